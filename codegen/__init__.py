@@ -1,0 +1,1 @@
+"""Code generation: rule base -> lookup table -> embeddable C and pure-Python source."""

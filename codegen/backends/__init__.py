@@ -1,0 +1,1 @@
+"""Code-generation targets, one folder per language (templates and a small config)."""

@@ -1,0 +1,69 @@
+"""Atomic file output: a reader never sees a half-written file, and a failure leaves none."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Mapping
+from pathlib import Path
+
+from fuzzkit.errors import ConfigError
+
+
+def write_atomic(path: str | os.PathLike[str], data: str | bytes) -> Path:
+    """Write ``data`` to ``path`` through a temporary file in the same folder, then rename.
+
+    Raises
+    ------
+    ConfigError
+        If the parent folder is missing or ``path`` is an existing folder.
+    """
+    target = Path(path)
+    parent = target.parent if str(target.parent) else Path(".")
+    if target.is_dir():
+        raise ConfigError(f"{target}: is a directory (expected a file path)")
+    if not parent.is_dir():
+        raise ConfigError(f"{target}: folder {parent} does not exist")
+    payload = data.encode("utf-8") if isinstance(data, str) else data
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(payload)
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return target
+
+
+def write_tree_atomic(folder: str | os.PathLike[str], files: Mapping[str, str | bytes]) -> list[Path]:
+    """Write ``{relative path: content}`` under ``folder``: all files or none.
+
+    Every file is first written to a temporary sibling; only when all are written are they
+    renamed into place, so an error (bad path, full disk) leaves the folder as it was.
+    """
+    root = Path(folder)
+    if root.exists() and not root.is_dir():
+        raise ConfigError(f"{root}: exists and is not a directory (expected an output folder)")
+    for rel in files:
+        rp = Path(rel)
+        if rp.is_absolute() or ".." in rp.parts:
+            raise ConfigError(f"{rel}: output paths must be relative and stay inside {root}")
+    root.mkdir(parents=True, exist_ok=True)
+    staged: list[tuple[str, Path]] = []
+    try:
+        for rel, data in files.items():
+            target = root / rel
+            target.parent.mkdir(parents=True, exist_ok=True)
+            payload = data.encode("utf-8") if isinstance(data, str) else data
+            fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(payload)
+            staged.append((tmp, target))
+        for tmp, target in staged:
+            os.replace(tmp, target)
+    except BaseException:
+        for tmp, _ in staged:
+            Path(tmp).unlink(missing_ok=True)
+        raise
+    return [t for _, t in staged]

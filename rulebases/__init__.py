@@ -1,0 +1,1 @@
+"""Shipped rule bases (YAML), loadable by name with ``fuzzkit.load(name)``."""
