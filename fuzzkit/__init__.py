@@ -6,24 +6,34 @@ pure-Python controllers, and verify the controllers in closed loop against simul
 Quick start::
 
     import fuzzkit
-    rb = fuzzkit.load("macvicar_whelan")          # a shipped name or a path
+    rb = fuzzkit.load("macvicar_whelan")              # a shipped name or a path
     fuzzkit.evaluate(rb, {"e": [0.3], "de": [-0.2]})  # {"du": array([...])}
-    fuzzkit.evaluate_point(rb, e=0.3, de=-0.2)      # {"du": float}
+    fuzzkit.evaluate_point(rb, e=0.3, de=-0.2)        # {"du": float}
 """
 
 from __future__ import annotations
 
+import importlib
+from typing import Any
+
 __version__ = "0.1.0"
 
-from fuzzkit.inference import Engine, evaluate, evaluate_point
-from fuzzkit.registry import available, load, loads
+# Public names, resolved lazily so that importing a low module (fuzzkit.model) does not pull in
+# numpy-heavy ones, and the CLI starts fast.
+_EXPORTS = {
+    "Engine": "fuzzkit.inference",
+    "evaluate": "fuzzkit.inference",
+    "evaluate_point": "fuzzkit.inference",
+    "load": "fuzzkit.registry",
+    "loads": "fuzzkit.registry",
+    "available": "fuzzkit.registry",
+}
 
-__all__ = [
-    "Engine",
-    "__version__",
-    "available",
-    "evaluate",
-    "evaluate_point",
-    "load",
-    "loads",
-]
+__all__ = ["__version__", *sorted(_EXPORTS)]
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'fuzzkit' has no attribute {name!r}")
+    return getattr(importlib.import_module(module), name)
