@@ -1,0 +1,464 @@
+"""Semantic checks of a rule base, shared by the YAML loader and every engine.
+
+:func:`check` gathers every problem of a :class:`~fuzzkit.model.RuleBase` as
+``(path, message)`` pairs, where ``path`` is a logical path into the rule-base document:
+
+* ``("name",)``, ``("defuzzifier",)``, ``("out_of_range",)``, ``("operators", "and")``;
+* ``("inputs", "e")``, ``("inputs", "e", "range")``, ``("inputs", "e", "terms")`` (coverage),
+  ``("inputs", "e", "terms", "NL")``, ``("inputs", "e", "terms", "NL", "points")`` for the
+  piecewise-linear shapes and ``(..., "NL", "sigma")`` (the parameter's name) for the others;
+* ``("outputs", "du", "default")``;
+* ``("rules",)``, ``("rules", "table", "rows")``, and for rule ``k`` (its index in
+  ``RuleBase.rules``): ``("rules", k, "weight")``, ``("rules", k, "then", j)`` for its ``j``-th
+  consequent and ``("rules", k, "if", i, j, ...)`` for the sub-expression reached by taking
+  operand ``i`` of the antecedent, then operand ``j`` of that, and so on.
+
+The YAML loader maps these paths to ``file:line:col``; :func:`ensure_valid` (what engines call)
+raises one :class:`~fuzzkit.errors.RuleBaseError` naming every problem with its path.
+"""
+
+from __future__ import annotations
+
+import difflib
+import keyword
+import math
+import re
+from collections.abc import Iterable, Sequence
+from typing import TypeAlias
+
+from fuzzkit.errors import Location, Problem, RuleBaseError
+from fuzzkit.model import (
+    AGGREGATIONS,
+    AND_OPERATORS,
+    DEFUZZIFIERS,
+    IMPLICATIONS,
+    OR_OPERATORS,
+    OUT_OF_RANGE_POLICIES,
+    PIECEWISE_LINEAR_SHAPES,
+    SHAPE_PARAMS,
+    Compound,
+    Expression,
+    RuleBase,
+    Term,
+    Variable,
+)
+
+PathPart: TypeAlias = str | int
+Path: TypeAlias = tuple[PathPart, ...]
+Issue: TypeAlias = tuple[Path, str]
+
+IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+
+#: C keywords (C99, C11 and C23, including the C23 spellings of the old macros like ``bool``),
+#: plus names every generated C file sees through the standard headers it includes.
+C_KEYWORDS = frozenset(
+    """
+    auto break case char const continue default do double else enum extern float for goto if
+    inline int long register restrict return short signed sizeof static struct switch typedef
+    union unsigned void volatile while
+    _Alignas _Alignof _Atomic _Bool _Complex _Generic _Imaginary _Noreturn _Static_assert
+    _Thread_local _BitInt _Decimal32 _Decimal64 _Decimal128
+    alignas alignof bool constexpr false nullptr static_assert thread_local true typeof
+    typeof_unqual
+    NULL NAN INFINITY EOF
+    """.split()  # noqa: SIM905 (a word list reads better than 60 quoted strings)
+)
+
+PYTHON_KEYWORDS = frozenset(keyword.kwlist)
+
+
+def identifier_problem(name: str) -> str | None:
+    """Why ``name`` cannot become a C and Python identifier, or ``None`` when it can."""
+    if not IDENTIFIER.match(name):
+        return f"expected an identifier matching [A-Za-z_][A-Za-z0-9_]*, got {name!r}"
+    if name in C_KEYWORDS and name in PYTHON_KEYWORDS:
+        return f"{name!r} is a C and Python keyword; choose another name"
+    if name in C_KEYWORDS:
+        return f"{name!r} is a C keyword or reserved name; choose another name"
+    if name in PYTHON_KEYWORDS:
+        return f"{name!r} is a Python keyword; choose another name"
+    # C reserves these for the implementation; a generated symbol could clash with libc.
+    if name.startswith("__") or (len(name) > 1 and name[0] == "_" and name[1].isupper()):
+        return f"{name!r} is reserved in C (leading '__' or '_' + capital); choose another name"
+    return None
+
+
+def did_you_mean(word: str, candidates: Iterable[str]) -> str:
+    """`` (did you mean 'X'?)`` for the closest candidate, or an empty string."""
+    pool = list(candidates)
+    close = difflib.get_close_matches(word, pool, n=1, cutoff=0.6)
+    if not close:
+        # Labels differ in case often enough ('pl' for 'PL') to try a case-insensitive match.
+        lowered = {c.lower(): c for c in pool}
+        if word.lower() in lowered:
+            close = [lowered[word.lower()]]
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def _fmt(x: float) -> str:
+    return repr(float(x)) if not float(x).is_integer() else str(float(x))
+
+
+def _fmt_list(values: Sequence[float]) -> str:
+    return "[" + ", ".join(_fmt(v) for v in values) + "]"
+
+
+# ---------------------------------------------------------------------------- terms
+
+
+def term_param_path(term: Term) -> PathPart:
+    """The document key holding a term's parameters: ``points`` or the first parameter name."""
+    if term.shape in PIECEWISE_LINEAR_SHAPES:
+        return "points"
+    return SHAPE_PARAMS[term.shape][0] if term.shape in SHAPE_PARAMS else "shape"
+
+
+def _check_term(term: Term, base: Path) -> list[Issue]:
+    shape, p = term.shape, term.params
+    if shape not in SHAPE_PARAMS:
+        return [
+            (
+                (*base, "shape"),
+                f"unknown shape {shape!r}{did_you_mean(shape, SHAPE_PARAMS)}; "
+                f"expected one of {', '.join(SHAPE_PARAMS)}",
+            )
+        ]
+    names = SHAPE_PARAMS[shape]
+    pwl = shape in PIECEWISE_LINEAR_SHAPES
+    where: Path = (*base, "points") if pwl else base
+    if len(p) != len(names):
+        what = "points" if pwl else "parameters (" + ", ".join(names) + ")"
+        return [(where, f"{shape} needs {len(names)} {what}, got {len(p)}")]
+    bad = [n for n, v in zip(names, p, strict=True) if not math.isfinite(v)]
+    if bad:
+        if pwl:
+            return [(where, f"{shape} points must be finite numbers, got {_fmt_list(p)}")]
+        return [((*base, n), f"{n} must be a finite number, got {p[names.index(n)]}") for n in bad]
+    if shape == "triangle":
+        a, b, c = p
+        if not a <= b <= c:
+            return [(where, f"triangle points must be ordered a <= b <= c, got {_fmt_list(p)}")]
+        if not a < c:
+            return [(where, f"triangle is degenerate (a == c), got {_fmt_list(p)}; "
+                     "use a singleton for a single point")]
+    elif shape == "trapezoid":
+        a, b, c, d = p
+        if not a <= b <= c <= d:
+            return [(where, "trapezoid points must be ordered a <= b <= c <= d, "
+                     f"got {_fmt_list(p)}")]
+        if not a < d:
+            return [(where, f"trapezoid is degenerate (a == d), got {_fmt_list(p)}")]
+    elif shape in ("left_shoulder", "right_shoulder"):
+        if not p[0] < p[1]:
+            return [(where, f"{shape} points must be ordered a < b, got {_fmt_list(p)}")]
+    elif shape == "gaussian":
+        if not p[1] > 0:
+            return [((*base, "sigma"), f"gaussian sigma must be > 0, got {_fmt(p[1])}")]
+    elif shape == "bell":
+        out: list[Issue] = []
+        if not p[0] > 0:
+            out.append(((*base, "width"), f"bell width must be > 0, got {_fmt(p[0])}"))
+        if not p[1] > 0:
+            out.append(((*base, "slope"), f"bell slope must be > 0, got {_fmt(p[1])}"))
+        return out
+    elif shape == "sigmoid" and p[0] == 0:
+        return [((*base, "slope"), "sigmoid slope must be non-zero, got 0.0")]
+    return []
+
+
+def _term_is_valid(term: Term) -> bool:
+    return not _check_term(term, ())
+
+
+# ---------------------------------------------------------------------------- coverage
+
+# A piece of a term's support: (low, low included, high, high included).
+_Piece: TypeAlias = tuple[float, bool, float, bool]
+
+
+def _support(term: Term) -> list[_Piece]:
+    """Where a (valid) term's membership is > 0, exactly, as pieces of the real line."""
+    p = term.params
+    inf = math.inf
+    if term.shape == "triangle":
+        return [(p[0], p[0] == p[1], p[2], p[1] == p[2])]
+    if term.shape == "trapezoid":
+        return [(p[0], p[0] == p[1], p[3], p[2] == p[3])]
+    if term.shape == "left_shoulder":
+        return [(-inf, False, p[1], False)]
+    if term.shape == "right_shoulder":
+        return [(p[0], False, inf, False)]
+    if term.shape == "singleton":
+        return [(p[0], True, p[0], True)]
+    return [(-inf, False, inf, False)]  # gaussian, bell, sigmoid: > 0 everywhere
+
+
+def _covered(x: float, pieces: Sequence[_Piece]) -> bool:
+    for lo, lo_in, hi, hi_in in pieces:
+        if (lo < x or (lo == x and lo_in)) and (x < hi or (x == hi and hi_in)):
+            return True
+    return False
+
+
+def uncovered(var: Variable) -> list[tuple[float, float]]:
+    """The closed intervals of ``[low, high]`` where no term of ``var`` has membership > 0.
+
+    Exact: membership supports are unions of intervals with known ends, so testing every end
+    point and one point between each pair of consecutive ends decides the whole range. A gap
+    of a single point is reported as ``(x, x)``.
+    """
+    pieces = [piece for t in var.terms for piece in _support(t)]
+    ends = {var.low, var.high}
+    for lo, _, hi, _ in pieces:
+        for x in (lo, hi):
+            if var.low < x < var.high:
+                ends.add(x)
+    xs = sorted(ends)
+    gaps: list[tuple[float, float]] = []
+
+    def add(lo: float, hi: float) -> None:
+        if gaps and gaps[-1][1] == lo:
+            gaps[-1] = (gaps[-1][0], hi)
+        else:
+            gaps.append((lo, hi))
+
+    for i, x in enumerate(xs):
+        if not _covered(x, pieces):
+            add(x, x)
+        if i + 1 < len(xs):
+            mid = 0.5 * (x + xs[i + 1])
+            if not _covered(mid, pieces):
+                add(x, xs[i + 1])
+    return gaps
+
+
+# ---------------------------------------------------------------------------- variables
+
+
+def _check_variable(var: Variable, kind: str, base: Path) -> list[Issue]:
+    out: list[Issue] = []
+    why = identifier_problem(var.name)
+    if why:
+        out.append((base, f"{kind} name: {why}"))
+    range_ok = math.isfinite(var.low) and math.isfinite(var.high) and var.low < var.high
+    if not range_ok:
+        out.append(
+            (
+                (*base, "range"),
+                "range must be [low, high] with finite low < high, "
+                f"got [{_fmt(var.low)}, {_fmt(var.high)}]",
+            )
+        )
+    if not var.terms:
+        out.append(((*base, "terms"), f"{kind} {var.name!r} has no terms"))
+    seen: set[str] = set()
+    for term in var.terms:
+        tpath: Path = (*base, "terms", term.name)
+        if term.name in seen:
+            out.append((tpath, f"duplicate term {term.name!r} in {kind} {var.name!r}"))
+        seen.add(term.name)
+        why = identifier_problem(term.name)
+        if why:
+            out.append((tpath, f"term name: {why}"))
+        out.extend(_check_term(term, tpath))
+    if kind == "input" and range_ok and var.terms and all(map(_term_is_valid, var.terms)):
+        gaps = uncovered(var)
+        if gaps:
+            text = ", ".join(f"[{_fmt(lo)}, {_fmt(hi)}]" if lo != hi else f"at {_fmt(lo)}"
+                             for lo, hi in gaps)
+            out.append(
+                (
+                    (*base, "terms"),
+                    f"input {var.name!r} is not covered on {text} (no term has membership > 0 "
+                    "there, so no rule could fire)",
+                )
+            )
+    if kind == "output" and var.default is not None:
+        d = var.default
+        if not math.isfinite(d) or (range_ok and not var.low <= d <= var.high):
+            out.append(
+                (
+                    (*base, "default"),
+                    f"default must be a finite number inside the range [{_fmt(var.low)}, "
+                    f"{_fmt(var.high)}], got {_fmt(d)}",
+                )
+            )
+    return out
+
+
+# ---------------------------------------------------------------------------- rules
+
+
+def _check_expression(expr: Expression, rb: RuleBase, base: Path) -> list[Issue]:
+    if isinstance(expr, Compound):
+        out: list[Issue] = []
+        if expr.op not in ("and", "or"):
+            out.append((base, f"unknown connective {expr.op!r}; expected 'and' or 'or'"))
+        if len(expr.operands) < 2:
+            out.append((base, f"'{expr.op}' needs at least 2 operands, got {len(expr.operands)}"))
+        for i, sub in enumerate(expr.operands):
+            out.extend(_check_expression(sub, rb, (*base, i)))
+        return out
+    return _check_reference(expr.variable, expr.term, rb, base, want="input")
+
+
+def _check_reference(name: str, term: str, rb: RuleBase, path: Path, want: str) -> list[Issue]:
+    wanted = rb.inputs if want == "input" else rb.outputs
+    other = rb.outputs if want == "input" else rb.inputs
+    var = next((v for v in wanted if v.name == name), None)
+    if var is None:
+        if any(v.name == name for v in other):
+            if want == "input":
+                return [(path, f"{name!r} is an output; conditions (if) may only use inputs")]
+            return [(path, f"{name!r} is an input; conclusions (then) may only set outputs")]
+        names = [v.name for v in wanted]
+        return [
+            (
+                path,
+                f"unknown {want} {name!r}{did_you_mean(name, names)}; "
+                f"expected one of {', '.join(names) or '(none)'}",
+            )
+        ]
+    if term not in var.term_names:
+        return [
+            (
+                path,
+                f"unknown label {term!r} for {want} {name!r}"
+                f"{did_you_mean(term, var.term_names)}; expected one of "
+                f"{', '.join(var.term_names)}",
+            )
+        ]
+    return []
+
+
+def _check_rules(rb: RuleBase) -> list[Issue]:
+    out: list[Issue] = []
+    if not rb.rules:
+        out.append((("rules",), "the rule base has no rules (expected at least one)"))
+    for k, rule in enumerate(rb.rules):
+        out.extend(_check_expression(rule.antecedent, rb, ("rules", k, "if")))
+        if not rule.consequents:
+            out.append(
+                (("rules", k, "then"), "rule has no conclusion (expected then: {output: label})")
+            )
+        seen: set[str] = set()
+        for j, cons in enumerate(rule.consequents):
+            path: Path = ("rules", k, "then", j)
+            if cons.variable in seen:
+                out.append((path, f"output {cons.variable!r} is set twice in one rule"))
+            seen.add(cons.variable)
+            out.extend(_check_reference(cons.variable, cons.term, rb, path, want="output"))
+        w = rule.weight
+        if not (math.isfinite(w) and 0.0 <= w <= 1.0):
+            out.append((("rules", k, "weight"), f"weight must be in [0, 1], got {_fmt(w)}"))
+    if rb.table is not None:
+        t = rb.table
+        for key, name, pool, kind in (
+            ("rows", t.rows, rb.input_names, "input"),
+            ("columns", t.columns, rb.input_names, "input"),
+            ("output", t.output, rb.output_names, "output"),
+        ):
+            if name not in pool:
+                out.append(
+                    (("rules", "table", key),
+                     f"unknown {kind} {name!r}{did_you_mean(name, pool)}; expected one of "
+                     f"{', '.join(pool) or '(none)'}")
+                )
+        if t.rows == t.columns:
+            out.append((("rules", "table", "columns"),
+                        f"rows and columns must be different inputs, got {t.rows!r} twice"))
+    return out
+
+
+# ---------------------------------------------------------------------------- whole model
+
+
+def check(rb: RuleBase) -> list[Issue]:
+    """Every semantic problem of ``rb`` as ``(path, message)``; empty when it is valid.
+
+    See the module docstring for the form of the paths.
+    """
+    out: list[Issue] = []
+    why = identifier_problem(rb.name)
+    if why:
+        out.append((("name",), f"rule-base name: {why}"))
+    if not rb.inputs:
+        out.append((("inputs",), "expected at least one input"))
+    if not rb.outputs:
+        out.append((("outputs",), "expected at least one output"))
+    seen: dict[str, str] = {}
+    for kind, group in (("input", rb.inputs), ("output", rb.outputs)):
+        for var in group:
+            base: Path = (kind + "s", var.name)
+            if var.name in seen:
+                # Inputs and outputs share one namespace in generated code.
+                out.append((base, f"duplicate variable name {var.name!r} "
+                                  f"(already used by an {seen[var.name]})"))
+            else:
+                seen[var.name] = kind
+            out.extend(_check_variable(var, kind, base))
+
+    ops = rb.operators
+    for key, value, allowed in (
+        ("and", ops.and_, AND_OPERATORS),
+        ("or", ops.or_, OR_OPERATORS),
+        ("implication", ops.implication, IMPLICATIONS),
+        ("aggregation", ops.aggregation, AGGREGATIONS),
+    ):
+        if value not in allowed:
+            out.append(
+                (("operators", key),
+                 f"unknown {key} operator {value!r}{did_you_mean(value, allowed)}; "
+                 f"expected one of {', '.join(allowed)}")
+            )
+    if rb.defuzzifier not in DEFUZZIFIERS:
+        out.append(
+            (("defuzzifier",),
+             f"unknown defuzzifier {rb.defuzzifier!r}{did_you_mean(rb.defuzzifier, DEFUZZIFIERS)}"
+             f"; expected one of {', '.join(DEFUZZIFIERS)}")
+        )
+    elif rb.defuzzifier != "weighted_average":
+        for var in rb.outputs:
+            for term in var.terms:
+                if term.shape == "singleton":
+                    out.append(
+                        (("outputs", var.name, "terms", term.name, "shape"),
+                         f"singleton output term {term.name!r} has no area, so defuzzifier "
+                         f"{rb.defuzzifier!r} cannot use it; expected defuzzifier "
+                         "weighted_average or a shape with area")
+                    )
+    if rb.out_of_range not in OUT_OF_RANGE_POLICIES:
+        out.append(
+            (("out_of_range",),
+             f"unknown out_of_range policy {rb.out_of_range!r}"
+             f"{did_you_mean(rb.out_of_range, OUT_OF_RANGE_POLICIES)}; expected one of "
+             f"{', '.join(OUT_OF_RANGE_POLICIES)}")
+        )
+    out.extend(_check_rules(rb))
+    return out
+
+
+def format_path(path: Path) -> str:
+    """``inputs.e.terms.NL`` / ``rules[3].if[0]``: a path as a user reads it."""
+    text = ""
+    for part in path:
+        if isinstance(part, int):
+            text += f"[{part}]"
+        else:
+            text += ("." if text else "") + part
+    return text
+
+
+def ensure_valid(rb: RuleBase) -> None:
+    """Raise :class:`~fuzzkit.errors.RuleBaseError` listing every problem of ``rb``, if any.
+
+    Locations name ``rb.source.path`` (``<rulebase>`` for a model built in Python) with line 0;
+    each message starts with the logical path of the problem (e.g. ``inputs.e.terms.NL``).
+    """
+    issues = check(rb)
+    if not issues:
+        return
+    file = rb.source.path if rb.source is not None else "<rulebase>"
+    raise RuleBaseError(
+        Problem(Location(file), f"{format_path(path)}: {message}") for path, message in issues
+    )
