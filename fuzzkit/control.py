@@ -1,0 +1,366 @@
+"""Force controllers of the outer loop: incremental PI, fuzzy-PI and the hybrid force/motion law.
+
+Signs and units
+---------------
+* ``e = setpoint - measured`` (eq. 5, newtons), ``de = e - e_previous`` (eq. 6, newtons per step).
+* The controllers return the accumulated correction ``u`` (eq. 8, metres) along one task axis.
+  A positive correction moves the tool *into* the surface and so increases the force
+  (see ``fuzzkit.plant``): the gains are positive.
+* :class:`PI`: ``du = Kp*de + Ki*e`` (eq. 9); ``Kp``, ``Ki`` in metres per newton.
+* :class:`FuzzyPI`: ``du = Kx * F(Ki*e, Kp*de)`` where ``F`` is the rule base's control surface on
+  the normalised universe [-1, 1]: **Ki scales the error e, Kp scales the change of error de**
+  (1/N each), and **Kx scales the output** (metres per step). Scaled inputs are clipped to
+  [-1, 1] first, so ``|du| <= Kx * max|F|``: a fuzzy-PI has a built-in correction-rate limit.
+  Near the origin a MacVicar-Whelan table behaves like ``F ~ a*e + b*de``, i.e. like a PI with
+  ``Ki_pi ~ Kx*Ki*a`` and ``Kp_pi ~ Kx*Kp*b``.
+
+Both accept ``u_min``/``u_max`` (clamping the accumulated correction is the anti-windup of the
+incremental form) and an optional ``rate_limit`` (largest ``|du|`` per step). A NaN measurement
+never becomes a correction: the step is skipped, ``u`` is held and ``faults`` is incremented.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+import numpy.typing as npt
+
+from fuzzkit.errors import ConfigError
+
+Vec = npt.NDArray[np.float64]
+
+#: A control surface: ``(e_normalised, de_normalised) -> du_normalised`` on [-1, 1].
+Surface = Callable[[float, float], float]
+
+
+@runtime_checkable
+class AxisController(Protocol):
+    """One force controller along one task axis (PI, FuzzyPI or a generated module's class)."""
+
+    def step(self, setpoint: float, measured: float) -> float:
+        """Process one sample; return the accumulated correction u (m)."""
+        ...
+
+    def reset(self) -> None:
+        """Forget the history: u = 0, no previous error."""
+        ...
+
+
+def saturated_sum_surface(e: float, de: float) -> float:
+    """Reference surface ``clip(e + de, -1, 1)``: the continuous limit of the canonical
+    MacVicar-Whelan table (``out = clamp(i_e + i_de, -3, 3)``). For tests and quick studies."""
+    return min(max(e + de, -1.0), 1.0)
+
+
+def engine_surface(
+    engine: Any, e_name: str = "e", de_name: str = "de", out_name: str = "du"
+) -> Surface:
+    """Wrap an inference engine (``fuzzkit.inference.Engine``) as a :data:`Surface`."""
+
+    def surface(e: float, de: float) -> float:
+        return float(engine.evaluate_point(**{e_name: e, de_name: de})[out_name])
+
+    return surface
+
+
+def tabulated_surface(surface: Surface, n: int = 201) -> Surface:
+    """Sample ``surface`` on an ``n x n`` grid over [-1, 1]^2; answer by bilinear interpolation.
+
+    A fast stand-in for the exact engine in long simulations (error of order h^2 * curvature).
+    """
+    if n < 2:
+        raise ConfigError(f"tabulated_surface: n must be >= 2 (got {n})")
+    grid = np.linspace(-1.0, 1.0, n)
+    table = np.array([[surface(float(a), float(b)) for b in grid] for a in grid])
+    h = 2.0 / (n - 1)
+    rows = table.tolist()
+
+    def interp(e: float, de: float) -> float:
+        if math.isnan(e) or math.isnan(de):
+            return math.nan
+        fe = (min(max(e, -1.0), 1.0) + 1.0) / h
+        fd = (min(max(de, -1.0), 1.0) + 1.0) / h
+        i = min(int(fe), n - 2)
+        j = min(int(fd), n - 2)
+        se, sd = fe - i, fd - j
+        r0, r1 = rows[i], rows[i + 1]
+        val: float = (1.0 - se) * ((1.0 - sd) * r0[j] + sd * r0[j + 1]) + se * (
+            (1.0 - sd) * r1[j] + sd * r1[j + 1]
+        )
+        return val
+
+    return interp
+
+
+class _Incremental:
+    """Shared state and limits of the incremental controllers (eq. 8)."""
+
+    def __init__(self, u_min: float, u_max: float, rate_limit: float | None) -> None:
+        if not u_min <= 0.0 <= u_max:
+            raise ConfigError(
+                f"output limits must satisfy u_min <= 0 <= u_max (got {u_min}, {u_max})"
+            )
+        if rate_limit is not None and not rate_limit > 0.0:
+            raise ConfigError(f"rate_limit must be > 0 or None (got {rate_limit})")
+        self.u_min, self.u_max, self.rate_limit = u_min, u_max, rate_limit
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the history: u = 0, no previous error, zero fault count."""
+        self.u = 0.0
+        self.e = 0.0
+        self.de = 0.0
+        self.du = 0.0
+        self.faults = 0
+        self._e_prev: float | None = None
+
+    def set_output(self, u: float) -> None:
+        """Overwrite the accumulated correction (bumpless take-over, safety back-off)."""
+        self.u = min(max(u, self.u_min), self.u_max)
+
+    def _increment(self, e: float, de: float) -> float:
+        raise NotImplementedError
+
+    def step(self, setpoint: float, measured: float) -> float:
+        """Process one sample and return the accumulated correction ``u`` (m).
+
+        A NaN/inf ``measured`` is a sensor fault: u is held, ``faults`` counts it, and the next
+        valid sample's ``de`` is taken against the last valid error.
+        """
+        if not math.isfinite(measured) or not math.isfinite(setpoint):
+            self.faults += 1
+            self.du = 0.0
+            return self.u
+        e = setpoint - measured
+        de = 0.0 if self._e_prev is None else e - self._e_prev
+        self._e_prev = e
+        du = self._increment(e, de)
+        if not math.isfinite(du):  # a surface that answers NaN must not move the robot
+            self.faults += 1
+            du = 0.0
+        if self.rate_limit is not None:
+            du = min(max(du, -self.rate_limit), self.rate_limit)
+        u = min(max(self.u + du, self.u_min), self.u_max)
+        self.e, self.de, self.du, self.u = e, de, u - self.u, u
+        return u
+
+
+class PI(_Incremental):
+    """Incremental PI force controller, eqs. 8-9: ``du = Kp*de + Ki*e``, ``u += du``.
+
+    Parameters
+    ----------
+    kp, ki : gains in metres per newton (``kp`` on the change of error, ``ki`` on the error).
+    u_min, u_max : limits of the accumulated correction (m); clamping is the anti-windup.
+    rate_limit : optional largest ``|du|`` per step (m).
+
+    Examples
+    --------
+    >>> pi = PI(kp=4e-5, ki=1e-5)
+    >>> round(pi.step(10.0, 0.0) * 1e6, 3)  # first step: de = 0, du = Ki*e
+    100.0
+    """
+
+    def __init__(
+        self,
+        kp: float,
+        ki: float,
+        u_min: float = -math.inf,
+        u_max: float = math.inf,
+        rate_limit: float | None = None,
+    ) -> None:
+        if not (math.isfinite(kp) and math.isfinite(ki)) or kp < 0.0 or ki < 0.0:
+            raise ConfigError(f"PI gains must be finite and >= 0 (got kp={kp}, ki={ki})")
+        self.kp, self.ki = kp, ki
+        super().__init__(u_min, u_max, rate_limit)
+
+    def _increment(self, e: float, de: float) -> float:
+        return self.kp * de + self.ki * e
+
+
+class FuzzyPI(_Incremental):
+    """Fuzzy-PI force controller: ``du = Kx * F(clip(Ki*e), clip(Kp*de))``, ``u += du``.
+
+    ``surface`` is any callable ``(e, de) -> du`` on the normalised universe: the exact engine
+    (:func:`engine_surface`), a lookup table, a generated module's function, or
+    :func:`saturated_sum_surface`.
+
+    Parameters
+    ----------
+    surface : the control surface F.
+    kp : scale of the change of error ``de`` (1/N).
+    ki : scale of the error ``e`` (1/N).
+    kx : scale of the output (m per step).
+    u_min, u_max, rate_limit : as for :class:`PI`.
+    """
+
+    def __init__(
+        self,
+        surface: Surface,
+        kp: float,
+        ki: float,
+        kx: float,
+        u_min: float = -math.inf,
+        u_max: float = math.inf,
+        rate_limit: float | None = None,
+    ) -> None:
+        gains = (kp, ki, kx)
+        if not all(math.isfinite(g) and g > 0.0 for g in gains):
+            raise ConfigError(f"fuzzy-PI scaling factors must be finite and > 0 (got {gains})")
+        self.surface, self.kp, self.ki, self.kx = surface, kp, ki, kx
+        super().__init__(u_min, u_max, rate_limit)
+
+    def _increment(self, e: float, de: float) -> float:
+        en = min(max(self.ki * e, -1.0), 1.0)
+        den = min(max(self.kp * de, -1.0), 1.0)
+        return self.kx * float(self.surface(en, den))
+
+
+class HybridForceController:
+    """The outer loop of the hybrid force/motion controller (paper, sec. 3).
+
+    One :class:`AxisController` per task axis (x, y, z), a diagonal selection matrix ``S``
+    (``selection[i]`` is 1 for a force-controlled axis, 0 for a motion-only one), per-axis set
+    points, and three safeguards:
+
+    * **engagement**: with ``engage_threshold_n`` set, the loop stays idle (zero correction)
+      until the measured force exceeds it on any axis: "on contact the controller takes over";
+    * **force safety limit**: when any measured force exceeds ``force_limit_n`` on
+      ``trip_samples`` consecutive samples, the controller latches ``tripped``, stops
+      correcting, and backs off along the measured force direction by ``backoff_m`` at
+      ``backoff_speed_m_s``; only :meth:`reset` clears it;
+    * **sensor faults**: a sample with NaN/inf on a force-controlled axis (or ``None``) holds
+      the correction and increments ``faults``.
+
+    :meth:`step` returns the task-frame correction ``S*u + backoff`` (m).
+    """
+
+    def __init__(
+        self,
+        controllers: Sequence[AxisController | None],
+        setpoints: Sequence[float],
+        period_s: float,
+        force_limit_n: float = 50.0,
+        engage_threshold_n: float | None = None,
+        trip_samples: int = 2,
+        backoff_m: float = 0.005,
+        backoff_speed_m_s: float = 0.02,
+    ) -> None:
+        if len(controllers) != 3 or len(setpoints) != 3:
+            raise ConfigError(
+                "HybridForceController needs 3 controllers and 3 set points (x, y, z)"
+            )
+        if not force_limit_n > 0.0:
+            raise ConfigError(f"force_limit_n must be > 0 (got {force_limit_n})")
+        if trip_samples < 1:
+            raise ConfigError(f"trip_samples must be >= 1 (got {trip_samples})")
+        self.controllers = list(controllers)
+        self.selection = np.array([0.0 if c is None else 1.0 for c in controllers])
+        self.setpoints = np.asarray(setpoints, dtype=np.float64)
+        self.period_s = period_s
+        self.force_limit_n = force_limit_n
+        self.engage_threshold_n = engage_threshold_n
+        self.trip_samples = trip_samples
+        self.backoff_m = backoff_m
+        self.backoff_speed_m_s = backoff_speed_m_s
+        self.reset()
+
+    def reset(self) -> None:
+        """Clear every axis controller, the engagement, the trip latch and the fault count."""
+        for c in self.controllers:
+            if c is not None:
+                c.reset()
+        self.u = np.zeros(3)
+        self.e = np.zeros(3)
+        self.de = np.zeros(3)
+        self.du = np.zeros(3)
+        self.faults = 0
+        self.engaged = self.engage_threshold_n is None
+        self.tripped = False
+        self.trip_time_s: float | None = None
+        self._over = 0
+        self._backoff = np.zeros(3)
+        self._backoff_dir = np.zeros(3)
+        self._e_last: Vec | None = None
+        self._t = 0.0
+
+    def step(self, force: Vec | None) -> Vec:
+        """Consume one measured force sample (task frame, N) and return the correction (m)."""
+        self._t += self.period_s
+        self.du = np.zeros(3)
+        valid = force is not None and bool(np.all(np.isfinite(force[self.selection > 0])))
+        if force is None or not valid:
+            self.faults += 1
+            return self._output()
+        f = np.where(np.isfinite(force), force, 0.0)
+        if not self.tripped:
+            if float(np.max(np.abs(f))) > self.force_limit_n:
+                self._over += 1
+            else:
+                self._over = 0
+            if self._over >= self.trip_samples:
+                self._trip(f)
+        if self.tripped:
+            step = self.backoff_speed_m_s * self.period_s
+            if float(np.linalg.norm(self._backoff)) < self.backoff_m:
+                self._backoff = self._backoff + step * self._backoff_dir
+            return self._output()
+        if not self.engaged:
+            thr = self.engage_threshold_n if self.engage_threshold_n is not None else 0.0
+            if float(np.max(np.abs(f))) <= thr:
+                return self._output()
+            self.engaged = True
+        for i, c in enumerate(self.controllers):
+            if c is None:
+                continue
+            before = self.u[i]
+            self.u[i] = c.step(float(self.setpoints[i]), float(f[i]))
+            self.du[i] = self.u[i] - before
+            self.e[i] = self.setpoints[i] - f[i]
+        self.de = self.e - self._e_last if self._e_last is not None else np.zeros(3)
+        self._e_last = self.e.copy()
+        return self._output()
+
+    def _trip(self, f: Vec) -> None:
+        self.tripped = True
+        self.trip_time_s = self._t
+        norm = float(np.linalg.norm(f))
+        # Retreat against the force the tool exerts: away from whatever it is pressing on.
+        self._backoff_dir = -f / norm if norm > 0.0 else np.zeros(3)
+
+    def _output(self) -> Vec:
+        return self.selection * self.u + self._backoff
+
+
+def make_axis_controllers(
+    kind: str,
+    selection: Sequence[bool],
+    gains: Mapping[str, float],
+    surface: Surface | None = None,
+) -> list[AxisController | None]:
+    """Build one controller per selected axis from a gain mapping.
+
+    ``kind`` is ``"pi"`` (gains ``kp``, ``ki``) or ``"fuzzy-pi"`` (gains ``kp``, ``ki``, ``kx``
+    and a ``surface``); both accept optional ``u_min``, ``u_max``, ``rate_limit``.
+    """
+    limits: dict[str, Any] = {
+        "u_min": gains.get("u_min", -math.inf),
+        "u_max": gains.get("u_max", math.inf),
+        "rate_limit": gains.get("rate_limit"),
+    }
+    out: list[AxisController | None] = []
+    for sel in selection:
+        if not sel:
+            out.append(None)
+        elif kind == "pi":
+            out.append(PI(gains["kp"], gains["ki"], **limits))
+        elif kind == "fuzzy-pi":
+            if surface is None:
+                raise ConfigError("fuzzy-pi needs a control surface (a rule base)")
+            out.append(FuzzyPI(surface, gains["kp"], gains["ki"], gains["kx"], **limits))
+        else:
+            raise ConfigError(f"unknown controller {kind!r} (expected pi or fuzzy-pi)")
+    return out
