@@ -1,0 +1,170 @@
+"""Membership-function shapes, vectorised over numpy arrays.
+
+Each function takes an array ``x`` and the shape's parameters and returns ``mu(x)`` in [0, 1]
+with the same shape as ``x``. NaN in ``x`` gives NaN (the engine masks NaN inputs before it gets
+here, so this only matters to direct callers). Parameters are assumed valid (see
+``fuzzkit.validation``): ordered, finite, positive widths.
+
+The piecewise-linear shapes (triangle, trapezoid, shoulders) are also available as a vertex list
+(:func:`vertices`) from which the exact engine integrates in closed form.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+import numpy.typing as npt
+
+from fuzzkit.model import Term
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Slope standing in for a vertical edge (a == b); with inputs bounded by _XMAX no product
+#: overflows, and the edge point itself has membership 1.
+_VERTICAL = 1e200
+_XMAX = 1e100
+
+
+def _ramp_slope(lo: float, hi: float) -> float:
+    return _VERTICAL if hi <= lo else 1.0 / (hi - lo)
+
+
+def _trapezoid_core(x: FloatArray, b: float, c: float, s_rise: float, s_fall: float) -> FloatArray:
+    # mu = clip(min(1 + (x - b) s_rise, 1 + (c - x) s_fall), 0, 1): one formula for all
+    # piecewise-linear shapes; a shoulder has slope 0 on its open side.
+    xs = np.clip(x, -_XMAX, _XMAX)
+    with np.errstate(invalid="ignore"):
+        rise = 1.0 + (xs - b) * s_rise
+        fall = 1.0 + (c - xs) * s_fall
+        return np.clip(np.minimum(rise, fall), 0.0, 1.0)
+
+
+def triangle(x: FloatArray, a: float, b: float, c: float) -> FloatArray:
+    """Triangle: 0 at ``a``, 1 at ``b``, 0 at ``c``.
+
+    ``mu = max(0, min((x - a)/(b - a), (c - x)/(c - b)))``; ``a == b`` (or ``b == c``) makes a
+    vertical edge with ``mu(b) = 1``.
+    """
+    return _trapezoid_core(x, b, b, _ramp_slope(a, b), _ramp_slope(b, c))
+
+
+def trapezoid(x: FloatArray, a: float, b: float, c: float, d: float) -> FloatArray:
+    """Trapezoid: rises from ``a`` to 1 at ``b``, stays 1 to ``c``, falls to 0 at ``d``.
+
+    ``mu = max(0, min((x - a)/(b - a), 1, (d - x)/(d - c)))``.
+    """
+    return _trapezoid_core(x, b, c, _ramp_slope(a, b), _ramp_slope(c, d))
+
+
+def left_shoulder(x: FloatArray, a: float, b: float) -> FloatArray:
+    """Left shoulder: 1 for ``x <= a``, falls linearly to 0 at ``b``, 0 beyond.
+
+    ``mu = clip((b - x)/(b - a), 0, 1)``.
+    """
+    return _trapezoid_core(x, 0.0, a, 0.0, _ramp_slope(a, b))
+
+
+def right_shoulder(x: FloatArray, a: float, b: float) -> FloatArray:
+    """Right shoulder: 0 for ``x <= a``, rises linearly to 1 at ``b``, 1 beyond.
+
+    ``mu = clip((x - a)/(b - a), 0, 1)``.
+    """
+    return _trapezoid_core(x, b, 0.0, _ramp_slope(a, b), 0.0)
+
+
+def gaussian(x: FloatArray, mean: float, sigma: float) -> FloatArray:
+    """Gaussian: ``mu = exp(-(x - mean)^2 / (2 sigma^2))``."""
+    xs = np.clip(x, -_XMAX, _XMAX)
+    with np.errstate(over="ignore", under="ignore"):
+        return np.exp(-0.5 * ((xs - mean) / sigma) ** 2)
+
+
+def bell(x: FloatArray, width: float, slope: float, centre: float) -> FloatArray:
+    """Generalised bell: ``mu = 1 / (1 + |(x - centre)/width|^(2 slope))``."""
+    xs = np.clip(x, -_XMAX, _XMAX)
+    with np.errstate(over="ignore", under="ignore"):
+        return 1.0 / (1.0 + np.abs((xs - centre) / width) ** (2.0 * slope))
+
+
+def sigmoid(x: FloatArray, slope: float, centre: float) -> FloatArray:
+    """Sigmoid: ``mu = 1 / (1 + exp(-slope (x - centre)))``; opens right for slope > 0."""
+    xs = np.clip(x, -_XMAX, _XMAX)
+    with np.errstate(over="ignore", under="ignore"):
+        return 1.0 / (1.0 + np.exp(-slope * (xs - centre)))
+
+
+def singleton(x: FloatArray, value: float) -> FloatArray:
+    """Singleton: ``mu = 1`` where ``x == value``, else 0 (NaN stays NaN)."""
+    out = (x == value).astype(np.float64)
+    out[np.isnan(x)] = np.nan
+    return out
+
+
+SHAPES: dict[str, Callable[..., FloatArray]] = {
+    "triangle": triangle,
+    "trapezoid": trapezoid,
+    "left_shoulder": left_shoulder,
+    "right_shoulder": right_shoulder,
+    "gaussian": gaussian,
+    "bell": bell,
+    "sigmoid": sigmoid,
+    "singleton": singleton,
+}
+
+
+def evaluate_term(term: Term, x: npt.ArrayLike) -> FloatArray:
+    """Membership of ``x`` (any shape) in ``term``."""
+    return SHAPES[term.shape](np.asarray(x, dtype=np.float64), *term.params)
+
+
+def trapezoid_form(term: Term) -> tuple[float, float, float, float]:
+    """A piecewise-linear term as ``(core_start, core_end, rise_slope, fall_slope)``.
+
+    ``mu = clip(min(1 + (x - core_start) rise, 1 + (core_end - x) fall), 0, 1)``; a shoulder's
+    open side has slope 0. This is how the engine fuzzifies all piecewise-linear terms at once.
+    """
+    p = term.params
+    if term.shape == "triangle":
+        return p[1], p[1], _ramp_slope(p[0], p[1]), _ramp_slope(p[1], p[2])
+    if term.shape == "trapezoid":
+        return p[1], p[2], _ramp_slope(p[0], p[1]), _ramp_slope(p[2], p[3])
+    if term.shape == "left_shoulder":
+        return 0.0, p[0], 0.0, _ramp_slope(p[0], p[1])
+    if term.shape == "right_shoulder":
+        return p[1], 0.0, _ramp_slope(p[0], p[1]), 0.0
+    raise ValueError(f"term {term.name!r}: shape {term.shape!r} is not piecewise linear")
+
+
+def breakpoints(term: Term) -> tuple[float, ...]:
+    """The x positions where a piecewise-linear term changes slope (its vertices)."""
+    if not term.is_piecewise_linear:
+        raise ValueError(f"term {term.name!r}: shape {term.shape!r} is not piecewise linear")
+    return tuple(term.params)
+
+
+def centre(term: Term, low: float, high: float) -> float:
+    """Representative value of a term for the weighted-average defuzzifier (paper eq. 10).
+
+    The midpoint of the set of points of ``[low, high]`` where the term reaches its largest
+    membership: the peak of a triangle, the middle of a trapezoid's core, the middle of a
+    shoulder's core within the range, the mean of a gaussian or bell (clamped to the range),
+    the range end a sigmoid opens towards, a singleton's value.
+    """
+    p = term.params
+    if term.shape == "triangle":
+        return float(np.clip(p[1], low, high))
+    if term.shape == "trapezoid":
+        lo, hi = max(p[1], low), min(p[2], high)
+        return (lo + hi) / 2 if lo <= hi else float(np.clip((p[1] + p[2]) / 2, low, high))
+    if term.shape == "left_shoulder":
+        return (low + float(np.clip(p[0], low, high))) / 2
+    if term.shape == "right_shoulder":
+        return (float(np.clip(p[1], low, high)) + high) / 2
+    if term.shape == "gaussian":
+        return float(np.clip(p[0], low, high))
+    if term.shape == "bell":
+        return float(np.clip(p[2], low, high))
+    if term.shape == "sigmoid":
+        return high if p[0] > 0 else low
+    return float(p[0])  # singleton
