@@ -86,7 +86,7 @@ def identifier_problem(name: str) -> str | None:
 def did_you_mean(word: str, candidates: Iterable[str]) -> str:
     """`` (did you mean 'X'?)`` for the closest candidate, or an empty string."""
     pool = list(candidates)
-    close = difflib.get_close_matches(word, pool, n=1, cutoff=0.6)
+    close = difflib.get_close_matches(word, pool, n=1, cutoff=0.5)
     if not close:
         # Labels differ in case often enough ('pl' for 'PL') to try a case-insensitive match.
         lowered = {c.lower(): c for c in pool}

@@ -1,0 +1,1231 @@
+"""Rule-base YAML <-> model: strict loading with every problem located, dumping, JSON Schema.
+
+The format is documented in ``docs/rulebase-format.md``. Loading is as safe as
+``yaml.safe_load`` (the document is composed with PyYAML's ``SafeLoader``, which builds no
+Python objects) and stricter: the node tree is converted by hand so that every problem, from
+an unknown key to an uncovered input range, is reported as ``file:line:col: message`` and all
+of them are raised together in one :class:`~fuzzkit.errors.RuleBaseError`.
+
+Semantic checks live in :mod:`fuzzkit.validation` (shared with the engines); this module maps
+the logical paths that :func:`fuzzkit.validation.check` returns back to YAML positions.
+
+Examples
+--------
+>>> rb = loads_rulebase(open("rulebases/macvicar_whelan.yaml").read())  # doctest: +SKIP
+>>> loads_rulebase(dump(rb)) == rb                                     # doctest: +SKIP
+True
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import re
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path as FsPath
+from typing import Any
+
+import yaml
+from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
+
+from fuzzkit import validation
+from fuzzkit.errors import Location, Problem, RuleBaseError
+from fuzzkit.model import (
+    AGGREGATIONS,
+    AND_OPERATORS,
+    DEFUZZIFIERS,
+    IMPLICATIONS,
+    OR_OPERATORS,
+    OUT_OF_RANGE_POLICIES,
+    PIECEWISE_LINEAR_SHAPES,
+    SHAPE_PARAMS,
+    Compound,
+    Consequent,
+    Expression,
+    Operators,
+    Proposition,
+    Rule,
+    RuleBase,
+    RuleTable,
+    Source,
+    Term,
+    Variable,
+)
+from fuzzkit.validation import Path, did_you_mean
+
+#: Larger files are refused before parsing: a rule base is a few kilobytes.
+MAX_FILE_BYTES = 1 << 20
+#: Documents whose node tree, with every alias expanded, is larger are refused (alias bombs).
+MAX_NODES = 100_000
+
+TOP_KEYS = ("name", "description", "inputs", "outputs", "operators", "defuzzifier",
+            "out_of_range", "rules")
+OPERATOR_KEYS = ("and", "or", "implication", "aggregation")
+PARTITION_KEYS = ("partition", "labels", "ends")
+PARTITION_KINDS = ("triangular",)
+PARTITION_ENDS = ("shoulder", "triangle")
+TABLE_KEYS = ("rows", "columns", "output", "cells", "row_labels", "column_labels")
+RULE_KEYS = ("if", "then", "weight")
+CONNECTIVES = ("and", "or", "not")
+EMPTY_CELL = "-"
+
+_STR = "tag:yaml.org,2002:str"
+_INT = "tag:yaml.org,2002:int"
+_FLOAT = "tag:yaml.org,2002:float"
+_BOOL = "tag:yaml.org,2002:bool"
+_NULL = "tag:yaml.org,2002:null"
+_MERGE = "tag:yaml.org,2002:merge"
+# YAML 1.1 (PyYAML) reads ``1e-3`` as a string; accept the YAML 1.2 number syntax when unquoted.
+_NUMBER_12 = re.compile(r"[-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?\Z")
+_CONSTRUCTOR = yaml.constructor.SafeConstructor()
+
+
+def _pwl_key(shape: str) -> tuple[str, ...]:
+    """The keys holding a shape's parameters in YAML: ``points`` or the parameter names."""
+    return ("points",) if shape in PIECEWISE_LINEAR_SHAPES else SHAPE_PARAMS[shape]
+
+
+def describe(node: Node) -> str:
+    """A node as an error message shows it: ``'abc'``, ``3``, ``true``, ``a list``."""
+    if isinstance(node, ScalarNode):
+        if node.tag == _STR:
+            return repr(node.value)
+        if node.tag == _NULL:
+            return "nothing (null)" if node.value in ("", "~") else "null"
+        return str(node.value)
+    if isinstance(node, SequenceNode):
+        return "a list"
+    if isinstance(node, MappingNode):
+        return "a mapping"
+    return "an unknown node"  # pragma: no cover - PyYAML has no other node kinds
+
+
+def partition_terms(labels: Sequence[str], low: float, high: float, ends: str) -> tuple[Term, ...]:
+    """The terms of a ``partition: triangular`` shorthand over ``[low, high]``.
+
+    Label ``k`` of ``n`` peaks at ``low + k*(high-low)/(n-1)`` (the last exactly at ``high``)
+    and falls to 0 at its neighbours' peaks. With ``ends="shoulder"`` the outer terms are
+    shoulders (1 up to / from the range end); with ``ends="triangle"`` they are triangles
+    centred on the range ends reaching one spacing beyond (clipped by the range at inference).
+    """
+    n = len(labels)
+    step = (high - low) / (n - 1)
+    peaks = [low + k * step for k in range(n - 1)] + [high]
+    terms: list[Term] = []
+    for k, label in enumerate(labels):
+        left = peaks[k - 1] if k > 0 else low - step
+        right = peaks[k + 1] if k < n - 1 else high + step
+        if ends == "shoulder" and k == 0:
+            terms.append(Term(label, "left_shoulder", (low, right)))
+        elif ends == "shoulder" and k == n - 1:
+            terms.append(Term(label, "right_shoulder", (left, high)))
+        else:
+            terms.append(Term(label, "triangle", (left, peaks[k], right)))
+    return tuple(terms)
+
+
+class _TooBig(Exception):
+    """Raised to stop at once on a document that must not be processed further."""
+
+
+@dataclass
+class _Reader:
+    """Converts one composed YAML document into a model, collecting located problems."""
+
+    file: str
+    lines: list[str]
+    problems: list[Problem] = field(default_factory=list)
+    #: logical path (see fuzzkit.validation) -> node whose position names it
+    marks: dict[Path, Node] = field(default_factory=dict)
+    #: semantic problems under these paths are consequences of a reported structural one
+    hidden_under: set[Path] = field(default_factory=set)
+    #: semantic problems exactly at these paths are unreliable (e.g. coverage of a bad range)
+    hidden_at: set[Path] = field(default_factory=set)
+    broken_vars: set[str] = field(default_factory=set)
+
+    # ------------------------------------------------------------------ primitives
+
+    def loc(self, node: Node, column_offset: int = 0, line_offset: int = 0) -> Location:
+        mark = node.start_mark
+        return Location(self.file, mark.line + 1 + line_offset, mark.column + 1 + column_offset)
+
+    def error(self, node: Node, message: str) -> None:
+        self.problems.append(Problem(self.loc(node), message))
+
+    def mapping(self, node: Node, what: str) -> dict[str, tuple[Node, Node]] | None:
+        """The entries of a mapping node by key; reports non-mappings and duplicate keys."""
+        if not isinstance(node, MappingNode):
+            self.error(node, f"expected {what} (a mapping), got {describe(node)}")
+            return None
+        entries: dict[str, tuple[Node, Node]] = {}
+        for key, value in node.value:
+            if key.tag == _MERGE:
+                self.error(key, "merge keys (<<) are not supported; write the entries out")
+                continue
+            if not isinstance(key, ScalarNode) or key.tag != _STR:
+                hint = "; quote it" if isinstance(key, ScalarNode) else ""
+                self.error(key, f"expected a name as key, got {describe(key)}{hint}")
+                continue
+            if key.value in entries:
+                first = entries[key.value][0].start_mark.line + 1
+                self.error(key, f"duplicate key {key.value!r} (first defined on line {first})")
+                continue
+            entries[key.value] = (key, value)
+        return entries
+
+    def keys(
+        self,
+        entries: dict[str, tuple[Node, Node]],
+        node: Node,
+        allowed: Sequence[str],
+        required: Sequence[str],
+        what: str,
+    ) -> None:
+        """Report keys of ``entries`` not in ``allowed`` and missing ``required`` keys."""
+        for key, (knode, _) in entries.items():
+            if key not in allowed:
+                self.error(
+                    knode,
+                    f"unknown key {key!r} in {what}{did_you_mean(key, allowed)}; "
+                    f"expected one of {', '.join(allowed)}",
+                )
+        for key in required:
+            if key not in entries:
+                self.error(node, f"missing required key {key!r} in {what}")
+
+    def number(self, node: Node, what: str) -> float | None:
+        if isinstance(node, ScalarNode):
+            if node.tag == _FLOAT:
+                return float(_CONSTRUCTOR.construct_yaml_float(node))
+            if node.tag == _INT:
+                return float(_CONSTRUCTOR.construct_yaml_int(node))
+            if node.tag == _STR and node.style is None and _NUMBER_12.match(node.value):
+                return float(node.value)
+        self.error(node, f"expected a number for {what}, got {describe(node)}")
+        return None
+
+    def name(self, node: Node, what: str) -> str | None:
+        if isinstance(node, ScalarNode) and node.tag == _STR:
+            return str(node.value)
+        hint = ""
+        if isinstance(node, ScalarNode) and node.tag == _BOOL:
+            hint = " (YAML reads an unquoted yes/no/on/off/true/false as a boolean; quote it)"
+        self.error(node, f"expected {what}, got {describe(node)}{hint}")
+        return None
+
+    def text(self, node: Node, what: str) -> str | None:
+        if isinstance(node, ScalarNode) and node.tag == _STR:
+            return str(node.value)
+        self.error(node, f"expected {what} (a string), got {describe(node)}")
+        return None
+
+    def sequence(self, node: Node, what: str) -> list[Node] | None:
+        if isinstance(node, SequenceNode):
+            return list(node.value)
+        self.error(node, f"expected {what} (a list), got {describe(node)}")
+        return None
+
+    def choice(self, node: Node, what: str, path: Path) -> str | None:
+        """A name whose allowed values validation checks; records where it is."""
+        self.marks[path] = node
+        value = self.name(node, what)
+        if value is None:
+            self.hidden_under.add(path)
+        return value
+
+    # ------------------------------------------------------------------ document
+
+    def rule_base(self, root: Node) -> RuleBase | None:
+        entries = self.mapping(root, "a rule base")
+        if entries is None:
+            return None
+        self.keys(entries, root, TOP_KEYS, ("name", "inputs", "outputs", "rules"), "the rule base")
+        self.marks[()] = root
+
+        name = "rulebase"
+        if "name" in entries:
+            got = self.choice(entries["name"][1], "the rule-base name (an identifier)", ("name",))
+            name = got if got is not None else name
+        else:
+            self.hidden_under.add(("name",))
+
+        description = ""
+        if "description" in entries:
+            description = self.text(entries["description"][1], "a description") or ""
+
+        inputs = self.variables(entries, "input", root)
+        outputs = self.variables(entries, "output", root)
+
+        ops = Operators()
+        if "operators" in entries:
+            onode = entries["operators"][1]
+            self.marks[("operators",)] = onode
+            omap = self.mapping(onode, "operators")
+            if omap is not None:
+                self.keys(omap, onode, OPERATOR_KEYS, (), "operators")
+                chosen = {
+                    key: self.choice(omap[key][1], f"an {key} operator name"
+                                     if key[0] in "aeiou" else f"a {key} operator name",
+                                     ("operators", key))
+                    for key in OPERATOR_KEYS
+                    if key in omap
+                }
+                ops = Operators(
+                    and_=chosen.get("and") or ops.and_,
+                    or_=chosen.get("or") or ops.or_,
+                    implication=chosen.get("implication") or ops.implication,
+                    aggregation=chosen.get("aggregation") or ops.aggregation,
+                )
+
+        defuzzifier = "centroid"
+        if "defuzzifier" in entries:
+            defuzzifier = self.choice(entries["defuzzifier"][1], "a defuzzifier name",
+                                      ("defuzzifier",)) or defuzzifier
+        out_of_range = "clamp"
+        if "out_of_range" in entries:
+            out_of_range = self.choice(entries["out_of_range"][1], "an out_of_range policy",
+                                       ("out_of_range",)) or out_of_range
+
+        rules: list[Rule] = []
+        table: RuleTable | None = None
+        if "rules" in entries:
+            rules, table = self.rules(entries["rules"][1], inputs, outputs)
+        else:
+            self.hidden_at.add(("rules",))
+
+        return RuleBase(
+            name=name,
+            inputs=tuple(inputs),
+            outputs=tuple(outputs),
+            rules=tuple(rules),
+            operators=ops,
+            defuzzifier=defuzzifier,
+            out_of_range=out_of_range,
+            description=description,
+            table=table,
+        )
+
+    # ------------------------------------------------------------------ variables
+
+    def variables(
+        self, entries: dict[str, tuple[Node, Node]], kind: str, root: Node
+    ) -> list[Variable]:
+        group = kind + "s"
+        if group not in entries:
+            self.hidden_under.add((group,))
+            return []
+        node = entries[group][1]
+        self.marks[(group,)] = node
+        vmap = self.mapping(node, f"the {group}: a mapping of name to {{range, terms}}")
+        if vmap is None:
+            self.hidden_under.add((group,))
+            return []
+        return [self.variable(name, knode, vnode, kind) for name, (knode, vnode) in vmap.items()]
+
+    def variable(self, name: str, knode: Node, vnode: Node, kind: str) -> Variable:
+        base: Path = (kind + "s", name)
+        self.marks[base] = knode
+        what = f"{kind} {name!r}"
+        entries = self.mapping(vnode, f"{what}: {{range: [low, high], terms: ...}}")
+        if entries is None:
+            self.hidden_under.add(base)
+            self.broken_vars.add(name)
+            return Variable(name, 0.0, 1.0, ())
+        allowed = ("range", "terms", "default") if kind == "output" else ("range", "terms")
+        for key, (kn, _) in entries.items():
+            if key == "default" and kind == "input":
+                self.error(kn, "'default' is only allowed on outputs (the value used when no "
+                               "rule fires)")
+        self.keys({k: v for k, v in entries.items() if not (k == "default" and kind == "input")},
+                  vnode, allowed, ("range", "terms"), what)
+
+        low, high = 0.0, 1.0
+        range_ok = False
+        if "range" in entries:
+            rnode = entries["range"][1]
+            self.marks[(*base, "range")] = rnode
+            got = self.range(rnode, what)
+            if got is not None:
+                low, high = got
+                range_ok = math.isfinite(low) and math.isfinite(high) and low < high
+            else:
+                self.hidden_under.add((*base, "range"))
+        else:
+            self.hidden_under.add((*base, "range"))
+        if not range_ok:
+            # Coverage and default-in-range are meaningless without a valid range.
+            self.hidden_at.update({(*base, "terms"), (*base, "default")})
+
+        terms: tuple[Term, ...] = ()
+        if "terms" in entries:
+            terms = self.terms(entries["terms"][1], base, kind, low, high, range_ok)
+        else:
+            self.broken_vars.add(name)
+            self.hidden_under.add((*base, "terms"))
+
+        default: float | None = None
+        if "default" in entries and kind == "output":
+            dnode = entries["default"][1]
+            self.marks[(*base, "default")] = dnode
+            if not (isinstance(dnode, ScalarNode) and dnode.tag == _NULL):
+                default = self.number(dnode, f"the default of {what}")
+        return Variable(name, low, high, terms, default)
+
+    def range(self, node: Node, what: str) -> tuple[float, float] | None:
+        if not isinstance(node, SequenceNode) or len(node.value) != 2:
+            shown = f"{len(node.value)} items" if isinstance(node, SequenceNode) else describe(node)
+            self.error(node, f"expected the range of {what} as [low, high], got {shown}")
+            return None
+        low = self.number(node.value[0], f"the low end of the range of {what}")
+        high = self.number(node.value[1], f"the high end of the range of {what}")
+        if low is None or high is None:
+            return None
+        return low, high
+
+    def terms(
+        self, node: Node, base: Path, kind: str, low: float, high: float, range_ok: bool
+    ) -> tuple[Term, ...]:
+        tpath: Path = (*base, "terms")
+        self.marks[tpath] = node
+        var = base[1]
+        entries = self.mapping(
+            node, f"the terms of {kind} {var!r}: label: {{shape: ..., ...}} or a partition"
+        )
+        if entries is None:
+            self.hidden_under.add(tpath)
+            self.broken_vars.add(str(var))
+            return ()
+        if "partition" in entries:
+            return self.partition(entries, node, base, kind, low, high, range_ok)
+        return tuple(self.term(label, kn, vn, (*tpath, label))
+                     for label, (kn, vn) in entries.items())
+
+    def partition(
+        self,
+        entries: dict[str, tuple[Node, Node]],
+        node: Node,
+        base: Path,
+        kind: str,
+        low: float,
+        high: float,
+        range_ok: bool,
+    ) -> tuple[Term, ...]:
+        tpath: Path = (*base, "terms")
+        what = f"the partition of {kind} {base[1]!r}"
+        self.keys(entries, node, PARTITION_KEYS, ("partition", "labels"), what)
+        pnode = entries["partition"][1]
+        got = self.name(pnode, "a partition kind")
+        if got is not None and got not in PARTITION_KINDS:
+            self.error(pnode, f"unknown partition {got!r}{did_you_mean(got, PARTITION_KINDS)}; "
+                              f"expected one of {', '.join(PARTITION_KINDS)}")
+        ends = "shoulder" if kind == "input" else "triangle"
+        if "ends" in entries:
+            enode = entries["ends"][1]
+            e = self.name(enode, "partition ends (shoulder or triangle)")
+            if e is not None and e not in PARTITION_ENDS:
+                self.error(enode, f"unknown partition ends {e!r}{did_you_mean(e, PARTITION_ENDS)}"
+                                  f"; expected one of {', '.join(PARTITION_ENDS)}")
+            elif e is not None:
+                ends = e
+        labels: list[str] = []
+        if "labels" in entries:
+            lnode = entries["labels"][1]
+            items = self.sequence(lnode, "partition labels")
+            for item in items or []:
+                label = self.name(item, "a label name")
+                if label is not None:
+                    labels.append(label)
+                    self.marks[(*tpath, label)] = item
+            if items is not None and len(items) < 2:
+                self.error(lnode, f"a partition needs at least 2 labels, got {len(items)}")
+                self.broken_vars.add(str(base[1]))
+                return ()
+            if items is None or len(labels) != len(items):
+                self.broken_vars.add(str(base[1]))
+        else:
+            self.broken_vars.add(str(base[1]))
+            return ()
+        if not range_ok:
+            low, high = 0.0, 1.0  # placeholder: the range problem is reported already
+        return partition_terms(labels, low, high, ends)
+
+    def term(self, label: str, knode: Node, vnode: Node, tpath: Path) -> Term:
+        self.marks[tpath] = knode
+        coverage = tpath[:-1]
+        entries = self.mapping(vnode, f"term {label!r}: {{shape: ..., ...}}")
+        if entries is None:
+            self.hidden_under.add(tpath)
+            self.hidden_at.add(coverage)
+            return Term(label, "triangle", (0.0, 0.5, 1.0))
+        if "shape" not in entries:
+            self.error(vnode, f"missing required key 'shape' in term {label!r}; expected one of "
+                              f"{', '.join(SHAPE_PARAMS)}")
+            self.hidden_under.add(tpath)
+            self.hidden_at.add(coverage)
+            return Term(label, "triangle", (0.0, 0.5, 1.0))
+        snode = entries["shape"][1]
+        self.marks[(*tpath, "shape")] = snode
+        shape = self.name(snode, "a shape name")
+        if shape is None or shape not in SHAPE_PARAMS:
+            # validation reports the unknown shape with a did-you-mean; no parameters to read.
+            if shape is None:
+                self.hidden_under.add(tpath)
+            self.hidden_at.add(coverage)
+            return Term(label, shape or "triangle", ())
+        param_keys = _pwl_key(shape)
+        self.keys(entries, vnode, ("shape", *param_keys), ("shape", *param_keys),
+                  f"{shape} term {label!r}")
+        params: list[float] = []
+        if shape in PIECEWISE_LINEAR_SHAPES:
+            if "points" not in entries:
+                self.hidden_under.add(tpath)
+                self.hidden_at.add(coverage)
+                return Term(label, shape, (math.nan,) * len(SHAPE_PARAMS[shape]))
+            pnode = entries["points"][1]
+            self.marks[(*tpath, "points")] = pnode
+            items = self.sequence(pnode, f"the points of term {label!r}")
+            values = [self.number(i, f"a point of term {label!r}") for i in items or []]
+            if items is None or any(v is None for v in values):
+                self.hidden_under.add((*tpath, "points"))
+                self.hidden_at.add(coverage)
+                return Term(label, shape, (math.nan,) * len(SHAPE_PARAMS[shape]))
+            params = [v for v in values if v is not None]
+        else:
+            for key in param_keys:
+                value: float | None = None
+                if key in entries:
+                    self.marks[(*tpath, key)] = entries[key][1]
+                    value = self.number(entries[key][1], f"{key} of term {label!r}")
+                if value is None:
+                    self.hidden_under.add((*tpath, key))
+                    self.hidden_at.add(coverage)
+                    value = 1.0
+                params.append(value)
+        return Term(label, shape, tuple(params))
+
+    # ------------------------------------------------------------------ rules
+
+    def rules(
+        self, node: Node, inputs: list[Variable], outputs: list[Variable]
+    ) -> tuple[list[Rule], RuleTable | None]:
+        self.marks[("rules",)] = node
+        if isinstance(node, SequenceNode):
+            rules: list[Rule] = []
+            for item in node.value:
+                rule = self.rule(item, len(rules))
+                if rule is None:
+                    self.hidden_at.add(("rules",))
+                else:
+                    rules.append(rule)
+            return rules, None
+        if isinstance(node, MappingNode):
+            entries = self.mapping(node, "rules")
+            if entries is not None:
+                self.keys(entries, node, ("table",), ("table",), "rules (a list, or {table: ...})")
+                if "table" in entries:
+                    return self.table(entries["table"][1], inputs, outputs)
+            self.hidden_at.add(("rules",))
+            return [], None
+        self.error(node, f"expected rules as a list of {{if: ..., then: ...}} or as "
+                         f"{{table: ...}}, got {describe(node)}")
+        self.hidden_at.add(("rules",))
+        return [], None
+
+    def rule(self, node: Node, k: int) -> Rule | None:
+        entries = self.mapping(node, "a rule: {if: ..., then: ..., weight: ...}")
+        if entries is None:
+            return None
+        self.keys(entries, node, RULE_KEYS, ("if", "then"), "a rule")
+        if "if" not in entries or "then" not in entries:
+            return None
+        base: Path = ("rules", k)
+        self.marks[base] = node
+        antecedent = self.expression(entries["if"][1], (*base, "if"))
+        consequents: list[Consequent] = []
+        tnode = entries["then"][1]
+        self.marks[(*base, "then")] = tnode
+        tmap = self.mapping(tnode, "then: {output: label, ...}")
+        if tmap is None:
+            self.hidden_under.add((*base, "then"))
+            consequents.append(Consequent("?", "?"))
+        else:
+            for j, (out, (kn, vn)) in enumerate(tmap.items()):
+                self.marks[(*base, "then", j)] = kn
+                label = self.name(vn, f"a label of output {out!r}")
+                if label is None:
+                    self.hidden_under.add((*base, "then", j))
+                consequents.append(Consequent(out, label or "?"))
+        weight = 1.0
+        if "weight" in entries:
+            wnode = entries["weight"][1]
+            self.marks[(*base, "weight")] = wnode
+            w = self.number(wnode, "the rule weight")
+            weight = 1.0 if w is None else w
+        return Rule(antecedent, tuple(consequents), weight)
+
+    def expression(self, node: Node, path: Path) -> Expression:
+        """A condition; on a structural problem a placeholder whose checks are hidden."""
+        self.marks[path] = node
+        placeholder = Proposition("?", "?")
+        entries = self.mapping(node, "a condition such as {e: PS}, {and: [...]}, {or: [...]} or "
+                                     "{not: {e: PS}}")
+        if entries is None:
+            self.hidden_under.add(path)
+            return placeholder
+        if not entries:
+            self.error(node, "expected a condition such as {e: PS}, got an empty mapping")
+            self.hidden_under.add(path)
+            return placeholder
+        many = len(entries) > 1
+        parts: list[Expression] = []
+        for i, (key, (kn, vn)) in enumerate(entries.items()):
+            sub: Path = (*path, i) if many else path
+            self.marks[sub] = kn
+            parts.append(self.entry(key, kn, vn, sub))
+        return Compound("and", tuple(parts)) if many else parts[0]
+
+    def entry(self, key: str, knode: Node, vnode: Node, path: Path) -> Expression:
+        placeholder = Proposition("?", "?")
+        if key in ("and", "or"):
+            items = self.sequence(vnode, f"the operands of {key!r}")
+            if items is None:
+                self.hidden_under.add(path)
+                return placeholder
+            operands = tuple(self.expression(item, (*path, i)) for i, item in enumerate(items))
+            self.marks[path] = knode
+            return Compound("and" if key == "and" else "or", operands)
+        if key == "not":
+            inner = self.mapping(vnode, "the operand of 'not': {variable: label}")
+            if inner is None:
+                self.hidden_under.add(path)
+                return placeholder
+            if len(inner) != 1 or next(iter(inner)) in CONNECTIVES:
+                self.error(vnode, "'not' applies to one condition {variable: label}, got "
+                                  f"{describe(vnode)} with {len(inner)} entries; negate each "
+                                  "operand instead (De Morgan)" if len(inner) != 1 else
+                                  "'not' applies to one condition {variable: label}, not to "
+                                  "and/or; negate each operand instead (De Morgan)")
+                self.hidden_under.add(path)
+                return placeholder
+            var, (_, lnode) = next(iter(inner.items()))
+            label = self.name(lnode, f"a label of input {var!r}")
+            return self.proposition(var, label, True, path)
+        negated = False
+        lnode = vnode
+        if isinstance(vnode, MappingNode):
+            inner = self.mapping(vnode, f"{{not: label}} for input {key!r}")
+            if inner is None or list(inner) != ["not"]:
+                self.error(vnode, f"expected a label or {{not: label}} for input {key!r}, got "
+                                  f"a mapping with keys {', '.join(map(repr, inner or {}))}")
+                self.hidden_under.add(path)
+                return placeholder
+            lnode = inner["not"][1]
+            negated = True
+        label = self.name(lnode, f"a label of input {key!r}")
+        return self.proposition(key, label, negated, path)
+
+    def proposition(self, var: str, label: str | None, negated: bool, path: Path) -> Expression:
+        if label is None or var in self.broken_vars:
+            self.hidden_under.add(path)
+        return Proposition(var, label or "?", negated)
+
+    def table(
+        self, node: Node, inputs: list[Variable], outputs: list[Variable]
+    ) -> tuple[list[Rule], RuleTable | None]:
+        entries = self.mapping(node, "a rule table: {rows, columns, output, cells}")
+        if entries is None:
+            self.hidden_at.add(("rules",))
+            return [], None
+        self.keys(entries, node, TABLE_KEYS, ("rows", "columns", "cells"), "the rule table")
+        names: dict[str, str | None] = {}
+        for key in ("rows", "columns", "output"):
+            if key in entries:
+                names[key] = self.choice(entries[key][1], f"an {key[:-1]} name" if key != "output"
+                                         else "an output name", ("rules", "table", key))
+        if "output" not in entries:
+            if len(outputs) == 1:
+                names["output"] = outputs[0].name
+            else:
+                self.error(node, "missing required key 'output' in the rule table (the rule "
+                                 f"base has {len(outputs)} outputs)")
+        rows, cols, out = names.get("rows"), names.get("columns"), names.get("output")
+        if rows is None or cols is None or out is None:
+            self.hidden_at.add(("rules",))
+            return [], None
+        table = RuleTable(rows, cols, out)
+        row_var = next((v for v in inputs if v.name == rows), None)
+        col_var = next((v for v in inputs if v.name == cols), None)
+        row_labels = self.header(entries, "row_labels", row_var)
+        col_labels = self.header(entries, "column_labels", col_var)
+        if (row_labels is None or col_labels is None or "cells" not in entries
+                or rows in self.broken_vars or cols in self.broken_vars):
+            self.hidden_at.add(("rules",))
+            return [], table
+        grid = self.cells(entries["cells"][1], len(row_labels), len(col_labels), rows, cols)
+        if grid is None:
+            self.hidden_at.add(("rules",))
+            return [], table
+        rules: list[Rule] = []
+        for (rlabel, rnode), row in zip(row_labels, grid, strict=True):
+            for (clabel, cnode), (cell, cell_loc) in zip(col_labels, row, strict=True):
+                if cell == EMPTY_CELL:
+                    continue
+                k = len(rules)
+                self.marks[("rules", k)] = cell_loc
+                self.marks[("rules", k, "if", 0)] = rnode
+                self.marks[("rules", k, "if", 1)] = cnode
+                rules.append(Rule(
+                    Compound("and", (Proposition(rows, rlabel), Proposition(cols, clabel))),
+                    (Consequent(out, cell),),
+                ))
+        if out in self.broken_vars:
+            self.hidden_under.update(("rules", k, "then") for k in range(len(rules)))
+        return rules, table
+
+    def header(
+        self, entries: dict[str, tuple[Node, Node]], key: str, var: Variable | None
+    ) -> list[tuple[str, Node]] | None:
+        """Row or column labels in table order: given explicitly, or the variable's terms."""
+        if key not in entries:
+            if var is None:
+                return None  # unknown variable: validation reports it at rows/columns
+            anchor = entries["cells"][1] if "cells" in entries else None
+            return [(t.name, anchor) for t in var.terms] if anchor is not None else None
+        lnode = entries[key][1]
+        items = self.sequence(lnode, f"{key} (labels in table order)")
+        if items is None:
+            return None
+        labels: list[tuple[str, Node]] = []
+        seen: set[str] = set()
+        for item in items:
+            label = self.name(item, "a label name")
+            if label is None:
+                return None
+            if label in seen:
+                self.error(item, f"duplicate label {label!r} in {key}")
+                return None
+            seen.add(label)
+            labels.append((label, item))
+        return labels
+
+    def cells(
+        self, node: Node, nrows: int, ncols: int, rows: str, cols: str
+    ) -> list[list[tuple[str, Node]]] | None:
+        """The table body as rows of (label, node positioned at the cell)."""
+        lines: list[tuple[str, Callable[[int], Node]]] = []
+        if isinstance(node, ScalarNode) and node.tag == _STR:
+            lines = self.block_lines(node)
+        elif isinstance(node, SequenceNode):
+            for item in node.value:
+                row_text = self.text(item, "a table row (labels separated by spaces)")
+                if row_text is None:
+                    return None
+                lines.append((row_text, self.cell_locator(item, quoted=item.style is not None)))
+        else:
+            self.error(node, "expected the cells as a block of rows (cells: |) or a list of row "
+                             f"strings, got {describe(node)}")
+            return None
+        grid: list[list[tuple[str, Node]]] = []
+        ok = True
+        for text, locate in lines:
+            row = [(m.group(), locate(m.start())) for m in re.finditer(r"\S+", text)]
+            if len(row) != ncols:
+                self.problems.append(Problem(
+                    self.loc(locate(0)),
+                    f"table row {len(grid) + 1} has {len(row)} cells, expected {ncols} (one per "
+                    f"label of columns input {cols!r})",
+                ))
+                ok = False
+            grid.append(row)
+        if len(grid) != nrows:
+            hint = ""
+            if isinstance(node, ScalarNode) and node.style != "|":
+                hint = "; write the cells as a literal block (cells: |) so each row keeps its line"
+            self.error(node, f"table has {len(grid)} rows, expected {nrows} (one per label of "
+                             f"rows input {rows!r}){hint}")
+            ok = False
+        return grid if ok else None
+
+    def block_lines(self, node: ScalarNode) -> list[tuple[str, Callable[[int], Node]]]:
+        """Non-blank lines of a string scalar, each with a function locating a column in it."""
+        out: list[tuple[str, Callable[[int], Node]]] = []
+        for i, line in enumerate(str(node.value).split("\n")):
+            if not line.strip():
+                continue
+            if node.style == "|":
+                src_no = node.start_mark.line + 1 + i
+                src = self.lines[src_no] if src_no < len(self.lines) else ""
+                indent = len(src.rstrip()) - len(line.rstrip())
+                if line.strip() and src.rstrip().endswith(line.rstrip()) and indent >= 0:
+                    out.append((line, self.cell_locator(node, line=src_no, column=indent)))
+                    continue
+            out.append((line, self.cell_locator(node)))
+        return out
+
+    def cell_locator(
+        self, node: Node, *, quoted: bool = False, line: int | None = None,
+        column: int | None = None,
+    ) -> Callable[[int], Node]:
+        """Position of column ``offset`` of a row: a stand-in node whose mark points there."""
+        def locate(offset: int) -> Node:
+            mark = node.start_mark
+            if line is None:
+                # Only single-line rows can be located exactly inside a plain or quoted scalar.
+                same_line = node.end_mark.line == mark.line
+                col = mark.column + (1 if quoted else 0) + offset if same_line else mark.column
+                return _At(mark.line, col)
+            return _At(line, (column or 0) + offset)
+        return locate
+
+
+class _At(Node):
+    """A pseudo-node marking a position inside a scalar (a table cell)."""
+
+    def __init__(self, line: int, column: int) -> None:
+        mark = yaml.error.Mark("", 0, line, column, None, 0)
+        super().__init__("tag:fuzzkit:cell", "", mark, mark)
+
+
+# ---------------------------------------------------------------------------- loading
+
+
+def _expanded_size(root: Node, limit: int) -> int:
+    """Nodes in the document with every alias expanded, counting stops past ``limit``.
+
+    Computed on the composed graph (aliases are shared nodes) without expanding anything, so
+    a billion-laughs document is measured in time linear in its text.
+    """
+    size: dict[int, int] = {}
+    on_path: set[int] = set()
+    stack: list[tuple[Node, bool]] = [(root, False)]
+
+    def children(n: Node) -> list[Node]:
+        if isinstance(n, SequenceNode):
+            return list(n.value)
+        if isinstance(n, MappingNode):
+            return [x for pair in n.value for x in pair]
+        return []
+
+    while stack:
+        node, done = stack.pop()
+        nid = id(node)
+        if done:
+            on_path.discard(nid)
+            total = 1 + sum(size[id(c)] for c in children(node))
+            size[nid] = min(total, limit + 1)
+            if total > limit:
+                return total
+            continue
+        if nid in size:
+            continue
+        on_path.add(nid)
+        stack.append((node, True))
+        for child in children(node):
+            if id(child) in on_path:
+                raise _TooBig("the document refers to itself through an alias (recursive "
+                              "structure); expected a tree")
+            if id(child) not in size:
+                stack.append((child, False))
+    return size[id(root)]
+
+
+def _compose(text: str, file: str) -> Node | None:
+    try:
+        return yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        where = Location(file, mark.line + 1, mark.column + 1) if mark else Location(file)
+        what = " ".join(x for x in (exc.context, exc.problem) if x) or "invalid YAML"
+        if "\t" in text and "'\\t'" in what:
+            what += " (YAML forbids tabs for indentation; use spaces)"
+        raise RuleBaseError([Problem(where, f"invalid YAML: {what}")]) from None
+    except yaml.YAMLError as exc:
+        raise RuleBaseError([Problem(Location(file), f"invalid YAML: {exc}")]) from None
+    except RecursionError:
+        raise RuleBaseError([Problem(Location(file), "invalid rule base: YAML nested too deeply "
+                                     "(expected a few levels of mappings and lists)")]) from None
+
+
+def loads_rulebase(text: str, source: str = "<string>") -> RuleBase:
+    """Parse rule-base YAML ``text``; ``source`` names it in messages and in ``rb.source``.
+
+    Raises
+    ------
+    RuleBaseError
+        Listing every problem as ``source:line:col: message``, sorted by position.
+    """
+    size = len(text.encode("utf-8", errors="replace"))
+    if size > MAX_FILE_BYTES:
+        raise RuleBaseError([Problem(Location(source), f"file is {size} bytes; rule bases are "
+                                     f"limited to {MAX_FILE_BYTES} bytes (1 MiB)")])
+    root = _compose(text, source)
+    if root is None:
+        raise RuleBaseError([Problem(Location(source), "file is empty; expected a mapping with "
+                                     "name, inputs, outputs and rules")])
+    try:
+        nodes = _expanded_size(root, MAX_NODES)
+    except _TooBig as exc:
+        raise RuleBaseError([Problem(Location(source), str(exc))]) from None
+    if nodes > MAX_NODES:
+        raise RuleBaseError([Problem(Location(source), f"the document expands to more than "
+                                     f"{MAX_NODES} nodes through aliases (an alias bomb?); "
+                                     "rule bases are far smaller")])
+    reader = _Reader(source, text.split("\n"))
+    rb = reader.rule_base(root)
+    problems = list(reader.problems)
+    if rb is not None:
+        for path, message in validation.check(rb):
+            if path in reader.hidden_at or any(
+                path[: len(h)] == h for h in reader.hidden_under
+            ):
+                continue
+            problems.append(Problem(_locate(reader, path, root), message))
+    if problems:
+        unique = list(dict.fromkeys(problems))
+        unique.sort(key=lambda p: (p.location.line, p.location.col))
+        raise RuleBaseError(unique)
+    if rb is None:  # pragma: no cover - a missing model always comes with a problem
+        raise RuntimeError("no rule base and no problem")
+    digest = hashlib.sha256(text.encode("utf-8")).hexdigest()
+    return replace(rb, source=Source(source, digest))
+
+
+def _locate(reader: _Reader, path: Path, root: Node) -> Location:
+    for n in range(len(path), -1, -1):
+        node = reader.marks.get(path[:n])
+        if node is not None:
+            return reader.loc(node)
+    return reader.loc(root)
+
+
+def load_file(path: str | FsPath) -> RuleBase:
+    """Read and parse a rule-base YAML file (see :func:`loads_rulebase`)."""
+    p = FsPath(path)
+    name = str(path)
+    try:
+        size = p.stat().st_size
+        if size > MAX_FILE_BYTES:
+            raise RuleBaseError([Problem(Location(name), f"file is {size} bytes; rule bases are "
+                                         f"limited to {MAX_FILE_BYTES} bytes (1 MiB)")])
+        data = p.read_bytes()
+    except IsADirectoryError:
+        raise RuleBaseError([Problem(Location(name), "is a directory (expected a .yaml "
+                                     "file)")]) from None
+    except OSError as exc:
+        raise RuleBaseError([Problem(Location(name), f"cannot read: {exc.strerror or exc}")]) \
+            from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise RuleBaseError([Problem(Location(name), f"not UTF-8 text (byte {exc.start}); "
+                                     "expected a YAML file")]) from None
+    return loads_rulebase(text, name)
+
+
+# ---------------------------------------------------------------------------- dumping
+
+
+class _Flow(list[Any]):
+    """A list written in flow style: ``[a, b]``."""
+
+
+class _FlowMap(dict[str, Any]):
+    """A mapping written in flow style: ``{a: 1}``."""
+
+
+class _Literal(str):
+    """A string written as a literal block (``|``)."""
+
+    __slots__ = ()
+
+
+class _Dumper(yaml.SafeDumper):
+    """SafeDumper with flow lists/maps and literal blocks where the format reads best."""
+
+
+_Dumper.add_representer(
+    _Flow, lambda d, v: d.represent_sequence("tag:yaml.org,2002:seq", v, flow_style=True)
+)
+_Dumper.add_representer(
+    _FlowMap, lambda d, v: d.represent_mapping("tag:yaml.org,2002:map", v, flow_style=True)
+)
+_Dumper.add_representer(
+    _Literal, lambda d, v: d.represent_scalar(_STR, v, style="|")
+)
+
+
+def _dump_terms(var: Variable, kind: str) -> dict[str, Any]:
+    labels = var.term_names
+    if len(labels) >= 2 and math.isfinite(var.low) and math.isfinite(var.high):
+        default_ends = "shoulder" if kind == "input" else "triangle"
+        for ends in (default_ends, *(e for e in PARTITION_ENDS if e != default_ends)):
+            if partition_terms(labels, var.low, var.high, ends) == var.terms:
+                spec: dict[str, Any] = {"partition": "triangular", "labels": _Flow(labels)}
+                if ends != default_ends:
+                    spec["ends"] = ends
+                return _FlowMap(spec)
+    out: dict[str, Any] = {}
+    for t in var.terms:
+        spec = {"shape": t.shape}
+        if t.shape in PIECEWISE_LINEAR_SHAPES or t.shape not in SHAPE_PARAMS:
+            spec["points"] = _Flow(float(x) for x in t.params)
+        else:
+            spec.update(zip(SHAPE_PARAMS[t.shape], map(float, t.params), strict=True))
+        out[t.name] = _FlowMap(spec)
+    return out
+
+
+def _dump_expression(expr: Expression) -> dict[str, Any]:
+    if isinstance(expr, Proposition):
+        return {expr.variable: {"not": expr.term} if expr.negated else expr.term}
+    flat = expr.op == "and" and all(isinstance(o, Proposition) for o in expr.operands)
+    names = [o.variable for o in expr.operands if isinstance(o, Proposition)]
+    if flat and len(set(names)) == len(names) and len(names) >= 2:
+        merged: dict[str, Any] = {}
+        for o in expr.operands:
+            merged.update(_dump_expression(o))
+        return merged
+    return {expr.op: [_dump_expression(o) for o in expr.operands]}
+
+
+def _table_rules(
+    table: RuleTable, rows: Sequence[str], cols: Sequence[str], grid: dict[tuple[str, str], str]
+) -> tuple[Rule, ...]:
+    return tuple(
+        Rule(Compound("and", (Proposition(table.rows, r), Proposition(table.columns, c))),
+             (Consequent(table.output, grid[r, c]),))
+        for r in rows for c in cols if (r, c) in grid
+    )
+
+
+def _dump_table(rb: RuleBase) -> dict[str, Any] | None:
+    """The table form of ``rb.rules`` if they are exactly ``rb.table``, else ``None``."""
+    t = rb.table
+    if t is None:
+        return None
+    try:
+        row_var, col_var = rb.input(t.rows), rb.input(t.columns)
+    except KeyError:
+        return None
+    grid: dict[tuple[str, str], str] = {}
+    seen_rows: list[str] = []
+    seen_cols: list[str] = []
+    for rule in rb.rules:
+        a = rule.antecedent
+        if not (isinstance(a, Compound) and a.op == "and" and len(a.operands) == 2
+                and rule.weight == 1.0 and len(rule.consequents) == 1
+                and rule.consequents[0].variable == t.output):
+            return None
+        r, c = a.operands
+        if not (isinstance(r, Proposition) and isinstance(c, Proposition)
+                and r.variable == t.rows and c.variable == t.columns
+                and not r.negated and not c.negated
+                and r.term in row_var.term_names and c.term in col_var.term_names
+                and (r.term, c.term) not in grid):
+            return None
+        grid[r.term, c.term] = rule.consequents[0].term
+        seen_rows.append(r.term)
+        seen_cols.append(c.term)
+    row_orders = [list(row_var.term_names),
+                  list(dict.fromkeys(seen_rows + list(row_var.term_names)))]
+    col_orders = [list(col_var.term_names),
+                  list(dict.fromkeys(seen_cols + list(col_var.term_names)))]
+    for rows in row_orders:
+        for cols in col_orders:
+            if _table_rules(t, rows, cols, grid) != rb.rules:
+                continue
+            cells = [[grid.get((r, c), EMPTY_CELL) for c in cols] for r in rows]
+            width = max(len(x) for row in cells for x in row)
+            text = "\n".join(" ".join(x.ljust(width) for x in row).rstrip() for row in cells)
+            spec: dict[str, Any] = {"rows": t.rows, "columns": t.columns, "output": t.output}
+            if rows != list(row_var.term_names):
+                spec["row_labels"] = _Flow(rows)
+            if cols != list(col_var.term_names):
+                spec["column_labels"] = _Flow(cols)
+            spec["cells"] = _Literal(text + "\n")
+            return {"table": spec}
+    return None
+
+
+def dump(rb: RuleBase) -> str:
+    """The YAML text of ``rb``; ``loads_rulebase(dump(rb)) == rb`` for every valid model.
+
+    Partitions are written back as the ``partition`` shorthand when the terms are exactly one,
+    and the rules as a table when ``rb.table`` is set and the rules are exactly that table.
+    """
+    doc: dict[str, Any] = {"name": rb.name}
+    if rb.description:
+        doc["description"] = rb.description
+    for kind, group in (("input", rb.inputs), ("output", rb.outputs)):
+        section: dict[str, Any] = {}
+        for var in group:
+            spec: dict[str, Any] = {"range": _Flow([float(var.low), float(var.high)])}
+            if kind == "output" and var.default is not None:
+                spec["default"] = float(var.default)
+            spec["terms"] = _dump_terms(var, kind)
+            section[var.name] = spec
+        doc[kind + "s"] = section
+    ops = rb.operators
+    doc["operators"] = _FlowMap({"and": ops.and_, "or": ops.or_, "implication": ops.implication,
+                                 "aggregation": ops.aggregation})
+    doc["defuzzifier"] = rb.defuzzifier
+    doc["out_of_range"] = rb.out_of_range
+    table = _dump_table(rb)
+    if table is not None:
+        doc["rules"] = table
+    else:
+        rules: list[Any] = []
+        for rule in rb.rules:
+            item: dict[str, Any] = {
+                "if": _dump_expression(rule.antecedent),
+                "then": {c.variable: c.term for c in rule.consequents},
+            }
+            if rule.weight != 1.0:
+                item["weight"] = float(rule.weight)
+            rules.append(_FlowMap(item))
+        doc["rules"] = rules
+    return yaml.dump(doc, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=100)
+
+
+# ---------------------------------------------------------------------------- JSON Schema
+
+
+def json_schema() -> dict[str, Any]:
+    """A JSON Schema (draft 2020-12) of the rule-base format, for editors and linters.
+
+    Structural only (keys, types, shapes, operator names); the semantic checks (ordered
+    points, known labels, coverage) need :func:`loads_rulebase`.
+    """
+    number = {"type": "number"}
+    name = {"type": "string", "pattern": r"^[A-Za-z_][A-Za-z0-9_]*$"}
+    shape_defs: list[dict[str, Any]] = []
+    for shape, params in SHAPE_PARAMS.items():
+        if shape in PIECEWISE_LINEAR_SHAPES:
+            props: dict[str, Any] = {
+                "points": {"type": "array", "items": number, "minItems": len(params),
+                           "maxItems": len(params),
+                           "description": f"{shape} points [{', '.join(params)}]"}
+            }
+            required = ["shape", "points"]
+        else:
+            props = {p: number for p in params}
+            required = ["shape", *params]
+        shape_defs.append({
+            "type": "object",
+            "properties": {"shape": {"const": shape}, **props},
+            "required": required,
+            "additionalProperties": False,
+        })
+    partition = {
+        "type": "object",
+        "description": "N evenly spaced triangular labels over the range",
+        "properties": {
+            "partition": {"enum": list(PARTITION_KINDS)},
+            "labels": {"type": "array", "items": name, "minItems": 2, "uniqueItems": True},
+            "ends": {"enum": list(PARTITION_ENDS),
+                     "description": "outer terms: shoulder (inputs' default) or triangle"},
+        },
+        "required": ["partition", "labels"],
+        "additionalProperties": False,
+    }
+    explicit_terms = {
+        "type": "object",
+        "propertyNames": {"allOf": [name, {"not": {"const": "partition"}}]},
+        "additionalProperties": {"$ref": "#/$defs/term"},
+        "minProperties": 1,
+    }
+
+    def variable(kind: str) -> dict[str, Any]:
+        props: dict[str, Any] = {
+            "range": {"type": "array", "items": number, "minItems": 2, "maxItems": 2,
+                      "description": "[low, high]"},
+            "terms": {"oneOf": [{"$ref": "#/$defs/partition"}, explicit_terms]},
+        }
+        if kind == "output":
+            props["default"] = {"type": ["number", "null"],
+                                "description": "output when no rule fires (null = NaN)"}
+        return {"type": "object", "properties": props, "required": ["range", "terms"],
+                "additionalProperties": False}
+
+    condition: dict[str, Any] = {
+        "type": "object",
+        "minProperties": 1,
+        "description": "{input: label, ...} (AND), {and: [...]}, {or: [...]}, {not: {input: "
+                       "label}}, {input: {not: label}}",
+        "properties": {
+            "and": {"type": "array", "items": {"$ref": "#/$defs/condition"}, "minItems": 2},
+            "or": {"type": "array", "items": {"$ref": "#/$defs/condition"}, "minItems": 2},
+            "not": {"type": "object", "minProperties": 1, "maxProperties": 1,
+                    "additionalProperties": name},
+        },
+        "additionalProperties": {
+            "oneOf": [name, {"type": "object", "properties": {"not": name},
+                             "required": ["not"], "additionalProperties": False}]
+        },
+    }
+    rule = {
+        "type": "object",
+        "properties": {
+            "if": {"$ref": "#/$defs/condition"},
+            "then": {"type": "object", "minProperties": 1, "additionalProperties": name},
+            "weight": {"type": "number", "minimum": 0, "maximum": 1},
+        },
+        "required": ["if", "then"],
+        "additionalProperties": False,
+    }
+    table = {
+        "type": "object",
+        "properties": {
+            "rows": name, "columns": name, "output": name,
+            "row_labels": {"type": "array", "items": name},
+            "column_labels": {"type": "array", "items": name},
+            "cells": {"oneOf": [{"type": "string"}, {"type": "array", "items": {"type": "string"}}],
+                      "description": "one line per row, labels separated by spaces, '-' = no "
+                                     "rule"},
+        },
+        "required": ["rows", "columns", "cells"],
+        "additionalProperties": False,
+    }
+    return {
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "$id": "https://fuzzkit.invalid/schema/rulebase.json",
+        "title": "fuzzkit rule base",
+        "description": "A Mamdani fuzzy rule base (see docs/rulebase-format.md).",
+        "type": "object",
+        "properties": {
+            "name": {**name, "description": "identifier; the C symbol prefix"},
+            "description": {"type": "string"},
+            "inputs": {"type": "object", "minProperties": 1, "propertyNames": name,
+                       "additionalProperties": variable("input")},
+            "outputs": {"type": "object", "minProperties": 1, "propertyNames": name,
+                        "additionalProperties": variable("output")},
+            "operators": {
+                "type": "object",
+                "properties": {
+                    "and": {"enum": list(AND_OPERATORS)},
+                    "or": {"enum": list(OR_OPERATORS)},
+                    "implication": {"enum": list(IMPLICATIONS)},
+                    "aggregation": {"enum": list(AGGREGATIONS)},
+                },
+                "additionalProperties": False,
+            },
+            "defuzzifier": {"enum": list(DEFUZZIFIERS)},
+            "out_of_range": {"enum": list(OUT_OF_RANGE_POLICIES)},
+            "rules": {"oneOf": [
+                {"type": "array", "items": {"$ref": "#/$defs/rule"}, "minItems": 1},
+                {"type": "object", "properties": {"table": {"$ref": "#/$defs/table"}},
+                 "required": ["table"], "additionalProperties": False},
+            ]},
+        },
+        "required": ["name", "inputs", "outputs", "rules"],
+        "additionalProperties": False,
+        "$defs": {
+            "term": {"oneOf": shape_defs},
+            "partition": partition,
+            "condition": condition,
+            "rule": rule,
+            "table": table,
+        },
+    }
+

@@ -1,0 +1,82 @@
+"""Find rule bases by shipped name or by path: the entry point most users call.
+
+Shipped rule bases live in the package ``fuzzkit.rulebases`` (the repository's ``rulebases/``
+folder) and are read with :mod:`importlib.resources`, so names resolve the same way from a
+source checkout, an editable install and a plain ``pip install .``.
+"""
+
+from __future__ import annotations
+
+import os
+from importlib import resources
+from pathlib import Path
+
+from fuzzkit.dsl import load_file, loads_rulebase
+from fuzzkit.errors import Location, Problem, RuleBaseError
+from fuzzkit.model import RuleBase
+from fuzzkit.validation import did_you_mean
+
+_PACKAGE = "fuzzkit.rulebases"
+_SUFFIXES = (".yaml", ".yml")
+
+
+def available() -> list[str]:
+    """Names of the shipped rule bases, sorted (``load(name)`` accepts each)."""
+    root = resources.files(_PACKAGE)
+    return sorted(
+        entry.name.rsplit(".", 1)[0]
+        for entry in root.iterdir()
+        if entry.is_file() and entry.name.endswith(_SUFFIXES)
+    )
+
+
+def _looks_like_path(spec: str) -> bool:
+    return (
+        spec.endswith(_SUFFIXES)
+        or os.sep in spec
+        or "/" in spec
+        or (os.altsep is not None and os.altsep in spec)
+    )
+
+
+def load(name_or_path: str | os.PathLike[str]) -> RuleBase:
+    """Load a rule base from a YAML file path or by the name of a shipped rule base.
+
+    A string ending in ``.yaml``/``.yml`` or containing a path separator is a path; any other
+    string is a shipped name (see :func:`available`).
+
+    Raises
+    ------
+    RuleBaseError
+        The file is malformed (every problem listed), missing, or the name is unknown.
+
+    Examples
+    --------
+    >>> rb = load("macvicar_whelan")
+    >>> rb.input_names
+    ('e', 'de')
+    """
+    if isinstance(name_or_path, os.PathLike):
+        return load_file(Path(name_or_path))
+    spec = str(name_or_path)
+    if _looks_like_path(spec):
+        return load_file(spec)
+    names = available()
+    if spec not in names:
+        if Path(spec).is_file():  # a file without a YAML suffix in the working folder
+            return load_file(spec)
+        raise RuleBaseError([Problem(
+            Location(spec),
+            f"no shipped rule base or file called {spec!r}{did_you_mean(spec, names)}; "
+            f"shipped: {', '.join(names)} (or give a path to a .yaml file)",
+        )])
+    resource = resources.files(_PACKAGE).joinpath(spec + ".yaml")
+    if not resource.is_file():
+        resource = resources.files(_PACKAGE).joinpath(spec + ".yml")
+    text = resource.read_text(encoding="utf-8")
+    return loads_rulebase(text, source=f"<shipped>/{resource.name}")
+
+
+def loads(text: str, source: str = "<string>") -> RuleBase:
+    """Parse rule-base YAML from a string; ``source`` names it in error messages."""
+    return loads_rulebase(text, source)
