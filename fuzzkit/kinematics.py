@@ -375,7 +375,9 @@ class IKResult:
 # The chain
 # --------------------------------------------------------------------------------------------
 
-_Eval = tuple[Mat3, Vec3, list[Vec3], list[Vec3]]
+#: One kinematic pass: TCP rotation and position, each joint's axis and origin (base frame).
+ChainEval = tuple[Mat3, Vec3, list[Vec3], list[Vec3]]
+_Eval = ChainEval
 
 
 class SerialChain:
@@ -417,8 +419,7 @@ class SerialChain:
             (tool[2, 0], tool[2, 1], tool[2, 2]),
         )
         self._tool_p: Vec3 = (tool[0, 3], tool[1, 3], tool[2, 3])
-        self._cache_q: tuple[float, ...] | None = None
-        self._cache: _Eval | None = None
+        self._cache: dict[tuple[float, ...], _Eval] = {}
 
     # ---- scalar forward kinematics ----------------------------------------------------------
 
@@ -429,8 +430,9 @@ class SerialChain:
         the geometric Jacobian needs, so one pass gives both FK and J.
         """
         key = tuple(q)
-        if key == self._cache_q and self._cache is not None:
-            return self._cache
+        hit = self._cache.get(key)
+        if hit is not None:
+            return hit
         r00, r01, r02 = 1.0, 0.0, 0.0
         r10, r11, r12 = 0.0, 1.0, 0.0
         r20, r21, r22 = 0.0, 0.0, 1.0
@@ -483,8 +485,38 @@ class SerialChain:
             ),
         )
         out: _Eval = (rot, p, axes, origins)
-        self._cache_q, self._cache = key, out
+        # A few recent configurations: the plant alternates between the IK iterate and the
+        # actual (lagging) joints, and each is asked for again in the next period.
+        if len(self._cache) >= 8:
+            self._cache.clear()
+        self._cache[key] = out
         return out
+
+    def evaluate(self, q: Sequence[float]) -> ChainEval:
+        """One kinematic pass for the hot path: ``(R_tcp, p_tcp, joint axes, joint origins)``.
+
+        Tuples of floats in the base frame; ``q`` is not checked (use :meth:`fk` for user
+        input). Feed the result to :meth:`jacobian_of` and :meth:`frames_of` to avoid
+        recomputing.
+        """
+        return self._evaluate(q)
+
+    def jacobian_of(self, ev: ChainEval) -> FloatArray:
+        """Geometric Jacobian (6 x dof) from an :meth:`evaluate` result."""
+        return np.array(self._jacobian_rows(ev))
+
+    def frames_of(self, ev: ChainEval) -> FloatArray:
+        """Arm polyline (base, DH frame origins, flange, TCP) from an :meth:`evaluate` result."""
+        rot, p, _, origins = ev
+        # flange = TCP minus the tool offset: p6 = p - R R_t^T t
+        t_rt = self._tool_r
+        tp = self._tool_p
+        back = [t_rt[0][i] * tp[0] + t_rt[1][i] * tp[1] + t_rt[2][i] * tp[2] for i in range(3)]
+        p6 = [
+            p[i] - (rot[i][0] * back[0] + rot[i][1] * back[1] + rot[i][2] * back[2])
+            for i in range(3)
+        ]
+        return np.array([*origins, p6, p])
 
     def _check_q(self, q: Sequence[float] | FloatArray) -> list[float]:
         values = [float(v) for v in np.asarray(q, dtype=float).reshape(-1)]
@@ -519,13 +551,7 @@ class SerialChain:
 
         This is the polyline drawn as the arm in recordings.
         """
-        rot, p, _, origins = self._evaluate(self._check_q(q))
-        # flange = TCP pose times the inverse tool offset: p6 = p - R_flange t = p - R R_t^T t
-        t_rt = self._tool_r
-        tp = self._tool_p
-        back = [sum(t_rt[k][i] * tp[k] for k in range(3)) for i in range(3)]  # R_t^T t
-        p6 = [p[i] - sum(rot[i][k] * back[k] for k in range(3)) for i in range(3)]
-        return np.array([*origins, p6, p])
+        return self.frames_of(self._evaluate(self._check_q(q)))
 
     def jacobian(self, q: Sequence[float] | FloatArray) -> FloatArray:
         """Return the 6 x dof geometric Jacobian at the TCP, base frame, rows ``[v; w]``.
