@@ -1,0 +1,369 @@
+"""``fuzzkit validate | info | eval | surface | schema``: working with rule bases.
+
+Every RULEBASE argument is a path to a YAML file or the name of a shipped rule base.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import json
+import math
+import sys
+import textwrap
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, TextIO
+
+from fuzzkit.errors import EvaluationError, Location, Problem, ProblemsError, RuleBaseError
+from fuzzkit.model import SHAPE_PARAMS, Compound, Expression, Proposition, RuleBase, Variable
+
+EXIT_OK = 0
+EXIT_BAD_INPUT = 2
+
+
+def register(sub: Any) -> None:
+    """Add the rule-base subcommands to the ``fuzzkit`` parser."""
+    p = sub.add_parser("validate", help="check rule-base files; list every problem",
+                       description="Check rule-base YAML files (paths or shipped names). Exit 0 "
+                                   "when all are valid, 2 listing every problem otherwise.")
+    p.add_argument("files", nargs="+", metavar="FILE")
+    p.set_defaults(handler=cmd_validate)
+
+    p = sub.add_parser("info", help="describe a rule base: variables, terms, rules",
+                       description="Print a rule base's variables with ranges, their terms with "
+                                   "shapes and parameters, and its rules (as a grid for tables).")
+    p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
+    p.set_defaults(handler=cmd_info)
+
+    p = sub.add_parser("eval", help="evaluate a rule base at a point or at CSV rows",
+                       description="Evaluate a rule base with the exact engine, at one point "
+                                   "(--input NAME=VALUE for every input) or at every row of a CSV "
+                                   "file (--points, header = input names; the rows are echoed "
+                                   "with the outputs appended). NaN inputs give NaN outputs.")
+    p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
+    group = p.add_mutually_exclusive_group(required=True)
+    group.add_argument("--input", "-i", action="append", metavar="NAME=VALUE", dest="inputs",
+                       help="an input value (repeat for every input)")
+    group.add_argument("--points", metavar="FILE.csv",
+                       help="CSV file with a header of input names ('-' reads stdin)")
+    p.add_argument("--json", action="store_true", help="print the point's outputs as JSON")
+    p.set_defaults(handler=cmd_eval)
+
+    p = sub.add_parser("surface", help="write the control surface of a 2-input rule base",
+                       description="Compute the control surface output = F(input1, input2) with "
+                                   "the exact engine and write it as a Rerun recording (3-D mesh "
+                                   "plus the label-peak grid) and/or a PNG.")
+    p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
+    p.add_argument("--rrd", metavar="OUT.rrd", help="Rerun recording to write")
+    p.add_argument("--png", metavar="OUT.png", help="PNG image to write")
+    p.add_argument("--resolution", type=int, default=101, metavar="N",
+                   help="grid points per input (default 101)")
+    p.add_argument("--output", metavar="NAME", help="which output (default: the first)")
+    p.set_defaults(handler=cmd_surface)
+
+    p = sub.add_parser("schema", help="print the JSON Schema of the rule-base format",
+                       description="Print a JSON Schema (draft 2020-12) of the rule-base YAML "
+                                   "format, e.g. for the YAML language server.")
+    p.set_defaults(handler=cmd_schema)
+
+
+def _load(spec: str) -> RuleBase:
+    from fuzzkit.registry import load
+
+    return load(spec)
+
+
+# ---------------------------------------------------------------------------- validate
+
+
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}{'' if n == 1 else 's'}"
+
+
+def cmd_validate(args: argparse.Namespace) -> int:
+    """Load every file, print ``FILE: ok`` or every problem; exit 2 if any is invalid."""
+    failed = 0
+    for spec in args.files:
+        try:
+            rb = _load(spec)
+        except RuleBaseError as exc:
+            failed += 1
+            for problem in exc.problems:
+                print(f"{problem}", file=sys.stderr)
+            continue
+        print(f"{spec}: ok ({rb.name}: {_count(len(rb.inputs), 'input')}, "
+              f"{_count(len(rb.outputs), 'output')}, {_count(len(rb.rules), 'rule')})")
+    if failed:
+        print(f"fuzzkit: error: {failed} of {len(args.files)} rule base"
+              f"{'s' if len(args.files) != 1 else ''} invalid", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------------------- info
+
+
+def _num(x: float) -> str:
+    return f"{x:.6g}"
+
+
+def format_expression(expr: Expression, top: bool = True) -> str:
+    """A condition as text: ``e is PS and (de is NS or de is not ZR)``."""
+    if isinstance(expr, Proposition):
+        return f"{expr.variable} is {'not ' if expr.negated else ''}{expr.term}"
+    text = f" {expr.op} ".join(format_expression(o, top=False) for o in expr.operands)
+    return text if top else f"({text})"
+
+
+def _variable_lines(var: Variable, kind: str) -> list[str]:
+    head = f"  {var.name}  [{_num(var.low)}, {_num(var.high)}]"
+    if kind == "output":
+        head += f"  default {'NaN' if var.default is None else _num(var.default)}"
+    lines = [head]
+    width = max((len(t.name) for t in var.terms), default=0)
+    for t in var.terms:
+        names = SHAPE_PARAMS.get(t.shape, ())
+        params = " ".join(f"{n}={_num(v)}" for n, v in zip(names, t.params, strict=False))
+        lines.append(f"    {t.name.ljust(width)}  {t.shape:<14} {params}")
+    return lines
+
+
+def _table_grid(rb: RuleBase) -> list[str] | None:
+    t = rb.table
+    if t is None:
+        return None
+    try:
+        rows, cols = rb.input(t.rows).term_names, rb.input(t.columns).term_names
+    except KeyError:
+        return None
+    cell: dict[tuple[str, str], str] = {}
+    row_order: list[str] = []
+    for rule in rb.rules:
+        a = rule.antecedent
+        if not (isinstance(a, Compound) and len(a.operands) == 2):
+            return None
+        rp, cp = a.operands
+        if not (isinstance(rp, Proposition) and isinstance(cp, Proposition)):
+            return None
+        cell[rp.term, cp.term] = rule.consequents[0].term
+        row_order.append(rp.term)
+    # Keep the order the table was written in (e.g. the paper prints PL at the top).
+    rows_shown = list(dict.fromkeys(row_order + list(rows)))
+    corner = f"{t.rows}\\{t.columns}"
+    first = max(len(x) for x in [corner, *rows_shown])
+    width = max(len(x) for x in [*cols, *cell.values(), "-"])
+    lines = ["  " + " ".join([corner.ljust(first), *(x.ljust(width) for x in cols)]).rstrip()]
+    for r in rows_shown:
+        values = [cell.get((r, c), "-").ljust(width) for c in cols]
+        lines.append("  " + " ".join([r.ljust(first), *values]).rstrip())
+    return lines
+
+
+def describe_rulebase(rb: RuleBase) -> str:
+    """The text ``fuzzkit info`` prints."""
+    src = f"  ({rb.source.path})" if rb.source is not None else ""
+    lines = [f"{rb.name}{src}"]
+    if rb.description:
+        lines += textwrap.wrap(rb.description, 96, initial_indent="  ", subsequent_indent="  ")
+    ops = rb.operators
+    lines += [
+        "",
+        f"operators: and={ops.and_} or={ops.or_} implication={ops.implication} "
+        f"aggregation={ops.aggregation}",
+        f"defuzzifier: {rb.defuzzifier}    out_of_range: {rb.out_of_range}",
+        "",
+        "inputs:",
+    ]
+    for var in rb.inputs:
+        lines += _variable_lines(var, "input")
+    lines.append("outputs:")
+    for var in rb.outputs:
+        lines += _variable_lines(var, "output")
+    lines.append("")
+    grid = _table_grid(rb)
+    if grid is not None and rb.table is not None:
+        lines.append(f"rules: {len(rb.rules)} (table: rows {rb.table.rows}, columns "
+                     f"{rb.table.columns} -> {rb.table.output})")
+        lines += grid
+    else:
+        lines.append(f"rules: {len(rb.rules)}")
+        width = len(str(len(rb.rules)))
+        for k, rule in enumerate(rb.rules, start=1):
+            then = " and ".join(f"{c.variable} is {c.term}" for c in rule.consequents)
+            weight = f"  (weight {_num(rule.weight)})" if rule.weight != 1.0 else ""
+            lines.append(f"  {str(k).rjust(width)}. if {format_expression(rule.antecedent)} "
+                         f"then {then}{weight}")
+    return "\n".join(lines)
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    print(describe_rulebase(_load(args.rulebase)))
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------------------- eval
+
+
+def _parse_inputs(rb: RuleBase, items: Sequence[str]) -> dict[str, float]:
+    from fuzzkit.validation import did_you_mean
+
+    values: dict[str, float] = {}
+    problems: list[str] = []
+    for item in items:
+        name, sep, text = item.partition("=")
+        name = name.strip()
+        if not sep:
+            problems.append(f"--input {item!r}: expected NAME=VALUE")
+            continue
+        if name not in rb.input_names:
+            problems.append(f"--input {item!r}: unknown input {name!r}"
+                            f"{did_you_mean(name, rb.input_names)}; expected one of "
+                            f"{', '.join(rb.input_names)}")
+            continue
+        if name in values:
+            problems.append(f"--input {item!r}: input {name!r} given twice")
+            continue
+        try:
+            values[name] = float(text)
+        except ValueError:
+            problems.append(f"--input {item!r}: expected a number for {name!r}, got {text!r}")
+    missing = [n for n in rb.input_names if n not in values and not any(
+        p.startswith(f"--input '{n}=") for p in problems)]
+    if missing:
+        problems.append(f"missing --input for {', '.join(missing)} (rule base {rb.name!r} has "
+                        f"inputs {', '.join(rb.input_names)})")
+    if problems:
+        raise EvaluationError("; ".join(problems))
+    return values
+
+
+def _read_points(
+    rb: RuleBase, name: str, fh: TextIO
+) -> tuple[list[str], list[list[str]], dict[str, list[float]]]:
+    reader = csv.reader(fh)
+    try:
+        header = next(reader)
+    except StopIteration:
+        raise ProblemsError([Problem(Location(name), "CSV file is empty; expected a header of "
+                                     f"input names ({', '.join(rb.input_names)})")]) from None
+    header = [h.strip() for h in header]
+    problems: list[Problem] = []
+    missing = [n for n in rb.input_names if n not in header]
+    if missing:
+        plural = "s" if len(missing) > 1 else ""
+        problems.append(Problem(Location(name, 1), f"missing column{plural}"
+                                f" {', '.join(missing)} (expected a header naming every input: "
+                                f"{', '.join(rb.input_names)}; got {', '.join(header)})"))
+    clash = [n for n in rb.output_names if n in header]
+    if clash:
+        problems.append(Problem(Location(name, 1), f"column{'s' if len(clash) > 1 else ''} "
+                                f"{', '.join(clash)} would be overwritten by the output(s); "
+                                "rename them"))
+    dup = sorted({h for h in header if header.count(h) > 1})
+    if dup:
+        problems.append(Problem(Location(name, 1), f"duplicate column {', '.join(dup)}"))
+    if problems:
+        raise ProblemsError(problems)
+    cols = {n: header.index(n) for n in rb.input_names}
+    rows: list[list[str]] = []
+    values: dict[str, list[float]] = {n: [] for n in rb.input_names}
+    for row in reader:
+        line = reader.line_num
+        if not row or all(not c.strip() for c in row):
+            continue
+        if len(row) != len(header):
+            problems.append(Problem(Location(name, line), f"expected {len(header)} cells, got "
+                                    f"{len(row)}"))
+            continue
+        for n, j in cols.items():
+            cell = row[j].strip()
+            try:
+                values[n].append(float(cell))
+            except ValueError:
+                problems.append(Problem(Location(name, line), f"expected a number for {n!r}, got "
+                                        f"{cell!r}"))
+                values[n].append(math.nan)
+        rows.append(row)
+        if len(problems) > 50:
+            break  # the rest of a bad file would only repeat the same mistake
+    if problems:
+        raise ProblemsError(problems)
+    return header, rows, values
+
+
+def cmd_eval(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from fuzzkit.inference import Engine
+
+    rb = _load(args.rulebase)
+    engine = Engine(rb)
+    if args.points is None:
+        point = _parse_inputs(rb, args.inputs)
+        result = engine.evaluate_point(point)
+        if args.json:
+            payload = {k: (None if math.isnan(v) else v) for k, v in result.items()}
+            print(json.dumps({"inputs": point, "outputs": payload}, allow_nan=False))
+        else:
+            for k, v in result.items():
+                print(f"{k} = {v!r}")
+        return EXIT_OK
+    if args.json:
+        raise EvaluationError("--json applies to --input; --points writes CSV")
+    if args.points == "-":
+        header, rows, values = _read_points(rb, "<stdin>", sys.stdin)
+    else:
+        try:
+            with open(args.points, newline="", encoding="utf-8") as fh:
+                header, rows, values = _read_points(rb, args.points, fh)
+        except UnicodeDecodeError:
+            raise ProblemsError([Problem(Location(args.points), "not UTF-8 text; expected a CSV "
+                                         "file")]) from None
+    outputs = engine.evaluate({n: np.asarray(v, dtype=np.float64) for n, v in values.items()})
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow([*header, *rb.output_names])
+    for i, row in enumerate(rows):
+        writer.writerow([*row, *(repr(float(outputs[n][i])) for n in rb.output_names)])
+    sys.stdout.write(buf.getvalue())
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------------------- surface
+
+
+def cmd_surface(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from fuzzkit.surface import peak_grid, write_surface_png, write_surface_rrd
+
+    if args.rrd is None and args.png is None:
+        raise EvaluationError("nothing to write: give --rrd OUT.rrd and/or --png OUT.png")
+    for option, path, suffix in (("--rrd", args.rrd, ".rrd"), ("--png", args.png, ".png")):
+        if path is not None and Path(path).suffix.lower() != suffix:
+            raise EvaluationError(f"{option} {path}: expected a file name ending in {suffix}")
+    rb = _load(args.rulebase)
+    if args.rrd is not None:
+        write_surface_rrd(rb, args.rrd, args.resolution, args.output)
+        print(f"wrote {args.rrd}")
+    if args.png is not None:
+        write_surface_png(rb, args.png, args.resolution, args.output)
+        print(f"wrote {args.png}")
+    points, labels = peak_grid(rb, args.output)
+    name = args.output or rb.output_names[0]
+    print(f"{name} at the label peaks ({len(labels)} points): min {_num(np.nanmin(points[:, 2]))}"
+          f", max {_num(np.nanmax(points[:, 2]))}")
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------------------- schema
+
+
+def cmd_schema(args: argparse.Namespace) -> int:
+    from fuzzkit.dsl import json_schema
+
+    print(json.dumps(json_schema(), indent=2))
+    return EXIT_OK
+
