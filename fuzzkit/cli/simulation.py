@@ -1,0 +1,206 @@
+"""``fuzzkit simulate`` and ``fuzzkit compare``: the paper's experiments in closed loop."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+from fuzzkit.errors import ConfigError
+
+CONTROLLERS = ("pi", "fuzzy-pi")
+_GAIN_KEYS = {
+    "pi": {"kp", "ki", "u_min", "u_max", "rate_limit"},
+    "fuzzy-pi": {"kp", "ki", "kx", "u_min", "u_max", "rate_limit"},
+}
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``simulate`` and ``compare`` subcommands."""
+    from fuzzkit.plant import PLANTS
+
+    sim = subparsers.add_parser(
+        "simulate",
+        help="run one experiment (E1, E2, E3) in closed loop and print its metrics",
+        description="Run one of the paper's experiments with a PI or fuzzy-PI force loop.",
+    )
+    sim.add_argument("experiment", metavar="EXPERIMENT", help="E1, E2 or E3")
+    sim.add_argument("--controller", choices=CONTROLLERS, default="fuzzy-pi")
+    sim.add_argument(
+        "--rulebase",
+        default="macvicar_whelan",
+        metavar="RB",
+        help="rule base for fuzzy-pi: shipped name or YAML path",
+    )
+    sim.add_argument("--plant", choices=sorted(PLANTS), default="planar")
+    sim.add_argument("--seed", type=int, default=0, help="sensor-noise seed")
+    sim.add_argument("--rrd", metavar="OUT.rrd", help="write a Rerun recording of the run")
+    sim.add_argument("--json", action="store_true", help="print the metrics as JSON")
+    sim.add_argument(
+        "--gains",
+        metavar="GAINS.yaml",
+        help="gain overrides: {kp: .., ki: .., kx: ..} or {pi: {...}, fuzzy-pi: {...}}",
+    )
+    sim.set_defaults(handler=_simulate)
+
+    cmp_ = subparsers.add_parser(
+        "compare",
+        help="run PI and fuzzy-PI on experiments and print a comparison table",
+        description="Run PI and fuzzy-PI on each experiment (default: E1 E2 E3) and tabulate.",
+    )
+    cmp_.add_argument("experiments", nargs="*", metavar="EXPERIMENT", default=["E1", "E2", "E3"])
+    cmp_.add_argument("--rulebase", default="macvicar_whelan", metavar="RB")
+    cmp_.add_argument("--plant", choices=sorted(PLANTS), default="planar")
+    cmp_.add_argument("--seed", type=int, default=0)
+    cmp_.add_argument("--gains", metavar="GAINS.yaml")
+    cmp_.add_argument("--json", action="store_true", help="print every run's metrics as JSON")
+    cmp_.add_argument("--rrd-dir", metavar="DIR", help="write one .rrd per run into DIR")
+    cmp_.set_defaults(handler=_compare)
+
+
+def load_gains(path: str | None, controller: str) -> dict[str, float]:
+    """Gain overrides for ``controller`` from a YAML file (flat or keyed by controller)."""
+    if path is None:
+        return {}
+    import yaml
+
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read gains file ({exc.strerror})") from exc
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"{path}:{mark.line + 1}" if mark is not None else path
+        raise ConfigError(f"{where}: not valid YAML") from exc
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path}: expected a mapping of gains, got {type(data).__name__}")
+    if any(k in data for k in CONTROLLERS):
+        unknown = sorted(set(data) - set(CONTROLLERS))
+        if unknown:
+            raise ConfigError(f"{path}: unknown controller keys {unknown} (expected pi, fuzzy-pi)")
+        data = data.get(controller) or {}
+        if not isinstance(data, dict):
+            raise ConfigError(f"{path}: gains of {controller} must be a mapping")
+    problems = []
+    out: dict[str, float] = {}
+    for key, val in data.items():
+        if key not in _GAIN_KEYS[controller]:
+            problems.append(
+                f"unknown gain {key!r} for {controller} "
+                f"(expected one of {', '.join(sorted(_GAIN_KEYS[controller]))})"
+            )
+        elif isinstance(val, bool) or not isinstance(val, int | float) or not math.isfinite(val):
+            problems.append(f"gain {key} must be a finite number (got {val!r})")
+        else:
+            out[str(key)] = float(val)
+    if problems:
+        raise ConfigError(f"{path}: " + "; ".join(problems))
+    return out
+
+
+def _run_one(exp_name: str, controller: str, args: argparse.Namespace, surface: Any) -> Any:
+    from fuzzkit.experiments import experiment, run
+
+    exp = experiment(exp_name)
+    gains = load_gains(args.gains, controller)
+    return run(exp, args.plant, controller, gains=gains, surface=surface, seed=args.seed)
+
+
+def _surface_for(controller: str, rulebase: str) -> Any:
+    if controller != "fuzzy-pi":
+        return None
+    from fuzzkit.experiments import load_surface
+
+    return load_surface(rulebase)
+
+
+def _fmt(v: Any, digits: int = 2) -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return f"{v:.{digits}f}"
+    return str(v)
+
+
+def _simulate(args: argparse.Namespace) -> int:
+    from fuzzkit.experiments import axis_metrics, summary
+
+    surface = _surface_for(args.controller, args.rulebase)
+    result = _run_one(args.experiment, args.controller, args, surface)
+    if args.rrd:
+        from fuzzkit.traces import write_rrd
+
+        write_rrd(result, args.rrd)
+    data = summary(result)
+    if args.json:
+        print(json.dumps(data, indent=2))
+        return 0
+    print(
+        f"{data['experiment']} {data['controller']} on {data['plant']}: "
+        f"{data['sim_time_s']:.2f} s simulated in {data['wall_time_s']:.2f} s"
+    )
+    print(f"  {result.experiment.title}")
+    for name, m in data["axes"].items():
+        i = "xyz".index(name)
+        first = axis_metrics(result, i)["first_contact_s"]
+        print(
+            f"  {name}: set {m['setpoint']:g} N, first contact {_fmt(first)} s, "
+            f"overshoot {_fmt(m['overshoot_pct'], 1)} %, settling {_fmt(m['settling_time_s'])} s, "
+            f"steady error {_fmt(m['steady_state_error_mean'])} +- "
+            f"{_fmt(m['steady_state_error_std'])} N, RMS moving {_fmt(m['rms_error'])} N, "
+            f"peak {_fmt(m['peak_force'], 1)} N, contact lost {_fmt(m['contact_lost_s'])} s"
+        )
+    if result.faults or result.tripped:
+        print(f"  sensor faults: {result.faults}, safety trip: {result.tripped}")
+    for msg, count in sorted(result.messages.items()):
+        print(f"  plant: {msg} ({count} periods)")
+    if args.rrd:
+        print(f"  wrote {args.rrd}")
+    return 0
+
+
+def comparison_table(rows: list[dict[str, Any]]) -> str:
+    """Format PI vs fuzzy-PI summaries (``fuzzkit.experiments.summary``) as a text table."""
+    head = (
+        f"{'exp':<4}{'axis':<5}{'set N':>6}  {'controller':<9}{'overshoot %':>12}{'settle s':>10}"
+        f"{'ss mean N':>11}{'ss std N':>10}{'rms move N':>12}{'peak N':>8}{'lost s':>8}"
+    )
+    lines = [head, "-" * len(head)]
+    for data in rows:
+        for axis, m in data["axes"].items():
+            lines.append(
+                f"{data['experiment']:<4}{axis:<5}{m['setpoint']:>6g}  {data['controller']:<9}"
+                f"{_fmt(m['overshoot_pct'], 1):>12}{_fmt(m['settling_time_s']):>10}"
+                f"{_fmt(m['steady_state_error_mean']):>11}{_fmt(m['steady_state_error_std']):>10}"
+                f"{_fmt(m['rms_error']):>12}{_fmt(m['peak_force'], 1):>8}"
+                f"{_fmt(m['contact_lost_s']):>8}"
+            )
+    return "\n".join(lines)
+
+
+def _compare(args: argparse.Namespace) -> int:
+    from fuzzkit.experiments import experiment, summary
+
+    for name in args.experiments:
+        experiment(name)  # reject unknown names before any simulation runs
+    if args.rrd_dir and not Path(args.rrd_dir).is_dir():
+        raise ConfigError(f"{args.rrd_dir}: folder does not exist")
+    surface = _surface_for("fuzzy-pi", args.rulebase)
+    rows = []
+    for name in args.experiments:
+        for controller in CONTROLLERS:
+            result = _run_one(name, controller, args, surface if controller == "fuzzy-pi" else None)
+            if args.rrd_dir:
+                from fuzzkit.traces import write_rrd
+
+                write_rrd(result, Path(args.rrd_dir) / f"{name.upper()}_{controller}.rrd")
+            rows.append(summary(result))
+    if args.json:
+        print(json.dumps(rows, indent=2))
+    else:
+        print(comparison_table(rows))
+    return 0
