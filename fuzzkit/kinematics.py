@@ -764,6 +764,12 @@ class SerialChain:
             if blocked:
                 jac[:, blocked] = 0.0
                 dq = self._dls(jac, err, lam2)
+            # Stationary point test: the error is (nearly) orthogonal to every direction the free
+            # joints can move the TCP, so no step can reduce it: the closest reachable pose.
+            grad = jac.T @ err
+            if float(grad @ grad) <= 1e-12 * float(np.sum(jac * jac)) * cost:
+                status = IKStatus.LIMIT if blocked else IKStatus.UNREACHABLE
+                break
             big = max(abs(v) for v in dq)
             scale = max_step / big if big > max_step else 1.0
             q_new = [min(max(q[i] + scale * dq[i], lo[i]), hi[i]) for i in range(n)]

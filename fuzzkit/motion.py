@@ -459,13 +459,18 @@ class Contact3Solver:
             if fn <= 0.0:
                 self._stick[i] = (0.0, 0.0, 0.0)
                 continue
-            # tangential slip this period, accumulated on the old spring projected on the plane
-            s0 = self._stick[i]
-            sx = s0[0] + (v[0] - vn * nx) * dt
-            sy = s0[1] + (v[1] - vn * ny) * dt
-            sz = s0[2] + (v[2] - vn * nz) * dt
-            sn = sx * nx + sy * ny + sz * nz
-            sx, sy, sz = sx - sn * nx, sy - sn * ny, sz - sn * nz
+            # The old stick spring is turned into the current tangent plane keeping its length
+            # (the normal turns as the tool slides over a rough profile), then this period's
+            # tangential motion is added: the planar law's scalar spring, in 3-D.
+            s0x, s0y, s0z = self._stick[i]
+            s0n = s0x * nx + s0y * ny + s0z * nz
+            px_, py_, pz_ = s0x - s0n * nx, s0y - s0n * ny, s0z - s0n * nz
+            old = math.sqrt(s0x * s0x + s0y * s0y + s0z * s0z)
+            proj = math.sqrt(px_ * px_ + py_ * py_ + pz_ * pz_)
+            k_turn = old / proj if proj > 1e-15 else 0.0
+            sx = px_ * k_turn + (v[0] - vn * nx) * dt
+            sy = py_ * k_turn + (v[1] - vn * ny) * dt
+            sz = pz_ * k_turn + (v[2] - vn * nz) * dt
             kt = m.tangential_stiffness_n_per_m
             ft_mag = kt * math.sqrt(sx * sx + sy * sy + sz * sz)
             cap = m.friction * fn
@@ -712,18 +717,20 @@ class Arm6Plant:
         q_ik = res.q.tolist()
         self._q_ik = q_ik
 
-        # Joint reference: rate-limited towards the IK solution (the axis speed limits).
+        # Joint reference: towards the IK solution, the whole step scaled down together when
+        # any axis would exceed its speed limit, so the reference keeps its direction (a robot
+        # controller slows the path down rather than bending it).
         q_ref, q, lag = self._q_ref, self._q, self._lag
+        dq_max = self._dq_max
+        d = [q_ik[i] - q_ref[i] for i in range(len(q_ref))]
+        scale = 1.0
         limited: list[str] = []
-        for i, dq_max in enumerate(self._dq_max):
-            d = q_ik[i] - q_ref[i]
-            if d > dq_max:
-                d = dq_max
+        for i, lim in enumerate(dq_max):
+            if abs(d[i]) > lim:
+                scale = min(scale, lim / abs(d[i]))
                 limited.append(chain.robot.joints[i].name)
-            elif d < -dq_max:
-                d = -dq_max
-                limited.append(chain.robot.joints[i].name)
-            q_ref[i] += d
+        for i in range(len(q_ref)):
+            q_ref[i] += d[i] * scale
             q[i] += lag * (q_ref[i] - q[i])
         if limited:
             messages.append(f"joint speed limit on {', '.join(limited)}")
