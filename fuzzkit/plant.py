@@ -320,7 +320,7 @@ class ForceSensor:
         self.model = model
         self._rng = np.random.default_rng(seed)
         self._filtered = np.zeros(3)
-        self._next_t = 0.0
+        self._next_t = 1.0 / model.rate_hz  # samples at k / rate_hz, k = 1, 2, ...
         self._latest = np.full(3, np.nan)
         self._fresh = False
 
@@ -465,6 +465,7 @@ class ContactPlant(Protocol):
 #: Imported lazily so that choosing one plant never imports another's dependencies.
 PLANTS: dict[str, str] = {
     "planar": "planar_sim:PlanarArmPlant",
+    "arm6": "fuzzkit.motion:Arm6Plant",  # 6-DOF IRB 140 kinematic plant (issue 5)
 }
 
 
