@@ -94,10 +94,8 @@ class PlanarArmPlant:
 
     @property
     def period_s(self) -> float:
-        """Controller period of the current scenario (seconds)."""
-        if self._scenario is None:
-            raise RuntimeError("PlanarArmPlant.reset(scenario) must be called first")
-        return self._scenario.period_s
+        """Controller period of the current scenario (seconds; 4 ms before the first reset)."""
+        return self._scenario.period_s if self._scenario is not None else 0.004
 
     # -- world building -------------------------------------------------------------------------
 
