@@ -59,8 +59,16 @@ MAX_FILE_BYTES = 1 << 20
 #: Documents whose node tree, with every alias expanded, is larger are refused (alias bombs).
 MAX_NODES = 100_000
 
-TOP_KEYS = ("name", "description", "inputs", "outputs", "operators", "defuzzifier",
-            "out_of_range", "rules")
+TOP_KEYS = (
+    "name",
+    "description",
+    "inputs",
+    "outputs",
+    "operators",
+    "defuzzifier",
+    "out_of_range",
+    "rules",
+)
 OPERATOR_KEYS = ("and", "or", "implication", "aggregation")
 PARTITION_KEYS = ("partition", "labels", "ends")
 PARTITION_KINDS = ("triangular",)
@@ -265,9 +273,13 @@ class _Reader:
             if omap is not None:
                 self.keys(omap, onode, OPERATOR_KEYS, (), "operators")
                 chosen = {
-                    key: self.choice(omap[key][1], f"an {key} operator name"
-                                     if key[0] in "aeiou" else f"a {key} operator name",
-                                     ("operators", key))
+                    key: self.choice(
+                        omap[key][1],
+                        f"an {key} operator name"
+                        if key[0] in "aeiou"
+                        else f"a {key} operator name",
+                        ("operators", key),
+                    )
                     for key in OPERATOR_KEYS
                     if key in omap
                 }
@@ -280,12 +292,16 @@ class _Reader:
 
         defuzzifier = "centroid"
         if "defuzzifier" in entries:
-            defuzzifier = self.choice(entries["defuzzifier"][1], "a defuzzifier name",
-                                      ("defuzzifier",)) or defuzzifier
+            defuzzifier = (
+                self.choice(entries["defuzzifier"][1], "a defuzzifier name", ("defuzzifier",))
+                or defuzzifier
+            )
         out_of_range = "clamp"
         if "out_of_range" in entries:
-            out_of_range = self.choice(entries["out_of_range"][1], "an out_of_range policy",
-                                       ("out_of_range",)) or out_of_range
+            out_of_range = (
+                self.choice(entries["out_of_range"][1], "an out_of_range policy", ("out_of_range",))
+                or out_of_range
+            )
 
         rules: list[Rule] = []
         table: RuleTable | None = None
@@ -335,10 +351,16 @@ class _Reader:
         allowed = ("range", "terms", "default") if kind == "output" else ("range", "terms")
         for key, (kn, _) in entries.items():
             if key == "default" and kind == "input":
-                self.error(kn, "'default' is only allowed on outputs (the value used when no "
-                               "rule fires)")
-        self.keys({k: v for k, v in entries.items() if not (k == "default" and kind == "input")},
-                  vnode, allowed, ("range", "terms"), what)
+                self.error(
+                    kn, "'default' is only allowed on outputs (the value used when no rule fires)"
+                )
+        self.keys(
+            {k: v for k, v in entries.items() if not (k == "default" and kind == "input")},
+            vnode,
+            allowed,
+            ("range", "terms"),
+            what,
+        )
 
         low, high = 0.0, 1.0
         range_ok = False
@@ -398,8 +420,9 @@ class _Reader:
             return ()
         if "partition" in entries:
             return self.partition(entries, node, base, kind, low, high, range_ok)
-        return tuple(self.term(label, kn, vn, (*tpath, label))
-                     for label, (kn, vn) in entries.items())
+        return tuple(
+            self.term(label, kn, vn, (*tpath, label)) for label, (kn, vn) in entries.items()
+        )
 
     def partition(
         self,
@@ -417,15 +440,21 @@ class _Reader:
         pnode = entries["partition"][1]
         got = self.name(pnode, "a partition kind")
         if got is not None and got not in PARTITION_KINDS:
-            self.error(pnode, f"unknown partition {got!r}{did_you_mean(got, PARTITION_KINDS)}; "
-                              f"expected one of {', '.join(PARTITION_KINDS)}")
+            self.error(
+                pnode,
+                f"unknown partition {got!r}{did_you_mean(got, PARTITION_KINDS)}; "
+                f"expected one of {', '.join(PARTITION_KINDS)}",
+            )
         ends = "shoulder" if kind == "input" else "triangle"
         if "ends" in entries:
             enode = entries["ends"][1]
             e = self.name(enode, "partition ends (shoulder or triangle)")
             if e is not None and e not in PARTITION_ENDS:
-                self.error(enode, f"unknown partition ends {e!r}{did_you_mean(e, PARTITION_ENDS)}"
-                                  f"; expected one of {', '.join(PARTITION_ENDS)}")
+                self.error(
+                    enode,
+                    f"unknown partition ends {e!r}{did_you_mean(e, PARTITION_ENDS)}"
+                    f"; expected one of {', '.join(PARTITION_ENDS)}",
+                )
             elif e is not None:
                 ends = e
         labels: list[str] = []
@@ -459,8 +488,11 @@ class _Reader:
             self.hidden_at.add(coverage)
             return Term(label, "triangle", (0.0, 0.5, 1.0))
         if "shape" not in entries:
-            self.error(vnode, f"missing required key 'shape' in term {label!r}; expected one of "
-                              f"{', '.join(SHAPE_PARAMS)}")
+            self.error(
+                vnode,
+                f"missing required key 'shape' in term {label!r}; expected one of "
+                f"{', '.join(SHAPE_PARAMS)}",
+            )
             self.hidden_under.add(tpath)
             self.hidden_at.add(coverage)
             return Term(label, "triangle", (0.0, 0.5, 1.0))
@@ -474,8 +506,13 @@ class _Reader:
             self.hidden_at.add(coverage)
             return Term(label, shape or "triangle", ())
         param_keys = _pwl_key(shape)
-        self.keys(entries, vnode, ("shape", *param_keys), ("shape", *param_keys),
-                  f"{shape} term {label!r}")
+        self.keys(
+            entries,
+            vnode,
+            ("shape", *param_keys),
+            ("shape", *param_keys),
+            f"{shape} term {label!r}",
+        )
         params: list[float] = []
         if shape in PIECEWISE_LINEAR_SHAPES:
             if "points" not in entries:
@@ -527,8 +564,11 @@ class _Reader:
                     return self.table(entries["table"][1], inputs, outputs)
             self.hidden_at.add(("rules",))
             return [], None
-        self.error(node, f"expected rules as a list of {{if: ..., then: ...}} or as "
-                         f"{{table: ...}}, got {describe(node)}")
+        self.error(
+            node,
+            f"expected rules as a list of {{if: ..., then: ...}} or as "
+            f"{{table: ...}}, got {describe(node)}",
+        )
         self.hidden_at.add(("rules",))
         return [], None
 
@@ -552,6 +592,7 @@ class _Reader:
         else:
             for j, (out, (kn, vn)) in enumerate(tmap.items()):
                 self.marks[(*base, "then", j)] = kn
+                self.marks[(*base, "then", j, "label")] = vn
                 label = self.name(vn, f"a label of output {out!r}")
                 if label is None:
                     self.hidden_under.add((*base, "then", j))
@@ -568,8 +609,9 @@ class _Reader:
         """A condition; on a structural problem a placeholder whose checks are hidden."""
         self.marks[path] = node
         placeholder = Proposition("?", "?")
-        entries = self.mapping(node, "a condition such as {e: PS}, {and: [...]}, {or: [...]} or "
-                                     "{not: {e: PS}}")
+        entries = self.mapping(
+            node, "a condition such as {e: PS}, {and: [...]}, {or: [...]} or {not: {e: PS}}"
+        )
         if entries is None:
             self.hidden_under.add(path)
             return placeholder
@@ -601,14 +643,19 @@ class _Reader:
                 self.hidden_under.add(path)
                 return placeholder
             if len(inner) != 1 or next(iter(inner)) in CONNECTIVES:
-                self.error(vnode, "'not' applies to one condition {variable: label}, got "
-                                  f"{describe(vnode)} with {len(inner)} entries; negate each "
-                                  "operand instead (De Morgan)" if len(inner) != 1 else
-                                  "'not' applies to one condition {variable: label}, not to "
-                                  "and/or; negate each operand instead (De Morgan)")
+                self.error(
+                    vnode,
+                    "'not' applies to one condition {variable: label}, got "
+                    f"{describe(vnode)} with {len(inner)} entries; negate each "
+                    "operand instead (De Morgan)"
+                    if len(inner) != 1
+                    else "'not' applies to one condition {variable: label}, not to "
+                    "and/or; negate each operand instead (De Morgan)",
+                )
                 self.hidden_under.add(path)
                 return placeholder
             var, (_, lnode) = next(iter(inner.items()))
+            self.marks[(*path, "label")] = lnode
             label = self.name(lnode, f"a label of input {var!r}")
             return self.proposition(var, label, True, path)
         negated = False
@@ -616,12 +663,16 @@ class _Reader:
         if isinstance(vnode, MappingNode):
             inner = self.mapping(vnode, f"{{not: label}} for input {key!r}")
             if inner is None or list(inner) != ["not"]:
-                self.error(vnode, f"expected a label or {{not: label}} for input {key!r}, got "
-                                  f"a mapping with keys {', '.join(map(repr, inner or {}))}")
+                self.error(
+                    vnode,
+                    f"expected a label or {{not: label}} for input {key!r}, got "
+                    f"a mapping with keys {', '.join(map(repr, inner or {}))}",
+                )
                 self.hidden_under.add(path)
                 return placeholder
             lnode = inner["not"][1]
             negated = True
+        self.marks[(*path, "label")] = lnode
         label = self.name(lnode, f"a label of input {key!r}")
         return self.proposition(key, label, negated, path)
 
@@ -641,14 +692,20 @@ class _Reader:
         names: dict[str, str | None] = {}
         for key in ("rows", "columns", "output"):
             if key in entries:
-                names[key] = self.choice(entries[key][1], f"an {key[:-1]} name" if key != "output"
-                                         else "an output name", ("rules", "table", key))
+                names[key] = self.choice(
+                    entries[key][1],
+                    f"an {key[:-1]} name" if key != "output" else "an output name",
+                    ("rules", "table", key),
+                )
         if "output" not in entries:
             if len(outputs) == 1:
                 names["output"] = outputs[0].name
             else:
-                self.error(node, "missing required key 'output' in the rule table (the rule "
-                                 f"base has {len(outputs)} outputs)")
+                self.error(
+                    node,
+                    "missing required key 'output' in the rule table (the rule "
+                    f"base has {len(outputs)} outputs)",
+                )
         rows, cols, out = names.get("rows"), names.get("columns"), names.get("output")
         if rows is None or cols is None or out is None:
             self.hidden_at.add(("rules",))
@@ -658,8 +715,13 @@ class _Reader:
         col_var = next((v for v in inputs if v.name == cols), None)
         row_labels = self.header(entries, "row_labels", row_var)
         col_labels = self.header(entries, "column_labels", col_var)
-        if (row_labels is None or col_labels is None or "cells" not in entries
-                or rows in self.broken_vars or cols in self.broken_vars):
+        if (
+            row_labels is None
+            or col_labels is None
+            or "cells" not in entries
+            or rows in self.broken_vars
+            or cols in self.broken_vars
+        ):
             self.hidden_at.add(("rules",))
             return [], table
         grid = self.cells(entries["cells"][1], len(row_labels), len(col_labels), rows, cols)
@@ -675,10 +737,14 @@ class _Reader:
                 self.marks[("rules", k)] = cell_loc
                 self.marks[("rules", k, "if", 0)] = rnode
                 self.marks[("rules", k, "if", 1)] = cnode
-                rules.append(Rule(
-                    Compound("and", (Proposition(rows, rlabel), Proposition(cols, clabel))),
-                    (Consequent(out, cell),),
-                ))
+                self.marks[("rules", k, "if", 0, "label")] = rnode
+                self.marks[("rules", k, "if", 1, "label")] = cnode
+                rules.append(
+                    Rule(
+                        Compound("and", (Proposition(rows, rlabel), Proposition(cols, clabel))),
+                        (Consequent(out, cell),),
+                    )
+                )
         if out in self.broken_vars:
             self.hidden_under.update(("rules", k, "then") for k in range(len(rules)))
         return rules, table
@@ -723,27 +789,35 @@ class _Reader:
                     return None
                 lines.append((row_text, self.cell_locator(item, quoted=item.style is not None)))
         else:
-            self.error(node, "expected the cells as a block of rows (cells: |) or a list of row "
-                             f"strings, got {describe(node)}")
+            self.error(
+                node,
+                "expected the cells as a block of rows (cells: |) or a list of row "
+                f"strings, got {describe(node)}",
+            )
             return None
         grid: list[list[tuple[str, Node]]] = []
         ok = True
         for text, locate in lines:
             row = [(m.group(), locate(m.start())) for m in re.finditer(r"\S+", text)]
             if len(row) != ncols:
-                self.problems.append(Problem(
-                    self.loc(locate(0)),
-                    f"table row {len(grid) + 1} has {len(row)} cells, expected {ncols} (one per "
-                    f"label of columns input {cols!r})",
-                ))
+                self.problems.append(
+                    Problem(
+                        self.loc(locate(0)),
+                        f"table row {len(grid) + 1} has {len(row)} cells, expected {ncols} (one per "
+                        f"label of columns input {cols!r})",
+                    )
+                )
                 ok = False
             grid.append(row)
         if len(grid) != nrows:
             hint = ""
             if isinstance(node, ScalarNode) and node.style != "|":
                 hint = "; write the cells as a literal block (cells: |) so each row keeps its line"
-            self.error(node, f"table has {len(grid)} rows, expected {nrows} (one per label of "
-                             f"rows input {rows!r}){hint}")
+            self.error(
+                node,
+                f"table has {len(grid)} rows, expected {nrows} (one per label of "
+                f"rows input {rows!r}){hint}",
+            )
             ok = False
         return grid if ok else None
 
@@ -764,10 +838,15 @@ class _Reader:
         return out
 
     def cell_locator(
-        self, node: Node, *, quoted: bool = False, line: int | None = None,
+        self,
+        node: Node,
+        *,
+        quoted: bool = False,
+        line: int | None = None,
         column: int | None = None,
     ) -> Callable[[int], Node]:
         """Position of column ``offset`` of a row: a stand-in node whose mark points there."""
+
         def locate(offset: int) -> Node:
             mark = node.start_mark
             if line is None:
@@ -776,6 +855,7 @@ class _Reader:
                 col = mark.column + (1 if quoted else 0) + offset if same_line else mark.column
                 return _At(mark.line, col)
             return _At(line, (column or 0) + offset)
+
         return locate
 
 
@@ -823,8 +903,10 @@ def _expanded_size(root: Node, limit: int) -> int:
         stack.append((node, True))
         for child in children(node):
             if id(child) in on_path:
-                raise _TooBig("the document refers to itself through an alias (recursive "
-                              "structure); expected a tree")
+                raise _TooBig(
+                    "the document refers to itself through an alias (recursive "
+                    "structure); expected a tree"
+                )
             if id(child) not in size:
                 stack.append((child, False))
     return size[id(root)]
@@ -843,8 +925,15 @@ def _compose(text: str, file: str) -> Node | None:
     except yaml.YAMLError as exc:
         raise RuleBaseError([Problem(Location(file), f"invalid YAML: {exc}")]) from None
     except RecursionError:
-        raise RuleBaseError([Problem(Location(file), "invalid rule base: YAML nested too deeply "
-                                     "(expected a few levels of mappings and lists)")]) from None
+        raise RuleBaseError(
+            [
+                Problem(
+                    Location(file),
+                    "invalid rule base: YAML nested too deeply "
+                    "(expected a few levels of mappings and lists)",
+                )
+            ]
+        ) from None
 
 
 def loads_rulebase(text: str, source: str = "<string>") -> RuleBase:
@@ -857,28 +946,46 @@ def loads_rulebase(text: str, source: str = "<string>") -> RuleBase:
     """
     size = len(text.encode("utf-8", errors="replace"))
     if size > MAX_FILE_BYTES:
-        raise RuleBaseError([Problem(Location(source), f"file is {size} bytes; rule bases are "
-                                     f"limited to {MAX_FILE_BYTES} bytes (1 MiB)")])
+        raise RuleBaseError(
+            [
+                Problem(
+                    Location(source),
+                    f"file is {size} bytes; rule bases are "
+                    f"limited to {MAX_FILE_BYTES} bytes (1 MiB)",
+                )
+            ]
+        )
     root = _compose(text, source)
     if root is None:
-        raise RuleBaseError([Problem(Location(source), "file is empty; expected a mapping with "
-                                     "name, inputs, outputs and rules")])
+        raise RuleBaseError(
+            [
+                Problem(
+                    Location(source),
+                    "file is empty; expected a mapping with name, inputs, outputs and rules",
+                )
+            ]
+        )
     try:
         nodes = _expanded_size(root, MAX_NODES)
     except _TooBig as exc:
         raise RuleBaseError([Problem(Location(source), str(exc))]) from None
     if nodes > MAX_NODES:
-        raise RuleBaseError([Problem(Location(source), f"the document expands to more than "
-                                     f"{MAX_NODES} nodes through aliases (an alias bomb?); "
-                                     "rule bases are far smaller")])
+        raise RuleBaseError(
+            [
+                Problem(
+                    Location(source),
+                    f"the document expands to more than "
+                    f"{MAX_NODES} nodes through aliases (an alias bomb?); "
+                    "rule bases are far smaller",
+                )
+            ]
+        )
     reader = _Reader(source, text.split("\n"))
     rb = reader.rule_base(root)
     problems = list(reader.problems)
     if rb is not None:
         for path, message in validation.check(rb):
-            if path in reader.hidden_at or any(
-                path[: len(h)] == h for h in reader.hidden_under
-            ):
+            if path in reader.hidden_at or any(path[: len(h)] == h for h in reader.hidden_under):
                 continue
             problems.append(Problem(_locate(reader, path, root), message))
     if problems:
@@ -906,20 +1013,30 @@ def load_file(path: str | FsPath) -> RuleBase:
     try:
         size = p.stat().st_size
         if size > MAX_FILE_BYTES:
-            raise RuleBaseError([Problem(Location(name), f"file is {size} bytes; rule bases are "
-                                         f"limited to {MAX_FILE_BYTES} bytes (1 MiB)")])
+            raise RuleBaseError(
+                [
+                    Problem(
+                        Location(name),
+                        f"file is {size} bytes; rule bases are "
+                        f"limited to {MAX_FILE_BYTES} bytes (1 MiB)",
+                    )
+                ]
+            )
         data = p.read_bytes()
     except IsADirectoryError:
-        raise RuleBaseError([Problem(Location(name), "is a directory (expected a .yaml "
-                                     "file)")]) from None
+        raise RuleBaseError(
+            [Problem(Location(name), "is a directory (expected a .yaml file)")]
+        ) from None
     except OSError as exc:
-        raise RuleBaseError([Problem(Location(name), f"cannot read: {exc.strerror or exc}")]) \
-            from None
+        raise RuleBaseError(
+            [Problem(Location(name), f"cannot read: {exc.strerror or exc}")]
+        ) from None
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise RuleBaseError([Problem(Location(name), f"not UTF-8 text (byte {exc.start}); "
-                                     "expected a YAML file")]) from None
+        raise RuleBaseError(
+            [Problem(Location(name), f"not UTF-8 text (byte {exc.start}); expected a YAML file")]
+        ) from None
     return loads_rulebase(text, name)
 
 
@@ -950,9 +1067,7 @@ _Dumper.add_representer(
 _Dumper.add_representer(
     _FlowMap, lambda d, v: d.represent_mapping("tag:yaml.org,2002:map", v, flow_style=True)
 )
-_Dumper.add_representer(
-    _Literal, lambda d, v: d.represent_scalar(_STR, v, style="|")
-)
+_Dumper.add_representer(_Literal, lambda d, v: d.represent_scalar(_STR, v, style="|"))
 
 
 def _dump_terms(var: Variable, kind: str) -> dict[str, Any]:
@@ -993,9 +1108,13 @@ def _table_rules(
     table: RuleTable, rows: Sequence[str], cols: Sequence[str], grid: dict[tuple[str, str], str]
 ) -> tuple[Rule, ...]:
     return tuple(
-        Rule(Compound("and", (Proposition(table.rows, r), Proposition(table.columns, c))),
-             (Consequent(table.output, grid[r, c]),))
-        for r in rows for c in cols if (r, c) in grid
+        Rule(
+            Compound("and", (Proposition(table.rows, r), Proposition(table.columns, c))),
+            (Consequent(table.output, grid[r, c]),),
+        )
+        for r in rows
+        for c in cols
+        if (r, c) in grid
     )
 
 
@@ -1013,24 +1132,39 @@ def _dump_table(rb: RuleBase) -> dict[str, Any] | None:
     seen_cols: list[str] = []
     for rule in rb.rules:
         a = rule.antecedent
-        if not (isinstance(a, Compound) and a.op == "and" and len(a.operands) == 2
-                and rule.weight == 1.0 and len(rule.consequents) == 1
-                and rule.consequents[0].variable == t.output):
+        if not (
+            isinstance(a, Compound)
+            and a.op == "and"
+            and len(a.operands) == 2
+            and rule.weight == 1.0
+            and len(rule.consequents) == 1
+            and rule.consequents[0].variable == t.output
+        ):
             return None
         r, c = a.operands
-        if not (isinstance(r, Proposition) and isinstance(c, Proposition)
-                and r.variable == t.rows and c.variable == t.columns
-                and not r.negated and not c.negated
-                and r.term in row_var.term_names and c.term in col_var.term_names
-                and (r.term, c.term) not in grid):
+        if not (
+            isinstance(r, Proposition)
+            and isinstance(c, Proposition)
+            and r.variable == t.rows
+            and c.variable == t.columns
+            and not r.negated
+            and not c.negated
+            and r.term in row_var.term_names
+            and c.term in col_var.term_names
+            and (r.term, c.term) not in grid
+        ):
             return None
         grid[r.term, c.term] = rule.consequents[0].term
         seen_rows.append(r.term)
         seen_cols.append(c.term)
-    row_orders = [list(row_var.term_names),
-                  list(dict.fromkeys(seen_rows + list(row_var.term_names)))]
-    col_orders = [list(col_var.term_names),
-                  list(dict.fromkeys(seen_cols + list(col_var.term_names)))]
+    row_orders = [
+        list(row_var.term_names),
+        list(dict.fromkeys(seen_rows + list(row_var.term_names))),
+    ]
+    col_orders = [
+        list(col_var.term_names),
+        list(dict.fromkeys(seen_cols + list(col_var.term_names))),
+    ]
     for rows in row_orders:
         for cols in col_orders:
             if _table_rules(t, rows, cols, grid) != rb.rules:
@@ -1067,8 +1201,14 @@ def dump(rb: RuleBase) -> str:
             section[var.name] = spec
         doc[kind + "s"] = section
     ops = rb.operators
-    doc["operators"] = _FlowMap({"and": ops.and_, "or": ops.or_, "implication": ops.implication,
-                                 "aggregation": ops.aggregation})
+    doc["operators"] = _FlowMap(
+        {
+            "and": ops.and_,
+            "or": ops.or_,
+            "implication": ops.implication,
+            "aggregation": ops.aggregation,
+        }
+    )
     doc["defuzzifier"] = rb.defuzzifier
     doc["out_of_range"] = rb.out_of_range
     table = _dump_table(rb)
@@ -1103,28 +1243,36 @@ def json_schema() -> dict[str, Any]:
     for shape, params in SHAPE_PARAMS.items():
         if shape in PIECEWISE_LINEAR_SHAPES:
             props: dict[str, Any] = {
-                "points": {"type": "array", "items": number, "minItems": len(params),
-                           "maxItems": len(params),
-                           "description": f"{shape} points [{', '.join(params)}]"}
+                "points": {
+                    "type": "array",
+                    "items": number,
+                    "minItems": len(params),
+                    "maxItems": len(params),
+                    "description": f"{shape} points [{', '.join(params)}]",
+                }
             }
             required = ["shape", "points"]
         else:
             props = {p: number for p in params}
             required = ["shape", *params]
-        shape_defs.append({
-            "type": "object",
-            "properties": {"shape": {"const": shape}, **props},
-            "required": required,
-            "additionalProperties": False,
-        })
+        shape_defs.append(
+            {
+                "type": "object",
+                "properties": {"shape": {"const": shape}, **props},
+                "required": required,
+                "additionalProperties": False,
+            }
+        )
     partition = {
         "type": "object",
         "description": "N evenly spaced triangular labels over the range",
         "properties": {
             "partition": {"enum": list(PARTITION_KINDS)},
             "labels": {"type": "array", "items": name, "minItems": 2, "uniqueItems": True},
-            "ends": {"enum": list(PARTITION_ENDS),
-                     "description": "outer terms: shoulder (inputs' default) or triangle"},
+            "ends": {
+                "enum": list(PARTITION_ENDS),
+                "description": "outer terms: shoulder (inputs' default) or triangle",
+            },
         },
         "required": ["partition", "labels"],
         "additionalProperties": False,
@@ -1138,30 +1286,52 @@ def json_schema() -> dict[str, Any]:
 
     def variable(kind: str) -> dict[str, Any]:
         props: dict[str, Any] = {
-            "range": {"type": "array", "items": number, "minItems": 2, "maxItems": 2,
-                      "description": "[low, high]"},
+            "range": {
+                "type": "array",
+                "items": number,
+                "minItems": 2,
+                "maxItems": 2,
+                "description": "[low, high]",
+            },
             "terms": {"oneOf": [{"$ref": "#/$defs/partition"}, explicit_terms]},
         }
         if kind == "output":
-            props["default"] = {"type": ["number", "null"],
-                                "description": "output when no rule fires (null = NaN)"}
-        return {"type": "object", "properties": props, "required": ["range", "terms"],
-                "additionalProperties": False}
+            props["default"] = {
+                "type": ["number", "null"],
+                "description": "output when no rule fires (null = NaN)",
+            }
+        return {
+            "type": "object",
+            "properties": props,
+            "required": ["range", "terms"],
+            "additionalProperties": False,
+        }
 
     condition: dict[str, Any] = {
         "type": "object",
         "minProperties": 1,
         "description": "{input: label, ...} (AND), {and: [...]}, {or: [...]}, {not: {input: "
-                       "label}}, {input: {not: label}}",
+        "label}}, {input: {not: label}}",
         "properties": {
             "and": {"type": "array", "items": {"$ref": "#/$defs/condition"}, "minItems": 2},
             "or": {"type": "array", "items": {"$ref": "#/$defs/condition"}, "minItems": 2},
-            "not": {"type": "object", "minProperties": 1, "maxProperties": 1,
-                    "additionalProperties": name},
+            "not": {
+                "type": "object",
+                "minProperties": 1,
+                "maxProperties": 1,
+                "additionalProperties": name,
+            },
         },
         "additionalProperties": {
-            "oneOf": [name, {"type": "object", "properties": {"not": name},
-                             "required": ["not"], "additionalProperties": False}]
+            "oneOf": [
+                name,
+                {
+                    "type": "object",
+                    "properties": {"not": name},
+                    "required": ["not"],
+                    "additionalProperties": False,
+                },
+            ]
         },
     }
     rule = {
@@ -1177,12 +1347,15 @@ def json_schema() -> dict[str, Any]:
     table = {
         "type": "object",
         "properties": {
-            "rows": name, "columns": name, "output": name,
+            "rows": name,
+            "columns": name,
+            "output": name,
             "row_labels": {"type": "array", "items": name},
             "column_labels": {"type": "array", "items": name},
-            "cells": {"oneOf": [{"type": "string"}, {"type": "array", "items": {"type": "string"}}],
-                      "description": "one line per row, labels separated by spaces, '-' = no "
-                                     "rule"},
+            "cells": {
+                "oneOf": [{"type": "string"}, {"type": "array", "items": {"type": "string"}}],
+                "description": "one line per row, labels separated by spaces, '-' = no rule",
+            },
         },
         "required": ["rows", "columns", "cells"],
         "additionalProperties": False,
@@ -1196,10 +1369,18 @@ def json_schema() -> dict[str, Any]:
         "properties": {
             "name": {**name, "description": "identifier; the C symbol prefix"},
             "description": {"type": "string"},
-            "inputs": {"type": "object", "minProperties": 1, "propertyNames": name,
-                       "additionalProperties": variable("input")},
-            "outputs": {"type": "object", "minProperties": 1, "propertyNames": name,
-                        "additionalProperties": variable("output")},
+            "inputs": {
+                "type": "object",
+                "minProperties": 1,
+                "propertyNames": name,
+                "additionalProperties": variable("input"),
+            },
+            "outputs": {
+                "type": "object",
+                "minProperties": 1,
+                "propertyNames": name,
+                "additionalProperties": variable("output"),
+            },
             "operators": {
                 "type": "object",
                 "properties": {
@@ -1212,11 +1393,17 @@ def json_schema() -> dict[str, Any]:
             },
             "defuzzifier": {"enum": list(DEFUZZIFIERS)},
             "out_of_range": {"enum": list(OUT_OF_RANGE_POLICIES)},
-            "rules": {"oneOf": [
-                {"type": "array", "items": {"$ref": "#/$defs/rule"}, "minItems": 1},
-                {"type": "object", "properties": {"table": {"$ref": "#/$defs/table"}},
-                 "required": ["table"], "additionalProperties": False},
-            ]},
+            "rules": {
+                "oneOf": [
+                    {"type": "array", "items": {"$ref": "#/$defs/rule"}, "minItems": 1},
+                    {
+                        "type": "object",
+                        "properties": {"table": {"$ref": "#/$defs/table"}},
+                        "required": ["table"],
+                        "additionalProperties": False,
+                    },
+                ]
+            },
         },
         "required": ["name", "inputs", "outputs", "rules"],
         "additionalProperties": False,
@@ -1228,4 +1415,3 @@ def json_schema() -> dict[str, Any]:
             "table": table,
         },
     }
-

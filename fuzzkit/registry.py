@@ -65,11 +65,15 @@ def load(name_or_path: str | os.PathLike[str]) -> RuleBase:
     if spec not in names:
         if Path(spec).is_file():  # a file without a YAML suffix in the working folder
             return load_file(spec)
-        raise RuleBaseError([Problem(
-            Location(spec),
-            f"no shipped rule base or file called {spec!r}{did_you_mean(spec, names)}; "
-            f"shipped: {', '.join(names)} (or give a path to a .yaml file)",
-        )])
+        raise RuleBaseError(
+            [
+                Problem(
+                    Location(spec),
+                    f"no shipped rule base or file called {spec!r}{did_you_mean(spec, names)}; "
+                    f"shipped: {', '.join(names)} (or give a path to a .yaml file)",
+                )
+            ]
+        )
     resource = resources.files(_PACKAGE).joinpath(spec + ".yaml")
     if not resource.is_file():
         resource = resources.files(_PACKAGE).joinpath(spec + ".yml")

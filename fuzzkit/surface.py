@@ -100,9 +100,7 @@ def term_peak(term: Term, var: Variable) -> float:
     return float(min(max(peak, var.low), var.high))
 
 
-def peak_grid(
-    rb: RuleBase, output: str | None = None
-) -> tuple[FloatArray, list[str]]:
+def peak_grid(rb: RuleBase, output: str | None = None) -> tuple[FloatArray, list[str]]:
     """The surface at every pair of input term peaks: ``(N, 3)`` points and their labels."""
     from fuzzkit.inference import Engine
 
@@ -127,9 +125,7 @@ def _colours(z: FloatArray, low: float, high: float) -> npt.NDArray[np.uint8]:
     return np.asarray(np.round(rgba * 255), dtype=np.uint8)
 
 
-def _mesh(
-    x: FloatArray, y: FloatArray, z: FloatArray
-) -> tuple[FloatArray, npt.NDArray[np.uint32]]:
+def _mesh(x: FloatArray, y: FloatArray, z: FloatArray) -> tuple[FloatArray, npt.NDArray[np.uint32]]:
     nx, ny = len(x), len(y)
     xx, yy = np.meshgrid(x, y, indexing="ij")
     vertices = np.column_stack([xx.ravel(), yy.ravel(), np.nan_to_num(z).ravel()])
@@ -193,8 +189,9 @@ def write_surface_rrd(
         )
         rec.log(
             f"surface/{name}/label_peaks",
-            rr.Points3D(peaks, radii=0.015 * (out.high - out.low), labels=labels,
-                        colors=[(20, 20, 20)]),
+            rr.Points3D(
+                peaks, radii=0.015 * (out.high - out.low), labels=labels, colors=[(20, 20, 20)]
+            ),
             static=True,
         )
         rec.flush()

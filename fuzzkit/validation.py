@@ -11,7 +11,8 @@
 * ``("rules",)``, ``("rules", "table", "rows")``, and for rule ``k`` (its index in
   ``RuleBase.rules``): ``("rules", k, "weight")``, ``("rules", k, "then", j)`` for its ``j``-th
   consequent and ``("rules", k, "if", i, j, ...)`` for the sub-expression reached by taking
-  operand ``i`` of the antecedent, then operand ``j`` of that, and so on.
+  operand ``i`` of the antecedent, then operand ``j`` of that, and so on; a problem with the
+  label of a proposition or consequent (rather than its variable) adds ``"label"``.
 
 The YAML loader maps these paths to ``file:line:col``; :func:`ensure_valid` (what engines call)
 raises one :class:`~fuzzkit.errors.RuleBaseError` naming every problem with its path.
@@ -139,13 +140,19 @@ def _check_term(term: Term, base: Path) -> list[Issue]:
         if not a <= b <= c:
             return [(where, f"triangle points must be ordered a <= b <= c, got {_fmt_list(p)}")]
         if not a < c:
-            return [(where, f"triangle is degenerate (a == c), got {_fmt_list(p)}; "
-                     "use a singleton for a single point")]
+            return [
+                (
+                    where,
+                    f"triangle is degenerate (a == c), got {_fmt_list(p)}; "
+                    "use a singleton for a single point",
+                )
+            ]
     elif shape == "trapezoid":
         a, b, c, d = p
         if not a <= b <= c <= d:
-            return [(where, "trapezoid points must be ordered a <= b <= c <= d, "
-                     f"got {_fmt_list(p)}")]
+            return [
+                (where, f"trapezoid points must be ordered a <= b <= c <= d, got {_fmt_list(p)}")
+            ]
         if not a < d:
             return [(where, f"trapezoid is degenerate (a == d), got {_fmt_list(p)}")]
     elif shape in ("left_shoulder", "right_shoulder"):
@@ -264,8 +271,9 @@ def _check_variable(var: Variable, kind: str, base: Path) -> list[Issue]:
     if kind == "input" and range_ok and var.terms and all(map(_term_is_valid, var.terms)):
         gaps = uncovered(var)
         if gaps:
-            text = ", ".join(f"[{_fmt(lo)}, {_fmt(hi)}]" if lo != hi else f"at {_fmt(lo)}"
-                             for lo, hi in gaps)
+            text = ", ".join(
+                f"[{_fmt(lo)}, {_fmt(hi)}]" if lo != hi else f"at {_fmt(lo)}" for lo, hi in gaps
+            )
             out.append(
                 (
                     (*base, "terms"),
@@ -322,7 +330,7 @@ def _check_reference(name: str, term: str, rb: RuleBase, path: Path, want: str) 
     if term not in var.term_names:
         return [
             (
-                path,
+                (*path, "label"),
                 f"unknown label {term!r} for {want} {name!r}"
                 f"{did_you_mean(term, var.term_names)}; expected one of "
                 f"{', '.join(var.term_names)}",
@@ -360,13 +368,19 @@ def _check_rules(rb: RuleBase) -> list[Issue]:
         ):
             if name not in pool:
                 out.append(
-                    (("rules", "table", key),
-                     f"unknown {kind} {name!r}{did_you_mean(name, pool)}; expected one of "
-                     f"{', '.join(pool) or '(none)'}")
+                    (
+                        ("rules", "table", key),
+                        f"unknown {kind} {name!r}{did_you_mean(name, pool)}; expected one of "
+                        f"{', '.join(pool) or '(none)'}",
+                    )
                 )
         if t.rows == t.columns:
-            out.append((("rules", "table", "columns"),
-                        f"rows and columns must be different inputs, got {t.rows!r} twice"))
+            out.append(
+                (
+                    ("rules", "table", "columns"),
+                    f"rows and columns must be different inputs, got {t.rows!r} twice",
+                )
+            )
     return out
 
 
@@ -392,8 +406,13 @@ def check(rb: RuleBase) -> list[Issue]:
             base: Path = (kind + "s", var.name)
             if var.name in seen:
                 # Inputs and outputs share one namespace in generated code.
-                out.append((base, f"duplicate variable name {var.name!r} "
-                                  f"(already used by an {seen[var.name]})"))
+                out.append(
+                    (
+                        base,
+                        f"duplicate variable name {var.name!r} "
+                        f"(already used by an {seen[var.name]})",
+                    )
+                )
             else:
                 seen[var.name] = kind
             out.extend(_check_variable(var, kind, base))
@@ -407,32 +426,40 @@ def check(rb: RuleBase) -> list[Issue]:
     ):
         if value not in allowed:
             out.append(
-                (("operators", key),
-                 f"unknown {key} operator {value!r}{did_you_mean(value, allowed)}; "
-                 f"expected one of {', '.join(allowed)}")
+                (
+                    ("operators", key),
+                    f"unknown {key} operator {value!r}{did_you_mean(value, allowed)}; "
+                    f"expected one of {', '.join(allowed)}",
+                )
             )
     if rb.defuzzifier not in DEFUZZIFIERS:
         out.append(
-            (("defuzzifier",),
-             f"unknown defuzzifier {rb.defuzzifier!r}{did_you_mean(rb.defuzzifier, DEFUZZIFIERS)}"
-             f"; expected one of {', '.join(DEFUZZIFIERS)}")
+            (
+                ("defuzzifier",),
+                f"unknown defuzzifier {rb.defuzzifier!r}{did_you_mean(rb.defuzzifier, DEFUZZIFIERS)}"
+                f"; expected one of {', '.join(DEFUZZIFIERS)}",
+            )
         )
     elif rb.defuzzifier != "weighted_average":
         for var in rb.outputs:
             for term in var.terms:
                 if term.shape == "singleton":
                     out.append(
-                        (("outputs", var.name, "terms", term.name, "shape"),
-                         f"singleton output term {term.name!r} has no area, so defuzzifier "
-                         f"{rb.defuzzifier!r} cannot use it; expected defuzzifier "
-                         "weighted_average or a shape with area")
+                        (
+                            ("outputs", var.name, "terms", term.name, "shape"),
+                            f"singleton output term {term.name!r} has no area, so defuzzifier "
+                            f"{rb.defuzzifier!r} cannot use it; expected defuzzifier "
+                            "weighted_average or a shape with area",
+                        )
                     )
     if rb.out_of_range not in OUT_OF_RANGE_POLICIES:
         out.append(
-            (("out_of_range",),
-             f"unknown out_of_range policy {rb.out_of_range!r}"
-             f"{did_you_mean(rb.out_of_range, OUT_OF_RANGE_POLICIES)}; expected one of "
-             f"{', '.join(OUT_OF_RANGE_POLICIES)}")
+            (
+                ("out_of_range",),
+                f"unknown out_of_range policy {rb.out_of_range!r}"
+                f"{did_you_mean(rb.out_of_range, OUT_OF_RANGE_POLICIES)}; expected one of "
+                f"{', '.join(OUT_OF_RANGE_POLICIES)}",
+            )
         )
     out.extend(_check_rules(rb))
     return out

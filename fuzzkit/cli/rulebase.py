@@ -25,47 +25,76 @@ EXIT_BAD_INPUT = 2
 
 def register(sub: Any) -> None:
     """Add the rule-base subcommands to the ``fuzzkit`` parser."""
-    p = sub.add_parser("validate", help="check rule-base files; list every problem",
-                       description="Check rule-base YAML files (paths or shipped names). Exit 0 "
-                                   "when all are valid, 2 listing every problem otherwise.")
+    p = sub.add_parser(
+        "validate",
+        help="check rule-base files; list every problem",
+        description="Check rule-base YAML files (paths or shipped names). Exit 0 "
+        "when all are valid, 2 listing every problem otherwise.",
+    )
     p.add_argument("files", nargs="+", metavar="FILE")
     p.set_defaults(handler=cmd_validate)
 
-    p = sub.add_parser("info", help="describe a rule base: variables, terms, rules",
-                       description="Print a rule base's variables with ranges, their terms with "
-                                   "shapes and parameters, and its rules (as a grid for tables).")
+    p = sub.add_parser(
+        "info",
+        help="describe a rule base: variables, terms, rules",
+        description="Print a rule base's variables with ranges, their terms with "
+        "shapes and parameters, and its rules (as a grid for tables).",
+    )
     p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
     p.set_defaults(handler=cmd_info)
 
-    p = sub.add_parser("eval", help="evaluate a rule base at a point or at CSV rows",
-                       description="Evaluate a rule base with the exact engine, at one point "
-                                   "(--input NAME=VALUE for every input) or at every row of a CSV "
-                                   "file (--points, header = input names; the rows are echoed "
-                                   "with the outputs appended). NaN inputs give NaN outputs.")
+    p = sub.add_parser(
+        "eval",
+        help="evaluate a rule base at a point or at CSV rows",
+        description="Evaluate a rule base with the exact engine, at one point "
+        "(--input NAME=VALUE for every input) or at every row of a CSV "
+        "file (--points, header = input names; the rows are echoed "
+        "with the outputs appended). NaN inputs give NaN outputs.",
+    )
     p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
     group = p.add_mutually_exclusive_group(required=True)
-    group.add_argument("--input", "-i", action="append", metavar="NAME=VALUE", dest="inputs",
-                       help="an input value (repeat for every input)")
-    group.add_argument("--points", metavar="FILE.csv",
-                       help="CSV file with a header of input names ('-' reads stdin)")
+    group.add_argument(
+        "--input",
+        "-i",
+        action="append",
+        metavar="NAME=VALUE",
+        dest="inputs",
+        help="an input value (repeat for every input)",
+    )
+    group.add_argument(
+        "--points",
+        metavar="FILE.csv",
+        help="CSV file with a header of input names ('-' reads stdin)",
+    )
     p.add_argument("--json", action="store_true", help="print the point's outputs as JSON")
     p.set_defaults(handler=cmd_eval)
 
-    p = sub.add_parser("surface", help="write the control surface of a 2-input rule base",
-                       description="Compute the control surface output = F(input1, input2) with "
-                                   "the exact engine and write it as a Rerun recording (3-D mesh "
-                                   "plus the label-peak grid) and/or a PNG.")
+    p = sub.add_parser(
+        "surface",
+        help="write the control surface of a 2-input rule base",
+        description="Compute the control surface output = F(input1, input2) with "
+        "the exact engine and write it as a Rerun recording (3-D mesh "
+        "plus the label-peak grid) and/or a PNG.",
+    )
     p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
     p.add_argument("--rrd", metavar="OUT.rrd", help="Rerun recording to write")
     p.add_argument("--png", metavar="OUT.png", help="PNG image to write")
-    p.add_argument("--resolution", type=int, default=101, metavar="N",
-                   help="grid points per input (default 101)")
+    p.add_argument(
+        "--resolution",
+        type=int,
+        default=101,
+        metavar="N",
+        help="grid points per input (default 101)",
+    )
     p.add_argument("--output", metavar="NAME", help="which output (default: the first)")
     p.set_defaults(handler=cmd_surface)
 
-    p = sub.add_parser("schema", help="print the JSON Schema of the rule-base format",
-                       description="Print a JSON Schema (draft 2020-12) of the rule-base YAML "
-                                   "format, e.g. for the YAML language server.")
+    p = sub.add_parser(
+        "schema",
+        help="print the JSON Schema of the rule-base format",
+        description="Print a JSON Schema (draft 2020-12) of the rule-base YAML "
+        "format, e.g. for the YAML language server.",
+    )
     p.set_defaults(handler=cmd_schema)
 
 
@@ -93,11 +122,16 @@ def cmd_validate(args: argparse.Namespace) -> int:
             for problem in exc.problems:
                 print(f"{problem}", file=sys.stderr)
             continue
-        print(f"{spec}: ok ({rb.name}: {_count(len(rb.inputs), 'input')}, "
-              f"{_count(len(rb.outputs), 'output')}, {_count(len(rb.rules), 'rule')})")
+        print(
+            f"{spec}: ok ({rb.name}: {_count(len(rb.inputs), 'input')}, "
+            f"{_count(len(rb.outputs), 'output')}, {_count(len(rb.rules), 'rule')})"
+        )
     if failed:
-        print(f"fuzzkit: error: {failed} of {len(args.files)} rule base"
-              f"{'s' if len(args.files) != 1 else ''} invalid", file=sys.stderr)
+        print(
+            f"fuzzkit: error: {failed} of {len(args.files)} rule base"
+            f"{'s' if len(args.files) != 1 else ''} invalid",
+            file=sys.stderr,
+        )
         return EXIT_BAD_INPUT
     return EXIT_OK
 
@@ -184,8 +218,10 @@ def describe_rulebase(rb: RuleBase) -> str:
     lines.append("")
     grid = _table_grid(rb)
     if grid is not None and rb.table is not None:
-        lines.append(f"rules: {len(rb.rules)} (table: rows {rb.table.rows}, columns "
-                     f"{rb.table.columns} -> {rb.table.output})")
+        lines.append(
+            f"rules: {len(rb.rules)} (table: rows {rb.table.rows}, columns "
+            f"{rb.table.columns} -> {rb.table.output})"
+        )
         lines += grid
     else:
         lines.append(f"rules: {len(rb.rules)}")
@@ -193,8 +229,10 @@ def describe_rulebase(rb: RuleBase) -> str:
         for k, rule in enumerate(rb.rules, start=1):
             then = " and ".join(f"{c.variable} is {c.term}" for c in rule.consequents)
             weight = f"  (weight {_num(rule.weight)})" if rule.weight != 1.0 else ""
-            lines.append(f"  {str(k).rjust(width)}. if {format_expression(rule.antecedent)} "
-                         f"then {then}{weight}")
+            lines.append(
+                f"  {str(k).rjust(width)}. if {format_expression(rule.antecedent)} "
+                f"then {then}{weight}"
+            )
     return "\n".join(lines)
 
 
@@ -218,9 +256,11 @@ def _parse_inputs(rb: RuleBase, items: Sequence[str]) -> dict[str, float]:
             problems.append(f"--input {item!r}: expected NAME=VALUE")
             continue
         if name not in rb.input_names:
-            problems.append(f"--input {item!r}: unknown input {name!r}"
-                            f"{did_you_mean(name, rb.input_names)}; expected one of "
-                            f"{', '.join(rb.input_names)}")
+            problems.append(
+                f"--input {item!r}: unknown input {name!r}"
+                f"{did_you_mean(name, rb.input_names)}; expected one of "
+                f"{', '.join(rb.input_names)}"
+            )
             continue
         if name in values:
             problems.append(f"--input {item!r}: input {name!r} given twice")
@@ -229,11 +269,16 @@ def _parse_inputs(rb: RuleBase, items: Sequence[str]) -> dict[str, float]:
             values[name] = float(text)
         except ValueError:
             problems.append(f"--input {item!r}: expected a number for {name!r}, got {text!r}")
-    missing = [n for n in rb.input_names if n not in values and not any(
-        p.startswith(f"--input '{n}=") for p in problems)]
+    missing = [
+        n
+        for n in rb.input_names
+        if n not in values and not any(p.startswith(f"--input '{n}=") for p in problems)
+    ]
     if missing:
-        problems.append(f"missing --input for {', '.join(missing)} (rule base {rb.name!r} has "
-                        f"inputs {', '.join(rb.input_names)})")
+        problems.append(
+            f"missing --input for {', '.join(missing)} (rule base {rb.name!r} has "
+            f"inputs {', '.join(rb.input_names)})"
+        )
     if problems:
         raise EvaluationError("; ".join(problems))
     return values
@@ -246,21 +291,38 @@ def _read_points(
     try:
         header = next(reader)
     except StopIteration:
-        raise ProblemsError([Problem(Location(name), "CSV file is empty; expected a header of "
-                                     f"input names ({', '.join(rb.input_names)})")]) from None
+        raise ProblemsError(
+            [
+                Problem(
+                    Location(name),
+                    "CSV file is empty; expected a header of "
+                    f"input names ({', '.join(rb.input_names)})",
+                )
+            ]
+        ) from None
     header = [h.strip() for h in header]
     problems: list[Problem] = []
     missing = [n for n in rb.input_names if n not in header]
     if missing:
         plural = "s" if len(missing) > 1 else ""
-        problems.append(Problem(Location(name, 1), f"missing column{plural}"
-                                f" {', '.join(missing)} (expected a header naming every input: "
-                                f"{', '.join(rb.input_names)}; got {', '.join(header)})"))
+        problems.append(
+            Problem(
+                Location(name, 1),
+                f"missing column{plural}"
+                f" {', '.join(missing)} (expected a header naming every input: "
+                f"{', '.join(rb.input_names)}; got {', '.join(header)})",
+            )
+        )
     clash = [n for n in rb.output_names if n in header]
     if clash:
-        problems.append(Problem(Location(name, 1), f"column{'s' if len(clash) > 1 else ''} "
-                                f"{', '.join(clash)} would be overwritten by the output(s); "
-                                "rename them"))
+        problems.append(
+            Problem(
+                Location(name, 1),
+                f"column{'s' if len(clash) > 1 else ''} "
+                f"{', '.join(clash)} would be overwritten by the output(s); "
+                "rename them",
+            )
+        )
     dup = sorted({h for h in header if header.count(h) > 1})
     if dup:
         problems.append(Problem(Location(name, 1), f"duplicate column {', '.join(dup)}"))
@@ -274,16 +336,18 @@ def _read_points(
         if not row or all(not c.strip() for c in row):
             continue
         if len(row) != len(header):
-            problems.append(Problem(Location(name, line), f"expected {len(header)} cells, got "
-                                    f"{len(row)}"))
+            problems.append(
+                Problem(Location(name, line), f"expected {len(header)} cells, got {len(row)}")
+            )
             continue
         for n, j in cols.items():
             cell = row[j].strip()
             try:
                 values[n].append(float(cell))
             except ValueError:
-                problems.append(Problem(Location(name, line), f"expected a number for {n!r}, got "
-                                        f"{cell!r}"))
+                problems.append(
+                    Problem(Location(name, line), f"expected a number for {n!r}, got {cell!r}")
+                )
                 values[n].append(math.nan)
         rows.append(row)
         if len(problems) > 50:
@@ -319,8 +383,9 @@ def cmd_eval(args: argparse.Namespace) -> int:
             with open(args.points, newline="", encoding="utf-8") as fh:
                 header, rows, values = _read_points(rb, args.points, fh)
         except UnicodeDecodeError:
-            raise ProblemsError([Problem(Location(args.points), "not UTF-8 text; expected a CSV "
-                                         "file")]) from None
+            raise ProblemsError(
+                [Problem(Location(args.points), "not UTF-8 text; expected a CSV file")]
+            ) from None
     outputs = engine.evaluate({n: np.asarray(v, dtype=np.float64) for n, v in values.items()})
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
@@ -353,8 +418,10 @@ def cmd_surface(args: argparse.Namespace) -> int:
         print(f"wrote {args.png}")
     points, labels = peak_grid(rb, args.output)
     name = args.output or rb.output_names[0]
-    print(f"{name} at the label peaks ({len(labels)} points): min {_num(np.nanmin(points[:, 2]))}"
-          f", max {_num(np.nanmax(points[:, 2]))}")
+    print(
+        f"{name} at the label peaks ({len(labels)} points): min {_num(np.nanmin(points[:, 2]))}"
+        f", max {_num(np.nanmax(points[:, 2]))}"
+    )
     return EXIT_OK
 
 
@@ -366,4 +433,3 @@ def cmd_schema(args: argparse.Namespace) -> int:
 
     print(json.dumps(json_schema(), indent=2))
     return EXIT_OK
-
