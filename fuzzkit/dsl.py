@@ -803,8 +803,8 @@ class _Reader:
                 self.problems.append(
                     Problem(
                         self.loc(locate(0)),
-                        f"table row {len(grid) + 1} has {len(row)} cells, expected {ncols} (one per "
-                        f"label of columns input {cols!r})",
+                        f"table row {len(grid) + 1} has {len(row)} cells, expected {ncols} "
+                        f"(one per label of columns input {cols!r})",
                     )
                 )
                 ok = False

@@ -436,8 +436,9 @@ def check(rb: RuleBase) -> list[Issue]:
         out.append(
             (
                 ("defuzzifier",),
-                f"unknown defuzzifier {rb.defuzzifier!r}{did_you_mean(rb.defuzzifier, DEFUZZIFIERS)}"
-                f"; expected one of {', '.join(DEFUZZIFIERS)}",
+                f"unknown defuzzifier {rb.defuzzifier!r}"
+                f"{did_you_mean(rb.defuzzifier, DEFUZZIFIERS)}; "
+                f"expected one of {', '.join(DEFUZZIFIERS)}",
             )
         )
     elif rb.defuzzifier != "weighted_average":

@@ -1,4 +1,4 @@
-"""Malformed rule bases: every problem is reported with its line (and column) and a clear message."""
+"""Malformed rule bases: every problem is reported at its line and column, clearly worded."""
 
 from __future__ import annotations
 
@@ -401,7 +401,7 @@ def test_malformed_rule_base_is_reported_at_its_line(
     where = hits[0].location
     assert where.file == "bad.yaml"
     assert where.line == line, str(hits[0])
-    text_line = (yaml_text.split("\n") + [""])[line - 1]
+    text_line = [*yaml_text.split("\n"), ""][line - 1]
     expected_col = text_line.index(at) + 1 if at else 1
     assert where.col == expected_col, f"{hits[0]} (expected column {expected_col}: {at!r})"
 
