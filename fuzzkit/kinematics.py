@@ -487,7 +487,7 @@ class SerialChain:
         out: _Eval = (rot, p, axes, origins)
         # A few recent configurations: the plant alternates between the IK iterate and the
         # actual (lagging) joints, and each is asked for again in the next period.
-        if len(self._cache) >= 8:
+        if len(self._cache) >= 16:
             self._cache.clear()
         self._cache[key] = out
         return out
@@ -738,7 +738,7 @@ class SerialChain:
         ev = self._evaluate(q)
         e, ep, eo = self._error(rt, pt, ev, position_only)
         cost = ep * ep + eo * eo
-        mu = 1e-6
+        mu = 1e-9
         slow = 0
         iterations = 0
         status = IKStatus.MAX_ITERATIONS

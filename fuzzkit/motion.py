@@ -531,8 +531,8 @@ class Arm6Parameters:
     workspace_offset: Vec3 = (0.070, 0.0, 0.287)
     servo_time_constant_s: float = 0.008
     ik_iterations: int = 4
-    ik_position_tolerance: float = 1e-8
-    ik_orientation_tolerance: float = 1e-8
+    ik_position_tolerance: float = 1e-7
+    ik_orientation_tolerance: float = 1e-7
     object_half_width: float = 0.25
     strict: bool = False
 
