@@ -317,3 +317,63 @@ def test_bad_corrections_are_rejected(bad: Arr) -> None:
     plant.reset(scenario(), seed=0)
     with pytest.raises(ValueError, match="correction_xyz must be 3 finite numbers"):
         plant.step(bad, 0.004)
+
+
+# --------------------------------------------------------------------------------------------
+# Closed loop: the experiments of fuzzkit.experiments, unchanged, on this plant
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def fuzzy_surface() -> object:
+    from fuzzkit.experiments import load_surface
+
+    return load_surface()
+
+
+@pytest.mark.parametrize("controller", ["pi", "fuzzy-pi"])
+@pytest.mark.parametrize("name", ["E1", "E3"])
+def test_experiments_reach_both_set_points_within_1_n(
+    name: str, controller: str, fuzzy_surface: object
+) -> None:
+    from fuzzkit.experiments import experiment, run
+
+    exp = experiment(name)
+    res = run(
+        exp,
+        "arm6",
+        controller,
+        surface=fuzzy_surface if controller == "fuzzy-pi" else None,  # type: ignore[arg-type]
+    )
+    assert res.plant == "arm6"
+    assert not res.tripped
+    steady = res.t >= res.t[-1] - exp.steady_window_s
+    for axis in (0, 2):  # both x and z are force-controlled in E1 and E3
+        assert exp.selection[axis]
+        err = res.force_true[steady, axis] - exp.setpoints[axis]
+        assert np.max(np.abs(err)) < 1.0, (axis, float(np.max(np.abs(err))))
+    # the arm never needed a joint past its limits or an unreachable pose
+    assert not any("unreachable" in m or "limit (" in m for m in res.messages)
+    assert all(np.all(np.abs(q) < 7.0) for q in res.joint_angles)
+
+
+def test_selecting_only_z_leaves_x_on_the_nominal_path() -> None:
+    from fuzzkit.experiments import experiment, run
+
+    exp = experiment("E2")
+    assert exp.selection == (False, False, True)
+    # ideal servo: the tool is where the IK put it, so x must be the nominal x itself
+    res = run(exp, Arm6Plant(Arm6Parameters(servo_time_constant_s=0.0)), "pi")
+    assert np.all(res.u[:, 0] == 0.0) and np.all(res.u[:, 1] == 0.0)
+    np.testing.assert_allclose(res.tool_position[:, 0], res.nominal_position[:, 0], atol=1e-6)
+    np.testing.assert_allclose(res.tool_position[:, 1], 0.0, atol=1e-6)
+    # while z really was moved by the force loop
+    assert np.max(np.abs(res.tool_position[:, 2] - res.nominal_position[:, 2])) > 1e-3
+    steady = res.t >= res.t[-1] - exp.steady_window_s
+    assert abs(float(np.mean(res.force_true[steady, 2])) - 30.0) < 1.0
+
+    # with the default 8 ms servo lag, x trails the 25 mm/s path by at most v * tau
+    lagged = run(exp, "arm6", "pi")
+    np.testing.assert_allclose(
+        lagged.tool_position[:, 0], lagged.nominal_position[:, 0], atol=0.025 * 0.008 + 2e-5
+    )
