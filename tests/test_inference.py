@@ -1,0 +1,324 @@
+"""The exact engine against an independent fine-grid Mamdani written here, plus properties."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from fuzzkit import membership
+from fuzzkit.errors import EvaluationError
+from fuzzkit.inference import Engine, evaluate, evaluate_point
+from fuzzkit.model import (
+    Compound,
+    Consequent,
+    Operators,
+    Proposition,
+    Rule,
+    RuleBase,
+    Term,
+    Variable,
+)
+
+LABELS = ("NL", "NM", "NS", "ZR", "PS", "PM", "PL")
+ALL_OPERATORS = [
+    (imp, agg) for imp in ("min", "product") for agg in ("max", "bounded_sum", "probabilistic_sum")
+]
+AREA_DEFUZZIFIERS = ("centroid", "bisector")
+MAX_DEFUZZIFIERS = ("mean_of_maximum", "smallest_of_maximum", "largest_of_maximum")
+
+
+def partition(ends: str, width: float = 1 / 3) -> tuple[Term, ...]:
+    terms = []
+    for k, name in enumerate(LABELS):
+        p = -1 + k / 3
+        if ends == "shoulder" and k == 0:
+            terms.append(Term(name, "left_shoulder", (-1.0, -1 + width)))
+        elif ends == "shoulder" and k == 6:
+            terms.append(Term(name, "right_shoulder", (1 - width, 1.0)))
+        else:
+            terms.append(Term(name, "triangle", (p - width, p, p + width)))
+    return tuple(terms)
+
+
+def table_rules(cell: object = None) -> tuple[Rule, ...]:
+    rules = []
+    for i in range(7):
+        for j in range(7):
+            out = min(3, max(-3, (i - 3) + (j - 3))) + 3
+            rules.append(
+                Rule(
+                    Compound("and", (Proposition("e", LABELS[i]), Proposition("de", LABELS[j]))),
+                    (Consequent("du", LABELS[out]),),
+                )
+            )
+    return tuple(rules)
+
+
+def macvicar_whelan(
+    implication: str = "min",
+    aggregation: str = "max",
+    defuzzifier: str = "centroid",
+    and_: str = "min",
+    output_terms: tuple[Term, ...] | None = None,
+    **kw: object,
+) -> RuleBase:
+    return RuleBase(
+        name="mw",
+        inputs=(
+            Variable("e", -1.0, 1.0, partition("shoulder")),
+            Variable("de", -1.0, 1.0, partition("shoulder")),
+        ),
+        outputs=(Variable("du", -1.0, 1.0, output_terms or partition("triangle")),),
+        rules=table_rules(),
+        operators=Operators(and_, "max", implication, aggregation),
+        defuzzifier=defuzzifier,
+        **kw,  # type: ignore[arg-type]
+    )
+
+
+def reference(rb: RuleBase, e: float, de: float, n: int = 400_001) -> float:
+    """Straightforward Mamdani on a fine grid: one rule at a time, nothing vectorised."""
+    out = rb.outputs[0]
+    y = np.linspace(out.low, out.high, n)
+    mu_in = {}
+    for v, x in (("e", e), ("de", de)):
+        var = rb.input(v)
+        xc = min(max(x, var.low), var.high)
+        mu_in[v] = {t.name: float(membership.evaluate_term(t, xc)) for t in var.terms}
+    agg = np.zeros(n)
+    for rule in rb.rules:
+        assert isinstance(rule.antecedent, Compound)
+        vals = [mu_in[p.variable][p.term] for p in rule.antecedent.operands]  # type: ignore[union-attr]
+        a = min(vals) if rb.operators.and_ == "min" else math.prod(vals)
+        a *= rule.weight
+        mu = membership.evaluate_term(out.term(rule.consequents[0].term), y)
+        imp = np.minimum(a, mu) if rb.operators.implication == "min" else a * mu
+        if rb.operators.aggregation == "max":
+            agg = np.maximum(agg, imp)
+        elif rb.operators.aggregation == "bounded_sum":
+            agg = np.minimum(1.0, agg + imp)
+        else:
+            agg = agg + imp - agg * imp
+    d = rb.defuzzifier
+    if d == "centroid":
+        return float(np.trapezoid(agg * y, y) / np.trapezoid(agg, y))
+    if d == "bisector":
+        cum = np.concatenate([[0.0], np.cumsum(0.5 * (agg[1:] + agg[:-1]) * np.diff(y))])
+        return float(np.interp(cum[-1] / 2, cum, y))
+    at = np.nonzero(agg >= agg.max() - 1e-9)[0]
+    som, lom = float(y[at[0]]), float(y[at[-1]])
+    return {"smallest_of_maximum": som, "largest_of_maximum": lom}.get(d, (som + lom) / 2)
+
+
+POINTS = np.random.default_rng(7).uniform(-1.2, 1.2, size=(12, 2))
+
+
+@pytest.mark.parametrize("implication, aggregation", ALL_OPERATORS)
+@pytest.mark.parametrize("defuzzifier", AREA_DEFUZZIFIERS + MAX_DEFUZZIFIERS)
+def test_engine_matches_fine_grid_reference(
+    implication: str, aggregation: str, defuzzifier: str
+) -> None:
+    rb = macvicar_whelan(implication, aggregation, defuzzifier)
+    got = Engine(rb).evaluate({"e": POINTS[:, 0], "de": POINTS[:, 1]})["du"]
+    want = np.array([reference(rb, e, de) for e, de in POINTS])
+    # the reference's grid step is 5e-6: its centroid error is O(h^2), its maxima O(h)
+    tol = 1e-8 if defuzzifier in AREA_DEFUZZIFIERS else 1.5e-5
+    np.testing.assert_allclose(got, want, atol=tol, rtol=0)
+
+
+def test_generic_sweep_path_with_three_overlapping_terms() -> None:
+    # width 0.6 > 1/3 spacing: three output terms overlap, so the pairwise fast path
+    # does not apply and the general breakpoint sweep computes the centroid
+    wide = tuple(
+        Term(t.name, "triangle", (t.params[1] - 0.6, t.params[1], t.params[1] + 0.6))
+        for t in partition("triangle")
+    )
+    rb = macvicar_whelan(output_terms=wide)
+    eng = Engine(rb)
+    assert eng._outputs[0].fast_centroid is None
+    got = eng.evaluate({"e": POINTS[:, 0], "de": POINTS[:, 1]})["du"]
+    want = np.array([reference(rb, e, de) for e, de in POINTS])
+    np.testing.assert_allclose(got, want, atol=1e-8, rtol=0)
+
+
+def test_product_and_and_rule_weights_against_reference() -> None:
+    rb = macvicar_whelan(and_="product")
+    weighted = tuple(
+        Rule(r.antecedent, r.consequents, weight=0.25 + 0.75 * ((k * 7) % 11) / 10)
+        for k, r in enumerate(rb.rules)
+    )
+    rb = RuleBase(rb.name, rb.inputs, rb.outputs, weighted, rb.operators, "centroid")
+    got = evaluate(rb, {"e": POINTS[:, 0], "de": POINTS[:, 1]})["du"]
+    want = np.array([reference(rb, e, de) for e, de in POINTS])
+    np.testing.assert_allclose(got, want, atol=1e-8, rtol=0)
+
+
+def test_smooth_output_terms_use_grid_within_bound() -> None:
+    gauss = tuple(Term(name, "gaussian", (-1 + k / 3, 0.15)) for k, name in enumerate(LABELS))
+    rb = macvicar_whelan(output_terms=gauss)
+    got = evaluate(rb, {"e": POINTS[:6, 0], "de": POINTS[:6, 1]})["du"]
+    want = np.array([reference(rb, e, de, n=2_000_001) for e, de in POINTS[:6]])
+    np.testing.assert_allclose(got, want, atol=1e-9, rtol=0)
+
+
+def test_label_peak_grid_is_the_closed_form_term_centroids() -> None:
+    # at (i/3, j/3) only rule (i, j) fires, with strength 1: the output is the centroid of one
+    # whole output term. Interior terms are symmetric triangles (centroid = peak); the outer
+    # ones are half triangles clipped by the range: centroid 1/3 of the way in, +-8/9.
+    rb = macvicar_whelan()
+    k = np.arange(-3, 4)
+    e, de = np.meshgrid(k / 3, k / 3, indexing="ij")
+    got = evaluate(rb, {"e": e, "de": de})["du"]
+    idx = np.clip(k[:, None] + k[None, :], -3, 3)
+    want = np.where(np.abs(idx) == 3, np.sign(idx) * 8 / 9, idx / 3)
+    np.testing.assert_allclose(got, want, atol=1e-12)
+
+
+def test_macvicar_whelan_is_odd_symmetric_and_bounded() -> None:
+    rb = macvicar_whelan()
+    g = np.linspace(-1.1, 1.1, 89)
+    e, de = np.meshgrid(g, g, indexing="ij")
+    du = evaluate(rb, {"e": e, "de": de})["du"]
+    np.testing.assert_allclose(du, -du[::-1, ::-1], atol=1e-12)  # F(-e, -de) = -F(e, de)
+    np.testing.assert_allclose(du, du.T, atol=1e-12)  # symmetric table, same terms
+    assert np.all(np.abs(du) <= 8 / 9 + 1e-12)
+
+
+def test_product_sum_macvicar_whelan_is_monotone() -> None:
+    # product AND, product implication, bounded sum, centroid over a Ruspini partition is a
+    # monotone interpolation of the table
+    rb = macvicar_whelan("product", "bounded_sum", and_="product")
+    g = np.linspace(-1.1, 1.1, 221)
+    e, de = np.meshgrid(g, g, indexing="ij")
+    du = evaluate(rb, {"e": e, "de": de})["du"]
+    assert np.all(np.diff(du, axis=0) >= -1e-12)
+    assert np.all(np.diff(du, axis=1) >= -1e-12)
+
+
+def test_min_max_centroid_macvicar_whelan_is_not_monotone_and_reference_agrees() -> None:
+    # A finding worth knowing before deploying: the paper's min/max/centroid surface dips
+    # (about 1 % of the range) where a clipped outer term's area shifts the centroid back.
+    rb = macvicar_whelan()
+    e0, e1, de = -0.5, -0.475, -0.6
+    lo, hi = evaluate_point(rb, e=e0, de=de)["du"], evaluate_point(rb, e=e1, de=de)["du"]
+    assert hi < lo - 1e-3
+    assert reference(rb, e1, de) < reference(rb, e0, de) - 1e-3
+    g = np.linspace(-1.1, 1.1, 221)
+    e, dd = np.meshgrid(g, g, indexing="ij")
+    assert np.diff(evaluate(rb, {"e": e, "de": dd})["du"], axis=0).min() > -0.01
+
+
+def test_weighted_average_is_eq10_over_term_centres() -> None:
+    rb = macvicar_whelan(defuzzifier="weighted_average")
+    e, de = 0.1, -0.45
+    # independent: activation per output term = max of the firing strengths of its rules
+    mu = {
+        v: {t.name: float(membership.evaluate_term(t, x)) for t in rb.input(v).terms}
+        for v, x in (("e", e), ("de", de))
+    }
+    centres = {name: max(-1.0, min(1.0, -1 + k / 3)) for k, name in enumerate(LABELS)}
+    act: dict[str, float] = {}
+    for i, a in enumerate(LABELS):
+        for j, b in enumerate(LABELS):
+            out = LABELS[min(3, max(-3, i + j - 6)) + 3]
+            act[out] = max(act.get(out, 0.0), min(mu["e"][a], mu["de"][b]))
+    want = sum(act[n] * centres[n] for n in act) / sum(act.values())
+    assert evaluate_point(rb, e=e, de=de)["du"] == pytest.approx(want, abs=1e-14)
+
+
+@pytest.mark.parametrize("aggregation, expected", [("max", 0.5), ("bounded_sum", 0.8)])
+def test_rules_sharing_a_consequent_are_aggregated(aggregation: str, expected: float) -> None:
+    # two rules, same consequent, strengths 0.5 and 0.3 (weights); nothing overwrites
+    v_in = Variable("x", 0.0, 1.0, (Term("A", "trapezoid", (-1.0, 0.0, 1.0, 2.0)),))
+    v_out = Variable("y", 0.0, 1.0, (Term("S", "singleton", (0.5,)),))
+    rules = (
+        Rule(Proposition("x", "A"), (Consequent("y", "S"),), weight=0.5),
+        Rule(Proposition("x", "A"), (Consequent("y", "S"),), weight=0.3),
+    )
+    rb = RuleBase(
+        "agg",
+        (v_in,),
+        (v_out,),
+        rules,
+        Operators(aggregation=aggregation),
+        defuzzifier="weighted_average",
+    )
+    eng = Engine(rb)
+    act = eng._outputs[0].pieces.activations(eng.firing_strengths({"x": [0.4]}))
+    assert act[0, 0] == pytest.approx(expected)
+
+
+def test_nan_gives_nan_and_infinity_is_clamped() -> None:
+    rb = macvicar_whelan()
+    out = evaluate(rb, {"e": [np.nan, 0.2, np.inf, -np.inf, 1e308], "de": [0.0, np.nan, 0, 0, 0]})
+    du = out["du"]
+    assert np.isnan(du[0]) and np.isnan(du[1])
+    edge = evaluate_point(rb, e=1.0, de=0.0)["du"]
+    assert du[2] == pytest.approx(edge) and du[4] == pytest.approx(edge)
+    assert du[3] == pytest.approx(-edge)
+
+
+def test_extend_policy_evaluates_outside_the_range() -> None:
+    # with narrow input terms (shoulders at +-0.5) `extend` and `clamp` agree; with a triangle
+    # whose support ends past the range, `extend` sees membership fall off beyond the end
+    inp = (
+        Term("N", "triangle", (-2.0, -1.0, 0.0)),
+        Term("Z", "triangle", (-1.0, 0.0, 1.0)),
+        Term("P", "triangle", (0.0, 1.0, 2.0)),
+    )
+    outp = (
+        Term("N", "triangle", (-2.0, -1.0, 0.0)),
+        Term("Z", "triangle", (-1.0, 0.0, 1.0)),
+        Term("P", "triangle", (0.0, 1.0, 2.0)),
+    )
+    rules = tuple(Rule(Proposition("x", n), (Consequent("y", n),)) for n in "NZP")
+    base = dict(
+        inputs=(Variable("x", -1.0, 1.0, inp),),
+        outputs=(Variable("y", -1.0, 1.0, outp, 0.25),),
+        rules=rules,
+    )
+    clamp = RuleBase("c", **base)  # type: ignore[arg-type]
+    extend = RuleBase("x", out_of_range="extend", **base)  # type: ignore[arg-type]
+    assert evaluate_point(clamp, x=1.5)["y"] == pytest.approx(evaluate_point(clamp, x=1.0)["y"])
+    assert evaluate_point(extend, x=1.5)["y"] != pytest.approx(evaluate_point(extend, x=1.0)["y"])
+    # beyond every support no rule fires: the output's default
+    assert evaluate_point(extend, x=2.5)["y"] == 0.25
+
+
+def test_no_rule_firing_gives_default_or_nan() -> None:
+    inp = (Term("LO", "left_shoulder", (0.2, 0.5)), Term("HI", "right_shoulder", (0.4, 0.8)))
+    outp = (Term("A", "triangle", (0.0, 0.5, 1.0)),)
+    rules = (Rule(Proposition("x", "LO"), (Consequent("y", "A"),)),)
+    for default, expect_nan in ((None, True), (0.75, False)):
+        rb = RuleBase(
+            "d", (Variable("x", 0.0, 1.0, inp),), (Variable("y", 0.0, 1.0, outp, default),), rules
+        )
+        y = evaluate_point(rb, x=0.9)["y"]
+        assert math.isnan(y) if expect_nan else y == 0.75
+        assert evaluate_point(rb, x=0.1)["y"] == pytest.approx(0.5)
+
+
+def test_broadcasting_and_shapes() -> None:
+    rb = macvicar_whelan()
+    e = np.linspace(-1, 1, 5)[:, None]
+    de = np.linspace(-1, 1, 3)[None, :]
+    du = evaluate(rb, {"e": e, "de": de})["du"]
+    assert du.shape == (5, 3)
+    assert du[4, 1] == pytest.approx(evaluate_point(rb, e=1.0, de=0.0)["du"])
+    assert evaluate(rb, {"e": 0.3, "de": -0.2})["du"].shape == ()
+
+
+@pytest.mark.parametrize(
+    "inputs, match",
+    [
+        ({"e": [0.1]}, r"missing input\(s\) 'de'"),
+        ({"e": 0.1, "de": 0.2, "dx": 1.0}, r"unknown input\(s\) 'dx'"),
+        ({"e": "abc", "de": 0.2}, r"input 'e': expected numbers"),
+        ({"e": [0.1, 0.2], "de": [0.1, 0.2, 0.3]}, r"do not broadcast"),
+    ],
+)
+def test_bad_inputs_are_clear_errors(inputs: dict[str, object], match: str) -> None:
+    with pytest.raises(EvaluationError, match=match):
+        Engine(macvicar_whelan()).evaluate(inputs)  # type: ignore[arg-type]
