@@ -209,6 +209,49 @@ def with_stiffness(exp: Experiment, stiffness_n_per_m: float) -> Experiment:
     )
 
 
+def press_experiment(stiffness_n_per_m: float, gap_m: float = 0.0002) -> Experiment:
+    """E1's hammer, approached under force control from ``gap_m`` above it (path held).
+
+    Isolates the force loop's stability from the impact of a moving approach: used for the
+    stiffness study (10, 100, 1000 N/mm), where the approach speed is what the controller
+    commands for a 10 N error.
+    """
+    e1 = _e1()
+    hammer = next(o for o in e1.scenario.objects if isinstance(o, Box))
+    top = hammer.center_z + 0.5 * hammer.size_z
+    x = hammer.center_x
+    z = top + e1.scenario.tool.radius_m + gap_m
+    scn = replace(
+        e1.scenario,
+        name="press",
+        description="press on the hammer from just above it",
+        path=(Waypoint(0.0, x, 0.0, z),),
+        duration_s=3.0,
+        contact=replace(e1.scenario.contact, stiffness_n_per_m=stiffness_n_per_m),
+    )
+    return replace(
+        e1,
+        name="press",
+        title="press 10 N on the hammer",
+        scenario=scn,
+        engage_threshold_n=None,
+        hold_path_on_contact=False,
+    )
+
+
+def scaled_gains(kind: str, stiffness_n_per_m: float) -> dict[str, float]:
+    """Default gains scaled for another contact stiffness (same loop gain ``Ki*k`` per step).
+
+    The loop gain of the incremental force loop is ``Ki * k`` per period; the defaults are tuned
+    for ``k = 10 N/mm``, so the correction gains are scaled by ``1e4 / k`` (``kx`` for fuzzy-PI).
+    """
+    g = dict(DEFAULT_GAINS[kind])
+    factor = 1.0e4 / stiffness_n_per_m
+    for key in ("kp", "ki") if kind == "pi" else ("kx",):
+        g[key] *= factor
+    return g
+
+
 # --------------------------------------------------------------------------------------------
 # Sensor faults (injected between the plant and the controller)
 # --------------------------------------------------------------------------------------------

@@ -96,7 +96,9 @@ def test_tabulated_surface_is_close_to_its_source() -> None:
     tab = tabulated_surface(saturated_sum_surface, n=101)
     rng = np.random.default_rng(0)
     pts = rng.uniform(-1.0, 1.0, (500, 2))
-    err = max(abs(tab(float(a), float(b)) - saturated_sum_surface(float(a), float(b))) for a, b in pts)
+    err = max(
+        abs(tab(float(a), float(b)) - saturated_sum_surface(float(a), float(b))) for a, b in pts
+    )
     assert err < 0.02
     assert math.isnan(tab(math.nan, 0.0))
 
@@ -117,10 +119,16 @@ def test_reset_clears_state() -> None:
         (lambda: PI(kp=1.0, ki=1.0, u_min=0.1, u_max=0.2), "u_min <= 0 <= u_max"),
         (lambda: PI(kp=1.0, ki=1.0, rate_limit=0.0), "rate_limit"),
         (lambda: FuzzyPI(saturated_sum_surface, kp=1.0, ki=1.0, kx=0.0), "scaling factors"),
-        (lambda: make_axis_controllers("pid", [True], {"kp": 1.0, "ki": 1.0}), "unknown controller"),
+        (
+            lambda: make_axis_controllers("pid", [True], {"kp": 1.0, "ki": 1.0}),
+            "unknown controller",
+        ),
         (lambda: make_axis_controllers("fuzzy-pi", [True], {"kp": 1, "ki": 1, "kx": 1}), "surface"),
         (lambda: HybridForceController([None, None], [0.0, 0.0], 0.004), "3 controllers"),
-        (lambda: HybridForceController([None] * 3, [0.0] * 3, 0.004, force_limit_n=0), "force_limit"),
+        (
+            lambda: HybridForceController([None] * 3, [0.0] * 3, 0.004, force_limit_n=0),
+            "force_limit",
+        ),
     ],
 )
 def test_bad_parameters_are_rejected(build: object, match: str) -> None:

@@ -160,13 +160,19 @@ def test_rough_surface_rms_tilt_and_determinism() -> None:
     h = np.array([rs.height(float(x)) for x in xs])
     trend = 0.1 + math.tan(0.01) * xs
     assert np.sqrt(np.mean((h - trend) ** 2)) == pytest.approx(2e-4, rel=0.1)
-    again = RoughSurface(x_min=0.0, x_max=2.0, height_m=0.1, tilt_rad=0.01, roughness_rms_m=2e-4, seed=7)
+    again = RoughSurface(
+        x_min=0.0, x_max=2.0, height_m=0.1, tilt_rad=0.01, roughness_rms_m=2e-4, seed=7
+    )
     assert again.height(0.3) == rs.height(0.3)
-    other = RoughSurface(x_min=0.0, x_max=2.0, height_m=0.1, tilt_rad=0.01, roughness_rms_m=2e-4, seed=8)
+    other = RoughSurface(
+        x_min=0.0, x_max=2.0, height_m=0.1, tilt_rad=0.01, roughness_rms_m=2e-4, seed=8
+    )
     assert other.height(0.3) != rs.height(0.3)
     # slope() is the derivative of height().
     x0, dx = 0.77, 1e-7
-    assert rs.slope(x0) == pytest.approx((rs.height(x0 + dx) - rs.height(x0 - dx)) / (2 * dx), rel=1e-4)
+    assert rs.slope(x0) == pytest.approx(
+        (rs.height(x0 + dx) - rs.height(x0 - dx)) / (2 * dx), rel=1e-4
+    )
 
 
 def test_nominal_path_interpolates_and_holds() -> None:

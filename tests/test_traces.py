@@ -1,0 +1,74 @@
+"""Tests of the Rerun recordings: written atomically and readable back by rerun itself."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from fuzzkit.errors import ConfigError
+from fuzzkit.experiments import RunResult, experiment, run
+from fuzzkit.traces import write_rrd
+
+
+def _rerun_cli() -> str:
+    exe = Path(sys.executable).with_name("rerun")
+    found = str(exe) if exe.exists() else shutil.which("rerun")
+    if found is None:
+        pytest.skip("the rerun CLI (rerun-sdk) is not on PATH")
+    return found
+
+
+@pytest.fixture(scope="module")
+def result() -> RunResult:
+    return run(experiment("E1"), "planar", "pi", seed=1, duration_s=2.5)
+
+
+def test_rrd_is_valid_and_has_every_entity(result: RunResult, tmp_path: Path) -> None:
+    out = write_rrd(result, tmp_path / "e1.rrd")
+    assert out.stat().st_size > 0
+    assert list(tmp_path.iterdir()) == [out]  # no temporary file left behind
+    cli = _rerun_cli()
+    verify = subprocess.run([cli, "rrd", "verify", str(out)], capture_output=True, text=True)
+    assert verify.returncode == 0, verify.stderr
+    listing = subprocess.run([cli, "rrd", "print", str(out)], capture_output=True, text=True)
+    assert listing.returncode == 0, listing.stderr
+    rows: dict[str, int] = {}
+    for m in re.finditer(r"with (\d+) rows .*? - (/\S+) - ", listing.stdout):
+        rows[m.group(2)] = rows.get(m.group(2), 0) + int(m.group(1))
+    expected = [
+        "/forces/z/measured",
+        "/forces/z/setpoint",
+        "/forces/x/measured",
+        "/forces/x/setpoint",
+        "/control/z/e",
+        "/control/z/de",
+        "/control/z/du",
+        "/control/z/u",
+        "/control/x/u",
+        "/joints/q1",
+        "/joints/q2",
+        "/world/arm",
+        "/world/tool",
+        "/world/contacts",
+        "/world/nominal_path",
+        "/world/environment/table",
+        "/world/environment/hammer",
+    ]
+    missing = [e for e in expected if e not in rows]
+    assert not missing, f"missing entities {missing}; found {sorted(rows)}"
+    # Every controller period of the force series is there (plus the static style row).
+    assert rows["/forces/z/measured"] >= len(result.t)
+    assert "/control/y/u" not in rows  # y is not force-controlled in E1
+
+
+def test_bad_output_path_writes_nothing(result: RunResult, tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="does not exist"):
+        write_rrd(result, tmp_path / "missing" / "x.rrd")
+    with pytest.raises(ConfigError, match="is a directory"):
+        write_rrd(result, tmp_path)
+    assert list(tmp_path.iterdir()) == []
