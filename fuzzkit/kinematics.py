@@ -690,19 +690,46 @@ class SerialChain:
         t = np.asarray(target, dtype=float)
         if t.shape != (4, 4) or not np.all(np.isfinite(t)):
             raise ValueError(f"target must be a finite 4x4 pose (got shape {t.shape})")
+        rows = t.tolist()
         rt: Mat3 = (
-            (t[0, 0], t[0, 1], t[0, 2]),
-            (t[1, 0], t[1, 1], t[1, 2]),
-            (t[2, 0], t[2, 1], t[2, 2]),
+            (rows[0][0], rows[0][1], rows[0][2]),
+            (rows[1][0], rows[1][1], rows[1][2]),
+            (rows[2][0], rows[2][1], rows[2][2]),
         )
-        pt: Vec3 = (t[0, 3], t[1, 3], t[2, 3])
-        q = [
-            min(max(v, lo), hi)
-            for v, lo, hi in zip(self._check_q(seed), self._lo, self._hi, strict=True)
-        ]
-        return self._solve(
+        pt: Vec3 = (rows[0][3], rows[1][3], rows[2][3])
+        return self.ik_fast(
             rt,
             pt,
+            self._check_q(seed),
+            position_tolerance=position_tolerance,
+            orientation_tolerance=orientation_tolerance,
+            max_iterations=max_iterations,
+            max_step=max_step,
+            position_only=position_only,
+        )
+
+    def ik_fast(
+        self,
+        rotation: Mat3,
+        position: Vec3,
+        seed: Sequence[float],
+        *,
+        position_tolerance: float = 1e-9,
+        orientation_tolerance: float = 1e-9,
+        max_iterations: int = 100,
+        max_step: float = 0.5,
+        position_only: bool = False,
+    ) -> IKResult:
+        """:meth:`ik` for the plant's hot path: target as tuples, nothing checked.
+
+        ``rotation`` (3x3 row tuples) and ``position`` give the TCP target; ``seed`` must hold
+        ``dof`` finite floats (it is clamped to the limits). Use :meth:`ik` for user input.
+        """
+        lo, hi = self._lo, self._hi
+        q = [min(max(v, lo[i]), hi[i]) for i, v in enumerate(seed)]
+        return self._solve(
+            rotation,
+            position,
             q,
             position_tolerance,
             orientation_tolerance,

@@ -693,8 +693,9 @@ class Arm6Plant:
         chain = self.chain
         p = self.params
 
-        res = chain.ik(
-            _pose_matrix(target_pos, quat),
+        res = chain.ik_fast(
+            matrix_from_quat(quat),
+            target_pos,
             self._q_ik,
             position_tolerance=p.ik_position_tolerance,
             orientation_tolerance=p.ik_orientation_tolerance,
