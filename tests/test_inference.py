@@ -78,7 +78,7 @@ def macvicar_whelan(
     )
 
 
-def reference(rb: RuleBase, e: float, de: float, n: int = 400_001) -> float:
+def reference(rb: RuleBase, e: float, de: float, n: int = 200_001) -> float:
     """Straightforward Mamdani on a fine grid: one rule at a time, nothing vectorised."""
     out = rb.outputs[0]
     y = np.linspace(out.low, out.high, n)
@@ -112,7 +112,7 @@ def reference(rb: RuleBase, e: float, de: float, n: int = 400_001) -> float:
     return {"smallest_of_maximum": som, "largest_of_maximum": lom}.get(d, (som + lom) / 2)
 
 
-POINTS = np.random.default_rng(7).uniform(-1.2, 1.2, size=(12, 2))
+POINTS = np.random.default_rng(7).uniform(-1.2, 1.2, size=(8, 2))
 
 
 @pytest.mark.parametrize("implication, aggregation", ALL_OPERATORS)
@@ -123,8 +123,8 @@ def test_engine_matches_fine_grid_reference(
     rb = macvicar_whelan(implication, aggregation, defuzzifier)
     got = Engine(rb).evaluate({"e": POINTS[:, 0], "de": POINTS[:, 1]})["du"]
     want = np.array([reference(rb, e, de) for e, de in POINTS])
-    # the reference's grid step is 5e-6: its centroid error is O(h^2), its maxima O(h)
-    tol = 1e-8 if defuzzifier in AREA_DEFUZZIFIERS else 1.5e-5
+    # the reference grid step is 1e-5: its centroid error is O(h^2), its maxima O(h)
+    tol = 1e-8 if defuzzifier in AREA_DEFUZZIFIERS else 2.5e-5
     np.testing.assert_allclose(got, want, atol=tol, rtol=0)
 
 
