@@ -69,12 +69,30 @@ def engine_surface(
 def tabulated_surface(surface: Surface, n: int = 201) -> Surface:
     """Sample ``surface`` on an ``n x n`` grid over [-1, 1]^2; answer by bilinear interpolation.
 
-    A fast stand-in for the exact engine in long simulations (error of order h^2 * curvature).
+    A fast stand-in for the exact engine in long simulations (error of order h^2 * curvature;
+    measure it against the source before trusting it: ``codegen.lut`` certifies a bound).
     """
     if n < 2:
         raise ConfigError(f"tabulated_surface: n must be >= 2 (got {n})")
     grid = np.linspace(-1.0, 1.0, n)
-    table = np.array([[surface(float(a), float(b)) for b in grid] for a in grid])
+    return _bilinear(np.array([[surface(float(a), float(b)) for b in grid] for a in grid]))
+
+
+def engine_table_surface(
+    engine: Any, n: int = 201, e_name: str = "e", de_name: str = "de", out_name: str = "du"
+) -> Surface:
+    """Like :func:`tabulated_surface` for an inference engine, sampled in one batch call."""
+    if n < 2:
+        raise ConfigError(f"engine_table_surface: n must be >= 2 (got {n})")
+    grid = np.linspace(-1.0, 1.0, n)
+    ee, dd = np.meshgrid(grid, grid, indexing="ij")
+    table = np.asarray(engine.evaluate({e_name: ee, de_name: dd})[out_name], dtype=np.float64)
+    return _bilinear(table.reshape(n, n))
+
+
+def _bilinear(table: Vec) -> Surface:
+    """Bilinear interpolation of ``table[i, j]`` = F(e_i, de_j) on a uniform [-1, 1]^2 grid."""
+    n = table.shape[0]
     h = 2.0 / (n - 1)
     rows = table.tolist()
 
