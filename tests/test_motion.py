@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
@@ -377,3 +379,21 @@ def test_selecting_only_z_leaves_x_on_the_nominal_path() -> None:
     np.testing.assert_allclose(
         lagged.tool_position[:, 0], lagged.nominal_position[:, 0], atol=0.025 * 0.008 + 2e-5
     )
+
+
+def test_arm6_recording_is_written_atomically_and_refuses_planar_runs(tmp_path: Path) -> None:
+    from fuzzkit.experiments import experiment, run
+    from fuzzkit.traces_arm6 import write_rrd
+
+    res = run(experiment("E1"), "arm6", "pi", duration_s=0.5)
+    out = write_rrd(res, tmp_path / "e1.rrd")
+    data = out.read_bytes()
+    assert data[:4] == b"RRF2" and len(data) > 10_000  # a Rerun file with geometry in it
+    assert [p.name for p in tmp_path.iterdir()] == ["e1.rrd"]  # no temporary left behind
+
+    planar_like = dataclasses.replace(res, joint_angles=res.joint_angles[:, :2])
+    with pytest.raises(ConfigError, match="expected an arm6 run"):
+        write_rrd(planar_like, tmp_path / "p.rrd")
+    with pytest.raises(ConfigError, match="does not exist"):
+        write_rrd(res, tmp_path / "missing" / "x.rrd")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["e1.rrd"]

@@ -1,0 +1,230 @@
+"""Rerun recordings (.rrd) of closed-loop runs on the 6-DOF arm (``--plant arm6``), in 3-D.
+
+Same time series as :mod:`fuzzkit.traces` (so the two plants' recordings compare side by side),
+plus the arm in three dimensions. Entity layout (timeline ``sim_time``, a duration in seconds):
+
+* ``forces/<axis>/measured``, ``/true``, ``/setpoint`` (N, task frame)
+* ``control/<axis>/e``, ``/du``, ``/u`` (N, mm) for every force-controlled axis
+* ``joints/<axis name>`` (degrees): the IRB 140's six axis angles
+* ``world/arm`` (line strip: base, every DH frame origin, flange, TCP), ``world/tool`` (the tool
+  axis from flange to tip and its contact sphere), ``world/force`` (arrow at the tool tip: the
+  force the tool exerts on the environment, 2 mm per N), ``world/contacts``
+* static: ``world/environment/<name>`` (3-D boxes, table rectangles, the rough workpiece as
+  a wire surface), ``world/nominal_path``, ``world/tool_path``, ``world/robot_base``
+
+Everything in ``world/`` is in metres in the scenario frame (the planar arm's frame), in which
+the IRB 140's base sits at ``-workspace_offset`` (see :mod:`fuzzkit.motion`).
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+
+from fuzzkit.errors import ConfigError
+from fuzzkit.experiments import AXES, RunResult
+from fuzzkit.motion import (
+    Arm6Parameters,
+    Box3,
+    EnvObject3,
+    ExtrudedProfile,
+    HeightField,
+    Plane,
+    objects_from_scenario,
+)
+from fuzzkit.plant import nominal_position
+
+Vec = npt.NDArray[np.float64]
+
+_AXIS_COLOURS = {"x": (230, 80, 60), "y": (60, 170, 80), "z": (60, 110, 230)}
+_ENV = (140, 110, 80)
+#: Arrow length per newton of contact force (m/N).
+FORCE_SCALE_M_PER_N = 0.002
+
+
+def _wire(obj: EnvObject3, x_lo: float, x_hi: float) -> list[Vec]:
+    """Line strips drawing a 3-D object that Boxes3D cannot (planes, surfaces)."""
+    if isinstance(obj, Plane):
+        lo, hi = max(obj.x_min, x_lo), min(obj.x_max, x_hi)
+        y0, y1 = max(obj.y_min, -0.3), min(obj.y_max, 0.3)
+        z = obj.point[2]  # the scenario's tables are horizontal
+        return [np.array([[lo, y0, z], [hi, y0, z], [hi, y1, z], [lo, y1, z], [lo, y0, z]])]
+    if isinstance(obj, ExtrudedProfile):
+        s = obj.surface
+        xs = np.linspace(s.x_min, s.x_max, max(2, int((s.x_max - s.x_min) / 0.002)))
+        hs = np.array([s.height(float(x)) for x in xs])
+        strips = [
+            np.column_stack([xs, np.full_like(xs, y), hs])
+            for y in np.linspace(obj.y_min, obj.y_max, 5)
+        ]
+        for x, h in ((xs[0], hs[0]), (xs[-1], hs[-1])):
+            strips.append(np.array([[x, obj.y_min, h], [x, obj.y_max, h]]))
+        return strips
+    if isinstance(obj, HeightField):
+        grid = np.asarray(obj.heights, dtype=np.float64)
+        gx = obj.x0 + obj.dx * np.arange(grid.shape[0])
+        gy = obj.y0 + obj.dy * np.arange(grid.shape[1])
+        step = max(1, grid.shape[1] // 10)
+        return [
+            np.column_stack([gx, np.full_like(gx, gy[j]), grid[:, j]])
+            for j in range(0, grid.shape[1], step)
+        ]
+    raise ConfigError(f"cannot draw environment object {obj!r}")
+
+
+def write_rrd(
+    result: RunResult,
+    path: str | os.PathLike[str],
+    geometry_every: int = 5,
+    params: Arm6Parameters | None = None,
+) -> Path:
+    """Write an arm6 run as a 3-D Rerun recording at ``path`` (temporary file, then rename).
+
+    Parameters
+    ----------
+    result:
+        A run of :func:`fuzzkit.experiments.run` on the ``arm6`` plant.
+    path:
+        Output ``.rrd`` file; its folder must exist.
+    geometry_every:
+        Log the arm, tool, force arrow and contacts every that many periods (time series are
+        always complete).
+    params:
+        The plant parameters of the run (for the robot base position); defaults.
+
+    Raises
+    ------
+    ConfigError
+        If the output path is a folder or its folder is missing, or the run is not 6-DOF.
+    """
+    import rerun as rr
+
+    target = Path(path)
+    parent = target.parent if str(target.parent) else Path(".")
+    if target.is_dir():
+        raise ConfigError(f"{target}: is a directory (expected an .rrd file path)")
+    if not parent.is_dir():
+        raise ConfigError(f"{target}: folder {parent} does not exist")
+    if result.joint_angles.ndim != 2 or result.joint_angles.shape[1] != 6:
+        raise ConfigError(
+            f"run on plant {result.plant!r} has {result.joint_angles.shape[-1]} joints "
+            f"(expected an arm6 run; use fuzzkit.traces.write_rrd for the planar arm)"
+        )
+    p = params or Arm6Parameters()
+    exp = result.experiment
+    scn = exp.scenario
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=parent)
+    os.close(fd)
+    try:
+        rec = rr.RecordingStream(
+            f"fuzzkit_{exp.name}_{result.controller}_arm6",
+            recording_id=f"{exp.name}-{result.controller}-arm6",
+        )
+        rec.save(tmp)
+        times = rr.TimeColumn("sim_time", duration=result.t)
+
+        def series(entity: str, values: Vec, name: str, colour: tuple[int, int, int]) -> None:
+            rec.log(entity, rr.SeriesLines(colors=[colour], names=[name]), static=True)
+            rec.send_columns(
+                entity,
+                indexes=[times],
+                columns=rr.Scalars.columns(scalars=np.asarray(values, dtype=np.float64)),
+            )
+
+        for i, axis in enumerate(AXES):
+            c = _AXIS_COLOURS[axis]
+            dim = (int(0.5 * c[0] + 100), int(0.5 * c[1] + 100), int(0.5 * c[2] + 100))
+            series(f"forces/{axis}/measured", result.force[:, i], f"f{axis} measured", c)
+            series(f"forces/{axis}/true", result.force_true[:, i], f"f{axis} true", dim)
+            if exp.selection[i]:
+                series(f"forces/{axis}/setpoint", result.setpoint[:, i], f"f{axis} set", (0, 0, 0))
+                series(f"control/{axis}/e", result.e[:, i], f"e{axis} (N)", c)
+                series(f"control/{axis}/du", result.du[:, i] * 1e3, f"du{axis} (mm)", c)
+                series(f"control/{axis}/u", result.u[:, i] * 1e3, f"u{axis} (mm)", c)
+        for j in range(6):
+            series(
+                f"joints/axis{j + 1}",
+                np.degrees(result.joint_angles[:, j]),
+                f"axis {j + 1} (deg)",
+                (120, 120, 120),
+            )
+
+        # static world: environment, paths, robot base
+        xs = [w.x for w in scn.path] + [float(v) for v in result.tool_position[:, 0]]
+        x_lo, x_hi = min(xs) - 0.1, max(xs) + 0.1
+        for k, obj in enumerate(objects_from_scenario(scn)):
+            entity = f"world/environment/{obj.name or k}"
+            if isinstance(obj, Box3):
+                rec.log(
+                    entity,
+                    rr.Boxes3D(centers=[obj.center], half_sizes=[obj.half_size], colors=[_ENV]),
+                    static=True,
+                )
+            else:
+                rec.log(entity, rr.LineStrips3D(_wire(obj, x_lo, x_hi), colors=[_ENV]), static=True)
+        t_path = np.linspace(scn.path[0].t_s, scn.path[-1].t_s, 200)
+        nominal = np.array([nominal_position(scn.path, float(t)) for t in t_path])
+        rec.log(
+            "world/nominal_path", rr.LineStrips3D([nominal], colors=[(150, 150, 150)]), static=True
+        )
+        rec.log(
+            "world/tool_path",
+            rr.LineStrips3D([result.tool_position], colors=[(60, 110, 230)]),
+            static=True,
+        )
+        base = -np.asarray(p.workspace_offset)
+        rec.log(
+            "world/robot_base",
+            rr.Boxes3D(
+                centers=[base + np.array([0.0, 0.0, 0.05])],
+                half_sizes=[[0.1, 0.1, 0.05]],
+                colors=[(230, 120, 20)],
+            ),
+            static=True,
+        )
+
+        # moving geometry
+        radius = scn.tool.radius_m
+        rot = scn.rotation
+        for k in range(0, len(result.t), max(1, geometry_every)):
+            rec.set_time("sim_time", duration=float(result.t[k]))
+            arm = result.arm_points[k]
+            rec.log(
+                "world/arm", rr.LineStrips3D([arm[:-1]], colors=[(230, 120, 20)], radii=[0.012])
+            )
+            tip = arm[-1]
+            rec.log(
+                "world/tool/axis",
+                rr.LineStrips3D([arm[-2:]], colors=[(40, 40, 40)], radii=[0.006]),
+            )
+            rec.log(
+                "world/tool/sphere",
+                rr.Points3D([tip], radii=[radius], colors=[(0, 120, 200, 120)]),
+            )
+            f_base = rot @ np.nan_to_num(result.force_true[k])
+            rec.log(
+                "world/force",
+                rr.Arrows3D(
+                    origins=[tip],
+                    vectors=[f_base * FORCE_SCALE_M_PER_N],
+                    colors=[(220, 30, 30)],
+                    radii=[0.003],
+                ),
+            )
+            rec.log(
+                "world/contacts",
+                rr.Points3D(
+                    result.contact_points[k].reshape(-1, 3), colors=[(230, 40, 40)], radii=[0.004]
+                ),
+            )
+        rec.flush()
+        rec.disconnect()
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return target
