@@ -145,7 +145,7 @@ def test_macvicar_whelan_is_odd_monotonic_and_bounded() -> None:
     peaks = np.arange(-3, 4) / 3
     pe, pd = np.meshgrid(peaks, peaks, indexing="ij")
     at_peaks = evaluate(rb, {"e": pe, "de": pd})["du"]
-    assert np.all(np.diff(at_peaks, axis=0) >= 0) and np.all(np.diff(at_peaks, axis=1) >= 0)
+    assert np.diff(at_peaks, axis=0).min() > -1e-12 and np.diff(at_peaks, axis=1).min() > -1e-12
     # Between the peaks, centroid over max-aggregated clipped sets is known to dip slightly
     # (e.g. du(-0.85, -1) < du(-0.9, -1) by 0.003, confirmed by a brute-force centroid);
     # the dips stay below 2% of the output range.
