@@ -47,17 +47,31 @@ def _skfuzzy_macvicar_whelan() -> object:
     return ctrl.ControlSystemSimulation(ctrl.ControlSystem(rules))
 
 
-def test_shipped_macvicar_whelan_agrees_with_scikit_fuzzy() -> None:
-    sim = _skfuzzy_macvicar_whelan()
-    rng = np.random.default_rng(3)
-    points = np.vstack([rng.uniform(-1, 1, size=(25, 2)), [[0.0, 0.0], [1 / 3, -2 / 3], [1.0, 1.0]]])
-    rb = fuzzkit.load("macvicar_whelan")
-    ours = fuzzkit.evaluate(rb, {"e": points[:, 0], "de": points[:, 1]})["du"]
-    theirs = []
+def _skfuzzy_eval(sim: object, points: np.ndarray) -> np.ndarray:
+    out = []
     for e, de in points:
         sim.input["e"] = e  # type: ignore[attr-defined]
         sim.input["de"] = de  # type: ignore[attr-defined]
         sim.compute()  # type: ignore[attr-defined]
-        theirs.append(sim.output["du"])  # type: ignore[attr-defined]
-    err = np.abs(ours - np.array(theirs))
+        out.append(sim.output["du"])  # type: ignore[attr-defined]
+    return np.array(out)
+
+
+def test_shipped_macvicar_whelan_agrees_with_scikit_fuzzy() -> None:
+    sim = _skfuzzy_macvicar_whelan()
+    rb = fuzzkit.load("macvicar_whelan")
+    points = np.random.default_rng(3).uniform(-1, 1, size=(25, 2))
+    ours = fuzzkit.evaluate(rb, {"e": points[:, 0], "de": points[:, 1]})["du"]
+    err = np.abs(ours - _skfuzzy_eval(sim, points))
     assert err.max() < 5 * STEP**2, err.max()
+
+
+def test_at_input_kinks_scikit_fuzzy_is_off_by_its_input_sampling() -> None:
+    # at a label peak that falls between universe samples (k/3), scikit-fuzzy interpolates the
+    # input membership linearly across the kink: an O(h) error in mu, so O(h) in the output
+    sim = _skfuzzy_macvicar_whelan()
+    rb = fuzzkit.load("macvicar_whelan")
+    points = np.array([[1 / 3, -2 / 3], [0.0, 2 / 3], [-1 / 3, 0.1]])
+    ours = fuzzkit.evaluate(rb, {"e": points[:, 0], "de": points[:, 1]})["du"]
+    err = np.abs(ours - _skfuzzy_eval(sim, points))
+    assert err.max() < 2 * STEP, err.max()
