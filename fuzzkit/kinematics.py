@@ -767,6 +767,7 @@ class SerialChain:
         cost = ep * ep + eo * eo
         mu = 1e-9
         slow = 0
+        suspect = False
         iterations = 0
         status = IKStatus.MAX_ITERATIONS
         n = self.dof
@@ -793,10 +794,12 @@ class SerialChain:
                 dq = self._dls(jac, err, lam2)
             # Stationary point test: the error is (nearly) orthogonal to every direction the free
             # joints can move the TCP, so no step can reduce it: the closest reachable pose.
-            grad = jac.T @ err
-            if float(grad @ grad) <= 1e-12 * float(np.sum(jac * jac)) * cost:
-                status = IKStatus.LIMIT if blocked else IKStatus.UNREACHABLE
-                break
+            # Only asked once progress falters, to keep the usual tracking step cheap.
+            if suspect:
+                grad = jac.T @ err
+                if float(grad @ grad) <= 1e-12 * float(np.sum(jac * jac)) * cost:
+                    status = IKStatus.LIMIT if blocked else IKStatus.UNREACHABLE
+                    break
             big = max(abs(v) for v in dq)
             scale = max_step / big if big > max_step else 1.0
             q_new = [min(max(q[i] + scale * dq[i], lo[i]), hi[i]) for i in range(n)]
@@ -808,6 +811,7 @@ class SerialChain:
                 # approached slowly (the closest pose to an unreachable target): stop there
                 # instead of spending the whole budget.
                 slow = slow + 1 if cost_new > cost * (1.0 - 1e-6) else 0
+                suspect = slow > 0
                 q, ev, e, ep, eo, cost = q_new, ev_new, e_new, ep_new, eo_new, cost_new
                 mu = max(mu * 0.1, 1e-12)
                 if slow >= 5:
@@ -815,6 +819,7 @@ class SerialChain:
                     break
             else:
                 mu *= 10.0
+                suspect = True
                 # Damping this large means no step of any useful length lowers the error:
                 # a stationary point that is not the target.
                 if mu > 1e4:
