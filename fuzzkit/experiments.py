@@ -263,7 +263,8 @@ class Faults:
 
     ``nan_probability``: each sample is NaN with this probability. ``dropout``: ``(start_s,
     length_s)`` during which every sample is missing (NaN). ``spike_probability`` /
-    ``spike_n``: a sample gets a random-signed spike of this size. ``delay_steps``: the
+    ``spike_n``: a sample gets a random-signed spike of this size on x and z (the plane of the
+    experiments). ``delay_steps``: the
     controller sees the sample of ``delay_steps`` periods ago. Seeded, deterministic.
     """
 

@@ -28,6 +28,7 @@ import numpy as np
 import numpy.typing as npt
 import pymunk
 
+from fuzzkit.errors import SimulationError
 from fuzzkit.plant import (
     ContactSolver,
     ForceSensor,
@@ -115,8 +116,6 @@ class PlanarArmPlant:
             float(start[0]), float(start[2]) + self._tool_len, p.link1_m, p.link2_m
         )
         if not ok:
-            from fuzzkit.errors import SimulationError
-
             raise SimulationError(
                 f"scenario {scenario.name}: path start {start.tolist()} is out of reach"
             )
@@ -213,8 +212,6 @@ class PlanarArmPlant:
         if not all(
             math.isfinite(v) for v in (link1.angle, link2.angle, tool.position.x, tool.position.y)
         ):
-            from fuzzkit.errors import SimulationError
-
             raise SimulationError(f"planar arm state became non-finite at t={self._t:.3f} s")
         return self._sample(nominal, target, tuple(messages))
 

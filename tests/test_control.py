@@ -189,3 +189,37 @@ def test_safety_limit_needs_consecutive_samples_then_latches_and_backs_off() -> 
 def test_make_axis_controllers_follows_selection() -> None:
     axes = make_axis_controllers("pi", [True, False, True], {"kp": 1e-5, "ki": 1e-5})
     assert axes[1] is None and isinstance(axes[0], PI) and isinstance(axes[2], PI)
+
+
+def test_engine_table_surface_tracks_the_exact_engine() -> None:
+    from fuzzkit.control import engine_surface, engine_table_surface
+    from fuzzkit.inference import Engine
+    from fuzzkit.registry import load
+
+    engine = Engine(load("macvicar_whelan"))
+    exact, table = engine_surface(engine), engine_table_surface(engine, n=201)
+    rng = np.random.default_rng(1)
+    pts = rng.uniform(-1.0, 1.0, (300, 2))
+    err = max(abs(table(float(a), float(b)) - exact(float(a), float(b))) for a, b in pts)
+    assert err < 0.01
+    assert exact(0.0, 0.0) == pytest.approx(0.0, abs=1e-12)
+    assert exact(0.3, 0.1) == pytest.approx(-exact(-0.3, -0.1), abs=1e-9)  # odd symmetry
+
+
+def test_any_object_with_step_and_reset_is_an_axis_controller() -> None:
+    """A generated module's controller class plugs in without an adapter."""
+
+    class Bang:
+        def __init__(self) -> None:
+            self.u = 0.0
+
+        def step(self, setpoint: float, measured: float) -> float:
+            self.u += 1e-4 if setpoint > measured else -1e-4
+            return self.u
+
+        def reset(self) -> None:
+            self.u = 0.0
+
+    h = HybridForceController([None, None, Bang()], [0.0, 0.0, 10.0], period_s=0.004)
+    assert h.step(np.array([0.0, 0.0, 5.0]))[2] == pytest.approx(1e-4)
+    assert h.step(np.array([0.0, 0.0, math.nan]))[2] == pytest.approx(1e-4)  # NaN never reaches it

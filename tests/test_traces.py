@@ -72,3 +72,12 @@ def test_bad_output_path_writes_nothing(result: RunResult, tmp_path: Path) -> No
     with pytest.raises(ConfigError, match="is a directory"):
         write_rrd(result, tmp_path)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_simulate_writes_rrd(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from fuzzkit.cli import main
+
+    out = tmp_path / "run.rrd"
+    assert main(["simulate", "E1", "--controller", "pi", "--rrd", str(out)]) == 0
+    assert out.stat().st_size > 0
+    assert f"wrote {out}" in capsys.readouterr().out
