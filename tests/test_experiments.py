@@ -252,3 +252,12 @@ def test_cli_compare_prints_both_controllers(capsys: pytest.CaptureFixture[str])
         ("z", "fuzzy-pi"),
         ("x", "fuzzy-pi"),
     ]
+
+
+def test_runs_are_deterministic_per_seed() -> None:
+    exp = experiment("E1")
+    a, b = (run(exp, "planar", "pi", seed=5, duration_s=2.5) for _ in range(2))
+    c = run(exp, "planar", "pi", seed=6, duration_s=2.5)
+    assert np.array_equal(a.force, b.force, equal_nan=True)
+    assert np.array_equal(a.u, b.u)
+    assert not np.array_equal(a.force, c.force, equal_nan=True)
