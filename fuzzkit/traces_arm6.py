@@ -223,6 +223,10 @@ def write_rrd(
             )
         rec.flush()
         rec.disconnect()
+        # mkstemp makes the file owner-only; a recording is an ordinary output file
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, target)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

@@ -285,3 +285,39 @@ def test_unknown_robot_name_is_a_clear_error() -> None:
 def test_fk_rejects_bad_joint_vectors(chain: SerialChain, q: Arr) -> None:
     with pytest.raises(ValueError, match="joint values"):
         chain.fk(q)
+
+
+@pytest.mark.parametrize(
+    "q_deg",
+    [
+        [10, 20, -30, 40, 0, 50],  # wrist singular: axes 4 and 6 aligned (q5 = 0)
+        [0, 40, -90, 0, 30, 0],  # elbow singular: forearm in line with the upper arm
+        [0, 0, 0, 0, 0, 0],  # both at once (calibration pose)
+    ],
+)
+def test_ik_near_singularities_converges_with_bounded_steps(
+    chain: SerialChain, q_deg: list[float]
+) -> None:
+    q_star = np.array(q_deg, dtype=float) * DEG
+    assert np.linalg.svd(chain.jacobian(q_star), compute_uv=False)[-1] < 1e-2  # really singular
+    rng = np.random.default_rng(8)
+    for _ in range(10):
+        seed = q_star + rng.uniform(-0.05, 0.05, 6)
+        target = chain.fk(q_star)
+        res = chain.ik(target, seed, max_step=0.5)
+        # reaching the pose is what counts (the joints may differ along the singular direction)
+        assert res.converged, res
+        got = chain.fk(res.q)
+        assert np.linalg.norm(got[:3, 3] - target[:3, 3]) < 1e-6
+        # damping keeps the solution near the seed instead of flying off along the null space
+        assert np.max(np.abs(res.q - seed)) < 0.5
+    # tracking straight through the wrist singularity: one warm-started solve per 4 ms step
+    q = q_star - np.array([0, 0, 0, 0, 0.05, 0])
+    start = chain.fk(q)
+    for k in range(50):  # the tool moves 0.2 mm per step along its own axis
+        t = start.copy()
+        t[:3, 3] += start[:3, 2] * 2e-4 * k
+        res = chain.ik(t, q, max_iterations=4, position_tolerance=1e-7, orientation_tolerance=1e-7)
+        assert res.status in (IKStatus.CONVERGED, IKStatus.MAX_ITERATIONS)
+        assert np.max(np.abs(res.q - q)) < 0.1  # no jump
+        q = res.q
