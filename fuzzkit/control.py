@@ -66,6 +66,18 @@ def engine_surface(
     return surface
 
 
+def lookup_table_surface(table: Any) -> Surface:
+    """Wrap a ``codegen.lut.LookupTable`` (inputs e, de; output du) as a :data:`Surface`.
+
+    Uses the table's reference interpolation, which reproduces the generated code's arithmetic.
+    """
+
+    def surface(e: float, de: float) -> float:
+        return float(table.interpolate([e, de])[0])
+
+    return surface
+
+
 def tabulated_surface(surface: Surface, n: int = 201) -> Surface:
     """Sample ``surface`` on an ``n x n`` grid over [-1, 1]^2; answer by bilinear interpolation.
 

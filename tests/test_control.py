@@ -223,3 +223,18 @@ def test_any_object_with_step_and_reset_is_an_axis_controller() -> None:
     h = HybridForceController([None, None, Bang()], [0.0, 0.0, 10.0], period_s=0.004)
     assert h.step(np.array([0.0, 0.0, 5.0]))[2] == pytest.approx(1e-4)
     assert h.step(np.array([0.0, 0.0, math.nan]))[2] == pytest.approx(1e-4)  # NaN never reaches it
+
+
+def test_codegen_lookup_table_plugs_in_as_a_surface() -> None:
+    lut = pytest.importorskip("codegen.lut")
+    from fuzzkit.control import engine_surface, lookup_table_surface
+    from fuzzkit.inference import Engine
+    from fuzzkit.registry import load
+
+    rb = load("macvicar_whelan")
+    table = lut.build_table(rb, [41, 41], check_factor=4)
+    surf, exact = lookup_table_surface(table), engine_surface(Engine(rb))
+    for e, de in [(0.0, 0.0), (0.3, -0.2), (-0.9, 0.55), (1.0, 1.0)]:
+        assert surf(e, de) == pytest.approx(exact(e, de), abs=0.02)
+    f = FuzzyPI(surf, kp=0.2, ki=0.05, kx=2e-4)
+    assert f.step(10.0, 5.0) > 0.0
