@@ -164,7 +164,7 @@ class _Reader:
     def mapping(self, node: Node, what: str) -> dict[str, tuple[Node, Node]] | None:
         """The entries of a mapping node by key; reports non-mappings and duplicate keys."""
         if not isinstance(node, MappingNode):
-            self.error(node, f"expected {what} (a mapping), got {describe(node)}")
+            self.error(node, f"expected {what}, got {describe(node)}")
             return None
         entries: dict[str, tuple[Node, Node]] = {}
         for key, value in node.value:
@@ -198,8 +198,10 @@ class _Reader:
                     f"unknown key {key!r} in {what}{did_you_mean(key, allowed)}; "
                     f"expected one of {', '.join(allowed)}",
                 )
+        typos = {did_you_mean(k, allowed) for k in entries if k not in allowed}
         for key in required:
-            if key not in entries:
+            # A misspelt key was reported with a did-you-mean already; one message is enough.
+            if key not in entries and f" (did you mean {key!r}?)" not in typos:
                 self.error(node, f"missing required key {key!r} in {what}")
 
     def number(self, node: Node, what: str) -> float | None:
@@ -245,7 +247,7 @@ class _Reader:
     # ------------------------------------------------------------------ document
 
     def rule_base(self, root: Node) -> RuleBase | None:
-        entries = self.mapping(root, "a rule base")
+        entries = self.mapping(root, "a rule base (a mapping)")
         if entries is None:
             return None
         self.keys(entries, root, TOP_KEYS, ("name", "inputs", "outputs", "rules"), "the rule base")
@@ -269,7 +271,7 @@ class _Reader:
         if "operators" in entries:
             onode = entries["operators"][1]
             self.marks[("operators",)] = onode
-            omap = self.mapping(onode, "operators")
+            omap = self.mapping(onode, "operators as a mapping {and: ..., or: ...}")
             if omap is not None:
                 self.keys(omap, onode, OPERATOR_KEYS, (), "operators")
                 chosen = {
@@ -333,7 +335,7 @@ class _Reader:
             return []
         node = entries[group][1]
         self.marks[(group,)] = node
-        vmap = self.mapping(node, f"the {group}: a mapping of name to {{range, terms}}")
+        vmap = self.mapping(node, f"the {group} (a mapping of name to {{range, terms}})")
         if vmap is None:
             self.hidden_under.add((group,))
             return []
@@ -343,7 +345,7 @@ class _Reader:
         base: Path = (kind + "s", name)
         self.marks[base] = knode
         what = f"{kind} {name!r}"
-        entries = self.mapping(vnode, f"{what}: {{range: [low, high], terms: ...}}")
+        entries = self.mapping(vnode, f"{what} as a mapping {{range: [low, high], terms: ...}}")
         if entries is None:
             self.hidden_under.add(base)
             self.broken_vars.add(name)
@@ -412,7 +414,8 @@ class _Reader:
         self.marks[tpath] = node
         var = base[1]
         entries = self.mapping(
-            node, f"the terms of {kind} {var!r}: label: {{shape: ..., ...}} or a partition"
+            node,
+            f"the terms of {kind} {var!r} as a mapping of label to {{shape: ...}}, or a partition",
         )
         if entries is None:
             self.hidden_under.add(tpath)
@@ -469,11 +472,13 @@ class _Reader:
             if items is not None and len(items) < 2:
                 self.error(lnode, f"a partition needs at least 2 labels, got {len(items)}")
                 self.broken_vars.add(str(base[1]))
+                self.hidden_at.add(tpath)
                 return ()
             if items is None or len(labels) != len(items):
                 self.broken_vars.add(str(base[1]))
         else:
             self.broken_vars.add(str(base[1]))
+            self.hidden_at.add(tpath)
             return ()
         if not range_ok:
             low, high = 0.0, 1.0  # placeholder: the range problem is reported already
@@ -482,7 +487,7 @@ class _Reader:
     def term(self, label: str, knode: Node, vnode: Node, tpath: Path) -> Term:
         self.marks[tpath] = knode
         coverage = tpath[:-1]
-        entries = self.mapping(vnode, f"term {label!r}: {{shape: ..., ...}}")
+        entries = self.mapping(vnode, f"term {label!r} as a mapping {{shape: ..., ...}}")
         if entries is None:
             self.hidden_under.add(tpath)
             self.hidden_at.add(coverage)
@@ -557,7 +562,7 @@ class _Reader:
                     rules.append(rule)
             return rules, None
         if isinstance(node, MappingNode):
-            entries = self.mapping(node, "rules")
+            entries = self.mapping(node, "rules as a list or {table: ...}")
             if entries is not None:
                 self.keys(entries, node, ("table",), ("table",), "rules (a list, or {table: ...})")
                 if "table" in entries:
@@ -573,7 +578,7 @@ class _Reader:
         return [], None
 
     def rule(self, node: Node, k: int) -> Rule | None:
-        entries = self.mapping(node, "a rule: {if: ..., then: ..., weight: ...}")
+        entries = self.mapping(node, "a rule as a mapping {if: ..., then: ..., weight: ...}")
         if entries is None:
             return None
         self.keys(entries, node, RULE_KEYS, ("if", "then"), "a rule")
@@ -585,7 +590,7 @@ class _Reader:
         consequents: list[Consequent] = []
         tnode = entries["then"][1]
         self.marks[(*base, "then")] = tnode
-        tmap = self.mapping(tnode, "then: {output: label, ...}")
+        tmap = self.mapping(tnode, "then as a mapping {output: label, ...}")
         if tmap is None:
             self.hidden_under.add((*base, "then"))
             consequents.append(Consequent("?", "?"))
@@ -594,7 +599,7 @@ class _Reader:
                 self.marks[(*base, "then", j)] = kn
                 self.marks[(*base, "then", j, "label")] = vn
                 label = self.name(vn, f"a label of output {out!r}")
-                if label is None:
+                if label is None or out in self.broken_vars:
                     self.hidden_under.add((*base, "then", j))
                 consequents.append(Consequent(out, label or "?"))
         weight = 1.0
@@ -638,7 +643,7 @@ class _Reader:
             self.marks[path] = knode
             return Compound("and" if key == "and" else "or", operands)
         if key == "not":
-            inner = self.mapping(vnode, "the operand of 'not': {variable: label}")
+            inner = self.mapping(vnode, "the operand of 'not' as a mapping {variable: label}")
             if inner is None:
                 self.hidden_under.add(path)
                 return placeholder
@@ -661,7 +666,7 @@ class _Reader:
         negated = False
         lnode = vnode
         if isinstance(vnode, MappingNode):
-            inner = self.mapping(vnode, f"{{not: label}} for input {key!r}")
+            inner = self.mapping(vnode, f"a label or {{not: label}} for input {key!r}")
             if inner is None or list(inner) != ["not"]:
                 self.error(
                     vnode,
@@ -684,7 +689,7 @@ class _Reader:
     def table(
         self, node: Node, inputs: list[Variable], outputs: list[Variable]
     ) -> tuple[list[Rule], RuleTable | None]:
-        entries = self.mapping(node, "a rule table: {rows, columns, output, cells}")
+        entries = self.mapping(node, "a rule table as a mapping {rows, columns, output, cells}")
         if entries is None:
             self.hidden_at.add(("rules",))
             return [], None

@@ -69,7 +69,9 @@ def rule(text: str) -> str:
 
 
 def e_terms(text: str) -> str:
-    return "{" + text + ", Z: {shape: triangle, points: [-1, 0, 1]}}"
+    """Terms of input 'e': ``text`` (defining N) plus valid Z and P."""
+    z_and_p = "Z: {shape: triangle, points: [-1, 0, 1]}, P: {shape: triangle, points: [0, 1, 2]}"
+    return "{" + text + ", " + z_and_p + "}"
 
 
 # (yaml_text, line, at, match): the problem matching ``match`` is reported on ``line`` at the
@@ -131,7 +133,7 @@ CASES = [
         GOOD.replace("outputs:\n  du:", "outputs:\n  du: 5\n  dx:"),
         6,
         "5",
-        r"expected output 'du': .* \(a mapping\), got 5",
+        r"expected output 'du' as a mapping \{range: \[low, high\], terms: \.\.\.\}, got 5$",
     ),
     (
         doc(e="{partition: triangular, labels: [N, Z, yes, P]}"),
@@ -289,7 +291,7 @@ CASES = [
         r"unknown out_of_range policy 'wrap'; expected one of clamp, extend",
     ),
     (
-        doc(du="{N: {shape: singleton, value: -1}, P: {shape: singleton, value: 1}}"),
+        doc(du="{N: {shape: singleton, value: -1}, P: {shape: triangle, points: [0, 1, 2]}}"),
         6,
         "singleton, value: -1",
         r"singleton output term 'N' has no area",
@@ -398,6 +400,7 @@ def test_malformed_rule_base_is_reported_at_its_line(
     found = problems(yaml_text)
     hits = [p for p in found if re.search(match, p.message)]
     assert hits, f"no problem matches {match!r}; got:\n" + "\n".join(map(str, found))
+    assert len(found) == 1, "one mistake, one message:\n" + "\n".join(map(str, found))
     where = hits[0].location
     assert where.file == "bad.yaml"
     assert where.line == line, str(hits[0])

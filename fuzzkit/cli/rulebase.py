@@ -368,8 +368,12 @@ def cmd_eval(args: argparse.Namespace) -> int:
         point = _parse_inputs(rb, args.inputs)
         result = engine.evaluate_point(point)
         if args.json:
-            payload = {k: (None if math.isnan(v) else v) for k, v in result.items()}
-            print(json.dumps({"inputs": point, "outputs": payload}, allow_nan=False))
+            # JSON has no NaN: null stands for "no value" on both sides.
+            def clean(values: dict[str, float]) -> dict[str, float | None]:
+                return {k: (None if math.isnan(v) else v) for k, v in values.items()}
+
+            doc = {"inputs": clean(point), "outputs": clean(result)}
+            print(json.dumps(doc, allow_nan=False))
         else:
             for k, v in result.items():
                 print(f"{k} = {v!r}")
