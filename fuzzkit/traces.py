@@ -139,6 +139,7 @@ def write_rrd(result: RunResult, path: str | os.PathLike[str], geometry_every: i
             )
         rec.flush()
         rec.disconnect()
+        os.chmod(tmp, 0o644)  # mkstemp makes 0600 files; a recording is meant to be shared
         os.replace(tmp, target)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
