@@ -39,8 +39,8 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
@@ -537,12 +537,63 @@ class Arm6Parameters:
     strict: bool = False
 
 
+class Arm6Detail:
+    """The 6-DOF extras of one period, computed only when asked for (most runs never ask).
+
+    Holds the period's kinematic pass and contact state; :class:`Arm6Sample` exposes the
+    results as properties.
+    """
+
+    __slots__ = (
+        "_ev",
+        "_jac",
+        "_joint_reference",
+        "_state",
+        "_tool_length",
+        "_wrench",
+        "ik_status",
+    )
+
+    def __init__(
+        self,
+        ev: ChainEval,
+        state: ContactState,
+        tool_length: float,
+        joint_reference: Sequence[float],
+        ik_status: str,
+        jacobian_of: Callable[[ChainEval], FloatArray],
+    ) -> None:
+        self._ev = ev
+        self._state = state
+        self._tool_length = tool_length
+        self._joint_reference = tuple(joint_reference)
+        self.ik_status = ik_status
+        self._jac = jacobian_of
+        self._wrench: tuple[FloatArray, FloatArray, FloatArray] | None = None
+
+    def wrench(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``(wrench at the TCP in the base frame, wrench at the sensor in its frame, J^T f)``."""
+        if self._wrench is None:
+            self._wrench = _wrench(self._ev, self._state, self._tool_length, self._jac)
+        return self._wrench
+
+    @property
+    def joint_reference(self) -> FloatArray:
+        """Joint targets after the speed limit (rad)."""
+        return np.array(self._joint_reference)
+
+    @property
+    def tcp_rotation(self) -> FloatArray:
+        """Actual TCP orientation, base-from-tool rotation (3, 3)."""
+        return np.array(self._ev[0])
+
+
 @dataclass(frozen=True, slots=True)
 class Arm6Sample(PlantSample):
     """A :class:`fuzzkit.plant.PlantSample` with the 6-DOF plant's extra signals.
 
-    Attributes
-    ----------
+    Properties (computed on first use)
+    ----------------------------------
     wrench_base : ``[f; m]`` the tool exerts on the environment at the TCP, base frame.
     wrench_sensor : the same wrench about the F/T sensor origin (the flange), sensor frame.
     joint_torques : ``tau_e = J(q)^T wrench_base`` (N m), eq. 3 of the paper.
@@ -551,12 +602,75 @@ class Arm6Sample(PlantSample):
     tcp_rotation : actual TCP orientation, base-from-tool rotation (3, 3).
     """
 
-    wrench_base: FloatArray = field(default_factory=lambda: np.zeros(6))
-    wrench_sensor: FloatArray = field(default_factory=lambda: np.zeros(6))
-    joint_torques: FloatArray = field(default_factory=lambda: np.zeros(6))
-    joint_reference: FloatArray = field(default_factory=lambda: np.zeros(6))
-    ik_status: str = IKStatus.CONVERGED.value
-    tcp_rotation: FloatArray = field(default_factory=lambda: np.eye(3))
+    detail: Arm6Detail | None = None
+
+    def _d(self) -> Arm6Detail:
+        if self.detail is None:
+            raise ValueError("this sample carries no 6-DOF detail")
+        return self.detail
+
+    @property
+    def wrench_base(self) -> FloatArray:
+        """``[f; m]`` the tool exerts on the environment at the TCP, base frame (N, N m)."""
+        return self._d().wrench()[0]
+
+    @property
+    def wrench_sensor(self) -> FloatArray:
+        """The wrench about the sensor origin (flange), in the sensor frame (N, N m)."""
+        return self._d().wrench()[1]
+
+    @property
+    def joint_torques(self) -> FloatArray:
+        """``tau_e = J(q)^T wrench_base`` (N m), eq. 3 of the paper."""
+        return self._d().wrench()[2]
+
+    @property
+    def joint_reference(self) -> FloatArray:
+        """Joint targets after the speed limit (rad)."""
+        return self._d().joint_reference
+
+    @property
+    def ik_status(self) -> str:
+        """Status of this period's IK solve (an :class:`~fuzzkit.kinematics.IKStatus` value)."""
+        return self._d().ik_status
+
+    @property
+    def tcp_rotation(self) -> FloatArray:
+        """Actual TCP orientation, base-from-tool rotation (3, 3)."""
+        return self._d().tcp_rotation
+
+
+def _wrench(
+    ev: ChainEval,
+    state: ContactState,
+    length: float,
+    jacobian_of: Callable[[ChainEval], FloatArray],
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Wrench at the TCP (base), about the flange (sensor frame), and ``J^T f``.
+
+    The tool offset is a pure translation along flange z, so TCP and flange share axes and the
+    lever from flange to TCP is ``length * z_tcp``: ``m_s = m_tcp + (p_tcp - p_flange) x f``.
+    """
+    (fx, fy, fz), (mx, my, mz) = state.force, state.moment
+    rot = ev[0]
+    lx, ly, lz = rot[0][2] * length, rot[1][2] * length, rot[2][2] * length
+    mfx, mfy, mfz = mx + ly * fz - lz * fy, my + lz * fx - lx * fz, mz + lx * fy - ly * fx
+    w_sensor = np.array(
+        [
+            rot[0][0] * fx + rot[1][0] * fy + rot[2][0] * fz,
+            rot[0][1] * fx + rot[1][1] * fy + rot[2][1] * fz,
+            rot[0][2] * fx + rot[1][2] * fy + rot[2][2] * fz,
+            rot[0][0] * mfx + rot[1][0] * mfy + rot[2][0] * mfz,
+            rot[0][1] * mfx + rot[1][1] * mfy + rot[2][1] * mfz,
+            rot[0][2] * mfx + rot[1][2] * mfy + rot[2][2] * mfz,
+        ]
+    )
+    w_base = np.array([fx, fy, fz, mx, my, mz])
+    if state.points:
+        tau: FloatArray = jacobian_of(ev).T @ w_base
+    else:  # no contact, no torque: skip the Jacobian
+        tau = np.zeros(len(ev[2]))
+    return w_base, w_sensor, tau
 
 
 #: IK seeds tried, in order, for the first pose of a path: elbow up, wrist flipped down.
@@ -617,6 +731,7 @@ class Arm6Plant:
         self.chain = SerialChain(self._robot_base.with_tool((0.0, 0.0, scenario.tool.length_m)))
         off = p.workspace_offset
         self._offset = off
+        self._offset_arr = np.array(off, dtype=float)
         self._rot_task = scenario.rotation
         self._rot_task_t = [list(r) for r in scenario.rotation.T]
         self.path = CartesianPath.from_waypoints(scenario.path, scenario.rotation, off)
@@ -768,44 +883,20 @@ class Arm6Plant:
         The sensor frame is the flange frame (the F/T sensor sits between wrist and tool); its
         moment is taken about the flange origin: ``m_s = m_tcp + (p_tcp - p_flange) x f``.
         """
-        return self._wrench(self.chain.evaluate(self._q))
-
-    def _wrench(self, ev: ChainEval) -> tuple[FloatArray, FloatArray, FloatArray]:
-        st = self._state
-        (fx, fy, fz), (mx, my, mz) = st.force, st.moment
-        rot = ev[0]
-        # The tool offset is a pure translation along flange z, so TCP and flange share axes
-        # and the lever from flange to TCP is length * z_tcp.
-        length = self._tool_length
-        lx, ly, lz = rot[0][2] * length, rot[1][2] * length, rot[2][2] * length
-        mfx, mfy, mfz = mx + ly * fz - lz * fy, my + lz * fx - lx * fz, mz + lx * fy - ly * fx
-        w_sensor = np.array(
-            [
-                rot[0][0] * fx + rot[1][0] * fy + rot[2][0] * fz,
-                rot[0][1] * fx + rot[1][1] * fy + rot[2][1] * fz,
-                rot[0][2] * fx + rot[1][2] * fy + rot[2][2] * fz,
-                rot[0][0] * mfx + rot[1][0] * mfy + rot[2][0] * mfz,
-                rot[0][1] * mfx + rot[1][1] * mfy + rot[2][1] * mfz,
-                rot[0][2] * mfx + rot[1][2] * mfy + rot[2][2] * mfz,
-            ]
+        return _wrench(
+            self.chain.evaluate(self._q), self._state, self._tool_length, self.chain.jacobian_of
         )
-        w_base = np.array([fx, fy, fz, mx, my, mz])
-        if st.points:
-            tau: FloatArray = self.chain.jacobian_of(ev).T @ w_base
-        else:  # no contact, no torque: skip the Jacobian
-            tau = np.zeros(self.chain.dof)
-        return w_base, w_sensor, tau
 
     def _sample(
         self, nominal: FloatArray, target: FloatArray, messages: tuple[str, ...]
     ) -> Arm6Sample:
         q = self._q
         ev = self.chain.evaluate(q)
-        w_base, w_sensor, tau = self._wrench(ev)
         ox, oy, oz = self._offset
-        o = np.array([ox, oy, oz])
-        arm = self.chain.frames_of(ev) - o
-        pts = np.array(self._state.points, dtype=float).reshape(-1, 3) - o
+        arm = self.chain.frames_of(ev)
+        arm -= self._offset_arr
+        state = self._state
+        pts = np.array(state.points, dtype=float) - self._offset_arr if state.points else _NO_POINTS
         p = ev[1]
         return Arm6Sample(
             t_s=self._t,
@@ -815,17 +906,23 @@ class Arm6Plant:
             nominal_position=nominal,
             target_position=target,
             joint_angles=np.array(q),
-            in_contact=bool(self._state.points),
+            in_contact=bool(state.points),
             contact_points=pts,
             arm_points=arm,
             messages=messages,
-            wrench_base=w_base,
-            wrench_sensor=w_sensor,
-            joint_torques=tau,
-            joint_reference=np.array(self._q_ref),
-            ik_status=self._ik_status.value,
-            tcp_rotation=np.array(ev[0]),
+            detail=Arm6Detail(
+                ev,
+                state,
+                self._tool_length,
+                self._q_ref,
+                self._ik_status.value,
+                self.chain.jacobian_of,
+            ),
         )
+
+
+_NO_POINTS = np.zeros((0, 3))
+_NO_POINTS.flags.writeable = False
 
 
 def _pose_matrix(pos: Sequence[float], quat: Sequence[float]) -> FloatArray:
