@@ -139,7 +139,10 @@ def write_rrd(result: RunResult, path: str | os.PathLike[str], geometry_every: i
             )
         rec.flush()
         rec.disconnect()
-        os.chmod(tmp, 0o644)  # mkstemp makes 0600 files; a recording is meant to be shared
+        # mkstemp makes 0600 files; give the recording the permissions open() would have.
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, target)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
