@@ -986,10 +986,21 @@ def loads_rulebase(text: str, source: str = "<string>") -> RuleBase:
             ]
         )
     reader = _Reader(source, text.split("\n"))
-    rb = reader.rule_base(root)
+    try:
+        rb = reader.rule_base(root)
+        issues = validation.check(rb) if rb is not None else []
+    except RecursionError:
+        raise RuleBaseError(
+            [
+                Problem(
+                    Location(source),
+                    "conditions nested too deeply (expected a few levels of and/or)",
+                )
+            ]
+        ) from None
     problems = list(reader.problems)
     if rb is not None:
-        for path, message in validation.check(rb):
+        for path, message in issues:
             if path in reader.hidden_at or any(path[: len(h)] == h for h in reader.hidden_under):
                 continue
             problems.append(Problem(_locate(reader, path, root), message))
