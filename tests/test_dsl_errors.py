@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import re
 import time
+from pathlib import Path
 from string import Template
 
 import pytest
@@ -487,7 +488,7 @@ def test_huge_file_fails_fast_before_parsing() -> None:
     assert "limited to 1048576 bytes" in p.message
 
 
-def test_huge_file_on_disk_is_refused_without_reading(tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_huge_file_on_disk_is_refused_without_reading(tmp_path: Path) -> None:
     path = tmp_path / "big.yaml"
     path.write_text(GOOD + "#" * (dsl.MAX_FILE_BYTES + 1))
     with pytest.raises(RuleBaseError, match=r"big\.yaml: file is \d+ bytes; rule bases are "):
@@ -499,7 +500,7 @@ def test_deep_nesting_is_a_message_not_a_crash() -> None:
     assert "nested too deeply" in p.message
 
 
-def test_non_utf8_file_is_a_message(tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_non_utf8_file_is_a_message(tmp_path: Path) -> None:
     path = tmp_path / "latin1.yaml"
     path.write_bytes(GOOD.replace("demo", "d\xe9mo").encode("latin-1"))
     with pytest.raises(RuleBaseError, match=r"not UTF-8 text"):

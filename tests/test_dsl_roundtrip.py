@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import random
 from pathlib import Path
+from typing import Literal
 
 import pytest
 import yaml
@@ -92,7 +93,7 @@ def _random_expression(rng: random.Random, inputs: list[Variable], depth: int) -
     if depth == 0 or rng.random() < 0.4:
         var = rng.choice(inputs)
         return Proposition(var.name, rng.choice(var.term_names), rng.random() < 0.2)
-    op = rng.choice(["and", "or"])
+    op: Literal["and", "or"] = "and" if rng.random() < 0.5 else "or"
     return Compound(
         op, tuple(_random_expression(rng, inputs, depth - 1) for _ in range(rng.randint(2, 3)))
     )
