@@ -37,6 +37,7 @@ planar plant's; the tool points down along the scenario's task z axis.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 from collections.abc import Callable, Sequence
@@ -264,6 +265,8 @@ class HeightField:
     dy: float
     heights: tuple[tuple[float, ...], ...]
     name: str = "height field"
+    #: added to every height (moving a field into another frame without rebuilding it)
+    z0: float = 0.0
 
     @classmethod
     def rough(
@@ -313,7 +316,7 @@ class HeightField:
         h = h00 * (1 - fu) * (1 - fv) + h10 * fu * (1 - fv) + h01 * (1 - fu) * fv + h11 * fu * fv
         dhdx = ((h10 - h00) * (1 - fv) + (h11 - h01) * fv) / self.dx
         dhdy = ((h01 - h00) * (1 - fu) + (h11 - h10) * fu) / self.dy
-        return h, dhdx, dhdy
+        return h + self.z0, dhdx, dhdy
 
     def contact(self, c: Vec3, radius: float) -> Contact3 | None:
         """Contact of a sphere of ``radius`` centred at ``c`` (local tangent plane), or None."""
@@ -408,6 +411,27 @@ def objects_from_scenario(
                 f"(expected Table, Box or RoughSurface)"
             )
     return tuple(out)
+
+
+def translated(obj: EnvObject3, offset: Vec3) -> EnvObject3:
+    """Return ``obj`` moved by ``offset`` (scenario frame -> robot frame)."""
+    ox, oy, oz = offset
+    if isinstance(obj, Plane):
+        return dataclasses.replace(
+            obj,
+            point=(obj.point[0] + ox, obj.point[1] + oy, obj.point[2] + oz),
+            x_min=obj.x_min + ox,
+            x_max=obj.x_max + ox,
+            y_min=obj.y_min + oy,
+            y_max=obj.y_max + oy,
+        )
+    if isinstance(obj, Box3):
+        c = obj.center
+        return dataclasses.replace(obj, center=(c[0] + ox, c[1] + oy, c[2] + oz))
+    if isinstance(obj, HeightField):
+        return dataclasses.replace(obj, x0=obj.x0 + ox, y0=obj.y0 + oy, z0=obj.z0 + oz)
+    o = obj.offset
+    return dataclasses.replace(obj, offset=(o[0] + ox, o[1] + oy, o[2] + oz))
 
 
 @dataclass(frozen=True, slots=True)
@@ -525,6 +549,10 @@ class Arm6Parameters:
     strict:
         Raise :class:`fuzzkit.errors.SimulationError` on an unreachable target instead of
         reporting it and going to the closest pose.
+    extra_objects:
+        3-D objects added to every scenario's environment, in the scenario frame: what a
+        planar scenario cannot describe (a height field rough in x and y, a block off the
+        working plane).
     """
 
     robot: RobotDescription | None = None
@@ -535,6 +563,7 @@ class Arm6Parameters:
     ik_orientation_tolerance: float = 1e-7
     object_half_width: float = 0.25
     strict: bool = False
+    extra_objects: tuple[EnvObject3, ...] = ()
 
 
 class Arm6Detail:
@@ -735,7 +764,9 @@ class Arm6Plant:
         self._rot_task = scenario.rotation
         self._rot_task_t = [list(r) for r in scenario.rotation.T]
         self.path = CartesianPath.from_waypoints(scenario.path, scenario.rotation, off)
-        self.objects = objects_from_scenario(scenario, off, p.object_half_width)
+        self.objects = objects_from_scenario(scenario, off, p.object_half_width) + tuple(
+            translated(obj, off) for obj in p.extra_objects
+        )
         self._contact = Contact3Solver(self.objects, scenario.contact, scenario.tool.radius_m)
         self._sensor = ForceSensor(scenario.sensor, seed)
         self._dt = scenario.period_s

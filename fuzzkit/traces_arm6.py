@@ -156,7 +156,7 @@ def write_rrd(
         # static world: environment, paths, robot base
         xs = [w.x for w in scn.path] + [float(v) for v in result.tool_position[:, 0]]
         x_lo, x_hi = min(xs) - 0.1, max(xs) + 0.1
-        for k, obj in enumerate(objects_from_scenario(scn)):
+        for k, obj in enumerate(objects_from_scenario(scn) + p.extra_objects):
             entity = f"world/environment/{obj.name or k}"
             if isinstance(obj, Box3):
                 rec.log(

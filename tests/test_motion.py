@@ -397,3 +397,62 @@ def test_arm6_recording_is_written_atomically_and_refuses_planar_runs(tmp_path: 
     with pytest.raises(ConfigError, match="does not exist"):
         write_rrd(res, tmp_path / "missing" / "x.rrd")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["e1.rrd"]
+
+
+def test_force_loop_holds_30_n_on_a_3d_rough_field_along_a_diagonal_path() -> None:
+    from fuzzkit.experiments import Experiment, run
+
+    touch = -0.30 + 0.02 - 0.002  # 2 mm into the nominal surface, as E2 programs it
+    field = HeightField.rough((0.30, 0.60), (-0.20, 0.20), -0.30, 0.0002, spacing=0.004, seed=7)
+    scn = Scenario(
+        name="E2-3D",
+        path=(
+            Waypoint(0.0, 0.40, -0.10, touch + 0.022),
+            Waypoint(1.1, 0.40, -0.10, touch),
+            Waypoint(1.5, 0.40, -0.10, touch),
+            Waypoint(9.5, 0.46, 0.10, touch),  # diagonal, leaving the x-z plane
+        ),
+        objects=(),
+        duration_s=10.5,
+        contact=ContactModel(friction=0.3),
+    )
+    exp = Experiment(
+        name="E2-3D",
+        title="diagonal path over a rough height field: 30 N along z",
+        scenario=scn,
+        setpoints=(0.0, 0.0, 30.0),
+        selection=(False, False, True),
+        force_limit_n=60.0,
+    )
+    plant = Arm6Plant(Arm6Parameters(extra_objects=(field,)))
+    res = run(exp, plant, "pi")
+    assert not res.tripped and not res.messages
+    moving = res.moving & (res.t > 3.0)  # sliding over the field after the approach
+    assert moving.sum() > 1000
+    err = res.force_true[moving, 2] - 30.0
+    assert float(np.sqrt(np.mean(err**2))) < 1.0
+    # y is not force-controlled: the tool follows the nominal y, within the servo lag
+    np.testing.assert_allclose(res.tool_position[:, 1], res.nominal_position[:, 1], atol=3e-4)
+    assert np.ptp(res.tool_position[:, 1]) > 0.19
+
+
+def test_translated_objects_touch_at_the_moved_place() -> None:
+    from fuzzkit.motion import ExtrudedProfile, translated
+
+    off = (0.07, 0.01, 0.287)
+    sphere = 0.02
+    objs = [
+        Plane((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), x_min=-1, x_max=1, y_min=-1, y_max=1),
+        Box3((0.0, 0.0, 0.0), (0.05, 0.05, 0.01)),
+        HeightField(-0.1, -0.1, 0.1, 0.1, ((0.0,) * 3,) * 3),
+        ExtrudedProfile(RoughSurface(-0.1, 0.1, 0.01)),
+    ]
+    for obj in objs:
+        base_hit = obj.contact(
+            (0.0, 0.0, 0.015 + 0.01 * isinstance(obj, (Box3, ExtrudedProfile))), sphere
+        )
+        c = (off[0], off[1], off[2] + 0.015 + 0.01 * isinstance(obj, (Box3, ExtrudedProfile)))
+        moved_hit = translated(obj, off).contact(c, sphere)
+        assert base_hit is not None and moved_hit is not None, obj
+        assert moved_hit[0] == pytest.approx(base_hit[0], abs=1e-12)
+        np.testing.assert_allclose(np.subtract(moved_hit[2], base_hit[2]), off, atol=1e-12)
