@@ -181,6 +181,13 @@ def test_eval_points_with_two_outputs(tmp_path: Path, capsys: pytest.CaptureFixt
     assert [float(x) for x in row[3:]] == [expected["du"], expected["dv"]]
 
 
+def test_eval_points_unreadable(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code, _, err = run(capsys, "eval", "macvicar_whelan", "--points", str(tmp_path / "no.csv"))
+    assert code == 2 and "no.csv: cannot read: No such file or directory" in err
+    code, _, err = run(capsys, "eval", "macvicar_whelan", "--points", str(tmp_path))
+    assert code == 2 and "is a directory (expected a CSV file)" in err
+
+
 @pytest.mark.parametrize(
     ("text", "messages"),
     [

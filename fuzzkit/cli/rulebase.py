@@ -386,6 +386,14 @@ def cmd_eval(args: argparse.Namespace) -> int:
         try:
             with open(args.points, newline="", encoding="utf-8") as fh:
                 header, rows, values = _read_points(rb, args.points, fh)
+        except IsADirectoryError:
+            raise ProblemsError(
+                [Problem(Location(args.points), "is a directory (expected a CSV file)")]
+            ) from None
+        except OSError as exc:
+            raise ProblemsError(
+                [Problem(Location(args.points), f"cannot read: {exc.strerror or exc}")]
+            ) from None
         except UnicodeDecodeError:
             raise ProblemsError(
                 [Problem(Location(args.points), "not UTF-8 text; expected a CSV file")]
