@@ -196,6 +196,10 @@ def write_surface_rrd(
         )
         rec.flush()
         rec.disconnect()
+        # mkstemp creates 0600; a recording is a normal output file, so honour the umask.
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, target)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import os
 import shutil
+import stat
 import struct
 import subprocess
 import sys
@@ -85,6 +87,9 @@ def test_rrd_holds_the_mesh_and_the_peaks(tmp_path: Path) -> None:
     assert "/surface/du/label_peaks@Points3D:positions" in text
     assert "/surface/du/label_peaks@Points3D:labels" in text
     assert "RecordingInfo:start_time" not in text  # no timestamp in the file
+    umask = os.umask(0)
+    os.umask(umask)
+    assert stat.S_IMODE(rrd.stat().st_mode) == 0o666 & ~umask  # not mkstemp's 0600
 
 
 def test_rrd_is_written_atomically(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
