@@ -708,6 +708,42 @@ class SerialChain:
             position_only=position_only,
         )
 
+    def ik_restarts(
+        self,
+        target: FloatArray,
+        seed: Sequence[float] | FloatArray | None = None,
+        *,
+        restarts: int = 32,
+        rng_seed: int = 0,
+        **options: Any,
+    ) -> IKResult:
+        """:meth:`ik` from ``seed``, then from random seeds within the limits until one converges.
+
+        Damped least squares is local: from a seed far from the answer it can stall against a
+        joint limit on the wrong branch (about half the time for uniformly random seeds on the
+        IRB 140). Restarting from other seeds finds a solution when one exists; the random
+        seeds come from ``numpy.random.default_rng(rng_seed)``, so the result is deterministic.
+
+        Returns
+        -------
+        IKResult
+            The first converged result, else the one with the smallest error.
+        """
+        first = self.ik(target, self.lower * 0.0 if seed is None else seed, **options)
+        if first.converged:
+            return first
+        best = first
+        rng = np.random.default_rng(rng_seed)
+        for _ in range(restarts):
+            res = self.ik(target, rng.uniform(self.lower, self.upper), **options)
+            if res.converged:
+                return res
+            if res.position_error + res.orientation_error < (
+                best.position_error + best.orientation_error
+            ):
+                best = res
+        return best
+
     def ik_fast(
         self,
         rotation: Mat3,

@@ -784,6 +784,9 @@ class Arm6Plant:
                 best = res
                 break
         if best is None:
+            res = self.chain.ik_restarts(target, _START_SEEDS[0], max_iterations=200)
+            best = res if res.converged else None
+        if best is None:
             raise SimulationError(
                 f"scenario {scenario.name}: path start {list(pos)} (robot frame) is out of "
                 f"reach of {self._robot_base.name} with the tool pointing down"

@@ -321,3 +321,18 @@ def test_ik_near_singularities_converges_with_bounded_steps(
         assert res.status in (IKStatus.CONVERGED, IKStatus.MAX_ITERATIONS)
         assert np.max(np.abs(res.q - q)) < 0.1  # no jump
         q = res.q
+
+
+def test_ik_restarts_find_poses_from_a_fixed_home_seed(chain: SerialChain) -> None:
+    rng = np.random.default_rng(99)
+    home = np.array([0.0, 0.3, 0.3, 0.0, 0.9, math.pi])
+    for _ in range(100):
+        target = chain.fk(rng.uniform(chain.lower, chain.upper))
+        res = chain.ik_restarts(target, home, restarts=40)
+        assert res.converged
+        assert chain.within_limits(res.q)
+        got = poe_reference(res.q)
+        assert np.linalg.norm(got[:3, 3] - target[:3, 3]) < 1e-6
+    # an unreachable pose still ends with a clear status after every restart
+    res = chain.ik_restarts(pose(np.eye(3), (1.5, 0.0, 0.5)), home, restarts=3)
+    assert res.status in (IKStatus.UNREACHABLE, IKStatus.LIMIT)
