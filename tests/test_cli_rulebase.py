@@ -230,6 +230,12 @@ def test_surface_writes_rrd_and_png(tmp_path: Path, capsys: pytest.CaptureFixtur
     assert rrd.stat().st_size > 1000
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "du at the label peaks (49 points): min -0.888889, max 0.888889" in out
+    lines = out.splitlines()
+    grid = lines[lines.index(next(x for x in lines if "e\\de" in x)) :]
+    assert grid[0].split() == ["e\\de", "NL", "NM", "NS", "ZR", "PS", "PM", "PL"]
+    # Row e=ZR is the table's middle row: du = de's label centre (outer ones clipped: 8/9).
+    assert grid[4].split() == ["ZR", "-0.8889", "-0.6667", "-0.3333", "+0.0000", "+0.3333",
+                               "+0.6667", "+0.8889"]  # fmt: skip
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.png", "s.rrd"]  # no temp files
 
 

@@ -434,6 +434,16 @@ def cmd_surface(args: argparse.Namespace) -> int:
         f"{name} at the label peaks ({len(labels)} points): min {_num(np.nanmin(points[:, 2]))}"
         f", max {_num(np.nanmax(points[:, 2]))}"
     )
+    vx, vy = rb.inputs
+    z = points[:, 2].reshape(len(vx.terms), len(vy.terms))
+    corner = f"{vx.name}\\{vy.name}"
+    first = max(len(x) for x in [corner, *vx.term_names])
+    # round first so that -1e-17 prints as +0.0000, not -0.0000
+    cells = [[f"{round(float(v), 4) + 0.0:+.4f}" for v in row] for row in z]
+    width = max(len(x) for x in [*vy.term_names, *(c for row in cells for c in row)])
+    print("  " + " ".join([corner.ljust(first), *(t.rjust(width) for t in vy.term_names)]))
+    for label, row in zip(vx.term_names, cells, strict=True):
+        print("  " + " ".join([label.ljust(first), *(c.rjust(width) for c in row)]))
     return EXIT_OK
 
 
