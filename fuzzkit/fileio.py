@@ -10,6 +10,18 @@ from pathlib import Path
 from fuzzkit.errors import ConfigError
 
 
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def _publish(tmp: str, target: Path) -> None:
+    # mkstemp creates owner-only files; give the result the permissions a plain open() would
+    os.chmod(tmp, 0o666 & ~_umask())
+    os.replace(tmp, target)
+
+
 def write_atomic(path: str | os.PathLike[str], data: str | bytes) -> Path:
     """Write ``data`` to ``path`` through a temporary file in the same folder, then rename.
 
@@ -29,7 +41,7 @@ def write_atomic(path: str | os.PathLike[str], data: str | bytes) -> Path:
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(payload)
-        os.replace(tmp, target)
+        _publish(tmp, target)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
@@ -61,7 +73,7 @@ def write_tree_atomic(folder: str | os.PathLike[str], files: Mapping[str, str | 
                 fh.write(payload)
             staged.append((tmp, target))
         for tmp, target in staged:
-            os.replace(tmp, target)
+            _publish(tmp, target)
     except BaseException:
         for tmp, _ in staged:
             Path(tmp).unlink(missing_ok=True)
