@@ -4,17 +4,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 from pathlib import Path
 from typing import Any
 
 from fuzzkit.errors import ConfigError
 
 CONTROLLERS = ("pi", "fuzzy-pi")
-_GAIN_KEYS = {
-    "pi": {"kp", "ki", "u_min", "u_max", "rate_limit"},
-    "fuzzy-pi": {"kp", "ki", "kx", "u_min", "u_max", "rate_limit"},
-}
 
 
 def register(subparsers: Any) -> None:
@@ -41,7 +36,8 @@ def register(subparsers: Any) -> None:
     sim.add_argument(
         "--gains",
         metavar="GAINS.yaml",
-        help="gain overrides: {kp: .., ki: .., kx: ..} or {pi: {...}, fuzzy-pi: {...}}",
+        help="gains file (fuzzkit.gains): flat {kp: .., ki: ..}, or keyed by controller "
+        "as fuzzkit tune writes",
     )
     sim.set_defaults(handler=_simulate)
 
@@ -54,52 +50,19 @@ def register(subparsers: Any) -> None:
     cmp_.add_argument("--rulebase", default="macvicar_whelan", metavar="RB")
     cmp_.add_argument("--plant", choices=sorted(PLANTS), default="planar")
     cmp_.add_argument("--seed", type=int, default=0)
-    cmp_.add_argument("--gains", metavar="GAINS.yaml")
+    cmp_.add_argument(
+        "--gains", metavar="GAINS.yaml", help="gains file (fuzzkit.gains), e.g. from fuzzkit tune"
+    )
     cmp_.add_argument("--json", action="store_true", help="print every run's metrics as JSON")
     cmp_.add_argument("--rrd-dir", metavar="DIR", help="write one .rrd per run into DIR")
     cmp_.set_defaults(handler=_compare)
 
 
 def load_gains(path: str | None, controller: str) -> dict[str, float]:
-    """Gain overrides for ``controller`` from a YAML file (flat or keyed by controller)."""
-    if path is None:
-        return {}
-    import yaml
+    """Gain overrides for ``controller`` from a gains file (see ``fuzzkit.gains.read_gains``)."""
+    from fuzzkit.gains import read_gains
 
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read gains file ({exc.strerror})") from exc
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"{path}:{mark.line + 1}" if mark is not None else path
-        raise ConfigError(f"{where}: not valid YAML") from exc
-    if not isinstance(data, dict):
-        raise ConfigError(f"{path}: expected a mapping of gains, got {type(data).__name__}")
-    if any(k in data for k in CONTROLLERS):
-        unknown = sorted(set(data) - set(CONTROLLERS))
-        if unknown:
-            raise ConfigError(f"{path}: unknown controller keys {unknown} (expected pi, fuzzy-pi)")
-        data = data.get(controller) or {}
-        if not isinstance(data, dict):
-            raise ConfigError(f"{path}: gains of {controller} must be a mapping")
-    problems = []
-    out: dict[str, float] = {}
-    for key, val in data.items():
-        if key not in _GAIN_KEYS[controller]:
-            problems.append(
-                f"unknown gain {key!r} for {controller} "
-                f"(expected one of {', '.join(sorted(_GAIN_KEYS[controller]))})"
-            )
-        elif isinstance(val, bool) or not isinstance(val, int | float) or not math.isfinite(val):
-            problems.append(f"gain {key} must be a finite number (got {val!r})")
-        else:
-            out[str(key)] = float(val)
-    if problems:
-        raise ConfigError(f"{path}: " + "; ".join(problems))
-    return out
+    return read_gains(path, controller)
 
 
 def _run_one(exp_name: str, controller: str, args: argparse.Namespace, surface: Any) -> Any:
