@@ -84,8 +84,13 @@ def bench_skfuzzy(spec: dict[str, Any], point: list[float], n: int) -> dict[str,
     batch.input[names[1]] = gy.ravel()
     batch.compute()
     surface = time.perf_counter() - start
-    return {"version": fuzz.__version__, "scalar_s": scalar, "surface_s": surface,
-            "value": one(*point), "surface_mode": "array input"}
+    return {
+        "version": fuzz.__version__,
+        "scalar_s": scalar,
+        "surface_s": surface,
+        "value": one(*point),
+        "surface_mode": "array input",
+    }
 
 
 def _fll(spec: dict[str, Any]) -> str:
@@ -102,20 +107,38 @@ def _fll(spec: dict[str, Any]) -> str:
 
     lines = [f"Engine: {spec['name']}"]
     for v in spec["inputs"]:
-        lines += [f"InputVariable: {v['name']}", "  enabled: true",
-                  f"  range: {v['range'][0]!r} {v['range'][1]!r}", "  lock-range: true"]
+        lines += [
+            f"InputVariable: {v['name']}",
+            "  enabled: true",
+            f"  range: {v['range'][0]!r} {v['range'][1]!r}",
+            "  lock-range: true",
+        ]
         lines += [term(*t) for t in v["terms"]]
     o = spec["outputs"][0]
-    lines += [f"OutputVariable: {o['name']}", "  enabled: true",
-              f"  range: {o['range'][0]!r} {o['range'][1]!r}", "  lock-range: false",
-              "  aggregation: Maximum", "  defuzzifier: Centroid", "  default: nan",
-              "  lock-previous: false"]
+    lines += [
+        f"OutputVariable: {o['name']}",
+        "  enabled: true",
+        f"  range: {o['range'][0]!r} {o['range'][1]!r}",
+        "  lock-range: false",
+        "  aggregation: Maximum",
+        "  defuzzifier: Centroid",
+        "  default: nan",
+        "  lock-previous: false",
+    ]
     lines += [term(*t) for t in o["terms"]]
-    lines += ["RuleBlock: rules", "  enabled: true", "  conjunction: Minimum",
-              "  disjunction: Maximum", "  implication: Minimum", "  activation: General"]
+    lines += [
+        "RuleBlock: rules",
+        "  enabled: true",
+        "  conjunction: Minimum",
+        "  disjunction: Maximum",
+        "  implication: Minimum",
+        "  activation: General",
+    ]
     names = [v["name"] for v in spec["inputs"]]
-    lines += [f"  rule: if {names[0]} is {a} and {names[1]} is {b} then {o['name']} is {c}"
-              for a, b, c in spec["rules"]]
+    lines += [
+        f"  rule: if {names[0]} is {a} and {names[1]} is {b} then {o['name']} is {c}"
+        for a, b, c in spec["rules"]
+    ]
     return "\n".join(lines) + "\n"
 
 
@@ -138,9 +161,13 @@ def bench_fuzzylite(spec: dict[str, Any], point: list[float], n: int) -> dict[st
     run(gx.ravel(), gy.ravel())  # pyfuzzylite 8 accepts arrays
     surface = time.perf_counter() - start
     resolution = getattr(out.defuzzifier, "resolution", "?")
-    return {"version": fl.__version__, "scalar_s": scalar, "surface_s": surface,
-            "value": float(np.asarray(run(*point)).reshape(-1)[0]),
-            "surface_mode": f"array input, centroid resolution {resolution}"}
+    return {
+        "version": fl.__version__,
+        "scalar_s": scalar,
+        "surface_s": surface,
+        "value": float(np.asarray(run(*point)).reshape(-1)[0]),
+        "surface_mode": f"array input, centroid resolution {resolution}",
+    }
 
 
 def main() -> None:

@@ -48,7 +48,9 @@ def write_atomic(path: str | os.PathLike[str], data: str | bytes) -> Path:
     return target
 
 
-def write_tree_atomic(folder: str | os.PathLike[str], files: Mapping[str, str | bytes]) -> list[Path]:
+def write_tree_atomic(
+    folder: str | os.PathLike[str], files: Mapping[str, str | bytes]
+) -> list[Path]:
     """Write ``{relative path: content}`` under ``folder``: all files or none.
 
     Every file is first written to a temporary sibling; only when all are written are they

@@ -37,16 +37,18 @@ Semantics
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import numpy.typing as npt
 
 from fuzzkit import membership
 from fuzzkit.errors import EvaluationError
+from fuzzkit.fastpath import PolyCentroid, ScalarInput, ScalarPath, Segment
 from fuzzkit.model import Compound, Expression, Proposition, RuleBase, Variable
 
 FloatArray = npt.NDArray[np.float64]
@@ -85,8 +87,15 @@ class _Fuzzifier:
             x = _fmin(_fmax(x, -_EXTEND_LIMIT), _EXTEND_LIMIT)
         xc = x[:, None]
         # x is finite and slopes are at most 1e200, so nothing overflows or becomes NaN
-        pl = _fmin(_fmax(_fmin(1.0 + (xc - self.core_start) * self.rise,
-                               1.0 + (self.core_end - xc) * self.fall), 0.0), 1.0)
+        pl = _fmin(
+            _fmax(
+                _fmin(
+                    1.0 + (xc - self.core_start) * self.rise, 1.0 + (self.core_end - xc) * self.fall
+                ),
+                0.0,
+            ),
+            1.0,
+        )
         if not self.smooth:
             return pl
         out = np.empty((x.shape[0], self.n_terms))
@@ -180,9 +189,7 @@ class _Firing:
 # --------------------------------------------------------------------------- output stage
 
 
-def _reduce_columns(
-    values: FloatArray, order: IntArray, starts: IntArray, op: str
-) -> FloatArray:
+def _reduce_columns(values: FloatArray, order: IntArray, starts: IntArray, op: str) -> FloatArray:
     """Reduce groups of columns (``values[:, order]`` cut at ``starts``) with ``op``."""
     cols = np.take(values, order, axis=1)
     if op == "max":
@@ -241,9 +248,7 @@ class _Pieces:
 
     def activations(self, firing: FloatArray) -> FloatArray:
         """Per-term activation (B, T): the term's firing strengths aggregated."""
-        op = {"max": "max", "bounded_sum": "sum", "probabilistic_sum": "probsum"}[
-            self.aggregation
-        ]
+        op = {"max": "max", "bounded_sum": "sum", "probabilistic_sum": "probsum"}[self.aggregation]
         red = _reduce_columns(firing, self.inst_rules, self.starts, op)
         if op == "sum":
             red = np.minimum(red, 1.0)
@@ -255,7 +260,7 @@ class _Pieces:
 def _merge_close(z: FloatArray, width: float) -> FloatArray:
     """Sorted breakpoints with near-duplicates (rounding of k/3 and the like) merged."""
     keep = np.concatenate([[True], np.diff(z) > 1e-12 * width])
-    return z[keep]
+    return cast(FloatArray, z[keep])
 
 
 # Gauss-Legendre nodes/weights on [-1, 1] by order.
@@ -278,7 +283,7 @@ class _ExactGeometry:
         if self.implication == "min" and self.aggregation == "max":
             # edges of different terms crossing inside an interval are static breakpoints
             extra = []
-            for z0, z1 in zip(z[:-1], z[1:], strict=True):
+            for z0, z1 in itertools.pairwise(z):
                 s, c = self._lines(out, z0, z1)
                 for i in range(len(s)):
                     for j in range(i + 1, len(s)):
@@ -325,16 +330,18 @@ class _ExactGeometry:
 
     def _aggregate(self, y: FloatArray, lv: FloatArray, final: bool = True) -> FloatArray:
         """Aggregated membership at points y (B, m, C), slot levels lv (B, m, K)."""
-        ell = np.maximum(self.slope[None, :, None, :] * y[..., None] + self.icpt[None, :, None, :], 0.0)
+        ell = np.maximum(
+            self.slope[None, :, None, :] * y[..., None] + self.icpt[None, :, None, :], 0.0
+        )
         lvb = lv[:, :, None, :]
         imp = np.minimum(lvb, ell) if self.implication == "min" else lvb * ell
         if self.aggregation == "max":
-            return imp.max(axis=-1)
+            return cast(FloatArray, imp.max(axis=-1))
         if self.aggregation == "bounded_sum":
             s = imp.sum(axis=-1)
-            return np.minimum(s, 1.0) if final else s
+            return cast(FloatArray, np.minimum(s, 1.0) if final else s)
         with np.errstate(divide="ignore"):
-            return -np.expm1(np.log1p(-np.minimum(imp, 1.0)).sum(axis=-1))
+            return cast(FloatArray, -np.expm1(np.log1p(-np.minimum(imp, 1.0)).sum(axis=-1)))
 
     def sample_points(self, levels: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Sorted breakpoints (B, m, C) and the slot levels (B, m, K) for these piece levels."""
@@ -371,7 +378,9 @@ class _ExactGeometry:
             pts = np.sort(np.concatenate([pts, cross], axis=-1), axis=-1)
         return pts, lv
 
-    def integrals(self, levels: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    def integrals(
+        self, levels: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
         """Per-segment area and moment (B, S), segment starts/ends (B, S), and values at points."""
         pts, lv = self.sample_points(levels)
         b = pts.shape[0]
@@ -416,7 +425,7 @@ class _ExactGeometry:
                 k = np.where(h > 0, (f1 - f0) / h, 0.0)
                 t = 2 * r / (f0 + np.sqrt(np.maximum(f0 * f0 + 2 * k * r, 0.0)))
             t = np.where(np.isfinite(t), np.clip(t, 0.0, h), 0.0)
-            return a0 + t
+            return cast(FloatArray, a0 + t)
         # polynomial segment: bisect on the partial integral (exact by Gauss-Legendre)
         lv_levels = levels
         lo = np.zeros_like(h)
@@ -428,7 +437,7 @@ class _ExactGeometry:
             below = part < r
             lo = np.where(below, mid_t, lo)
             hi = np.where(below, hi, mid_t)
-        return a0 + 0.5 * (lo + hi)
+        return cast(FloatArray, a0 + 0.5 * (lo + hi))
 
     def _partial_area(
         self,
@@ -459,7 +468,7 @@ class _ExactGeometry:
         imp = np.minimum(lv_i, ell) if self.implication == "min" else lv_i * ell
         with np.errstate(divide="ignore"):
             f = -np.expm1(np.log1p(-np.minimum(imp, 1.0)).sum(axis=-1))[:, 0, :]
-        return 0.5 * t * (f * wg).sum(-1)
+        return cast(FloatArray, 0.5 * t * (f * wg).sum(-1))
 
     def maxima(self, levels: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Height, smallest and largest point of maximum (B,)."""
@@ -474,91 +483,31 @@ class _ExactGeometry:
         return height, som, lom
 
 
-class _PairwiseCentroid:
-    """Fast closed-form centroid for min implication, max aggregation, at most two terms
-    overlapping anywhere (every partition-style output).
-
-    Then ``max_k g_k = sum_k g_k - sum_{i<j} min(g_i, g_j)`` pointwise, where
-    ``g_k = min(L_k, mu_k)`` and ``min(g_i, g_j) = min(min(L_i, L_j), min(mu_i, mu_j))``: every
-    term is a fixed piecewise-linear function clipped at a level. The area and moment of a
-    clipped linear segment are closed form, so the centroid needs only a handful of array
-    operations over (points, segments) and no sorting.
-    """
-
-    def __init__(self, geo: _ExactGeometry, n_terms: int) -> None:
-        segs: list[tuple[float, float, float, float, int, float]] = []
-        pairs: dict[tuple[int, int], int] = {}
-        for k in range(len(geo.z0)):
-            z0, z1 = float(geo.z0[k]), float(geo.z1[k])
-            active = [q for q in range(geo.kmax) if geo.slot_piece[k, q] < n_terms]
-            vals = {}
-            for q in active:
-                t = int(geo.slot_piece[k, q])
-                v0 = max(0.0, geo.slope[k, q] * z0 + geo.icpt[k, q])
-                v1 = max(0.0, geo.slope[k, q] * z1 + geo.icpt[k, q])
-                vals[t] = (v0, v1)
-                segs.append((z0, z1, v0, v1, t, 1.0))
-            if len(active) == 2:
-                ti, tj = sorted(vals)
-                col = pairs.setdefault((ti, tj), n_terms + len(pairs))
-                v0 = min(vals[ti][0], vals[tj][0])
-                v1 = min(vals[ti][1], vals[tj][1])
-                segs.append((z0, z1, v0, v1, col, -1.0))
-        arr = np.array([s_[:4] for s_ in segs], dtype=np.float64)
-        self.x0, self.x1, self.v0, self.v1 = (arr[:, i] for i in range(4))
-        self.h = self.x1 - self.x0
-        dv = self.v1 - self.v0
-        self.dv = dv
-        with np.errstate(divide="ignore"):
-            self.inv_dv = np.where(dv != 0.0, 1.0 / np.where(dv != 0.0, dv, 1.0), 0.0)
-        self.level = np.array([s_[4] for s_ in segs], dtype=np.intp)
-        self.sign = np.array([s_[5] for s_ in segs], dtype=np.float64)
-        self.pair_i = np.array([ij[0] for ij in pairs], dtype=np.intp)
-        self.pair_j = np.array([ij[1] for ij in pairs], dtype=np.intp)
-
-    @staticmethod
-    def applies(geo: _ExactGeometry, rb: RuleBase) -> bool:
-        ops = rb.operators
-        return ops.implication == "min" and ops.aggregation == "max" and geo.kmax <= 2
-
-    def area_moment(self, levels: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Total area and moment (B,) of the aggregated set for per-term levels (B, T)."""
-        lv = np.concatenate(
-            [
-                levels,
-                np.minimum(
-                    np.take(levels, self.pair_i, axis=1), np.take(levels, self.pair_j, axis=1)
-                ),
-            ],
-            axis=1,
-        )
-        lev = np.take(lv, self.level, axis=1)
-        # t: fraction of the segment before the edge meets the level (0 or 1 when it does not)
-        t = lev - self.v0
-        t *= self.inv_dv
-        np.maximum(t, 0.0, out=t)
-        np.minimum(t, 1.0, out=t)
-        fa = np.minimum(lev, self.v0)
-        fb = np.minimum(lev, self.v1)
-        fc = t * self.dv
-        fc += self.v0
-        np.minimum(fc, lev, out=fc)
-        left = t * self.h  # xc - x0
-        right = self.h - left  # x1 - xc
-        xc = left + self.x0
-        area = left * (fa + fc)
-        area += right * (fc + fb)
-        # moment of a linear piece [p, q]: (q - p)/6 (p (2 f_p + f_q) + q (f_p + 2 f_q))
-        m1 = 2 * fa + fc
-        m1 *= self.x0
-        m1 += xc * (fa + 2 * fc)
-        m1 *= left
-        m2 = 2 * fc + fb
-        m2 *= xc
-        m2 += self.x1 * (fc + 2 * fb)
-        m2 *= right
-        m1 += m2
-        return 0.5 * (area @ self.sign), (m1 @ self.sign) / 6.0
+def _partition_centroid(geo: _ExactGeometry, rb: RuleBase, n_terms: int) -> PolyCentroid | None:
+    """Centroid tables when at most two terms overlap anywhere (see :mod:`fuzzkit.fastpath`)."""
+    ops = rb.operators
+    if not (ops.implication == "min" and ops.aggregation == "max" and geo.kmax <= 2):
+        return None
+    segs: list[Segment] = []
+    pairs: dict[tuple[int, int], int] = {}
+    for k in range(len(geo.z0)):
+        z0, z1 = float(geo.z0[k]), float(geo.z1[k])
+        vals = {}
+        for q in range(geo.kmax):
+            t = int(geo.slot_piece[k, q])
+            if t >= n_terms:
+                continue
+            v0 = max(0.0, float(geo.slope[k, q] * z0 + geo.icpt[k, q]))
+            v1 = max(0.0, float(geo.slope[k, q] * z1 + geo.icpt[k, q]))
+            vals[t] = (v0, v1)
+            segs.append(Segment(z0, z1, v0, v1, t, 1.0))
+        if len(vals) == 2:
+            ti, tj = sorted(vals)
+            col = pairs.setdefault((ti, tj), n_terms + len(pairs))
+            v0 = min(vals[ti][0], vals[tj][0])
+            v1 = min(vals[ti][1], vals[tj][1])
+            segs.append(Segment(z0, z1, v0, v1, col, -1.0))
+    return PolyCentroid(segs, list(pairs), n_terms)
 
 
 class _GridGeometry:
@@ -605,7 +554,11 @@ class _GridGeometry:
         out = np.empty((levels.shape[0], len(self.y)))
         for s in range(0, levels.shape[0], self.chunk):
             lv = levels[s : s + self.chunk, None, :]
-            imp = np.minimum(lv, self.piece_mu[None]) if self.implication == "min" else lv * self.piece_mu[None]
+            imp = (
+                np.minimum(lv, self.piece_mu[None])
+                if self.implication == "min"
+                else lv * self.piece_mu[None]
+            )
             if self.aggregation == "max":
                 f = imp.max(axis=-1)
             elif self.aggregation == "bounded_sum":
@@ -627,13 +580,13 @@ class _Output:
         self.pieces = _Pieces(rb, out)
         self.centres = np.array([membership.centre(t, out.low, out.high) for t in out.terms])
         self.geometry: _ExactGeometry | _GridGeometry | None = None
-        self.fast_centroid: _PairwiseCentroid | None = None
+        self.fast_centroid: PolyCentroid | None = None
         if self.defuzzifier != "weighted_average" and not self.pieces.empty:
             if all(t.is_piecewise_linear for t in out.terms):
                 geo = _ExactGeometry(rb, out, self.pieces)
                 self.geometry = geo
-                if self.defuzzifier == "centroid" and _PairwiseCentroid.applies(geo, rb):
-                    self.fast_centroid = _PairwiseCentroid(geo, len(out.terms))
+                if self.defuzzifier == "centroid":
+                    self.fast_centroid = _partition_centroid(geo, rb, len(out.terms))
             else:
                 self.geometry = _GridGeometry(rb, out, self.pieces)
 
@@ -684,7 +637,11 @@ class _Output:
         d = self.defuzzifier
         with np.errstate(invalid="ignore", divide="ignore"):
             if d == "centroid":
-                moment = (dy / 6 * (y[:-1] * (2 * f[:, :-1] + f[:, 1:]) + y[1:] * (f[:, :-1] + 2 * f[:, 1:]))).sum(axis=1)
+                moment = (
+                    dy
+                    / 6
+                    * (y[:-1] * (2 * f[:, :-1] + f[:, 1:]) + y[1:] * (f[:, :-1] + 2 * f[:, 1:]))
+                ).sum(axis=1)
                 return np.where(ok, moment / total, self.default)
             if d == "bisector":
                 cum = np.cumsum(cell, axis=1)
@@ -735,6 +692,7 @@ class Engine:
         self._fuzzifiers = [_Fuzzifier(v, rulebase.out_of_range) for v in rulebase.inputs]
         self._firing = _Firing(rulebase)
         self._outputs = [_Output(rulebase, o) for o in rulebase.outputs]
+        self._scalar = _scalar_path(rulebase, self._outputs)
 
     def _coerce(self, inputs: Mapping[str, npt.ArrayLike]) -> list[FloatArray]:
         unknown = sorted(set(inputs) - set(self.input_names))
@@ -760,7 +718,9 @@ class Engine:
         try:
             return list(np.broadcast_arrays(*arrays))
         except ValueError as exc:
-            shapes = ", ".join(f"{n}{a.shape}" for n, a in zip(self.input_names, arrays, strict=True))
+            shapes = ", ".join(
+                f"{n}{a.shape}" for n, a in zip(self.input_names, arrays, strict=True)
+            )
             raise EvaluationError(f"input shapes do not broadcast together: {shapes}") from exc
 
     def evaluate(self, inputs: Mapping[str, npt.ArrayLike]) -> dict[str, FloatArray]:
@@ -790,6 +750,13 @@ class Engine:
     ) -> dict[str, float]:
         """Evaluate at one point: ``evaluate_point(e=0.3, de=-0.2) -> {"du": ...}``."""
         merged = dict(inputs, **kw) if inputs else kw
+        if self._scalar is not None and len(merged) == len(self.input_names):
+            try:
+                values = [float(merged[n]) for n in self.input_names]
+            except (KeyError, TypeError, ValueError):
+                values = None
+            if values is not None:
+                return dict(zip(self.output_names, self._scalar(values), strict=True))
         if len(merged) == len(self.input_names):
             try:
                 flat = [np.array([float(merged[n])]) for n in self.input_names]
@@ -805,6 +772,52 @@ class Engine:
         """Weighted firing strength of every rule at every point, shape (points, rules)."""
         flat = [a.reshape(-1) for a in self._coerce(inputs)]
         return self._firing([fz(x) for fz, x in zip(self._fuzzifiers, flat, strict=True)])
+
+
+def _scalar_path(rb: RuleBase, outputs: list[_Output]) -> ScalarPath | None:
+    """The pure-Python single-point evaluator, when the rule base has its shape."""
+    if any(not t.is_piecewise_linear for v in rb.inputs for t in v.terms):
+        return None
+    if any(o.fast_centroid is None for o in outputs):
+        return None
+    pos = {v.name: i for i, v in enumerate(rb.inputs)}
+    out_pos = {v.name: i for i, v in enumerate(rb.outputs)}
+    table: dict[tuple[int, ...], list[tuple[float, tuple[tuple[int, int], ...]]]] = {}
+    for rule in rb.rules:
+        ante = rule.antecedent
+        props = [ante] if isinstance(ante, Proposition) else list(ante.operands)
+        if isinstance(ante, Compound) and ante.op != "and":
+            return None
+        if not all(isinstance(p, Proposition) and not p.negated for p in props):
+            return None
+        by_input = {
+            pos[p.variable]: rb.input(p.variable).term_index(p.term)
+            for p in props
+            if isinstance(p, Proposition)
+        }
+        if len(by_input) != len(props) or len(by_input) != len(rb.inputs):
+            return None
+        key = tuple(by_input[i] for i in range(len(rb.inputs)))
+        cons = tuple(
+            (out_pos[c.variable], rb.output(c.variable).term_index(c.term))
+            for c in rule.consequents
+        )
+        table.setdefault(key, []).append((rule.weight, cons))
+    inputs = [
+        ScalarInput(
+            v.low,
+            v.high,
+            rb.out_of_range == "clamp",
+            tuple(membership.trapezoid_form(t) for t in v.terms),
+        )
+        for v in rb.inputs
+    ]
+    outs = []
+    for o, var in zip(outputs, rb.outputs, strict=True):
+        if o.fast_centroid is None:  # checked above; keeps the type checker informed
+            return None
+        outs.append((o.fast_centroid, len(var.terms), o.default))
+    return ScalarPath(inputs, table, rb.operators.and_ == "product", outs)
 
 
 _ENGINES: dict[int, tuple[RuleBase, Engine]] = {}
@@ -823,10 +836,12 @@ def engine_for(rulebase: RuleBase) -> Engine:
 
 
 def evaluate(rulebase: RuleBase, inputs: Mapping[str, npt.ArrayLike]) -> dict[str, FloatArray]:
-    """Evaluate ``rulebase`` at the broadcast ``inputs``: ``{name: array}`` -> ``{output: array}``."""
+    """Evaluate ``rulebase`` at the broadcast inputs: ``{name: array}`` -> ``{output: array}``."""
     return engine_for(rulebase).evaluate(inputs)
 
 
-def evaluate_point(rulebase: RuleBase, inputs: Mapping[str, float] | None = None, **kw: float) -> dict[str, float]:
+def evaluate_point(
+    rulebase: RuleBase, inputs: Mapping[str, float] | None = None, **kw: float
+) -> dict[str, float]:
     """Evaluate ``rulebase`` at one point; returns ``{output: float}``."""
     return engine_for(rulebase).evaluate_point(inputs, **kw)

@@ -12,6 +12,7 @@ The piecewise-linear shapes (triangle, trapezoid, shoulders) are also available 
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import cast
 
 import numpy as np
 import numpy.typing as npt
@@ -98,7 +99,7 @@ def singleton(x: FloatArray, value: float) -> FloatArray:
     """Singleton: ``mu = 1`` where ``x == value``, else 0 (NaN stays NaN)."""
     out = (x == value).astype(np.float64)
     out[np.isnan(x)] = np.nan
-    return out
+    return cast(FloatArray, out)
 
 
 SHAPES: dict[str, Callable[..., FloatArray]] = {

@@ -322,3 +322,41 @@ def test_broadcasting_and_shapes() -> None:
 def test_bad_inputs_are_clear_errors(inputs: dict[str, object], match: str) -> None:
     with pytest.raises(EvaluationError, match=match):
         Engine(macvicar_whelan()).evaluate(inputs)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("and_", ["min", "product"])
+def test_scalar_path_agrees_with_vectorised_engine(and_: str) -> None:
+    rb = macvicar_whelan(and_=and_)
+    weighted = tuple(
+        Rule(r.antecedent, r.consequents, weight=0.3 + 0.7 * ((k * 5) % 7) / 6)
+        for k, r in enumerate(rb.rules)
+    )
+    rb = RuleBase(rb.name, rb.inputs, rb.outputs, weighted, rb.operators, "centroid")
+    eng = Engine(rb)
+    assert eng._scalar is not None  # the pure-Python path is the one under test
+    rng = np.random.default_rng(11)
+    pts = np.vstack(
+        [
+            rng.uniform(-1.3, 1.3, size=(400, 2)),
+            np.array(np.meshgrid(np.arange(-3, 4) / 3, np.arange(-3, 4) / 3)).reshape(2, -1).T,
+            [[np.inf, 0.2], [-np.inf, -0.4], [1e300, -1e300]],
+        ]
+    )
+    batch = eng.evaluate({"e": pts[:, 0], "de": pts[:, 1]})["du"]
+    single = np.array([eng.evaluate_point(e=e, de=de)["du"] for e, de in pts])
+    np.testing.assert_allclose(single, batch, atol=1e-13, rtol=0)
+    assert math.isnan(eng.evaluate_point(e=math.nan, de=0.1)["du"])
+
+
+def test_scalar_path_only_for_its_shape() -> None:
+    wide = tuple(
+        Term(t.name, "triangle", (t.params[1] - 0.6, t.params[1], t.params[1] + 0.6))
+        for t in partition("triangle")
+    )
+    assert Engine(macvicar_whelan(output_terms=wide))._scalar is None
+    assert Engine(macvicar_whelan(defuzzifier="bisector"))._scalar is None
+    # the general path still answers single points
+    rb = macvicar_whelan(output_terms=wide)
+    assert evaluate_point(rb, e=0.2, de=0.1)["du"] == pytest.approx(
+        reference(rb, 0.2, 0.1), abs=1e-8
+    )

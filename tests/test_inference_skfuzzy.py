@@ -42,8 +42,12 @@ def _skfuzzy_macvicar_whelan() -> object:
     for rule in rb.rules:
         a, b = rule.antecedent.operands  # type: ignore[union-attr]
         then = rule.consequents[0]
-        rules.append(ctrl.Rule(antecedents[a.variable][a.term] & antecedents[b.variable][b.term],
-                               consequent[then.term]))
+        rules.append(
+            ctrl.Rule(
+                antecedents[a.variable][a.term] & antecedents[b.variable][b.term],
+                consequent[then.term],
+            )
+        )
     return ctrl.ControlSystemSimulation(ctrl.ControlSystem(rules))
 
 

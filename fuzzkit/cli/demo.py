@@ -19,15 +19,34 @@ def demo_steps(out: Path) -> list[list[str]]:
         ["validate", *available()],
         ["info", "macvicar_whelan"],
         [
-            "surface", "macvicar_whelan",
-            "--rrd", str(out / "macvicar_whelan_surface.rrd"),
-            "--png", str(out / "macvicar_whelan_surface.png"),
+            "surface",
+            "macvicar_whelan",
+            "--rrd",
+            str(out / "macvicar_whelan_surface.rrd"),
+            "--png",
+            str(out / "macvicar_whelan_surface.png"),
         ],
         ["compile", "macvicar_whelan", "--target", "c", "--out", str(out / "c"), "--verify"],
-        ["compile", "macvicar_whelan", "--target", "c", "--type", "q15",
-         "--out", str(out / "c_q15"), "--verify"],
-        ["compile", "macvicar_whelan", "--target", "python", "--out", str(out / "python"),
-         "--verify"],
+        [
+            "compile",
+            "macvicar_whelan",
+            "--target",
+            "c",
+            "--type",
+            "q15",
+            "--out",
+            str(out / "c_q15"),
+            "--verify",
+        ],
+        [
+            "compile",
+            "macvicar_whelan",
+            "--target",
+            "python",
+            "--out",
+            str(out / "python"),
+            "--verify",
+        ],
         ["compare", "E1", "--rrd-dir", str(out)],
     ]
 
@@ -45,8 +64,10 @@ def _run(args: argparse.Namespace) -> int:
         if code != 0:
             print(f"demo: step failed with exit code {code}")
             return code
-    print(f"\ndemo: done; recordings, figures and generated sources are in {out}/ "
-          "(open the .rrd files with `rerun FILE.rrd`)")
+    print(
+        f"\ndemo: done; recordings, figures and generated sources are in {out}/ "
+        "(open the .rrd files with `rerun FILE.rrd`)"
+    )
     return 0
 
 
