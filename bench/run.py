@@ -7,6 +7,7 @@ ignored, so one command line serves all (``--peers-python`` for the engine bench
 from __future__ import annotations
 
 import importlib.util
+import inspect
 import sys
 import time
 import traceback
@@ -29,7 +30,8 @@ def main() -> int:
         start = time.perf_counter()
         try:
             spec.loader.exec_module(module)
-            module.main(argv)
+            takes_argv = bool(inspect.signature(module.main).parameters)
+            module.main(argv) if takes_argv else module.main()
         except SystemExit:
             pass
         except Exception:
