@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -46,6 +47,9 @@ GAIN_KEYS: dict[str, tuple[str, ...]] = {
 
 #: Every gain key of any controller (a flat file may hold any of them).
 _ALL_KEYS = tuple(dict.fromkeys(k for keys in GAIN_KEYS.values() for k in keys))
+
+#: A decimal number in exponent notation (what YAML 1.1 fails to read as a float).
+_FLOAT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
 
 #: Keys of a structured entry (``{gains: ..., provenance: ...}``).
 _ENTRY_KEYS = ("gains", "provenance")
@@ -79,6 +83,17 @@ def _line_index(node: Any) -> dict[tuple[str, ...], int]:
     return out
 
 
+def _number(val: Any) -> Any:
+    """``val``, or the float a string like ``1e-4`` spells.
+
+    YAML 1.1 (PyYAML) reads ``1e-4`` without a decimal point as a *string*; engineers write
+    gains that way, so such strings are accepted as numbers (not nan/inf spellings).
+    """
+    if isinstance(val, str) and _FLOAT.fullmatch(val.strip()):
+        return float(val)
+    return val
+
+
 def _check_gains(
     controller: str | None,
     data: Any,
@@ -100,6 +115,7 @@ def _check_gains(
     out: dict[str, float] = {}
     for key, val in data.items():
         k = str(key)
+        val = _number(val)
         if k not in allowed:
             problems.append(
                 f"{at(k)}: unknown gain {k!r}"

@@ -1,0 +1,353 @@
+"""Optimal gains: against a dense grid search on a simple plant, against the defaults on the real
+planar plant, determinism, Ctrl-C, and the gains file (round trip and bad files)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fuzzkit.control import saturated_sum_surface
+from fuzzkit.errors import ConfigError
+from fuzzkit.experiments import Experiment, experiment, run, with_stiffness
+from fuzzkit.gains import GainsEntry, parse_gains, read_gains, read_gains_file, write_gains
+from fuzzkit.plant import PlantSample, Scenario, Table, ToolModel, Waypoint, nominal_position
+from fuzzkit.tuning import (
+    TUNING_HORIZON_S,
+    GainSpace,
+    Progress,
+    TuningProblem,
+    evaluate_gains,
+    optimise,
+    run_cost,
+    tune,
+)
+
+# --------------------------------------------------------------------------------------------
+# A simple plant with a cheap closed loop: first-order position servo, linear spring contact
+# --------------------------------------------------------------------------------------------
+
+TABLE_Z = -0.30
+
+
+class SpringPlant:
+    """Tool tip follows its target with a 20 ms first-order lag; a table below is a spring.
+
+    Exact and noise-free: force = k * penetration. Independent of planar_sim and motion.
+    """
+
+    name = "spring"
+
+    def __init__(self) -> None:
+        self._period = 0.004
+
+    @property
+    def period_s(self) -> float:
+        return self._period
+
+    def reset(self, scenario: Scenario, seed: int = 0) -> PlantSample:
+        self.scn = scenario
+        self._period = scenario.period_s
+        self.t = 0.0
+        self.pos = nominal_position(scenario.path, 0.0)
+        return self._sample(self.pos.copy())
+
+    def step(self, correction_xyz: np.ndarray, path_time_s: float) -> PlantSample:
+        nominal = nominal_position(self.scn.path, path_time_s)
+        target = nominal + correction_xyz
+        self.pos = self.pos + (1.0 - math.exp(-self._period / 0.02)) * (target - self.pos)
+        self.t += self._period
+        return self._sample(target)
+
+    def _sample(self, target: np.ndarray) -> PlantSample:
+        depth = TABLE_Z - (self.pos[2] - self.scn.tool.radius_m)
+        k = self.scn.contact.stiffness_n_per_m
+        f_base = np.array([0.0, 0.0, -k * depth]) if depth > 0.0 else np.zeros(3)
+        f_task = self.scn.rotation.T @ f_base
+        return PlantSample(
+            t_s=self.t,
+            force=f_task,
+            force_true=f_task.copy(),
+            tool_position=self.pos.copy(),
+            nominal_position=nominal_position(self.scn.path, 0.0),
+            target_position=target,
+            joint_angles=np.zeros(2),
+            in_contact=bool(depth > 0.0),
+            contact_points=np.zeros((0, 3)),
+            arm_points=np.zeros((2, 3)),
+        )
+
+
+def press_on_spring(horizon_s: float = 1.0) -> Experiment:
+    """Press 10 N on the table from 0.5 mm above it, force loop active from the start."""
+    tool = ToolModel(length_m=0.1, radius_m=0.02)
+    z = TABLE_Z + tool.radius_m + 0.0005
+    scn = Scenario(
+        name="spring",
+        path=(Waypoint(0.0, 0.4, 0.0, z),),
+        objects=(Table(TABLE_Z),),
+        duration_s=horizon_s,
+        tool=tool,
+    )
+    return Experiment(
+        name="spring",
+        title="press 10 N on a spring table",
+        scenario=scn,
+        setpoints=(0.0, 0.0, 10.0),
+        selection=(False, False, True),
+        force_limit_n=50.0,
+        engage_threshold_n=None,
+    )
+
+
+#: A 2-decade box around the spring plant's good region (loop gain Ki*k from 0.01 to 1).
+SPRING_SPACE = GainSpace(("kp", "ki"), (1.0e-6, 1.0e-6), (1.0e-4, 1.0e-4))
+
+
+def _spring_problem(
+    controller: str = "pi", space: GainSpace | None = SPRING_SPACE
+) -> TuningProblem:
+    return TuningProblem.build(
+        [press_on_spring()],
+        controller,
+        rulebase=saturated_sum_surface,
+        plant=SpringPlant,
+        stiffnesses_n_per_mm=(10.0,),
+        space=space,
+    )
+
+
+def test_tuning_is_within_a_few_percent_of_a_dense_grid_search() -> None:
+    problem = _spring_problem()
+    lo, hi = SPRING_SPACE.log_bounds
+    n = 25
+    grid = [
+        problem.aggregate(evaluate_gains(problem, {"kp": 10.0**a, "ki": 10.0**b}))
+        for a in np.linspace(lo[0], hi[0], n)
+        for b in np.linspace(lo[1], hi[1], n)
+    ]
+    best = min(grid)
+    # The landscape has a real optimum: most of the box is much worse than its best.
+    assert float(np.median(grid)) > 1.5 * best
+    result = optimise(problem, budget=60, seed=1, workers=1)
+    assert result.cost <= 1.03 * best, (result.cost, best)
+    # The reported cost is what an independent evaluation of the returned gains gives.
+    again = problem.aggregate(evaluate_gains(problem, result.gains))
+    assert again == pytest.approx(result.cost, rel=1e-12)
+
+
+def test_fuzzy_pi_tuning_on_the_spring_plant_beats_the_defaults() -> None:
+    problem = _spring_problem("fuzzy-pi", space=None)
+    result = optimise(problem, budget=30, seed=0, workers=1)
+    assert set(result.gains) >= {"kp", "ki", "kx", "u_min", "u_max"}
+    assert result.cost < result.baseline_cost
+    lo, hi = problem.space.log_bounds
+    x = np.log10([result.gains[k] for k in problem.space.names])
+    assert np.all(x >= lo - 1e-9) and np.all(x <= hi + 1e-9)
+
+
+def test_tuned_gains_no_worse_than_defaults_on_every_experiment() -> None:
+    """Tuned jointly on E1-E3 (planar plant, tiny budget), checked per experiment by re-running
+    each experiment independently of the optimiser."""
+    names = ("E1", "E2", "E3")
+    result = tune(names, "pi", stiffnesses_n_per_mm=(10.0,), budget=10, seed=0, workers=2)
+    assert result.evaluations == 10
+    for name in names:
+        exp = with_stiffness(experiment(name), 1.0e4)
+        h = TUNING_HORIZON_S[name]
+        tuned = run_cost(run(exp, "planar", "pi", gains=result.gains, duration_s=h))
+        default = run_cost(run(exp, "planar", "pi", gains=result.baseline_gains, duration_s=h))
+        assert tuned <= default + 1e-12, (name, tuned, default)
+        assert tuned == pytest.approx(result.experiment_costs[name], rel=1e-9)
+
+
+def test_same_seed_same_gains_for_any_number_of_workers() -> None:
+    problem = _spring_problem()
+    a = optimise(problem, budget=20, seed=3, workers=1)
+    b = optimise(problem, budget=20, seed=3, workers=1)
+    c = optimise(problem, budget=20, seed=3, workers=2)
+    assert a.gains == b.gains == c.gains
+    assert a.history == c.history
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_ctrl_c_keeps_the_best_so_far(workers: int) -> None:
+    seen: list[Progress] = []
+
+    def stop_after_three(p: Progress) -> None:
+        seen.append(p)
+        if len(seen) == 3:
+            raise KeyboardInterrupt
+
+    problem = _spring_problem()
+    result = optimise(problem, budget=60, seed=0, workers=workers, callback=stop_after_three)
+    assert result.interrupted
+    assert result.evaluations == seen[-1].evaluations < 60
+    assert result.cost == seen[-1].best_cost  # one experiment: the best is eligible
+    assert result.cost <= result.baseline_cost
+    again = problem.aggregate(evaluate_gains(problem, result.gains))
+    assert again == pytest.approx(result.cost, rel=1e-12)
+
+
+def test_cost_prefers_good_gains_and_prices_a_missed_contact() -> None:
+    exp = press_on_spring()
+    good = run_cost(run(exp, SpringPlant(), "pi", gains={"kp": 1e-5, "ki": 1e-5}))
+    sluggish = run_cost(run(exp, SpringPlant(), "pi", gains={"kp": 1e-5, "ki": 3e-8}))
+    ringing = run_cost(run(exp, SpringPlant(), "pi", gains={"kp": 0.0, "ki": 8e-5}))
+    assert good < sluggish and good < ringing
+    # Never touching (the set point is 0 N everywhere: the loop does not move): priced w_none.
+    idle = Experiment(
+        name="idle",
+        title="",
+        scenario=exp.scenario,
+        setpoints=(0.0, 0.0, 0.0),
+        selection=(False, False, True),
+        force_limit_n=50.0,
+        engage_threshold_n=None,
+    )
+    assert run_cost(run(idle, SpringPlant(), "pi")) == 10.0
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"controller": "pid"}, "unknown controller"),
+        ({"experiments": ["E9"]}, "unknown experiment"),
+        ({"experiments": []}, "at least one experiment"),
+        ({"stiffnesses_n_per_mm": (10.0, -1.0)}, "positive finite"),
+        ({"plant": "moon"}, "unknown plant"),
+        ({"budget": 5}, "budget must be >= 10"),
+        ({"workers": 0}, "workers must be >= 1"),
+    ],
+)
+def test_bad_tuning_arguments(kwargs: dict[str, object], match: str) -> None:
+    args: dict[str, object] = {"experiments": ["E1"], "controller": "pi", "budget": 10}
+    args.update(kwargs)
+    with pytest.raises(ConfigError, match=match):
+        tune(**args)  # type: ignore[arg-type]
+
+
+# --------------------------------------------------------------------------------------------
+# Gains files
+# --------------------------------------------------------------------------------------------
+
+
+def test_gains_file_round_trip_and_merge(tmp_path: Path) -> None:
+    path = tmp_path / "g.yaml"
+    fuzzy = {"kp": 0.1261914688960387, "ki": 0.049999999999999996, "kx": 2.0000000000000004e-4}
+    write_gains(path, GainsEntry("fuzzy-pi", fuzzy, {"seed": 0, "experiments": ["E1"]}))
+    _, kept = write_gains(path, GainsEntry("pi", {"kp": 3e-5, "ki": 1.1e-5}))
+    assert kept == ["fuzzy-pi"]
+    assert read_gains(path, "fuzzy-pi") == fuzzy  # exact floats
+    assert read_gains(path, "pi") == {"kp": 3e-5, "ki": 1.1e-5}
+    entries = read_gains_file(path)
+    assert entries["fuzzy-pi"].provenance == {"seed": 0, "experiments": ["E1"]}
+    _, kept = write_gains(path, GainsEntry("pi", {"kp": 1e-5, "ki": 1e-5}), merge=False)
+    assert kept == [] and read_gains(path, "fuzzy-pi") == {}
+    assert read_gains(None, "pi") == {}
+
+
+@pytest.mark.parametrize(
+    "text, match",
+    [
+        ("pi:\n  gains:\n    kp: -1\n", "g.yaml:3: gain kp must be >= 0"),
+        ("fuzzy-pi:\n  gains: {kp: 0.1, ki: 0, kx: 1e-4}\n", "g.yaml:2: gain ki must be > 0"),
+        ("pi:\n  gains:\n    kp: 1e-5\n    kd: 2\n", "g.yaml:4: unknown gain 'kd' for pi"),
+        ("pi:\n  gains: {kp: 1e-5}\n  notes: x\n", "g.yaml:3: unknown key 'notes' in the pi"),
+        ("pi:\n  gains: {kp: 1e-5}\n  provenance: [1]\n", "provenance must be a mapping"),
+        ("pi:\n  gains: [1, 2]\n", "gains must be a mapping"),
+        ("kp: .nan\n", "g.yaml:1: gain kp must be a finite number"),
+        ("pi: {u_min: 0.1}\n", "u_min must be <= 0"),
+        ("", "got an empty file"),
+        ("pi: {kp: [1\n", "g.yaml:2: not valid YAML"),
+        ("pid: {kp: 1}\npi: {kp: 1e-5}\n", "g.yaml:1: unknown controller keys ['pid']"),
+    ],
+)
+def test_bad_gains_files(tmp_path: Path, text: str, match: str) -> None:
+    path = tmp_path / "g.yaml"
+    path.write_text(text)
+    with pytest.raises(ConfigError) as info:
+        read_gains(path, "pi" if "fuzzy" not in text else "fuzzy-pi")
+    assert match in str(info.value)
+
+
+def test_every_problem_of_a_gains_file_is_listed() -> None:
+    with pytest.raises(ConfigError) as info:
+        parse_gains("pi:\n  kp: -1\n  ki: fast\n  kd: 1\n", "g.yaml")
+    msg = str(info.value)
+    assert "g.yaml:2: gain kp" in msg and "g.yaml:3: gain ki" in msg and "g.yaml:4: unknown" in msg
+
+
+def test_flat_file_with_a_key_the_controller_lacks(tmp_path: Path) -> None:
+    path = tmp_path / "g.yaml"
+    path.write_text("kp: 0.2\nki: 0.05\nkx: 1e-4\n")
+    assert read_gains(path, "fuzzy-pi") == {"kp": 0.2, "ki": 0.05, "kx": 1e-4}
+    with pytest.raises(ConfigError, match="unknown gain 'kx' for pi"):
+        read_gains(path, "pi")
+
+
+# --------------------------------------------------------------------------------------------
+# CLI
+# --------------------------------------------------------------------------------------------
+
+
+def test_cli_tune_writes_a_file_simulate_accepts(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from fuzzkit.cli import main
+
+    out = tmp_path / "gains.yaml"
+    args = ["tune", "E1", "--controller", "pi", "--budget", "10", "--workers", "1"]
+    assert main([*args, "--stiffness", "10", "--quiet", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "vs default gains" in text and f"wrote {out}" in text
+    entry = read_gains_file(out)["pi"]
+    assert entry.provenance["experiments"] == ["E1"] and entry.provenance["budget"] == 10
+    assert entry.provenance["cost"] <= entry.provenance["default_cost"]
+    assert main(["simulate", "E1", "--controller", "pi", "--gains", str(out), "--json"]) == 0
+
+
+def test_cli_tune_ctrl_c_writes_the_best_so_far(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from fuzzkit import tuning
+    from fuzzkit.cli import main
+
+    calls = []
+
+    def interrupt(self: tuning.ProgressBar, p: Progress) -> None:
+        calls.append(p)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(tuning.ProgressBar, "__call__", interrupt)
+    out = tmp_path / "gains.yaml"
+    args = ["tune", "E1", "--controller", "pi", "--budget", "40", "--workers", "1"]
+    assert main([*args, "--stiffness", "10", "--out", str(out)]) == 130
+    assert "interrupted: best so far" in capsys.readouterr().out
+    prov = read_gains_file(out)["pi"].provenance
+    assert prov["interrupted"] is True and prov["evaluations"] < 40
+
+
+@pytest.mark.parametrize(
+    "extra, match",
+    [
+        (["--stiffness", "10,abc"], "'abc' is not a number"),
+        (["--stiffness", "0"], "positive stiffness"),
+        (["--budget", "3"], "budget must be >= 10"),
+        (["--out", "/nonexistent/dir/g.yaml"], "does not exist"),
+        (["--plant", "planar", "--rulebase", "no_such_rb"], "no_such_rb"),
+    ],
+)
+def test_cli_tune_bad_arguments(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], extra: list[str], match: str
+) -> None:
+    from fuzzkit.cli import main
+
+    args = ["tune", "E1", "--out", str(tmp_path / "g.yaml"), "--workers", "1", *extra]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert match in err and "Traceback" not in err
+    assert not (tmp_path / "g.yaml").exists()
