@@ -244,19 +244,34 @@ class ScalarPath:
                     act.append((k, m if m < 1.0 else 1.0))
             actives.append(act)
         levels = [[0.0] * n for _, n, _ in self.outputs]
-        for combo in itertools.product(*actives):
-            hit = self.rules.get(tuple(k for k, _ in combo))
-            if hit is None:
-                continue
-            if self.product_and:
-                strength = math.prod(m for _, m in combo)
-            else:
-                strength = min(m for _, m in combo)
-            for weight, consequents in hit:
-                fired = strength * weight
-                for o, t in consequents:
-                    if fired > levels[o][t]:
-                        levels[o][t] = fired
+        rules = self.rules
+        if len(actives) == 2:  # the common controller shape: plain loops, no tuples of tuples
+            prod = self.product_and
+            for k0, m0 in actives[0]:
+                for k1, m1 in actives[1]:
+                    hit = rules.get((k0, k1))
+                    if hit is None:
+                        continue
+                    strength = m0 * m1 if prod else (m0 if m0 < m1 else m1)
+                    for weight, consequents in hit:
+                        fired = strength * weight
+                        for o, t in consequents:
+                            if fired > levels[o][t]:
+                                levels[o][t] = fired
+        else:
+            for combo in itertools.product(*actives):
+                hit = rules.get(tuple(k for k, _ in combo))
+                if hit is None:
+                    continue
+                if self.product_and:
+                    strength = math.prod(m for _, m in combo)
+                else:
+                    strength = min(m for _, m in combo)
+                for weight, consequents in hit:
+                    fired = strength * weight
+                    for o, t in consequents:
+                        if fired > levels[o][t]:
+                            levels[o][t] = fired
         result = []
         for (poly, _, default), lv in zip(self.outputs, levels, strict=True):
             area, moment = poly.area_moment_scalar(lv)

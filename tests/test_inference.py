@@ -360,3 +360,50 @@ def test_scalar_path_only_for_its_shape() -> None:
     assert evaluate_point(rb, e=0.2, de=0.1)["du"] == pytest.approx(
         reference(rb, 0.2, 0.1), abs=1e-8
     )
+
+
+def test_scalar_path_with_three_inputs_agrees_with_vectorised_engine() -> None:
+    names = ("N", "Z", "P")
+    inp = (
+        Term("N", "left_shoulder", (-1.0, 0.0)),
+        Term("Z", "triangle", (-1.0, 0.0, 1.0)),
+        Term("P", "right_shoulder", (0.0, 1.0)),
+    )
+    out = tuple(Term(n, "triangle", (k - 2.0, k - 1.0, k + 0.0)) for k, n in enumerate(names))
+    rules = []
+    for i in range(3):
+        for j in range(3):
+            for k in range(3):
+                label = names[min(2, max(0, i + j + k - 3 + 1))]
+                props = tuple(Proposition(v, names[t]) for v, t in zip("abc", (i, j, k)))
+                rules.append(Rule(Compound("and", props), (Consequent("y", label),), 0.5 + k / 4))
+    rb = RuleBase(
+        "three",
+        tuple(Variable(v, -1.0, 1.0, inp) for v in "abc"),
+        (Variable("y", -1.0, 1.0, out),),
+        tuple(rules),
+    )
+    eng = Engine(rb)
+    assert eng._scalar is not None
+    pts = np.random.default_rng(5).uniform(-1.2, 1.2, size=(200, 3))
+    batch = eng.evaluate({"a": pts[:, 0], "b": pts[:, 1], "c": pts[:, 2]})["y"]
+    single = [eng.evaluate_point(a=a, b=b, c=c)["y"] for a, b, c in pts]
+    np.testing.assert_allclose(single, batch, atol=1e-13, rtol=0)
+    assert single[0] == pytest.approx(reference3(rb, *pts[0]), abs=1e-8)
+
+
+def reference3(rb: RuleBase, a: float, b: float, c: float, n: int = 200_001) -> float:
+    """Fine-grid centroid of a conjunctive min/max rule base with three inputs."""
+    out = rb.outputs[0]
+    y = np.linspace(out.low, out.high, n)
+    x = {"a": a, "b": b, "c": c}
+    agg = np.zeros(n)
+    for rule in rb.rules:
+        props = rule.antecedent.operands  # type: ignore[union-attr]
+        strength = min(
+            float(membership.evaluate_term(rb.input(p.variable).term(p.term), x[p.variable]))  # type: ignore[union-attr]
+            for p in props
+        )
+        mu = membership.evaluate_term(out.term(rule.consequents[0].term), y)
+        agg = np.maximum(agg, np.minimum(strength * rule.weight, mu))
+    return float(np.trapezoid(agg * y, y) / np.trapezoid(agg, y))
