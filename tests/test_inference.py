@@ -375,7 +375,9 @@ def test_scalar_path_with_three_inputs_agrees_with_vectorised_engine() -> None:
         for j in range(3):
             for k in range(3):
                 label = names[min(2, max(0, i + j + k - 3 + 1))]
-                props = tuple(Proposition(v, names[t]) for v, t in zip("abc", (i, j, k)))
+                props = tuple(
+                    Proposition(v, names[t]) for v, t in zip("abc", (i, j, k), strict=True)
+                )
                 rules.append(Rule(Compound("and", props), (Consequent("y", label),), 0.5 + k / 4))
     rb = RuleBase(
         "three",
