@@ -1,0 +1,639 @@
+"""The PI vs fuzzy-PI comparison report: runs, figures, table and the paper's claims checked.
+
+:func:`build_report` runs E1-E3 x {PI, fuzzy-PI} x {default, tuned gains} on one or more plants,
+a press-on-the-hammer stiffness study, and writes ``report.md`` with PNG figures (force vs time
+per axis with the set point, as the paper's Figs. 7-12; the control surface; overshoot and
+settling time against stiffness), the comparison table, the gains, and a claim-by-claim verdict
+computed from the numbers by :func:`assess_claims`; plus one ``.rrd`` per run.
+
+Fuzzy-PI runs of the report use the exact inference engine; the tuning (when the report tunes)
+uses a lookup table for speed (see ``fuzzkit.tuning``).
+"""
+
+from __future__ import annotations
+
+import io
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import IO, Any
+
+from fuzzkit.errors import ConfigError
+from fuzzkit.fileio import write_atomic
+
+CONTROLLERS = ("pi", "fuzzy-pi")
+LABELS = ("default", "tuned")
+EXPERIMENT_NAMES = ("E1", "E2", "E3")
+
+#: Stiffnesses of the press study (N/mm).
+STUDY_STIFFNESSES_N_PER_MM = (5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0)
+
+#: Differences smaller than these are "no clear difference" when checking a claim:
+#: (absolute, relative to the larger value).
+OVERSHOOT_TOL = (0.5, 0.10)  # percentage points, fraction
+SETTLING_TOL = (0.02, 0.10)  # s, fraction
+RMS_TOL = (0.01, 0.10)  # N, fraction
+#: E3 "similar": per axis, RMS and settling time within this fraction (or the absolute floor).
+SIMILAR_REL = 0.25
+SIMILAR_ABS = {"rms_error": 0.05, "settling_time_s": 0.25}
+
+Key = tuple[str, str, str, str]  # plant, experiment, controller, gains label
+
+
+@dataclass(frozen=True, slots=True)
+class ClaimResult:
+    """One of the paper's claims checked on one plant with one gains set."""
+
+    claim: str
+    plant: str
+    gains: str
+    holds: bool
+    verdict: str
+    evidence: str
+
+
+def _axis(summaries: Mapping[Key, Mapping[str, Any]], key: Key, axis: str) -> Mapping[str, Any]:
+    data = summaries.get(key)
+    if data is None:
+        raise ConfigError(f"no run for {'/'.join(key)} (needed by a claim)")
+    axes: Mapping[str, Mapping[str, Any]] = data["axes"]
+    if axis not in axes:
+        raise ConfigError(f"run {'/'.join(key)} has no force-controlled axis {axis}")
+    return axes[axis]
+
+
+def _num(v: Any, never: float = math.inf) -> float:
+    return never if v is None else float(v)
+
+
+def _compare(a: float, b: float, tol: tuple[float, float]) -> int:
+    """-1 if a is clearly smaller than b, +1 if clearly larger, 0 within the tolerance."""
+    if math.isinf(a) and math.isinf(b):
+        return 0
+    margin = max(tol[0], tol[1] * max(abs(a), abs(b)) if math.isfinite(max(a, b)) else 0.0)
+    if a < b - margin:
+        return -1
+    if a > b + margin:
+        return 1
+    return 0
+
+
+def _fmt(v: Any, unit: str = "", digits: int = 2) -> str:
+    if v is None:
+        return "never" if unit == " s" else "-"
+    return f"{float(v):.{digits}f}{unit}"
+
+
+def assess_claims(
+    summaries: Mapping[Key, Mapping[str, Any]], plant: str, gains: str
+) -> list[ClaimResult]:
+    """Check the paper's sec. 4.1 conclusions against run summaries.
+
+    Parameters
+    ----------
+    summaries : ``{(plant, experiment, controller, gains): fuzzkit.experiments.summary(...)}``.
+    plant, gains : which plant and gains set (``default`` / ``tuned``) to judge.
+
+    Returns
+    -------
+    One :class:`ClaimResult` per claim, in the paper's order. "Clearly" better means beyond
+    the tolerances of this module (``OVERSHOOT_TOL`` ...), else "no clear difference".
+
+    Raises
+    ------
+    ConfigError
+        A run the claims need is missing.
+    """
+
+    def k(exp: str, ctrl: str) -> Key:
+        return (plant, exp, ctrl, gains)
+
+    out: list[ClaimResult] = []
+
+    def add(claim: str, holds: bool, verdict: str, evidence: str) -> None:
+        out.append(ClaimResult(claim, plant, gains, holds, verdict, evidence))
+
+    def verdict_of(sign: int, want: int) -> tuple[bool, str]:
+        if sign == want:
+            return True, "holds"
+        if sign == 0:
+            return False, "does not hold (no clear difference)"
+        return False, "does not hold (the opposite)"
+
+    # E1: fuzzy-PI less overshoot, faster settling (z, 10 N).
+    pi, fz = _axis(summaries, k("E1", "pi"), "z"), _axis(summaries, k("E1", "fuzzy-pi"), "z")
+    s = _compare(_num(fz["overshoot_pct"], 0.0), _num(pi["overshoot_pct"], 0.0), OVERSHOOT_TOL)
+    holds, v = verdict_of(s, -1)
+    add(
+        "E1: fuzzy-PI overshoots less than PI",
+        holds,
+        v,
+        f"z overshoot fuzzy-PI {_fmt(fz['overshoot_pct'], ' %', 1)} vs "
+        f"PI {_fmt(pi['overshoot_pct'], ' %', 1)}",
+    )
+    s = _compare(_num(fz["settling_time_s"]), _num(pi["settling_time_s"]), SETTLING_TOL)
+    holds, v = verdict_of(s, -1)
+    add(
+        "E1: fuzzy-PI settles faster than PI",
+        holds,
+        v,
+        f"z settling fuzzy-PI {_fmt(fz['settling_time_s'], ' s')} vs "
+        f"PI {_fmt(pi['settling_time_s'], ' s')}",
+    )
+    # E2: PI finer on small disturbances (RMS while moving), PI larger initial overshoot.
+    pi, fz = _axis(summaries, k("E2", "pi"), "z"), _axis(summaries, k("E2", "fuzzy-pi"), "z")
+    s = _compare(_num(pi["rms_error"]), _num(fz["rms_error"]), RMS_TOL)
+    holds, v = verdict_of(s, -1)
+    add(
+        "E2: PI has the finer resolution on small disturbances",
+        holds,
+        v,
+        f"z RMS error while moving PI {_fmt(pi['rms_error'], ' N')} vs fuzzy-PI "
+        f"{_fmt(fz['rms_error'], ' N')} (steady std {_fmt(pi['steady_state_error_std'], ' N')}"
+        f" vs {_fmt(fz['steady_state_error_std'], ' N')})",
+    )
+    s = _compare(_num(pi["overshoot_pct"], 0.0), _num(fz["overshoot_pct"], 0.0), OVERSHOOT_TOL)
+    holds, v = verdict_of(s, 1)
+    add(
+        "E2: PI overshoots more at the start",
+        holds,
+        v,
+        f"z overshoot PI {_fmt(pi['overshoot_pct'], ' %', 1)} vs "
+        f"fuzzy-PI {_fmt(fz['overshoot_pct'], ' %', 1)}",
+    )
+    # E3: similar results, x behaves like z.
+    diffs: list[str] = []
+    notes: list[str] = []
+    for axis in ("z", "x"):
+        pi, fz = _axis(summaries, k("E3", "pi"), axis), _axis(summaries, k("E3", "fuzzy-pi"), axis)
+        for metric, unit in (("rms_error", " N"), ("settling_time_s", " s")):
+            a, b = _num(pi[metric]), _num(fz[metric])
+            tol = (SIMILAR_ABS[metric], SIMILAR_REL)
+            what = metric.split("_")[0]
+            note = f"{axis} {what} PI {_fmt(pi[metric], unit)} vs {_fmt(fz[metric], unit)}"
+            notes.append(note)
+            if _compare(a, b, tol) != 0:
+                diffs.append(note)
+    add(
+        "E3: neither controller is better (x behaves like z)",
+        not diffs,
+        "holds" if not diffs else "does not hold (" + "; ".join(diffs) + ")",
+        "; ".join(notes),
+    )
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# Figures
+# --------------------------------------------------------------------------------------------
+
+
+def _png(fig: Any) -> bytes:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=80)
+    return buf.getvalue()
+
+
+def force_figure(results: Mapping[tuple[str, str], Any], title: str) -> bytes:
+    """Force vs time per controlled axis: columns PI, fuzzy-PI; default and tuned; set point.
+
+    ``results`` maps ``(controller, gains label)`` to a ``RunResult`` of one experiment.
+    """
+    from matplotlib.figure import Figure
+
+    any_run = next(iter(results.values()))
+    exp = any_run.experiment
+    axes_idx = [i for i in (2, 0, 1) if exp.selection[i]]
+    fig = Figure(figsize=(9.0, 2.4 * len(axes_idx) + 0.6))
+    grid = fig.subplots(len(axes_idx), 2, squeeze=False, sharex=True)
+    styles = {"default": ("tab:gray", "-"), "tuned": ("tab:blue", "-")}
+    for col, ctrl in enumerate(CONTROLLERS):
+        for row, i in enumerate(axes_idx):
+            ax = grid[row][col]
+            for label in LABELS:
+                r = results.get((ctrl, label))
+                if r is None:
+                    continue
+                colour, ls = styles[label]
+                ax.plot(r.t, r.force_true[:, i], color=colour, ls=ls, lw=1.0, label=label)
+            ax.plot(any_run.t, any_run.setpoint[:, i], "k--", lw=0.8, label="set point")
+            ax.set_ylabel(f"f{'xyz'[i]} (N)")
+            ax.grid(alpha=0.3)
+            if row == 0:
+                ax.set_title(f"{'PI' if ctrl == 'pi' else 'fuzzy-PI'}")
+            if row == len(axes_idx) - 1:
+                ax.set_xlabel("time (s)")
+    grid[0][0].legend(fontsize=8, loc="lower right")
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    return _png(fig)
+
+
+def stiffness_figure(study: Mapping[tuple[str, str], list[tuple[float, Any]]]) -> bytes:
+    """Overshoot and settling time against stiffness, per (controller, gains label).
+
+    ``study`` maps ``(controller, label)`` to ``[(stiffness N/mm, z-axis metrics)]``; a run
+    that never settles is drawn at the top of the settling axis with an x marker.
+    """
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(9.0, 3.4))
+    ax1, ax2 = fig.subplots(1, 2)
+    colours = {"pi": "tab:orange", "fuzzy-pi": "tab:blue"}
+    worst = max(
+        [_num(m["settling_time_s"], 0.0) for rows in study.values() for _, m in rows] + [1.0]
+    )
+    for (ctrl, label), rows in study.items():
+        ks = [k for k, _ in rows]
+        ls = "-" if label == "tuned" else "--"
+        name = f"{'PI' if ctrl == 'pi' else 'fuzzy-PI'} {label}"
+        ax1.plot(
+            ks,
+            [_num(m["overshoot_pct"], 0.0) for _, m in rows],
+            ls=ls,
+            marker="o",
+            ms=3,
+            color=colours[ctrl],
+            label=name,
+        )
+        settle = [m["settling_time_s"] for _, m in rows]
+        ax2.plot(
+            ks,
+            [worst * 1.1 if s is None else s for s in settle],
+            ls=ls,
+            marker="o",
+            ms=3,
+            color=colours[ctrl],
+            label=name,
+        )
+        never = [k for k, s in zip(ks, settle, strict=True) if s is None]
+        ax2.plot(never, [worst * 1.1] * len(never), "x", color=colours[ctrl], ms=8)
+    for ax in (ax1, ax2):
+        ax.set_xscale("log")
+        ax.set_xlabel("environment stiffness (N/mm)")
+        ax.grid(alpha=0.3)
+    ax1.set_yscale("symlog", linthresh=1.0)
+    ax1.set_ylabel("overshoot (%)")
+    ax2.set_ylabel("settling time (s); x = never")
+    ax1.legend(fontsize=7)
+    fig.suptitle("press 10 N on the hammer (planar plant)", fontsize=10)
+    fig.tight_layout()
+    return _png(fig)
+
+
+# --------------------------------------------------------------------------------------------
+# Markdown
+# --------------------------------------------------------------------------------------------
+
+
+def comparison_markdown(summaries: Mapping[Key, Mapping[str, Any]]) -> str:
+    """The comparison table (one row per run and axis) as Markdown."""
+    head = (
+        "| plant | exp | axis | set N | controller | gains | overshoot % | settle s | "
+        "ss mean N | ss std N | rms moving N | peak N | lost s |"
+    )
+    lines = [head, "|" + "---|" * 13]
+    for (plant, exp, ctrl, label), data in summaries.items():
+        for axis, m in data["axes"].items():
+            lines.append(
+                f"| {plant} | {exp} | {axis} | {m['setpoint']:g} | {ctrl} | {label} | "
+                f"{_fmt(m['overshoot_pct'], '', 1)} | {_fmt(m['settling_time_s'], ' s')} | "
+                f"{_fmt(m['steady_state_error_mean'])} | {_fmt(m['steady_state_error_std'])} | "
+                f"{_fmt(m['rms_error'])} | {_fmt(m['peak_force'], '', 1)} | "
+                f"{_fmt(m['contact_lost_s'])} |"
+            )
+    return "\n".join(lines)
+
+
+def claims_markdown(results: Sequence[ClaimResult]) -> str:
+    """The claim-by-claim table as Markdown."""
+    lines = [
+        "| claim (paper, sec. 4.1) | plant | gains | verdict | numbers |",
+        "|---|---|---|---|---|",
+    ]
+    for c in results:
+        verdict = f"**{c.verdict}**" if c.holds else c.verdict
+        lines.append(f"| {c.claim} | {c.plant} | {c.gains} | {verdict} | {c.evidence} |")
+    return "\n".join(lines)
+
+
+def claims_summary(results: Sequence[ClaimResult]) -> str:
+    """One sentence per claim: in how many of the checked settings it holds."""
+    by_claim: dict[str, list[ClaimResult]] = {}
+    for c in results:
+        by_claim.setdefault(c.claim, []).append(c)
+    lines = []
+    for claim, rs in by_claim.items():
+        n = sum(r.holds for r in rs)
+        where = ", ".join(f"{r.plant}/{r.gains}" for r in rs if r.holds)
+        if n == len(rs):
+            lines.append(f"- {claim}: **holds** in every setting checked ({len(rs)}).")
+        elif n == 0:
+            lines.append(f"- {claim}: **does not hold** in any setting checked ({len(rs)}).")
+        else:
+            lines.append(f"- {claim}: holds in {n} of {len(rs)} settings ({where}).")
+    return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------------------------
+# The report
+# --------------------------------------------------------------------------------------------
+
+
+def _log(stream: IO[str] | None, msg: str) -> None:
+    if stream is not None:
+        stream.write(msg + "\n")
+        stream.flush()
+
+
+def _gains_for(
+    ctrl: str,
+    gains_dir: Path | None,
+    out: Path,
+    budget: int,
+    rulebase: str,
+    seed: int,
+    workers: int | None,
+    log: IO[str] | None,
+) -> tuple[dict[str, float], dict[str, Any]]:
+    """Tuned gains of ``ctrl``: read from ``gains_dir`` or tuned now (and saved in out/gains)."""
+    from fuzzkit.gains import read_gains_file, write_gains
+
+    if gains_dir is not None:
+        path = gains_dir / f"{ctrl}.yaml"
+        if not path.is_file():
+            raise ConfigError(f"{path}: no such gains file (expected pi.yaml and fuzzy-pi.yaml)")
+        entries = read_gains_file(path)
+        entry = entries.get(ctrl) or entries.get(None)
+        if entry is None:
+            raise ConfigError(f"{path}: holds no gains for {ctrl}")
+        from fuzzkit.experiments import DEFAULT_GAINS
+
+        gains = dict(DEFAULT_GAINS[ctrl])
+        gains.update(entry.gains)
+        return gains, {**entry.provenance, "source": str(path)}
+    from fuzzkit.tuning import ProgressBar, tune
+
+    _log(log, f"tuning {ctrl} on E1 E2 E3 (budget {budget})")
+    bar = ProgressBar(log) if log is not None else None
+    result = tune(
+        EXPERIMENT_NAMES,
+        ctrl,
+        rulebase,
+        "planar",
+        budget=budget,
+        seed=seed,
+        workers=workers,
+        callback=bar,
+    )
+    if bar is not None:
+        bar.done()
+    (out / "gains").mkdir(exist_ok=True)
+    write_gains(out / "gains" / f"{ctrl}.yaml", result.to_entry(), merge=False)
+    entry = result.to_entry()
+    return dict(result.gains), {**entry.provenance, "source": f"gains/{ctrl}.yaml"}
+
+
+def build_report(
+    out: Path,
+    plants: Sequence[str] = ("planar",),
+    budget: int = 40,
+    gains_dir: Path | None = None,
+    rulebase: str = "macvicar_whelan",
+    seed: int = 0,
+    workers: int | None = None,
+    rrd: bool = True,
+    log: IO[str] | None = None,
+    stiffnesses_n_per_mm: Sequence[float] = STUDY_STIFFNESSES_N_PER_MM,
+) -> Path:
+    """Run everything and write ``out/report.md``, its PNGs, and one .rrd per run.
+
+    Parameters
+    ----------
+    out : output folder (created; its parent must exist).
+    plants : plant names to run E1-E3 on (tuning and the stiffness study use ``planar``).
+    budget : tuning budget per controller when ``gains_dir`` is None.
+    gains_dir : folder with ``pi.yaml`` and ``fuzzy-pi.yaml`` (skip tuning).
+    rulebase : the fuzzy-PI rule base.
+    seed : optimiser seed (sensor noise seed 0, as ``fuzzkit compare``).
+    workers : tuning worker processes (None: all cores).
+    rrd : write the recordings (``out/rrd/*.rrd``).
+    log : where progress goes (None: nowhere).
+    stiffnesses_n_per_mm : the stiffness study's stiffnesses.
+
+    Returns
+    -------
+    The path of ``report.md``.
+
+    Raises
+    ------
+    ConfigError
+        Unusable output folder, missing or bad gains files, unknown plant or rule base.
+    """
+    from fuzzkit.experiments import (
+        DEFAULT_GAINS,
+        experiment,
+        load_surface,
+        press_experiment,
+        run,
+        summary,
+    )
+    from fuzzkit.plant import make_plant
+    from fuzzkit.registry import load
+
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"{out}: exists and is not a folder (expected the report folder)")
+    parent = out.parent if str(out.parent) else Path(".")
+    if not parent.is_dir():
+        raise ConfigError(f"{out}: folder {parent} does not exist")
+    for p in plants:
+        make_plant(p)  # unknown plant: fail before any work
+    rb = load(rulebase)
+    out.mkdir(exist_ok=True)
+    if rrd:
+        (out / "rrd").mkdir(exist_ok=True)
+
+    gains: dict[tuple[str, str], dict[str, float]] = {}
+    provenance: dict[str, dict[str, Any]] = {}
+    for ctrl in CONTROLLERS:
+        gains[(ctrl, "default")] = dict(DEFAULT_GAINS[ctrl])
+        g, prov = _gains_for(ctrl, gains_dir, out, budget, rulebase, seed, workers, log)
+        gains[(ctrl, "tuned")] = g
+        provenance[ctrl] = prov
+
+    surface = load_surface(rulebase)
+    summaries: dict[Key, dict[str, Any]] = {}
+    figures: list[tuple[str, str]] = []
+    for plant in plants:
+        for name in EXPERIMENT_NAMES:
+            exp = experiment(name)
+            runs: dict[tuple[str, str], Any] = {}
+            for ctrl in CONTROLLERS:
+                for label in LABELS:
+                    _log(log, f"running {plant} {name} {ctrl} {label}")
+                    r = run(
+                        exp,
+                        plant,
+                        ctrl,
+                        gains=gains[(ctrl, label)],
+                        surface=surface if ctrl == "fuzzy-pi" else None,
+                    )
+                    runs[(ctrl, label)] = r
+                    summaries[(plant, name, ctrl, label)] = summary(r)
+                    if rrd:
+                        from fuzzkit.traces import write_rrd
+
+                        write_rrd(r, out / "rrd" / f"{plant}_{name}_{ctrl}_{label}.rrd")
+            fname = f"force_{plant}_{name}.png"
+            write_atomic(out / fname, force_figure(runs, f"{name} on {plant}: {exp.title}"))
+            figures.append((fname, f"{name} on the {plant} plant"))
+
+    from fuzzkit.surface import write_surface_png
+
+    write_surface_png(rb, out / "surface.png")
+
+    _log(log, "stiffness study")
+    study: dict[tuple[str, str], list[tuple[float, Any]]] = {}
+    from fuzzkit.experiments import axis_metrics
+
+    for ctrl in CONTROLLERS:
+        for label in LABELS:
+            rows = []
+            for k in stiffnesses_n_per_mm:
+                r = run(
+                    press_experiment(k * 1e3),
+                    "planar",
+                    ctrl,
+                    gains=gains[(ctrl, label)],
+                    surface=surface if ctrl == "fuzzy-pi" else None,
+                )
+                m = axis_metrics(r, 2)
+                m["tripped"] = float(r.tripped)
+                rows.append((k, m))
+            study[(ctrl, label)] = rows
+    write_atomic(out / "stiffness.png", stiffness_figure(study))
+
+    claims = [c for p in plants for label in LABELS for c in assess_claims(summaries, p, label)]
+    text = _markdown(
+        plants, rulebase, gains, provenance, summaries, figures, study, claims, rrd, budget
+    )
+    return write_atomic(out / "report.md", text)
+
+
+def _markdown(
+    plants: Sequence[str],
+    rulebase: str,
+    gains: Mapping[tuple[str, str], Mapping[str, float]],
+    provenance: Mapping[str, Mapping[str, Any]],
+    summaries: Mapping[Key, Mapping[str, Any]],
+    figures: Sequence[tuple[str, str]],
+    study: Mapping[tuple[str, str], list[tuple[float, Any]]],
+    claims: Sequence[ClaimResult],
+    rrd: bool,
+    budget: int,
+) -> str:
+    plist = ", ".join(plants)
+    md = [
+        "# PI vs fuzzy-PI force control: comparison report",
+        "",
+        f"Generated by `fuzzkit report` (plants: {plist}; rule base `{rulebase}`; sensor-noise "
+        "seed 0). Every number below is computed by the run that this report describes; the "
+        "verdicts are derived from them with the tolerances of `fuzzkit.report`.",
+        "",
+        "## Verdicts at a glance",
+        "",
+        claims_summary(claims),
+        "",
+        "## Gains",
+        "",
+        "Default gains are the hand-tuned `DEFAULT_GAINS` (like the paper's, by trial and error, "
+        "for 10 N/mm). Tuned gains minimise `fuzzkit.tuning.run_cost` (ITAE of the force error "
+        "plus penalties for overshoot, force above the safety limit and contact loss) over "
+        "E1-E3 and the stiffnesses listed, on the planar plant.",
+        "",
+        "| controller | gains | kp | ki | kx | tuning cost | source |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for ctrl in CONTROLLERS:
+        prov = provenance.get(ctrl, {})
+        for label in LABELS:
+            g = gains[(ctrl, label)]
+            cost = prov.get("default_cost" if label == "default" else "cost")
+            src = "fuzzkit.experiments.DEFAULT_GAINS" if label == "default" else prov.get("source")
+            kx = f"{g['kx']:.4g}" if "kx" in g else "-"
+            md.append(f"| {ctrl} | {label} | {g['kp']:.4g} | {g['ki']:.4g} | {kx} | ")
+            md[-1] += f"{'-' if cost is None else f'{float(cost):.5g}'} | {src} |"
+    for ctrl in CONTROLLERS:
+        prov = provenance.get(ctrl, {})
+        if "experiments" in prov:
+            ks = prov.get("stiffness_n_per_mm")
+            md.append("")
+            md.append(
+                f"`{ctrl}` tuned on {', '.join(map(str, prov['experiments']))} at "
+                f"{ks} N/mm, seed {prov.get('seed')}, {prov.get('evaluations')} of "
+                f"{prov.get('budget')} evaluations"
+                + (" (interrupted)" if prov.get("interrupted") else "")
+                + "."
+            )
+    md += [
+        "",
+        "## Comparison table",
+        "",
+        "True contact force; overshoot past the set point in % of it; settling into the 5 % band "
+        "(0.5 N for 0 N) from first contact; steady state over the last second; RMS error while "
+        "the path moves; peak force; time without contact after first contact.",
+        "",
+        comparison_markdown(summaries),
+        "",
+        "## The paper's claims, checked",
+        "",
+        "Tolerances: overshoot differences below "
+        f"{OVERSHOOT_TOL[0]} points or {OVERSHOOT_TOL[1]:.0%}, settling below "
+        f"{SETTLING_TOL[0]} s or {SETTLING_TOL[1]:.0%}, RMS below {RMS_TOL[0]} N or "
+        f"{RMS_TOL[1]:.0%} count as no clear difference; E3 is 'similar' when RMS and settling "
+        f"of every axis agree within {SIMILAR_REL:.0%}.",
+        "",
+        claims_markdown(claims),
+        "",
+        "## Force against time (cf. the paper's Figs. 7-12)",
+        "",
+    ]
+    for fname, caption in figures:
+        md += [f"![{caption}]({fname})", ""]
+    md += [
+        "## Control surface",
+        "",
+        f"![control surface of {rulebase}](surface.png)",
+        "",
+        "## Environment stiffness",
+        "",
+        "Press 10 N on E1's hammer from 0.2 mm above it (`press_experiment`), the same gains "
+        "at every stiffness.",
+        "",
+        "![overshoot and settling time against stiffness](stiffness.png)",
+        "",
+        "| stiffness N/mm | " + " | ".join(f"{c} {lab}" for c, lab in study) + " |",
+        "|---|" + "---|" * len(study),
+    ]
+    ks = [k for k, _ in next(iter(study.values()))]
+    for i, k in enumerate(ks):
+        cells = []
+        for rows in study.values():
+            m = rows[i][1]
+            tr = " (tripped)" if m.get("tripped") else ""
+            cells.append(
+                f"{_fmt(m['overshoot_pct'], ' %', 1)}, {_fmt(m['settling_time_s'], ' s')}{tr}"
+            )
+        md.append(f"| {k:g} | " + " | ".join(cells) + " |")
+    md += ["", "## Recordings", ""]
+    if rrd:
+        md.append(
+            "One Rerun recording per run in `rrd/` (`rerun rrd/planar_E1_pi_tuned.rrd`); "
+            "recordings are not committed (`*.rrd` is ignored by git): regenerate them with "
+            "`fuzzkit report`."
+        )
+    else:
+        md.append("Not written (`--no-rrd`).")
+    md.append("")
+    return "\n".join(md)
