@@ -1,0 +1,149 @@
+"""The comparison report: claims follow the numbers, and the files it writes."""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from fuzzkit.errors import ConfigError
+from fuzzkit.gains import GainsEntry, write_gains
+from fuzzkit.report import Key, assess_claims, build_report, claims_summary
+
+
+def _axis(
+    overshoot: float | None, settle: float | None, rms: float | None, std: float = 0.05
+) -> dict[str, Any]:
+    return {
+        "setpoint": 10.0,
+        "overshoot_pct": overshoot,
+        "settling_time_s": settle,
+        "steady_state_error_mean": 0.0,
+        "steady_state_error_std": std,
+        "rms_error": rms,
+        "peak_force": 10.0,
+        "contact_lost_s": 0.0,
+    }
+
+
+def _paper_like() -> dict[Key, dict[str, Any]]:
+    """Metrics shaped like the paper's findings: every claim should hold."""
+    s: dict[Key, dict[str, Any]] = {}
+
+    def put(exp: str, ctrl: str, axes: dict[str, dict[str, Any]]) -> None:
+        s[("planar", exp, ctrl, "default")] = {"experiment": exp, "controller": ctrl, "axes": axes}
+
+    put("E1", "pi", {"z": _axis(30.0, 1.2, None)})
+    put("E1", "fuzzy-pi", {"z": _axis(5.0, 0.4, None)})
+    put("E2", "pi", {"z": _axis(20.0, 2.0, 0.30, 0.05)})
+    put("E2", "fuzzy-pi", {"z": _axis(8.0, 2.0, 0.50, 0.12)})
+    same = {"z": _axis(2.0, 1.0, 0.40), "x": _axis(3.0, 1.5, 0.20)}
+    put("E3", "pi", copy.deepcopy(same))
+    put("E3", "fuzzy-pi", copy.deepcopy(same))
+    return s
+
+
+def _verdicts(s: dict[Key, dict[str, Any]]) -> dict[str, tuple[bool, str]]:
+    return {c.claim: (c.holds, c.verdict) for c in assess_claims(s, "planar", "default")}
+
+
+def test_paper_like_numbers_make_every_claim_hold() -> None:
+    v = _verdicts(_paper_like())
+    assert len(v) == 5
+    assert all(holds for holds, _ in v.values()), v
+    text = claims_summary(assess_claims(_paper_like(), "planar", "default"))
+    assert text.count("**holds** in every setting") == 5
+
+
+def test_reversed_numbers_make_the_claims_fail_and_say_so() -> None:
+    s = _paper_like()
+    e1 = s[("planar", "E1", "pi", "default")], s[("planar", "E1", "fuzzy-pi", "default")]
+    s[("planar", "E1", "pi", "default")], s[("planar", "E1", "fuzzy-pi", "default")] = e1[1], e1[0]
+    s[("planar", "E2", "pi", "default")]["axes"]["z"]["rms_error"] = 0.5  # equal to fuzzy-PI
+    s[("planar", "E3", "fuzzy-pi", "default")]["axes"]["x"]["settling_time_s"] = None  # never
+    v = _verdicts(s)
+    assert v["E1: fuzzy-PI overshoots less than PI"] == (False, "does not hold (the opposite)")
+    assert v["E1: fuzzy-PI settles faster than PI"] == (False, "does not hold (the opposite)")
+    assert v["E2: PI has the finer resolution on small disturbances"] == (
+        False,
+        "does not hold (no clear difference)",
+    )
+    holds, verdict = v["E3: neither controller is better (x behaves like z)"]
+    assert not holds and "x settling PI 1.50 s vs never" in verdict
+    text = claims_summary(assess_claims(s, "planar", "default"))
+    assert "E1: fuzzy-PI overshoots less than PI: **does not hold**" in text
+
+
+def test_differences_within_tolerance_are_no_clear_difference() -> None:
+    s = _paper_like()
+    s[("planar", "E1", "fuzzy-pi", "default")]["axes"]["z"]["overshoot_pct"] = 29.0  # vs 30 %
+    v = _verdicts(s)
+    assert v["E1: fuzzy-PI overshoots less than PI"] == (
+        False,
+        "does not hold (no clear difference)",
+    )
+
+
+def test_a_missing_run_is_a_clear_error() -> None:
+    s = _paper_like()
+    del s[("planar", "E2", "pi", "default")]
+    with pytest.raises(ConfigError, match="no run for planar/E2/pi/default"):
+        assess_claims(s, "planar", "default")
+
+
+def test_report_writes_markdown_figures_and_recordings(tmp_path: Path) -> None:
+    """With given gains (no tuning): every file, and a claims section that matches the table."""
+    gains_dir = tmp_path / "gains"
+    gains_dir.mkdir()
+    write_gains(gains_dir / "pi.yaml", GainsEntry("pi", {"kp": 2e-5, "ki": 1.5e-5}, {"seed": 1}))
+    write_gains(
+        gains_dir / "fuzzy-pi.yaml", GainsEntry("fuzzy-pi", {"kp": 0.3, "ki": 0.05, "kx": 2e-4})
+    )
+    out = tmp_path / "report"
+    path = build_report(out, gains_dir=gains_dir, stiffnesses_n_per_mm=(10.0, 100.0))
+    assert path == out / "report.md"
+    names = {p.name for p in out.iterdir()}
+    for png in (
+        "force_planar_E1.png",
+        "force_planar_E2.png",
+        "force_planar_E3.png",
+        "surface.png",
+        "stiffness.png",
+    ):
+        assert png in names
+        assert (out / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        assert (out / png).stat().st_size < 200_000  # small enough to commit
+    rrds = sorted(p.name for p in (out / "rrd").iterdir())
+    assert len(rrds) == 12 and "planar_E2_fuzzy-pi_tuned.rrd" in rrds
+    text = path.read_text()
+    for section in (
+        "## Verdicts at a glance",
+        "## Comparison table",
+        "## The paper's claims",
+        "![E1 on the planar plant](force_planar_E1.png)",
+        "stiffness.png",
+    ):
+        assert section in text
+    assert "| pi | tuned | 2e-05 | 1.5e-05 | - |" in text
+    # The verdict rows are the ones assess_claims derives (the text is not canned).
+    assert text.count("| E1: fuzzy-PI overshoots less than PI | planar |") == 2
+
+
+def test_report_rejects_bad_inputs(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="no such gains file"):
+        build_report(tmp_path / "r", gains_dir=tmp_path, rrd=False)
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    with pytest.raises(ConfigError, match="not a folder"):
+        build_report(blocker, gains_dir=tmp_path)
+    with pytest.raises(ConfigError, match="unknown plant"):
+        build_report(tmp_path / "r2", plants=("moon",))
+
+
+def test_cli_report_bad_budget(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    from fuzzkit.cli import main
+
+    assert main(["report", "--out", str(tmp_path / "r"), "--budget", "2"]) == 2
+    assert "--budget must be >= 10" in capsys.readouterr().err
