@@ -27,7 +27,9 @@ Search (:func:`optimise`): gains are searched as ``log10`` values within bounds
 ``scipy.optimize.differential_evolution`` (seeded Latin-hypercube population holding the default
 gains, ``updating="deferred"``, ``vectorized`` so each generation is one batch that a process
 pool evaluates in parallel); stage 2 is a bounded compass (pattern) search around the best point,
-whose ``2 * dims`` trial points per iteration also run in parallel. ``budget`` caps the number of
+whose ``2 * dims`` trial points per iteration also run in parallel. Both stages minimise the cost plus
+``PENALTY`` times how much worse than the default gains a candidate is on each experiment,
+which steers the search towards candidates the final choice may return. ``budget`` caps the number of
 gain sets simulated, the default gains included. The result is the cheapest gain set found that
 is *no worse than the default gains on any experiment* it was tuned for (the defaults themselves
 qualify, so this never fails).
@@ -77,6 +79,9 @@ DEFAULT_STIFFNESSES_N_PER_MM: tuple[float, ...] = (5.0, 10.0, 20.0)
 #: 1.0 s (E2, E3); each horizon keeps the contact transient and 1-4 s of holding or sliding,
 #: where the gains make the difference, and drops the rest of the path.
 TUNING_HORIZON_S: dict[str, float] = {"E1": 3.5, "E2": 4.5, "E3": 6.0, "press": 1.5}
+
+#: Weight of the search's penalty for being worse than the default gains on an experiment.
+PENALTY = 10.0
 
 #: Samples per side of the lookup table standing in for the exact fuzzy engine while tuning.
 TABLE_SIZE = 201
@@ -559,12 +564,24 @@ class _Pricer:
                 )
                 self.records.append(ev)
                 self.memo[keyed[i]] = ev
-                if self.best is None or ev.cost < self.best.cost:
+                if self.best is None or self.score(ev) < self.score(self.best):
                     self.best = ev
             self.history.append(self.best.cost if self.best else math.inf)
             self._report()
         inf = Evaluation({}, (), (), math.inf)
         return [self.memo.get(k, inf) for k in keyed]
+
+    def score(self, ev: Evaluation) -> float:
+        """What the search minimises: the cost plus a penalty for each experiment on which
+        ``ev`` is worse than the baseline, which steers the search towards gain sets that
+        :meth:`choose` may return."""
+        if self.baseline is None or not ev.experiment_costs:
+            return ev.cost
+        worse = sum(
+            max(0.0, c - b)
+            for c, b in zip(ev.experiment_costs, self.baseline.experiment_costs, strict=True)
+        )
+        return ev.cost + PENALTY * worse
 
     def _report(self) -> None:
         if self.callback is None or self.best is None:
@@ -663,7 +680,7 @@ def optimise(
         def batch(x: Vec) -> Vec:
             pts = np.atleast_2d(x.T) if x.ndim == 2 else x[None, :]
             evs = pricer.price([space.to_gains(p) for p in pts])
-            return np.array([ev.cost for ev in evs])
+            return np.array([pricer.score(ev) for ev in evs])
 
         if generations >= 0:
             differential_evolution(
@@ -723,7 +740,7 @@ def _compass(pricer: _Pricer, space: GainSpace) -> None:
     if pricer.best is None:
         return
     x = space.to_x(pricer.best.gains)
-    fx = pricer.best.cost
+    fx = pricer.score(pricer.best)
     step = 0.05 * (hi - lo)
     min_step = 0.002  # decades: 0.5 % of a gain, finer than any simulation can tell apart
     while pricer.remaining > 0 and float(np.max(step)) > min_step:
@@ -737,9 +754,10 @@ def _compass(pricer: _Pricer, space: GainSpace) -> None:
         if not trials:
             break
         evs = pricer.price([space.to_gains(y) for y in trials])
-        j = int(np.argmin([ev.cost for ev in evs]))
-        if evs[j].cost < fx:
-            x, fx = trials[j], evs[j].cost
+        scores = [pricer.score(ev) for ev in evs]
+        j = int(np.argmin(scores))
+        if scores[j] < fx:
+            x, fx = trials[j], scores[j]
         else:
             step = step * 0.5
 
