@@ -26,13 +26,13 @@ Search (:func:`optimise`): gains are searched as ``log10`` values within bounds
 (:data:`SPACES`), because good gains span decades across stiffnesses. Stage 1 is
 ``scipy.optimize.differential_evolution`` (seeded Latin-hypercube population holding the default
 gains, ``updating="deferred"``, ``vectorized`` so each generation is one batch that a process
-pool evaluates in parallel); stage 2 is a bounded compass (pattern) search around the best point,
-whose ``2 * dims`` trial points per iteration also run in parallel. Both stages minimise the cost plus
-``PENALTY`` times how much worse than the default gains a candidate is on each experiment,
-which steers the search towards candidates the final choice may return. ``budget`` caps the number of
-gain sets simulated, the default gains included. The result is the cheapest gain set found that
-is *no worse than the default gains on any experiment* it was tuned for (the defaults themselves
-qualify, so this never fails).
+pool evaluates in parallel); stage 2 is a bounded compass (pattern) search around the best
+point, whose ``2 * dims`` trial points per iteration also run in parallel. Both stages minimise
+the cost plus ``PENALTY`` times how much worse than the default gains a candidate is on each
+experiment, which steers the search towards candidates the final choice may return.
+``budget`` caps the number of gain sets simulated, the default gains included. The result is
+the cheapest gain set found that is *no worse than the default gains on any experiment* it was
+tuned for (the defaults themselves qualify, so this never fails).
 
 Speed: experiments are simulated over short horizons (:data:`TUNING_HORIZON_S`: first contact
 plus the transient that the gains decide), and the fuzzy surface is a 201 x 201 bilinear lookup
