@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import os
 import tempfile
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from pathlib import Path
 
 from fuzzkit.errors import ConfigError
@@ -22,8 +23,11 @@ def _publish(tmp: str, target: Path) -> None:
     os.replace(tmp, target)
 
 
-def write_atomic(path: str | os.PathLike[str], data: str | bytes) -> Path:
-    """Write ``data`` to ``path`` through a temporary file in the same folder, then rename.
+@contextmanager
+def atomic_output(path: str | os.PathLike[str], what: str = "file") -> Iterator[str]:
+    """Yield a temporary path beside ``path``; on success it becomes ``path``, else vanishes.
+
+    For writers that need a file name rather than bytes (a Rerun recording, a figure).
 
     Raises
     ------
@@ -33,19 +37,31 @@ def write_atomic(path: str | os.PathLike[str], data: str | bytes) -> Path:
     target = Path(path)
     parent = target.parent if str(target.parent) else Path(".")
     if target.is_dir():
-        raise ConfigError(f"{target}: is a directory (expected a file path)")
+        raise ConfigError(f"{target}: is a directory (expected a {what} path)")
     if not parent.is_dir():
         raise ConfigError(f"{target}: folder {parent} does not exist")
-    payload = data.encode("utf-8") if isinstance(data, str) else data
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=parent)
+    os.close(fd)
     try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(payload)
+        yield tmp
         _publish(tmp, target)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
-    return target
+
+
+def write_atomic(path: str | os.PathLike[str], data: str | bytes) -> Path:
+    """Write ``data`` to ``path`` through a temporary file in the same folder, then rename.
+
+    Raises
+    ------
+    ConfigError
+        If the parent folder is missing or ``path`` is an existing folder.
+    """
+    payload = data.encode("utf-8") if isinstance(data, str) else data
+    with atomic_output(path) as tmp, open(tmp, "wb") as fh:
+        fh.write(payload)
+    return Path(path)
 
 
 def write_tree_atomic(

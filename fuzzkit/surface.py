@@ -8,7 +8,6 @@ logged alongside as points so a viewer shows which rule cell dominates where.
 from __future__ import annotations
 
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +16,7 @@ import numpy.typing as npt
 from fuzzkit.errors import ConfigError, EvaluationError
 from fuzzkit.fileio import write_atomic
 from fuzzkit.model import RuleBase, Term, Variable
+from fuzzkit.rrd import open_recording
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -151,23 +151,12 @@ def write_surface_rrd(
     import rerun as rr
 
     name = _check_shape(rb, output)
-    target = Path(path)
-    parent = target.parent if str(target.parent) else Path(".")
-    if not parent.is_dir():
-        raise ConfigError(f"{target}: folder {parent} does not exist")
     x, y, z = surface_grid(rb, resolution, name)
     out = rb.output(name)
     vertices, triangles = _mesh(x, y, z)
     peaks, labels = peak_grid(rb, name)
 
-    rec = rr.RecordingStream(
-        "fuzzkit", recording_id=f"surface-{rb.name}-{name}", send_properties=False
-    )
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=parent)
-    os.close(fd)
-    try:
-        # Saving first sends everything logged afterwards into the file; no viewer is spawned.
-        rec.save(tmp)
+    with open_recording(path, "fuzzkit", f"surface-{rb.name}-{name}", send_properties=False) as rec:
         vx, vy = rb.inputs
         rec.log(
             f"surface/{name}/description",
@@ -194,17 +183,7 @@ def write_surface_rrd(
             ),
             static=True,
         )
-        rec.flush()
-        rec.disconnect()
-        # mkstemp creates 0600; a recording is a normal output file, so honour the umask.
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return target
+    return Path(path)
 
 
 def write_surface_png(

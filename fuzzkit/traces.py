@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -25,6 +25,7 @@ import numpy.typing as npt
 from fuzzkit.errors import ConfigError
 from fuzzkit.experiments import AXES, RunResult
 from fuzzkit.plant import Box, EnvObject, RoughSurface, Table, nominal_position
+from fuzzkit.rrd import log_series, open_recording
 
 Vec = npt.NDArray[np.float64]
 
@@ -52,6 +53,30 @@ def _circle(cx: float, cz: float, r: float, n: int = 24) -> list[list[float]]:
     return [[cx + r * math.cos(t), 0.0, cz + r * math.sin(t)] for t in a]
 
 
+def log_control_series(rec: Any, result: RunResult, times: Any) -> None:
+    """Log the force and control time series of a run (any plant) on the ``times`` column."""
+    for i, axis in enumerate(AXES):
+        c = _AXIS_COLOURS[axis]
+        dim = (int(0.5 * c[0] + 100), int(0.5 * c[1] + 100), int(0.5 * c[2] + 100))
+        log_series(
+            rec, f"forces/{axis}/measured", times, result.force[:, i], f"f{axis} measured", c
+        )
+        log_series(rec, f"forces/{axis}/true", times, result.force_true[:, i], f"f{axis} true", dim)
+        if result.experiment.selection[i]:
+            log_series(
+                rec,
+                f"forces/{axis}/setpoint",
+                times,
+                result.setpoint[:, i],
+                f"f{axis} set",
+                (0, 0, 0),
+            )
+            log_series(rec, f"control/{axis}/e", times, result.e[:, i], f"e{axis} (N)", c)
+            log_series(rec, f"control/{axis}/de", times, result.de[:, i], f"de{axis} (N)", c)
+            log_series(rec, f"control/{axis}/du", times, result.du[:, i] * 1e3, f"du{axis} (mm)", c)
+            log_series(rec, f"control/{axis}/u", times, result.u[:, i] * 1e3, f"u{axis} (mm)", c)
+
+
 def write_rrd(result: RunResult, path: str | os.PathLike[str], geometry_every: int = 5) -> Path:
     """Write ``result`` as a Rerun recording at ``path`` (temporary file, then rename).
 
@@ -60,45 +85,20 @@ def write_rrd(result: RunResult, path: str | os.PathLike[str], geometry_every: i
     """
     import rerun as rr
 
-    target = Path(path)
-    parent = target.parent if str(target.parent) else Path(".")
-    if target.is_dir():
-        raise ConfigError(f"{target}: is a directory (expected an .rrd file path)")
-    if not parent.is_dir():
-        raise ConfigError(f"{target}: folder {parent} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=parent)
-    os.close(fd)
     exp = result.experiment
-    try:
-        rec = rr.RecordingStream(
-            f"fuzzkit_{exp.name}_{result.controller}",
-            recording_id=f"{exp.name}-{result.controller}",
-        )
-        rec.save(tmp)
+    with open_recording(
+        path, f"fuzzkit_{exp.name}_{result.controller}", f"{exp.name}-{result.controller}"
+    ) as rec:
         times = rr.TimeColumn("sim_time", duration=result.t)
-
-        def series(entity: str, values: Vec, name: str, colour: tuple[int, int, int]) -> None:
-            rec.log(entity, rr.SeriesLines(colors=[colour], names=[name]), static=True)
-            rec.send_columns(
-                entity,
-                indexes=[times],
-                columns=rr.Scalars.columns(scalars=values.astype(np.float64)),
-            )
-
-        for i, axis in enumerate(AXES):
-            c = _AXIS_COLOURS[axis]
-            dim = tuple(int(0.5 * v + 100) for v in c)
-            series(f"forces/{axis}/measured", result.force[:, i], f"f{axis} measured", c)
-            series(f"forces/{axis}/true", result.force_true[:, i], f"f{axis} true", dim)  # type: ignore[arg-type]
-            if exp.selection[i]:
-                series(f"forces/{axis}/setpoint", result.setpoint[:, i], f"f{axis} set", (0, 0, 0))
-                series(f"control/{axis}/e", result.e[:, i], f"e{axis} (N)", c)
-                series(f"control/{axis}/de", result.de[:, i], f"de{axis} (N)", c)
-                series(f"control/{axis}/du", result.du[:, i] * 1e3, f"du{axis} (mm)", c)
-                series(f"control/{axis}/u", result.u[:, i] * 1e3, f"u{axis} (mm)", c)
+        log_control_series(rec, result, times)
         for j in range(result.joint_angles.shape[1]):
-            series(
-                f"joints/q{j + 1}", result.joint_angles[:, j], f"q{j + 1} (rad)", (120, 120, 120)
+            log_series(
+                rec,
+                f"joints/q{j + 1}",
+                times,
+                result.joint_angles[:, j],
+                f"q{j + 1} (rad)",
+                (120, 120, 120),
             )
 
         scn = exp.scenario
@@ -137,14 +137,4 @@ def write_rrd(result: RunResult, path: str | os.PathLike[str], geometry_every: i
                 "world/contacts",
                 rr.Points3D(pts.reshape(-1, 3), colors=[(230, 40, 40)], radii=[0.004]),
             )
-        rec.flush()
-        rec.disconnect()
-        # mkstemp makes 0600 files; give the recording the permissions open() would have.
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return target
+    return Path(path)

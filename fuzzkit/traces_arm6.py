@@ -19,14 +19,13 @@ the IRB 140's base sits at ``-workspace_offset`` (see :mod:`fuzzkit.motion`).
 from __future__ import annotations
 
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.errors import ConfigError
-from fuzzkit.experiments import AXES, RunResult
+from fuzzkit.experiments import RunResult
 from fuzzkit.motion import (
     Arm6Parameters,
     Box3,
@@ -37,10 +36,11 @@ from fuzzkit.motion import (
     objects_from_scenario,
 )
 from fuzzkit.plant import nominal_position
+from fuzzkit.rrd import log_series, open_recording
+from fuzzkit.traces import log_control_series
 
 Vec = npt.NDArray[np.float64]
 
-_AXIS_COLOURS = {"x": (230, 80, 60), "y": (60, 170, 80), "z": (60, 110, 230)}
 _ENV = (140, 110, 80)
 #: Arrow length per newton of contact force (m/N).
 FORCE_SCALE_M_PER_N = 0.002
@@ -103,12 +103,6 @@ def write_rrd(
     """
     import rerun as rr
 
-    target = Path(path)
-    parent = target.parent if str(target.parent) else Path(".")
-    if target.is_dir():
-        raise ConfigError(f"{target}: is a directory (expected an .rrd file path)")
-    if not parent.is_dir():
-        raise ConfigError(f"{target}: folder {parent} does not exist")
     if result.joint_angles.ndim != 2 or result.joint_angles.shape[1] != 6:
         raise ConfigError(
             f"run on plant {result.plant!r} has {result.joint_angles.shape[-1]} joints "
@@ -117,37 +111,18 @@ def write_rrd(
     p = params or Arm6Parameters()
     exp = result.experiment
     scn = exp.scenario
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=parent)
-    os.close(fd)
-    try:
-        rec = rr.RecordingStream(
-            f"fuzzkit_{exp.name}_{result.controller}_arm6",
-            recording_id=f"{exp.name}-{result.controller}-arm6",
-        )
-        rec.save(tmp)
+    with open_recording(
+        path,
+        f"fuzzkit_{exp.name}_{result.controller}_arm6",
+        f"{exp.name}-{result.controller}-arm6",
+    ) as rec:
         times = rr.TimeColumn("sim_time", duration=result.t)
-
-        def series(entity: str, values: Vec, name: str, colour: tuple[int, int, int]) -> None:
-            rec.log(entity, rr.SeriesLines(colors=[colour], names=[name]), static=True)
-            rec.send_columns(
-                entity,
-                indexes=[times],
-                columns=rr.Scalars.columns(scalars=np.asarray(values, dtype=np.float64)),
-            )
-
-        for i, axis in enumerate(AXES):
-            c = _AXIS_COLOURS[axis]
-            dim = (int(0.5 * c[0] + 100), int(0.5 * c[1] + 100), int(0.5 * c[2] + 100))
-            series(f"forces/{axis}/measured", result.force[:, i], f"f{axis} measured", c)
-            series(f"forces/{axis}/true", result.force_true[:, i], f"f{axis} true", dim)
-            if exp.selection[i]:
-                series(f"forces/{axis}/setpoint", result.setpoint[:, i], f"f{axis} set", (0, 0, 0))
-                series(f"control/{axis}/e", result.e[:, i], f"e{axis} (N)", c)
-                series(f"control/{axis}/du", result.du[:, i] * 1e3, f"du{axis} (mm)", c)
-                series(f"control/{axis}/u", result.u[:, i] * 1e3, f"u{axis} (mm)", c)
+        log_control_series(rec, result, times)
         for j in range(6):
-            series(
+            log_series(
+                rec,
                 f"joints/axis{j + 1}",
+                times,
                 np.degrees(result.joint_angles[:, j]),
                 f"axis {j + 1} (deg)",
                 (120, 120, 120),
@@ -221,14 +196,4 @@ def write_rrd(
                     result.contact_points[k].reshape(-1, 3), colors=[(230, 40, 40)], radii=[0.004]
                 ),
             )
-        rec.flush()
-        rec.disconnect()
-        # mkstemp makes the file owner-only; a recording is an ordinary output file
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return target
+    return Path(path)
