@@ -102,9 +102,10 @@ def _fit_function(segs: Sequence[Segment]) -> _PiecewiseCubic:
         # a cubic through four exact values is exact: confirm at a fifth level
         s_chk = 0.5 + 1 / 7
         ar5, mo5 = clipped_integrals(x0, x1, v0, v1, np.array(a + (b - a) * s_chk))
-        for coef, want in ((coef_a, ar5.sum()), (coef_m, mo5.sum())):
+        for coef, parts in ((coef_a, ar5), (coef_m, mo5)):
             got = float(np.polynomial.polynomial.polyval(s_chk, coef))
-            if abs(got - want) > 1e-12 * max(1.0, abs(float(want))):
+            # rounding scales with the addends, not with their (possibly cancelling) sum
+            if abs(got - float(parts.sum())) > 1e-11 * max(1.0, float(np.abs(parts).sum())):
                 raise RuntimeError("centroid tables: clipped integral is not cubic in the level")
         starts.append(a)
         inv_w.append(1.0 / (b - a))
@@ -114,12 +115,23 @@ def _fit_function(segs: Sequence[Segment]) -> _PiecewiseCubic:
 
 
 class PolyCentroid:
-    """Area and moment of a partition-style aggregated output from its per-term levels."""
+    """Centroid of a partition-style aggregated output from its per-term levels.
+
+    The segments are given in unit coordinates ``(y - low) / width`` so the tables are equally
+    well conditioned whatever the output's units; results are mapped back.
+    """
 
     def __init__(
-        self, segments: Sequence[Segment], pairs: Sequence[tuple[int, int]], n_terms: int
+        self,
+        segments: Sequence[Segment],
+        pairs: Sequence[tuple[int, int]],
+        n_terms: int,
+        low: float = 0.0,
+        width: float = 1.0,
     ) -> None:
         self.n_terms = n_terms
+        self.low = low
+        self.width = width
         self.pairs = tuple(pairs)
         n_funcs = n_terms + len(pairs)
         by_func: dict[int, list[Segment]] = {}
@@ -176,6 +188,17 @@ class PolyCentroid:
             area = area * s + np.take(ca[:, k], flat)
             moment = moment * s + np.take(cm[:, k], flat)
         return area @ self.sign, moment @ self.sign
+
+    def centroid(self, levels: FloatArray, default: float) -> FloatArray:
+        """Centroid (B,) in output units; ``default`` where nothing fired."""
+        area, moment = self.area_moment(levels)
+        unit = np.divide(moment, area, out=np.full_like(area, np.nan), where=area > 1e-300)
+        return np.where(area > 1e-300, self.low + self.width * unit, default)
+
+    def centroid_scalar(self, levels: Sequence[float], default: float) -> float:
+        """Centroid of one point in output units; ``default`` where nothing fired."""
+        area, moment = self.area_moment_scalar(levels)
+        return self.low + self.width * (moment / area) if area > 1e-300 else default
 
     def area_moment_scalar(self, levels: Sequence[float]) -> tuple[float, float]:
         """Area and moment for one point's per-term levels, in plain Python."""
@@ -274,6 +297,5 @@ class ScalarPath:
                             levels[o][t] = fired
         result = []
         for (poly, _, default), lv in zip(self.outputs, levels, strict=True):
-            area, moment = poly.area_moment_scalar(lv)
-            result.append(moment / area if area > 1e-300 else default)
+            result.append(poly.centroid_scalar(lv, default))
         return result

@@ -490,8 +490,10 @@ def _partition_centroid(geo: _ExactGeometry, rb: RuleBase, n_terms: int) -> Poly
         return None
     segs: list[Segment] = []
     pairs: dict[tuple[int, int], int] = {}
+    low, width = float(geo.z0[0]), float(geo.z1[-1] - geo.z0[0])
     for k in range(len(geo.z0)):
         z0, z1 = float(geo.z0[k]), float(geo.z1[k])
+        u0, u1 = (z0 - low) / width, (z1 - low) / width
         vals = {}
         for q in range(geo.kmax):
             t = int(geo.slot_piece[k, q])
@@ -500,14 +502,14 @@ def _partition_centroid(geo: _ExactGeometry, rb: RuleBase, n_terms: int) -> Poly
             v0 = max(0.0, float(geo.slope[k, q] * z0 + geo.icpt[k, q]))
             v1 = max(0.0, float(geo.slope[k, q] * z1 + geo.icpt[k, q]))
             vals[t] = (v0, v1)
-            segs.append(Segment(z0, z1, v0, v1, t, 1.0))
+            segs.append(Segment(u0, u1, v0, v1, t, 1.0))
         if len(vals) == 2:
             ti, tj = sorted(vals)
             col = pairs.setdefault((ti, tj), n_terms + len(pairs))
             v0 = min(vals[ti][0], vals[tj][0])
             v1 = min(vals[ti][1], vals[tj][1])
-            segs.append(Segment(z0, z1, v0, v1, col, -1.0))
-    return PolyCentroid(segs, list(pairs), n_terms)
+            segs.append(Segment(u0, u1, v0, v1, col, -1.0))
+    return PolyCentroid(segs, list(pairs), n_terms, low, width)
 
 
 class _GridGeometry:
@@ -602,9 +604,7 @@ class _Output:
             return np.where(tot > 0, val, self.default)
         levels = self.pieces.levels(firing)
         if self.fast_centroid is not None:
-            area, moment = self.fast_centroid.area_moment(levels)
-            fired = area > 1e-300
-            return np.divide(moment, area, out=np.full_like(area, self.default), where=fired)
+            return self.fast_centroid.centroid(levels, self.default)
         geo = self.geometry
         if isinstance(geo, _ExactGeometry):
             return self._exact(geo, levels)

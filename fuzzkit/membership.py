@@ -97,8 +97,7 @@ def sigmoid(x: FloatArray, slope: float, centre: float) -> FloatArray:
 
 def singleton(x: FloatArray, value: float) -> FloatArray:
     """Singleton: ``mu = 1`` where ``x == value``, else 0 (NaN stays NaN)."""
-    out = (x == value).astype(np.float64)
-    out[np.isnan(x)] = np.nan
+    out = np.where(np.isnan(x), np.nan, (x == value).astype(np.float64))
     return cast(FloatArray, out)
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from collections.abc import Sequence
 
@@ -59,6 +60,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("fuzzkit: interrupted", file=sys.stderr)
         return 130
+    except Exception as exc:  # a bug, not bad input: say so, traceback only on request
+        if os.environ.get("FUZZKIT_DEBUG"):
+            raise
+        print(
+            f"fuzzkit: internal error: {type(exc).__name__}: {exc}\n"
+            "  this is a bug in fuzzkit; rerun with FUZZKIT_DEBUG=1 for the traceback",
+            file=sys.stderr,
+        )
+        return EXIT_FAILURE
     return int(code or 0)
 
 
