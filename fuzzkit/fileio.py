@@ -23,6 +23,21 @@ def _publish(tmp: str, target: Path) -> None:
     os.replace(tmp, target)
 
 
+def check_output_path(path: str | os.PathLike[str], what: str = "file") -> Path:
+    """``path`` as a Path if a file can be created there; else a ConfigError saying why.
+
+    Commands that write several files call this for all of them first, so that a bad second
+    path does not leave the first file written.
+    """
+    target = Path(path)
+    parent = target.parent if str(target.parent) else Path(".")
+    if target.is_dir():
+        raise ConfigError(f"{target}: is a directory (expected a {what} path)")
+    if not parent.is_dir():
+        raise ConfigError(f"{target}: folder {parent} does not exist")
+    return target
+
+
 @contextmanager
 def atomic_output(path: str | os.PathLike[str], what: str = "file") -> Iterator[str]:
     """Yield a temporary path beside ``path``; on success it becomes ``path``, else vanishes.
@@ -34,13 +49,11 @@ def atomic_output(path: str | os.PathLike[str], what: str = "file") -> Iterator[
     ConfigError
         If the parent folder is missing or ``path`` is an existing folder.
     """
-    target = Path(path)
-    parent = target.parent if str(target.parent) else Path(".")
-    if target.is_dir():
-        raise ConfigError(f"{target}: is a directory (expected a {what} path)")
-    if not parent.is_dir():
-        raise ConfigError(f"{target}: folder {parent} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=parent)
+    target = check_output_path(path, what)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    except OSError as exc:
+        raise ConfigError(f"{target}: cannot write here ({exc.strerror})") from exc
     os.close(fd)
     try:
         yield tmp

@@ -295,3 +295,25 @@ def test_console_script_runs_end_to_end(tmp_path: Path) -> None:
     assert failed.returncode == 2
     assert "Traceback" not in failed.stderr
     assert f"{bad}:3:14: range must be" in failed.stderr
+
+
+def test_eval_points_oversized_csv_field_is_a_located_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    csv_path = tmp_path / "big.csv"
+    csv_path.write_text("e,de\n0.1,0.2\n1," + "x" * 200_000 + "\n")
+    code, out, err = run(capsys, "eval", "macvicar_whelan", "--points", str(csv_path))
+    assert code == 2 and out == ""
+    assert f"{csv_path}:3: bad CSV: field larger than field limit" in err
+    assert "Traceback" not in err
+
+
+def test_surface_checks_every_output_before_writing_any(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rrd = tmp_path / "s.rrd"
+    code, _, err = run(
+        capsys, "surface", "macvicar_whelan", "--rrd", str(rrd), "--png", str(tmp_path / "no/s.png")
+    )
+    assert code == 2 and "does not exist" in err
+    assert list(tmp_path.iterdir()) == []  # the .rrd was not written either

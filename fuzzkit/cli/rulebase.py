@@ -12,11 +12,12 @@ import json
 import math
 import sys
 import textwrap
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any, TextIO
 
 from fuzzkit.errors import EvaluationError, Location, Problem, ProblemsError, RuleBaseError
+from fuzzkit.fileio import check_output_path
 from fuzzkit.model import SHAPE_PARAMS, Compound, Expression, Proposition, RuleBase, Variable
 
 EXIT_OK = 0
@@ -331,7 +332,7 @@ def _read_points(
     cols = {n: header.index(n) for n in rb.input_names}
     rows: list[list[str]] = []
     values: dict[str, list[float]] = {n: [] for n in rb.input_names}
-    for row in reader:
+    for row in _csv_rows(reader, name):
         line = reader.line_num
         if not row or all(not c.strip() for c in row):
             continue
@@ -411,6 +412,19 @@ def cmd_eval(args: argparse.Namespace) -> int:
 # ---------------------------------------------------------------------------- surface
 
 
+def _csv_rows(reader: Any, name: str) -> Iterator[list[str]]:
+    """The reader's rows; a malformed CSV (e.g. a field over the size limit) is a located error."""
+    while True:
+        try:
+            yield next(reader)
+        except StopIteration:
+            return
+        except csv.Error as exc:
+            raise ProblemsError(
+                [Problem(Location(name, reader.line_num), f"bad CSV: {exc}")]
+            ) from exc
+
+
 def cmd_surface(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -421,6 +435,9 @@ def cmd_surface(args: argparse.Namespace) -> int:
     for option, path, suffix in (("--rrd", args.rrd, ".rrd"), ("--png", args.png, ".png")):
         if path is not None and Path(path).suffix.lower() != suffix:
             raise EvaluationError(f"{option} {path}: expected a file name ending in {suffix}")
+    for option, path in (("--rrd", args.rrd), ("--png", args.png)):
+        if path is not None:
+            check_output_path(path, f"{option} file")
     rb = _load(args.rulebase)
     if args.rrd is not None:
         write_surface_rrd(rb, args.rrd, args.resolution, args.output)
