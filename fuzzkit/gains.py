@@ -235,12 +235,15 @@ def read_gains_file(path: str | os.PathLike[str]) -> dict[str | None, GainsEntry
     return parse_gains(text, str(path))
 
 
-def read_gains(path: str | os.PathLike[str] | None, controller: str) -> dict[str, float]:
+def read_gains(
+    path: str | os.PathLike[str] | None, controller: str, required: bool = False
+) -> dict[str, float]:
     """The gain overrides for ``controller`` in a gains file ({} when ``path`` is None).
 
-    A flat file applies to any controller; a file keyed by controller that lacks
-    ``controller`` gives {} (the defaults stay in force). This is what ``simulate``,
-    ``compare`` and ``compile`` call.
+    A flat file applies to any controller. A file keyed by controller that lacks
+    ``controller`` is an error when ``required`` (``simulate`` and ``compile``: the user asked
+    for that controller with that file), else gives {} and the defaults stay in force
+    (``compare``, which runs both controllers and says which ran on defaults).
 
     Raises
     ------
@@ -268,6 +271,12 @@ def read_gains(path: str | os.PathLike[str] | None, controller: str) -> dict[str
             raise ConfigError("\n".join(problems))
         return dict(gains)
     entry = entries.get(controller)
+    if entry is None and required:
+        held = ", ".join(str(k) for k in entries) or "nothing"
+        raise ConfigError(
+            f"{path}: no gains for {controller} (the file holds: {held}); "
+            f"tune {controller} into it or pass a file for {controller}"
+        )
     return dict(entry.gains) if entry is not None else {}
 
 

@@ -482,9 +482,9 @@ def build_report(
                     runs[(ctrl, label)] = r
                     summaries[(plant, name, ctrl, label)] = summary(r)
                     if rrd:
-                        from fuzzkit.traces import write_rrd
+                        from fuzzkit.traces import write_run_rrd
 
-                        write_rrd(r, out / "rrd" / f"{plant}_{name}_{ctrl}_{label}.rrd")
+                        write_run_rrd(r, out / "rrd" / f"{plant}_{name}_{ctrl}_{label}.rrd")
             fname = f"force_{plant}_{name}.png"
             write_atomic(out / fname, force_figure(runs, f"{name} on {plant}: {exp.title}"))
             figures.append((fname, f"{name} on the {plant} plant"))

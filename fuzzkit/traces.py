@@ -138,3 +138,12 @@ def write_rrd(result: RunResult, path: str | os.PathLike[str], geometry_every: i
                 rr.Points3D(pts.reshape(-1, 3), colors=[(230, 40, 40)], radii=[0.004]),
             )
     return Path(path)
+
+
+def write_run_rrd(result: RunResult, path: str | os.PathLike[str]) -> Path:
+    """Write a run's recording with the drawing its plant needs (planar, or 3-D for arm6)."""
+    if result.joint_angles.ndim == 2 and result.joint_angles.shape[1] == 6:
+        from fuzzkit.traces_arm6 import write_rrd as write_arm6_rrd
+
+        return write_arm6_rrd(result, path)
+    return write_rrd(result, path)

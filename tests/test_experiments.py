@@ -218,6 +218,7 @@ def test_cli_simulate_json(capsys: pytest.CaptureFixture[str]) -> None:
         ("- 1\n- 2\n", "mapping"),
         ("pi: {kp: 1e-5}\npid: {}\n", "unknown controller keys"),
         ("kp: [1\n", "gains.yaml:2: not valid YAML"),
+        ("fuzzy-pi: {kx: 1e-4}\n", "no gains for pi (the file holds: fuzzy-pi)"),
     ],
 )
 def test_cli_bad_gains_file(
@@ -240,11 +241,18 @@ def test_cli_unknown_experiment(capsys: pytest.CaptureFixture[str]) -> None:
 
 
 @pytest.mark.slow
-def test_cli_compare_prints_both_controllers(capsys: pytest.CaptureFixture[str]) -> None:
+def test_cli_compare_prints_both_controllers(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     from fuzzkit.cli import main
 
-    assert main(["compare", "E1"]) == 0
-    out = capsys.readouterr().out
+    gains = tmp_path / "gains.yaml"
+    gains.write_text("fuzzy-pi: {kp: 0.2, ki: 0.05, kx: 2.0e-4}\n")
+    assert main(["compare", "E1", "--gains", str(gains)]) == 0
+    captured = capsys.readouterr()
+    # a file for one controller is fine for compare, which says who runs on defaults
+    assert "has no gains for pi: it runs on the defaults" in captured.err
+    out = captured.out
     rows = [line.split() for line in out.splitlines() if line.startswith("E1")]
     assert [(r[1], r[3]) for r in rows] == [
         ("z", "pi"),

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -58,18 +59,20 @@ def register(subparsers: Any) -> None:
     cmp_.set_defaults(handler=_compare)
 
 
-def load_gains(path: str | None, controller: str) -> dict[str, float]:
+def load_gains(path: str | None, controller: str, required: bool = True) -> dict[str, float]:
     """Gain overrides for ``controller`` from a gains file (see ``fuzzkit.gains.read_gains``)."""
     from fuzzkit.gains import read_gains
 
-    return read_gains(path, controller)
+    return read_gains(path, controller, required)
 
 
-def _run_one(exp_name: str, controller: str, args: argparse.Namespace, surface: Any) -> Any:
+def _run_one(
+    exp_name: str, controller: str, args: argparse.Namespace, surface: Any, required: bool = True
+) -> Any:
     from fuzzkit.experiments import experiment, run
 
     exp = experiment(exp_name)
-    gains = load_gains(args.gains, controller)
+    gains = load_gains(args.gains, controller, required)
     return run(exp, args.plant, controller, gains=gains, surface=surface, seed=args.seed)
 
 
@@ -107,9 +110,9 @@ def _simulate(args: argparse.Namespace) -> int:
     surface = _surface_for(args.controller, args.rulebase)
     result = _run_one(args.experiment, args.controller, args, surface)
     if args.rrd:
-        from fuzzkit.traces import write_rrd
+        from fuzzkit.traces import write_run_rrd
 
-        write_rrd(result, args.rrd)
+        write_run_rrd(result, args.rrd)
     data = summary(result)
     if args.json:
         print(json.dumps(data, indent=2))
@@ -165,14 +168,23 @@ def _compare(args: argparse.Namespace) -> int:
     if args.rrd_dir and not Path(args.rrd_dir).is_dir():
         raise ConfigError(f"{args.rrd_dir}: folder does not exist")
     surface = _surface_for("fuzzy-pi", args.rulebase)
+    if args.gains:
+        for controller in CONTROLLERS:
+            if not load_gains(args.gains, controller, required=False):
+                print(
+                    f"note: {args.gains} has no gains for {controller}: it runs on the defaults",
+                    file=sys.stderr,
+                )
     rows = []
     for name in args.experiments:
         for controller in CONTROLLERS:
-            result = _run_one(name, controller, args, surface if controller == "fuzzy-pi" else None)
+            result = _run_one(
+                name, controller, args, surface if controller == "fuzzy-pi" else None, False
+            )
             if args.rrd_dir:
-                from fuzzkit.traces import write_rrd
+                from fuzzkit.traces import write_run_rrd
 
-                write_rrd(result, Path(args.rrd_dir) / f"{name.upper()}_{controller}.rrd")
+                write_run_rrd(result, Path(args.rrd_dir) / f"{name.upper()}_{controller}.rrd")
             rows.append(summary(result))
     if args.json:
         print(json.dumps(rows, indent=2))
