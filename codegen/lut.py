@@ -1,0 +1,656 @@
+"""Lookup tables: sample the exact engine on a grid and certify the interpolation error.
+
+A :class:`LookupTable` holds, for a rule base with 1 to 3 inputs, the breakpoints of every input
+axis and the sampled value of every output at every grid node. Between nodes the table is read
+by multilinear interpolation, with each input first clamped to its range (the engine's default
+``clamp`` policy, so clamping is exact, not an approximation).
+
+Breakpoints are placed on the *knots* of the input terms (the vertices of piecewise-linear
+membership functions: where the surface has kinks) and spread evenly between them; on a
+MacVicar-Whelan base with labels at k/3 this gives a uniform grid whose nodes include every kink,
+which is both small and fast to index.
+
+Two-input tables are read linearly on the two triangles of each cell, cut along the diagonal
+that fits the surface better (chosen per cell): AND = min makes creases along exactly such
+diagonals, where a bilinear patch converges only like the cell width.
+
+The bound is *measured*, not derived: the error against the exact engine is evaluated on a check
+grid at least ``CHECK_FACTOR`` (4) times denser than the table along every axis (8 for two
+inputs, 16 for one; so it contains every cell centre, every edge midpoint and the quarter
+points), with the values as stored in the target number type and, for Q15, with a bit-exact
+model of the generated integer arithmetic. It is a measured maximum, not a proof: between check
+points the error can exceed it slightly, which the tests quantify on random points.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+import numpy.typing as npt
+
+from fuzzkit.errors import CodegenError
+from fuzzkit.model import RuleBase, Variable
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+NumberType = Literal["float", "double", "q15"]
+#: Evaluates a rule base on broadcastable arrays, ``{input: array} -> {output: array}``.
+Evaluator = Callable[[Mapping[str, FloatArray]], Mapping[str, FloatArray]]
+
+NUMBER_TYPES: tuple[NumberType, ...] = ("float", "double", "q15")
+#: Default tolerance, as a fraction of each output's range.
+DEFAULT_TOLERANCE = 1e-3
+#: The check grid has this many sub-intervals per table cell and axis (>= 4 by contract).
+CHECK_FACTOR = 4
+#: Largest table (grid nodes, all axes multiplied) the tolerance search may produce.
+DEFAULT_MAX_POINTS = 65536
+#: Fewest and most breakpoints per axis.
+MIN_BREAKPOINTS = 2
+MAX_BREAKPOINTS = 4096
+#: Q15: one unit of the last place is 1/32768 of a variable's full scale.
+Q15_ONE = 32768
+#: Q15 interpolation fraction: t in [0, 2**Q15_T_BITS] (Q14 keeps every product inside int32).
+Q15_T_BITS = 14
+#: Q15 reciprocal cell widths are scaled by 2**Q15_RECIP_BITS (t = (dq * recip) >> 16).
+Q15_RECIP_BITS = 30
+
+
+@dataclass(frozen=True, eq=False)
+class Q15Layout:
+    """How a Q15 table maps integers to values: ``value = q * full_scale / 32768``.
+
+    ``in_scale``/``out_scale`` are the full scales (the largest magnitude of each variable's
+    range, so 0 is exact and the whole range fits); ``q_breakpoints`` are the breakpoints in
+    Q15 units, ``q_low``/``q_high`` the clamping limits of each input, and ``recip`` the
+    reciprocal cell widths ``round(2**30 / width)`` the generated code multiplies by instead
+    of dividing.
+    """
+
+    in_scale: tuple[float, ...]
+    out_scale: tuple[float, ...]
+    q_low: tuple[int, ...]
+    q_high: tuple[int, ...]
+    q_breakpoints: tuple[IntArray, ...]
+    recip: tuple[IntArray, ...]
+
+
+@dataclass(frozen=True, eq=False)
+class LookupTable:
+    """A rule base sampled on a grid, with the verified error bound of its interpolation.
+
+    ``values[k]`` is the exact engine's output ``k`` at the grid nodes (float64, shape = number
+    of breakpoints per input, first input slowest); ``stored[k]`` the same values as the target
+    number type keeps them (float32, float64 or int16 Q15 codes). ``bound[k]`` is the largest
+    absolute error (output units) measured on the check grid for ``number_type``, and
+    ``tolerance[k]`` the absolute tolerance it was held to. For two inputs, ``splits[i, j]``
+    says along which diagonal cell ``(i, j)`` is cut into two linear triangles (see
+    :func:`_combine`); ``None`` otherwise.
+    """
+
+    rule_base_name: str
+    input_names: tuple[str, ...]
+    output_names: tuple[str, ...]
+    input_ranges: tuple[tuple[float, float], ...]
+    output_ranges: tuple[tuple[float, float], ...]
+    breakpoints: tuple[FloatArray, ...]
+    values: tuple[FloatArray, ...]
+    stored: tuple[npt.NDArray[np.generic], ...]
+    number_type: NumberType
+    q15: Q15Layout | None
+    bound: tuple[float, ...]
+    tolerance: tuple[float, ...]
+    check_points: int
+    splits: npt.NDArray[np.uint8] | None = None
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """Number of breakpoints per input."""
+        return tuple(len(b) for b in self.breakpoints)
+
+    @property
+    def n_points(self) -> int:
+        """Grid nodes per output."""
+        return math.prod(self.shape)
+
+    @property
+    def value_bytes(self) -> int:
+        """Bytes of one stored value."""
+        return {"float": 4, "double": 8, "q15": 2}[self.number_type]
+
+    @property
+    def memory_bytes(self) -> int:
+        """Bytes of constant data the generated C keeps (tables, breakpoints, reciprocals)."""
+        total = self.n_points * len(self.values) * self.value_bytes
+        for axis, bp in enumerate(self.breakpoints):
+            if self.q15 is not None:
+                total += 2 * len(bp) + 4 * (len(bp) - 1)
+            elif not self.is_uniform(axis):
+                total += self.value_bytes * len(bp)
+        if self.splits is not None:
+            total += (self.splits.size + 7) // 8
+        return total
+
+    def is_uniform(self, axis: int) -> bool:
+        """True when the breakpoints of ``axis`` are evenly spaced (indexed without a search)."""
+        return _is_uniform(self.breakpoints[axis])
+
+    def describe(self) -> str:
+        """One line for humans: grid, memory and the bound relative to each output range."""
+        grid = "x".join(str(n) for n in self.shape)
+        parts = []
+        ranges = self.output_ranges
+        for name, b, (lo, hi) in zip(self.output_names, self.bound, ranges, strict=True):
+            parts.append(f"{name}: {b:.3g} ({b / (hi - lo):.3g} of range)")
+        return (
+            f"table {grid} ({self.n_points} points, {self.memory_bytes} bytes, "
+            f"{self.number_type}), verified bound " + ", ".join(parts)
+        )
+
+    def interpolate(self, inputs: Sequence[npt.ArrayLike]) -> tuple[FloatArray, ...]:
+        """Reference evaluation in Python, as the generated code computes it.
+
+        Inputs are values in input units (broadcast together). For ``float``/``double`` the
+        interpolation runs in float64 over the stored values (the C float code differs only by
+        float32 rounding); for ``q15`` the inputs are first quantised to Q15 codes and the
+        integer arithmetic of the generated C is reproduced bit for bit. NaN inputs give NaN.
+        """
+        return self.interpolate_with(inputs, self.splits)
+
+    def interpolate_with(
+        self, inputs: Sequence[npt.ArrayLike], splits: npt.NDArray[np.uint8] | None
+    ) -> tuple[FloatArray, ...]:
+        """:meth:`interpolate` with another choice of 2-D cell diagonals (for the builder)."""
+        arrays = np.broadcast_arrays(*[np.asarray(x, dtype=np.float64) for x in inputs])
+        if len(arrays) != len(self.breakpoints):
+            raise CodegenError(f"expected {len(self.breakpoints)} inputs, got {len(arrays)}")
+        nan = np.zeros(arrays[0].shape, dtype=bool)
+        for x in arrays:
+            nan |= np.isnan(x)
+        if self.q15 is not None:
+            codes = [quantize_q15(x, s) for x, s in zip(arrays, self.q15.in_scale, strict=True)]
+            outs = self._q15(codes, splits)
+            result = tuple(
+                o.astype(np.float64) * (s / Q15_ONE)
+                for o, s in zip(outs, self.q15.out_scale, strict=True)
+            )
+        else:
+            idx, frac = _locate_float(self.breakpoints, arrays)
+            result = tuple(
+                _combine(np.asarray(tab, dtype=np.float64), idx, frac, splits, None)
+                for tab in self.stored
+            )
+        for r in result:
+            r[nan] = np.nan
+        return result
+
+    def interpolate_q15(self, codes: Sequence[npt.ArrayLike]) -> tuple[IntArray, ...]:
+        """Bit-exact model of the generated Q15 ``eval``: Q15 input codes in, codes out."""
+        return self._q15([np.asarray(c, dtype=np.int64) for c in codes], self.splits)
+
+    def _q15(
+        self, codes: Sequence[IntArray], splits: npt.NDArray[np.uint8] | None
+    ) -> tuple[IntArray, ...]:
+        layout = self.q15
+        if layout is None:
+            raise CodegenError("Q15 evaluation needs a q15 table")
+        idx: list[IntArray] = []
+        frac: list[IntArray] = []
+        for axis, q in enumerate(codes):
+            qb = layout.q_breakpoints[axis]
+            qc = np.clip(q, layout.q_low[axis], layout.q_high[axis])
+            i = np.clip(np.searchsorted(qb, qc, side="right") - 1, 0, len(qb) - 2)
+            t = ((qc - qb[i]) * layout.recip[axis][i]) >> (Q15_RECIP_BITS - Q15_T_BITS)
+            idx.append(i)
+            frac.append(np.minimum(t, 1 << Q15_T_BITS))
+        return tuple(
+            _combine(np.asarray(tab, dtype=np.int64), idx, frac, splits, Q15_T_BITS)
+            for tab in self.stored
+        )
+
+
+def quantize_q15(x: npt.ArrayLike, scale: float) -> IntArray:
+    """Q15 code of ``x`` for full scale ``scale``: round-to-nearest, saturated; NaN -> 0."""
+    arr = np.asarray(x, dtype=np.float64)
+    with np.errstate(invalid="ignore"):
+        scaled = np.clip(np.nan_to_num(arr, nan=0.0) * (Q15_ONE / scale), -32768.0, 32767.0)
+    return np.rint(scaled).astype(np.int64)
+
+
+def _is_uniform(bp: FloatArray) -> bool:
+    steps = np.diff(bp)
+    return bool(np.all(np.abs(steps - steps[0]) <= 1e-9 * (bp[-1] - bp[0])))
+
+
+def _locate_float(
+    breakpoints: Sequence[FloatArray], xs: Sequence[FloatArray]
+) -> tuple[list[IntArray], list[FloatArray]]:
+    """Cell index and fraction in [0, 1] of clamped inputs (NaN treated as the low end)."""
+    idx: list[IntArray] = []
+    frac: list[FloatArray] = []
+    for bp, x in zip(breakpoints, xs, strict=True):
+        xc = np.clip(np.nan_to_num(x, nan=bp[0]), bp[0], bp[-1])
+        i = np.clip(np.searchsorted(bp, xc, side="right") - 1, 0, len(bp) - 2)
+        idx.append(i)
+        frac.append((xc - bp[i]) / (bp[i + 1] - bp[i]))
+    return idx, frac
+
+
+def _lerp_term(t: Any, d: Any, shift: int | None) -> Any:
+    """``t * d`` in float, or ``round(t * d / 2**shift)`` with a floor shift in Q15."""
+    if shift is None:
+        return t * d
+    return (t * d + (1 << (shift - 1))) >> shift
+
+
+def _combine(
+    tab: Any,
+    idx: Sequence[IntArray],
+    frac: Sequence[Any],
+    splits: npt.NDArray[np.uint8] | None,
+    shift: int | None,
+) -> Any:
+    """Interpolate ``tab`` inside the located cells.
+
+    1 and 3 inputs: (multi)linear. 2 inputs: linear on the two triangles of each cell, split
+    along the diagonal ``splits`` names (0: (0,0)-(1,1), 1: (1,0)-(0,1)). A min-AND rule base
+    has creases exactly on such diagonals, where a bilinear patch would only converge like h.
+    In Q15 (``shift`` set) every product is rounded on its own, as the C does, and the
+    result saturated to int16.
+    """
+    one: Any = 1.0 if shift is None else (1 << shift)
+    d = len(idx)
+    if d == 1:
+        v0, v1 = tab[idx[0]], tab[idx[0] + 1]
+        out = v0 + _lerp_term(frac[0], v1 - v0, shift)
+    elif d == 2:
+        i, j = idx
+        t0, t1 = frac
+        v00, v10 = tab[i, j], tab[i + 1, j]
+        v01, v11 = tab[i, j + 1], tab[i + 1, j + 1]
+        anti = np.zeros(i.shape, dtype=bool) if splits is None else splits[i, j].astype(bool)
+        main_lo = v00 + _lerp_term(t0, v10 - v00, shift) + _lerp_term(t1, v11 - v10, shift)
+        main_hi = v00 + _lerp_term(t1, v01 - v00, shift) + _lerp_term(t0, v11 - v01, shift)
+        anti_lo = v00 + _lerp_term(t0, v10 - v00, shift) + _lerp_term(t1, v01 - v00, shift)
+        anti_hi = (
+            v11 + _lerp_term(one - t0, v01 - v11, shift) + _lerp_term(one - t1, v10 - v11, shift)
+        )
+        out = np.where(
+            anti,
+            np.where(t0 + t1 <= one, anti_lo, anti_hi),
+            np.where(t0 >= t1, main_lo, main_hi),
+        )
+    else:
+        # Trilinear, reduced axis by axis from the last, as the C does.
+        corners: dict[tuple[int, ...], Any] = {}
+        for bits in np.ndindex(*(2,) * d):
+            corners[bits] = tab[tuple(idx[a] + bits[a] for a in range(d))]
+        for axis in reversed(range(d)):
+            reduced: dict[tuple[int, ...], Any] = {}
+            for bits in np.ndindex(*(2,) * axis):
+                a0 = corners[(*bits, 0)]
+                a1 = corners[(*bits, 1)]
+                reduced[bits] = a0 + _lerp_term(frac[axis], a1 - a0, shift)
+            corners = reduced
+        out = corners[()]
+    if shift is not None:
+        out = np.clip(out, -32768, 32767)
+    return np.array(out)
+
+
+def knots(var: Variable) -> FloatArray:
+    """Where ``var``'s membership functions have kinks inside its range, plus the range ends."""
+    pts = {float(var.low), float(var.high)}
+    for term in var.terms:
+        if term.is_piecewise_linear:
+            pts.update(float(p) for p in term.params if var.low < p < var.high)
+    ordered = np.array(sorted(pts), dtype=np.float64)
+    # Knots closer than a millionth of the range would make needlessly tiny cells.
+    keep = np.concatenate(([True], np.diff(ordered) > 1e-6 * (var.high - var.low)))
+    keep[-1] = True
+    merged = ordered[keep]
+    if len(merged) >= 2 and merged[-2] >= merged[-1]:
+        merged = np.delete(merged, -2)
+    return merged
+
+
+def _allocate(lengths: FloatArray, pieces: int) -> IntArray:
+    """Split ``pieces`` sub-intervals over intervals of ``lengths`` (each >= 1), evenly."""
+    n = len(lengths)
+    alloc: IntArray = np.maximum(1, np.floor(lengths / lengths.sum() * pieces)).astype(np.int64)
+    while alloc.sum() < pieces:
+        alloc[int(np.argmax(lengths / alloc))] += 1
+    while alloc.sum() > pieces:
+        spacing = np.where(alloc > 1, lengths / np.maximum(alloc - 1, 1), np.inf)
+        alloc[int(np.argmin(spacing))] -= 1
+    if n and alloc.min() < 1:  # pragma: no cover - guarded by the caller
+        raise CodegenError("internal: breakpoint allocation failed")
+    return alloc
+
+
+def axis_breakpoints(var: Variable, count: int) -> FloatArray:
+    """``count`` breakpoints over ``var``'s range, on its knots when ``count`` allows it."""
+    if count < MIN_BREAKPOINTS:
+        raise CodegenError(
+            f"input {var.name}: a table needs at least {MIN_BREAKPOINTS} breakpoints, got {count}"
+        )
+    ks = knots(var)
+    if count - 1 < len(ks) - 1:
+        return np.linspace(var.low, var.high, count)
+    alloc = _allocate(np.diff(ks), count - 1)
+    parts = [np.linspace(ks[i], ks[i + 1], int(alloc[i]) + 1)[:-1] for i in range(len(ks) - 1)]
+    return np.concatenate([*parts, [ks[-1]]])
+
+
+def _axis_count_for_spacing(var: Variable, cells_per_range: int) -> int:
+    """Breakpoints for cells no wider than range/``cells_per_range``, on and between knots."""
+    ks = knots(var)
+    h = (var.high - var.low) / cells_per_range
+    pieces = np.ceil(np.diff(ks) / h - 1e-9).astype(np.int64)
+    # An even number of pieces puts a node midway between knots, where adjacent labels cross
+    # at 0.5 and the aggregated output changes shape (a crease of the surface).
+    pieces = np.maximum(2, pieces + pieces % 2)
+    return int(pieces.sum()) + 1
+
+
+def _check_grid_axis(bp: FloatArray, factor: int) -> FloatArray:
+    steps = np.linspace(0.0, 1.0, factor + 1)[:-1]
+    inner = (bp[:-1, None] + (bp[1:] - bp[:-1])[:, None] * steps[None, :]).ravel()
+    return np.concatenate([inner, bp[-1:]])
+
+
+def _default_evaluator(rb: RuleBase) -> Evaluator:
+    from fuzzkit.inference import Engine
+
+    engine = Engine(rb)
+
+    def evaluate(inputs: Mapping[str, FloatArray]) -> Mapping[str, FloatArray]:
+        return engine.evaluate(inputs)
+
+    return evaluate
+
+
+def _sample(
+    rb: RuleBase, evaluate: Evaluator, axes: Sequence[FloatArray]
+) -> tuple[FloatArray, ...]:
+    grids = np.meshgrid(*axes, indexing="ij")
+    result = evaluate({v.name: g for v, g in zip(rb.inputs, grids, strict=True)})
+    outs = []
+    for var in rb.outputs:
+        arr = np.broadcast_to(np.asarray(result[var.name], dtype=np.float64), grids[0].shape)
+        outs.append(np.array(arr))
+    return tuple(outs)
+
+
+def _q15_layout(
+    rb: RuleBase, breakpoints: Sequence[FloatArray]
+) -> tuple[Q15Layout, tuple[FloatArray, ...]]:
+    """Snap breakpoints to Q15 codes; returns the layout and the snapped real breakpoints."""
+    in_scale = tuple(max(abs(v.low), abs(v.high)) for v in rb.inputs)
+    out_scale = tuple(max(abs(v.low), abs(v.high)) for v in rb.outputs)
+    q_low, q_high, q_bps, recips, real_bps = [], [], [], [], []
+    for var, bp, scale in zip(rb.inputs, breakpoints, in_scale, strict=True):
+        lo = int(np.clip(math.ceil(var.low / scale * Q15_ONE - 1e-9), -32768, 32767))
+        hi = int(np.clip(math.floor(var.high / scale * Q15_ONE + 1e-9), -32768, 32767))
+        qb = np.clip(np.rint(bp / scale * Q15_ONE), lo, hi).astype(np.int64)
+        if np.any(np.diff(qb) <= 0):
+            raise CodegenError(
+                f"input {var.name}: {len(bp)} breakpoints are too close for Q15 "
+                "(two round to the same code); use fewer breakpoints or a float type"
+            )
+        widths = np.diff(qb)
+        q_low.append(lo)
+        q_high.append(hi)
+        q_bps.append(qb)
+        recips.append(np.rint((1 << Q15_RECIP_BITS) / widths).astype(np.int64))
+        real_bps.append(qb.astype(np.float64) * (scale / Q15_ONE))
+    layout = Q15Layout(
+        in_scale, out_scale, tuple(q_low), tuple(q_high), tuple(q_bps), tuple(recips)
+    )
+    return layout, tuple(real_bps)
+
+
+def _store(
+    values: Sequence[FloatArray], number_type: NumberType, layout: Q15Layout | None
+) -> tuple[npt.NDArray[np.generic], ...]:
+    if number_type == "float":
+        return tuple(v.astype(np.float32) for v in values)
+    if number_type == "double":
+        return tuple(v.astype(np.float64) for v in values)
+    if layout is None:  # pragma: no cover - built together by the caller
+        raise CodegenError("internal: q15 table without layout")
+    return tuple(
+        quantize_q15(v, s).astype(np.int16) for v, s in zip(values, layout.out_scale, strict=True)
+    )
+
+
+def build_table(
+    rb: RuleBase,
+    counts: Sequence[int],
+    *,
+    number_type: NumberType = "float",
+    tolerance: float | None = None,
+    evaluate: Evaluator | None = None,
+    check_factor: int = CHECK_FACTOR,
+) -> LookupTable:
+    """Sample ``rb`` with ``counts[i]`` breakpoints on input ``i`` and measure the bound.
+
+    ``tolerance`` (fraction of each output range) is only recorded here; :func:`make_table`
+    enforces it. ``evaluate`` defaults to the exact engine.
+    """
+    _check_rule_base(rb, number_type)
+    if check_factor < 4:
+        raise CodegenError(f"check_factor must be at least 4, got {check_factor}")
+    if len(counts) != len(rb.inputs):
+        raise CodegenError(f"expected {len(rb.inputs)} breakpoint counts, got {len(counts)}")
+    evaluator = evaluate if evaluate is not None else _default_evaluator(rb)
+    bps = tuple(axis_breakpoints(v, int(n)) for v, n in zip(rb.inputs, counts, strict=True))
+    layout: Q15Layout | None = None
+    if number_type == "q15":
+        layout, bps = _q15_layout(rb, bps)
+    values = _sample(rb, evaluator, bps)
+    for var, vals in zip(rb.outputs, values, strict=True):
+        if not np.all(np.isfinite(vals)):
+            bad = np.argwhere(~np.isfinite(vals))[0]
+            where = ", ".join(
+                f"{v.name}={bps[a][bad[a]]:.6g}" for a, v in enumerate(rb.inputs)
+            )
+            raise CodegenError(
+                f"output {var.name} is undefined at {where} (no rule fires there); "
+                "add rules covering it or give the output a default"
+            )
+    stored = _store(values, number_type, layout)
+    tol_frac = DEFAULT_TOLERANCE if tolerance is None else tolerance
+    table = LookupTable(
+        rule_base_name=rb.name,
+        input_names=rb.input_names,
+        output_names=rb.output_names,
+        input_ranges=tuple((float(v.low), float(v.high)) for v in rb.inputs),
+        output_ranges=tuple((float(v.low), float(v.high)) for v in rb.outputs),
+        breakpoints=bps,
+        values=values,
+        stored=stored,
+        number_type=number_type,
+        q15=layout,
+        bound=(),
+        tolerance=tuple(tol_frac * (v.high - v.low) for v in rb.outputs),
+        check_points=0,
+    )
+    # A multiple of 4, so the 4x sub-grid the 2-D diagonals are chosen on is part of it.
+    factor = 4 * math.ceil(max(check_factor, {1: 16, 2: 8, 3: 4}[len(bps)]) / 4)
+    check_axes = [_check_grid_axis(bp, factor) for bp in bps]
+    exact = _sample(rb, evaluator, check_axes)
+    grids = np.meshgrid(*check_axes, indexing="ij")
+    splits = _choose_splits(table, grids, exact, factor) if len(bps) == 2 else None
+    approx = table.interpolate_with(grids, splits)
+    bound = tuple(float(np.max(np.abs(a - e))) for a, e in zip(approx, exact, strict=True))
+    return dataclasses.replace(
+        table, bound=bound, check_points=int(grids[0].size), splits=splits
+    )
+
+
+def _choose_splits(
+    table: LookupTable,
+    grids: Sequence[FloatArray],
+    exact: Sequence[FloatArray],
+    factor: int,
+) -> npt.NDArray[np.uint8]:
+    """Per 2-D cell, the diagonal whose two triangles fit the exact surface better.
+
+    Chosen on the 4x sub-grid of the check grid only, so three quarters of the points that
+    certify the bound played no part in the choice.
+    """
+    k = 4
+    step = factor // k
+    sub = [g[::step, ::step] for g in grids]
+    n0, n1 = (len(bp) - 1 for bp in table.breakpoints)
+    worst = []
+    for choice in (0, 1):
+        trial = np.full((n0, n1), choice, dtype=np.uint8)
+        approx = table.interpolate_with(sub, trial)
+        err = np.zeros((n0, n1))
+        for a, e, tol in zip(approx, exact, table.tolerance, strict=True):
+            diff = np.abs(a - e[::step, ::step])
+            cell = diff[:-1, :-1].reshape(n0, k, n1, k)[:, 1:, :, 1:]
+            err = np.maximum(err, cell.max(axis=(1, 3)) / tol)
+        worst.append(err)
+    return (worst[1] < worst[0]).astype(np.uint8)
+
+
+def _check_rule_base(rb: RuleBase, number_type: str) -> None:
+    if number_type not in NUMBER_TYPES:
+        raise CodegenError(
+            f"unknown number type {number_type!r} (expected one of {', '.join(NUMBER_TYPES)})"
+        )
+    if not 1 <= len(rb.inputs) <= 3:
+        raise CodegenError(
+            f"rule base {rb.name}: lookup tables support 1 to 3 inputs, got {len(rb.inputs)}"
+        )
+    if not rb.outputs:
+        raise CodegenError(f"rule base {rb.name}: has no outputs")
+    if rb.out_of_range != "clamp":
+        raise CodegenError(
+            f"rule base {rb.name}: out_of_range is {rb.out_of_range!r}; a lookup table "
+            "clamps its inputs, so only 'clamp' can be compiled exactly"
+        )
+    for var in rb.inputs + rb.outputs:
+        if not (math.isfinite(var.low) and math.isfinite(var.high) and var.low < var.high):
+            raise CodegenError(f"variable {var.name}: range [{var.low}, {var.high}] is not usable")
+
+
+def make_table(
+    rb: RuleBase,
+    *,
+    number_type: NumberType = "float",
+    tolerance: float | None = None,
+    resolution: int | Sequence[int] | None = None,
+    max_points: int = DEFAULT_MAX_POINTS,
+    evaluate: Evaluator | None = None,
+) -> LookupTable:
+    """The smallest table found whose verified bound meets ``tolerance``, or one of ``resolution``.
+
+    Parameters
+    ----------
+    rb
+        A validated rule base with 1 to 3 inputs and the ``clamp`` out-of-range policy.
+    number_type
+        ``float``, ``double`` or ``q15``; the bound is measured for that type.
+    tolerance
+        Allowed error as a fraction of each output's range (default 1e-3). With
+        ``resolution`` it is still checked.
+    resolution
+        Breakpoints per input (one number for all inputs, or one per input); when given, no
+        search is made.
+    max_points
+        Cap on grid nodes for the search.
+    evaluate
+        The reference evaluator (default: the exact engine); for tests.
+
+    Raises
+    ------
+    CodegenError
+        If the rule base cannot be tabulated, or the bound exceeds the tolerance (with
+        ``resolution``) or cannot be brought under it within ``max_points``.
+    """
+    _check_rule_base(rb, number_type)
+    tol = DEFAULT_TOLERANCE if tolerance is None else float(tolerance)
+    if not (math.isfinite(tol) and tol > 0):
+        raise CodegenError(f"tolerance must be a positive number, got {tolerance}")
+    evaluator = evaluate if evaluate is not None else _default_evaluator(rb)
+    if resolution is not None:
+        counts = [resolution] * len(rb.inputs) if isinstance(resolution, int) else list(resolution)
+        if len(counts) != len(rb.inputs) or any(
+            not MIN_BREAKPOINTS <= int(c) <= MAX_BREAKPOINTS for c in counts
+        ):
+            raise CodegenError(
+                f"resolution must give {len(rb.inputs)} count(s) between {MIN_BREAKPOINTS} "
+                f"and {MAX_BREAKPOINTS}, got {resolution}"
+            )
+        table = build_table(
+            rb, counts, number_type=number_type, tolerance=tol, evaluate=evaluator
+        )
+        _enforce(table, f"resolution {resolution}")
+        return table
+    return _search(rb, number_type, tol, max_points, evaluator)
+
+
+def _enforce(table: LookupTable, what: str) -> None:
+    bad = [
+        f"{name}: bound {b:.3g} > tolerance {t:.3g}"
+        for name, b, t in zip(table.output_names, table.bound, table.tolerance, strict=True)
+        if b > t
+    ]
+    if bad:
+        raise CodegenError(
+            f"{what} ({'x'.join(map(str, table.shape))} table) does not meet the tolerance: "
+            + "; ".join(bad)
+            + " (use more breakpoints or a larger --tolerance)"
+        )
+
+
+def _search(
+    rb: RuleBase, number_type: NumberType, tol: float, max_points: int, evaluator: Evaluator
+) -> LookupTable:
+    # Interpolation error falls like h**2, so each miss predicts the spacing needed; nodes on
+    # the knots make the error non-monotonic in h, hence the small downward sweep at the end.
+    def counts_for(cells: int) -> list[int]:
+        return [_axis_count_for_spacing(v, cells) for v in rb.inputs]
+
+    def ratio(table: LookupTable) -> float:
+        return max(b / t for b, t in zip(table.bound, table.tolerance, strict=True))
+
+    cells = 4
+    best: LookupTable | None = None
+    last: LookupTable | None = None
+    for _ in range(12):
+        counts = counts_for(cells)
+        if math.prod(counts) > max_points:
+            break
+        last = build_table(rb, counts, number_type=number_type, tolerance=tol, evaluate=evaluator)
+        r = ratio(last)
+        if r <= 1.0:
+            best = last
+            break
+        grow = math.sqrt(r) * 1.05 if math.isfinite(r) else 2.0
+        cells = max(cells + 1, math.ceil(cells * min(grow, 4.0)))
+    if best is None:
+        detail = (
+            f"best tried: {last.describe()}" if last is not None else "even the coarsest grid"
+        )
+        raise CodegenError(
+            f"tolerance {tol:g} of the output range cannot be met within {max_points} table "
+            f"points ({detail}); raise --tolerance or give --resolution"
+        )
+    # Try a few smaller spacings below the first success.
+    for smaller in range(cells - 1, max(cells - 4, 1), -1):
+        counts = counts_for(smaller)
+        if counts == list(best.shape):
+            continue
+        trial = build_table(rb, counts, number_type=number_type, tolerance=tol, evaluate=evaluator)
+        if ratio(trial) <= 1.0 and trial.n_points < best.n_points:
+            best = trial
+    return best
