@@ -322,7 +322,10 @@ class RunResult:
     tool_position: Vec  # base frame (n, 3)
     nominal_position: Vec
     joint_angles: Vec
-    in_contact: npt.NDArray[np.bool_]
+    in_contact: npt.NDArray[np.bool_]  # any object touches the tool
+    # normal contact force per task axis (n, 3), friction excluded (PlantSample.force_normal);
+    # NaN rows when the plant does not report it
+    force_normal: Vec
     moving: npt.NDArray[np.bool_]  # the nominal path was moving during that period
     arm_points: list[Vec]
     contact_points: list[Vec]
@@ -431,6 +434,7 @@ def run(
             ("nominal_position", sample.nominal_position),
             ("joint_angles", sample.joint_angles),
             ("in_contact", sample.in_contact),
+            ("force_normal", _NO_NORMAL if sample.force_normal is None else sample.force_normal),
             ("moving", moving),
         ):
             rows[key].append(val)
@@ -454,6 +458,7 @@ def run(
         nominal_position=arr["nominal_position"].astype(np.float64),
         joint_angles=arr["joint_angles"].astype(np.float64),
         in_contact=arr["in_contact"].astype(bool),
+        force_normal=arr["force_normal"].astype(np.float64).reshape(-1, 3),
         moving=arr["moving"].astype(bool),
         arm_points=arm_points,
         contact_points=contact_points,
@@ -479,8 +484,11 @@ _SERIES = (
     "nominal_position",
     "joint_angles",
     "in_contact",
+    "force_normal",
     "moving",
 )
+
+_NO_NORMAL = np.full(3, np.nan)
 
 
 def _path_moving(scn: Scenario, t0: float, t1: float) -> bool:
@@ -544,12 +552,79 @@ def rms(x: Vec) -> float | None:
     return float(np.sqrt(np.mean(np.square(x)))) if len(x) else None
 
 
+#: Normal force (N) that marks an axis's first contact when the experiment has no engage
+#: threshold (the force loop active from the start, as in ``press_experiment``).
+CONTACT_THRESHOLD_N = 1.0
+
+
+def axis_contact(result: RunResult, axis: int) -> npt.NDArray[np.bool_] | None:
+    """Per sample: does the tool touch a surface that faces task ``axis``?
+
+    True where the normal contact force credited to that axis (``RunResult.force_normal``,
+    friction excluded) is positive in the direction of the axis's set point (either direction
+    for a 0 N set point). None when the plant does not report normal forces.
+    """
+    normal = result.force_normal[:, axis]
+    if len(normal) == 0 or not np.all(np.isfinite(normal)):
+        return None
+    sp = float(result.experiment.setpoints[axis])
+    pressing = normal * math.copysign(1.0, sp) if sp != 0.0 else np.abs(normal)
+    touching: npt.NDArray[np.bool_] = pressing > 0.0
+    return touching
+
+
+def axis_first_contact(result: RunResult, axis: int) -> int | None:
+    """Index of task ``axis``'s first contact: its normal force first reaches the threshold.
+
+    The threshold is the experiment's engage threshold (``CONTACT_THRESHOLD_N`` without one),
+    applied to the normal contact force credited to the axis in the direction of its set point,
+    so friction from sliding on a floor (``mu * f_z`` along x) never counts as an x contact.
+    Falls back to the run's first contact with any object when the plant does not report
+    normal forces. None when the axis never touches a surface facing it.
+    """
+    normal = result.force_normal[:, axis]
+    if len(normal) == 0 or not np.all(np.isfinite(normal)):
+        idx = np.nonzero(result.in_contact)[0]
+        return int(idx[0]) if len(idx) else None
+    exp = result.experiment
+    thr = exp.engage_threshold_n if exp.engage_threshold_n is not None else CONTACT_THRESHOLD_N
+    sp = float(exp.setpoints[axis])
+    pressing = normal * math.copysign(1.0, sp) if sp != 0.0 else np.abs(normal)
+    idx = np.nonzero(pressing >= thr)[0]
+    return int(idx[0]) if len(idx) else None
+
+
+def path_driving(result: RunResult, axis: int) -> npt.NDArray[np.bool_]:
+    """Per sample: the nominal path moved along task ``axis`` during that period."""
+    nominal_task = result.nominal_position @ result.experiment.scenario.rotation
+    driving = np.zeros(len(result.t), dtype=bool)
+    if len(driving) > 1:
+        driving[1:] = np.abs(np.diff(nominal_task[:, axis])) > 1e-9
+    return driving
+
+
 def axis_metrics(result: RunResult, axis: int) -> dict[str, float | None]:
-    """The per-axis figures of a run (keys as in ``fuzzkit simulate --json``)."""
+    """The per-axis figures of a run (keys as in ``fuzzkit simulate --json``).
+
+    Each axis is measured from *its own* first contact (:func:`axis_first_contact`): in E3 the
+    tool slides on the floor for seconds before x meets the wall. An axis that never touches a
+    surface facing it (E1's x, held at 0 N while the cup rests on the hammer) has
+    ``first_contact_s`` None and is measured from the run's first contact with anything, when
+    its loop starts holding it.
+
+    * ``overshoot_pct``: peak beyond the set point from the axis's first contact on. Where the
+      nominal path keeps driving into the surface after contact, the force follows a ramp
+      disturbance and this peak is the loop's ramp-following error (for an incremental PI,
+      ``k * v * T / (ki * k)`` newtons: E3's x, 25 mm/s into a 10 N/mm wall, about 10 N).
+    * ``settling_time_s``: into the 5 % band (0.5 N for 0 N) and staying there, counted from
+      the end of the approach: the axis's first contact or, while the nominal path still moves
+      along that axis, the period it stops (a force cannot settle while the path pushes it).
+    * ``contact_lost_s``: time after the first contact without touching a surface facing the
+      axis.
+    """
     exp = result.experiment
     t, f = result.t, result.force_true[:, axis]
     sp = float(exp.setpoints[axis])
-    contact_idx = np.nonzero(result.in_contact)[0]
     out: dict[str, float | None] = {
         "setpoint": sp,
         "first_contact_s": None,
@@ -561,13 +636,27 @@ def axis_metrics(result: RunResult, axis: int) -> dict[str, float | None]:
         "peak_force": float(np.max(np.abs(f))) if len(f) else None,
         "contact_lost_s": None,
     }
-    if len(contact_idx) == 0:
-        return out
-    i0 = int(contact_idx[0])
+    own = axis_first_contact(result, axis)
+    touching = axis_contact(result, axis)
+    if own is not None:
+        i0 = own
+        out["first_contact_s"] = float(t[i0])
+    else:
+        any_contact = np.nonzero(result.in_contact)[0]
+        if len(any_contact) == 0:
+            return out
+        i0 = int(any_contact[0])
+        touching = None  # no surface faces this axis: count contact with anything
+    if touching is None:
+        touching = result.in_contact
     t0 = float(t[i0])
-    out["first_contact_s"] = t0
     out["overshoot_pct"] = overshoot_pct(f[i0:], sp)
-    out["settling_time_s"] = settling_time(t, f, sp, t0)
+    driving = path_driving(result, axis)
+    i_settle = i0
+    while i_settle < len(t) and driving[i_settle]:
+        i_settle += 1
+    if i_settle < len(t):
+        out["settling_time_s"] = settling_time(t, f, sp, float(t[i_settle]))
     steady = t >= t[-1] - exp.steady_window_s
     mean, std = steady_state_error(f[steady], sp)
     out["steady_state_error_mean"] = mean
@@ -576,13 +665,14 @@ def axis_metrics(result: RunResult, axis: int) -> dict[str, float | None]:
     moving = result.moving & (t >= t0 + 0.5)
     out["rms_error"] = rms(sp - f[moving])
     period = float(exp.scenario.period_s)
-    out["contact_lost_s"] = float(np.count_nonzero(~result.in_contact[i0:]) * period)
+    out["contact_lost_s"] = float(np.count_nonzero(~touching[i0:]) * period)
     return out
 
 
 #: The per-axis keys of the JSON summary (``fuzzkit simulate --json``), in order.
 SUMMARY_AXIS_KEYS = (
     "setpoint",
+    "first_contact_s",
     "overshoot_pct",
     "settling_time_s",
     "steady_state_error_mean",

@@ -57,6 +57,7 @@ from fuzzkit.plant import (
     Scenario,
     Table,
     Waypoint,
+    normal_force_by_axis,
 )
 from fuzzkit.rotations import (
     Quat,
@@ -444,6 +445,9 @@ class ContactState:
     moment: Vec3
     points: tuple[Vec3, ...]
     names: tuple[str, ...]
+    #: per contact, the normal part (friction excluded) of the force the tool exerts on the
+    #: object, base frame (N): tells a wall from the floor the tool slides on
+    normal_forces: tuple[Vec3, ...] = ()
 
 
 class Contact3Solver:
@@ -472,6 +476,7 @@ class Contact3Solver:
         mx = my = mz = 0.0
         points: list[Vec3] = []
         names: list[str] = []
+        normals: list[Vec3] = []
         for i, obj in enumerate(self.objects):
             hit = obj.contact(c, self.radius)
             if hit is None:
@@ -514,12 +519,14 @@ class Contact3Solver:
             mz += rx * ty - ry * tx
             points.append(pt)
             names.append(obj.name)
+            normals.append((-fn * nx, -fn * ny, -fn * nz))
         # Report what the tool does to the environment (the paper's f): minus the reaction.
         return ContactState(
             force=(-fx, -fy, -fz),
             moment=(-mx, -my, -mz),
             points=tuple(points),
             names=tuple(names),
+            normal_forces=tuple(normals),
         )
 
 
@@ -944,6 +951,7 @@ class Arm6Plant:
             contact_points=pts,
             arm_points=arm,
             messages=messages,
+            force_normal=normal_force_by_axis(state.normal_forces, self._rot_task),
             detail=Arm6Detail(
                 ev,
                 state,

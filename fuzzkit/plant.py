@@ -25,7 +25,7 @@ from __future__ import annotations
 import importlib
 import itertools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Protocol, runtime_checkable
@@ -254,11 +254,16 @@ class ToolModel:
 
 @dataclass(frozen=True, slots=True)
 class ContactResult:
-    """Contact force on the tool (base x, z; newtons) and where the contacts are."""
+    """Contact force on the tool (base x, z; newtons) and where the contacts are.
+
+    ``normals`` holds, per contact (in the order of ``points``), the normal part of the force on
+    the tool (friction excluded), base ``(x, z)``: what tells a wall from a floor one slides on.
+    """
 
     force_x: float
     force_z: float
     points: tuple[tuple[float, float], ...]
+    normals: tuple[tuple[float, float], ...] = ()
 
 
 class ContactSolver:
@@ -283,6 +288,7 @@ class ContactSolver:
         m = self.model
         fx = fz = 0.0
         points: list[tuple[float, float]] = []
+        normals: list[tuple[float, float]] = []
         for i, obj in enumerate(self.objects):
             pen = obj.penetration(x, z, self.radius)
             if pen is None:
@@ -305,7 +311,8 @@ class ContactSolver:
             fx += fn * nx + ft * tx
             fz += fn * nz + ft * tz
             points.append((px, pz))
-        return ContactResult(fx, fz, tuple(points))
+            normals.append((fn * nx, fn * nz))
+        return ContactResult(fx, fz, tuple(points), tuple(normals))
 
 
 class ForceSensor:
@@ -405,6 +412,34 @@ def base_to_task(scenario: Scenario, vec_base: Vec) -> Vec:
     return scenario.rotation.T @ vec_base
 
 
+def normal_force_by_axis(normal_forces_base: Iterable[Sequence[float]], rotation: Vec) -> Vec:
+    """The normal contact force per task axis: what tells which task axis touches a surface.
+
+    ``normal_forces_base``: per contact, the normal part (friction excluded) of the force the
+    tool exerts on the object, base frame ``(x, y, z)``; ``rotation``: base-from-task.
+
+    Each contact's normal force, in the task frame, is credited to the task axis its surface
+    normal lies closest to (the largest component; ties go to the lower axis index): pressing
+    down on a floor credits z, even where roughness tilts the floor's normal by 10 degrees,
+    and pushing into a wall ahead credits x. Friction never counts, so sliding on a floor
+    with a tangential force of ``mu * f_z`` along x gives 0 along x. Returns ``(3,)`` newtons,
+    task frame (positive: pushing into a surface that faces the negative task axis).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> tool_down = np.diag([1.0, -1.0, -1.0])
+    >>> normal_force_by_axis([(0.0, 0.0, -30.0), (6.0, 0.0, 0.0)], tool_down).tolist()
+    [6.0, 0.0, 30.0]
+    """
+    out = np.zeros(3)
+    for f in normal_forces_base:
+        task = rotation.T @ np.asarray(f, dtype=np.float64)
+        i = int(np.argmax(np.abs(task)))
+        out[i] += task[i]
+    return out
+
+
 @dataclass(frozen=True, slots=True)
 class PlantSample:
     """What a plant reports after one controller period.
@@ -418,6 +453,11 @@ class PlantSample:
     joint_angles : radians, plant-specific length.
     in_contact : True when any environment object touches the tool.
     contact_points : (k, 3) base-frame points of contact.
+    force_normal : the normal contact force per task axis (friction excluded, each contact
+        credited to the task axis closest to its surface normal; see
+        :func:`normal_force_by_axis`), task frame, N. It says *which axis* touches a surface,
+        so metrics can count each force axis from its own first contact. None: the plant does
+        not report it (metrics then take any contact as every axis's contact).
     arm_points : (m, 3) base-frame polyline from the base through the joints to the tool tip.
     messages : status and limit messages of this period (torque limit, unreachable target ...).
     """
@@ -433,6 +473,7 @@ class PlantSample:
     contact_points: Vec
     arm_points: Vec
     messages: tuple[str, ...] = ()
+    force_normal: Vec | None = None
 
 
 @runtime_checkable

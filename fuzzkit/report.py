@@ -290,15 +290,16 @@ def stiffness_figure(study: Mapping[tuple[str, str], list[tuple[float, Any]]]) -
 def comparison_markdown(summaries: Mapping[Key, Mapping[str, Any]]) -> str:
     """The comparison table (one row per run and axis) as Markdown."""
     head = (
-        "| plant | exp | axis | set N | controller | gains | overshoot % | settle s | "
-        "ss mean N | ss std N | rms moving N | peak N | lost s |"
+        "| plant | exp | axis | set N | controller | gains | contact s | overshoot % | "
+        "settle s | ss mean N | ss std N | rms moving N | peak N | lost s |"
     )
-    lines = [head, "|" + "---|" * 13]
+    lines = [head, "|" + "---|" * 14]
     for (plant, exp, ctrl, label), data in summaries.items():
         for axis, m in data["axes"].items():
             lines.append(
                 f"| {plant} | {exp} | {axis} | {m['setpoint']:g} | {ctrl} | {label} | "
-                f"{_fmt(m['overshoot_pct'], '', 1)} | {_fmt(m['settling_time_s'], ' s')} | "
+                f"{_fmt(m.get('first_contact_s'), ' s')} | {_fmt(m['overshoot_pct'], '', 1)} | "
+                f"{_fmt(m['settling_time_s'], ' s')} | "
                 f"{_fmt(m['steady_state_error_mean'])} | {_fmt(m['steady_state_error_std'])} | "
                 f"{_fmt(m['rms_error'])} | {_fmt(m['peak_force'], '', 1)} | "
                 f"{_fmt(m['contact_lost_s'])} |"
@@ -580,9 +581,15 @@ def _markdown(
         "",
         "## Comparison table",
         "",
-        "True contact force; overshoot past the set point in % of it; settling into the 5 % band "
-        "(0.5 N for 0 N) from first contact; steady state over the last second; RMS error while "
-        "the path moves; peak force; time without contact after first contact.",
+        "True contact force, each axis measured from its own first contact (`contact s`: the "
+        "normal force credited to that axis, friction excluded, reaches the engage threshold; "
+        "'-' when no surface faces the axis, which is then measured from the run's first "
+        "contact); overshoot past the set point in % of it (where the path keeps driving into "
+        "the surface, the ramp-following error); settling into the 5 % band (0.5 N for 0 N) "
+        "from the end of the approach (the first contact, or when the path stops moving along "
+        "the axis); steady state over the last second; RMS error while the path moves; peak "
+        "force; time without touching a surface facing the axis after its first contact. "
+        "Definitions: docs/simulation.md, section Results.",
         "",
         comparison_markdown(summaries),
         "",

@@ -35,6 +35,7 @@ from fuzzkit.plant import (
     PlantSample,
     Scenario,
     nominal_position,
+    normal_force_by_axis,
 )
 
 Vec = npt.NDArray[np.float64]
@@ -153,6 +154,7 @@ class PlanarArmPlant:
         self._q_target = (q1, q2)
         self._target = start
         self._last_points: tuple[tuple[float, float], ...] = ()
+        self._last_normals: tuple[tuple[float, float], ...] = ()
         self._true_task = np.zeros(3)
         return self._sample(start, start, ())
 
@@ -204,6 +206,7 @@ class PlanarArmPlant:
             self._sensor.update(self._t, dt, true_task)
             self._true_task = true_task
             self._last_points = res.points
+            self._last_normals = res.normals
             sat[0] = sat[0] or abs(self._motor1.impulse) >= 0.99 * p.torque_limit_nm[0] * dt
             sat[1] = sat[1] or abs(self._motor2.impulse) >= 0.99 * p.torque_limit_nm[1] * dt
         for j, s in enumerate(sat):
@@ -226,6 +229,10 @@ class PlanarArmPlant:
         tip = np.array([cx, 0.0, cz - 0.5 * self._tool_len])
         arm = np.array([[0.0, 0.0, 0.0], [ex, 0.0, ez], [wx, 0.0, wz], tip.tolist()])
         pts = np.array([[x, 0.0, z] for x, z in self._last_points]).reshape(-1, 3)
+        # What the tool exerts on each object: minus the normal reaction on the tool.
+        normal = normal_force_by_axis(
+            ((-nx, 0.0, -nz) for nx, nz in self._last_normals), self._rot_t.T
+        )
         return PlantSample(
             t_s=self._t,
             force=self._sensor.read(),
@@ -238,6 +245,7 @@ class PlanarArmPlant:
             contact_points=pts,
             arm_points=arm,
             messages=messages,
+            force_normal=normal,
         )
 
 

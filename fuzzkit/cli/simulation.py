@@ -102,7 +102,7 @@ def _fmt(v: Any, digits: int = 2) -> str:
 
 
 def _simulate(args: argparse.Namespace) -> int:
-    from fuzzkit.experiments import axis_metrics, experiment, summary
+    from fuzzkit.experiments import experiment, summary
 
     experiment(args.experiment)  # reject a bad name before loading anything
     if args.rrd:
@@ -123,10 +123,8 @@ def _simulate(args: argparse.Namespace) -> int:
     )
     print(f"  {result.experiment.title}")
     for name, m in data["axes"].items():
-        i = "xyz".index(name)
-        first = axis_metrics(result, i)["first_contact_s"]
         print(
-            f"  {name}: set {m['setpoint']:g} N, first contact {_fmt(first)} s, "
+            f"  {name}: set {m['setpoint']:g} N, first contact {_fmt(m['first_contact_s'])} s, "
             f"overshoot {_fmt(m['overshoot_pct'], 1)} %, settling {_fmt(m['settling_time_s'])} s, "
             f"steady error {_fmt(m['steady_state_error_mean'])} +- "
             f"{_fmt(m['steady_state_error_std'])} N, RMS moving {_fmt(m['rms_error'])} N, "
@@ -144,7 +142,8 @@ def _simulate(args: argparse.Namespace) -> int:
 def comparison_table(rows: list[dict[str, Any]]) -> str:
     """Format PI vs fuzzy-PI summaries (``fuzzkit.experiments.summary``) as a text table."""
     head = (
-        f"{'exp':<4}{'axis':<5}{'set N':>6}  {'controller':<9}{'overshoot %':>12}{'settle s':>10}"
+        f"{'exp':<4}{'axis':<5}{'set N':>6}  {'controller':<9}{'contact s':>10}{'overshoot %':>12}"
+        f"{'settle s':>10}"
         f"{'ss mean N':>11}{'ss std N':>10}{'rms move N':>12}{'peak N':>8}{'lost s':>8}"
     )
     lines = [head, "-" * len(head)]
@@ -152,7 +151,8 @@ def comparison_table(rows: list[dict[str, Any]]) -> str:
         for axis, m in data["axes"].items():
             lines.append(
                 f"{data['experiment']:<4}{axis:<5}{m['setpoint']:>6g}  {data['controller']:<9}"
-                f"{_fmt(m['overshoot_pct'], 1):>12}{_fmt(m['settling_time_s']):>10}"
+                f"{_fmt(m.get('first_contact_s')):>10}{_fmt(m['overshoot_pct'], 1):>12}"
+                f"{_fmt(m['settling_time_s']):>10}"
                 f"{_fmt(m['steady_state_error_mean']):>11}{_fmt(m['steady_state_error_std']):>10}"
                 f"{_fmt(m['rms_error']):>12}{_fmt(m['peak_force'], 1):>8}"
                 f"{_fmt(m['contact_lost_s']):>8}"
