@@ -1,0 +1,403 @@
+"""Render a lookup table into source files: ``{relative path: text}``, never written here.
+
+The one object a template sees is a :class:`Spec`, built here from the rule base and its
+:class:`~codegen.lut.LookupTable`: every number is already formatted as a literal of the target
+language and every name already checked, so templates only lay text out. Each target lives in
+``codegen/backends/<target>/`` with its templates and a small config (``config.py``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import keyword
+import math
+import re
+import textwrap
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import jinja2
+import numpy as np
+
+from codegen.lut import Q15_RECIP_BITS, Q15_T_BITS, LookupTable
+from fuzzkit.errors import CodegenError
+from fuzzkit.model import RuleBase
+
+TARGETS = ("c", "python")
+
+_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+#: C99 keywords plus names a prefix must not shadow (macros of the headers we include).
+C_RESERVED = frozenset(
+    [
+        "auto",
+        "break",
+        "case",
+        "char",
+        "const",
+        "continue",
+        "default",
+        "do",
+        "double",
+        "else",
+        "enum",
+        "extern",
+        "float",
+        "for",
+        "goto",
+        "if",
+        "inline",
+        "int",
+        "long",
+        "register",
+        "restrict",
+        "return",
+        "short",
+        "signed",
+        "sizeof",
+        "static",
+        "struct",
+        "switch",
+        "typedef",
+        "union",
+        "unsigned",
+        "void",
+        "volatile",
+        "while",
+        "_Bool",
+        "_Complex",
+        "_Imaginary",
+        "NAN",
+        "INFINITY",
+        "bool",
+        "true",
+        "false",
+        "int8_t",
+        "int16_t",
+        "int32_t",
+        "int64_t",
+        "uint8_t",
+        "uint16_t",
+        "uint32_t",
+        "uint64_t",
+        "",
+    ]
+)
+PYTHON_RESERVED = frozenset(keyword.kwlist) | frozenset(keyword.softkwlist)
+
+
+@dataclass(frozen=True)
+class FpiDefaults:
+    """Fuzzy-PI gains baked into the generated code as defaults (from a gains file)."""
+
+    kp: float
+    ki: float
+    kx: float
+    u_min: float
+    u_max: float
+
+
+@dataclass(frozen=True)
+class AxisSpec:
+    """One input axis as the templates need it (literals already formatted)."""
+
+    index: int
+    name: str
+    low: str
+    high: str
+    count: int
+    stride: int
+    uniform: bool
+    inv_step: str
+    breakpoints: tuple[str, ...]
+    search_steps: tuple[int, ...]
+    # Q15 only (empty strings / tuples otherwise)
+    scale: str
+    q_low: int
+    q_high: int
+    recip: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class OutputSpec:
+    """One output: its table rows as literal text and its verified bound."""
+
+    index: int
+    name: str
+    low: str
+    high: str
+    rows: tuple[str, ...]
+    bound: str
+    tolerance: str
+    scale: str
+
+
+@dataclass(frozen=True)
+class Spec:
+    """Everything a template may use; nothing else reaches the generated text."""
+
+    name: str
+    upper: str
+    target: str
+    number_type: str
+    ctype: str
+    version: str
+    source_file: str
+    source_sha256: str
+    description: tuple[str, ...]
+    n_inputs: int
+    n_outputs: int
+    inputs: tuple[AxisSpec, ...]
+    outputs: tuple[OutputSpec, ...]
+    shape: str
+    n_points: int
+    memory_bytes: int
+    check_points: int
+    bound_summary: str
+    split_bytes: tuple[str, ...]
+    has_fpi: bool
+    fpi_note: str
+    fpi_defaults: dict[str, str] | None
+    zero: str
+    one: str
+    t_bits: int
+    t_one: int
+    t_half: int
+    recip_shift: int
+
+
+def check_identifier(name: str, what: str) -> str:
+    """Return ``name`` if it may appear in generated C and Python, else raise CodegenError."""
+    if not isinstance(name, str) or not _IDENT.match(name):
+        raise CodegenError(
+            f"{what} {name!r} is not an identifier (expected [A-Za-z_][A-Za-z0-9_]*)"
+        )
+    if name in C_RESERVED or name in PYTHON_RESERVED:
+        raise CodegenError(f"{what} {name!r} is a keyword or reserved name of C or Python")
+    if name.startswith("__") or (name.startswith("_") and name[1:2].isupper()):
+        raise CodegenError(f"{what} {name!r} is reserved in C (leading __ or _ + capital)")
+    return name
+
+
+def _comment_safe(text: str) -> str:
+    """``text`` made harmless inside a C block comment and a Python docstring."""
+    clean = "".join(ch if 32 <= ord(ch) < 127 else "?" for ch in text)
+    return clean.replace("*/", "* /").replace('"""', "'''").replace("\\", "/")
+
+
+def _c_literal(value: float, number_type: str) -> str:
+    if not math.isfinite(value):
+        raise CodegenError(f"cannot emit the non-finite constant {value}")
+    if number_type == "float":
+        text = format(float(np.float32(value)), ".9g")
+        suffix = "f"
+    else:
+        text = format(float(value), ".17g")
+        suffix = ""
+    if not any(ch in text for ch in ".en"):
+        text += ".0"
+    return text + suffix
+
+
+def _py_literal(value: float) -> str:
+    if not math.isfinite(value):
+        raise CodegenError(f"cannot emit the non-finite constant {value}")
+    return repr(float(value))
+
+
+def _wrap(items: Sequence[str], per_line: int) -> tuple[str, ...]:
+    return tuple(", ".join(items[i : i + per_line]) for i in range(0, len(items), per_line))
+
+
+def _search_steps(count: int) -> tuple[int, ...]:
+    # Powers of two for a fixed-length binary search over count - 1 cells.
+    cells = count - 1
+    steps = []
+    s = 1
+    while s < cells:
+        steps.append(s)
+        s *= 2
+    return tuple(reversed(steps))
+
+
+def source_sha256(rb: RuleBase) -> tuple[str, str]:
+    """The rule base's file name and sha256 as the banner states them."""
+    if rb.source is not None:
+        return Path(rb.source.path).name, rb.source.sha256
+    # A model built in Python has no file: hash its canonical repr so the banner still
+    # identifies what the code came from.
+    return "<model>", hashlib.sha256(repr(rb).encode("utf-8")).hexdigest()
+
+
+def build_spec(
+    rb: RuleBase,
+    table: LookupTable,
+    target: str,
+    *,
+    fpi_defaults: FpiDefaults | None = None,
+) -> Spec:
+    """Collect, check and format everything the ``target`` templates need.
+
+    Raises
+    ------
+    CodegenError
+        Unknown target, a name that cannot be an identifier, or a table of another type
+        than the target computes in (the Python target needs ``double``).
+    """
+    from fuzzkit import __version__
+
+    if target not in TARGETS:
+        raise CodegenError(f"unknown target {target!r} (expected one of {', '.join(TARGETS)})")
+    if target == "python" and table.number_type != "double":
+        raise CodegenError(f"the python target computes in double; got a {table.number_type} table")
+    name = check_identifier(rb.name, "rule base name")
+    for var in rb.inputs + rb.outputs:
+        check_identifier(var.name, f"variable name ({rb.name})")
+    nt = table.number_type
+    py = target == "python"
+
+    def lit(v: float) -> str:
+        return _py_literal(v) if py else _c_literal(v, nt)
+
+    shape = table.shape
+    strides = [math.prod(shape[a + 1 :]) for a in range(len(shape))]
+    axes = []
+    for a, var in enumerate(rb.inputs):
+        bp = table.breakpoints[a]
+        q = table.q15
+        uniform = q is None and table.is_uniform(a)
+        axes.append(
+            AxisSpec(
+                index=a,
+                name=var.name,
+                low=lit(float(bp[0])),
+                high=lit(float(bp[-1])),
+                count=len(bp),
+                stride=strides[a],
+                uniform=uniform,
+                inv_step=lit((len(bp) - 1) / (float(bp[-1]) - float(bp[0]))),
+                breakpoints=_wrap(
+                    [str(int(v)) for v in q.q_breakpoints[a]]
+                    if q is not None
+                    else [lit(float(v)) for v in bp],
+                    8,
+                ),
+                search_steps=_search_steps(len(bp)),
+                scale=_c_literal(q.in_scale[a], "double") if q is not None else "",
+                q_low=q.q_low[a] if q is not None else 0,
+                q_high=q.q_high[a] if q is not None else 0,
+                recip=_wrap([str(int(v)) for v in q.recip[a]], 8) if q is not None else (),
+            )
+        )
+    outputs = []
+    for k, var in enumerate(rb.outputs):
+        flat = np.asarray(table.stored[k]).ravel()
+        items = [str(int(v)) for v in flat] if nt == "q15" else [lit(float(v)) for v in flat]
+        outputs.append(
+            OutputSpec(
+                index=k,
+                name=var.name,
+                low=format(var.low, ".6g"),
+                high=format(var.high, ".6g"),
+                rows=_wrap(items, 8),
+                bound=format(table.bound[k], ".3g"),
+                tolerance=format(table.tolerance[k], ".3g"),
+                scale=_c_literal(table.q15.out_scale[k], "double") if table.q15 else "",
+            )
+        )
+    split_bytes: tuple[str, ...] = ()
+    if table.splits is not None:
+        bits = np.packbits(table.splits.ravel(), bitorder="little")
+        split_bytes = _wrap([f"0x{int(b):02x}" for b in bits], 12)
+    has_fpi = len(rb.inputs) == 2 and nt != "q15"
+    if len(rb.inputs) != 2:
+        note = (
+            "no fuzzy-PI API: it needs exactly 2 inputs (e, de), this rule base has "
+            f"{len(rb.inputs)}"
+        )
+    elif nt == "q15":
+        note = "no fuzzy-PI API in Q15: use NAME_eval from a fixed-point loop (see header)"
+    else:
+        note = ""
+    defaults = None
+    if fpi_defaults is not None and has_fpi:
+        defaults = {
+            k: lit(float(getattr(fpi_defaults, k))) for k in ("kp", "ki", "kx", "u_min", "u_max")
+        }
+    file_name, sha = source_sha256(rb)
+    desc = tuple(textwrap.wrap(_comment_safe(" ".join(rb.description.split())), 88)[:8])
+    bound_summary = ", ".join(f"{o.name}: {o.bound} (tolerance {o.tolerance})" for o in outputs)
+    return Spec(
+        name=name,
+        upper=name.upper(),
+        target=target,
+        number_type=nt,
+        ctype={"float": "float", "double": "double", "q15": "int16_t"}[nt],
+        version=__version__,
+        source_file=_comment_safe(file_name),
+        source_sha256=sha,
+        description=desc,
+        n_inputs=len(rb.inputs),
+        n_outputs=len(rb.outputs),
+        inputs=tuple(axes),
+        outputs=tuple(outputs),
+        shape="x".join(str(n) for n in shape),
+        n_points=table.n_points,
+        memory_bytes=table.memory_bytes,
+        check_points=table.check_points,
+        bound_summary=bound_summary,
+        split_bytes=split_bytes,
+        has_fpi=has_fpi,
+        fpi_note=note.replace("NAME", name),
+        fpi_defaults=defaults,
+        zero=lit(0.0),
+        one=lit(1.0),
+        t_bits=Q15_T_BITS,
+        t_one=1 << Q15_T_BITS,
+        t_half=1 << (Q15_T_BITS - 1),
+        recip_shift=Q15_RECIP_BITS - Q15_T_BITS,
+    )
+
+
+def _environment(target: str) -> jinja2.Environment:
+    folder = Path(__file__).parent / "backends" / target
+    return jinja2.Environment(
+        loader=jinja2.FileSystemLoader(str(folder)),
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+        keep_trailing_newline=True,
+        autoescape=False,
+    )
+
+
+def _config(target: str) -> Any:
+    return importlib.import_module(f"codegen.backends.{target}.config")
+
+
+def render(spec: Spec) -> dict[str, str]:
+    """Render every file of ``spec.target``: ``{relative path: text}``."""
+    config = _config(spec.target)
+    env = _environment(spec.target)
+    files: dict[str, str] = {}
+    outputs: Mapping[str, str] = config.FILES
+    for pattern, template in outputs.items():
+        path = pattern.format(name=spec.name)
+        try:
+            files[path] = env.get_template(template).render(spec=spec)
+        except jinja2.TemplateError as exc:  # a template bug, not user input
+            raise CodegenError(f"template {spec.target}/{template}: {exc}") from exc
+    return files
+
+
+def emit(
+    rb: RuleBase,
+    table: LookupTable,
+    target: str,
+    *,
+    fpi_defaults: FpiDefaults | None = None,
+) -> dict[str, str]:
+    """Generate the ``target`` sources for ``rb`` from ``table``: ``{relative path: text}``."""
+    return render(build_spec(rb, table, target, fpi_defaults=fpi_defaults))

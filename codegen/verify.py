@@ -1,0 +1,217 @@
+"""Equivalence check: generated code against the exact engine (``--verify``, tests).
+
+Random points over the input ranges plus every combination of edge values (range ends, just
+beyond, far beyond, +-huge, +-inf, NaN) are evaluated by the generated code and by the exact
+engine; every finite difference must stay within the table's published bound plus a stated
+rounding allowance, and NaN must appear exactly where the engine gives NaN.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import itertools
+import math
+import sys
+import tempfile
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from codegen.lut import Q15_ONE, LookupTable, quantize_q15
+from codegen.toolchain import CompiledTable
+from fuzzkit.errors import CodegenError
+from fuzzkit.model import RuleBase
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Rounding allowance on top of the bound, as a fraction of each output's full scale: float32
+#: arithmetic on float32-stored values (the bound already includes storing them), double
+#: arithmetic, and none for Q15 whose integer arithmetic the bound models bit for bit.
+ROUNDING = {"float": 1e-5, "double": 1e-12, "q15": 0.0}
+DEFAULT_POINTS = 100_000
+
+
+@dataclass(frozen=True)
+class Verification:
+    """Outcome of one equivalence check."""
+
+    target: str
+    n_points: int
+    max_error: tuple[float, ...]
+    bound: tuple[float, ...]
+    allowance: tuple[float, ...]
+    nan_mismatches: int
+
+    @property
+    def ok(self) -> bool:
+        """True when every error is within bound + allowance and NaN matched everywhere."""
+        return self.nan_mismatches == 0 and all(
+            e <= b + a for e, b, a in zip(self.max_error, self.bound, self.allowance, strict=True)
+        )
+
+    def describe(self) -> str:
+        """One line for humans."""
+        parts = ", ".join(
+            f"max error {e:.3g} <= {b:.3g} + {a:.2g}"
+            if e <= b + a
+            else f"max error {e:.3g} EXCEEDS {b:.3g} + {a:.2g}"
+            for e, b, a in zip(self.max_error, self.bound, self.allowance, strict=True)
+        )
+        nan = "" if not self.nan_mismatches else f", {self.nan_mismatches} NaN mismatches"
+        verdict = "ok" if self.ok else "FAILED"
+        return f"verify {self.target}: {verdict} on {self.n_points} points ({parts}{nan})"
+
+
+def edge_values(low: float, high: float) -> list[float]:
+    """Values that stress one input: ends, just beyond, far beyond, huge, inf, NaN."""
+    span = high - low
+    return [
+        low,
+        high,
+        0.5 * (low + high),
+        low - 1e-9 * span,
+        high + 1e-9 * span,
+        low - span,
+        high + span,
+        -1e30,
+        1e30,
+        -math.inf,
+        math.inf,
+        math.nan,
+    ]
+
+
+def verification_points(rb: RuleBase, n: int = DEFAULT_POINTS, seed: int = 0) -> FloatArray:
+    """``n`` seeded random points in range plus every combination of edge values."""
+    rng = np.random.default_rng(seed)
+    rand = np.column_stack([rng.uniform(v.low, v.high, n) for v in rb.inputs])
+    edges = np.array(
+        list(itertools.product(*[edge_values(v.low, v.high) for v in rb.inputs])),
+        dtype=np.float64,
+    )
+    return np.vstack([rand, edges])
+
+
+def _exact(rb: RuleBase, points: FloatArray) -> FloatArray:
+    from fuzzkit.inference import Engine
+
+    result = Engine(rb).evaluate({v.name: points[:, i] for i, v in enumerate(rb.inputs)})
+    return np.column_stack([np.asarray(result[v.name], dtype=np.float64) for v in rb.outputs])
+
+
+def compare(
+    rb: RuleBase, table: LookupTable, target: str, got: FloatArray, exact: FloatArray
+) -> Verification:
+    """Compare generated outputs ``got`` with ``exact`` (both ``(n, n_outputs)``)."""
+    nan_got = np.isnan(got)
+    nan_exact = np.isnan(exact)
+    mismatches = int(np.count_nonzero(nan_got != nan_exact))
+    both = ~nan_got & ~nan_exact
+    errors = []
+    for k in range(got.shape[1]):
+        col = both[:, k]
+        diff = np.abs(got[col, k] - exact[col, k])
+        errors.append(float(diff.max()) if diff.size else 0.0)
+    rounding = ROUNDING[table.number_type]
+    allowance = tuple(rounding * max(abs(v.low), abs(v.high)) for v in rb.outputs)
+    return Verification(
+        target=target,
+        n_points=int(got.shape[0]),
+        max_error=tuple(errors),
+        bound=table.bound,
+        allowance=allowance,
+        nan_mismatches=mismatches,
+    )
+
+
+def c_points(table: LookupTable, points: FloatArray) -> tuple[npt.NDArray[Any], FloatArray]:
+    """The points as the C API takes them, and the same points as real values for the engine.
+
+    float: cast to float32 (the engine sees the cast value). q15: quantised to codes (NaN and
+    infinities have no code and are dropped; +-huge saturate).
+    """
+    if table.number_type == "q15":
+        layout = table.q15
+        if layout is None:  # pragma: no cover - a q15 table always has a layout
+            raise CodegenError("internal: q15 table without layout")
+        finite = np.all(np.isfinite(points), axis=1)
+        pts = points[finite]
+        codes = np.column_stack([quantize_q15(pts[:, i], s) for i, s in enumerate(layout.in_scale)])
+        real = codes.astype(np.float64) * (np.array(layout.in_scale) / Q15_ONE)
+        return codes.astype(np.int16), real
+    dtype = np.float32 if table.number_type == "float" else np.float64
+    with np.errstate(over="ignore"):
+        cast = points.astype(dtype)
+    return cast, cast.astype(np.float64)
+
+
+def c_outputs_real(table: LookupTable, raw: npt.NDArray[Any]) -> FloatArray:
+    """C outputs in real units (Q15 codes scaled by each output's full scale)."""
+    if table.q15 is not None:
+        return raw.astype(np.float64) * (np.array(table.q15.out_scale) / Q15_ONE)
+    return raw.astype(np.float64)
+
+
+def verify_c(
+    rb: RuleBase,
+    table: LookupTable,
+    files: Mapping[str, str],
+    *,
+    n: int = DEFAULT_POINTS,
+    compiler: Sequence[str] | None = None,
+) -> Verification:
+    """Compile ``files`` (strict flags), load them and compare with the exact engine."""
+    points = verification_points(rb, n)
+    args, real = c_points(table, points)
+    fpi = len(rb.inputs) == 2 and table.number_type != "q15"
+    with CompiledTable(
+        files,
+        rb.name,
+        table.number_type,
+        len(rb.inputs),
+        len(rb.outputs),
+        fpi=fpi,
+        compiler=compiler,
+    ) as lib:
+        got = c_outputs_real(table, lib.eval_batch(args))
+    return compare(rb, table, f"c ({table.number_type})", got, _exact(rb, real))
+
+
+def load_module(files: Mapping[str, str], name: str) -> ModuleType:
+    """Import the generated Python module from a temporary folder (without touching sys.path)."""
+    with tempfile.TemporaryDirectory(prefix="fuzzkit-py-") as tmp:
+        path = Path(tmp) / f"{name}.py"
+        path.write_text(files[f"{name}.py"], encoding="utf-8")
+        spec = importlib.util.spec_from_file_location(f"fuzzkit_generated_{name}", path)
+        if spec is None or spec.loader is None:  # pragma: no cover
+            raise CodegenError(f"cannot import generated module {path}")
+        module = importlib.util.module_from_spec(spec)
+        # Register while executing so dataclass-like introspection works, then drop it.
+        sys.modules[spec.name] = module
+        try:
+            spec.loader.exec_module(module)
+        finally:
+            sys.modules.pop(spec.name, None)
+    return module
+
+
+def python_outputs(
+    evaluate: Callable[[Sequence[float]], tuple[float, ...]], points: FloatArray
+) -> FloatArray:
+    """Call a generated ``eval`` on every row."""
+    return np.array([evaluate(tuple(row)) for row in points.tolist()], dtype=np.float64)
+
+
+def verify_python(
+    rb: RuleBase, table: LookupTable, files: Mapping[str, str], *, n: int = DEFAULT_POINTS
+) -> Verification:
+    """Import the generated module and compare its ``eval`` with the exact engine."""
+    module = load_module(files, rb.name)
+    points = verification_points(rb, n)
+    got = python_outputs(module.eval, points)
+    return compare(rb, table, "python", got, _exact(rb, points))
