@@ -1,0 +1,142 @@
+"""``fuzzkit compile``: a rule base to lookup-table C or Python, optionally verified.
+
+Everything is computed and checked before anything is written; the output folder then gets
+all files at once (``write_tree_atomic``) or none.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from typing import Any
+
+EXIT_OK = 0
+EXIT_FAILURE = 1
+
+GAIN_KEYS = ("kp", "ki", "kx", "u_min", "u_max")
+
+
+def register(sub: Any) -> None:
+    """Add ``compile`` to the ``fuzzkit`` parser."""
+    p = sub.add_parser(
+        "compile",
+        help="compile a rule base to lookup-table C or Python",
+        description="Sample a rule base with the exact engine into a lookup table with a "
+        "verified error bound and generate C (NAME.h, NAME.c) or Python (NAME.py) from it. "
+        "Prints the table size and bound; --verify compiles/imports the result and compares "
+        "it with the exact engine on 1e5 random points and the edge cases.",
+    )
+    p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
+    p.add_argument("--target", required=True, help="c or python")
+    p.add_argument(
+        "--type",
+        dest="number_type",
+        default=None,
+        help="C number type: float (default), double or q15; python always computes in double",
+    )
+    size = p.add_mutually_exclusive_group()
+    size.add_argument(
+        "--tolerance",
+        type=float,
+        default=None,
+        metavar="T",
+        help="allowed error as a fraction of each output range (default 1e-3)",
+    )
+    size.add_argument(
+        "--resolution",
+        type=int,
+        default=None,
+        metavar="N",
+        help="breakpoints per input instead of a tolerance search",
+    )
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
+    p.add_argument(
+        "--verify",
+        action="store_true",
+        help="compile (C) or import (Python) the result and check it against the exact engine",
+    )
+    p.add_argument(
+        "--gains",
+        metavar="GAINS.yaml",
+        default=None,
+        help="bake fuzzy-PI gains (kp, ki, kx, u_min, u_max) in as defaults",
+    )
+    p.set_defaults(handler=cmd_compile)
+
+
+def _fpi_defaults(path: str | None) -> Any:
+    from codegen.emit import FpiDefaults
+    from fuzzkit.errors import ConfigError
+    from fuzzkit.gains import read_gains
+
+    if path is None:
+        return None
+    gains = read_gains(path, "fuzzy-pi", required=True)
+    missing = [k for k in GAIN_KEYS if k not in gains]
+    if missing:
+        raise ConfigError(
+            f"{path}: compile --gains needs all of {', '.join(GAIN_KEYS)} for fuzzy-pi "
+            f"(missing: {', '.join(missing)})"
+        )
+    values = {k: float(gains[k]) for k in GAIN_KEYS}
+    bad = [k for k, v in values.items() if not math.isfinite(v)]
+    if bad:
+        raise ConfigError(f"{path}: gains must be finite numbers (got {bad[0]}={values[bad[0]]})")
+    return FpiDefaults(**values)
+
+
+def cmd_compile(args: argparse.Namespace) -> int:
+    """Handler of ``fuzzkit compile``."""
+    from pathlib import Path
+
+    from codegen.emit import TARGETS, emit
+    from codegen.lut import NUMBER_TYPES, make_table
+    from codegen.verify import verify_c, verify_python
+    from fuzzkit.errors import CodegenError, ConfigError
+    from fuzzkit.fileio import write_tree_atomic
+    from fuzzkit.registry import load
+
+    # Cheap checks first, so a typo costs nothing and nothing is written.
+    if args.target not in TARGETS:
+        raise CodegenError(f"unknown target {args.target!r} (expected one of {', '.join(TARGETS)})")
+    number_type = args.number_type or ("double" if args.target == "python" else "float")
+    if number_type not in NUMBER_TYPES:
+        raise CodegenError(
+            f"unknown --type {number_type!r} (expected one of {', '.join(NUMBER_TYPES)})"
+        )
+    if args.target == "python" and number_type != "double":
+        raise CodegenError(
+            f"--type {number_type} applies to the C target; the python target computes in double"
+        )
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"{out}: exists and is not a directory (expected an output folder)")
+    if args.tolerance is not None and not (math.isfinite(args.tolerance) and args.tolerance > 0):
+        raise CodegenError(f"--tolerance must be a positive number, got {args.tolerance}")
+    defaults = _fpi_defaults(args.gains)
+
+    rb = load(args.rulebase)
+    table = make_table(
+        rb, number_type=number_type, tolerance=args.tolerance, resolution=args.resolution
+    )
+    files = emit(rb, table, args.target, fpi_defaults=defaults)
+    print(f"{rb.name}: {table.describe()}")
+    if len(rb.inputs) != 2:
+        print(f"note: no fuzzy-PI API (it needs 2 inputs, {rb.name} has {len(rb.inputs)})")
+    elif number_type == "q15":
+        print("note: no fuzzy-PI API for q15 (NAME_eval only; see the header)")
+    if defaults is not None and len(rb.inputs) != 2:
+        print("note: --gains ignored (no fuzzy-PI API)")
+    if args.verify:
+        if args.target == "c":
+            result = verify_c(rb, table, files)
+        else:
+            result = verify_python(rb, table, files)
+        print(result.describe())
+        if not result.ok:
+            print("nothing written: the generated code does not match the exact engine")
+            return EXIT_FAILURE
+    written = write_tree_atomic(out, files)
+    for path in written:
+        print(f"wrote {path}")
+    return EXIT_OK
