@@ -1,0 +1,197 @@
+"""Generated C: strict compilation, sanitizers, and equivalence with the exact engine."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from _codegen_util import CC, CLANG, needs_cc, rulebase, skip_no_cc, sources, table
+
+from codegen.lut import Q15_ONE
+from codegen.toolchain import SANITIZE_FLAGS, STRICT_FLAGS, CompiledTable, run_compiler
+from codegen.verify import (
+    ROUNDING,
+    c_outputs_real,
+    c_points,
+    compare,
+    verification_points,
+)
+from fuzzkit.errors import ToolchainError
+from fuzzkit.inference import Engine
+
+pytestmark = [needs_cc, skip_no_cc]
+
+CASES = [
+    ("macvicar_whelan", "float"),
+    ("macvicar_whelan", "double"),
+    ("macvicar_whelan", "q15"),
+    ("gaussian5", "float"),
+    ("three_input", "float"),
+    ("three_input", "q15"),
+]
+
+
+def _exact(name: str, real: np.ndarray) -> np.ndarray:
+    rb = rulebase(name)
+    res = Engine(rb).evaluate({v.name: real[:, i] for i, v in enumerate(rb.inputs)})
+    return np.column_stack([res[v.name] for v in rb.outputs])
+
+
+def _write(folder: Path, files: dict[str, str]) -> list[str]:
+    for rel, text in files.items():
+        (folder / rel).write_text(text)
+    return [rel for rel in files if rel.endswith(".c")]
+
+
+@pytest.mark.parametrize("compiler", ["cc", "clang"])
+@pytest.mark.parametrize("name, number_type", CASES)
+def test_compiles_cleanly_with_strict_flags(
+    tmp_path: Path, compiler: str, name: str, number_type: str
+) -> None:
+    if compiler == "clang" and CLANG is None:
+        pytest.skip("clang not installed; the gcc run covers the strict build here")
+    cc = [CLANG] if compiler == "clang" else CC
+    assert cc is not None
+    srcs = _write(tmp_path, sources(name, "c", number_type))  # type: ignore[arg-type]
+    proc = run_compiler([*cc, *STRICT_FLAGS, "-O2", "-c", *srcs], tmp_path)
+    assert proc.stderr.strip() == ""  # not even a note
+
+
+@pytest.mark.parametrize("name, number_type", CASES)
+def test_matches_exact_engine_on_random_and_edge_points(name: str, number_type: str) -> None:
+    rb = rulebase(name)
+    tab = table(name, number_type)  # type: ignore[arg-type]
+    files = sources(name, "c", number_type)  # type: ignore[arg-type]
+    points = verification_points(rb, 100_000, seed=1)
+    args, real = c_points(tab, points)
+    fpi = len(rb.inputs) == 2 and number_type != "q15"
+    with CompiledTable(
+        files, rb.name, number_type, len(rb.inputs), len(rb.outputs), fpi=fpi
+    ) as lib:
+        got = c_outputs_real(tab, lib.eval_batch(args))
+    exact = _exact(name, real)
+    result = compare(rb, tab, "c", got, exact)
+    assert result.nan_mismatches == 0
+    for err, bound, allow in zip(result.max_error, tab.bound, result.allowance, strict=True):
+        assert err <= bound + allow, result.describe()
+        # The bound is not vacuous: the worst random point comes close to it.
+        assert err >= 0.5 * bound, result.describe()
+    if number_type != "q15":
+        # NaN in any input -> every output NaN; +-inf behaves as the nearer range end.
+        nan_rows = np.isnan(points).any(axis=1)
+        assert np.isnan(got[nan_rows]).all()
+        assert not np.isnan(got[~nan_rows]).any()
+        lows = np.array([v.low for v in rb.inputs])
+        highs = np.array([v.high for v in rb.inputs])
+        with CompiledTable(
+            files, rb.name, number_type, len(rb.inputs), len(rb.outputs), fpi=False
+        ) as lib:
+            at_inf = lib.eval_batch([np.full(len(lows), math.inf), np.full(len(lows), -math.inf)])
+            at_ends = lib.eval_batch([highs, lows])
+        np.testing.assert_array_equal(at_inf, at_ends)
+
+
+@pytest.mark.parametrize("name", ["macvicar_whelan", "three_input"])
+def test_q15_is_bit_exact_with_the_python_model(name: str) -> None:
+    rb = rulebase(name)
+    tab = table(name, "q15")
+    rng = np.random.default_rng(2)
+    codes = rng.integers(-32768, 32768, size=(50_000, len(rb.inputs)))
+    codes[:8] = [[-32768] * len(rb.inputs), [32767] * len(rb.inputs)] * 4
+    with CompiledTable(
+        sources(name, "c", "q15"), rb.name, "q15", len(rb.inputs), len(rb.outputs), fpi=False
+    ) as lib:
+        got = lib.eval_batch(codes.astype(np.int16)).astype(np.int64)
+    model = np.column_stack(tab.interpolate_q15([codes[:, i] for i in range(len(rb.inputs))]))
+    np.testing.assert_array_equal(got, model)
+
+
+def test_q15_scaling_is_documented_and_applied() -> None:
+    # 0.5 of full scale in, the exact engine's value at 0.5 out (within the bound).
+    rb = rulebase("macvicar_whelan")
+    tab = table("macvicar_whelan", "q15")
+    header = sources("macvicar_whelan", "c", "q15")["macvicar_whelan.h"]
+    assert "MACVICAR_WHELAN_IN0_FULL_SCALE 1.0" in header
+    with CompiledTable(
+        sources("macvicar_whelan", "c", "q15"), rb.name, "q15", 2, 1, fpi=False
+    ) as lib:
+        out = lib.eval_batch(np.array([[Q15_ONE // 2, -(Q15_ONE // 4)]], dtype=np.int16))
+    exact = Engine(rb).evaluate_point(e=0.5, de=-0.25)["du"]
+    assert abs(out[0, 0] / Q15_ONE - exact) <= tab.bound[0]
+
+
+HARNESS = r"""
+#include <stdio.h>
+#include "{name}.h"
+
+int main(void)
+{{
+    {t} in[{ni}], out[{no}];
+    double x[{ni}];
+    int i;
+    for (;;) {{
+        for (i = 0; i < {ni}; i++) {{
+            if (scanf("{fmt}", &x[i]) != 1) {{
+                return 0;
+            }}
+            in[i] = ({t})x[i];
+        }}
+        {name}_eval(in, out);
+        for (i = 0; i < {no}; i++) {{
+            printf("%.17g%c", (double)out[i], i + 1 < {no} ? ' ' : '\n');
+        }}
+    }}
+}}
+"""
+
+
+@pytest.mark.parametrize(
+    "name, number_type",
+    [("macvicar_whelan", "float"), ("macvicar_whelan", "q15"), ("three_input", "double")],
+)
+def test_runs_clean_under_address_and_undefined_sanitizers(
+    tmp_path: Path, name: str, number_type: str
+) -> None:
+    rb = rulebase(name)
+    tab = table(name, number_type)  # type: ignore[arg-type]
+    files = sources(name, "c", number_type)  # type: ignore[arg-type]
+    srcs = _write(tmp_path, files)
+    ctype = {"float": "float", "double": "double", "q15": "int16_t"}[number_type]
+    (tmp_path / "main.c").write_text(
+        HARNESS.format(name=name, t=ctype, ni=len(rb.inputs), no=len(rb.outputs), fmt="%lf")
+    )
+    assert CC is not None
+    try:
+        run_compiler([*CC, *STRICT_FLAGS, *SANITIZE_FLAGS, "-o", "h", "main.c", *srcs], tmp_path)
+    except ToolchainError as exc:
+        if "sanitize" in str(exc) or "asan" in str(exc).lower():
+            pytest.skip(f"this compiler cannot link sanitizers: {exc}")
+        raise
+    points = verification_points(rb, 2000, seed=3)
+    args, real = c_points(tab, points)
+    text = "\n".join(" ".join(repr(float(v)) for v in row) for row in args.astype(np.float64))
+    proc = subprocess.run(
+        [str(tmp_path / "h")], input=text, capture_output=True, text=True, timeout=120, check=False
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert "runtime error" not in proc.stderr and "AddressSanitizer" not in proc.stderr
+    got = np.array([[float(v) for v in line.split()] for line in proc.stdout.splitlines()])
+    got = c_outputs_real(tab, got)
+    result = compare(rb, tab, "c", got, _exact(name, real))
+    assert result.ok, result.describe()
+
+
+def test_compile_failure_is_a_toolchain_error_with_the_compiler_output(tmp_path: Path) -> None:
+    files = dict(sources("macvicar_whelan", "c", "float"))
+    files["macvicar_whelan.c"] += "\nint broken(void) { return undefined_symbol_xyz; }\n"
+    with pytest.raises(ToolchainError, match="undefined_symbol_xyz"):
+        CompiledTable(files, "macvicar_whelan", "float", 2, 1, fpi=True)
+
+
+def test_rounding_allowance_is_small_against_the_bound() -> None:
+    # The stated float allowance must not be what makes the check pass.
+    tab = table("macvicar_whelan", "float")
+    assert ROUNDING["float"] < 1e-3 * tab.bound[0]
