@@ -583,7 +583,7 @@ def _markdown(
         "",
         "True contact force, each axis measured from its own first contact (`contact s`: the "
         "normal force credited to that axis, friction excluded, reaches the engage threshold; "
-        "'-' when no surface faces the axis, which is then measured from the run's first "
+        "'never' when no surface faces the axis, which is then measured from the run's first "
         "contact); overshoot past the set point in % of it (where the path keeps driving into "
         "the surface, the ramp-following error); settling into the 5 % band (0.5 N for 0 N) "
         "from the end of the approach (the first contact, or when the path stops moving along "
