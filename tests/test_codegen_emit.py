@@ -1,0 +1,180 @@
+"""Emitter: golden files, determinism, banner, and names that must never reach source text.
+
+Golden files live in tests/golden/<rule base>/<target>-<type>/; rewrite them with
+``FUZZKIT_REFRESH_GOLDEN=1 pytest tests/test_codegen_emit.py`` and review the diff.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from pathlib import Path
+
+import jinja2
+import numpy as np
+import pytest
+from _codegen_util import RESOLUTION, rulebase, sources, table
+
+from codegen.emit import build_spec, check_identifier, emit
+from codegen.lut import build_table, make_table
+from fuzzkit import __version__
+from fuzzkit.errors import CodegenError
+
+GOLDEN = Path(__file__).parent / "golden"
+REFRESH = os.environ.get("FUZZKIT_REFRESH_GOLDEN") == "1"
+
+GOLDEN_CASES = [
+    ("macvicar_whelan", "c", "float"),
+    ("macvicar_whelan", "c", "q15"),
+    ("macvicar_whelan", "python", "double"),
+    ("paper_table1", "c", "float"),
+    ("paper_table1", "python", "double"),
+    ("gaussian5", "c", "float"),
+    ("gaussian5", "python", "double"),
+    ("three_input", "c", "float"),
+    ("three_input", "c", "q15"),
+    ("three_input", "python", "double"),
+]
+
+
+@pytest.mark.parametrize("name, target, number_type", GOLDEN_CASES)
+def test_output_matches_golden_files(name: str, target: str, number_type: str) -> None:
+    files = sources(name, target, number_type)  # type: ignore[arg-type]
+    folder = GOLDEN / name / f"{target}-{number_type}"
+    if REFRESH:
+        folder.mkdir(parents=True, exist_ok=True)
+        for old in folder.iterdir():
+            old.unlink()
+        for rel, text in files.items():
+            (folder / rel).write_text(text, encoding="utf-8")
+    expected = {p.name: p.read_text(encoding="utf-8") for p in sorted(folder.iterdir())}
+    assert sorted(expected) == sorted(files), "set FUZZKIT_REFRESH_GOLDEN=1 to rewrite"
+    for rel, text in files.items():
+        assert text == expected[rel], (
+            f"{folder / rel} differs; FUZZKIT_REFRESH_GOLDEN=1 rewrites it"
+        )
+
+
+def test_same_input_gives_byte_identical_output() -> None:
+    rb = rulebase("macvicar_whelan")
+    first = emit(rb, make_table(rb, resolution=13, tolerance=1.0), "c")
+    second = emit(rb, make_table(rb, resolution=13, tolerance=1.0), "c")
+    assert first == second
+
+
+def test_banner_names_version_source_hash_size_and_bound() -> None:
+    rb = rulebase("macvicar_whelan")
+    tab = table("macvicar_whelan", "float")
+    assert rb.source is not None
+    for text in [*sources("macvicar_whelan", "c", "float").values()]:
+        head = text[:1500]
+        assert f"fuzzkit {__version__}" in head
+        assert "macvicar_whelan.yaml" in head
+        assert rb.source.sha256 in head
+        assert f"{RESOLUTION['macvicar_whelan']}x{RESOLUTION['macvicar_whelan']}" in head
+        assert f"{tab.bound[0]:.3g}" in head
+        assert "DO NOT EDIT" in head
+    py = sources("macvicar_whelan", "python", "double")["macvicar_whelan.py"]
+    assert rb.source.sha256 in py[:1500] and "DO NOT EDIT" in py[:1500]
+
+
+def test_three_input_base_omits_fpi_with_a_note() -> None:
+    c = sources("three_input", "c", "float")
+    assert "fpi_step" not in c["three_input.h"]
+    assert "no fuzzy-PI API" in c["three_input.h"]
+    assert "class FuzzyPI" not in sources("three_input", "python", "double")["three_input.py"]
+
+
+@pytest.mark.parametrize(
+    "name, match",
+    [
+        ("int", "keyword"),
+        ("while", "keyword"),
+        ("lambda", "keyword"),
+        ("match", "keyword"),
+        ("NAN", "reserved"),
+        ("__x", "reserved"),
+        ("_Foo", "reserved"),
+        ("a-b", "not an identifier"),
+        ("1abc", "not an identifier"),
+        ("ok*/evil", "not an identifier"),
+        ("x y", "not an identifier"),
+        ("é", "not an identifier"),
+        ("", "not an identifier"),
+    ],
+)
+def test_bad_identifiers_are_rejected(name: str, match: str) -> None:
+    with pytest.raises(CodegenError, match=match):
+        check_identifier(name, "name")
+
+
+def test_bad_names_in_a_model_never_reach_source() -> None:
+    # Validation normally stops these; the emitter must not rely on it.
+    rb = rulebase("macvicar_whelan")
+    tab = table("macvicar_whelan", "float")
+    bad_rb = dataclasses.replace(rb, name="static")
+    with pytest.raises(CodegenError, match="rule base name 'static'"):
+        build_spec(bad_rb, tab, "c")
+    bad_var = dataclasses.replace(rb.inputs[0], name="e); system(1")
+    with pytest.raises(CodegenError, match="not an identifier"):
+        build_spec(dataclasses.replace(rb, inputs=(bad_var, rb.inputs[1])), tab, "c")
+
+
+def test_target_and_type_mismatches_are_errors() -> None:
+    rb = rulebase("macvicar_whelan")
+    with pytest.raises(CodegenError, match="unknown target 'rust'"):
+        build_spec(rb, table("macvicar_whelan", "float"), "rust")
+    with pytest.raises(CodegenError, match="python target computes in double"):
+        build_spec(rb, table("macvicar_whelan", "float"), "python")
+
+
+def test_no_template_sees_anything_but_the_spec() -> None:
+    # StrictUndefined: a template naming something the spec lacks fails loudly.
+    from codegen.emit import _environment
+
+    env = _environment("c")
+    with pytest.raises(jinja2.UndefinedError, match="nonexistent"):
+        env.from_string("{{ spec.nonexistent }}").render(
+            spec=build_spec(rulebase("gaussian5"), table("gaussian5", "float"), "c")
+        )
+
+
+def test_reference_interpolation_reproduces_planes_and_trilinear_functions() -> None:
+    # Independent of any fuzzy logic: a plane is reproduced exactly by either triangle split,
+    # a trilinear function by the trilinear patch.
+    rb2 = rulebase("macvicar_whelan")
+
+    def plane(inputs):  # type: ignore[no-untyped-def]
+        return {"du": 0.3 * inputs["e"] - 0.2 * inputs["de"] + 0.1}
+
+    tab = build_table(rb2, [9, 11], number_type="double", evaluate=plane)
+    rng = np.random.default_rng(0)
+    e, de = rng.uniform(-1.5, 1.5, (2, 5000))
+    got = tab.interpolate([e, de])[0]
+    ec, dc = np.clip(e, -1, 1), np.clip(de, -1, 1)
+    np.testing.assert_allclose(got, 0.3 * ec - 0.2 * dc + 0.1, atol=1e-12)
+    assert tab.bound[0] < 1e-12
+
+    rb3 = rulebase("three_input")
+
+    def trilinear(inputs):  # type: ignore[no-untyped-def]
+        e, de, r = inputs["e"], inputs["de"], inputs["r"]
+        return {"du": e * de * r + e, "dv": 0.5 * de * r - r}
+
+    tab3 = build_table(rb3, [5, 6, 7], number_type="double", evaluate=trilinear)
+    e, de, r = rng.uniform(-1, 1, 3000), rng.uniform(-1, 1, 3000), rng.uniform(0, 1, 3000)
+    du, dv = tab3.interpolate([e, de, r])
+    np.testing.assert_allclose(du, e * de * r + e, atol=1e-12)
+    np.testing.assert_allclose(dv, 0.5 * de * r - r, atol=1e-12)
+
+
+def test_table_nodes_hold_the_exact_engine_values_and_knots() -> None:
+    from fuzzkit.inference import Engine
+
+    rb = rulebase("macvicar_whelan")
+    tab = table("macvicar_whelan", "double")
+    for k in range(-3, 4):  # every label peak is a node
+        assert np.min(np.abs(tab.breakpoints[0] - k / 3)) < 1e-12
+    g = np.meshgrid(*tab.breakpoints, indexing="ij")
+    exact = Engine(rb).evaluate({"e": g[0], "de": g[1]})["du"]
+    np.testing.assert_array_equal(tab.values[0], exact)
