@@ -598,7 +598,8 @@ def make_table(
         ``float``, ``double`` or ``q15``; the bound is measured for that type.
     tolerance
         Allowed error as a fraction of each output's range (default 1e-3). With
-        ``resolution`` it is still checked.
+        ``resolution`` it is checked only when given explicitly (the size was chosen, the
+        bound is reported).
     resolution
         Breakpoints per input (one number for all inputs, or one per input); when given, no
         search is made.
@@ -628,7 +629,8 @@ def make_table(
                 f"and {MAX_BREAKPOINTS}, got {resolution}"
             )
         table = build_table(rb, counts, number_type=number_type, tolerance=tol, evaluate=evaluator)
-        _enforce(table, f"resolution {resolution}")
+        if tolerance is not None:
+            _enforce(table, f"resolution {resolution}")
         return table
     return _search(rb, number_type, tol, max_points, evaluator)
 

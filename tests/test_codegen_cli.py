@@ -1,0 +1,172 @@
+"""``fuzzkit compile``: outputs, --verify, --gains, and bad input that writes nothing."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+from _codegen_util import needs_cc, skip_no_cc
+
+from fuzzkit.cli import main
+
+
+def _run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    try:
+        code = main(list(argv))
+    except SystemExit as exc:  # argparse usage errors
+        code = int(exc.code or 0)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_python_target_writes_an_importable_module(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "gen"
+    code, text, _ = _run(
+        capsys,
+        "compile",
+        "macvicar_whelan",
+        "--target",
+        "python",
+        "--resolution",
+        "25",
+        "--out",
+        str(out),
+        "--verify",
+    )
+    assert code == 0, text
+    assert "table 25x25" in text and "verified bound du:" in text
+    assert "verify python: ok" in text
+    spec = importlib.util.spec_from_file_location("mw_cli", out / "macvicar_whelan.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert len(module.eval((0.1, 0.2))) == 1
+
+
+@needs_cc
+@skip_no_cc
+def test_c_target_with_verify_and_baked_gains(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    gains = tmp_path / "gains.yaml"
+    gains.write_text("fuzzy-pi:\n  gains: {kp: 0.5, ki: 0.25, kx: 0.01, u_min: -0.2, u_max: 0.2}\n")
+    out = tmp_path / "c"
+    code, text, err = _run(
+        capsys,
+        "compile",
+        "macvicar_whelan",
+        "--target",
+        "c",
+        "--type",
+        "q15",
+        "--resolution",
+        "25",
+        "--out",
+        str(out),
+        "--verify",
+    )
+    assert code == 0, err
+    assert "verify c (q15): ok" in text
+    assert "no fuzzy-PI API for q15" in text
+    code, text, err = _run(
+        capsys,
+        "compile",
+        "macvicar_whelan",
+        "--target",
+        "c",
+        "--resolution",
+        "25",
+        "--out",
+        str(out),
+        "--gains",
+        str(gains),
+        "--verify",
+    )
+    assert code == 0, err
+    header = (out / "macvicar_whelan.h").read_text()
+    assert "#define MACVICAR_WHELAN_FPI_KI 0.25f" in header
+    assert "macvicar_whelan_fpi_init_default" in header
+
+
+@pytest.mark.parametrize(
+    "extra, match",
+    [
+        (["--target", "fortran"], "unknown target 'fortran'"),
+        (["--target", "c", "--type", "int8"], "unknown --type 'int8'"),
+        (["--target", "python", "--type", "q15"], "applies to the C target"),
+        (["--target", "c", "--tolerance", "-1"], "positive number"),
+        (["--target", "c", "--tolerance", "1e-7"], "cannot be met within"),
+        (["--target", "c", "--tolerance", "1", "--resolution", "5"], "not allowed with"),
+        (["--target", "c", "--resolution", "1"], "between 2 and"),
+    ],
+)
+def test_bad_input_is_a_clear_error_and_writes_nothing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], extra: list[str], match: str
+) -> None:
+    out = tmp_path / "out"
+    code, _, err = _run(capsys, "compile", "macvicar_whelan", *extra, "--out", str(out))
+    assert code == 2
+    assert match in err
+    assert "Traceback" not in err
+    assert not out.exists()
+
+
+def test_output_folder_that_is_a_file_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    target = tmp_path / "afile"
+    target.write_text("keep me")
+    code, _, err = _run(capsys, "compile", "macvicar_whelan", "--target", "c", "--out", str(target))
+    assert code == 2 and "not a directory" in err
+    assert target.read_text() == "keep me"
+
+
+def test_incomplete_gains_file_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    gains = tmp_path / "g.yaml"
+    gains.write_text("kp: 0.5\nki: 0.25\n")
+    out = tmp_path / "out"
+    code, _, err = _run(
+        capsys,
+        "compile",
+        "macvicar_whelan",
+        "--target",
+        "python",
+        "--out",
+        str(out),
+        "--gains",
+        str(gains),
+    )
+    assert code == 2 and "missing: kx, u_min, u_max" in err
+    assert not out.exists()
+
+
+def test_three_input_base_compiles_without_fpi(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    code, text, err = _run(
+        capsys,
+        "compile",
+        "three_input",
+        "--target",
+        "python",
+        "--resolution",
+        "9",
+        "--out",
+        str(tmp_path / "o"),
+    )
+    assert code == 0, err
+    assert "note: no fuzzy-PI API (it needs 2 inputs, three_input has 3)" in text
+
+
+def test_explicit_tolerance_is_enforced_on_an_explicit_resolution() -> None:
+    from codegen.lut import make_table
+    from fuzzkit import load
+    from fuzzkit.errors import CodegenError
+
+    with pytest.raises(CodegenError, match=r"resolution 5 .* does not meet the tolerance"):
+        make_table(load("macvicar_whelan"), resolution=5, tolerance=1e-4)
