@@ -1,0 +1,172 @@
+"""Benchmark of generated code (issue 3): C eval ns/call, Python eval/step us, table bytes.
+
+Run: ``.venv/bin/python bench/bench_codegen.py`` (prints a table; about a minute on a 2-core
+machine, most of it building the default-tolerance tables).
+
+Rows
+----
+* C ``NAME_eval``, float and Q15: a small C harness compiled with -O2 calls it 1e7 times on
+  1024 cycling points (results summed so nothing is optimised away); target <= 5 ns.
+* Generated Python ``eval`` and ``FuzzyPI.step``; target <= 2 us per step.
+* The exact engine, one scalar point (``Engine.evaluate_point``), for comparison.
+* Table memory of the default (tolerance 1e-3) tables; target <= 4 KiB.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+import fuzzkit
+from codegen.emit import emit
+from codegen.lut import LookupTable, make_table
+from codegen.toolchain import STRICT_FLAGS, find_compiler, run_compiler
+from codegen.verify import load_module
+
+NAME = "macvicar_whelan"
+C_CALLS = 10_000_000
+TARGET_C_NS = 5.0
+TARGET_PY_US = 2.0
+TARGET_BYTES = 4096
+
+HARNESS = r"""
+#define _POSIX_C_SOURCE 199309L
+#include <stdio.h>
+#include <time.h>
+#include "{name}.h"
+
+int main(void)
+{{
+    static {t} pts[1024][2];
+    {t} out[1];
+    double sum = 0.0;
+    long k;
+    struct timespec a, b;
+    for (k = 0; k < 1024; k++) {{
+        double e = -1.2 + 2.4 * (double)((k * 37) % 1024) / 1023.0;
+        double de = -1.2 + 2.4 * (double)((k * 91) % 1024) / 1023.0;
+        pts[k][0] = ({t})({scale} * e);
+        pts[k][1] = ({t})({scale} * de);
+    }}
+    clock_gettime(CLOCK_MONOTONIC, &a);
+    for (k = 0; k < {calls}L; k++) {{
+        {name}_eval(pts[k & 1023], out);
+        sum += (double)out[0];
+    }}
+    clock_gettime(CLOCK_MONOTONIC, &b);
+    printf("%.3f %g\n", ((double)(b.tv_sec - a.tv_sec) * 1e9 + (double)(b.tv_nsec - a.tv_nsec))
+           / (double){calls}, sum);
+    return 0;
+}}
+"""
+
+
+def c_ns_per_call(rb: fuzzkit.model.RuleBase, table: LookupTable) -> float | None:
+    """Compile the generated C with a timing harness (-O2) and return ns per NAME_eval."""
+    cc = find_compiler()
+    if cc is None:
+        return None
+    files = emit(rb, table, "c")
+    q15 = table.number_type == "q15"
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        for rel, text in files.items():
+            (folder / rel).write_text(text)
+        (folder / "bench.c").write_text(
+            HARNESS.format(
+                name=NAME,
+                t="int16_t" if q15 else table.number_type,
+                scale="27000.0" if q15 else "1.0",
+                calls=C_CALLS,
+            )
+        )
+        run_compiler([*cc, *STRICT_FLAGS, "-O2", "-o", "bench", "bench.c", f"{NAME}.c"], folder)
+        runs = []
+        for _ in range(3):  # best of three: the machine is shared
+            out = subprocess.run(
+                [str(folder / "bench")], capture_output=True, text=True, check=True, timeout=120
+            ).stdout
+            runs.append(float(out.split()[0]))
+    return min(runs)
+
+
+def _us(fn: object, n: int) -> float:
+    start = time.perf_counter()
+    fn()  # type: ignore[operator]
+    return (time.perf_counter() - start) / n * 1e6
+
+
+def main() -> None:
+    rb = fuzzkit.load(NAME)
+    tables = {nt: make_table(rb, number_type=nt) for nt in ("float", "q15", "double")}
+    module = load_module(emit(rb, tables["double"], "python"), NAME)
+    rng = np.random.default_rng(0)
+    pts = [tuple(p) for p in rng.uniform(-1.2, 1.2, (20_000, 2)).tolist()]
+
+    def run_eval() -> None:
+        ev = module.eval
+        for p in pts:
+            ev(p)
+
+    ctl = module.FuzzyPI(0.5, 0.5, 0.05, -1.0, 1.0)
+    meas = [0.3 * np.sin(0.01 * k) for k in range(20_000)]
+
+    def run_step() -> None:
+        step = ctl.step
+        for m in meas:
+            step(0.2, m)
+
+    engine = fuzzkit.Engine(rb)
+
+    def run_exact() -> None:
+        for e, de in pts[:2000]:
+            engine.evaluate_point(e=e, de=de)
+
+    rows: list[tuple[str, str, str, str]] = []
+    for nt in ("float", "q15"):
+        ns = c_ns_per_call(rb, tables[nt])
+        measured = "no compiler" if ns is None else f"{ns:.2f} ns"
+        ok = "" if ns is None else ("ok" if ns <= TARGET_C_NS else "MISSED")
+        rows.append((f"C {NAME}_eval ({nt}, -O2, 1e7 calls)", f"<= {TARGET_C_NS} ns", measured, ok))
+    py_eval = min(_us(run_eval, len(pts)) for _ in range(3))
+    py_step = min(_us(run_step, len(meas)) for _ in range(3))
+    exact = _us(run_exact, 2000)
+    rows.append(
+        (
+            "Python eval",
+            f"<= {TARGET_PY_US} us",
+            f"{py_eval:.2f} us",
+            "ok" if py_eval <= TARGET_PY_US else "MISSED",
+        )
+    )
+    rows.append(
+        (
+            "Python FuzzyPI.step",
+            f"<= {TARGET_PY_US} us",
+            f"{py_step:.2f} us",
+            "ok" if py_step <= TARGET_PY_US else "MISSED",
+        )
+    )
+    rows.append(("exact engine, scalar point", "(reference)", f"{exact:.1f} us", ""))
+    for nt in ("float", "q15"):
+        t = tables[nt]
+        rows.append(
+            (
+                f"table bytes ({nt}, tol 1e-3: {t.shape[0]}x{t.shape[1]}, bound {t.bound[0]:.2g})",
+                f"<= {TARGET_BYTES} B",
+                f"{t.memory_bytes} B",
+                "ok" if t.memory_bytes <= TARGET_BYTES else "MISSED",
+            )
+        )
+    width = max(len(r[0]) for r in rows)
+    print(f"{'measure':<{width}}  {'target':>12}  {'measured':>12}  verdict")
+    for what, target, measured, verdict in rows:
+        print(f"{what:<{width}}  {target:>12}  {measured:>12}  {verdict}")
+
+
+if __name__ == "__main__":
+    main()
