@@ -112,7 +112,11 @@ class AxisSpec:
     uniform: bool
     inv_step: str
     breakpoints: tuple[str, ...]
-    search_steps: tuple[int, ...]
+    # Non-uniform and Q15 axes: bin -> first-guess cell (see LookupTable.index_map)
+    map_rows: tuple[str, ...]
+    map_type: str
+    map_bins: int
+    map_scale: str
     # Q15 only (empty strings / tuples otherwise)
     scale: str
     q_low: int
@@ -211,17 +215,6 @@ def _wrap(items: Sequence[str], per_line: int) -> tuple[str, ...]:
     return tuple(", ".join(items[i : i + per_line]) for i in range(0, len(items), per_line))
 
 
-def _search_steps(count: int) -> tuple[int, ...]:
-    # Powers of two for a fixed-length binary search over count - 1 cells.
-    cells = count - 1
-    steps = []
-    s = 1
-    while s < cells:
-        steps.append(s)
-        s *= 2
-    return tuple(reversed(steps))
-
-
 def source_sha256(rb: RuleBase) -> tuple[str, str]:
     """The rule base's file name and sha256 as the banner states them."""
     if rb.source is not None:
@@ -268,6 +261,14 @@ def build_spec(
         bp = table.breakpoints[a]
         q = table.q15
         uniform = q is None and table.is_uniform(a)
+        map_rows: tuple[str, ...] = ()
+        map_bins = 0
+        map_scale = ""
+        if not uniform:
+            cells, scale = table.index_map(a)
+            map_rows = _wrap([str(int(c)) for c in cells], 16)
+            map_bins = int(cells.size)
+            map_scale = str(int(scale)) if q is not None else lit(scale)
         axes.append(
             AxisSpec(
                 index=a,
@@ -284,7 +285,10 @@ def build_spec(
                     else [lit(float(v)) for v in bp],
                     8,
                 ),
-                search_steps=_search_steps(len(bp)),
+                map_rows=map_rows,
+                map_type="unsigned char" if len(bp) <= 257 else "unsigned short",
+                map_bins=map_bins,
+                map_scale=map_scale,
                 scale=_c_literal(q.in_scale[a], "double") if q is not None else "",
                 q_low=q.q_low[a] if q is not None else 0,
                 q_high=q.q_high[a] if q is not None else 0,

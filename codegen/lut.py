@@ -142,9 +142,34 @@ class LookupTable:
                 total += 2 * len(bp) + 4 * (len(bp) - 1)
             elif not self.is_uniform(axis):
                 total += self.value_bytes * len(bp)
+            if self.q15 is not None or not self.is_uniform(axis):
+                cells = self.index_map(axis)[0]
+                total += cells.size * (1 if len(bp) <= 257 else 2)
         if self.splits is not None:
             total += (self.splits.size + 7) // 8
         return total
+
+    def index_map(self, axis: int) -> tuple[IntArray, float]:
+        """A first guess of the cell for a non-uniform axis, to replace a search in C.
+
+        Returns ``(cells, scale)``. float/double: ``bin = int((x - low) * scale)`` (capped at
+        the last bin), bins at most half the narrowest cell wide, so the cell is
+        ``cells[bin]`` or a neighbour even when rounding puts ``x`` in the adjacent bin (the C
+        then checks one breakpoint each way). Q15: ``bin = (q - q_low) >> scale``, bins of
+        2**scale codes, no wider than the narrowest cell, so the cell is ``cells[bin]`` or the
+        next one (exact integer arithmetic: one check).
+        """
+        if self.q15 is not None:
+            qb = self.q15.q_breakpoints[axis]
+            shift = int(np.min(np.diff(qb))).bit_length() - 1
+            starts = np.arange(self.q15.q_low[axis], self.q15.q_high[axis] + 1, 1 << shift)
+            cells = np.clip(np.searchsorted(qb, starts, side="right") - 1, 0, len(qb) - 2)
+            return cells.astype(np.int64), float(shift)
+        bp = self.breakpoints[axis]
+        n_bins = 2 * math.ceil((bp[-1] - bp[0]) / float(np.min(np.diff(bp))))
+        starts = bp[0] + (bp[-1] - bp[0]) * np.arange(n_bins) / n_bins
+        cells = np.clip(np.searchsorted(bp, starts, side="right") - 1, 0, len(bp) - 2)
+        return cells.astype(np.int64), n_bins / float(bp[-1] - bp[0])
 
     def is_uniform(self, axis: int) -> bool:
         """True when the breakpoints of ``axis`` are evenly spaced (indexed without a search)."""
@@ -268,7 +293,8 @@ def _combine(
     """Interpolate ``tab`` inside the located cells.
 
     1 and 3 inputs: (multi)linear. 2 inputs: linear on the two triangles of each cell, split
-    along the diagonal ``splits`` names (0: (0,0)-(1,1), 1: (1,0)-(0,1)). A min-AND rule base
+    along the diagonal ``splits`` names (0: (0,0)-(1,1), 1: (1,0)-(0,1)); the generated code
+    uses the same formula, term for term. A min-AND rule base
     has creases exactly on such diagonals, where a bilinear patch would only converge like h.
     In Q15 (``shift`` set) every product is rounded on its own, as the C does, and the
     result saturated to int16.
@@ -284,17 +310,19 @@ def _combine(
         v00, v10 = tab[i, j], tab[i + 1, j]
         v01, v11 = tab[i, j + 1], tab[i + 1, j + 1]
         anti = np.zeros(i.shape, dtype=bool) if splits is None else splits[i, j].astype(bool)
-        main_lo = v00 + _lerp_term(t0, v10 - v00, shift) + _lerp_term(t1, v11 - v10, shift)
-        main_hi = v00 + _lerp_term(t1, v01 - v00, shift) + _lerp_term(t0, v11 - v01, shift)
-        anti_lo = v00 + _lerp_term(t0, v10 - v00, shift) + _lerp_term(t1, v01 - v00, shift)
-        anti_hi = (
-            v11 + _lerp_term(one - t0, v01 - v11, shift) + _lerp_term(one - t1, v10 - v11, shift)
-        )
-        out = np.where(
-            anti,
-            np.where(t0 + t1 <= one, anti_lo, anti_hi),
-            np.where(t0 >= t1, main_lo, main_hi),
-        )
+        # An anti-diagonal cell is the mirror image (along input 0) of a main-diagonal one, so
+        # one formula serves both, without branches in the C: the triangle's middle corner vm,
+        # the larger fraction along the edge to it and the smaller along the edge after it.
+        s0 = np.where(anti, one - t0, t0)
+        w00 = np.where(anti, v10, v00)
+        w10 = np.where(anti, v00, v10)
+        w01 = np.where(anti, v11, v01)
+        w11 = np.where(anti, v01, v11)
+        lower = s0 >= t1
+        vm = np.where(lower, w10, w01)
+        hi = np.where(lower, s0, t1)
+        lo = np.where(lower, t1, s0)
+        out = w00 + _lerp_term(hi, vm - w00, shift) + _lerp_term(lo, w11 - vm, shift)
     else:
         # Trilinear, reduced axis by axis from the last, as the C does.
         corners: dict[tuple[int, ...], Any] = {}

@@ -55,8 +55,8 @@ static const float gaussian5_table0[289] = {
 /* Bit c (cell c = i0 * 16 + i1) set: the cell is cut along its (1,0)-(0,1)
  * diagonal, else along (0,0)-(1,1); each half is interpolated linearly. */
 static const unsigned char gaussian5_split[] = {
-    0x3f, 0x74, 0x1f, 0xb8, 0x83, 0xdc, 0x03, 0xe2, 0x83, 0x67, 0xe1, 0xab,
-    0xe0, 0x1d, 0x74, 0x0f, 0x70, 0x2e, 0xb8, 0x07, 0xd5, 0x87, 0xe6, 0xc1,
+    0x3f, 0x74, 0x1f, 0xb8, 0x83, 0xdc, 0x03, 0xe2, 0x83, 0x6f, 0xe1, 0xab,
+    0xe0, 0x1d, 0x74, 0x0e, 0x70, 0x2e, 0xb8, 0x07, 0xd5, 0x87, 0xe6, 0xc1,
     0x47, 0xc0, 0x3b, 0xc1, 0x1d, 0xf8, 0x2e, 0xfc,
 };
 
@@ -107,7 +107,8 @@ void gaussian5_eval(const float in[GAUSSIAN5_N_INPUTS], float out[GAUSSIAN5_N_OU
     int i0;
     int i1;
     int k;
-    int cell, anti;
+    int cell, anti, lower;
+    float s0, hi, lo;
     if (in[0] != in[0] || in[1] != in[1]) {
         out[0] = NAN;
         return;
@@ -117,24 +118,21 @@ void gaussian5_eval(const float in[GAUSSIAN5_N_INPUTS], float out[GAUSSIAN5_N_OU
     k = i0 * 17 + i1 * 1;
     cell = i0 * 16 + i1;
     anti = (gaussian5_split[cell >> 3] >> (cell & 7)) & 1;
+    /* An anti-diagonal cell is the mirror image (along input 0) of a main-diagonal one; in
+     * the mirrored cell the triangle holding the point has middle corner vm, reached by the
+     * larger fraction hi, then the smaller fraction lo to the far corner. Selects, no branches. */
+    s0 = anti ? 1.0f - t0 : t0;
+    lower = s0 >= t1;
+    hi = lower ? s0 : t1;
+    lo = lower ? t1 : s0;
     {
-        const float v00 = gaussian5_table0[k];
-        const float v10 = gaussian5_table0[k + 17];
-        const float v01 = gaussian5_table0[k + 1];
-        const float v11 = gaussian5_table0[k + 18];
-        if (anti) {
-            if (t0 + t1 <= 1.0f) {
-                out[0] = v00 + t0 * (v10 - v00) + t1 * (v01 - v00);
-            } else {
-                out[0] = v11 + (1.0f - t0) * (v01 - v11) + (1.0f - t1) * (v10 - v11);
-            }
-        } else {
-            if (t0 >= t1) {
-                out[0] = v00 + t0 * (v10 - v00) + t1 * (v11 - v10);
-            } else {
-                out[0] = v00 + t1 * (v01 - v00) + t0 * (v11 - v01);
-            }
-        }
+        const float *v = gaussian5_table0 + k;
+        const float w00 = anti ? v[17] : v[0];
+        const float w10 = anti ? v[0] : v[17];
+        const float w01 = anti ? v[18] : v[1];
+        const float w11 = anti ? v[1] : v[18];
+        const float vm = lower ? w10 : w01;
+        out[0] = w00 + hi * (vm - w00) + lo * (w11 - vm);
     }
 }
 

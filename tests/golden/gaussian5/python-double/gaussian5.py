@@ -75,7 +75,7 @@ _T0 = (
 # Bit c of cell c = i0 * 16 + i1 set: cut along the (1,0)-(0,1) diagonal.
 _SPLIT = bytes((
     0x3f, 0xf4, 0x1f, 0xb8, 0x83, 0xdc, 0x03, 0xe2, 0x83, 0x6f, 0xe1, 0xab,
-    0xe0, 0x1f, 0x74, 0x0f, 0x70, 0x2e, 0xb8, 0x07, 0xd5, 0x87, 0xf6, 0xc1,
+    0xe0, 0x1f, 0x74, 0x0f, 0x70, 0x2e, 0xf8, 0x07, 0xd5, 0x87, 0xf6, 0xc1,
     0x4f, 0xc0, 0x3b, 0xc1, 0x1d, 0xf8, 0x2f, 0xfc,
 ))
 
@@ -108,20 +108,18 @@ def eval(inputs: Sequence[float]) -> tuple[float, ...]:  # noqa: A001 - the docu
     k = i0 * 17 + i1 * 1
     cell = i0 * 16 + i1
     anti = (_SPLIT[cell >> 3] >> (cell & 7)) & 1
+    # An anti-diagonal cell is the mirror image (along input 0) of a main-diagonal one.
+    s0 = 1.0 - t0 if anti else t0
+    lower = s0 >= t1
+    hi = s0 if lower else t1
+    lo = t1 if lower else s0
     tab = _T0
-    v00 = tab[k]
-    v10 = tab[k + 17]
-    v01 = tab[k + 1]
-    v11 = tab[k + 18]
     if anti:
-        if t0 + t1 <= 1.0:
-            y0 = v00 + t0 * (v10 - v00) + t1 * (v01 - v00)
-        else:
-            y0 = v11 + (1.0 - t0) * (v01 - v11) + (1.0 - t1) * (v10 - v11)
-    elif t0 >= t1:
-        y0 = v00 + t0 * (v10 - v00) + t1 * (v11 - v10)
+        w00, w10, w01, w11 = tab[k + 17], tab[k], tab[k + 18], tab[k + 1]
     else:
-        y0 = v00 + t1 * (v01 - v00) + t0 * (v11 - v01)
+        w00, w10, w01, w11 = tab[k], tab[k + 17], tab[k + 1], tab[k + 18]
+    vm = w10 if lower else w01
+    y0 = w00 + hi * (vm - w00) + lo * (w11 - vm)
     return (y0,)
 
 
