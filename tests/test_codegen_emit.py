@@ -178,3 +178,31 @@ def test_table_nodes_hold_the_exact_engine_values_and_knots() -> None:
     g = np.meshgrid(*tab.breakpoints, indexing="ij")
     exact = Engine(rb).evaluate({"e": g[0], "de": g[1]})["du"]
     np.testing.assert_array_equal(tab.values[0], exact)
+
+
+def _mw_variant(**changes: object) -> object:
+    return dataclasses.replace(rulebase("macvicar_whelan"), **changes)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    "changes, match",
+    [
+        ({"out_of_range": "extend"}, "only 'clamp' can be compiled"),
+        ({"rules": rulebase("macvicar_whelan").rules[:3]}, "no rule fires there"),
+    ],
+)
+def test_rule_bases_a_table_cannot_represent_are_refused(changes: dict, match: str) -> None:
+    with pytest.raises(CodegenError, match=match):
+        make_table(_mw_variant(**changes), resolution=7)  # type: ignore[arg-type]
+
+
+def test_more_than_three_inputs_are_refused() -> None:
+    rb = rulebase("three_input")
+    four = dataclasses.replace(rb, inputs=(*rb.inputs, dataclasses.replace(rb.inputs[2], name="s")))
+    with pytest.raises(CodegenError, match="1 to 3 inputs, got 4"):
+        make_table(four, resolution=3)
+
+
+def test_q15_table_too_fine_for_the_codes_is_refused() -> None:
+    with pytest.raises(CodegenError, match="too close for Q15"):
+        make_table(rulebase("macvicar_whelan"), number_type="q15", resolution=[4096, 3])
