@@ -117,6 +117,7 @@ class AxisSpec:
     map_type: str
     map_bins: int
     map_scale: str
+    inv_widths: tuple[str, ...]
     # Q15 only (empty strings / tuples otherwise)
     scale: str
     q_low: int
@@ -289,6 +290,9 @@ def build_spec(
                 map_type="unsigned char" if len(bp) <= 257 else "unsigned short",
                 map_bins=map_bins,
                 map_scale=map_scale,
+                inv_widths=()
+                if uniform or q is not None
+                else _wrap([lit(1.0 / float(w)) for w in np.diff(bp)], 8),
                 scale=_c_literal(q.in_scale[a], "double") if q is not None else "",
                 q_low=q.q_low[a] if q is not None else 0,
                 q_high=q.q_high[a] if q is not None else 0,

@@ -141,7 +141,7 @@ class LookupTable:
             if self.q15 is not None:
                 total += 2 * len(bp) + 4 * (len(bp) - 1)
             elif not self.is_uniform(axis):
-                total += self.value_bytes * len(bp)
+                total += self.value_bytes * (2 * len(bp) - 1)  # breakpoints and 1/widths
             if self.q15 is not None or not self.is_uniform(axis):
                 cells = self.index_map(axis)[0]
                 total += cells.size * (1 if len(bp) <= 257 else 2)
