@@ -161,6 +161,7 @@ class Spec:
     memory_bytes: int
     check_points: int
     bound_summary: str
+    margin_percent: int
     split_bytes: tuple[str, ...]
     has_fpi: bool
     fpi_note: str
@@ -311,7 +312,7 @@ def build_spec(
                 high=format(var.high, ".6g"),
                 rows=_wrap(items, 8),
                 bound=format(table.bound[k], ".3g"),
-                tolerance=format(table.tolerance[k], ".3g"),
+                tolerance=format(table.tolerance[k], ".3g") if table.tolerance else "",
                 scale=_c_literal(table.q15.out_scale[k], "double") if table.q15 else "",
             )
         )
@@ -336,7 +337,10 @@ def build_spec(
         }
     file_name, sha = source_sha256(rb)
     desc = tuple(textwrap.wrap(_comment_safe(" ".join(rb.description.split())), 88)[:8])
-    bound_summary = ", ".join(f"{o.name}: {o.bound} (tolerance {o.tolerance})" for o in outputs)
+    bound_summary = ", ".join(
+        f"{o.name}: {o.bound}" + (f" (tolerance {o.tolerance})" if o.tolerance else "")
+        for o in outputs
+    )
     return Spec(
         name=name,
         upper=name.upper(),
@@ -356,6 +360,9 @@ def build_spec(
         memory_bytes=table.memory_bytes,
         check_points=table.check_points,
         bound_summary=bound_summary,
+        margin_percent=round(100 * (table.bound[0] / table.measured[0] - 1))
+        if table.measured and table.measured[0] > 0
+        else 0,
         split_bytes=split_bytes,
         has_fpi=has_fpi,
         fpi_note=note.replace("NAME", name),

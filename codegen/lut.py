@@ -97,7 +97,8 @@ class LookupTable:
     number type keeps them (float32, float64 or int16 Q15 codes). ``measured[k]`` is the largest
     absolute error (output units) on the check grid for ``number_type``, ``bound[k]`` that
     times ``BOUND_MARGIN`` (the published, verified bound), and
-    ``tolerance[k]`` the absolute tolerance it was held to. For two inputs, ``splits[i, j]``
+    ``tolerance[k]`` the absolute tolerance it was held to (empty when none was: a table of
+    a given resolution). For two inputs, ``splits[i, j]``
     says along which diagonal cell ``(i, j)`` is cut into two linear triangles (see
     :func:`_combine`); ``None`` otherwise.
     """
@@ -498,8 +499,9 @@ def build_table(
 ) -> LookupTable:
     """Sample ``rb`` with ``counts[i]`` breakpoints on input ``i`` and measure the bound.
 
-    ``tolerance`` (fraction of each output range) is only recorded here; :func:`make_table`
-    enforces it. ``evaluate`` defaults to the exact engine.
+    ``tolerance`` (fraction of each output range) is only recorded here (as absolute values
+    per output; ``()`` when None); :func:`make_table` enforces it. ``evaluate`` defaults to
+    the exact engine.
     """
     _check_rule_base(rb, number_type)
     if check_factor < 4:
@@ -521,7 +523,6 @@ def build_table(
                 "add rules covering it or give the output a default"
             )
     stored = _store(values, number_type, layout)
-    tol_frac = DEFAULT_TOLERANCE if tolerance is None else tolerance
     table = LookupTable(
         rule_base_name=rb.name,
         input_names=rb.input_names,
@@ -534,7 +535,9 @@ def build_table(
         number_type=number_type,
         q15=layout,
         bound=(),
-        tolerance=tuple(tol_frac * (v.high - v.low) for v in rb.outputs),
+        tolerance=()
+        if tolerance is None
+        else tuple(tolerance * (v.high - v.low) for v in rb.outputs),
         check_points=0,
     )
     # A multiple of 4, so the 4x sub-grid the 2-D diagonals are chosen on is part of it.
@@ -578,10 +581,10 @@ def _choose_splits(
         trial = np.full((n0, n1), choice, dtype=np.uint8)
         approx = table.interpolate_with(sub, trial)
         err = np.zeros((n0, n1))
-        for a, e, tol in zip(approx, exact, table.tolerance, strict=True):
+        for a, e, (lo, hi) in zip(approx, exact, table.output_ranges, strict=True):
             diff = np.abs(a - e[::step, ::step])
             cell = diff[:-1, :-1].reshape(n0, k, n1, k)[:, 1:, :, 1:]
-            err = np.maximum(err, cell.max(axis=(1, 3)) / tol)
+            err = np.maximum(err, cell.max(axis=(1, 3)) / (hi - lo))
         worst.append(err)
     return (worst[1] < worst[0]).astype(np.uint8)
 
@@ -656,7 +659,10 @@ def make_table(
                 f"resolution must give {len(rb.inputs)} count(s) between {MIN_BREAKPOINTS} "
                 f"and {MAX_BREAKPOINTS}, got {resolution}"
             )
-        table = build_table(rb, counts, number_type=number_type, tolerance=tol, evaluate=evaluator)
+        given = None if tolerance is None else tol
+        table = build_table(
+            rb, counts, number_type=number_type, tolerance=given, evaluate=evaluator
+        )
         if tolerance is not None:
             _enforce(table, f"resolution {resolution}")
         return table

@@ -29,10 +29,8 @@ def rulebase(name: str) -> RuleBase:
 
 @functools.cache
 def table(name: str, number_type: NumberType) -> LookupTable:
-    """A table of a shipped rule base at the test resolution (tolerance not enforced)."""
-    return make_table(
-        rulebase(name), number_type=number_type, resolution=RESOLUTION[name], tolerance=1.0
-    )
+    """A table of a shipped rule base at the test resolution (no tolerance: bound reported)."""
+    return make_table(rulebase(name), number_type=number_type, resolution=RESOLUTION[name])
 
 
 def sources(name: str, target: str, number_type: NumberType) -> dict[str, str]:
