@@ -195,3 +195,50 @@ def test_rounding_allowance_is_small_against_the_bound() -> None:
     # The stated float allowance must not be what makes the check pass.
     tab = table("macvicar_whelan", "float")
     assert ROUNDING["float"] < 1e-3 * tab.bound[0]
+
+
+ONE_INPUT_YAML = """
+name: gain_1d
+description: One input, one output (a soft-saturating gain) to exercise the 1-D code path.
+inputs:
+  x:
+    range: [-2, 3]
+    terms: {partition: triangular, labels: [N, Z, P]}
+outputs:
+  y:
+    range: [-1, 1]
+    terms: {partition: triangular, labels: [N, Z, P]}
+operators: {and: min, or: max, implication: min, aggregation: max}
+defuzzifier: centroid
+rules:
+  - {if: {x: N}, then: {y: N}}
+  - {if: {x: Z}, then: {y: Z}}
+  - {if: {x: P}, then: {y: P}}
+"""
+
+
+@pytest.mark.parametrize("number_type", ["float", "double", "q15"])
+def test_one_input_rule_base_compiles_and_matches(tmp_path: Path, number_type: str) -> None:
+    from codegen.emit import emit
+    from codegen.lut import make_table
+    from fuzzkit.registry import loads
+
+    rb = loads(ONE_INPUT_YAML)
+    tab = make_table(rb, number_type=number_type, resolution=21)  # type: ignore[arg-type]
+    files = emit(rb, tab, "c")
+    srcs = _write(tmp_path, files)
+    assert CC is not None
+    run_compiler([*CC, *STRICT_FLAGS, "-c", *srcs], tmp_path)
+    points = verification_points(rb, 20_000, seed=6)
+    args, real = c_points(tab, points)
+    with CompiledTable(files, rb.name, number_type, 1, 1, fpi=False) as lib:
+        got = c_outputs_real(tab, lib.eval_batch(args))
+    res = Engine(rb).evaluate({"x": real[:, 0]})
+    result = compare(rb, tab, "c", got, np.column_stack([res["y"]]))
+    assert result.ok, result.describe()
+    assert "no fuzzy-PI API" in files["gain_1d.h"]
+    if number_type == "double":
+        from codegen.verify import load_module, python_outputs
+
+        module = load_module(emit(rb, tab, "python"), rb.name)
+        np.testing.assert_allclose(python_outputs(module.eval, points), got, atol=1e-12)
