@@ -206,3 +206,37 @@ def test_more_than_three_inputs_are_refused() -> None:
 def test_q15_table_too_fine_for_the_codes_is_refused() -> None:
     with pytest.raises(CodegenError, match="too close for Q15"):
         make_table(rulebase("macvicar_whelan"), number_type="q15", resolution=[4096, 3])
+
+
+def test_fitted_node_values_shrink_the_bound_and_keep_lattice_and_monotonicity() -> None:
+    from codegen.lut import knots
+
+    rb = rulebase("macvicar_whelan")
+    fitted = build_table(rb, [49, 49], number_type="double")
+    plain = build_table(rb, [49, 49], number_type="double", fit=False)
+    assert fitted.fitted and not plain.fitted
+    assert fitted.bound[0] <= 0.75 * plain.bound[0]
+    stored, samples = fitted.stored[0], fitted.values[0]
+    on_knot = [np.isin(bp, knots(v)) for bp, v in zip(fitted.breakpoints, rb.inputs, strict=True)]
+    lattice = np.logical_and.outer(*on_knot)
+    assert lattice.sum() == 49  # the 7x7 label peaks
+    np.testing.assert_array_equal(stored[lattice], samples[lattice])
+    assert np.max(np.abs(stored - samples)) > 1e-4  # the fit did move the free nodes
+
+
+def test_fit_never_makes_a_monotone_surface_non_monotone() -> None:
+    # None of the shipped centroid surfaces is monotone (MacVicar-Whelan dips by 2% of the
+    # range near its corners), so a monotone surface with creases stands in for one.
+    def surface(inputs):  # type: ignore[no-untyped-def]
+        e, de = inputs["e"], inputs["de"]
+        return {"du": np.tanh(3.0 * np.minimum(e, de)) + 0.2 * np.tanh(4.0 * (e + de))}
+
+    rb = rulebase("macvicar_whelan")
+    tab = build_table(rb, [25, 25], number_type="double", evaluate=surface)
+    plain = build_table(rb, [25, 25], number_type="double", evaluate=surface, fit=False)
+    samples, stored = tab.values[0], tab.stored[0]
+    for axis in (0, 1):
+        assert np.all(np.diff(samples, axis=axis) >= 0)
+        assert np.all(np.diff(stored, axis=axis) >= 0)
+    # Either the fit kept it monotone or it was dropped: never a non-monotone table.
+    assert tab.bound[0] <= plain.bound[0]
