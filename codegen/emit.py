@@ -320,14 +320,12 @@ def build_spec(
     if table.splits is not None:
         bits = np.packbits(table.splits.ravel(), bitorder="little")
         split_bytes = _wrap([f"0x{int(b):02x}" for b in bits], 12)
-    has_fpi = len(rb.inputs) == 2 and nt != "q15"
+    has_fpi = len(rb.inputs) == 2
     if len(rb.inputs) != 2:
         note = (
             "no fuzzy-PI API: it needs exactly 2 inputs (e, de), this rule base has "
             f"{len(rb.inputs)}"
         )
-    elif nt == "q15":
-        note = "no fuzzy-PI API in Q15: use NAME_eval from a fixed-point loop (see header)"
     else:
         note = ""
     defaults = None

@@ -70,10 +70,11 @@ void fuzzkit_batch_eval(const {t} *in, {t} *out, long n)
 }}
 """
     if fpi:
+        g = "float" if number_type == "q15" else t  # Q15 fpi_init takes float gains too
         text += f"""
-void fuzzkit_fpi_run(const {t} *gains, const {t} *sp, const {t} *meas, {t} *u, long n,
+void fuzzkit_fpi_run(const {g} *gains, const {t} *sp, const {t} *meas, {t} *u, long n,
                      unsigned long *faults);
-void fuzzkit_fpi_run(const {t} *gains, const {t} *sp, const {t} *meas, {t} *u, long n,
+void fuzzkit_fpi_run(const {g} *gains, const {t} *sp, const {t} *meas, {t} *u, long n,
                      unsigned long *faults)
 {{
     {name}_fpi_t c;
@@ -153,7 +154,15 @@ class CompiledTable:
         self._fpi: Any = None
         if fpi:
             self._fpi = self.library.fuzzkit_fpi_run
-            self._fpi.argtypes = [ptr, ptr, ptr, ptr, ctypes.c_long, ctypes.POINTER(ctypes.c_ulong)]
+            gptr = ctypes.POINTER(ctypes.c_float) if number_type == "q15" else ptr
+            self._fpi.argtypes = [
+                gptr,
+                ptr,
+                ptr,
+                ptr,
+                ctypes.c_long,
+                ctypes.POINTER(ctypes.c_ulong),
+            ]
             self._fpi.restype = None
 
     def __enter__(self) -> CompiledTable:
@@ -191,12 +200,14 @@ class CompiledTable:
         dtype = _NUMPY[self.number_type]
         sp = np.ascontiguousarray(setpoints, dtype=dtype)
         me = np.ascontiguousarray(measured, dtype=dtype)
-        g = np.ascontiguousarray(gains, dtype=dtype)
+        q15 = self.number_type == "q15"
+        g = np.ascontiguousarray(gains, dtype=np.float32 if q15 else dtype)
+        gptr = ctypes.POINTER(ctypes.c_float) if q15 else ctypes.POINTER(_CTYPES[self.number_type])
         u = np.empty_like(sp)
         faults = np.zeros(sp.shape, dtype=np.uint64)
         ptr = ctypes.POINTER(_CTYPES[self.number_type])
         self._fpi(
-            g.ctypes.data_as(ptr),
+            g.ctypes.data_as(gptr),
             sp.ctypes.data_as(ptr),
             me.ctypes.data_as(ptr),
             u.ctypes.data_as(ptr),

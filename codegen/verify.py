@@ -168,7 +168,7 @@ def verify_c(
     """Compile ``files`` (strict flags), load them and compare with the exact engine."""
     points = verification_points(rb, n)
     args, real = c_points(table, points)
-    fpi = len(rb.inputs) == 2 and table.number_type != "q15"
+    fpi = len(rb.inputs) == 2
     with CompiledTable(
         files,
         rb.name,

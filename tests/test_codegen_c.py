@@ -67,7 +67,7 @@ def test_matches_exact_engine_on_random_and_edge_points(name: str, number_type: 
     files = sources(name, "c", number_type)  # type: ignore[arg-type]
     points = verification_points(rb, 100_000, seed=1)
     args, real = c_points(tab, points)
-    fpi = len(rb.inputs) == 2 and number_type != "q15"
+    fpi = len(rb.inputs) == 2
     with CompiledTable(
         files, rb.name, number_type, len(rb.inputs), len(rb.outputs), fpi=fpi
     ) as lib:

@@ -163,3 +163,64 @@ def test_c_fpi_matches_reference_loop(number_type: str, atol: float) -> None:
     ) as lib:
         us, faults = lib.fpi_run(GAINS, sp, me)
     _check_trace(us.astype(np.float64), faults.astype(np.int64), ref_u, ref_f, atol=atol)
+
+
+def _fixed(x: float, scale: float, lo: float, hi: float) -> int:
+    """round-half-away(x * scale) saturated to [lo, hi] (NaN -> 0), as documented."""
+    v = x * scale
+    if math.isnan(v):
+        return 0
+    if v >= hi:
+        return int(hi)
+    if v <= lo:
+        return int(lo)
+    return math.floor(abs(v) + 0.5) * (1 if v >= 0 else -1)
+
+
+def reference_fpi_q15(
+    tab: LookupTable, gains: tuple[float, ...], setpoints: np.ndarray, measured: np.ndarray
+) -> list[int]:
+    """The Q15 fuzzy-PI as the header documents it, with Python integers."""
+    assert tab.q15 is not None
+    f32 = [float(np.float32(g)) for g in gains]
+    kp, ki, kx, u_min, u_max = f32
+    big = 2147483647.0
+    kp_q = _fixed(kp / tab.q15.in_scale[1], 65536.0, -big, big)
+    ki_q = _fixed(ki / tab.q15.in_scale[0], 65536.0, -big, big)
+    kx_q = _fixed(kx * tab.q15.out_scale[0], 65536.0, -big, big)
+    lo = _fixed(u_min, 32768.0, -32768.0, 32767.0)
+    hi = _fixed(u_max, 32768.0, -32768.0, 32767.0)
+    u = min(max(0, lo), hi)
+    e_prev, first = 0, True
+    out = []
+    for sp, me in zip(setpoints.tolist(), measured.tolist(), strict=True):
+        e = int(sp) - int(me)
+        de = 0 if first else e - e_prev
+        in0 = min(max((ki_q * e + 32768) >> 16, -32768), 32767)
+        in1 = min(max((kp_q * de + 32768) >> 16, -32768), 32767)
+        y = int(tab.interpolate_q15([np.array([in0]), np.array([in1])])[0][0])
+        u = min(max(u + ((kx_q * y + 32768) >> 16), lo), hi)
+        e_prev, first = e, False
+        out.append(u)
+    return out
+
+
+@needs_cc
+@skip_no_cc
+def test_c_q15_fpi_is_bit_exact_with_the_documented_integer_loop() -> None:
+    tab = table("macvicar_whelan", "q15")
+    sp_real, me_real = spring_plant_measurements(table("macvicar_whelan", "double"))
+    # Normalised Q15 codes: the NaN/inf samples become a sensor stuck at full scale.
+    me_real = np.nan_to_num(me_real, nan=0.99, posinf=0.99)
+    sp = np.clip(np.rint(sp_real / 2.5 * 32768), -32768, 32767).astype(np.int16)
+    me = np.clip(np.rint(me_real / 2.5 * 32768), -32768, 32767).astype(np.int16)
+    gains = (0.8, 1.5, 0.05, -0.3, 0.6)
+    ref = reference_fpi_q15(tab, gains, sp, me)
+    with CompiledTable(
+        sources("macvicar_whelan", "c", "q15"), "macvicar_whelan", "q15", 2, 1, fpi=True
+    ) as lib:
+        us, faults = lib.fpi_run(gains, sp, me)
+    np.testing.assert_array_equal(us.astype(np.int64), ref)
+    assert not faults.any()
+    assert max(ref) == round(0.6 * 32768)  # saturated at u_max
+    assert len(set(ref)) > 50  # and it did move

@@ -123,8 +123,6 @@ def cmd_compile(args: argparse.Namespace) -> int:
     print(f"{rb.name}: {table.describe()}")
     if len(rb.inputs) != 2:
         print(f"note: no fuzzy-PI API (it needs 2 inputs, {rb.name} has {len(rb.inputs)})")
-    elif number_type == "q15":
-        print(f"note: no fuzzy-PI API for q15 ({rb.name}_eval only; see the header)")
     if defaults is not None and len(rb.inputs) != 2:
         print("note: --gains ignored (no fuzzy-PI API)")
     if args.verify:

@@ -228,3 +228,81 @@ void macvicar_whelan_eval(const int16_t in[MACVICAR_WHELAN_N_INPUTS], int16_t ou
         out[0] = macvicar_whelan_sat16(w00 + macvicar_whelan_lerp(hi, vm - w00) + macvicar_whelan_lerp(lo, w11 - vm));
     }
 }
+
+/* The gain products need >> of a negative int64 to be arithmetic too. */
+typedef char macvicar_whelan_static_assert_arithmetic_shift64[((-(int64_t)7 >> 1) == -4) ? 1 : -1];
+
+/* round(x * scale) saturated to [lo, hi]; NaN -> 0. Only fpi_init uses floating point. */
+static int32_t macvicar_whelan_fixed(double x, double scale, double lo, double hi)
+{
+    double v = x * scale;
+    if (v != v) {
+        return 0;
+    }
+    if (v >= hi) {
+        return (int32_t)hi;
+    }
+    if (v <= lo) {
+        return (int32_t)lo;
+    }
+    return (int32_t)(v < 0.0 ? v - 0.5 : v + 0.5);
+}
+
+static int64_t macvicar_whelan_mul_q16(int32_t gain, int32_t x)
+{
+    return ((int64_t)gain * x + 32768) >> 16;
+}
+
+static int16_t macvicar_whelan_sat16_64(int64_t v)
+{
+    return (int16_t)(v < -32768 ? -32768 : (v > 32767 ? 32767 : v));
+}
+
+void macvicar_whelan_fpi_init(macvicar_whelan_fpi_t *c, float kp, float ki, float kx, float u_min, float u_max)
+{
+    c->kp_q = macvicar_whelan_fixed((double)kp / MACVICAR_WHELAN_IN1_FULL_SCALE, 65536.0, -2147483647.0, 2147483647.0);
+    c->ki_q = macvicar_whelan_fixed((double)ki / MACVICAR_WHELAN_IN0_FULL_SCALE, 65536.0, -2147483647.0, 2147483647.0);
+    c->kx_q = macvicar_whelan_fixed((double)kx * MACVICAR_WHELAN_OUT0_FULL_SCALE, 65536.0, -2147483647.0, 2147483647.0);
+    c->u_min = macvicar_whelan_fixed((double)u_min, 32768.0, -32768.0, 32767.0);
+    c->u_max = macvicar_whelan_fixed((double)u_max, 32768.0, -32768.0, 32767.0);
+    macvicar_whelan_fpi_reset(c);
+}
+
+void macvicar_whelan_fpi_reset(macvicar_whelan_fpi_t *c)
+{
+    int32_t u = 0;
+    if (u < c->u_min) {
+        u = c->u_min;
+    }
+    if (u > c->u_max) {
+        u = c->u_max;
+    }
+    c->u = u;
+    c->e_prev = 0;
+    c->started = 0;
+    c->faults = 0;
+}
+
+int16_t macvicar_whelan_fpi_step(macvicar_whelan_fpi_t *c, int16_t setpoint, int16_t measured)
+{
+    int16_t in[MACVICAR_WHELAN_N_INPUTS];
+    int16_t out[MACVICAR_WHELAN_N_OUTPUTS];
+    int32_t e, de;
+    int64_t u;
+    e = (int32_t)setpoint - (int32_t)measured;
+    de = c->started ? e - c->e_prev : 0;
+    in[0] = macvicar_whelan_sat16_64(macvicar_whelan_mul_q16(c->ki_q, e));
+    in[1] = macvicar_whelan_sat16_64(macvicar_whelan_mul_q16(c->kp_q, de));
+    macvicar_whelan_eval(in, out);
+    u = (int64_t)c->u + macvicar_whelan_mul_q16(c->kx_q, out[0]);
+    if (u < c->u_min) {
+        u = c->u_min;
+    }
+    if (u > c->u_max) {
+        u = c->u_max;
+    }
+    c->u = (int32_t)u;
+    c->e_prev = e;
+    c->started = 1;
+    return (int16_t)u;
+}

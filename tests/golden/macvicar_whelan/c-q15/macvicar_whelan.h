@@ -15,7 +15,8 @@
  * min/min/max with centroid defuzzification.
  *
  * C99, no heap, no recursion, constant time, every symbol prefixed "macvicar_whelan_".
- * Needs only <stdint.h>; no floating point at all.
+ * Needs only <stdint.h>; no floating point except in the one-off gain conversion of
+ * macvicar_whelan_fpi_init.
  */
 #ifndef MACVICAR_WHELAN_H
 #define MACVICAR_WHELAN_H
@@ -47,7 +48,37 @@ extern "C" {
  * out[] in declaration order (du). Every int16 input is valid. */
 void macvicar_whelan_eval(const int16_t in[MACVICAR_WHELAN_N_INPUTS], int16_t out[MACVICAR_WHELAN_N_OUTPUTS]);
 
-/* no fuzzy-PI API in Q15: use macvicar_whelan_eval from a fixed-point loop (see header). */
+/* Incremental fuzzy-PI in Q15: integer-only per step (init converts the float gains once).
+ * setpoint, measured and u are Q15 codes of normalised signals (value = code / 32768: scale
+ * your sensor and actuator so their full scale is 1). Per step, ">> 16" rounding to nearest:
+ *   e  = setpoint - measured                 (int32)
+ *   de = e - e_prev                          (0 on the first step after init/reset: no kick)
+ *   in[0] = sat16(KI * e >> 16)    KI = round(ki / MACVICAR_WHELAN_IN0_FULL_SCALE * 65536)   Ki scales e
+ *   in[1] = sat16(KP * de >> 16)   KP = round(kp / MACVICAR_WHELAN_IN1_FULL_SCALE * 65536)   Kp scales de
+ *   du = KX * out[0] >> 16         KX = round(kx * MACVICAR_WHELAN_OUT0_FULL_SCALE * 65536)
+ *   u  = clamp(u + du, u_min, u_max)         (the clamp is the anti-windup)
+ * which is, in real terms, the float fuzzy-PI on the normalised signals. The gain products
+ * are int64 (a software multiply on 32-bit MCUs); gains saturate to int32, a NaN gain or
+ * limit becomes 0, u_min/u_max (normalised, in [-1, 1)) round to codes. Every int16 sample
+ * is valid, so there is no fault path: `faults` stays 0 (kept for parity with the float API).
+ * u starts at clamp(0, u_min, u_max); u_min <= u_max is the caller's to ensure. */
+typedef struct {
+    int32_t kp_q;    /* KP above: scales de (input 1) */
+    int32_t ki_q;    /* KI above: scales e (input 0) */
+    int32_t kx_q;    /* KX above: scales the table output into du */
+    int32_t u_min;   /* code */
+    int32_t u_max;   /* code */
+    int32_t u;       /* u_k, code */
+    int32_t e_prev;  /* e_{k-1}, codes */
+    int started;     /* 0 until the first step */
+    unsigned long faults;  /* always 0 in Q15 */
+} macvicar_whelan_fpi_t;
+
+void macvicar_whelan_fpi_init(macvicar_whelan_fpi_t *c, float kp, float ki, float kx, float u_min, float u_max);
+/* Forget the history (u, e_prev); keep the gains. */
+void macvicar_whelan_fpi_reset(macvicar_whelan_fpi_t *c);
+/* One control step; returns u_k as a Q15 code. */
+int16_t macvicar_whelan_fpi_step(macvicar_whelan_fpi_t *c, int16_t setpoint, int16_t measured);
 
 #ifdef __cplusplus
 }

@@ -14,7 +14,8 @@
  * feed-rate change dv. Uses OR, NOT, weights, several outputs, sigmoid and bell terms.
  *
  * C99, no heap, no recursion, constant time, every symbol prefixed "three_input_".
- * Needs only <stdint.h>; no floating point at all.
+ * Needs only <stdint.h>; no floating point except in the one-off gain conversion of
+ * three_input_fpi_init.
  */
 #ifndef THREE_INPUT_H
 #define THREE_INPUT_H
