@@ -125,7 +125,29 @@ def test_q15_scaling_is_documented_and_applied() -> None:
 
 HARNESS = r"""
 #include <stdio.h>
+#include <math.h>
 #include "{name}.h"
+
+/* A few hundred fuzzy-PI steps over extreme samples, so the sanitizers see the step too. */
+static int run_fpi(void)
+{{
+#ifdef WITH_FPI
+    {name}_fpi_t c;
+    long k;
+    {t} meas;
+    {name}_fpi_init(&c, 1e3f, 1e3f, 10.0f, -0.5f, 0.5f);
+    for (k = 0; k < 400; k++) {{
+        meas = ({t})(k % 7 == 0 ? {big} : (k % 5 == 0 ? -{big} : (k % 3)));
+#ifdef WITH_NAN
+        if (k % 11 == 0) {{
+            meas = NAN;
+        }}
+#endif
+        printf("u %.17g\n", (double){name}_fpi_step(&c, ({t})1, meas));
+    }}
+#endif
+    return 0;
+}}
 
 int main(void)
 {{
@@ -135,7 +157,7 @@ int main(void)
     for (;;) {{
         for (i = 0; i < {ni}; i++) {{
             if (scanf("{fmt}", &x[i]) != 1) {{
-                return 0;
+                return run_fpi();
             }}
             in[i] = ({t})x[i];
         }}
@@ -150,7 +172,13 @@ int main(void)
 
 @pytest.mark.parametrize(
     "name, number_type",
-    [("macvicar_whelan", "float"), ("macvicar_whelan", "q15"), ("three_input", "double")],
+    [
+        ("macvicar_whelan", "float"),
+        ("macvicar_whelan", "double"),
+        ("macvicar_whelan", "q15"),
+        ("three_input", "double"),
+        ("three_input", "q15"),
+    ],
 )
 def test_runs_clean_under_address_and_undefined_sanitizers(
     tmp_path: Path, name: str, number_type: str
@@ -161,11 +189,23 @@ def test_runs_clean_under_address_and_undefined_sanitizers(
     srcs = _write(tmp_path, files)
     ctype = {"float": "float", "double": "double", "q15": "int16_t"}[number_type]
     (tmp_path / "main.c").write_text(
-        HARNESS.format(name=name, t=ctype, ni=len(rb.inputs), no=len(rb.outputs), fmt="%lf")
+        HARNESS.format(
+            name=name,
+            t=ctype,
+            ni=len(rb.inputs),
+            no=len(rb.outputs),
+            fmt="%lf",
+            big="32767" if number_type == "q15" else "1e30",
+        )
     )
     assert CC is not None
     try:
-        run_compiler([*CC, *STRICT_FLAGS, *SANITIZE_FLAGS, "-o", "h", "main.c", *srcs], tmp_path)
+        defines = [] if len(rb.inputs) != 2 else ["-DWITH_FPI"]
+        if defines and number_type != "q15":
+            defines.append("-DWITH_NAN")
+        run_compiler(
+            [*CC, *STRICT_FLAGS, *SANITIZE_FLAGS, *defines, "-o", "h", "main.c", *srcs], tmp_path
+        )
     except ToolchainError as exc:
         if "sanitize" in str(exc) or "asan" in str(exc).lower():
             pytest.skip(f"this compiler cannot link sanitizers: {exc}")
@@ -178,7 +218,13 @@ def test_runs_clean_under_address_and_undefined_sanitizers(
     )
     assert proc.returncode == 0, proc.stderr
     assert "runtime error" not in proc.stderr and "AddressSanitizer" not in proc.stderr
-    got = np.array([[float(v) for v in line.split()] for line in proc.stdout.splitlines()])
+    lines = proc.stdout.splitlines()
+    us = [float(line.split()[1]) for line in lines if line.startswith("u ")]
+    got = np.array(
+        [[float(v) for v in line.split()] for line in lines if not line.startswith("u ")]
+    )
+    if len(rb.inputs) == 2:
+        assert len(us) == 400 and all(math.isfinite(u) for u in us)
     got = c_outputs_real(tab, got)
     result = compare(rb, tab, "c", got, _exact(name, real))
     assert result.ok, result.describe()
