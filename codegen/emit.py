@@ -213,8 +213,19 @@ def _py_literal(value: float) -> str:
     return repr(float(value))
 
 
-def _wrap(items: Sequence[str], per_line: int) -> tuple[str, ...]:
-    return tuple(", ".join(items[i : i + per_line]) for i in range(0, len(items), per_line))
+def _wrap(items: Sequence[str], per_line: int, width: int = 94) -> tuple[str, ...]:
+    """Join ``items`` with ", " into lines of at most ``per_line`` items and ``width`` chars."""
+    lines: list[str] = []
+    current: list[str] = []
+    for item in items:
+        candidate = ", ".join([*current, item])
+        if current and (len(current) >= per_line or len(candidate) > width):
+            lines.append(", ".join(current))
+            current = []
+        current.append(item)
+    if current:
+        lines.append(", ".join(current))
+    return tuple(lines)
 
 
 def source_sha256(rb: RuleBase) -> tuple[str, str]:
@@ -256,6 +267,8 @@ def build_spec(
     def lit(v: float) -> str:
         return _py_literal(v) if py else _c_literal(v, nt)
 
+    # Python reprs are up to 23 characters: 4 a line keeps generated Python under 100 columns.
+    per_line = 4 if py else 8
     shape = table.shape
     strides = [math.prod(shape[a + 1 :]) for a in range(len(shape))]
     axes = []
@@ -285,7 +298,7 @@ def build_spec(
                     [str(int(v)) for v in q.q_breakpoints[a]]
                     if q is not None
                     else [lit(float(v)) for v in bp],
-                    8,
+                    per_line,
                 ),
                 map_rows=map_rows,
                 map_type="unsigned char" if len(bp) <= 257 else "unsigned short",
@@ -310,7 +323,7 @@ def build_spec(
                 name=var.name,
                 low=format(var.low, ".6g"),
                 high=format(var.high, ".6g"),
-                rows=_wrap(items, 8),
+                rows=_wrap(items, per_line),
                 bound=format(table.bound[k], ".3g"),
                 tolerance=format(table.tolerance[k], ".3g") if table.tolerance else "",
                 scale=_c_literal(table.q15.out_scale[k], "double") if table.q15 else "",
