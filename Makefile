@@ -23,7 +23,10 @@ $(STAMP): pyproject.toml | $(BIN)/python
 demo: $(STAMP)
 	$(BIN)/fuzzkit demo --out $(DEMO_OUT)
 
+# The whole suite: static checks first (cheap, and they catch what tests miss), then pytest.
 test: $(STAMP)
+	$(BIN)/ruff check fuzzkit codegen planar_sim tests bench
+	$(BIN)/mypy
 	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) -q -p no:cacheprovider
 
 $(BENCH_VENV)/bin/python:
