@@ -23,7 +23,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--budget", type=int, default=60)
     parser.add_argument("--workers", type=int, default=None)
     parser.add_argument("--controllers", default="pi,fuzzy-pi")
-    args = parser.parse_args(argv)
+    args, _ = parser.parse_known_args(argv)  # `make bench` passes options for other benches
     workers = args.workers or default_workers()
     head = f"{'case':<34}{'wall s':>8}{'evals':>7}{'cost':>11}{'default':>11}{'gain %':>8}   target"
     print(f"fuzzkit tune E1, budget {args.budget}, {workers} workers, stiffness 5/10/20 N/mm")

@@ -219,12 +219,46 @@ class PolyCentroid:
 
 @dataclass(frozen=True)
 class ScalarInput:
-    """One input's piecewise-linear terms in trapezoid form, for the scalar path."""
+    """One input's piecewise-linear terms in trapezoid form, for the scalar path.
+
+    ``cuts`` are the sorted term vertices; ``candidates[i]`` lists (index, form) of the terms
+    that can be non-zero for ``cuts[i-1] <= x < cuts[i]`` (``i = bisect_right(cuts, x)``), so a
+    call evaluates only the two or three terms that matter instead of all of them.
+    """
 
     low: float
     high: float
     clamp: bool
-    terms: tuple[tuple[float, float, float, float], ...]
+    cuts: tuple[float, ...]
+    candidates: tuple[tuple[tuple[int, tuple[float, float, float, float]], ...], ...]
+
+
+def scalar_input(
+    low: float,
+    high: float,
+    clamp: bool,
+    forms: Sequence[tuple[float, float, float, float]],
+    vertices: Sequence[float],
+) -> ScalarInput:
+    """Build a :class:`ScalarInput`: which terms can be non-zero between consecutive vertices."""
+
+    def grade(form: tuple[float, float, float, float], x: float) -> float:
+        b, c, sr, sf = form
+        return min(1.0 + (x - b) * sr, 1.0 + (c - x) * sf)
+
+    cuts = sorted(set(vertices))
+    edges = [cuts[0] - 1.0, *cuts, cuts[-1] + 1.0]
+    candidates = []
+    for i in range(len(cuts) + 1):
+        a, b = edges[i], edges[i + 1]
+        # terms are linear strictly inside (a, b); the left end belongs to this interval
+        probes = [a, a + 0.25 * (b - a), a + 0.5 * (b - a), a + 0.75 * (b - a)]
+        if i == 0:
+            probes = probes[1:]
+        candidates.append(
+            tuple((k, f) for k, f in enumerate(forms) if any(grade(f, x) > 0.0 for x in probes))
+        )
+    return ScalarInput(low, high, clamp, tuple(cuts), tuple(candidates))
 
 
 class ScalarPath:
@@ -259,7 +293,7 @@ class ScalarPath:
             else:
                 x = -1e100 if x < -1e100 else 1e100 if x > 1e100 else x
             act = []
-            for k, (b, c, sr, sf) in enumerate(inp.terms):
+            for k, (b, c, sr, sf) in inp.candidates[bisect.bisect_right(inp.cuts, x)]:
                 rise = 1.0 + (x - b) * sr
                 fall = 1.0 + (c - x) * sf
                 m = rise if rise < fall else fall

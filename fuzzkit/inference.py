@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any, cast
 
@@ -48,7 +48,7 @@ import numpy.typing as npt
 
 from fuzzkit import membership
 from fuzzkit.errors import EvaluationError
-from fuzzkit.fastpath import PolyCentroid, ScalarInput, ScalarPath, Segment
+from fuzzkit.fastpath import PolyCentroid, ScalarPath, Segment, scalar_input
 from fuzzkit.model import Compound, Expression, Proposition, RuleBase, Variable
 
 FloatArray = npt.NDArray[np.float64]
@@ -768,6 +768,25 @@ class Engine:
         res2 = self.evaluate(merged)  # slow path: reports what is wrong
         return {k: float(v.reshape(-1)[0]) for k, v in res2.items()}
 
+    def point_function(self, output: str | None = None) -> Callable[..., float]:
+        """A plain function ``f(*inputs) -> float`` of one output, inputs in declaration order.
+
+        For control loops that call the engine once per sample: it skips building and reading
+        dictionaries, and uses the pure-Python scalar path when the rule base has its shape.
+        """
+        name = output or self.output_names[0]
+        if name not in self.output_names:
+            raise EvaluationError(
+                f"rule base {self.rulebase.name!r} has no output {name!r} "
+                f"(expected one of {', '.join(self.output_names)})"
+            )
+        idx = self.output_names.index(name)
+        scalar = self._scalar
+        if scalar is not None:
+            return lambda *values: scalar(values)[idx]
+        names = self.input_names
+        return lambda *values: self.evaluate_point(dict(zip(names, values, strict=True)))[name]
+
     def firing_strengths(self, inputs: Mapping[str, npt.ArrayLike]) -> FloatArray:
         """Weighted firing strength of every rule at every point, shape (points, rules)."""
         flat = [a.reshape(-1) for a in self._coerce(inputs)]
@@ -804,11 +823,12 @@ def _scalar_path(rb: RuleBase, outputs: list[_Output]) -> ScalarPath | None:
         )
         table.setdefault(key, []).append((rule.weight, cons))
     inputs = [
-        ScalarInput(
+        scalar_input(
             v.low,
             v.high,
             rb.out_of_range == "clamp",
-            tuple(membership.trapezoid_form(t) for t in v.terms),
+            [membership.trapezoid_form(t) for t in v.terms],
+            [p for t in v.terms for p in membership.breakpoints(t)],
         )
         for v in rb.inputs
     ]

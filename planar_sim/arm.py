@@ -178,7 +178,10 @@ class PlanarArmPlant:
 
         link1, link2, tool = self._link1, self._link2, self._tool
         gain, dt, tool_len = p.servo_gain_per_s, self._dt, self._tool_len
-        r = self._rot_t
+        # plain floats: numpy element access would cost more than the arithmetic, every substep
+        r00, r02, r10, r12, r20, r22 = (
+            float(self._rot_t[i, j]) for i, j in ((0, 0), (0, 2), (1, 0), (1, 2), (2, 0), (2, 2))
+        )
         sat = [False, False]
         for _ in range(p.substeps):
             q1 = link1.angle
@@ -197,11 +200,7 @@ class PlanarArmPlant:
             # The sensor measures the force the tool exerts on the environment: minus the reaction.
             fbx, fbz = -res.force_x, -res.force_z
             true_task = np.array(
-                [
-                    r[0, 0] * fbx + r[0, 2] * fbz,
-                    r[1, 0] * fbx + r[1, 2] * fbz,
-                    r[2, 0] * fbx + r[2, 2] * fbz,
-                ]
+                [r00 * fbx + r02 * fbz, r10 * fbx + r12 * fbz, r20 * fbx + r22 * fbz]
             )
             self._sensor.update(self._t, dt, true_task)
             self._true_task = true_task

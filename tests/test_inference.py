@@ -285,6 +285,12 @@ def test_extend_policy_evaluates_outside_the_range() -> None:
     assert evaluate_point(extend, x=1.5)["y"] != pytest.approx(evaluate_point(extend, x=1.0)["y"])
     # beyond every support no rule fires: the output's default
     assert evaluate_point(extend, x=2.5)["y"] == 0.25
+    # the scalar path (used by evaluate_point) agrees with the batch path everywhere
+    eng = Engine(extend)
+    assert eng._scalar is not None
+    xs = np.linspace(-3.0, 3.0, 241)
+    batch = eng.evaluate({"x": xs})["y"]
+    np.testing.assert_allclose([eng.evaluate_point(x=x)["y"] for x in xs], batch, atol=1e-13)
 
 
 def test_no_rule_firing_gives_default_or_nan() -> None:
