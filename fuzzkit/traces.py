@@ -77,6 +77,21 @@ def log_control_series(rec: Any, result: RunResult, times: Any) -> None:
             log_series(rec, f"control/{axis}/u", times, result.u[:, i] * 1e3, f"u{axis} (mm)", c)
 
 
+def log_paths(rec: Any, result: RunResult) -> None:
+    """Log the nominal (programmed) path and the path the tool actually took, static."""
+    import rerun as rr
+
+    path = result.experiment.scenario.path
+    t_path = np.linspace(path[0].t_s, path[-1].t_s, 200)
+    nominal = np.array([nominal_position(path, float(t)) for t in t_path])
+    rec.log("world/nominal_path", rr.LineStrips3D([nominal], colors=[(150, 150, 150)]), static=True)
+    rec.log(
+        "world/tool_path",
+        rr.LineStrips3D([result.tool_position], colors=[(60, 110, 230)]),
+        static=True,
+    )
+
+
 def write_rrd(result: RunResult, path: str | os.PathLike[str], geometry_every: int = 5) -> Path:
     """Write ``result`` as a Rerun recording at ``path`` (temporary file, then rename).
 
@@ -110,16 +125,7 @@ def write_rrd(result: RunResult, path: str | os.PathLike[str], geometry_every: i
                 rr.LineStrips3D([_outline(obj, x_lo, x_hi)], colors=[(140, 110, 80)]),
                 static=True,
             )
-        t_path = np.linspace(scn.path[0].t_s, scn.path[-1].t_s, 200)
-        nominal = np.array([nominal_position(scn.path, float(t)) for t in t_path])
-        rec.log(
-            "world/nominal_path", rr.LineStrips3D([nominal], colors=[(150, 150, 150)]), static=True
-        )
-        rec.log(
-            "world/tool_path",
-            rr.LineStrips3D([result.tool_position], colors=[(60, 110, 230)]),
-            static=True,
-        )
+        log_paths(rec, result)
         radius = scn.tool.radius_m
         for k in range(0, len(result.t), max(1, geometry_every)):
             rec.set_time("sim_time", duration=float(result.t[k]))

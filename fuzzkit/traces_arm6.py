@@ -35,9 +35,8 @@ from fuzzkit.motion import (
     Plane,
     objects_from_scenario,
 )
-from fuzzkit.plant import nominal_position
 from fuzzkit.rrd import log_series, open_recording
-from fuzzkit.traces import log_control_series
+from fuzzkit.traces import log_control_series, log_paths
 
 Vec = npt.NDArray[np.float64]
 
@@ -141,16 +140,7 @@ def write_rrd(
                 )
             else:
                 rec.log(entity, rr.LineStrips3D(_wire(obj, x_lo, x_hi), colors=[_ENV]), static=True)
-        t_path = np.linspace(scn.path[0].t_s, scn.path[-1].t_s, 200)
-        nominal = np.array([nominal_position(scn.path, float(t)) for t in t_path])
-        rec.log(
-            "world/nominal_path", rr.LineStrips3D([nominal], colors=[(150, 150, 150)]), static=True
-        )
-        rec.log(
-            "world/tool_path",
-            rr.LineStrips3D([result.tool_position], colors=[(60, 110, 230)]),
-            static=True,
-        )
+        log_paths(rec, result)
         base = -np.asarray(p.workspace_offset)
         rec.log(
             "world/robot_base",
