@@ -875,6 +875,42 @@ class _At(Node):
 # ---------------------------------------------------------------------------- loading
 
 
+_CORE_TAGS = frozenset(
+    {_STR, _INT, _FLOAT, _BOOL, _NULL, _MERGE, "tag:yaml.org,2002:seq", "tag:yaml.org,2002:map"}
+)
+
+
+def _foreign_tags(root: Node, source: str) -> list[Problem]:
+    """A problem for every node with an explicit tag outside plain YAML (``!!python/...``).
+
+    SafeLoader would refuse to construct them; fuzzkit reads nodes itself, so it says so
+    instead of silently reading the tagged value as plain data.
+    """
+    problems: list[Problem] = []
+    seen: set[int] = set()
+    stack = [root]
+    while stack:
+        node = stack.pop()
+        if id(node) in seen:
+            continue
+        seen.add(id(node))
+        if node.tag not in _CORE_TAGS:
+            mark = node.start_mark
+            problems.append(
+                Problem(
+                    Location(source, mark.line + 1, mark.column + 1),
+                    f"unsupported YAML tag {node.tag!r} (rule bases are plain YAML: "
+                    "mappings, lists, strings and numbers)",
+                )
+            )
+        if isinstance(node, MappingNode):
+            stack.extend(n for kv in node.value for n in kv)
+        elif isinstance(node, SequenceNode):
+            stack.extend(node.value)
+    problems.sort(key=lambda p: (p.location.line, p.location.col))
+    return problems
+
+
 def _expanded_size(root: Node, limit: int) -> int:
     """Nodes in the document with every alias expanded, counting stops past ``limit``.
 
@@ -985,6 +1021,9 @@ def loads_rulebase(text: str, source: str = "<string>") -> RuleBase:
                 )
             ]
         )
+    foreign = _foreign_tags(root, source)
+    if foreign:
+        raise RuleBaseError(foreign)
     reader = _Reader(source, text.split("\n"))
     try:
         rb = reader.rule_base(root)

@@ -570,3 +570,12 @@ def test_coverage_is_exact_at_the_vertices() -> None:
         (Term("N", "triangle", (-2.0, -1.0, 0.0)), Term("P", "trapezoid", (0.0, 0.0, 1.0, 1.0))),
     )
     assert check(_model(inputs=(edge,))) == []
+
+
+def test_python_object_tags_are_refused_not_read_as_data() -> None:
+    text = "name: x\ndescription: !!python/object/apply:os.system [ls]\ninputs: {}\n"
+    with pytest.raises(RuleBaseError) as info:
+        loads(text, source="tag.yaml")
+    (problem,) = info.value.problems
+    assert str(problem.location) == "tag.yaml:2:14"
+    assert "unsupported YAML tag" in problem.message and "python/object/apply" in problem.message
