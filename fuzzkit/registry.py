@@ -63,7 +63,7 @@ def load(name_or_path: str | os.PathLike[str]) -> RuleBase:
         return load_file(spec)
     names = available()
     if spec not in names:
-        if Path(spec).is_file():  # a file without a YAML suffix in the working folder
+        if Path(spec).exists():  # a file (or a folder, which load_file reports) right here
             return load_file(spec)
         raise RuleBaseError(
             [
