@@ -397,7 +397,7 @@ def run(
     n = round((duration_s or scn.duration_s) / scn.period_s)
     period = scn.period_s
 
-    rows: dict[str, list[Any]] = {k: [] for k in _SERIES}
+    records: list[tuple[Any, ...]] = []
     arm_points: list[Vec] = []
     contact_points: list[Vec] = []
     messages: dict[str, int] = {}
@@ -421,27 +421,30 @@ def run(
         for m in sample.messages:
             messages[m] = messages.get(m, 0) + 1
         moving = path_t > path_before and _path_moving(scn, path_before, path_t)
-        for key, val in (
-            ("t", sample.t_s),
-            ("force", measured),
-            ("force_true", sample.force_true),
-            ("setpoint", ctrl.setpoints),
-            ("e", ctrl.e.copy()),
-            ("de", ctrl.de.copy()),
-            ("du", ctrl.du.copy()),
-            ("u", correction_task.copy()),
-            ("tool_position", sample.tool_position),
-            ("nominal_position", sample.nominal_position),
-            ("joint_angles", sample.joint_angles),
-            ("in_contact", sample.in_contact),
-            ("force_normal", _NO_NORMAL if sample.force_normal is None else sample.force_normal),
-            ("moving", moving),
-        ):
-            rows[key].append(val)
+        # one tuple per period, in _SERIES order; transposed once after the loop
+        records.append(
+            (
+                sample.t_s,
+                measured,
+                sample.force_true,
+                ctrl.setpoints,
+                ctrl.e.copy(),
+                ctrl.de.copy(),
+                ctrl.du.copy(),
+                correction_task.copy(),
+                sample.tool_position,
+                sample.nominal_position,
+                sample.joint_angles,
+                sample.in_contact,
+                _NO_NORMAL if sample.force_normal is None else sample.force_normal,
+                moving,
+            )
+        )
         arm_points.append(sample.arm_points)
         contact_points.append(sample.contact_points)
     wall = time.perf_counter() - wall0
-    arr = {k: np.asarray(v) for k, v in rows.items()}
+    columns = list(zip(*records, strict=True)) if records else [() for _ in _SERIES]
+    arr = {k: np.asarray(v) for k, v in zip(_SERIES, columns, strict=True)}
     return RunResult(
         experiment=exp,
         controller=controller if hybrid is None else "custom",
