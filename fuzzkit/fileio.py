@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import tempfile
 from collections.abc import Iterator, Mapping
@@ -82,31 +83,57 @@ def write_tree_atomic(
 ) -> list[Path]:
     """Write ``{relative path: content}`` under ``folder``: all files or none.
 
-    Every file is first written to a temporary sibling; only when all are written are they
-    renamed into place, so an error (bad path, full disk) leaves the folder as it was.
+    Every target is checked first (not a folder, no file where a folder must go), every file
+    is then written to a temporary sibling, and only when all are written are they renamed
+    into place; on any error the temporaries and the folders this call created are removed,
+    so the output folder is left as it was.
+
+    Raises
+    ------
+    ConfigError
+        A path escapes ``folder``, a target is a folder, or a file stands where a folder
+        must be created; or the file system refuses a write (the message names the path).
     """
     root = Path(folder)
-    if root.exists() and not root.is_dir():
-        raise ConfigError(f"{root}: exists and is not a directory (expected an output folder)")
-    for rel in files:
+    targets: dict[Path, bytes] = {}
+    for rel, data in files.items():
         rp = Path(rel)
         if rp.is_absolute() or ".." in rp.parts:
             raise ConfigError(f"{rel}: output paths must be relative and stay inside {root}")
-    root.mkdir(parents=True, exist_ok=True)
+        targets[root / rp] = data.encode("utf-8") if isinstance(data, str) else data
+    for target in targets:
+        if target.is_dir():
+            raise ConfigError(f"{target}: is a directory (expected a file to write)")
+        for parent in [*reversed(target.parents[: len(target.relative_to(root).parts) - 1]), root]:
+            if parent.exists() and not parent.is_dir():
+                raise ConfigError(f"{parent}: exists and is not a directory (expected a folder)")
+        anc = root
+        while not anc.exists() and anc != anc.parent:
+            anc = anc.parent
+        if not anc.is_dir():
+            raise ConfigError(f"{anc}: exists and is not a directory (expected a folder)")
+    created: list[Path] = []
     staged: list[tuple[str, Path]] = []
     try:
-        for rel, data in files.items():
-            target = root / rel
-            target.parent.mkdir(parents=True, exist_ok=True)
-            payload = data.encode("utf-8") if isinstance(data, str) else data
+        for target, payload in targets.items():
+            for d in [*reversed(target.parent.parents), target.parent]:
+                if not d.exists():
+                    d.mkdir()
+                    created.append(d)
             fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
             with os.fdopen(fd, "wb") as fh:
                 fh.write(payload)
             staged.append((tmp, target))
         for tmp, target in staged:
             _publish(tmp, target)
-    except BaseException:
+    except BaseException as exc:
         for tmp, _ in staged:
             Path(tmp).unlink(missing_ok=True)
+        for d in reversed(created):
+            with contextlib.suppress(OSError):
+                d.rmdir()
+        if isinstance(exc, OSError):
+            where = exc.filename or root
+            raise ConfigError(f"{where}: cannot write ({exc.strerror})") from exc
         raise
-    return [t for _, t in staged]
+    return list(targets)
