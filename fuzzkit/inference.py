@@ -257,6 +257,12 @@ class _Pieces:
         return out
 
 
+def _probabilistic_sum(parts: FloatArray) -> FloatArray:
+    """``1 - prod(1 - p)`` over the last axis, through logs (accurate for small p)."""
+    with np.errstate(divide="ignore"):
+        return cast(FloatArray, -np.expm1(np.log1p(-np.minimum(parts, 1.0)).sum(axis=-1)))
+
+
 def _merge_close(z: FloatArray, width: float) -> FloatArray:
     """Sorted breakpoints with near-duplicates (rounding of k/3 and the like) merged."""
     keep = np.concatenate([[True], np.diff(z) > 1e-12 * width])
@@ -340,8 +346,7 @@ class _ExactGeometry:
         if self.aggregation == "bounded_sum":
             s = imp.sum(axis=-1)
             return cast(FloatArray, np.minimum(s, 1.0) if final else s)
-        with np.errstate(divide="ignore"):
-            return cast(FloatArray, -np.expm1(np.log1p(-np.minimum(imp, 1.0)).sum(axis=-1)))
+        return _probabilistic_sum(imp)
 
     def sample_points(self, levels: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Sorted breakpoints (B, m, C) and the slot levels (B, m, K) for these piece levels."""
@@ -395,12 +400,10 @@ class _ExactGeometry:
             xg, wg = self.gl
             mid, half = 0.5 * (p0 + p1), 0.5 * h
             nodes = mid[..., None] + half[..., None] * xg  # (B, m, C-1, n)
-            n = len(xg)
             fn = self._aggregate(nodes.reshape(b, nodes.shape[1], -1), lv).reshape(nodes.shape)
             area = half * (fn * wg).sum(-1)
             moment = half * (fn * wg * nodes).sum(-1)
             f = self._aggregate(pts, lv)
-            del n
         return (
             area.reshape(b, -1),
             moment.reshape(b, -1),
@@ -427,13 +430,12 @@ class _ExactGeometry:
             t = np.where(np.isfinite(t), np.clip(t, 0.0, h), 0.0)
             return cast(FloatArray, a0 + t)
         # polynomial segment: bisect on the partial integral (exact by Gauss-Legendre)
-        lv_levels = levels
         lo = np.zeros_like(h)
         hi = h.copy()
         xg, wg = self.gl
         for _ in range(60):
             mid_t = 0.5 * (lo + hi)
-            part = self._partial_area(lv_levels, idx, a0, mid_t, xg, wg)
+            part = self._partial_area(levels, a0, mid_t, xg, wg)
             below = part < r
             lo = np.where(below, mid_t, lo)
             hi = np.where(below, hi, mid_t)
@@ -442,7 +444,6 @@ class _ExactGeometry:
     def _partial_area(
         self,
         levels: FloatArray,
-        seg: IntArray,
         a0: FloatArray,
         t: FloatArray,
         xg: FloatArray,
@@ -450,13 +451,11 @@ class _ExactGeometry:
     ) -> FloatArray:
         b = levels.shape[0]
         lv = np.concatenate([levels, np.zeros((b, 1))], axis=1)[:, self.slot_piece]
-        n_seg_per_interval = None
         # which elementary interval holds the segment: the segment's start lies in it
         interval = np.clip(np.searchsorted(self.z1, a0, side="right"), 0, len(self.z0) - 1)
         interval = np.where(
             (a0 >= self.z1[interval]) & (interval < len(self.z0) - 1), interval + 1, interval
         )
-        del n_seg_per_interval, seg
         nodes = a0[:, None] + 0.5 * t[:, None] * (xg + 1.0)  # (B, n)
         lv_i = lv[np.arange(b), interval][:, None, None, :]  # (B,1,1,K)
         y = nodes[:, None, :]  # (B,1,n)
@@ -466,8 +465,7 @@ class _ExactGeometry:
             0.0,
         )
         imp = np.minimum(lv_i, ell) if self.implication == "min" else lv_i * ell
-        with np.errstate(divide="ignore"):
-            f = -np.expm1(np.log1p(-np.minimum(imp, 1.0)).sum(axis=-1))[:, 0, :]
+        f = _probabilistic_sum(imp)[:, 0, :]
         return cast(FloatArray, 0.5 * t * (f * wg).sum(-1))
 
     def maxima(self, levels: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -566,8 +564,7 @@ class _GridGeometry:
             elif self.aggregation == "bounded_sum":
                 f = np.minimum(imp.sum(axis=-1), 1.0)
             else:
-                with np.errstate(divide="ignore"):
-                    f = -np.expm1(np.log1p(-np.minimum(imp, 1.0)).sum(axis=-1))
+                f = _probabilistic_sum(imp)
             out[s : s + self.chunk] = f
         return out
 
