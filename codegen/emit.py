@@ -22,7 +22,7 @@ from typing import Any
 import jinja2
 import numpy as np
 
-from codegen.lut import Q15_RECIP_BITS, Q15_T_BITS, LookupTable
+from codegen.lut import Q15_RECIP_BITS, Q15_T_BITS, ROUNDING_ALLOWANCE, LookupTable
 from fuzzkit.errors import CodegenError
 from fuzzkit.model import RuleBase
 
@@ -161,6 +161,7 @@ class Spec:
     memory_bytes: int
     check_points: int
     bound_summary: str
+    rounding_note: tuple[str, ...]
     margin_percent: int
     split_bytes: tuple[str, ...]
     has_fpi: bool
@@ -191,6 +192,26 @@ def _comment_safe(text: str) -> str:
     """``text`` made harmless inside a C block comment and a Python docstring."""
     clean = "".join(ch if 32 <= ord(ch) < 127 else "?" for ch in text)
     return clean.replace("*/", "* /").replace('"""', "'''").replace("\\", "/")
+
+
+def _rounding_note(number_type: str, target: str) -> str:
+    """How the bound relates to the target's rounding (what verification allows on top)."""
+    if number_type == "q15":
+        return "Q15: the bound models this integer arithmetic bit for bit (no allowance)."
+    allowance = ROUNDING_ALLOWANCE[number_type]
+    exponent = round(math.log2(allowance))
+    if number_type == "float":
+        return (
+            "float: the bound is measured on float32 inputs with this file's float32 "
+            "breakpoints, constants and arithmetic, operation for operation; a compiler that "
+            f"fuses multiply-adds (FMA) may differ by up to 2^{exponent} of an output's full "
+            "scale (largest |range end|), which verification allows on top."
+        )
+    runtime = "Python floats" if target == "python" else "double arithmetic"
+    return (
+        f"double: the bound is measured in float64; {runtime} may differ by up to "
+        f"2^{exponent} of an output's full scale (largest |range end|), allowed on top."
+    )
 
 
 def _c_literal(value: float, number_type: str) -> str:
@@ -371,6 +392,7 @@ def build_spec(
         memory_bytes=table.memory_bytes,
         check_points=table.check_points,
         bound_summary=bound_summary,
+        rounding_note=tuple(textwrap.wrap(_rounding_note(nt, target), 88)),
         margin_percent=round(100 * (table.bound[0] / table.measured[0] - 1))
         if table.measured and table.measured[0] > 0
         else 0,

@@ -54,6 +54,12 @@ BOUND_MARGIN = 1.05
 #: The margin when only a 4x check grid was affordable (large 3-input tables): 10% over the
 #: 4x maximum was seen on random points of a 9x9x9 table.
 COARSE_BOUND_MARGIN = 1.2
+#: What verification allows on top of the bound, as a fraction of each output's full scale
+#: (largest |range end|). The bound already models the stored values and, for float, the
+#: float32 breakpoints, constants and arithmetic of the generated C operation for operation
+#: (Q15: bit for bit), so this covers only what a model cannot know: a compiler fusing
+#: ``a + t * d`` into one FMA rounds once instead of twice (a few ulp of the output).
+ROUNDING_ALLOWANCE: dict[str, float] = {"float": 2.0**-20, "double": 2.0**-48, "q15": 0.0}
 #: Exponent of the node grading between knots (see _grade).
 GRADING = 1.5
 #: Largest table (grid nodes, all axes multiplied) the tolerance search may produce.
@@ -194,10 +200,12 @@ class LookupTable:
     def interpolate(self, inputs: Sequence[npt.ArrayLike]) -> tuple[FloatArray, ...]:
         """Reference evaluation in Python, as the generated code computes it.
 
-        Inputs are values in input units (broadcast together). For ``float``/``double`` the
-        interpolation runs in float64 over the stored values (the C float code differs only by
-        float32 rounding); for ``q15`` the inputs are first quantised to Q15 codes and the
-        integer arithmetic of the generated C is reproduced bit for bit. NaN inputs give NaN.
+        Inputs are values in input units (broadcast together). For ``double`` the
+        interpolation runs in float64 over the stored values; for ``float`` the inputs are
+        rounded to float32 and the generated C's float32 clamp, cell location and
+        interpolation are reproduced operation for operation; for ``q15`` the inputs are first
+        quantised to Q15 codes and the integer arithmetic of the generated C is reproduced
+        bit for bit. NaN inputs give NaN.
         """
         return self.interpolate_with(inputs, self.splits)
 
@@ -218,6 +226,15 @@ class LookupTable:
                 o.astype(np.float64) * (s / Q15_ONE)
                 for o, s in zip(outs, self.q15.out_scale, strict=True)
             )
+        elif self.number_type == "float":
+            idx32, frac32 = self._locate_float32(arrays)
+            result = tuple(
+                np.asarray(
+                    _combine(np.asarray(tab, dtype=np.float32), idx32, frac32, splits, None),
+                    dtype=np.float64,
+                )
+                for tab in self.stored
+            )
         else:
             idx, frac = _locate_float(self.breakpoints, arrays)
             result = tuple(
@@ -227,6 +244,50 @@ class LookupTable:
         for r in result:
             r[nan] = np.nan
         return result
+
+    def float_constants(self, axis: int) -> tuple[float, float, float, FloatArray]:
+        """``(low, high, 1 / step, 1 / widths)`` of an axis as the generated code holds them.
+
+        The generated C rounds each to its number type; for ``float`` these values are
+        rounded to float32 here too, so the model in :meth:`interpolate` uses the very
+        constants the C does. ``1 / step`` is for uniform axes, ``1 / widths`` for the others.
+        """
+        bp = self.breakpoints[axis]
+        inv_step = (len(bp) - 1) / (float(bp[-1]) - float(bp[0]))
+        inv_widths: FloatArray = 1.0 / np.diff(bp)
+        low, high = float(bp[0]), float(bp[-1])
+        if self.number_type == "float":
+            low, high, inv_step = (float(np.float32(v)) for v in (low, high, inv_step))
+            inv_widths = inv_widths.astype(np.float32).astype(np.float64)
+        return low, high, inv_step, inv_widths
+
+    def _locate_float32(
+        self, xs: Sequence[FloatArray]
+    ) -> tuple[list[IntArray], list[npt.NDArray[np.float32]]]:
+        """Cell and fraction as the generated float C computes them, in float32 throughout."""
+        idx: list[IntArray] = []
+        frac: list[npt.NDArray[np.float32]] = []
+        for axis, x in enumerate(xs):
+            bp = self.breakpoints[axis]
+            n_cells = len(bp) - 1
+            low, high, inv_step, inv_widths = (
+                np.float32(v) if np.ndim(v) == 0 else np.asarray(v, dtype=np.float32)
+                for v in self.float_constants(axis)
+            )
+            with np.errstate(over="ignore", invalid="ignore"):
+                x32 = np.nan_to_num(x, nan=float(bp[0])).astype(np.float32)
+            x32 = np.where(x32 < low, low, np.where(x32 > high, high, x32)).astype(np.float32)
+            if self.is_uniform(axis):
+                f = ((x32 - low) * inv_step).astype(np.float32)
+                i = np.minimum(f.astype(np.int64), n_cells - 1)
+                f = (f - i.astype(np.float32)).astype(np.float32)
+            else:
+                bp32 = bp.astype(np.float32)
+                i = np.clip(np.searchsorted(bp32, x32, side="right") - 1, 0, n_cells - 1)
+                f = ((x32 - bp32[i]) * np.asarray(inv_widths)[i]).astype(np.float32)
+            idx.append(i.astype(np.int64))
+            frac.append(np.minimum(f, np.float32(1.0)))
+        return idx, frac
 
     def interpolate_q15(self, codes: Sequence[npt.ArrayLike]) -> tuple[IntArray, ...]:
         """Bit-exact model of the generated Q15 ``eval``: Q15 input codes in, codes out."""
@@ -477,6 +538,45 @@ def _q15_layout(
     return layout, tuple(real_bps)
 
 
+def _float32_breakpoints(rb: RuleBase, breakpoints: Sequence[FloatArray]) -> tuple[FloatArray, ...]:
+    """Non-uniform breakpoints rounded to float32, the values the generated float C stores.
+
+    The table is then sampled where the C's nodes really are (a knot at 1000.3 is a node at
+    1000.29998779 in float32). Uniform axes keep their float64 nodes: the C never stores
+    them, it computes ``(x - low) * (1 / step)``, which :meth:`LookupTable.interpolate`
+    reproduces in float32.
+    """
+    snapped = []
+    for var, bp in zip(rb.inputs, breakpoints, strict=True):
+        if _is_uniform(bp):
+            snapped.append(bp)
+            continue
+        bp32 = bp.astype(np.float32).astype(np.float64)
+        if np.any(np.diff(bp32) <= 0):
+            raise CodegenError(
+                f"input {var.name}: {len(bp)} breakpoints are too close for float "
+                f"(two round to the same float32 value in [{var.low:g}, {var.high:g}]); "
+                "use a larger --tolerance or --type double"
+            )
+        snapped.append(bp32)
+    return tuple(snapped)
+
+
+def _float32_near(knot_values: FloatArray, axis: FloatArray) -> FloatArray:
+    """The float32 values within two steps of every knot, inside ``axis``, not yet in it."""
+    k32 = knot_values.astype(np.float32)
+    near = [k32]
+    for direction in (-np.inf, np.inf):
+        step = k32
+        for _ in range(2):
+            step = np.nextafter(step, np.float32(direction))
+            near.append(step)
+    extra = np.unique(np.concatenate(near).astype(np.float64))
+    keep = (extra >= axis[0]) & (extra <= axis[-1]) & ~np.isin(extra, axis)
+    result: FloatArray = extra[keep]
+    return result
+
+
 def _store(
     values: Sequence[FloatArray], number_type: NumberType, layout: Q15Layout | None
 ) -> tuple[npt.NDArray[np.generic], ...]:
@@ -519,6 +619,8 @@ def build_table(
     layout: Q15Layout | None = None
     if number_type == "q15":
         layout, bps = _q15_layout(rb, bps)
+    elif number_type == "float":
+        bps = _float32_breakpoints(rb, bps)
     values = _sample(rb, evaluator, bps)
     for var, vals in zip(rb.outputs, values, strict=True):
         if not np.all(np.isfinite(vals)):
@@ -553,6 +655,10 @@ def build_table(
     if len(bps) == 3 and math.prod(8 * (len(b) - 1) + 1 for b in bps) > 4_000_000:
         factor = 4 * math.ceil(check_factor / 4)
     check_axes = [_check_grid_axis(bp, factor) for bp in bps]
+    if number_type == "float":
+        # A float C function only ever sees float32 inputs: certify it on such inputs (the
+        # rounding is monotone, so the grid keeps its shape per cell).
+        check_axes = [a.astype(np.float32).astype(np.float64) for a in check_axes]
     exact = _sample(rb, evaluator, check_axes)
     grids = np.meshgrid(*check_axes, indexing="ij")
     splits = _choose_splits(table, grids, exact, factor) if len(bps) == 2 else None
@@ -565,6 +671,20 @@ def build_table(
             fitted = True
     approx = table.interpolate_with(grids, splits)
     measured = tuple(float(np.max(np.abs(a - e))) for a, e in zip(approx, exact, strict=True))
+    if number_type == "float":
+        # A knot float32 cannot hold lies inside a cell, and the largest error sits on the
+        # first float32 values past it: check the lines through them too.
+        for axis, var in enumerate(rb.inputs):
+            near = _float32_near(knots(var), check_axes[axis])
+            if near.size == 0:
+                continue
+            axes_k = [near if a == axis else ax for a, ax in enumerate(check_axes)]
+            exact_k = _sample(rb, evaluator, axes_k)
+            approx_k = table.interpolate_with(np.meshgrid(*axes_k, indexing="ij"), splits)
+            measured = tuple(
+                max(m, float(np.max(np.abs(a - e))))
+                for m, a, e in zip(measured, approx_k, exact_k, strict=True)
+            )
     return dataclasses.replace(
         table,
         bound=tuple(m * (BOUND_MARGIN if factor >= 8 else COARSE_BOUND_MARGIN) for m in measured),
@@ -624,7 +744,11 @@ def _fit_values(
         ),
         shape=(k.size, table.n_points),
     )
-    on_knot = [np.isin(bp, knots(v)) for bp, v in zip(table.breakpoints, rb.inputs, strict=True)]
+    # (A float table's knots are rounded to float32 like its other breakpoints.)
+    on_knot = [
+        np.isin(bp, knots(v)) | np.isin(bp, knots(v).astype(np.float32).astype(np.float64))
+        for bp, v in zip(table.breakpoints, rb.inputs, strict=True)
+    ]
     pinned = np.logical_and.outer(on_knot[0], on_knot[1]).ravel()
     free = ~pinned
     a_free = a[:, free]

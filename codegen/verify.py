@@ -22,17 +22,17 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from codegen.lut import Q15_ONE, LookupTable, quantize_q15
+from codegen.lut import Q15_ONE, ROUNDING_ALLOWANCE, LookupTable, quantize_q15
 from codegen.toolchain import CompiledTable
 from fuzzkit.errors import CodegenError
 from fuzzkit.model import RuleBase
 
 FloatArray = npt.NDArray[np.float64]
 
-#: Rounding allowance on top of the bound, as a fraction of each output's full scale: float32
-#: arithmetic on float32-stored values (the bound already includes storing them), double
-#: arithmetic, and none for Q15 whose integer arithmetic the bound models bit for bit.
-ROUNDING = {"float": 1e-5, "double": 1e-12, "q15": 0.0}
+#: Rounding allowance on top of the bound, as a fraction of each output's full scale (see
+#: ``lut.ROUNDING_ALLOWANCE``: the bound models float32 and Q15 arithmetic operation for
+#: operation, so only FMA contraction and double rounding are left; none for Q15).
+ROUNDING = ROUNDING_ALLOWANCE
 DEFAULT_POINTS = 100_000
 
 

@@ -288,3 +288,59 @@ def test_one_input_rule_base_compiles_and_matches(tmp_path: Path, number_type: s
 
         module = load_module(emit(rb, tab, "python"), rb.name)
         np.testing.assert_allclose(python_outputs(module.eval, points), got, atol=1e-12)
+
+
+OFFSET_YAML = """
+name: offset_1d
+description: One input far from 0 with a knot float32 cannot hold (1000.3).
+inputs:
+  a:
+    range: [1000, 1002]
+    terms:
+      lo: {shape: triangle, points: [999, 1000, 1000.3]}
+      mid: {shape: triangle, points: [1000, 1000.3, 1002]}
+      hi: {shape: triangle, points: [1000.3, 1002, 1003]}
+outputs:
+  y:
+    range: [-500, 500]
+    terms:
+      neg: {shape: triangle, points: [-700, -500, -300]}
+      zer: {shape: triangle, points: [-200, 0, 200]}
+      pos: {shape: triangle, points: [300, 500, 700]}
+operators: {and: min, or: max, implication: min, aggregation: max}
+defuzzifier: weighted_average
+rules:
+  - {if: {a: lo}, then: {y: neg}}
+  - {if: {a: mid}, then: {y: zer}}
+  - {if: {a: hi}, then: {y: pos}}
+"""
+
+
+def test_float_c_on_a_range_far_from_zero_stays_within_its_bound() -> None:
+    # float32 cannot hold 1000.3: the C's breakpoints are rounded, and the bound must be
+    # certified for those breakpoints and float32 arithmetic (was 0.0203 against 9.2e-06).
+    from codegen.emit import emit
+    from codegen.lut import make_table
+    from codegen.verify import verify_c
+    from fuzzkit.registry import loads
+
+    rb = loads(OFFSET_YAML)
+    tab = make_table(rb, number_type="float")
+    files = emit(rb, tab, "c")
+    result = verify_c(rb, tab, files, n=20_000)
+    assert result.ok, result.describe()
+    # The float32 values around the knot, where the worst error of the C sits.
+    knot = np.float32(1000.3)
+    near = [knot]
+    for direction in (-np.inf, np.inf):
+        x = knot
+        for _ in range(3):
+            x = np.nextafter(x, np.float32(direction))
+            near.append(x)
+    xs = np.array(near, dtype=np.float32)
+    with CompiledTable(files, rb.name, "float", 1, 1, fpi=False) as lib:
+        got = lib.eval_batch(xs[:, None]).astype(np.float64)[:, 0]
+    exact = np.asarray(Engine(rb).evaluate({"a": xs.astype(np.float64)})["y"], dtype=np.float64)
+    assert np.max(np.abs(got - exact)) <= tab.bound[0]
+    # The Python model of the float C is operation for operation: identical results.
+    np.testing.assert_array_equal(tab.interpolate([xs.astype(np.float64)])[0], got)

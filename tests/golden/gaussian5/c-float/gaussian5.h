@@ -7,6 +7,10 @@
  * >= 4x denser than the table, every cell centre and edge midpoint included) + 5% for
  * the points between them:
  *   du: 0.00961
+ * float: the bound is measured on float32 inputs with this file's float32 breakpoints,
+ * constants and arithmetic, operation for operation; a compiler that fuses multiply-adds
+ * (FMA) may differ by up to 2^-20 of an output's full scale (largest |range end|), which
+ * verification allows on top.
  * DO NOT EDIT: regenerate with `fuzzkit compile` instead.
  *
  * 5-label fuzzy-PI with gaussian input terms (NB NS ZE PS PB), product AND, product

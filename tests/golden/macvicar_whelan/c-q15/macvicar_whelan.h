@@ -7,6 +7,7 @@
  * >= 4x denser than the table, every cell centre and edge midpoint included) + 5% for
  * the points between them:
  *   du: 0.0235
+ * Q15: the bound models this integer arithmetic bit for bit (no allowance).
  * DO NOT EDIT: regenerate with `fuzzkit compile` instead.
  *
  * Canonical 7-label MacVicar-Whelan PI-like rule base (the saturated sum: output label

@@ -7,6 +7,8 @@ Verified bound: the largest |table - exact engine| over 37249 check points (a gr
 >= 4x denser than the table, every cell centre and edge midpoint included) + 5% for the
 points between them:
   du: 0.0315
+double: the bound is measured in float64; Python floats may differ by up to 2^-48 of an
+output's full scale (largest |range end|), allowed on top.
 DO NOT EDIT: regenerate with `fuzzkit compile` instead.
 
 Table I of the paper exactly as printed (rows e = PL at the top down to NL, columns de =

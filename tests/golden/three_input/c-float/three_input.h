@@ -7,6 +7,10 @@
  * >= 4x denser than the table, every cell centre and edge midpoint included) + 5% for
  * the points between them:
  *   du: 0.0418, dv: 0.051
+ * float: the bound is measured on float32 inputs with this file's float32 breakpoints,
+ * constants and arithmetic, operation for operation; a compiler that fuses multiply-adds
+ * (FMA) may differ by up to 2^-20 of an output's full scale (largest |range end|), which
+ * verification allows on top.
  * DO NOT EDIT: regenerate with `fuzzkit compile` instead.
  *
  * Three-input, two-output list-form rule base: force error e, its change de and a surface

@@ -7,6 +7,7 @@
  * >= 4x denser than the table, every cell centre and edge midpoint included) + 5% for
  * the points between them:
  *   du: 0.0418, dv: 0.051
+ * Q15: the bound models this integer arithmetic bit for bit (no allowance).
  * DO NOT EDIT: regenerate with `fuzzkit compile` instead.
  *
  * Three-input, two-output list-form rule base: force error e, its change de and a surface
