@@ -6,7 +6,7 @@ Table: 9x9x9 points per output, double, 11988 bytes as C data.
 Verified bound: the largest |table - exact engine| over 274625 check points (a grid
 >= 4x denser than the table, every cell centre and edge midpoint included) + 5% for the
 points between them:
-  du: 0.0418, dv: 0.051
+  du: 0.0419, dv: 0.051
 double: the bound is measured in float64; Python floats may differ by up to 2^-48 of an
 output's full scale (largest |range end|), allowed on top.
 DO NOT EDIT: regenerate with `fuzzkit compile` instead.
@@ -31,7 +31,7 @@ N_OUTPUTS = 2
 INPUT_NAMES = ("e", "de", "r",)
 OUTPUT_NAMES = ("du", "dv",)
 #: Verified bound of each output (output units).
-BOUND = (0.0418, 0.051,)
+BOUND = (0.0419, 0.051,)
 
 _NAN = float("nan")
 _BP0 = (
