@@ -88,6 +88,10 @@ C_RESERVED = frozenset(
 PYTHON_RESERVED = frozenset(keyword.kwlist) | frozenset(keyword.softkwlist)
 
 
+#: The fuzzy-PI parameters the generated code takes (and a gains file may bake in).
+FPI_GAIN_KEYS = ("kp", "ki", "kx", "u_min", "u_max")
+
+
 @dataclass(frozen=True)
 class FpiDefaults:
     """Fuzzy-PI gains baked into the generated code as defaults (from a gains file)."""
@@ -97,6 +101,8 @@ class FpiDefaults:
     kx: float
     u_min: float
     u_max: float
+    #: Where the gains came from (the gains file), for error messages.
+    source: str = "gains"
 
 
 @dataclass(frozen=True)
@@ -192,6 +198,29 @@ def _comment_safe(text: str) -> str:
     """``text`` made harmless inside a C block comment and a Python docstring."""
     clean = "".join(ch if 32 <= ord(ch) < 127 else "?" for ch in text)
     return clean.replace("*/", "* /").replace('"""', "'''").replace("\\", "/")
+
+
+def _check_float32_gains(gains: Mapping[str, float], source: str) -> None:
+    """Refuse gains a C ``float`` cannot hold (``NAME_fpi_init`` takes floats)."""
+    problems = []
+    largest = float(np.finfo(np.float32).max)
+    smallest = float(np.finfo(np.float32).smallest_subnormal)
+    for key, value in gains.items():
+        with np.errstate(over="ignore"):
+            single = np.float32(value)
+        if not math.isfinite(float(single)):
+            problems.append(f"{key}: {value:g} overflows a C float (largest {largest:.7g})")
+        elif value != 0.0 and single == 0.0:
+            problems.append(
+                f"{key}: {value:g} rounds to 0 as a C float "
+                f"(smallest non-zero magnitude {smallest:.7g})"
+            )
+    if problems:
+        raise CodegenError(
+            f"{source}: fuzzy-PI gains out of float range: "
+            + "; ".join(problems)
+            + " (rescale the rule base's ranges or use --type double)"
+        )
 
 
 def _rounding_note(number_type: str, target: str) -> str:
@@ -364,9 +393,10 @@ def build_spec(
         note = ""
     defaults = None
     if fpi_defaults is not None and has_fpi:
-        defaults = {
-            k: lit(float(getattr(fpi_defaults, k))) for k in ("kp", "ki", "kx", "u_min", "u_max")
-        }
+        gains = {k: float(getattr(fpi_defaults, k)) for k in FPI_GAIN_KEYS}
+        if not py and nt in ("float", "q15"):
+            _check_float32_gains(gains, fpi_defaults.source)
+        defaults = {k: lit(v) for k, v in gains.items()}
     file_name, sha = source_sha256(rb)
     desc = tuple(textwrap.wrap(_comment_safe(" ".join(rb.description.split())), 88)[:8])
     bound_summary = ", ".join(

@@ -172,3 +172,50 @@ def test_explicit_tolerance_is_enforced_on_an_explicit_resolution() -> None:
 
     with pytest.raises(CodegenError, match=r"resolution 5 .* does not meet the tolerance"):
         make_table(load("macvicar_whelan"), resolution=5, tolerance=1e-4)
+
+
+@pytest.mark.parametrize(
+    "gains, match",
+    [
+        ("kp: 1.0e39\nki: 1\nkx: 1\nu_min: -1\nu_max: 1\n", "kp: 1e+39 overflows a C float"),
+        ("kp: 0.3\nki: 0.06\nkx: 1e-50\nu_min: -1\nu_max: 1\n", "kx: 1e-50 rounds to 0"),
+    ],
+)
+@pytest.mark.parametrize("number_type", ["float", "q15"])
+def test_gains_a_c_float_cannot_hold_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], gains: str, match: str, number_type: str
+) -> None:
+    # Were emitted as `inff` (does not compile) and `0.0f` (silently no correction).
+    path = tmp_path / "g.yaml"
+    path.write_text(gains)
+    out = tmp_path / "out"
+    code, _, err = _run(
+        capsys,
+        "compile",
+        "macvicar_whelan",
+        "--target",
+        "c",
+        "--type",
+        number_type,
+        "--resolution",
+        "9",
+        "--out",
+        str(out),
+        "--gains",
+        str(path),
+    )
+    assert code == 2, err
+    assert f"{path}: fuzzy-PI gains out of float range" in err and match in err
+    assert "Traceback" not in err
+    assert not out.exists()
+
+
+def test_tiny_gains_are_fine_for_double() -> None:
+    from codegen.emit import FpiDefaults, emit
+    from codegen.lut import make_table
+    from fuzzkit import load
+
+    rb = load("macvicar_whelan")
+    tab = make_table(rb, number_type="double", resolution=9)
+    files = emit(rb, tab, "c", fpi_defaults=FpiDefaults(1e39, 1.0, 1e-50, -1.0, 1.0))
+    assert "#define MACVICAR_WHELAN_FPI_KX 1e-50" in files["macvicar_whelan.h"]

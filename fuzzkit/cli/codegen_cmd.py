@@ -82,7 +82,7 @@ def _fpi_defaults(path: str | None) -> Any:
     bad = [k for k, v in values.items() if not math.isfinite(v)]
     if bad:
         raise ConfigError(f"{path}: gains must be finite numbers (got {bad[0]}={values[bad[0]]})")
-    return FpiDefaults(**values)
+    return FpiDefaults(**values, source=path)
 
 
 def cmd_compile(args: argparse.Namespace) -> int:
