@@ -197,7 +197,15 @@ def check_identifier(name: str, what: str) -> str:
 def _comment_safe(text: str) -> str:
     """``text`` made harmless inside a C block comment and a Python docstring."""
     clean = "".join(ch if 32 <= ord(ch) < 127 else "?" for ch in text)
-    return clean.replace("*/", "* /").replace('"""', "'''").replace("\\", "/")
+    clean = clean.replace('"""', "'''").replace("\\", "/")
+    # "*/" would end the comment, "/*" inside one trips -Wcomment, and "??" can start a
+    # trigraph (C99 translates "??/" to a backslash, even in comments: -Wtrigraphs). Repeat
+    # until none is left, as a replacement can form the next ("/*/", "???").
+    previous = None
+    while clean != previous:
+        previous = clean
+        clean = clean.replace("*/", "* /").replace("/*", "/ *").replace("??", "? ?")
+    return clean
 
 
 def _check_float32_gains(gains: Mapping[str, float], source: str) -> None:

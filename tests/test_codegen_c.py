@@ -344,3 +344,36 @@ def test_float_c_on_a_range_far_from_zero_stays_within_its_bound() -> None:
     assert np.max(np.abs(got - exact)) <= tab.bound[0]
     # The Python model of the float C is operation for operation: identical results.
     np.testing.assert_array_equal(tab.interpolate([xs.astype(np.float64)])[0], got)
+
+
+@pytest.mark.parametrize("compiler", ["cc", "clang"])
+def test_description_with_comment_and_trigraph_sequences_compiles_strictly(
+    tmp_path: Path, compiler: str
+) -> None:
+    # "/*" (-Wcomment) and "??/" (-Wtrigraphs) broke the strict build; "*/" ended the banner.
+    from codegen.emit import emit
+    from codegen.lut import make_table
+    from codegen.verify import load_module
+    from fuzzkit.registry import loads
+
+    if compiler == "clang" and CLANG is None:
+        pytest.skip("clang not installed; the gcc run covers the strict build here")
+    cc = [CLANG] if compiler == "clang" else CC
+    assert cc is not None
+    description = "Uses a /* nested comment */ a /*/ and trigraphs ??/ ??= ???/ end ??/"
+    text = "\n".join(
+        f"description: '{description}'" if line.startswith("description:") else line
+        for line in ONE_INPUT_YAML.splitlines()
+    )
+    rb = loads(text)
+    assert rb.description == description
+    tab = make_table(rb, number_type="double", resolution=9)
+    files = emit(rb, tab, "c")
+    srcs = _write(tmp_path, files)
+    proc = run_compiler([*cc, *STRICT_FLAGS, "-Wcomment", "-Wtrigraphs", "-c", *srcs], tmp_path)
+    assert proc.stderr.strip() == ""
+    for body in files.values():
+        for bad in ("??", "/* nested", "/*/"):
+            assert bad not in body
+    module = load_module(emit(rb, tab, "python"), rb.name)
+    assert "nested comment" in (module.__doc__ or "")
