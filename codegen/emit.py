@@ -10,9 +10,8 @@ from __future__ import annotations
 
 import hashlib
 import importlib
-import keyword
 import math
-import re
+import sys
 import textwrap
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -25,67 +24,22 @@ import numpy as np
 from codegen.lut import Q15_RECIP_BITS, Q15_T_BITS, ROUNDING_ALLOWANCE, LookupTable
 from fuzzkit.errors import CodegenError
 from fuzzkit.model import RuleBase
+from fuzzkit.validation import C_KEYWORDS, IDENTIFIER, PYTHON_KEYWORDS, identifier_problem
 
 TARGETS = ("c", "python")
 
-_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
-#: C99 keywords plus names a prefix must not shadow (macros of the headers we include).
-C_RESERVED = frozenset(
-    [
-        "auto",
-        "break",
-        "case",
-        "char",
-        "const",
-        "continue",
-        "default",
-        "do",
-        "double",
-        "else",
-        "enum",
-        "extern",
-        "float",
-        "for",
-        "goto",
-        "if",
-        "inline",
-        "int",
-        "long",
-        "register",
-        "restrict",
-        "return",
-        "short",
-        "signed",
-        "sizeof",
-        "static",
-        "struct",
-        "switch",
-        "typedef",
-        "union",
-        "unsigned",
-        "void",
-        "volatile",
-        "while",
-        "_Bool",
-        "_Complex",
-        "_Imaginary",
-        "NAN",
-        "INFINITY",
-        "bool",
-        "true",
-        "false",
-        "int8_t",
-        "int16_t",
-        "int32_t",
-        "int64_t",
-        "uint8_t",
-        "uint16_t",
-        "uint32_t",
-        "uint64_t",
-        "",
-    ]
+#: The keyword lists live with the model's validation (one source for YAML and emitters).
+C_RESERVED = C_KEYWORDS
+PYTHON_RESERVED = PYTHON_KEYWORDS
+#: Standard C headers (C99, C11): a rule base ``NAME`` generates ``NAME.h``, which an
+#: ``#include <NAME.h>`` elsewhere in the firmware could pick up instead (with ``-I.``).
+C_STANDARD_HEADERS = frozenset(
+    """
+    assert complex ctype errno fenv float inttypes iso646 limits locale math setjmp signal
+    stdalign stdarg stdatomic stdbool stddef stdint stdio stdlib stdnoreturn string tgmath
+    threads time uchar wchar wctype
+    """.split()  # noqa: SIM905 (a word list reads better than 29 quoted strings)
 )
-PYTHON_RESERVED = frozenset(keyword.kwlist) | frozenset(keyword.softkwlist)
 
 
 #: The fuzzy-PI parameters the generated code takes (and a gains file may bake in).
@@ -183,14 +137,33 @@ class Spec:
 
 def check_identifier(name: str, what: str) -> str:
     """Return ``name`` if it may appear in generated C and Python, else raise CodegenError."""
-    if not isinstance(name, str) or not _IDENT.match(name):
+    if not isinstance(name, str) or not IDENTIFIER.match(name):
         raise CodegenError(
             f"{what} {name!r} is not an identifier (expected [A-Za-z_][A-Za-z0-9_]*)"
         )
-    if name in C_RESERVED or name in PYTHON_RESERVED:
-        raise CodegenError(f"{what} {name!r} is a keyword or reserved name of C or Python")
-    if name.startswith("__") or (name.startswith("_") and name[1:2].isupper()):
-        raise CodegenError(f"{what} {name!r} is reserved in C (leading __ or _ + capital)")
+    why = identifier_problem(name)
+    if why is not None:
+        raise CodegenError(f"{what} {why}")
+    return name
+
+
+def check_module_name(name: str) -> str:
+    """Return ``name`` if ``NAME.py`` / ``NAME.h`` shadow no standard module, else raise.
+
+    A generated ``math.py`` is imported by its own ``import math`` (and by every other
+    ``import math`` beside it), a generated ``stdint.h`` is what ``#include <stdint.h>``
+    finds; both break the build far from the cause.
+    """
+    clashes = []
+    if name in sys.stdlib_module_names:
+        clashes.append(f"{name}.py would shadow the Python standard module {name!r}")
+    # Case-insensitive: Math.h is math.h on the default macOS and Windows file systems.
+    if name.lower() in C_STANDARD_HEADERS:
+        clashes.append(f"{name}.h would shadow the C standard header <{name.lower()}.h>")
+    if clashes:
+        raise CodegenError(
+            f"rule base name {name!r}: " + " and ".join(clashes) + "; rename the rule base"
+        )
     return name
 
 
@@ -316,7 +289,7 @@ def build_spec(
         raise CodegenError(f"unknown target {target!r} (expected one of {', '.join(TARGETS)})")
     if target == "python" and table.number_type != "double":
         raise CodegenError(f"the python target computes in double; got a {table.number_type} table")
-    name = check_identifier(rb.name, "rule base name")
+    name = check_module_name(check_identifier(rb.name, "rule base name"))
     for var in rb.inputs + rb.outputs:
         check_identifier(var.name, f"variable name ({rb.name})")
     nt = table.number_type

@@ -62,10 +62,12 @@ C_KEYWORDS = frozenset(
     alignas alignof bool constexpr false nullptr static_assert thread_local true typeof
     typeof_unqual
     NULL NAN INFINITY EOF
+    int8_t int16_t int32_t int64_t uint8_t uint16_t uint32_t uint64_t
     """.split()  # noqa: SIM905 (a word list reads better than 60 quoted strings)
 )
 
-PYTHON_KEYWORDS = frozenset(keyword.kwlist)
+#: Python keywords, soft keywords (``match``, ``case``, ``type``, ``_``) included.
+PYTHON_KEYWORDS = frozenset(keyword.kwlist) | frozenset(keyword.softkwlist)
 
 
 def identifier_problem(name: str) -> str | None:

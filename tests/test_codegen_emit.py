@@ -120,6 +120,42 @@ def test_bad_names_in_a_model_never_reach_source() -> None:
         build_spec(dataclasses.replace(rb, inputs=(bad_var, rb.inputs[1])), tab, "c")
 
 
+@pytest.mark.parametrize(
+    "name, match",
+    [
+        (
+            "math",
+            r"math\.py would shadow the Python standard module 'math' and math\.h would "
+            r"shadow the C standard header <math\.h>",
+        ),
+        ("stdint", r"stdint\.h would shadow the C standard header <stdint\.h>"),
+        ("bisect", r"bisect\.py would shadow the Python standard module 'bisect'"),
+        ("Signal", r"Signal\.h would shadow the C standard header <signal\.h>"),
+    ],
+)
+@pytest.mark.parametrize("target", ["c", "python"])
+def test_names_that_shadow_standard_modules_or_headers_are_refused(
+    name: str, match: str, target: str
+) -> None:
+    # math.py would import itself for `import math`; stdint.h would be what <stdint.h> finds.
+    rb = dataclasses.replace(rulebase("macvicar_whelan"), name=name)
+    tab = table("macvicar_whelan", "double")
+    with pytest.raises(CodegenError, match=rf"rule base name '{name}': {match}"):
+        build_spec(rb, tab, target)
+
+
+def test_emit_and_validation_share_one_keyword_list() -> None:
+    from codegen import emit as emit_module
+    from fuzzkit import validation
+
+    assert emit_module.C_RESERVED is validation.C_KEYWORDS
+    assert emit_module.PYTHON_RESERVED is validation.PYTHON_KEYWORDS
+    for name in ("EOF", "NULL", "_Atomic", "int16_t", "match", "lambda"):
+        assert validation.identifier_problem(name) is not None
+        with pytest.raises(CodegenError):
+            check_identifier(name, "name")
+
+
 def test_target_and_type_mismatches_are_errors() -> None:
     rb = rulebase("macvicar_whelan")
     with pytest.raises(CodegenError, match="unknown target 'rust'"):
