@@ -219,3 +219,38 @@ def test_tiny_gains_are_fine_for_double() -> None:
     tab = make_table(rb, number_type="double", resolution=9)
     files = emit(rb, tab, "c", fpi_defaults=FpiDefaults(1e39, 1.0, 1e-50, -1.0, 1.0))
     assert "#define MACVICAR_WHELAN_FPI_KX 1e-50" in files["macvicar_whelan.h"]
+
+
+def test_gains_the_generated_controller_does_not_implement_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # rate_limit was silently dropped: the shipped controller differed from the simulated one.
+    path = tmp_path / "g.yaml"
+    path.write_text(
+        "fuzzy-pi:\n  gains: {kp: 0.3, ki: 0.06, kx: 0.01, u_min: -0.05, u_max: 0.05, "
+        "rate_limit: 0.001}\n"
+    )
+    out = tmp_path / "out"
+    code, _, err = _run(
+        capsys,
+        "compile",
+        "macvicar_whelan",
+        "--target",
+        "python",
+        "--resolution",
+        "9",
+        "--out",
+        str(out),
+        "--gains",
+        str(path),
+    )
+    assert code == 2, err
+    assert f"{path}: the generated fuzzy-PI does not implement rate_limit" in err
+    assert not out.exists()
+
+
+def test_cli_gain_keys_are_the_emitters() -> None:
+    from codegen.emit import FPI_GAIN_KEYS
+    from fuzzkit.cli.codegen_cmd import GAIN_KEYS
+
+    assert GAIN_KEYS == FPI_GAIN_KEYS

@@ -13,6 +13,8 @@ from typing import Any
 EXIT_OK = 0
 EXIT_FAILURE = 1
 
+#: What the generated fuzzy-PI takes (``codegen.emit.FPI_GAIN_KEYS``; kept here so the
+#: parser does not import codegen).
 GAIN_KEYS = ("kp", "ki", "kx", "u_min", "u_max")
 
 
@@ -72,6 +74,14 @@ def _fpi_defaults(path: str | None) -> Any:
     if path is None:
         return None
     gains = read_gains(path, "fuzzy-pi", required=True)
+    # The generated controller implements exactly these; dropping another key (rate_limit)
+    # would ship a controller that behaves unlike the one simulated with the same file.
+    unsupported = [k for k in gains if k not in GAIN_KEYS]
+    if unsupported:
+        raise ConfigError(
+            f"{path}: the generated fuzzy-PI does not implement {', '.join(unsupported)} "
+            f"(it takes {', '.join(GAIN_KEYS)}); remove it from the file given to --gains"
+        )
     missing = [k for k in GAIN_KEYS if k not in gains]
     if missing:
         raise ConfigError(
