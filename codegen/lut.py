@@ -82,6 +82,16 @@ Q15_T_BITS = 14
 Q15_RECIP_BITS = 30
 
 
+class Q15ResolutionError(CodegenError):
+    """Breakpoints closer than one Q15 code (two would round to the same code)."""
+
+    def __init__(self, message: str, variable: str, count: int, codes: int) -> None:
+        super().__init__(message)
+        self.variable = variable
+        self.count = count
+        self.codes = codes
+
+
 @dataclass(frozen=True, eq=False)
 class Q15Layout:
     """How a Q15 table maps integers to values: ``value = q * full_scale / 32768``.
@@ -230,7 +240,7 @@ class LookupTable:
             codes = [quantize_q15(x, s) for x, s in zip(arrays, self.q15.in_scale, strict=True)]
             outs = self._q15(codes, splits)
             result = tuple(
-                o.astype(np.float64) * (s / Q15_ONE)
+                np.asarray(o, dtype=np.float64) * (s / Q15_ONE)
                 for o, s in zip(outs, self.q15.out_scale, strict=True)
             )
         elif self.number_type == "float":
@@ -248,6 +258,8 @@ class LookupTable:
                 _combine(np.asarray(tab, dtype=np.float64), idx, frac, splits, None)
                 for tab in self.stored
             )
+        # Arrays even for scalar inputs (0-d), so NaN can be set and the type holds.
+        result = tuple(np.array(r, dtype=np.float64) for r in result)
         for r in result:
             r[nan] = np.nan
         return result
@@ -529,9 +541,12 @@ def _q15_layout(
         hi = int(np.clip(math.floor(var.high / scale * Q15_ONE + 1e-9), -32768, 32767))
         qb = np.clip(np.rint(bp / scale * Q15_ONE), lo, hi).astype(np.int64)
         if np.any(np.diff(qb) <= 0):
-            raise CodegenError(
+            raise Q15ResolutionError(
                 f"input {var.name}: {len(bp)} breakpoints are too close for Q15 "
-                "(two round to the same code); use fewer breakpoints or a float type"
+                "(two round to the same code); use fewer breakpoints or a float type",
+                var.name,
+                len(bp),
+                hi - lo + 1,
             )
         widths = np.diff(qb)
         q_low.append(lo)
@@ -998,7 +1013,19 @@ def _search(
         counts = counts_for(cells)
         if math.prod(counts) > max_points:
             break
-        last = build_table(rb, counts, number_type=number_type, tolerance=tol, evaluate=evaluator)
+        try:
+            last = build_table(
+                rb, counts, number_type=number_type, tolerance=tol, evaluate=evaluator
+            )
+        except Q15ResolutionError as exc:
+            # The search chose these breakpoints, not the user: say what cannot be done.
+            detail = f"best tried: {last.describe()}; " if last is not None else ""
+            raise CodegenError(
+                f"tolerance {tol:g} of the output range cannot be met at Q15 resolution "
+                f"({detail}input {exc.variable} would need {exc.count} breakpoints, closer "
+                f"than the {exc.codes} Q15 codes of its range allow); raise --tolerance or "
+                "use --type float"
+            ) from None
         r = ratio(last)
         if r <= 1.0:
             best = last
@@ -1016,7 +1043,12 @@ def _search(
         counts = counts_for(smaller)
         if counts == list(best.shape):
             continue
-        trial = build_table(rb, counts, number_type=number_type, tolerance=tol, evaluate=evaluator)
+        try:
+            trial = build_table(
+                rb, counts, number_type=number_type, tolerance=tol, evaluate=evaluator
+            )
+        except Q15ResolutionError:  # pragma: no cover - fewer points than a success
+            continue
         if ratio(trial) <= 1.0 and trial.n_points < best.n_points:
             best = trial
     return best

@@ -16,6 +16,32 @@ from fuzzkit.model import RuleBase
 #: Small resolutions keep the tests fast; the bound is what is checked, whatever it is.
 RESOLUTION = {"macvicar_whelan": 25, "paper_table1": 25, "gaussian5": 17, "three_input": 9}
 
+#: One input far from 0 with a knot float32 cannot hold (float C) and few Q15 codes.
+OFFSET_YAML = """
+name: offset_1d
+description: One input far from 0 with a knot float32 cannot hold (1000.3).
+inputs:
+  a:
+    range: [1000, 1002]
+    terms:
+      lo: {shape: triangle, points: [999, 1000, 1000.3]}
+      mid: {shape: triangle, points: [1000, 1000.3, 1002]}
+      hi: {shape: triangle, points: [1000.3, 1002, 1003]}
+outputs:
+  y:
+    range: [-500, 500]
+    terms:
+      neg: {shape: triangle, points: [-700, -500, -300]}
+      zer: {shape: triangle, points: [-200, 0, 200]}
+      pos: {shape: triangle, points: [300, 500, 700]}
+operators: {and: min, or: max, implication: min, aggregation: max}
+defuzzifier: weighted_average
+rules:
+  - {if: {a: lo}, then: {y: neg}}
+  - {if: {a: mid}, then: {y: zer}}
+  - {if: {a: hi}, then: {y: pos}}
+"""
+
 CC = find_compiler()
 needs_cc = pytest.mark.needs_cc
 skip_no_cc = pytest.mark.skipif(CC is None, reason="no C compiler found (cc, gcc, clang or $CC)")

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from _codegen_util import CC, CLANG, needs_cc, rulebase, skip_no_cc, sources, table
+from _codegen_util import CC, CLANG, OFFSET_YAML, needs_cc, rulebase, skip_no_cc, sources, table
 
 from codegen.lut import Q15_ONE
 from codegen.toolchain import SANITIZE_FLAGS, STRICT_FLAGS, CompiledTable, run_compiler
@@ -290,32 +290,6 @@ def test_one_input_rule_base_compiles_and_matches(tmp_path: Path, number_type: s
         np.testing.assert_allclose(python_outputs(module.eval, points), got, atol=1e-12)
 
 
-OFFSET_YAML = """
-name: offset_1d
-description: One input far from 0 with a knot float32 cannot hold (1000.3).
-inputs:
-  a:
-    range: [1000, 1002]
-    terms:
-      lo: {shape: triangle, points: [999, 1000, 1000.3]}
-      mid: {shape: triangle, points: [1000, 1000.3, 1002]}
-      hi: {shape: triangle, points: [1000.3, 1002, 1003]}
-outputs:
-  y:
-    range: [-500, 500]
-    terms:
-      neg: {shape: triangle, points: [-700, -500, -300]}
-      zer: {shape: triangle, points: [-200, 0, 200]}
-      pos: {shape: triangle, points: [300, 500, 700]}
-operators: {and: min, or: max, implication: min, aggregation: max}
-defuzzifier: weighted_average
-rules:
-  - {if: {a: lo}, then: {y: neg}}
-  - {if: {a: mid}, then: {y: zer}}
-  - {if: {a: hi}, then: {y: pos}}
-"""
-
-
 def test_float_c_on_a_range_far_from_zero_stays_within_its_bound() -> None:
     # float32 cannot hold 1000.3: the C's breakpoints are rounded, and the bound must be
     # certified for those breakpoints and float32 arithmetic (was 0.0203 against 9.2e-06).
@@ -377,3 +351,25 @@ def test_description_with_comment_and_trigraph_sequences_compiles_strictly(
             assert bad not in body
     module = load_module(emit(rb, tab, "python"), rb.name)
     assert "nested comment" in (module.__doc__ or "")
+
+
+@pytest.mark.parametrize("number_type", ["float", "double"])
+def test_c_gives_the_exact_engine_value_on_the_knot_lattice(number_type: str) -> None:
+    # Zero error and zero change must give exactly the engine's output (no drift of an
+    # integrating loop at equilibrium): the fit keeps knot-lattice nodes, the C reads them.
+    from codegen.lut import knots
+
+    rb = rulebase("macvicar_whelan")
+    files = sources("macvicar_whelan", "c", number_type)  # type: ignore[arg-type]
+    dtype = np.float32 if number_type == "float" else np.float64
+    k0, k1 = (knots(v).astype(dtype) for v in rb.inputs)
+    g0, g1 = (g.ravel() for g in np.meshgrid(k0, k1, indexing="ij"))
+    with CompiledTable(files, rb.name, number_type, 2, 1, fpi=False) as lib:
+        got = lib.eval_batch(np.column_stack([g0, g1]))[:, 0]
+    exact = Engine(rb).evaluate({"e": g0.astype(np.float64), "de": g1.astype(np.float64)})["du"]
+    exact = np.asarray(exact).astype(dtype)
+    # At a range end the fraction is 1 and w00 + 1 * (vm - w00) may round by an ulp.
+    np.testing.assert_allclose(got, exact, rtol=0, atol=2 * float(np.finfo(dtype).eps))
+    interior = (np.abs(g0) < 1) & (np.abs(g1) < 1)
+    np.testing.assert_array_equal(got[interior], exact[interior])
+    assert got[(g0 == 0) & (g1 == 0)][0] == exact[(g0 == 0) & (g1 == 0)][0]

@@ -7,13 +7,14 @@ Golden files live in tests/golden/<rule base>/<target>-<type>/; rewrite them wit
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 from pathlib import Path
 
 import jinja2
 import numpy as np
 import pytest
-from _codegen_util import RESOLUTION, rulebase, sources, table
+from _codegen_util import OFFSET_YAML, RESOLUTION, rulebase, sources, table
 
 from codegen.emit import build_spec, check_identifier, emit
 from codegen.lut import build_table, make_table
@@ -204,16 +205,50 @@ def test_reference_interpolation_reproduces_planes_and_trilinear_functions() -> 
     np.testing.assert_allclose(dv, 0.5 * de * r - r, atol=1e-12)
 
 
-def test_table_nodes_hold_the_exact_engine_values_and_knots() -> None:
+@pytest.mark.parametrize("number_type", ["float", "double"])
+def test_stored_table_holds_the_exact_engine_values_on_the_knot_lattice(number_type: str) -> None:
+    # `values` are the engine samples by construction; what the code uses is `stored`, fitted
+    # everywhere except on the knot lattice, where it must stay the engine's value.
+    from codegen.lut import knots
     from fuzzkit.inference import Engine
 
     rb = rulebase("macvicar_whelan")
-    tab = table("macvicar_whelan", "double")
-    for k in range(-3, 4):  # every label peak is a node
-        assert np.min(np.abs(tab.breakpoints[0] - k / 3)) < 1e-12
+    tab = table("macvicar_whelan", number_type)  # type: ignore[arg-type]
+    assert tab.fitted
+    dtype = np.float32 if number_type == "float" else np.float64
+    on = []
+    for bp, var in zip(tab.breakpoints, rb.inputs, strict=True):
+        lattice = knots(var).astype(dtype).astype(np.float64)
+        for k in range(-3, 4):  # every label peak is a node
+            assert np.min(np.abs(bp - k / 3)) < 1e-7
+        on.append(np.isin(bp, lattice))
+        assert on[-1].sum() == len(lattice)
     g = np.meshgrid(*tab.breakpoints, indexing="ij")
-    exact = Engine(rb).evaluate({"e": g[0], "de": g[1]})["du"]
-    np.testing.assert_array_equal(tab.values[0], exact)
+    exact = np.asarray(Engine(rb).evaluate({"e": g[0], "de": g[1]})["du"]).astype(dtype)
+    lattice_nodes = np.logical_and.outer(*on)
+    np.testing.assert_array_equal(tab.stored[0][lattice_nodes], exact[lattice_nodes])
+    # Off the lattice the fit moved nodes (else this test could not tell the two apart).
+    assert np.any(tab.stored[0][~lattice_nodes] != exact[~lattice_nodes])
+
+
+def test_q15_interpolate_takes_scalars() -> None:
+    tab = table("macvicar_whelan", "q15")
+    (scalar,) = tab.interpolate([0.1, 0.2])
+    (array,) = tab.interpolate([np.array([0.1]), np.array([0.2])])
+    assert scalar.shape == () and scalar == array[0]
+    assert np.isnan(tab.interpolate([math.nan, 0.2])[0])
+
+
+def test_q15_search_on_a_narrow_range_names_the_q15_resolution() -> None:
+    # Was: "N breakpoints are too close for Q15 ... use fewer breakpoints", though the user
+    # chose none (the tolerance search did).
+    from fuzzkit.registry import loads
+
+    with pytest.raises(CodegenError) as info:
+        make_table(loads(OFFSET_YAML), number_type="q15")
+    text = str(info.value)
+    assert "tolerance 0.001 of the output range cannot be met at Q15 resolution" in text
+    assert "input a would need" in text and "fewer breakpoints" not in text
 
 
 def _mw_variant(**changes: object) -> object:
