@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from fuzzkit.errors import ConfigError
+from fuzzkit.fileio import check_output_path
 
 CONTROLLERS = ("pi", "fuzzy-pi")
 
@@ -84,15 +85,6 @@ def _surface_for(controller: str, rulebase: str) -> Any:
     return load_surface(rulebase)
 
 
-def _check_output(path: Path) -> None:
-    """Reject an output path that cannot be written, before minutes of simulation."""
-    parent = path.parent if str(path.parent) else Path(".")
-    if path.is_dir():
-        raise ConfigError(f"{path}: is a directory (expected an .rrd file path)")
-    if not parent.is_dir():
-        raise ConfigError(f"{path}: folder {parent} does not exist")
-
-
 def _fmt(v: Any, digits: int = 2) -> str:
     if v is None:
         return "-"
@@ -106,7 +98,7 @@ def _simulate(args: argparse.Namespace) -> int:
 
     experiment(args.experiment)  # reject a bad name before loading anything
     if args.rrd:
-        _check_output(Path(args.rrd))
+        check_output_path(args.rrd, ".rrd file")
     surface = _surface_for(args.controller, args.rulebase)
     result = _run_one(args.experiment, args.controller, args, surface)
     if args.rrd:

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from fuzzkit.errors import ConfigError
+from fuzzkit.fileio import check_output_path
 
 CONTROLLERS = ("pi", "fuzzy-pi")
 
@@ -104,22 +105,13 @@ def parse_stiffness(text: str) -> tuple[float, ...]:
     return tuple(out)
 
 
-def _check_file_target(path: Path) -> None:
-    """Reject an output file path that cannot be written, before minutes of tuning."""
-    parent = path.parent if str(path.parent) else Path(".")
-    if path.is_dir():
-        raise ConfigError(f"{path}: is a directory (expected a gains file path)")
-    if not parent.is_dir():
-        raise ConfigError(f"{path}: folder {parent} does not exist")
-
-
 def _tune(args: argparse.Namespace) -> int:
     from fuzzkit.gains import read_gains_file, write_gains
     from fuzzkit.tuning import ProgressBar, tune
 
     ks = parse_stiffness(args.stiffness)
     out = Path(args.out)
-    _check_file_target(out)
+    check_output_path(out, "gains file")
     if out.is_file() and not args.replace:
         read_gains_file(out)  # an unreadable existing file is reported now, not after tuning
     bar = None if args.quiet else ProgressBar()
