@@ -374,3 +374,27 @@ def test_scalar_path_with_three_inputs_agrees_with_vectorised_engine() -> None:
     np.testing.assert_allclose(single, batch, atol=1e-13, rtol=0)
     a, b, c = pts[0]
     assert single[0] == pytest.approx(fine_grid_reference(rb, {"a": a, "b": b, "c": c}), abs=1e-8)
+
+
+@pytest.mark.parametrize("low, high", [(-1000.0, 1000.0), (0.0, 30.0), (-1e-6, 1e-6)])
+def test_output_in_real_units_scales_the_unit_surface(low: float, high: float) -> None:
+    # affine map of the output universe: the centroid maps with it (fast and scalar paths)
+    def scaled(t: Term) -> Term:
+        return Term(t.name, t.shape, tuple(low + (p + 1) / 2 * (high - low) for p in t.params))
+
+    unit = macvicar_whelan()
+    out = unit.outputs[0]
+    rb = RuleBase(
+        "real",
+        unit.inputs,
+        (Variable("du", low, high, tuple(scaled(t) for t in out.terms)),),
+        unit.rules,
+    )
+    eng = Engine(rb)
+    assert eng._outputs[0].fast_centroid is not None and eng._scalar is not None
+    pts = np.random.default_rng(2).uniform(-1.1, 1.1, size=(50, 2))
+    want = low + (evaluate(unit, {"e": pts[:, 0], "de": pts[:, 1]})["du"] + 1) / 2 * (high - low)
+    got = eng.evaluate({"e": pts[:, 0], "de": pts[:, 1]})["du"]
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * (high - low))
+    single = [eng.evaluate_point(e=e, de=de)["du"] for e, de in pts]
+    np.testing.assert_allclose(single, want, rtol=0, atol=1e-12 * (high - low))
