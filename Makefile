@@ -3,21 +3,31 @@ PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.fuzzkit-installed
+# The development and CI environment is pinned (hashes included) by requirements/dev.lock,
+# resolved by `make lock`; users installing the package get the ranges in pyproject.toml.
+LOCK := requirements/dev.lock
+# The newest versions the ranges allow, in their own environment (`make test-latest`).
+LATEST_VENV ?= .venv-latest
 # Peer libraries for the benchmark live in their own environment: pyfuzzylite pins numpy<2,
 # which would drag the project's environment back to an old rerun-sdk.
 BENCH_VENV ?= .venv-bench
 BENCH_STAMP := $(BENCH_VENV)/.peers-installed
 DEMO_OUT ?= demo-out
 PYTEST_WORKERS ?= 2
+# mypy and import-linter do not follow setuptools' editable-install finder, which is what maps
+# codegen/ and planar_sim/ into the one installed package; they read this tree of symlinks,
+# laid out as the wheel installs it (fuzzkit/, fuzzkit/codegen, fuzzkit/planar_sim, ...).
+PACKAGE_TREE := build/package-tree
 
-.PHONY: demo test bench lint typecheck golden clean
+.PHONY: demo test test-latest verify bench lint typecheck imports golden lock clean package-tree
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 
-$(STAMP): pyproject.toml | $(BIN)/python
+$(STAMP): pyproject.toml $(LOCK) | $(BIN)/python
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	$(BIN)/python -m pip install --quiet --require-hashes -r $(LOCK)
+	$(BIN)/python -m pip install --quiet --no-deps -e .
 	touch $@
 
 demo: $(STAMP)
@@ -25,9 +35,43 @@ demo: $(STAMP)
 
 # The whole suite: static checks first (cheap, and they catch what tests miss), then pytest.
 test: $(STAMP)
-	$(BIN)/ruff check fuzzkit codegen planar_sim tests bench
-	$(BIN)/mypy
+	$(MAKE) --no-print-directory lint typecheck imports VENV=$(VENV)
 	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) -q -p no:cacheprovider
+
+# The suite against the newest versions pyproject.toml's ranges allow (not the lock): run it on
+# purpose to catch a dependency drift before the next `make lock` does.
+test-latest:
+	rm -rf $(LATEST_VENV)
+	$(PYTHON) -m venv $(LATEST_VENV)
+	$(LATEST_VENV)/bin/python -m pip install --quiet --upgrade pip
+	$(LATEST_VENV)/bin/python -m pip install --quiet --upgrade --upgrade-strategy eager -e '.[dev]'
+	$(LATEST_VENV)/bin/python -m pip list --format=freeze | grep -iE '^(numpy|scipy|numba|pymunk|rerun-sdk|matplotlib)=='
+	$(MAKE) --no-print-directory test VENV=$(LATEST_VENV) STAMP=$(LATEST_VENV)/bin/python
+
+# Refresh the lock file from pyproject.toml (newest versions inside the ranges), with hashes.
+lock: | $(BIN)/python
+	$(BIN)/python -m pip install --quiet "uv==0.13.8"
+	$(BIN)/uv pip compile pyproject.toml --extra dev --python-version 3.11 \
+		--python-platform x86_64-unknown-linux-gnu --generate-hashes --no-header --quiet \
+		--upgrade -o $(LOCK)
+
+package-tree:
+	rm -rf $(PACKAGE_TREE) && mkdir -p $(PACKAGE_TREE)/fuzzkit
+	for entry in fuzzkit/*; do ln -s "$(CURDIR)/$$entry" $(PACKAGE_TREE)/fuzzkit/; done
+	ln -s "$(CURDIR)/codegen" $(PACKAGE_TREE)/fuzzkit/codegen
+	ln -s "$(CURDIR)/planar_sim" $(PACKAGE_TREE)/fuzzkit/planar_sim
+	ln -s "$(CURDIR)/rulebases" $(PACKAGE_TREE)/fuzzkit/rulebases
+
+lint: $(STAMP)
+	$(BIN)/ruff check fuzzkit codegen planar_sim tests bench
+
+typecheck: $(STAMP) package-tree
+	cd $(PACKAGE_TREE) && $(CURDIR)/$(BIN)/mypy --config-file $(CURDIR)/pyproject.toml fuzzkit
+
+# The layering contract of DESIGN.md ([tool.importlinter] in pyproject.toml).
+imports: $(STAMP) package-tree
+	cd $(PACKAGE_TREE) && PYTHONPATH=$(CURDIR)/$(PACKAGE_TREE) \
+		$(CURDIR)/$(BIN)/lint-imports --no-cache --config $(CURDIR)/pyproject.toml
 
 $(BENCH_VENV)/bin/python:
 	$(PYTHON) -m venv $(BENCH_VENV)
@@ -40,15 +84,9 @@ $(BENCH_STAMP): | $(BENCH_VENV)/bin/python
 bench: $(STAMP) $(BENCH_STAMP)
 	$(BIN)/python bench/run.py --peers-python $(BENCH_VENV)/bin/python
 
-lint: $(STAMP)
-	$(BIN)/ruff check fuzzkit codegen planar_sim tests bench
-
-typecheck: $(STAMP)
-	$(BIN)/mypy
-
 # Rewrite the expected generated files under tests/golden/ after an intended change.
 golden: $(STAMP)
 	FUZZKIT_REFRESH_GOLDEN=1 $(BIN)/python -m pytest -q tests -k golden
 
 clean:
-	rm -rf $(VENV) $(BENCH_VENV) $(DEMO_OUT) build dist *.egg-info .pytest_cache .mypy_cache .ruff_cache
+	rm -rf $(VENV) $(LATEST_VENV) $(BENCH_VENV) $(DEMO_OUT) build dist *.egg-info .pytest_cache .mypy_cache .ruff_cache

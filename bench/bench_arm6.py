@@ -47,7 +47,8 @@ def _best_of(fn: Callable[[], tuple[float, float]], repeat: int = 3) -> tuple[fl
 
 def closed_loop_rate(controller: str) -> tuple[float, float]:
     """Simulated seconds per wall second and per CPU second of E2 on arm6 with ``controller``."""
-    from fuzzkit.experiments import experiment, load_surface, run
+    from fuzzkit.studies.experiments import experiment
+    from fuzzkit.studies.runner import load_surface, run
 
     surface = load_surface() if controller == "fuzzy-pi" else None
     exp = experiment("E2")
@@ -62,8 +63,8 @@ def closed_loop_rate(controller: str) -> tuple[float, float]:
 
 def plant_only_rate() -> tuple[float, float]:
     """Simulated seconds per wall second of the arm6 plant alone on E2's path."""
-    from fuzzkit.experiments import experiment
-    from fuzzkit.motion import Arm6Plant
+    from fuzzkit.plants.arm6 import Arm6Plant
+    from fuzzkit.studies.experiments import experiment
 
     scn = experiment("E2").scenario
     plant = Arm6Plant()
@@ -82,7 +83,7 @@ def plant_only_rate() -> tuple[float, float]:
 
 def ik_tracking_rate() -> tuple[tuple[float, float], float]:
     """Warm-started IK solves per second along a 25 mm/s line, and mean iterations."""
-    from fuzzkit.kinematics import SerialChain
+    from fuzzkit.plants.kinematics import SerialChain
 
     chain = SerialChain()
     q = np.array([0.0, 0.3, 0.3, 0.0, 0.9, np.pi])
@@ -113,7 +114,7 @@ def ik_tracking_rate() -> tuple[tuple[float, float], float]:
 
 def ik_cold_rate() -> tuple[tuple[float, float], float]:
     """Round-trip IK solves per second (seed 0.3 rad off), and the converged fraction."""
-    from fuzzkit.kinematics import SerialChain
+    from fuzzkit.plants.kinematics import SerialChain
 
     chain = SerialChain()
     rng = np.random.default_rng(0)
@@ -135,7 +136,7 @@ def ik_cold_rate() -> tuple[tuple[float, float], float]:
 
 def fk_batch_rate() -> tuple[float, float]:
     """Poses per second through the vectorised batch FK."""
-    from fuzzkit.kinematics import SerialChain
+    from fuzzkit.plants.kinematics import SerialChain
 
     chain = SerialChain()
     qs = np.random.default_rng(1).uniform(chain.lower, chain.upper, (1000, 6))

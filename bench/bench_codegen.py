@@ -22,10 +22,11 @@ from pathlib import Path
 import numpy as np
 
 import fuzzkit
-from codegen.emit import emit
-from codegen.lut import LookupTable, make_table
-from codegen.toolchain import STRICT_FLAGS, find_compiler, run_compiler
-from codegen.verify import load_module
+from fuzzkit.codegen.emit import emit
+from fuzzkit.codegen.lut import LookupTable
+from fuzzkit.codegen.table_search import make_table
+from fuzzkit.codegen.toolchain import STRICT_FLAGS, find_compiler, run_compiler
+from fuzzkit.codegen.verify import load_module
 
 NAME = "macvicar_whelan"
 C_CALLS = 10_000_000
@@ -74,7 +75,7 @@ void {name}_eval(const {t} in[2], {t} out[1])
 
 
 def c_ns_per_call(
-    rb: fuzzkit.model.RuleBase, table: LookupTable, baseline: bool = False
+    rb: fuzzkit.fuzzy.model.RuleBase, table: LookupTable, baseline: bool = False
 ) -> float | None:
     """Compile the generated C with a timing harness (-O2) and return ns per NAME_eval.
 

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 import fuzzkit
-from fuzzkit.inference import Engine
+from fuzzkit.fuzzy.inference import Engine
 
 POINT = (0.3, -0.2)
 SURFACE_N = 101
@@ -46,7 +46,7 @@ def best_of(fn: Callable[[], object], repeat: int = 5, min_time: float = 0.2) ->
     return best
 
 
-def peer_spec(rb: fuzzkit.model.RuleBase) -> dict[str, Any]:  # type: ignore[name-defined]
+def peer_spec(rb: fuzzkit.fuzzy.model.RuleBase) -> dict[str, Any]:  # type: ignore[name-defined]
     def var(v: Any) -> dict[str, Any]:
         return {
             "name": v.name,

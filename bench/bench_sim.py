@@ -5,7 +5,7 @@ Run: ``.venv/bin/python bench/bench_sim.py`` (prints a table; about 10 s on a 2-
 Rows
 ----
 * E1 closed loop on ``planar`` (pymunk arm, 4 physics substeps per 4 ms period) with PI,
-  with fuzzy-PI on the exact engine (``fuzzkit.inference``, what ``fuzzkit simulate`` uses),
+  with fuzzy-PI on the exact engine (``fuzzkit.fuzzy.inference``, what ``fuzzkit simulate`` uses),
   and with fuzzy-PI on a 201 x 201 bilinear table of the same surface; target >= 50x.
 * E1 plant only: the nominal path with zero correction, no controller.
 """
@@ -26,10 +26,11 @@ def _best_of(fn: Callable[[], float], repeat: int = 3) -> float:
 
 def closed_loop_rate(controller: str, surface_kind: str = "exact") -> float:
     """Simulated seconds per wall second of E1 on the planar arm."""
-    from fuzzkit.control import engine_surface, engine_table_surface
-    from fuzzkit.experiments import experiment, run
-    from fuzzkit.inference import Engine
-    from fuzzkit.registry import load
+    from fuzzkit.control.controllers import engine_surface, engine_table_surface
+    from fuzzkit.formats.registry import load
+    from fuzzkit.fuzzy.inference import Engine
+    from fuzzkit.studies.experiments import experiment
+    from fuzzkit.studies.runner import run
 
     surface = None
     if controller == "fuzzy-pi":
@@ -48,8 +49,8 @@ def closed_loop_rate(controller: str, surface_kind: str = "exact") -> float:
 
 def plant_rate() -> float:
     """Simulated seconds per wall second of the planar plant alone on E1's path."""
-    from fuzzkit.experiments import experiment
-    from planar_sim import PlanarArmPlant
+    from fuzzkit.planar_sim import PlanarArmPlant
+    from fuzzkit.studies.experiments import experiment
 
     exp = experiment("E1")
     zero = np.zeros(3)

@@ -5,7 +5,7 @@ about a minute on a 2-core machine with the default budget of 60).
 
 Rows: PI and fuzzy-PI tuned on E1 over the default stiffnesses (5, 10, 20 N/mm), planar plant,
 seed 0; wall time (target <= 60 s on 2 cores), gain sets simulated, best cost found and the
-default gains' cost on the same cost function (``fuzzkit.tuning.run_cost``).
+default gains' cost on the same cost function (``fuzzkit.studies.tuning.run_cost``).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from collections.abc import Sequence
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the benchmark and print its table; returns the exit code (1 if a target is missed)."""
-    from fuzzkit.tuning import default_workers, tune
+    from fuzzkit.studies.tuning import default_workers, tune
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
     parser.add_argument("--budget", type=int, default=60)

@@ -1,9 +1,9 @@
 """Render a lookup table into source files: ``{relative path: text}``, never written here.
 
 The one object a template sees is a :class:`Spec`, built here from the rule base and its
-:class:`~codegen.lut.LookupTable`: every number is already formatted as a literal of the target
-language and every name already checked, so templates only lay text out. Each target lives in
-``codegen/backends/<target>/`` with its templates and a small config (``config.py``).
+:class:`~fuzzkit.codegen.lut.LookupTable`: every number is already formatted as a literal of the
+target language and every name already checked, so templates only lay text out. Each target lives in
+``fuzzkit.codegen/backends/<target>/`` with its templates and a small config (``config.py``).
 """
 
 from __future__ import annotations
@@ -21,10 +21,10 @@ from typing import Any
 import jinja2
 import numpy as np
 
-from codegen.lut import Q15_RECIP_BITS, Q15_T_BITS, ROUNDING_ALLOWANCE, LookupTable
+from fuzzkit.codegen.lut import Q15_RECIP_BITS, Q15_T_BITS, ROUNDING_ALLOWANCE, LookupTable
 from fuzzkit.errors import CodegenError
-from fuzzkit.model import RuleBase
-from fuzzkit.validation import C_KEYWORDS, IDENTIFIER, PYTHON_KEYWORDS, identifier_problem
+from fuzzkit.fuzzy.model import RuleBase
+from fuzzkit.fuzzy.validation import C_KEYWORDS, IDENTIFIER, PYTHON_KEYWORDS, identifier_problem
 
 TARGETS = ("c", "python")
 
@@ -433,7 +433,7 @@ def _environment(target: str) -> jinja2.Environment:
 
 
 def _config(target: str) -> Any:
-    return importlib.import_module(f"codegen.backends.{target}.config")
+    return importlib.import_module(f"fuzzkit.codegen.backends.{target}.config")
 
 
 def render(spec: Spec) -> dict[str, str]:

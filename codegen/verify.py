@@ -22,10 +22,10 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from codegen.lut import Q15_ONE, ROUNDING_ALLOWANCE, LookupTable, quantize_q15
-from codegen.toolchain import CompiledTable
+from fuzzkit.codegen.lut import Q15_ONE, ROUNDING_ALLOWANCE, LookupTable, quantize_q15
+from fuzzkit.codegen.toolchain import CompiledTable
 from fuzzkit.errors import CodegenError
-from fuzzkit.model import RuleBase
+from fuzzkit.fuzzy.model import RuleBase
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -98,7 +98,7 @@ def verification_points(rb: RuleBase, n: int = DEFAULT_POINTS, seed: int = 0) ->
 
 
 def _exact(rb: RuleBase, points: FloatArray) -> FloatArray:
-    from fuzzkit.inference import Engine
+    from fuzzkit.fuzzy.inference import Engine
 
     result = Engine(rb).evaluate({v.name: points[:, i] for i, v in enumerate(rb.inputs)})
     return np.column_stack([np.asarray(result[v.name], dtype=np.float64) for v in rb.outputs])

@@ -18,15 +18,15 @@ from typing import Any
 
 __version__ = "0.1.0"
 
-# Public names, resolved lazily so that importing a low module (fuzzkit.model) does not pull in
-# numpy-heavy ones, and the CLI starts fast.
+# Public names, resolved lazily so that importing a low module (fuzzkit.fuzzy.model) does not pull
+# in numpy-heavy ones, and the CLI starts fast.
 _EXPORTS = {
-    "Engine": "fuzzkit.inference",
-    "evaluate": "fuzzkit.inference",
-    "evaluate_point": "fuzzkit.inference",
-    "load": "fuzzkit.registry",
-    "loads": "fuzzkit.registry",
-    "available": "fuzzkit.registry",
+    "Engine": "fuzzkit.fuzzy.inference",
+    "evaluate": "fuzzkit.fuzzy.inference",
+    "evaluate_point": "fuzzkit.fuzzy.inference",
+    "load": "fuzzkit.formats.registry",
+    "loads": "fuzzkit.formats.registry",
+    "available": "fuzzkit.formats.registry",
 }
 
 __all__ = ["__version__", *sorted(_EXPORTS)]

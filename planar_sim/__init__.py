@@ -1,10 +1,15 @@
 """A planar two-link arm in pymunk: the physics plant for closed-loop force-control tests.
 
 The arm moves in the vertical x-z plane (pymunk's y axis is the world's z). It implements the
-``fuzzkit.plant.ContactPlant`` contract and knows nothing about fuzzy logic: a controller is
-whoever calls :meth:`PlanarArmPlant.step`.
+``fuzzkit.plants.contract.ContactPlant`` contract and knows nothing about fuzzy logic: a controller
+is whoever calls :meth:`PlanarArmPlant.step`.
 """
 
-from planar_sim.arm import ArmParameters, PlanarArmPlant, forward_kinematics, inverse_kinematics
+from fuzzkit.planar_sim.arm import (
+    ArmParameters,
+    PlanarArmPlant,
+    forward_kinematics,
+    inverse_kinematics,
+)
 
 __all__ = ["ArmParameters", "PlanarArmPlant", "forward_kinematics", "inverse_kinematics"]

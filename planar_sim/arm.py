@@ -8,13 +8,13 @@ Model
 * Each joint is a position servo: a proportional position loop (``servo_gain_per_s``) commands a
   joint rate, which a pymunk ``SimpleMotor`` enforces up to ``torque_limit_nm``. Like an industrial
   robot in position control the arm is therefore stiff until a torque limit is reached; all contact
-  compliance is in the environment (``fuzzkit.plant.ContactModel``).
+  compliance is in the environment (``fuzzkit.plants.contract.ContactModel``).
 * The inner motion loop: target tip = nominal path + correction -> wrist = tip + tool length ->
   analytic two-link IK (elbow up) -> joint targets, recomputed every controller period.
-* Contact forces come from ``fuzzkit.plant.ContactSolver`` (penalty spring-damper with Coulomb
-  friction), applied to the tool every physics substep; the F/T sensor between wrist and tool
-  reads them through ``fuzzkit.plant.ForceSensor`` (tool weight compensated, like a calibrated
-  sensor).
+* Contact forces come from ``fuzzkit.plants.contract.ContactSolver`` (penalty spring-damper with
+  Coulomb friction), applied to the tool every physics substep; the F/T sensor between wrist and
+  tool reads them through ``fuzzkit.plants.contract.ForceSensor`` (tool weight compensated, like a
+  calibrated sensor).
 
 Everything is fixed-step: ``substeps`` physics steps per controller period.
 """
@@ -29,14 +29,9 @@ import numpy.typing as npt
 import pymunk
 
 from fuzzkit.errors import SimulationError
-from fuzzkit.plant import (
-    ContactSolver,
-    ForceSensor,
-    PlantSample,
-    Scenario,
-    nominal_position,
-    normal_force_by_axis,
-)
+from fuzzkit.plants.contact import ContactSolver, ForceSensor
+from fuzzkit.plants.contract import PlantSample, Scenario, normal_force_by_axis
+from fuzzkit.plants.environment import nominal_position
 
 Vec = npt.NDArray[np.float64]
 
@@ -79,7 +74,7 @@ def inverse_kinematics(wx: float, wz: float, l1: float, l2: float) -> tuple[floa
 
 
 class PlanarArmPlant:
-    """The pymunk planar arm as a ``fuzzkit.plant.ContactPlant``.
+    """The pymunk planar arm as a ``fuzzkit.plants.contract.ContactPlant``.
 
     Examples
     --------

@@ -1,4 +1,4 @@
-"""Shared helpers of the codegen tests (not a test module)."""
+"""Shared helpers of the fuzzkit.codegen tests (not a test module)."""
 
 from __future__ import annotations
 
@@ -8,10 +8,11 @@ import shutil
 import pytest
 
 import fuzzkit
-from codegen.emit import emit
-from codegen.lut import LookupTable, NumberType, make_table
-from codegen.toolchain import find_compiler
-from fuzzkit.model import RuleBase
+from fuzzkit.codegen.emit import emit
+from fuzzkit.codegen.lut import LookupTable, NumberType
+from fuzzkit.codegen.table_search import make_table
+from fuzzkit.codegen.toolchain import find_compiler
+from fuzzkit.fuzzy.model import RuleBase
 
 #: Small resolutions keep the tests fast; the bound is what is checked, whatever it is.
 RESOLUTION = {"macvicar_whelan": 25, "paper_table1": 25, "gaussian5": 17, "three_input": 9}

@@ -1,7 +1,7 @@
 """An independent reference Mamdani for the engine tests.
 
 Membership functions are written out here from their textbook definitions (not taken from
-fuzzkit.membership), and inference runs one rule at a time on a fine grid, so that a bug in
+fuzzkit.fuzzy.membership), and inference runs one rule at a time on a fine grid, so that a bug in
 the engine or in the shape formulas cannot hide in both sides of a comparison.
 """
 
@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from fuzzkit.model import Expression, Proposition, RuleBase, Term
+from fuzzkit.fuzzy.model import Expression, Proposition, RuleBase, Term
 
 GRID = 200_001
 

@@ -6,10 +6,11 @@ import numpy as np
 import pytest
 from _codegen_util import rulebase
 
-from codegen.emit import build_spec
-from codegen.lut import LookupTable, make_table, round_up
-from fuzzkit.inference import Engine
-from fuzzkit.model import RuleBase
+from fuzzkit.codegen.emit import build_spec
+from fuzzkit.codegen.lut import LookupTable
+from fuzzkit.codegen.table_search import make_table, round_up
+from fuzzkit.fuzzy.inference import Engine
+from fuzzkit.fuzzy.model import RuleBase
 
 TWO_INPUT = ["macvicar_whelan", "paper_table1", "gaussian5"]
 

@@ -166,8 +166,8 @@ def test_three_input_base_compiles_without_fpi(
 
 
 def test_explicit_tolerance_is_enforced_on_an_explicit_resolution() -> None:
-    from codegen.lut import make_table
     from fuzzkit import load
+    from fuzzkit.codegen.table_search import make_table
     from fuzzkit.errors import CodegenError
 
     with pytest.raises(CodegenError, match=r"resolution 5 .* does not meet the tolerance"):
@@ -211,9 +211,9 @@ def test_gains_a_c_float_cannot_hold_are_refused(
 
 
 def test_tiny_gains_are_fine_for_double() -> None:
-    from codegen.emit import FpiDefaults, emit
-    from codegen.lut import make_table
     from fuzzkit import load
+    from fuzzkit.codegen.emit import FpiDefaults, emit
+    from fuzzkit.codegen.table_search import make_table
 
     rb = load("macvicar_whelan")
     tab = make_table(rb, number_type="double", resolution=9)
@@ -250,7 +250,7 @@ def test_gains_the_generated_controller_does_not_implement_are_refused(
 
 
 def test_cli_gain_keys_are_the_emitters() -> None:
-    from codegen.emit import FPI_GAIN_KEYS
     from fuzzkit.cli.codegen_cmd import GAIN_KEYS
+    from fuzzkit.codegen.emit import FPI_GAIN_KEYS
 
     assert GAIN_KEYS == FPI_GAIN_KEYS

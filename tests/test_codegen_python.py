@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from _codegen_util import needs_cc, rulebase, skip_no_cc, sources, table
 
-from codegen.lut import LookupTable
-from codegen.toolchain import CompiledTable
-from codegen.verify import compare, load_module, python_outputs, verification_points
-from fuzzkit.inference import Engine
+from fuzzkit.codegen.lut import LookupTable
+from fuzzkit.codegen.toolchain import CompiledTable
+from fuzzkit.codegen.verify import compare, load_module, python_outputs, verification_points
+from fuzzkit.fuzzy.inference import Engine
 
 
 def _exact(name: str, points: np.ndarray) -> np.ndarray:

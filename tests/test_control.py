@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from fuzzkit.control import (
+from fuzzkit.control.controllers import (
     PI,
     FuzzyPI,
     HybridForceController,
@@ -192,9 +192,9 @@ def test_make_axis_controllers_follows_selection() -> None:
 
 
 def test_engine_table_surface_tracks_the_exact_engine() -> None:
-    from fuzzkit.control import engine_surface, engine_table_surface
-    from fuzzkit.inference import Engine
-    from fuzzkit.registry import load
+    from fuzzkit.control.controllers import engine_surface, engine_table_surface
+    from fuzzkit.formats.registry import load
+    from fuzzkit.fuzzy.inference import Engine
 
     engine = Engine(load("macvicar_whelan"))
     exact, table = engine_surface(engine), engine_table_surface(engine, n=201)
@@ -226,10 +226,10 @@ def test_any_object_with_step_and_reset_is_an_axis_controller() -> None:
 
 
 def test_codegen_lookup_table_plugs_in_as_a_surface() -> None:
-    lut = pytest.importorskip("codegen.lut")
-    from fuzzkit.control import engine_surface, lookup_table_surface
-    from fuzzkit.inference import Engine
-    from fuzzkit.registry import load
+    lut = pytest.importorskip("fuzzkit.codegen.table_search")
+    from fuzzkit.control.controllers import engine_surface, lookup_table_surface
+    from fuzzkit.formats.registry import load
+    from fuzzkit.fuzzy.inference import Engine
 
     rb = load("macvicar_whelan")
     table = lut.build_table(rb, [41, 41], check_factor=4)

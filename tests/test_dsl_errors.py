@@ -9,11 +9,11 @@ from string import Template
 
 import pytest
 
-from fuzzkit import dsl
 from fuzzkit.errors import Problem, RuleBaseError
-from fuzzkit.model import Compound, Consequent, Proposition, Rule, RuleBase, Term, Variable
-from fuzzkit.registry import loads
-from fuzzkit.validation import check, ensure_valid
+from fuzzkit.formats import yaml_reader as dsl
+from fuzzkit.formats.registry import loads
+from fuzzkit.fuzzy.model import Compound, Consequent, Proposition, Rule, RuleBase, Term, Variable
+from fuzzkit.fuzzy.validation import check, ensure_valid
 
 PART = "{partition: triangular, labels: [N, Z, P]}"
 RULES = """\

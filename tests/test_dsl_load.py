@@ -6,9 +6,9 @@ import hashlib
 
 import pytest
 
-from fuzzkit.dsl import partition_terms
-from fuzzkit.model import Compound, Consequent, Proposition, Rule, RuleTable, Term
-from fuzzkit.registry import loads
+from fuzzkit.formats.registry import loads
+from fuzzkit.fuzzy.model import Compound, Consequent, Proposition, Rule, RuleTable, Term
+from fuzzkit.fuzzy.partition import partition_terms
 
 HEAD = """\
 name: demo

@@ -10,9 +10,10 @@ from typing import Literal
 import pytest
 import yaml
 
-from fuzzkit import registry
-from fuzzkit.dsl import dump, json_schema
-from fuzzkit.model import (
+from fuzzkit.formats import registry
+from fuzzkit.formats.schema import json_schema
+from fuzzkit.formats.yaml_writer import dump
+from fuzzkit.fuzzy.model import (
     AGGREGATIONS,
     AND_OPERATORS,
     DEFUZZIFIERS,
@@ -31,7 +32,7 @@ from fuzzkit.model import (
     Term,
     Variable,
 )
-from fuzzkit.validation import check
+from fuzzkit.fuzzy.validation import check
 
 SHIPPED = registry.available()
 RULEBASES = Path(__file__).resolve().parent.parent / "rulebases"

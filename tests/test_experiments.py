@@ -10,23 +10,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fuzzkit.control import Surface
-from fuzzkit.experiments import (
+from fuzzkit.control.controllers import Surface
+from fuzzkit.studies.experiments import experiment, press_experiment, scaled_gains
+from fuzzkit.studies.metrics import (
     SUMMARY_AXIS_KEYS,
-    Faults,
-    RunResult,
     axis_metrics,
-    experiment,
-    load_surface,
     overshoot_pct,
-    press_experiment,
     rms,
-    run,
-    scaled_gains,
     settling_time,
     steady_state_error,
     summary,
 )
+from fuzzkit.studies.runner import Faults, RunResult, load_surface, run
 
 CONTROLLERS = ("pi", "fuzzy-pi")
 

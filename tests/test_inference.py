@@ -11,8 +11,8 @@ from _mamdani_reference import mu as independent_mu
 from _mamdani_reference import reference as fine_grid_reference
 
 from fuzzkit.errors import EvaluationError
-from fuzzkit.inference import Engine, evaluate, evaluate_point
-from fuzzkit.model import (
+from fuzzkit.fuzzy.inference import Engine, evaluate, evaluate_point
+from fuzzkit.fuzzy.model import (
     Compound,
     Consequent,
     Operators,

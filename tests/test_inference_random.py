@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 from _mamdani_reference import reference
 
-from fuzzkit.inference import Engine
-from fuzzkit.model import (
+from fuzzkit.fuzzy.inference import Engine
+from fuzzkit.fuzzy.model import (
     Compound,
     Consequent,
     Expression,
@@ -26,7 +26,7 @@ from fuzzkit.model import (
     Term,
     Variable,
 )
-from fuzzkit.validation import check
+from fuzzkit.fuzzy.validation import check
 
 
 def random_term(rng: np.random.Generator, name: str, lo: float, hi: float) -> Term:

@@ -1,5 +1,5 @@
-"""Tests of fuzzkit.kinematics: FK against hand geometry, Jacobian against finite differences,
-IK round trips and statuses, the robot description loader."""
+"""Tests of fuzzkit.plants.kinematics: FK against hand geometry, Jacobian against finite
+differences, IK round trips and statuses, the robot description loader."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ import numpy.typing as npt
 import pytest
 
 from fuzzkit.errors import ConfigError
-from fuzzkit.kinematics import IKStatus, Joint, RobotDescription, SerialChain, load_robot
-from fuzzkit.rotations import rotation_error
+from fuzzkit.plants.kinematics import IKStatus, Joint, RobotDescription, SerialChain, load_robot
+from fuzzkit.plants.rotations import rotation_error
 
 Arr = npt.NDArray[np.float64]
 DEG = math.pi / 180.0

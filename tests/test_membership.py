@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from fuzzkit import membership
-from fuzzkit.model import Term
+from fuzzkit.fuzzy import membership
+from fuzzkit.fuzzy.model import Term
 
 CASES = [
     # shape, params, x, expected (worked by hand from the formula in the docstring)

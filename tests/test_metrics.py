@@ -12,18 +12,12 @@ import math
 import numpy as np
 import pytest
 
-from fuzzkit.control import Surface
-from fuzzkit.experiments import (
-    DEFAULT_GAINS,
-    RunResult,
-    axis_first_contact,
-    axis_metrics,
-    experiment,
-    load_surface,
-    run,
-    summary,
-)
-from fuzzkit.plant import TOOL_DOWN, Box, Scenario, Table, Waypoint, normal_force_by_axis
+from fuzzkit.control.controllers import Surface
+from fuzzkit.plants.contract import TOOL_DOWN, Scenario, normal_force_by_axis
+from fuzzkit.plants.environment import Box, Table, Waypoint
+from fuzzkit.studies.experiments import DEFAULT_GAINS, experiment
+from fuzzkit.studies.metrics import axis_first_contact, axis_metrics, summary
+from fuzzkit.studies.runner import RunResult, load_surface, run
 
 PERIOD = 0.004
 MU = 0.15
@@ -160,7 +154,7 @@ def _slide_scenario() -> Scenario:
 
 @pytest.mark.parametrize("plant_name", ["planar", "arm6"])
 def test_plants_report_normal_force_without_friction(plant_name: str) -> None:
-    from fuzzkit.plant import make_plant
+    from fuzzkit.studies.plants import make_plant
 
     plant = make_plant(plant_name)
     scn = _slide_scenario()

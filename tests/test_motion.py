@@ -1,4 +1,4 @@
-"""Tests of fuzzkit.motion: the 6-DOF kinematic plant, its path, servo, contact and wrench."""
+"""Tests of fuzzkit.plants.arm6: the 6-DOF kinematic plant, its path, servo, contact and wrench."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import numpy.typing as npt
 import pytest
 
 from fuzzkit.errors import ConfigError, SimulationError
-from fuzzkit.motion import (
+from fuzzkit.plants.arm6 import (
     Arm6Parameters,
     Arm6Plant,
     Arm6Sample,
@@ -23,18 +23,10 @@ from fuzzkit.motion import (
     Plane,
     objects_from_scenario,
 )
-from fuzzkit.plant import (
-    Box,
-    ContactModel,
-    ContactPlant,
-    ContactSolver,
-    RoughSurface,
-    Scenario,
-    SensorModel,
-    Table,
-    Waypoint,
-)
-from fuzzkit.rotations import matrix_from_quat, quat_from_rotvec, rotation_error
+from fuzzkit.plants.contact import ContactModel, ContactSolver, SensorModel
+from fuzzkit.plants.contract import ContactPlant, Scenario
+from fuzzkit.plants.environment import Box, RoughSurface, Table, Waypoint
+from fuzzkit.plants.rotations import matrix_from_quat, quat_from_rotvec, rotation_error
 
 Arr = npt.NDArray[np.float64]
 QUIET = SensorModel(noise_std_n=0.0, cutoff_hz=1e6)  # the sensor passes the true force through
@@ -322,13 +314,13 @@ def test_bad_corrections_are_rejected(bad: Arr) -> None:
 
 
 # --------------------------------------------------------------------------------------------
-# Closed loop: the experiments of fuzzkit.experiments, unchanged, on this plant
+# Closed loop: the experiments of fuzzkit.studies.experiments, unchanged, on this plant
 # --------------------------------------------------------------------------------------------
 
 
 @pytest.fixture(scope="module")
 def fuzzy_surface() -> object:
-    from fuzzkit.experiments import load_surface
+    from fuzzkit.studies.runner import load_surface
 
     return load_surface()
 
@@ -338,7 +330,8 @@ def fuzzy_surface() -> object:
 def test_experiments_reach_both_set_points_within_1_n(
     name: str, controller: str, fuzzy_surface: object
 ) -> None:
-    from fuzzkit.experiments import experiment, run
+    from fuzzkit.studies.experiments import experiment
+    from fuzzkit.studies.runner import run
 
     exp = experiment(name)
     res = run(
@@ -360,7 +353,8 @@ def test_experiments_reach_both_set_points_within_1_n(
 
 
 def test_selecting_only_z_leaves_x_on_the_nominal_path() -> None:
-    from fuzzkit.experiments import experiment, run
+    from fuzzkit.studies.experiments import experiment
+    from fuzzkit.studies.runner import run
 
     exp = experiment("E2")
     assert exp.selection == (False, False, True)
@@ -382,8 +376,9 @@ def test_selecting_only_z_leaves_x_on_the_nominal_path() -> None:
 
 
 def test_arm6_recording_is_written_atomically_and_refuses_planar_runs(tmp_path: Path) -> None:
-    from fuzzkit.experiments import experiment, run
-    from fuzzkit.traces_arm6 import write_rrd
+    from fuzzkit.studies.experiments import experiment
+    from fuzzkit.studies.runner import run
+    from fuzzkit.viz.traces_arm6 import write_rrd
 
     res = run(experiment("E1"), "arm6", "pi", duration_s=0.5)
     out = write_rrd(res, tmp_path / "e1.rrd")
@@ -400,7 +395,8 @@ def test_arm6_recording_is_written_atomically_and_refuses_planar_runs(tmp_path: 
 
 
 def test_force_loop_holds_30_n_on_a_3d_rough_field_along_a_diagonal_path() -> None:
-    from fuzzkit.experiments import Experiment, run
+    from fuzzkit.studies.experiments import Experiment
+    from fuzzkit.studies.runner import run
 
     touch = -0.30 + 0.02 - 0.002  # 2 mm into the nominal surface, as E2 programs it
     field = HeightField.rough((0.30, 0.60), (-0.20, 0.20), -0.30, 0.0002, spacing=0.004, seed=7)
@@ -437,7 +433,7 @@ def test_force_loop_holds_30_n_on_a_3d_rough_field_along_a_diagonal_path() -> No
 
 
 def test_translated_objects_touch_at_the_moved_place() -> None:
-    from fuzzkit.motion import ExtrudedProfile, translated
+    from fuzzkit.plants.arm6 import ExtrudedProfile, translated
 
     off = (0.07, 0.01, 0.287)
     sphere = 0.02

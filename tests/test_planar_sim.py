@@ -1,4 +1,5 @@
-"""Tests of the pymunk planar arm and the shared contact/sensor models of fuzzkit.plant."""
+"""Tests of the pymunk planar arm and the shared contact/sensor models of
+fuzzkit.plants.contract."""
 
 from __future__ import annotations
 
@@ -8,20 +9,11 @@ import numpy as np
 import pytest
 
 from fuzzkit.errors import ConfigError, SimulationError
-from fuzzkit.plant import (
-    PLANTS,
-    Box,
-    ContactModel,
-    ContactPlant,
-    RoughSurface,
-    Scenario,
-    SensorModel,
-    Table,
-    Waypoint,
-    make_plant,
-    nominal_position,
-)
-from planar_sim import PlanarArmPlant, forward_kinematics, inverse_kinematics
+from fuzzkit.planar_sim import PlanarArmPlant, forward_kinematics, inverse_kinematics
+from fuzzkit.plants.contact import ContactModel, SensorModel
+from fuzzkit.plants.contract import ContactPlant, Scenario
+from fuzzkit.plants.environment import Box, RoughSurface, Table, Waypoint, nominal_position
+from fuzzkit.studies.plants import PLANTS, make_plant
 
 L1, L2 = 0.36, 0.38
 

@@ -12,7 +12,7 @@ import pytest
 
 import fuzzkit
 from fuzzkit.errors import RuleBaseError
-from fuzzkit.registry import available, load, loads
+from fuzzkit.formats.registry import available, load, loads
 
 ROOT = Path(__file__).resolve().parent.parent
 SHIPPED_FILES = sorted(p.stem for p in (ROOT / "rulebases").glob("*.yaml"))

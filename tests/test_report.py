@@ -8,9 +8,9 @@ from typing import Any
 
 import pytest
 
+from fuzzkit.control.gains import GainsEntry, write_gains
 from fuzzkit.errors import ConfigError
-from fuzzkit.gains import GainsEntry, write_gains
-from fuzzkit.report import Key, assess_claims, build_report, claims_summary
+from fuzzkit.report.build import Key, assess_claims, build_report, claims_summary
 
 
 def _axis(

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from fuzzkit import evaluate, evaluate_point
-from fuzzkit.model import Compound, Proposition, RuleBase
-from fuzzkit.registry import available, load
-from fuzzkit.validation import check
+from fuzzkit.formats.registry import available, load
+from fuzzkit.fuzzy.model import Compound, Proposition, RuleBase
+from fuzzkit.fuzzy.validation import check
 
 LABELS = ["NL", "NM", "NS", "ZR", "PS", "PM", "PL"]  # index -3 .. 3
 

@@ -15,7 +15,7 @@ import pytest
 
 from fuzzkit import evaluate_point, load
 from fuzzkit.errors import ConfigError, EvaluationError
-from fuzzkit.surface import peak_grid, surface_grid, write_surface_png, write_surface_rrd
+from fuzzkit.viz.surface import peak_grid, surface_grid, write_surface_png, write_surface_rrd
 
 RERUN = shutil.which("rerun", path=str(Path(sys.executable).parent)) or shutil.which("rerun")
 

@@ -11,8 +11,9 @@ from pathlib import Path
 import pytest
 
 from fuzzkit.errors import ConfigError
-from fuzzkit.experiments import RunResult, experiment, run
-from fuzzkit.traces import write_rrd
+from fuzzkit.studies.experiments import experiment
+from fuzzkit.studies.runner import RunResult, run
+from fuzzkit.viz.traces_planar import write_rrd
 
 
 def _rerun_cli() -> str:

@@ -9,12 +9,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fuzzkit.control import saturated_sum_surface
+from fuzzkit.control.controllers import saturated_sum_surface
+from fuzzkit.control.gains import GainsEntry, parse_gains, read_gains, read_gains_file, write_gains
 from fuzzkit.errors import ConfigError
-from fuzzkit.experiments import Experiment, experiment, run, with_stiffness
-from fuzzkit.gains import GainsEntry, parse_gains, read_gains, read_gains_file, write_gains
-from fuzzkit.plant import PlantSample, Scenario, Table, ToolModel, Waypoint, nominal_position
-from fuzzkit.tuning import (
+from fuzzkit.plants.contact import ToolModel
+from fuzzkit.plants.contract import PlantSample, Scenario
+from fuzzkit.plants.environment import Table, Waypoint, nominal_position
+from fuzzkit.studies.experiments import Experiment, experiment, with_stiffness
+from fuzzkit.studies.runner import run
+from fuzzkit.studies.tuning import (
     TUNING_HORIZON_S,
     GainSpace,
     Progress,
@@ -35,7 +38,7 @@ TABLE_Z = -0.30
 class SpringPlant:
     """Tool tip follows its target with a 20 ms first-order lag; a table below is a spring.
 
-    Exact and noise-free: force = k * penetration. Independent of planar_sim and motion.
+    Exact and noise-free: force = k * penetration. Independent of fuzzkit.planar_sim and motion.
     """
 
     name = "spring"
@@ -312,8 +315,8 @@ def test_cli_tune_writes_a_file_simulate_accepts(
 def test_cli_tune_ctrl_c_writes_the_best_so_far(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from fuzzkit import tuning
     from fuzzkit.cli import main
+    from fuzzkit.studies import tuning
 
     calls = []
 

@@ -13,8 +13,8 @@ from typing import Any
 EXIT_OK = 0
 EXIT_FAILURE = 1
 
-#: What the generated fuzzy-PI takes (``codegen.emit.FPI_GAIN_KEYS``; kept here so the
-#: parser does not import codegen).
+#: What the generated fuzzy-PI takes (``fuzzkit.codegen.emit.FPI_GAIN_KEYS``; kept here so the
+#: parser does not import fuzzkit.codegen).
 GAIN_KEYS = ("kp", "ki", "kx", "u_min", "u_max")
 
 
@@ -67,9 +67,9 @@ def register(sub: Any) -> None:
 
 
 def _fpi_defaults(path: str | None) -> Any:
-    from codegen.emit import FpiDefaults
+    from fuzzkit.codegen.emit import FpiDefaults
+    from fuzzkit.control.gains import read_gains
     from fuzzkit.errors import ConfigError
-    from fuzzkit.gains import read_gains
 
     if path is None:
         return None
@@ -99,12 +99,13 @@ def cmd_compile(args: argparse.Namespace) -> int:
     """Handler of ``fuzzkit compile``."""
     from pathlib import Path
 
-    from codegen.emit import TARGETS, emit
-    from codegen.lut import NUMBER_TYPES, make_table
-    from codegen.verify import verify_c, verify_python
+    from fuzzkit.codegen.emit import TARGETS, emit
+    from fuzzkit.codegen.lut import NUMBER_TYPES
+    from fuzzkit.codegen.table_search import make_table
+    from fuzzkit.codegen.verify import verify_c, verify_python
     from fuzzkit.errors import CodegenError, ConfigError
     from fuzzkit.fileio import write_tree_atomic
-    from fuzzkit.registry import load
+    from fuzzkit.formats.registry import load
 
     # Cheap checks first, so a typo costs nothing and nothing is written.
     if args.target not in TARGETS:

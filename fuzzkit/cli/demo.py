@@ -13,7 +13,7 @@ from pathlib import Path
 
 def demo_steps(out: Path) -> list[list[str]]:
     """The commands of the demo, in order, writing their files under ``out``."""
-    from fuzzkit.registry import available
+    from fuzzkit.formats.registry import available
 
     return [
         ["validate", *available()],

@@ -18,7 +18,7 @@ from typing import Any, TextIO
 
 from fuzzkit.errors import EvaluationError, Location, Problem, ProblemsError, RuleBaseError
 from fuzzkit.fileio import check_output_path
-from fuzzkit.model import SHAPE_PARAMS, Compound, Expression, Proposition, RuleBase, Variable
+from fuzzkit.fuzzy.model import SHAPE_PARAMS, Compound, Expression, Proposition, RuleBase, Variable
 
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2
@@ -100,7 +100,7 @@ def register(sub: Any) -> None:
 
 
 def _load(spec: str) -> RuleBase:
-    from fuzzkit.registry import load
+    from fuzzkit.formats.registry import load
 
     return load(spec)
 
@@ -246,7 +246,7 @@ def cmd_info(args: argparse.Namespace) -> int:
 
 
 def _parse_inputs(rb: RuleBase, items: Sequence[str]) -> dict[str, float]:
-    from fuzzkit.validation import did_you_mean
+    from fuzzkit.fuzzy.validation import did_you_mean
 
     values: dict[str, float] = {}
     problems: list[str] = []
@@ -361,7 +361,7 @@ def _read_points(
 def cmd_eval(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from fuzzkit.inference import Engine
+    from fuzzkit.fuzzy.inference import Engine
 
     rb = _load(args.rulebase)
     engine = Engine(rb)
@@ -428,7 +428,7 @@ def _csv_rows(reader: Any, name: str) -> Iterator[list[str]]:
 def cmd_surface(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from fuzzkit.surface import peak_grid, write_surface_png, write_surface_rrd
+    from fuzzkit.viz.surface import peak_grid, write_surface_png, write_surface_rrd
 
     if args.rrd is None and args.png is None:
         raise EvaluationError("nothing to write: give --rrd OUT.rrd and/or --png OUT.png")
@@ -468,7 +468,7 @@ def cmd_surface(args: argparse.Namespace) -> int:
 
 
 def cmd_schema(args: argparse.Namespace) -> int:
-    from fuzzkit.dsl import json_schema
+    from fuzzkit.formats.schema import json_schema
 
     print(json.dumps(json_schema(), indent=2))
     return EXIT_OK

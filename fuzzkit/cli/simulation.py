@@ -16,7 +16,7 @@ CONTROLLERS = ("pi", "fuzzy-pi")
 
 def register(subparsers: Any) -> None:
     """Add the ``simulate`` and ``compare`` subcommands."""
-    from fuzzkit.plant import PLANTS
+    from fuzzkit.studies.plants import PLANTS
 
     sim = subparsers.add_parser(
         "simulate",
@@ -38,7 +38,7 @@ def register(subparsers: Any) -> None:
     sim.add_argument(
         "--gains",
         metavar="GAINS.yaml",
-        help="gains file (fuzzkit.gains): flat {kp: .., ki: ..}, or keyed by controller "
+        help="gains file (fuzzkit.control.gains): flat {kp: .., ki: ..}, or keyed by controller "
         "as fuzzkit tune writes",
     )
     sim.set_defaults(handler=_simulate)
@@ -53,7 +53,9 @@ def register(subparsers: Any) -> None:
     cmp_.add_argument("--plant", choices=sorted(PLANTS), default="planar")
     cmp_.add_argument("--seed", type=int, default=0)
     cmp_.add_argument(
-        "--gains", metavar="GAINS.yaml", help="gains file (fuzzkit.gains), e.g. from fuzzkit tune"
+        "--gains",
+        metavar="GAINS.yaml",
+        help="gains file (fuzzkit.control.gains), e.g. from fuzzkit tune",
     )
     cmp_.add_argument("--json", action="store_true", help="print every run's metrics as JSON")
     cmp_.add_argument("--rrd-dir", metavar="DIR", help="write one .rrd per run into DIR")
@@ -61,8 +63,9 @@ def register(subparsers: Any) -> None:
 
 
 def load_gains(path: str | None, controller: str, required: bool = True) -> dict[str, float]:
-    """Gain overrides for ``controller`` from a gains file (see ``fuzzkit.gains.read_gains``)."""
-    from fuzzkit.gains import read_gains
+    """Gain overrides for ``controller`` from a gains file (see
+    ``fuzzkit.control.gains.read_gains``)."""
+    from fuzzkit.control.gains import read_gains
 
     return read_gains(path, controller, required)
 
@@ -70,7 +73,8 @@ def load_gains(path: str | None, controller: str, required: bool = True) -> dict
 def _run_one(
     exp_name: str, controller: str, args: argparse.Namespace, surface: Any, required: bool = True
 ) -> Any:
-    from fuzzkit.experiments import experiment, run
+    from fuzzkit.studies.experiments import experiment
+    from fuzzkit.studies.runner import run
 
     exp = experiment(exp_name)
     gains = load_gains(args.gains, controller, required)
@@ -80,7 +84,7 @@ def _run_one(
 def _surface_for(controller: str, rulebase: str) -> Any:
     if controller != "fuzzy-pi":
         return None
-    from fuzzkit.experiments import load_surface
+    from fuzzkit.studies.runner import load_surface
 
     return load_surface(rulebase)
 
@@ -94,7 +98,8 @@ def _fmt(v: Any, digits: int = 2) -> str:
 
 
 def _simulate(args: argparse.Namespace) -> int:
-    from fuzzkit.experiments import experiment, summary
+    from fuzzkit.studies.experiments import experiment
+    from fuzzkit.studies.metrics import summary
 
     experiment(args.experiment)  # reject a bad name before loading anything
     if args.rrd:
@@ -102,7 +107,7 @@ def _simulate(args: argparse.Namespace) -> int:
     surface = _surface_for(args.controller, args.rulebase)
     result = _run_one(args.experiment, args.controller, args, surface)
     if args.rrd:
-        from fuzzkit.traces import write_run_rrd
+        from fuzzkit.viz.traces import write_run_rrd
 
         write_run_rrd(result, args.rrd)
     data = summary(result)
@@ -132,7 +137,7 @@ def _simulate(args: argparse.Namespace) -> int:
 
 
 def comparison_table(rows: list[dict[str, Any]]) -> str:
-    """Format PI vs fuzzy-PI summaries (``fuzzkit.experiments.summary``) as a text table."""
+    """Format PI vs fuzzy-PI summaries (``fuzzkit.studies.experiments.summary``) as a text table."""
     head = (
         f"{'exp':<4}{'axis':<5}{'set N':>6}  {'controller':<9}{'contact s':>10}{'overshoot %':>12}"
         f"{'settle s':>10}"
@@ -153,7 +158,8 @@ def comparison_table(rows: list[dict[str, Any]]) -> str:
 
 
 def _compare(args: argparse.Namespace) -> int:
-    from fuzzkit.experiments import experiment, summary
+    from fuzzkit.studies.experiments import experiment
+    from fuzzkit.studies.metrics import summary
 
     for name in args.experiments:
         experiment(name)  # reject unknown names before any simulation runs
@@ -174,7 +180,7 @@ def _compare(args: argparse.Namespace) -> int:
                 name, controller, args, surface if controller == "fuzzy-pi" else None, False
             )
             if args.rrd_dir:
-                from fuzzkit.traces import write_run_rrd
+                from fuzzkit.viz.traces import write_run_rrd
 
                 write_run_rrd(result, Path(args.rrd_dir) / f"{name.upper()}_{controller}.rrd")
             rows.append(summary(result))

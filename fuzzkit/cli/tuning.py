@@ -16,14 +16,14 @@ CONTROLLERS = ("pi", "fuzzy-pi")
 
 def register(subparsers: Any) -> None:
     """Add the ``tune`` and ``report`` subcommands."""
-    from fuzzkit.plant import PLANTS
+    from fuzzkit.studies.plants import PLANTS
 
     tune = subparsers.add_parser(
         "tune",
         help="find optimal gains (Kp, Ki, Kx) by simulation and write a gains file",
         description=(
             "Minimise the closed-loop cost (ITAE of the force error plus penalties for "
-            "overshoot, force above the safety limit and contact loss; see fuzzkit.tuning) "
+            "overshoot, force above the safety limit and contact loss; see fuzzkit.studies.tuning) "
             "over the experiments and stiffnesses given, by differential evolution and a "
             "local polish. Ctrl-C stops early and still writes the best gains so far."
         ),
@@ -106,8 +106,8 @@ def parse_stiffness(text: str) -> tuple[float, ...]:
 
 
 def _tune(args: argparse.Namespace) -> int:
-    from fuzzkit.gains import read_gains_file, write_gains
-    from fuzzkit.tuning import ProgressBar, tune
+    from fuzzkit.control.gains import read_gains_file, write_gains
+    from fuzzkit.studies.tuning import ProgressBar, tune
 
     ks = parse_stiffness(args.stiffness)
     out = Path(args.out)
@@ -148,7 +148,7 @@ def _tune(args: argparse.Namespace) -> int:
 
 
 def _report(args: argparse.Namespace) -> int:
-    from fuzzkit.report import build_report
+    from fuzzkit.report.build import build_report
 
     if args.budget < 10:
         raise ConfigError(f"--budget must be >= 10 (got {args.budget})")

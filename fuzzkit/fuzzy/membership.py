@@ -3,7 +3,7 @@
 Each function takes an array ``x`` and the shape's parameters and returns ``mu(x)`` in [0, 1]
 with the same shape as ``x``. NaN in ``x`` gives NaN (the engine masks NaN inputs before it gets
 here, so this only matters to direct callers). Parameters are assumed valid (see
-``fuzzkit.validation``): ordered, finite, positive widths.
+``fuzzkit.fuzzy.validation``): ordered, finite, positive widths.
 
 The piecewise-linear shapes (triangle, trapezoid, shoulders) are also available as a vertex list
 (:func:`vertices`) from which the exact engine integrates in closed form.
@@ -17,7 +17,7 @@ from typing import cast
 import numpy as np
 import numpy.typing as npt
 
-from fuzzkit.model import Term
+from fuzzkit.fuzzy.model import Term
 
 FloatArray = npt.NDArray[np.float64]
 

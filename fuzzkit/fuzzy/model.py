@@ -1,11 +1,11 @@
 """The frozen rule-base model: the one structure every engine and emitter reads.
 
-The model knows no file format (``fuzzkit.dsl`` reads and writes YAML) and prints no code
-(``codegen`` does). Every object is a frozen, slotted dataclass holding tuples, so a model is
-hashable, comparable and safe to share between threads and processes.
+The model knows no file format (``fuzzkit.formats`` reads and writes files) and prints no code
+(``fuzzkit.codegen`` does). Every object is a frozen, slotted dataclass holding tuples, so a model
+is hashable, comparable and safe to share between threads and processes.
 
 Semantic consistency (ordered term parameters, known labels, covered input ranges, identifier
-names) is checked by :func:`fuzzkit.validation.check`, which the YAML loader and every engine
+names) is checked by :func:`fuzzkit.fuzzy.validation.check`, which the YAML loader and every engine
 call; constructing these classes by hand does not check anything by itself.
 """
 

@@ -35,7 +35,7 @@ import numpy.typing as npt
 import yaml
 
 from fuzzkit.errors import ConfigError
-from fuzzkit.rotations import Mat3, Vec3, rotation_error, rpy_to_matrix
+from fuzzkit.plants.rotations import Mat3, Vec3, rotation_error, rpy_to_matrix
 
 FloatArray = npt.NDArray[np.float64]
 

@@ -31,7 +31,7 @@ Semantics
   (NaN when none is given).
 * Weighted average (paper eq. 10): ``sum(a_j c_j) / sum(a_j)`` over the output terms, with
   ``a_j`` the term's activation (its rules' firing strengths aggregated with the aggregation
-  operator) and ``c_j`` the term centre of :func:`fuzzkit.membership.centre`.
+  operator) and ``c_j`` the term centre of :func:`fuzzkit.fuzzy.membership.centre`.
 * Mean of maximum is the midpoint of the smallest and largest of maximum (as in fuzzylite).
 """
 
@@ -46,10 +46,10 @@ from typing import Any, cast
 import numpy as np
 import numpy.typing as npt
 
-from fuzzkit import membership
 from fuzzkit.errors import EvaluationError
-from fuzzkit.fastpath import PolyCentroid, ScalarPath, Segment, scalar_input
-from fuzzkit.model import Compound, Expression, Proposition, RuleBase, Variable
+from fuzzkit.fuzzy import membership
+from fuzzkit.fuzzy.fastpath import PolyCentroid, ScalarPath, Segment, scalar_input
+from fuzzkit.fuzzy.model import Compound, Expression, Proposition, RuleBase, Variable
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.intp]
@@ -482,7 +482,8 @@ class _ExactGeometry:
 
 
 def _partition_centroid(geo: _ExactGeometry, rb: RuleBase, n_terms: int) -> PolyCentroid | None:
-    """Centroid tables when at most two terms overlap anywhere (see :mod:`fuzzkit.fastpath`)."""
+    """Centroid tables when at most two terms overlap anywhere (see
+    :mod:`fuzzkit.fuzzy.fastpath`)."""
     ops = rb.operators
     if not (ops.implication == "min" and ops.aggregation == "max" and geo.kmax <= 2):
         return None
@@ -664,7 +665,7 @@ class Engine:
     Parameters
     ----------
     rulebase
-        A rule base; it is validated (``fuzzkit.validation.ensure_valid``).
+        A rule base; it is validated (``fuzzkit.fuzzy.validation.ensure_valid``).
 
     Raises
     ------
@@ -680,7 +681,7 @@ class Engine:
     """
 
     def __init__(self, rulebase: RuleBase) -> None:
-        from fuzzkit.validation import ensure_valid
+        from fuzzkit.fuzzy.validation import ensure_valid
 
         ensure_valid(rulebase)
         self.rulebase = rulebase

@@ -1,4 +1,4 @@
-"""Rule-base YAML <-> model: strict loading with every problem located, dumping, JSON Schema.
+"""Rule-base YAML -> model: strict loading with every problem located.
 
 The format is documented in ``docs/rulebase-format.md``. Loading is as safe as
 ``yaml.safe_load`` (the document is composed with PyYAML's ``SafeLoader``, which builds no
@@ -6,14 +6,14 @@ Python objects) and stricter: the node tree is converted by hand so that every p
 an unknown key to an uncovered input range, is reported as ``file:line:col: message`` and all
 of them are raised together in one :class:`~fuzzkit.errors.RuleBaseError`.
 
-Semantic checks live in :mod:`fuzzkit.validation` (shared with the engines); this module maps
-the logical paths that :func:`fuzzkit.validation.check` returns back to YAML positions.
+Semantic checks live in :mod:`fuzzkit.fuzzy.validation` (shared with the engines); this module
+maps the logical paths that :func:`fuzzkit.fuzzy.validation.check` returns back to YAML
+positions. The writer is :mod:`fuzzkit.formats.yaml_writer`, the schema
+:mod:`fuzzkit.formats.schema`.
 
 Examples
 --------
 >>> rb = loads_rulebase(open("rulebases/macvicar_whelan.yaml").read())  # doctest: +SKIP
->>> loads_rulebase(dump(rb)) == rb                                     # doctest: +SKIP
-True
 """
 
 from __future__ import annotations
@@ -24,20 +24,13 @@ import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path as FsPath
-from typing import Any
 
 import yaml
 from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 
-from fuzzkit import validation
 from fuzzkit.errors import Location, Problem, RuleBaseError
-from fuzzkit.model import (
-    AGGREGATIONS,
-    AND_OPERATORS,
-    DEFUZZIFIERS,
-    IMPLICATIONS,
-    OR_OPERATORS,
-    OUT_OF_RANGE_POLICIES,
+from fuzzkit.fuzzy import validation
+from fuzzkit.fuzzy.model import (
     PIECEWISE_LINEAR_SHAPES,
     SHAPE_PARAMS,
     Compound,
@@ -52,7 +45,8 @@ from fuzzkit.model import (
     Term,
     Variable,
 )
-from fuzzkit.validation import Path, did_you_mean
+from fuzzkit.fuzzy.partition import PARTITION_ENDS, PARTITION_KINDS, partition_terms
+from fuzzkit.fuzzy.validation import Path, did_you_mean
 
 #: Larger files are refused before parsing: a rule base is a few kilobytes.
 MAX_FILE_BYTES = 1 << 20
@@ -71,14 +65,12 @@ TOP_KEYS = (
 )
 OPERATOR_KEYS = ("and", "or", "implication", "aggregation")
 PARTITION_KEYS = ("partition", "labels", "ends")
-PARTITION_KINDS = ("triangular",)
-PARTITION_ENDS = ("shoulder", "triangle")
 TABLE_KEYS = ("rows", "columns", "output", "cells", "row_labels", "column_labels")
 RULE_KEYS = ("if", "then", "weight")
 CONNECTIVES = ("and", "or", "not")
 EMPTY_CELL = "-"
 
-_STR = "tag:yaml.org,2002:str"
+STR_TAG = "tag:yaml.org,2002:str"
 _INT = "tag:yaml.org,2002:int"
 _FLOAT = "tag:yaml.org,2002:float"
 _BOOL = "tag:yaml.org,2002:bool"
@@ -89,7 +81,7 @@ _NUMBER_12 = re.compile(r"[-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?\Z"
 _CONSTRUCTOR = yaml.constructor.SafeConstructor()
 
 
-def _pwl_key(shape: str) -> tuple[str, ...]:
+def shape_param_keys(shape: str) -> tuple[str, ...]:
     """The keys holding a shape's parameters in YAML: ``points`` or the parameter names."""
     return ("points",) if shape in PIECEWISE_LINEAR_SHAPES else SHAPE_PARAMS[shape]
 
@@ -97,7 +89,7 @@ def _pwl_key(shape: str) -> tuple[str, ...]:
 def describe(node: Node) -> str:
     """A node as an error message shows it: ``'abc'``, ``3``, ``true``, ``a list``."""
     if isinstance(node, ScalarNode):
-        if node.tag == _STR:
+        if node.tag == STR_TAG:
             return repr(node.value)
         if node.tag == _NULL:
             return "nothing (null)" if node.value in ("", "~") else "null"
@@ -107,30 +99,6 @@ def describe(node: Node) -> str:
     if isinstance(node, MappingNode):
         return "a mapping"
     return "an unknown node"  # pragma: no cover - PyYAML has no other node kinds
-
-
-def partition_terms(labels: Sequence[str], low: float, high: float, ends: str) -> tuple[Term, ...]:
-    """The terms of a ``partition: triangular`` shorthand over ``[low, high]``.
-
-    Label ``k`` of ``n`` peaks at ``low + k*(high-low)/(n-1)`` (the last exactly at ``high``)
-    and falls to 0 at its neighbours' peaks. With ``ends="shoulder"`` the outer terms are
-    shoulders (1 up to / from the range end); with ``ends="triangle"`` they are triangles
-    centred on the range ends reaching one spacing beyond (clipped by the range at inference).
-    """
-    n = len(labels)
-    step = (high - low) / (n - 1)
-    peaks = [low + k * step for k in range(n - 1)] + [high]
-    terms: list[Term] = []
-    for k, label in enumerate(labels):
-        left = peaks[k - 1] if k > 0 else low - step
-        right = peaks[k + 1] if k < n - 1 else high + step
-        if ends == "shoulder" and k == 0:
-            terms.append(Term(label, "left_shoulder", (low, right)))
-        elif ends == "shoulder" and k == n - 1:
-            terms.append(Term(label, "right_shoulder", (left, high)))
-        else:
-            terms.append(Term(label, "triangle", (left, peaks[k], right)))
-    return tuple(terms)
 
 
 class _TooBig(Exception):
@@ -144,7 +112,7 @@ class _Reader:
     file: str
     lines: list[str]
     problems: list[Problem] = field(default_factory=list)
-    #: logical path (see fuzzkit.validation) -> node whose position names it
+    #: logical path (see fuzzkit.fuzzy.validation) -> node whose position names it
     marks: dict[Path, Node] = field(default_factory=dict)
     #: semantic problems under these paths are consequences of a reported structural one
     hidden_under: set[Path] = field(default_factory=set)
@@ -171,7 +139,7 @@ class _Reader:
             if key.tag == _MERGE:
                 self.error(key, "merge keys (<<) are not supported; write the entries out")
                 continue
-            if not isinstance(key, ScalarNode) or key.tag != _STR:
+            if not isinstance(key, ScalarNode) or key.tag != STR_TAG:
                 hint = "; quote it" if isinstance(key, ScalarNode) else ""
                 self.error(key, f"expected a name as key, got {describe(key)}{hint}")
                 continue
@@ -210,13 +178,13 @@ class _Reader:
                 return float(_CONSTRUCTOR.construct_yaml_float(node))
             if node.tag == _INT:
                 return float(_CONSTRUCTOR.construct_yaml_int(node))
-            if node.tag == _STR and node.style is None and _NUMBER_12.match(node.value):
+            if node.tag == STR_TAG and node.style is None and _NUMBER_12.match(node.value):
                 return float(node.value)
         self.error(node, f"expected a number for {what}, got {describe(node)}")
         return None
 
     def name(self, node: Node, what: str) -> str | None:
-        if isinstance(node, ScalarNode) and node.tag == _STR:
+        if isinstance(node, ScalarNode) and node.tag == STR_TAG:
             return str(node.value)
         hint = ""
         if isinstance(node, ScalarNode) and node.tag == _BOOL:
@@ -225,7 +193,7 @@ class _Reader:
         return None
 
     def text(self, node: Node, what: str) -> str | None:
-        if isinstance(node, ScalarNode) and node.tag == _STR:
+        if isinstance(node, ScalarNode) and node.tag == STR_TAG:
             return str(node.value)
         self.error(node, f"expected {what} (a string), got {describe(node)}")
         return None
@@ -510,7 +478,7 @@ class _Reader:
                 self.hidden_under.add(tpath)
             self.hidden_at.add(coverage)
             return Term(label, shape or "triangle", ())
-        param_keys = _pwl_key(shape)
+        param_keys = shape_param_keys(shape)
         self.keys(
             entries,
             vnode,
@@ -785,7 +753,7 @@ class _Reader:
     ) -> list[list[tuple[str, Node]]] | None:
         """The table body as rows of (label, node positioned at the cell)."""
         lines: list[tuple[str, Callable[[int], Node]]] = []
-        if isinstance(node, ScalarNode) and node.tag == _STR:
+        if isinstance(node, ScalarNode) and node.tag == STR_TAG:
             lines = self.block_lines(node)
         elif isinstance(node, SequenceNode):
             for item in node.value:
@@ -876,7 +844,7 @@ class _At(Node):
 
 
 _CORE_TAGS = frozenset(
-    {_STR, _INT, _FLOAT, _BOOL, _NULL, _MERGE, "tag:yaml.org,2002:seq", "tag:yaml.org,2002:map"}
+    {STR_TAG, _INT, _FLOAT, _BOOL, _NULL, _MERGE, "tag:yaml.org,2002:seq", "tag:yaml.org,2002:map"}
 )
 
 
@@ -1093,380 +1061,3 @@ def load_file(path: str | FsPath) -> RuleBase:
             [Problem(Location(name), f"not UTF-8 text (byte {exc.start}); expected a YAML file")]
         ) from None
     return loads_rulebase(text, name)
-
-
-# ---------------------------------------------------------------------------- dumping
-
-
-class _Flow(list[Any]):
-    """A list written in flow style: ``[a, b]``."""
-
-
-class _FlowMap(dict[str, Any]):
-    """A mapping written in flow style: ``{a: 1}``."""
-
-
-class _Literal(str):
-    """A string written as a literal block (``|``)."""
-
-    __slots__ = ()
-
-
-class _Dumper(yaml.SafeDumper):
-    """SafeDumper with flow lists/maps and literal blocks where the format reads best."""
-
-
-_Dumper.add_representer(
-    _Flow, lambda d, v: d.represent_sequence("tag:yaml.org,2002:seq", v, flow_style=True)
-)
-_Dumper.add_representer(
-    _FlowMap, lambda d, v: d.represent_mapping("tag:yaml.org,2002:map", v, flow_style=True)
-)
-_Dumper.add_representer(_Literal, lambda d, v: d.represent_scalar(_STR, v, style="|"))
-
-
-def _dump_terms(var: Variable, kind: str) -> dict[str, Any]:
-    labels = var.term_names
-    if len(labels) >= 2 and math.isfinite(var.low) and math.isfinite(var.high):
-        default_ends = "shoulder" if kind == "input" else "triangle"
-        for ends in (default_ends, *(e for e in PARTITION_ENDS if e != default_ends)):
-            if partition_terms(labels, var.low, var.high, ends) == var.terms:
-                spec: dict[str, Any] = {"partition": "triangular", "labels": _Flow(labels)}
-                if ends != default_ends:
-                    spec["ends"] = ends
-                return _FlowMap(spec)
-    out: dict[str, Any] = {}
-    for t in var.terms:
-        spec = {"shape": t.shape}
-        if t.shape in PIECEWISE_LINEAR_SHAPES or t.shape not in SHAPE_PARAMS:
-            spec["points"] = _Flow(float(x) for x in t.params)
-        else:
-            spec.update(zip(SHAPE_PARAMS[t.shape], map(float, t.params), strict=True))
-        out[t.name] = _FlowMap(spec)
-    return out
-
-
-def _dump_expression(expr: Expression) -> dict[str, Any]:
-    if isinstance(expr, Proposition):
-        return {expr.variable: {"not": expr.term} if expr.negated else expr.term}
-    flat = expr.op == "and" and all(isinstance(o, Proposition) for o in expr.operands)
-    names = [o.variable for o in expr.operands if isinstance(o, Proposition)]
-    if flat and len(set(names)) == len(names) and len(names) >= 2:
-        merged: dict[str, Any] = {}
-        for o in expr.operands:
-            merged.update(_dump_expression(o))
-        return merged
-    return {expr.op: [_dump_expression(o) for o in expr.operands]}
-
-
-def _table_rules(
-    table: RuleTable, rows: Sequence[str], cols: Sequence[str], grid: dict[tuple[str, str], str]
-) -> tuple[Rule, ...]:
-    return tuple(
-        Rule(
-            Compound("and", (Proposition(table.rows, r), Proposition(table.columns, c))),
-            (Consequent(table.output, grid[r, c]),),
-        )
-        for r in rows
-        for c in cols
-        if (r, c) in grid
-    )
-
-
-def _dump_table(rb: RuleBase) -> dict[str, Any] | None:
-    """The table form of ``rb.rules`` if they are exactly ``rb.table``, else ``None``."""
-    t = rb.table
-    if t is None:
-        return None
-    try:
-        row_var, col_var = rb.input(t.rows), rb.input(t.columns)
-    except KeyError:
-        return None
-    grid: dict[tuple[str, str], str] = {}
-    seen_rows: list[str] = []
-    seen_cols: list[str] = []
-    for rule in rb.rules:
-        a = rule.antecedent
-        if not (
-            isinstance(a, Compound)
-            and a.op == "and"
-            and len(a.operands) == 2
-            and rule.weight == 1.0
-            and len(rule.consequents) == 1
-            and rule.consequents[0].variable == t.output
-        ):
-            return None
-        r, c = a.operands
-        if not (
-            isinstance(r, Proposition)
-            and isinstance(c, Proposition)
-            and r.variable == t.rows
-            and c.variable == t.columns
-            and not r.negated
-            and not c.negated
-            and r.term in row_var.term_names
-            and c.term in col_var.term_names
-            and (r.term, c.term) not in grid
-        ):
-            return None
-        grid[r.term, c.term] = rule.consequents[0].term
-        seen_rows.append(r.term)
-        seen_cols.append(c.term)
-    row_orders = [
-        list(row_var.term_names),
-        list(dict.fromkeys(seen_rows + list(row_var.term_names))),
-    ]
-    col_orders = [
-        list(col_var.term_names),
-        list(dict.fromkeys(seen_cols + list(col_var.term_names))),
-    ]
-    for rows in row_orders:
-        for cols in col_orders:
-            if _table_rules(t, rows, cols, grid) != rb.rules:
-                continue
-            cells = [[grid.get((r, c), EMPTY_CELL) for c in cols] for r in rows]
-            width = max(len(x) for row in cells for x in row)
-            text = "\n".join(" ".join(x.ljust(width) for x in row).rstrip() for row in cells)
-            spec: dict[str, Any] = {"rows": t.rows, "columns": t.columns, "output": t.output}
-            if rows != list(row_var.term_names):
-                spec["row_labels"] = _Flow(rows)
-            if cols != list(col_var.term_names):
-                spec["column_labels"] = _Flow(cols)
-            spec["cells"] = _Literal(text + "\n")
-            return {"table": spec}
-    return None
-
-
-def dump(rb: RuleBase) -> str:
-    """The YAML text of ``rb``; ``loads_rulebase(dump(rb)) == rb`` for every valid model.
-
-    Partitions are written back as the ``partition`` shorthand when the terms are exactly one,
-    and the rules as a table when ``rb.table`` is set and the rules are exactly that table.
-    """
-    doc: dict[str, Any] = {"name": rb.name}
-    if rb.description:
-        doc["description"] = rb.description
-    for kind, group in (("input", rb.inputs), ("output", rb.outputs)):
-        section: dict[str, Any] = {}
-        for var in group:
-            spec: dict[str, Any] = {"range": _Flow([float(var.low), float(var.high)])}
-            if kind == "output" and var.default is not None:
-                spec["default"] = float(var.default)
-            spec["terms"] = _dump_terms(var, kind)
-            section[var.name] = spec
-        doc[kind + "s"] = section
-    ops = rb.operators
-    doc["operators"] = _FlowMap(
-        {
-            "and": ops.and_,
-            "or": ops.or_,
-            "implication": ops.implication,
-            "aggregation": ops.aggregation,
-        }
-    )
-    doc["defuzzifier"] = rb.defuzzifier
-    doc["out_of_range"] = rb.out_of_range
-    table = _dump_table(rb)
-    if table is not None:
-        doc["rules"] = table
-    else:
-        rules: list[Any] = []
-        for rule in rb.rules:
-            item: dict[str, Any] = {
-                "if": _dump_expression(rule.antecedent),
-                "then": {c.variable: c.term for c in rule.consequents},
-            }
-            if rule.weight != 1.0:
-                item["weight"] = float(rule.weight)
-            rules.append(_FlowMap(item))
-        doc["rules"] = rules
-    return yaml.dump(doc, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=100)
-
-
-# ---------------------------------------------------------------------------- JSON Schema
-
-
-def json_schema() -> dict[str, Any]:
-    """A JSON Schema (draft 2020-12) of the rule-base format, for editors and linters.
-
-    Structural only (keys, types, shapes, operator names); the semantic checks (ordered
-    points, known labels, coverage) need :func:`loads_rulebase`.
-    """
-    number = {"type": "number"}
-    name = {"type": "string", "pattern": r"^[A-Za-z_][A-Za-z0-9_]*$"}
-    shape_defs: list[dict[str, Any]] = []
-    for shape, params in SHAPE_PARAMS.items():
-        if shape in PIECEWISE_LINEAR_SHAPES:
-            props: dict[str, Any] = {
-                "points": {
-                    "type": "array",
-                    "items": number,
-                    "minItems": len(params),
-                    "maxItems": len(params),
-                    "description": f"{shape} points [{', '.join(params)}]",
-                }
-            }
-            required = ["shape", "points"]
-        else:
-            props = {p: number for p in params}
-            required = ["shape", *params]
-        shape_defs.append(
-            {
-                "type": "object",
-                "properties": {"shape": {"const": shape}, **props},
-                "required": required,
-                "additionalProperties": False,
-            }
-        )
-    partition = {
-        "type": "object",
-        "description": "N evenly spaced triangular labels over the range",
-        "properties": {
-            "partition": {"enum": list(PARTITION_KINDS)},
-            "labels": {"type": "array", "items": name, "minItems": 2, "uniqueItems": True},
-            "ends": {
-                "enum": list(PARTITION_ENDS),
-                "description": "outer terms: shoulder (inputs' default) or triangle",
-            },
-        },
-        "required": ["partition", "labels"],
-        "additionalProperties": False,
-    }
-    explicit_terms = {
-        "type": "object",
-        "propertyNames": {"allOf": [name, {"not": {"const": "partition"}}]},
-        "additionalProperties": {"$ref": "#/$defs/term"},
-        "minProperties": 1,
-    }
-
-    def variable(kind: str) -> dict[str, Any]:
-        props: dict[str, Any] = {
-            "range": {
-                "type": "array",
-                "items": number,
-                "minItems": 2,
-                "maxItems": 2,
-                "description": "[low, high]",
-            },
-            "terms": {"oneOf": [{"$ref": "#/$defs/partition"}, explicit_terms]},
-        }
-        if kind == "output":
-            props["default"] = {
-                "type": ["number", "null"],
-                "description": "output when no rule fires (null = NaN)",
-            }
-        return {
-            "type": "object",
-            "properties": props,
-            "required": ["range", "terms"],
-            "additionalProperties": False,
-        }
-
-    condition: dict[str, Any] = {
-        "type": "object",
-        "minProperties": 1,
-        "description": "{input: label, ...} (AND), {and: [...]}, {or: [...]}, {not: {input: "
-        "label}}, {input: {not: label}}",
-        "properties": {
-            "and": {"type": "array", "items": {"$ref": "#/$defs/condition"}, "minItems": 2},
-            "or": {"type": "array", "items": {"$ref": "#/$defs/condition"}, "minItems": 2},
-            "not": {
-                "type": "object",
-                "minProperties": 1,
-                "maxProperties": 1,
-                "additionalProperties": name,
-            },
-        },
-        "additionalProperties": {
-            "oneOf": [
-                name,
-                {
-                    "type": "object",
-                    "properties": {"not": name},
-                    "required": ["not"],
-                    "additionalProperties": False,
-                },
-            ]
-        },
-    }
-    rule = {
-        "type": "object",
-        "properties": {
-            "if": {"$ref": "#/$defs/condition"},
-            "then": {"type": "object", "minProperties": 1, "additionalProperties": name},
-            "weight": {"type": "number", "minimum": 0, "maximum": 1},
-        },
-        "required": ["if", "then"],
-        "additionalProperties": False,
-    }
-    table = {
-        "type": "object",
-        "properties": {
-            "rows": name,
-            "columns": name,
-            "output": name,
-            "row_labels": {"type": "array", "items": name},
-            "column_labels": {"type": "array", "items": name},
-            "cells": {
-                "oneOf": [{"type": "string"}, {"type": "array", "items": {"type": "string"}}],
-                "description": "one line per row, labels separated by spaces, '-' = no rule",
-            },
-        },
-        "required": ["rows", "columns", "cells"],
-        "additionalProperties": False,
-    }
-    return {
-        "$schema": "https://json-schema.org/draft/2020-12/schema",
-        "$id": "https://fuzzkit.invalid/schema/rulebase.json",
-        "title": "fuzzkit rule base",
-        "description": "A Mamdani fuzzy rule base (see docs/rulebase-format.md).",
-        "type": "object",
-        "properties": {
-            "name": {**name, "description": "identifier; the C symbol prefix"},
-            "description": {"type": "string"},
-            "inputs": {
-                "type": "object",
-                "minProperties": 1,
-                "propertyNames": name,
-                "additionalProperties": variable("input"),
-            },
-            "outputs": {
-                "type": "object",
-                "minProperties": 1,
-                "propertyNames": name,
-                "additionalProperties": variable("output"),
-            },
-            "operators": {
-                "type": "object",
-                "properties": {
-                    "and": {"enum": list(AND_OPERATORS)},
-                    "or": {"enum": list(OR_OPERATORS)},
-                    "implication": {"enum": list(IMPLICATIONS)},
-                    "aggregation": {"enum": list(AGGREGATIONS)},
-                },
-                "additionalProperties": False,
-            },
-            "defuzzifier": {"enum": list(DEFUZZIFIERS)},
-            "out_of_range": {"enum": list(OUT_OF_RANGE_POLICIES)},
-            "rules": {
-                "oneOf": [
-                    {"type": "array", "items": {"$ref": "#/$defs/rule"}, "minItems": 1},
-                    {
-                        "type": "object",
-                        "properties": {"table": {"$ref": "#/$defs/table"}},
-                        "required": ["table"],
-                        "additionalProperties": False,
-                    },
-                ]
-            },
-        },
-        "required": ["name", "inputs", "outputs", "rules"],
-        "additionalProperties": False,
-        "$defs": {
-            "term": {"oneOf": shape_defs},
-            "partition": partition,
-            "condition": condition,
-            "rule": rule,
-            "table": table,
-        },
-    }

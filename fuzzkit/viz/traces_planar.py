@@ -1,4 +1,5 @@
-"""Rerun recordings (.rrd) of closed-loop runs, written atomically, viewable with ``rerun FILE``.
+"""Rerun recordings (.rrd) of closed-loop runs on the planar plant, written atomically, viewable
+with ``rerun FILE``.
 
 Entity layout (timeline ``sim_time``, a duration in seconds):
 
@@ -17,20 +18,17 @@ from __future__ import annotations
 import math
 import os
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.errors import ConfigError
-from fuzzkit.experiments import AXES, RunResult
-from fuzzkit.plant import Box, EnvObject, RoughSurface, Table, nominal_position
-from fuzzkit.rrd import log_series, open_recording
+from fuzzkit.plants.environment import Box, EnvObject, RoughSurface, Table
+from fuzzkit.studies.runner import RunResult
+from fuzzkit.viz.recording import log_series, open_recording
+from fuzzkit.viz.run_series import log_control_series, log_paths
 
 Vec = npt.NDArray[np.float64]
-
-_AXIS_COLOURS = {"x": (230, 80, 60), "y": (60, 170, 80), "z": (60, 110, 230)}
-
 
 def _outline(obj: EnvObject, x_lo: float, x_hi: float) -> Vec:
     """A polyline (k, 3) drawing an environment object in the x-z plane."""
@@ -51,45 +49,6 @@ def _outline(obj: EnvObject, x_lo: float, x_hi: float) -> Vec:
 def _circle(cx: float, cz: float, r: float, n: int = 24) -> list[list[float]]:
     a = np.linspace(0.0, 2.0 * math.pi, n + 1)
     return [[cx + r * math.cos(t), 0.0, cz + r * math.sin(t)] for t in a]
-
-
-def log_control_series(rec: Any, result: RunResult, times: Any) -> None:
-    """Log the force and control time series of a run (any plant) on the ``times`` column."""
-    for i, axis in enumerate(AXES):
-        c = _AXIS_COLOURS[axis]
-        dim = (int(0.5 * c[0] + 100), int(0.5 * c[1] + 100), int(0.5 * c[2] + 100))
-        log_series(
-            rec, f"forces/{axis}/measured", times, result.force[:, i], f"f{axis} measured", c
-        )
-        log_series(rec, f"forces/{axis}/true", times, result.force_true[:, i], f"f{axis} true", dim)
-        if result.experiment.selection[i]:
-            log_series(
-                rec,
-                f"forces/{axis}/setpoint",
-                times,
-                result.setpoint[:, i],
-                f"f{axis} set",
-                (0, 0, 0),
-            )
-            log_series(rec, f"control/{axis}/e", times, result.e[:, i], f"e{axis} (N)", c)
-            log_series(rec, f"control/{axis}/de", times, result.de[:, i], f"de{axis} (N)", c)
-            log_series(rec, f"control/{axis}/du", times, result.du[:, i] * 1e3, f"du{axis} (mm)", c)
-            log_series(rec, f"control/{axis}/u", times, result.u[:, i] * 1e3, f"u{axis} (mm)", c)
-
-
-def log_paths(rec: Any, result: RunResult) -> None:
-    """Log the nominal (programmed) path and the path the tool actually took, static."""
-    import rerun as rr
-
-    path = result.experiment.scenario.path
-    t_path = np.linspace(path[0].t_s, path[-1].t_s, 200)
-    nominal = np.array([nominal_position(path, float(t)) for t in t_path])
-    rec.log("world/nominal_path", rr.LineStrips3D([nominal], colors=[(150, 150, 150)]), static=True)
-    rec.log(
-        "world/tool_path",
-        rr.LineStrips3D([result.tool_position], colors=[(60, 110, 230)]),
-        static=True,
-    )
 
 
 def write_rrd(result: RunResult, path: str | os.PathLike[str], geometry_every: int = 5) -> Path:
@@ -144,12 +103,3 @@ def write_rrd(result: RunResult, path: str | os.PathLike[str], geometry_every: i
                 rr.Points3D(pts.reshape(-1, 3), colors=[(230, 40, 40)], radii=[0.004]),
             )
     return Path(path)
-
-
-def write_run_rrd(result: RunResult, path: str | os.PathLike[str]) -> Path:
-    """Write a run's recording with the drawing its plant needs (planar, or 3-D for arm6)."""
-    if result.joint_angles.ndim == 2 and result.joint_angles.shape[1] == 6:
-        from fuzzkit.traces_arm6 import write_rrd as write_arm6_rrd
-
-        return write_arm6_rrd(result, path)
-    return write_rrd(result, path)

@@ -5,7 +5,7 @@ Signs and units
 * ``e = setpoint - measured`` (eq. 5, newtons), ``de = e - e_previous`` (eq. 6, newtons per step).
 * The controllers return the accumulated correction ``u`` (eq. 8, metres) along one task axis.
   A positive correction moves the tool *into* the surface and so increases the force
-  (see ``fuzzkit.plant``): the gains are positive.
+  (see ``fuzzkit.plants.contract``): the gains are positive.
 * :class:`PI`: ``du = Kp*de + Ki*e`` (eq. 9); ``Kp``, ``Ki`` in metres per newton.
 * :class:`FuzzyPI`: ``du = Kx * F(Ki*e, Kp*de)`` where ``F`` is the rule base's control surface on
   the normalised universe [-1, 1]: **Ki scales the error e, Kp scales the change of error de**
@@ -58,7 +58,7 @@ def saturated_sum_surface(e: float, de: float) -> float:
 def engine_surface(
     engine: Any, e_name: str = "e", de_name: str = "de", out_name: str = "du"
 ) -> Surface:
-    """Wrap an inference engine (``fuzzkit.inference.Engine``) as a :data:`Surface`."""
+    """Wrap an inference engine (``fuzzkit.fuzzy.inference.Engine``) as a :data:`Surface`."""
     order = tuple(getattr(engine, "input_names", ()))
     if order == (e_name, de_name) and hasattr(engine, "point_function"):
         return cast(Surface, engine.point_function(out_name))  # the fast per-sample path
@@ -70,7 +70,7 @@ def engine_surface(
 
 
 def lookup_table_surface(table: Any) -> Surface:
-    """Wrap a ``codegen.lut.LookupTable`` (inputs e, de; output du) as a :data:`Surface`.
+    """Wrap a ``fuzzkit.codegen.lut.LookupTable`` (inputs e, de; output du) as a :data:`Surface`.
 
     Uses the table's reference interpolation, which reproduces the generated code's arithmetic.
     """
@@ -85,7 +85,7 @@ def tabulated_surface(surface: Surface, n: int = 201) -> Surface:
     """Sample ``surface`` on an ``n x n`` grid over [-1, 1]^2; answer by bilinear interpolation.
 
     A fast stand-in for the exact engine in long simulations (error of order h^2 * curvature;
-    measure it against the source before trusting it: ``codegen.lut`` certifies a bound).
+    measure it against the source before trusting it: ``fuzzkit.codegen.lut`` certifies a bound).
     """
     if n < 2:
         raise ConfigError(f"tabulated_surface: n must be >= 2 (got {n})")

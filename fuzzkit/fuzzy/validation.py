@@ -1,6 +1,6 @@
 """Semantic checks of a rule base, shared by the YAML loader and every engine.
 
-:func:`check` gathers every problem of a :class:`~fuzzkit.model.RuleBase` as
+:func:`check` gathers every problem of a :class:`~fuzzkit.fuzzy.model.RuleBase` as
 ``(path, message)`` pairs, where ``path`` is a logical path into the rule-base document:
 
 * ``("name",)``, ``("defuzzifier",)``, ``("out_of_range",)``, ``("operators", "and")``;
@@ -28,7 +28,7 @@ from collections.abc import Iterable, Sequence
 from typing import TypeAlias
 
 from fuzzkit.errors import Location, Problem, RuleBaseError
-from fuzzkit.model import (
+from fuzzkit.fuzzy.model import (
     AGGREGATIONS,
     AND_OPERATORS,
     DEFUZZIFIERS,

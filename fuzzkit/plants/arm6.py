@@ -11,14 +11,14 @@ Model
 -----
 * **Kinematic plant.** The arm has no dynamics of its own: an industrial robot in position
   control is stiff, so all compliance is in the environment (penalty contact, as in
-  :mod:`fuzzkit.plant`). Contact force = ``stiffness * penetration + damping * penetration rate``
-  (clamped at zero: a damper cannot pull), plus a tangential stick spring capped by Coulomb
-  friction. The force does not move the arm; it is what the sensor reads.
+  :mod:`fuzzkit.plants.contract`). Contact force = ``stiffness * penetration + damping *
+  penetration rate`` (clamped at zero: a damper cannot pull), plus a tangential stick spring capped
+  by Coulomb friction. The force does not move the arm; it is what the sensor reads.
 * **Servo.** The joint reference moves towards the IK solution at most ``max_velocity * dt`` per
   period (the robot's axis speed limits, from the robot description); the actual joints follow
   the reference with a first-order lag of time constant ``servo_time_constant_s``, discretised
   exactly for a reference held over the period.
-* **IK.** :meth:`fuzzkit.kinematics.SerialChain.ik` (damped least squares), warm-started from
+* **IK.** :meth:`fuzzkit.plants.kinematics.SerialChain.ik` (damped least squares), warm-started from
   the previous period's solution; a target moving a fraction of a millimetre per period
   converges in one or two iterations. A target that is unreachable or needs a joint past its
   limit is reported in ``PlantSample.messages`` and the arm goes to the closest pose found, never
@@ -26,12 +26,12 @@ Model
 
 Frames
 ------
-Scenarios (:class:`fuzzkit.plant.Scenario`) live in the planar arm's x-z plane with the shoulder
-at the origin. This plant places that frame in the IRB 140 base frame with a pure translation,
-:attr:`Arm6Parameters.workspace_offset` (default ``(0.070, 0, 0.287)``: the IRB 140 shoulder axis
-is at x = 0.070, z = 0.352, and lowering by the flange length d6 = 0.065 puts the IRB's wrist
-centre exactly where the planar arm's wrist is when the tool points down, so both arms take the
-same posture). Every position in a :class:`PlantSample` is in the scenario frame, like the
+Scenarios (:class:`fuzzkit.plants.contract.Scenario`) live in the planar arm's x-z plane with the
+shoulder at the origin. This plant places that frame in the IRB 140 base frame with a pure
+translation, :attr:`Arm6Parameters.workspace_offset` (default ``(0.070, 0, 0.287)``: the IRB 140
+shoulder axis is at x = 0.070, z = 0.352, and lowering by the flange length d6 = 0.065 puts the
+IRB's wrist centre exactly where the planar arm's wrist is when the tool points down, so both arms
+take the same posture). Every position in a :class:`PlantSample` is in the scenario frame, like the
 planar plant's; the tool points down along the scenario's task z axis.
 """
 
@@ -47,19 +47,11 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.errors import ConfigError, SimulationError
-from fuzzkit.kinematics import ChainEval, IKStatus, RobotDescription, SerialChain, load_robot
-from fuzzkit.plant import (
-    Box,
-    ContactModel,
-    ForceSensor,
-    PlantSample,
-    RoughSurface,
-    Scenario,
-    Table,
-    Waypoint,
-    normal_force_by_axis,
-)
-from fuzzkit.rotations import (
+from fuzzkit.plants.contact import ContactModel, ForceSensor
+from fuzzkit.plants.contract import PlantSample, Scenario, normal_force_by_axis
+from fuzzkit.plants.environment import Box, RoughSurface, Table, Waypoint
+from fuzzkit.plants.kinematics import ChainEval, IKStatus, RobotDescription, SerialChain, load_robot
+from fuzzkit.plants.rotations import (
     Quat,
     Vec3,
     matrix_from_quat,
@@ -455,8 +447,9 @@ class Contact3Solver:
 
     Per touching object: normal force ``k * depth + c * rate`` (never pulling), tangential force
     from a stick spring (``tangential_stiffness``) on the accumulated tangential slip, capped at
-    ``friction * normal force`` (slip). The same law as :class:`fuzzkit.plant.ContactSolver`,
-    in three dimensions. Stateful: one per run, :meth:`step` once per period.
+    ``friction * normal force`` (slip). The same law as
+    :class:`fuzzkit.plants.contract.ContactSolver`, in three dimensions. Stateful: one per run,
+    :meth:`step` once per period.
     """
 
     def __init__(self, objects: Sequence[EnvObject3], model: ContactModel, radius: float) -> None:
@@ -626,7 +619,7 @@ class Arm6Detail:
 
 @dataclass(frozen=True, slots=True)
 class Arm6Sample(PlantSample):
-    """A :class:`fuzzkit.plant.PlantSample` with the 6-DOF plant's extra signals.
+    """A :class:`fuzzkit.plants.contract.PlantSample` with the 6-DOF plant's extra signals.
 
     Properties (computed on first use)
     ----------------------------------
@@ -667,7 +660,8 @@ class Arm6Sample(PlantSample):
 
     @property
     def ik_status(self) -> str:
-        """Status of this period's IK solve (an :class:`~fuzzkit.kinematics.IKStatus` value)."""
+        """Status of this period's IK solve (an :class:`~fuzzkit.plants.kinematics.IKStatus`
+        value)."""
         return self._d().ik_status
 
     @property
@@ -719,7 +713,8 @@ _START_SEEDS = (
 
 
 class Arm6Plant:
-    """The ABB IRB 140 kinematic plant as a :class:`fuzzkit.plant.ContactPlant` (name ``arm6``).
+    """The ABB IRB 140 kinematic plant as a :class:`fuzzkit.plants.contract.ContactPlant` (name
+    ``arm6``).
 
     Examples
     --------

@@ -11,10 +11,10 @@ import os
 from importlib import resources
 from pathlib import Path
 
-from fuzzkit.dsl import load_file, loads_rulebase
 from fuzzkit.errors import Location, Problem, RuleBaseError
-from fuzzkit.model import RuleBase
-from fuzzkit.validation import did_you_mean
+from fuzzkit.formats.yaml_reader import load_file, loads_rulebase
+from fuzzkit.fuzzy.model import RuleBase
+from fuzzkit.fuzzy.validation import did_you_mean
 
 _PACKAGE = "fuzzkit.rulebases"
 _SUFFIXES = (".yaml", ".yml")

@@ -1,6 +1,6 @@
 """Rerun recordings (.rrd) of closed-loop runs on the 6-DOF arm (``--plant arm6``), in 3-D.
 
-Same time series as :mod:`fuzzkit.traces` (so the two plants' recordings compare side by side),
+Same time series as :mod:`fuzzkit.viz.traces` (so the two plants' recordings compare side by side),
 plus the arm in three dimensions. Entity layout (timeline ``sim_time``, a duration in seconds):
 
 * ``forces/<axis>/measured``, ``/true``, ``/setpoint`` (N, task frame)
@@ -13,7 +13,7 @@ plus the arm in three dimensions. Entity layout (timeline ``sim_time``, a durati
   a wire surface), ``world/nominal_path``, ``world/tool_path``, ``world/robot_base``
 
 Everything in ``world/`` is in metres in the scenario frame (the planar arm's frame), in which
-the IRB 140's base sits at ``-workspace_offset`` (see :mod:`fuzzkit.motion`).
+the IRB 140's base sits at ``-workspace_offset`` (see :mod:`fuzzkit.plants.arm6`).
 """
 
 from __future__ import annotations
@@ -25,8 +25,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.errors import ConfigError
-from fuzzkit.experiments import RunResult
-from fuzzkit.motion import (
+from fuzzkit.plants.arm6 import (
     Arm6Parameters,
     Box3,
     EnvObject3,
@@ -35,8 +34,9 @@ from fuzzkit.motion import (
     Plane,
     objects_from_scenario,
 )
-from fuzzkit.rrd import log_series, open_recording
-from fuzzkit.traces import log_control_series, log_paths
+from fuzzkit.studies.runner import RunResult
+from fuzzkit.viz.recording import log_series, open_recording
+from fuzzkit.viz.run_series import log_control_series, log_paths
 
 Vec = npt.NDArray[np.float64]
 
@@ -86,7 +86,7 @@ def write_rrd(
     Parameters
     ----------
     result:
-        A run of :func:`fuzzkit.experiments.run` on the ``arm6`` plant.
+        A run of :func:`fuzzkit.studies.experiments.run` on the ``arm6`` plant.
     path:
         Output ``.rrd`` file; its folder must exist.
     geometry_every:
@@ -105,7 +105,7 @@ def write_rrd(
     if result.joint_angles.ndim != 2 or result.joint_angles.shape[1] != 6:
         raise ConfigError(
             f"run on plant {result.plant!r} has {result.joint_angles.shape[-1]} joints "
-            f"(expected an arm6 run; use fuzzkit.traces.write_rrd for the planar arm)"
+            f"(expected an arm6 run; use fuzzkit.viz.traces.write_rrd for the planar arm)"
         )
     p = params or Arm6Parameters()
     exp = result.experiment

@@ -36,7 +36,7 @@ tuned for (the defaults themselves qualify, so this never fails).
 
 Speed: experiments are simulated over short horizons (:data:`TUNING_HORIZON_S`: first contact
 plus the transient that the gains decide), and the fuzzy surface is a 201 x 201 bilinear lookup
-table sampled once from the exact engine (``fuzzkit.control.engine_table_surface``).
+table sampled once from the exact engine (``fuzzkit.control.controllers.engine_table_surface``).
 
 Determinism: the same arguments and ``seed`` give the same gains for any number of workers (the
 simulations are deterministic, the pool preserves order, the optimiser is seeded).
@@ -57,17 +57,12 @@ from typing import IO, Any
 import numpy as np
 import numpy.typing as npt
 
-from fuzzkit.control import Surface, engine_table_surface, tabulated_surface
+from fuzzkit.control.controllers import Surface, engine_table_surface, tabulated_surface
 from fuzzkit.errors import ConfigError
-from fuzzkit.experiments import (
-    DEFAULT_GAINS,
-    Experiment,
-    RunResult,
-    experiment,
-    run,
-    with_stiffness,
-)
-from fuzzkit.plant import ContactPlant, make_plant
+from fuzzkit.plants.contract import ContactPlant
+from fuzzkit.studies.experiments import DEFAULT_GAINS, Experiment, experiment, with_stiffness
+from fuzzkit.studies.plants import make_plant
+from fuzzkit.studies.runner import RunResult, run
 
 Vec = npt.NDArray[np.float64]
 
@@ -143,7 +138,7 @@ def run_cost(result: RunResult, weights: CostWeights = CostWeights()) -> float:
 
     Parameters
     ----------
-    result : a run from ``fuzzkit.experiments.run``.
+    result : a run from ``fuzzkit.studies.experiments.run``.
     weights : penalty weights.
 
     Returns
@@ -258,7 +253,7 @@ class TuningProblem:
         surface: SurfaceSpec | None = None
         if controller == "fuzzy-pi":
             if isinstance(rulebase, str):
-                from fuzzkit.registry import load
+                from fuzzkit.formats.registry import load
 
                 load(rulebase)  # a bad rule base fails here, with its own message
             surface = rulebase
@@ -337,8 +332,8 @@ class _Runner:
         self.problem = problem
         self.surface: Surface | None = None
         if isinstance(problem.surface, str):
-            from fuzzkit.inference import Engine
-            from fuzzkit.registry import load
+            from fuzzkit.formats.registry import load
+            from fuzzkit.fuzzy.inference import Engine
 
             self.surface = engine_table_surface(Engine(load(problem.surface)), n=TABLE_SIZE)
         elif problem.surface is not None:
@@ -429,7 +424,7 @@ class TuneResult:
     """The outcome of a search.
 
     ``gains`` are complete (searched gains plus the fixed output limits) and ready for
-    ``fuzzkit.experiments.run``; ``baseline_*`` describe the default gains on the same cost.
+    ``fuzzkit.studies.experiments.run``; ``baseline_*`` describe the default gains on the same cost.
     ``interrupted``: the search stopped early (Ctrl-C); the result is the best so far.
     """
 
@@ -460,9 +455,10 @@ class TuneResult:
         return 100.0 * (self.baseline_cost - self.cost) / self.baseline_cost
 
     def to_entry(self) -> Any:
-        """The result as a gains-file entry (``fuzzkit.gains.GainsEntry``) with provenance."""
+        """The result as a gains-file entry (``fuzzkit.control.gains.GainsEntry``) with
+        provenance."""
         from fuzzkit import __version__
-        from fuzzkit.gains import GainsEntry
+        from fuzzkit.control.gains import GainsEntry
 
         prov: dict[str, Any] = {
             "tool": f"fuzzkit {__version__} tune",
@@ -479,7 +475,9 @@ class TuneResult:
             "budget": self.budget,
             "evaluations": self.evaluations,
             "interrupted": self.interrupted,
-            "cost_definition": "fuzzkit.tuning.run_cost (ITAE + overshoot, peak, trip, loss)",
+            "cost_definition": (
+                "fuzzkit.studies.tuning.run_cost (ITAE + overshoot, peak, trip, loss)"
+            ),
         }
         if self.rulebase is None:
             del prov["rulebase"]
@@ -639,7 +637,7 @@ def optimise(
     workers : worker processes (None: every core this process may use; 1: in-process).
     callback : called with a :class:`Progress` after every batch; it may raise
         ``KeyboardInterrupt`` (as Ctrl-C does) to stop the search.
-    baseline : the reference gains (default: ``fuzzkit.experiments.DEFAULT_GAINS``).
+    baseline : the reference gains (default: ``fuzzkit.studies.experiments.DEFAULT_GAINS``).
 
     Returns
     -------
@@ -786,8 +784,8 @@ def tune(
     experiments : names (E1, E2, E3) or ``Experiment`` objects, tuned for together.
     controller : ``pi`` (tunes kp, ki) or ``fuzzy-pi`` (tunes kp, ki, kx).
     rulebase : fuzzy-PI rule base (shipped name or YAML path) or a picklable surface function.
-    plant : plant name (``fuzzkit.plant.PLANTS``) or a picklable factory returning a plant.
-    stiffnesses_n_per_mm : environment stiffnesses to tune over at once (None: each
+    plant : plant name (``fuzzkit.plants.contract.PLANTS``) or a picklable factory returning a
+    plant. stiffnesses_n_per_mm : environment stiffnesses to tune over at once (None: each
         experiment's own).
     budget : most gain sets simulated, the default gains included (>= 10).
     seed : optimiser seed; the same seed gives the same gains.
@@ -801,7 +799,8 @@ def tune(
 
     Returns
     -------
-    A :class:`TuneResult`; write it with ``fuzzkit.gains.write_gains(path, result.to_entry())``.
+    A :class:`TuneResult`; write it with ``fuzzkit.control.gains.write_gains(path,
+    result.to_entry())``.
 
     Raises
     ------

@@ -1,6 +1,6 @@
 """Fast exact centroid for partition-style outputs, and a pure-Python scalar evaluator.
 
-Used by :mod:`fuzzkit.inference` when the output uses min implication, max aggregation and
+Used by :mod:`fuzzkit.fuzzy.inference` when the output uses min implication, max aggregation and
 centroid, and no point of the output range lies in more than two terms (every partition).
 Then, pointwise, ``max_k g_k = sum_k g_k - sum_{i<j} min(g_i, g_j)`` with
 ``g_k = min(L_k, mu_k)`` and ``min(g_i, g_j) = min(min(L_i, L_j), min(mu_i, mu_j))``: every

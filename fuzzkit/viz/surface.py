@@ -15,8 +15,8 @@ import numpy.typing as npt
 
 from fuzzkit.errors import ConfigError, EvaluationError
 from fuzzkit.fileio import write_atomic
-from fuzzkit.model import RuleBase, Term, Variable
-from fuzzkit.rrd import open_recording
+from fuzzkit.fuzzy.model import RuleBase, Term, Variable
+from fuzzkit.viz.recording import open_recording
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -67,7 +67,7 @@ def surface_grid(
     ConfigError
         If ``resolution`` is outside 2 .. 1001.
     """
-    from fuzzkit.inference import Engine
+    from fuzzkit.fuzzy.inference import Engine
 
     name = _check_shape(rb, output)
     if not 2 <= resolution <= MAX_RESOLUTION:
@@ -102,7 +102,7 @@ def term_peak(term: Term, var: Variable) -> float:
 
 def peak_grid(rb: RuleBase, output: str | None = None) -> tuple[FloatArray, list[str]]:
     """The surface at every pair of input term peaks: ``(N, 3)`` points and their labels."""
-    from fuzzkit.inference import Engine
+    from fuzzkit.fuzzy.inference import Engine
 
     name = _check_shape(rb, output)
     vx, vy = rb.inputs

@@ -1,0 +1,213 @@
+"""Model -> rule-base YAML: the inverse of :mod:`fuzzkit.formats.yaml_reader`.
+
+``loads_rulebase(dump(rb)) == rb`` for every rule base (tested); tables are written back as
+tables where the rules form one, partitions as the shorthand where the terms are one.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import yaml
+
+from fuzzkit.formats.yaml_reader import EMPTY_CELL, STR_TAG
+from fuzzkit.fuzzy.model import (
+    PIECEWISE_LINEAR_SHAPES,
+    SHAPE_PARAMS,
+    Compound,
+    Consequent,
+    Expression,
+    Proposition,
+    Rule,
+    RuleBase,
+    RuleTable,
+    Variable,
+)
+from fuzzkit.fuzzy.partition import PARTITION_ENDS, partition_terms
+
+
+class _Flow(list[Any]):
+    """A list written in flow style: ``[a, b]``."""
+
+
+class _FlowMap(dict[str, Any]):
+    """A mapping written in flow style: ``{a: 1}``."""
+
+
+class _Literal(str):
+    """A string written as a literal block (``|``)."""
+
+    __slots__ = ()
+
+
+class _Dumper(yaml.SafeDumper):
+    """SafeDumper with flow lists/maps and literal blocks where the format reads best."""
+
+
+_Dumper.add_representer(
+    _Flow, lambda d, v: d.represent_sequence("tag:yaml.org,2002:seq", v, flow_style=True)
+)
+_Dumper.add_representer(
+    _FlowMap, lambda d, v: d.represent_mapping("tag:yaml.org,2002:map", v, flow_style=True)
+)
+_Dumper.add_representer(_Literal, lambda d, v: d.represent_scalar(STR_TAG, v, style="|"))
+
+
+def _dump_terms(var: Variable, kind: str) -> dict[str, Any]:
+    labels = var.term_names
+    if len(labels) >= 2 and math.isfinite(var.low) and math.isfinite(var.high):
+        default_ends = "shoulder" if kind == "input" else "triangle"
+        for ends in (default_ends, *(e for e in PARTITION_ENDS if e != default_ends)):
+            if partition_terms(labels, var.low, var.high, ends) == var.terms:
+                spec: dict[str, Any] = {"partition": "triangular", "labels": _Flow(labels)}
+                if ends != default_ends:
+                    spec["ends"] = ends
+                return _FlowMap(spec)
+    out: dict[str, Any] = {}
+    for t in var.terms:
+        spec = {"shape": t.shape}
+        if t.shape in PIECEWISE_LINEAR_SHAPES or t.shape not in SHAPE_PARAMS:
+            spec["points"] = _Flow(float(x) for x in t.params)
+        else:
+            spec.update(zip(SHAPE_PARAMS[t.shape], map(float, t.params), strict=True))
+        out[t.name] = _FlowMap(spec)
+    return out
+
+
+def _dump_expression(expr: Expression) -> dict[str, Any]:
+    if isinstance(expr, Proposition):
+        return {expr.variable: {"not": expr.term} if expr.negated else expr.term}
+    flat = expr.op == "and" and all(isinstance(o, Proposition) for o in expr.operands)
+    names = [o.variable for o in expr.operands if isinstance(o, Proposition)]
+    if flat and len(set(names)) == len(names) and len(names) >= 2:
+        merged: dict[str, Any] = {}
+        for o in expr.operands:
+            merged.update(_dump_expression(o))
+        return merged
+    return {expr.op: [_dump_expression(o) for o in expr.operands]}
+
+
+def _table_rules(
+    table: RuleTable, rows: Sequence[str], cols: Sequence[str], grid: dict[tuple[str, str], str]
+) -> tuple[Rule, ...]:
+    return tuple(
+        Rule(
+            Compound("and", (Proposition(table.rows, r), Proposition(table.columns, c))),
+            (Consequent(table.output, grid[r, c]),),
+        )
+        for r in rows
+        for c in cols
+        if (r, c) in grid
+    )
+
+
+def _dump_table(rb: RuleBase) -> dict[str, Any] | None:
+    """The table form of ``rb.rules`` if they are exactly ``rb.table``, else ``None``."""
+    t = rb.table
+    if t is None:
+        return None
+    try:
+        row_var, col_var = rb.input(t.rows), rb.input(t.columns)
+    except KeyError:
+        return None
+    grid: dict[tuple[str, str], str] = {}
+    seen_rows: list[str] = []
+    seen_cols: list[str] = []
+    for rule in rb.rules:
+        a = rule.antecedent
+        if not (
+            isinstance(a, Compound)
+            and a.op == "and"
+            and len(a.operands) == 2
+            and rule.weight == 1.0
+            and len(rule.consequents) == 1
+            and rule.consequents[0].variable == t.output
+        ):
+            return None
+        r, c = a.operands
+        if not (
+            isinstance(r, Proposition)
+            and isinstance(c, Proposition)
+            and r.variable == t.rows
+            and c.variable == t.columns
+            and not r.negated
+            and not c.negated
+            and r.term in row_var.term_names
+            and c.term in col_var.term_names
+            and (r.term, c.term) not in grid
+        ):
+            return None
+        grid[r.term, c.term] = rule.consequents[0].term
+        seen_rows.append(r.term)
+        seen_cols.append(c.term)
+    row_orders = [
+        list(row_var.term_names),
+        list(dict.fromkeys(seen_rows + list(row_var.term_names))),
+    ]
+    col_orders = [
+        list(col_var.term_names),
+        list(dict.fromkeys(seen_cols + list(col_var.term_names))),
+    ]
+    for rows in row_orders:
+        for cols in col_orders:
+            if _table_rules(t, rows, cols, grid) != rb.rules:
+                continue
+            cells = [[grid.get((r, c), EMPTY_CELL) for c in cols] for r in rows]
+            width = max(len(x) for row in cells for x in row)
+            text = "\n".join(" ".join(x.ljust(width) for x in row).rstrip() for row in cells)
+            spec: dict[str, Any] = {"rows": t.rows, "columns": t.columns, "output": t.output}
+            if rows != list(row_var.term_names):
+                spec["row_labels"] = _Flow(rows)
+            if cols != list(col_var.term_names):
+                spec["column_labels"] = _Flow(cols)
+            spec["cells"] = _Literal(text + "\n")
+            return {"table": spec}
+    return None
+
+
+def dump(rb: RuleBase) -> str:
+    """The YAML text of ``rb``; ``loads_rulebase(dump(rb)) == rb`` for every valid model.
+
+    Partitions are written back as the ``partition`` shorthand when the terms are exactly one,
+    and the rules as a table when ``rb.table`` is set and the rules are exactly that table.
+    """
+    doc: dict[str, Any] = {"name": rb.name}
+    if rb.description:
+        doc["description"] = rb.description
+    for kind, group in (("input", rb.inputs), ("output", rb.outputs)):
+        section: dict[str, Any] = {}
+        for var in group:
+            spec: dict[str, Any] = {"range": _Flow([float(var.low), float(var.high)])}
+            if kind == "output" and var.default is not None:
+                spec["default"] = float(var.default)
+            spec["terms"] = _dump_terms(var, kind)
+            section[var.name] = spec
+        doc[kind + "s"] = section
+    ops = rb.operators
+    doc["operators"] = _FlowMap(
+        {
+            "and": ops.and_,
+            "or": ops.or_,
+            "implication": ops.implication,
+            "aggregation": ops.aggregation,
+        }
+    )
+    doc["defuzzifier"] = rb.defuzzifier
+    doc["out_of_range"] = rb.out_of_range
+    table = _dump_table(rb)
+    if table is not None:
+        doc["rules"] = table
+    else:
+        rules: list[Any] = []
+        for rule in rb.rules:
+            item: dict[str, Any] = {
+                "if": _dump_expression(rule.antecedent),
+                "then": {c.variable: c.term for c in rule.consequents},
+            }
+            if rule.weight != 1.0:
+                item["weight"] = float(rule.weight)
+            rules.append(_FlowMap(item))
+        doc["rules"] = rules
+    return yaml.dump(doc, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=100)

@@ -1,0 +1,5 @@
+"""The fuzzy core: the frozen rule-base model, membership shapes, semantic checks, the exact engine.
+
+Imports nothing else of fuzzkit but :mod:`fuzzkit.errors` (the bottom layer; checked by
+``lint-imports``).
+"""

@@ -1,0 +1,16 @@
+"""Rerun recordings of closed-loop runs: one entry point that picks the plant's drawing."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from fuzzkit.studies.runner import RunResult
+from fuzzkit.viz import traces_arm6, traces_planar
+
+
+def write_run_rrd(result: RunResult, path: str | os.PathLike[str]) -> Path:
+    """Write a run's recording with the drawing its plant needs (planar, or 3-D for arm6)."""
+    if result.joint_angles.ndim == 2 and result.joint_angles.shape[1] == 6:
+        return traces_arm6.write_rrd(result, path)
+    return traces_planar.write_rrd(result, path)
