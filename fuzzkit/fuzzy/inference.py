@@ -1,4 +1,4 @@
-"""The exact Mamdani engine, vectorised over numpy arrays.
+"""The exact engine (Mamdani and Sugeno outputs), vectorised over numpy arrays.
 
 ``Engine(rb).evaluate({"e": e, "de": de})`` evaluates a rule base at any number of points at
 once (inputs are broadcast together); :func:`evaluate` and :func:`evaluate_point` are the
@@ -33,6 +33,13 @@ Semantics
   ``a_j`` the term's activation (its rules' firing strengths aggregated with the aggregation
   operator) and ``c_j`` the term centre of :func:`fuzzkit.fuzzy.membership.centre`.
 * Mean of maximum is the midpoint of the smallest and largest of maximum (as in fuzzylite).
+* Sugeno outputs (``constant``/``linear`` terms; see :class:`_SugenoOutput`): every rule
+  consequent counts on its own with its weighted firing strength ``w`` and value ``z``;
+  ``weighted_average`` is ``sum(w z) / sum(w)``, ``weighted_sum`` is ``sum(w z)``. Implication
+  and aggregation do not apply (MATLAB ignores ImpMethod/AggMethod for Sugeno systems, and
+  fuzzylite's WeightedAverage/WeightedSum read each activated term's degree). ``linear``
+  terms see the input values the membership functions see (clamped under ``clamp``), and
+  the result is not clamped to the output's range. No rule fired (``sum(w) == 0``): default.
 """
 
 from __future__ import annotations
@@ -78,13 +85,16 @@ class _Fuzzifier:
         self.core_start, self.core_end, self.rise, self.fall = (forms[:, k] for k in range(4))
         self.smooth = [(i, t) for i, t in enumerate(var.terms) if not t.is_piecewise_linear]
 
-    def __call__(self, x: FloatArray) -> FloatArray:
+    def prepare(self, x: FloatArray) -> FloatArray:
+        """The input value the terms see: clamped to the range, or bounded under ``extend``."""
         # bare ufuncs rather than np.clip: this runs once per input per call, and the
         # per-call overhead dominates scalar evaluation
         if self.clamp:
-            x = _fmin(_fmax(x, self.low), self.high)
-        else:
-            x = _fmin(_fmax(x, -_EXTEND_LIMIT), _EXTEND_LIMIT)
+            return _fmin(_fmax(x, self.low), self.high)
+        return _fmin(_fmax(x, -_EXTEND_LIMIT), _EXTEND_LIMIT)
+
+    def __call__(self, x: FloatArray) -> FloatArray:
+        x = self.prepare(x)
         xc = x[:, None]
         # x is finite and slopes are at most 1e200, so nothing overflows or becomes NaN
         pl = _fmin(
@@ -590,7 +600,7 @@ class _Output:
             else:
                 self.geometry = _GridGeometry(rb, out, self.pieces)
 
-    def __call__(self, firing: FloatArray) -> FloatArray:
+    def __call__(self, firing: FloatArray, inputs: list[FloatArray]) -> FloatArray:
         b = firing.shape[0]
         if self.pieces.empty:
             return np.full(b, self.default)
@@ -656,6 +666,53 @@ class _Output:
         return np.where(height > 0, val, self.default)
 
 
+class _SugenoOutput:
+    """One Sugeno (Takagi-Sugeno-Kang) output: a weighted mean or sum over the fired rules.
+
+    Every consequent ``k`` of the output contributes its rule's weighted firing strength
+    ``w_k`` and its term's value ``z_k`` (a constant, or ``c . x + c0`` at the input values the
+    terms see): ``sum(w z) / sum(w)`` (``weighted_average``) or ``sum(w z)``
+    (``weighted_sum``). Implication and aggregation do not apply: rules sharing a term count
+    separately, as in MATLAB and fuzzylite. When ``sum(w) == 0`` the output takes its default.
+    """
+
+    def __init__(self, rb: RuleBase, out: Variable) -> None:
+        self.name = out.name
+        self.default = math.nan if out.default is None else float(out.default)
+        self.average = rb.defuzzifier == "weighted_average"
+        n = len(rb.inputs)
+        coef = np.zeros((len(out.terms), n + 1))
+        for t, term in enumerate(out.terms):
+            if term.shape == "constant":
+                coef[t, n] = term.params[0]
+            else:
+                coef[t] = term.params
+        inst = [
+            (r, out.term_index(c.term))
+            for r, rule in enumerate(rb.rules)
+            for c in rule.consequents
+            if c.variable == out.name
+        ]
+        self.inst_rules = np.array([r for r, _ in inst], dtype=np.intp)
+        per_inst = coef[np.array([t for _, t in inst], dtype=np.intp)].reshape(-1, n + 1)
+        self.slopes = per_inst[:, :n].T.copy()  # (inputs, consequents)
+        self.constants = per_inst[:, n].copy()
+        self.linear = bool(np.any(self.slopes != 0.0))
+
+    def __call__(self, firing: FloatArray, inputs: list[FloatArray]) -> FloatArray:
+        w = firing[:, self.inst_rules]
+        if self.linear:
+            z = np.stack(inputs, axis=1) @ self.slopes + self.constants
+            num = (w * z).sum(axis=1)
+        else:
+            num = w @ self.constants
+        tot = w.sum(axis=1)
+        if self.average:
+            with np.errstate(invalid="ignore", divide="ignore"):
+                num = num / tot
+        return np.where(tot > 0, num, self.default)
+
+
 # --------------------------------------------------------------------------- public API
 
 
@@ -689,7 +746,11 @@ class Engine:
         self.output_names = rulebase.output_names
         self._fuzzifiers = [_Fuzzifier(v, rulebase.out_of_range) for v in rulebase.inputs]
         self._firing = _Firing(rulebase)
-        self._outputs = [_Output(rulebase, o) for o in rulebase.outputs]
+        self._outputs: list[_Output | _SugenoOutput] = [
+            _SugenoOutput(rulebase, o) if o.is_sugeno else _Output(rulebase, o)
+            for o in rulebase.outputs
+        ]
+        self._linear = any(isinstance(o, _SugenoOutput) and o.linear for o in self._outputs)
         self._scalar = _scalar_path(rulebase, self._outputs)
 
     def _coerce(self, inputs: Mapping[str, npt.ArrayLike]) -> list[FloatArray]:
@@ -737,9 +798,11 @@ class Engine:
             flat = [np.where(bad, 0.0, a) for a in flat]
         mus = [fz(x) for fz, x in zip(self._fuzzifiers, flat, strict=True)]
         firing = self._firing(mus)
+        if self._linear:
+            flat = [fz.prepare(x) for fz, x in zip(self._fuzzifiers, flat, strict=True)]
         result = {}
         for out in self._outputs:
-            val = out(firing)
+            val = out(firing, flat)
             result[out.name] = np.where(bad, np.nan, val) if any_bad else val
         return result
 
@@ -791,11 +854,11 @@ class Engine:
         return self._firing([fz(x) for fz, x in zip(self._fuzzifiers, flat, strict=True)])
 
 
-def _scalar_path(rb: RuleBase, outputs: list[_Output]) -> ScalarPath | None:
+def _scalar_path(rb: RuleBase, outputs: list[_Output | _SugenoOutput]) -> ScalarPath | None:
     """The pure-Python single-point evaluator, when the rule base has its shape."""
     if any(not t.is_piecewise_linear for v in rb.inputs for t in v.terms):
         return None
-    if any(o.fast_centroid is None for o in outputs):
+    if any(not isinstance(o, _Output) or o.fast_centroid is None for o in outputs):
         return None
     pos = {v.name: i for i, v in enumerate(rb.inputs)}
     out_pos = {v.name: i for i, v in enumerate(rb.outputs)}
@@ -832,7 +895,7 @@ def _scalar_path(rb: RuleBase, outputs: list[_Output]) -> ScalarPath | None:
     ]
     outs = []
     for o, var in zip(outputs, rb.outputs, strict=True):
-        if o.fast_centroid is None:  # checked above; keeps the type checker informed
+        if not isinstance(o, _Output) or o.fast_centroid is None:  # checked above (for mypy)
             return None
         outs.append((o.fast_centroid, len(var.terms), o.default))
     return ScalarPath(inputs, table, rb.operators.and_ == "product", outs)
