@@ -30,9 +30,14 @@ def register(sub: Any) -> None:
         "validate",
         help="check rule-base files; list every problem",
         description="Check rule-base YAML files (paths or shipped names). Exit 0 "
-        "when all are valid, 2 listing every problem otherwise.",
+        "when all are valid, 2 listing every problem otherwise. Warnings (input ranges no "
+        "term covers, in rule bases with coverage: allow_gaps) are printed and do not fail "
+        "unless --strict is given.",
     )
     p.add_argument("files", nargs="+", metavar="FILE")
+    p.add_argument(
+        "--strict", action="store_true", help="treat warnings (coverage gaps) as errors"
+    )
     p.set_defaults(handler=cmd_validate)
 
     p = sub.add_parser(
@@ -114,18 +119,30 @@ def _count(n: int, noun: str) -> str:
 
 def cmd_validate(args: argparse.Namespace) -> int:
     """Load every file, print ``FILE: ok`` or every problem; exit 2 if any is invalid."""
+    from fuzzkit.formats.registry import load_with_warnings
+
     failed = 0
     for spec in args.files:
         try:
-            rb = _load(spec)
+            rb, warnings = load_with_warnings(spec)
         except RuleBaseError as exc:
             failed += 1
             for problem in exc.problems:
                 print(f"{problem}", file=sys.stderr)
             continue
+        for warning in warnings:
+            if args.strict:
+                print(f"{warning.location}: {warning.message} (an error under --strict)",
+                      file=sys.stderr)
+            else:
+                print(f"{warning}", file=sys.stderr)
+        if warnings and args.strict:
+            failed += 1
+            continue
+        note = f", {_count(len(warnings), 'warning')}" if warnings else ""
         print(
             f"{spec}: ok ({rb.name}: {_count(len(rb.inputs), 'input')}, "
-            f"{_count(len(rb.outputs), 'output')}, {_count(len(rb.rules), 'rule')})"
+            f"{_count(len(rb.outputs), 'output')}, {_count(len(rb.rules), 'rule')}{note})"
         )
     if failed:
         print(

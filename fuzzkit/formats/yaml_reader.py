@@ -1021,11 +1021,21 @@ def _compose(text: str, file: str) -> Node | None:
 def loads_rulebase(text: str, source: str = "<string>") -> RuleBase:
     """Parse rule-base YAML ``text``; ``source`` names it in messages and in ``rb.source``.
 
+    Coverage gaps are errors unless the document says ``coverage: allow_gaps`` (then they are
+    warnings, which :func:`loads_rulebase_with_warnings` returns).
+
     Raises
     ------
     RuleBaseError
         Listing every problem as ``source:line:col: message``, sorted by position.
     """
+    return loads_rulebase_with_warnings(text, source)[0]
+
+
+def loads_rulebase_with_warnings(
+    text: str, source: str = "<string>"
+) -> tuple[RuleBase, list[Problem]]:
+    """:func:`loads_rulebase`, also returning the warnings (severity ``warning``), located."""
     size = len(text.encode("utf-8", errors="replace"))
     if size > MAX_FILE_BYTES:
         raise RuleBaseError(
@@ -1068,7 +1078,7 @@ def loads_rulebase(text: str, source: str = "<string>") -> RuleBase:
     reader = _Reader(source, text.split("\n"))
     try:
         rb = reader.rule_base(root)
-        issues = validation.check(rb) if rb is not None else []
+        found = validation.diagnose(rb) if rb is not None else validation.Diagnosis([], [])
     except RecursionError:
         raise RuleBaseError(
             [
@@ -1079,11 +1089,15 @@ def loads_rulebase(text: str, source: str = "<string>") -> RuleBase:
             ]
         ) from None
     problems = list(reader.problems)
-    if rb is not None:
+    warnings: list[Problem] = []
+    for issues, severity, into in (
+        (found.errors, "error", problems),
+        (found.warnings, "warning", warnings),
+    ):
         for path, message in issues:
             if path in reader.hidden_at or any(path[: len(h)] == h for h in reader.hidden_under):
                 continue
-            problems.append(Problem(_locate(reader, path, root), message))
+            into.append(Problem(_locate(reader, path, root), message, severity))
     if problems:
         unique = list(dict.fromkeys(problems))
         unique.sort(key=lambda p: (p.location.line, p.location.col))
@@ -1091,7 +1105,8 @@ def loads_rulebase(text: str, source: str = "<string>") -> RuleBase:
     if rb is None:  # pragma: no cover - a missing model always comes with a problem
         raise RuntimeError("no rule base and no problem")
     digest = hashlib.sha256(text.encode("utf-8")).hexdigest()
-    return replace(rb, source=Source(source, digest))
+    warnings.sort(key=lambda p: (p.location.line, p.location.col))
+    return replace(rb, source=Source(source, digest)), warnings
 
 
 def _locate(reader: _Reader, path: Path, root: Node) -> Location:
@@ -1104,6 +1119,11 @@ def _locate(reader: _Reader, path: Path, root: Node) -> Location:
 
 def load_file(path: str | FsPath) -> RuleBase:
     """Read and parse a rule-base YAML file (see :func:`loads_rulebase`)."""
+    return load_file_with_warnings(path)[0]
+
+
+def load_file_with_warnings(path: str | FsPath) -> tuple[RuleBase, list[Problem]]:
+    """:func:`load_file`, also returning the warnings (see :func:`loads_rulebase_with_warnings`)."""
     p = FsPath(path)
     name = str(path)
     try:
@@ -1133,4 +1153,4 @@ def load_file(path: str | FsPath) -> RuleBase:
         raise RuleBaseError(
             [Problem(Location(name), f"not UTF-8 text (byte {exc.start}); expected a YAML file")]
         ) from None
-    return loads_rulebase(text, name)
+    return loads_rulebase_with_warnings(text, name)

@@ -516,7 +516,8 @@ def diagnose(rb: RuleBase, allow_gaps: bool | None = None) -> Diagnosis:
     gaps = _coverage_gaps(rb)
     if gaps_allowed:
         return Diagnosis(errors, gaps)
-    return Diagnosis(errors + gaps, [])
+    hint = " (set coverage: allow_gaps to make this a warning)"
+    return Diagnosis(errors + [(path, message + hint) for path, message in gaps], [])
 
 
 def check(rb: RuleBase, allow_gaps: bool | None = None) -> list[Issue]:
