@@ -169,14 +169,19 @@ def format_expression(expr: Expression, top: bool = True) -> str:
     return text if top else f"({text})"
 
 
-def _variable_lines(var: Variable, kind: str) -> list[str]:
+def _variable_lines(var: Variable, kind: str, input_names: Sequence[str] = ()) -> list[str]:
     head = f"  {var.name}  [{_num(var.low)}, {_num(var.high)}]"
     if kind == "output":
         head += f"  default {'NaN' if var.default is None else _num(var.default)}"
     lines = [head]
     width = max((len(t.name) for t in var.terms), default=0)
+    if not var.terms:
+        lines.append("    (no terms: used only in linear Sugeno terms)")
     for t in var.terms:
-        names = SHAPE_PARAMS.get(t.shape, ())
+        if t.shape == "linear":
+            names = (*input_names, "constant")
+        else:
+            names = SHAPE_PARAMS.get(t.shape, ())
         params = " ".join(f"{n}={_num(v)}" for n, v in zip(names, t.params, strict=False))
         lines.append(f"    {t.name.ljust(width)}  {t.shape:<14} {params}")
     return lines
@@ -232,7 +237,7 @@ def describe_rulebase(rb: RuleBase) -> str:
         lines += _variable_lines(var, "input")
     lines.append("outputs:")
     for var in rb.outputs:
-        lines += _variable_lines(var, "output")
+        lines += _variable_lines(var, "output", rb.input_names)
     lines.append("")
     grid = _table_grid(rb)
     if grid is not None and rb.table is not None:
