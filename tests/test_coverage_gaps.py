@@ -54,12 +54,11 @@ def test_allow_gaps_loads_and_returns_the_gap_as_a_located_warning() -> None:
     assert str(w).startswith(f"tip.yaml:4:33: warning: {GAP}")
     assert check(rb) == []  # follows rb.coverage
     assert [m for _, m in check(rb, allow_gaps=False)] == [
-        m + " (set coverage: allow_gaps to make this a warning)"
-        for _, m in diagnose(rb).warnings
+        m + " (set coverage: allow_gaps to make this a warning)" for _, m in diagnose(rb).warnings
     ]
     found = diagnose(rb, allow_gaps=True)
     assert found.errors == [] and [p for p, _ in found.warnings] == [("inputs", "food", "terms")]
-    with pytest.raises(RuleBaseError, match="inputs.food.terms: input 'food' is not covered"):
+    with pytest.raises(RuleBaseError, match=r"inputs\.food\.terms: input 'food' is not covered"):
         ensure_valid(replace(rb, coverage="strict"))
 
 

@@ -187,7 +187,8 @@ inputs:
   x: {range: [0, 10], terms: {lo: {shape: triangle, points: [0, 0, 3]},
                               hi: {shape: triangle, points: [7, 10, 10]}}}
 outputs:
-  z: {range: [-5, 5]$default, terms: {A: {shape: constant, value: 2}, B: {shape: constant, value: -3}}}
+  z: {range: [-5, 5]$default, terms: {A: {shape: constant, value: 2},
+                                      B: {shape: constant, value: -3}}}
 defuzzifier: $defuzz
 rules:
   - {if: {x: lo}, then: {z: A}}
@@ -224,9 +225,7 @@ E_PART = "{partition: triangular, labels: [N, Z, P]}"
 B_LINEAR = "{shape: linear, coefficients: {e: 1, de: 2}, constant: 0}"
 
 
-def bad_doc(
-    e_terms: str = E_PART, b_term: str = B_LINEAR, defuzz: str = "weighted_average"
-) -> str:
+def bad_doc(e_terms: str = E_PART, b_term: str = B_LINEAR, defuzz: str = "weighted_average") -> str:
     return BASE.substitute(e_terms=e_terms, b_term=b_term, defuzz=defuzz)
 
 
@@ -290,9 +289,9 @@ def test_bad_sugeno_input_is_located_and_explained(text: str, line: int, match: 
 
 
 def test_weighted_sum_on_a_mamdani_output_is_refused() -> None:
-    text = bad_doc(
-        b_term="{shape: triangle, points: [0, 0.5, 1]}", defuzz="weighted_sum"
-    ).replace("A: {shape: constant, value: 0.5}", "A: {shape: triangle, points: [-1, -0.5, 0]}")
+    text = bad_doc(b_term="{shape: triangle, points: [0, 0.5, 1]}", defuzz="weighted_sum").replace(
+        "A: {shape: constant, value: 0.5}", "A: {shape: triangle, points: [-1, -0.5, 0]}"
+    )
     with pytest.raises(RuleBaseError, match=r"bad.yaml:11:14: weighted_sum is for Sugeno outputs"):
         loads(text, source="bad.yaml")
 
@@ -303,4 +302,3 @@ def test_membership_functions_refuse_sugeno_terms() -> None:
     term = load("sugeno_pi").output("du").term("gentle")
     with pytest.raises(ValueError, match="'gentle': linear is a Sugeno output term"):
         evaluate_term(term, 0.0)
-

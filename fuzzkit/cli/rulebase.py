@@ -35,9 +35,7 @@ def register(sub: Any) -> None:
         "unless --strict is given.",
     )
     p.add_argument("files", nargs="+", metavar="FILE")
-    p.add_argument(
-        "--strict", action="store_true", help="treat warnings (coverage gaps) as errors"
-    )
+    p.add_argument("--strict", action="store_true", help="treat warnings (coverage gaps) as errors")
     p.set_defaults(handler=cmd_validate)
 
     p = sub.add_parser(
@@ -132,8 +130,10 @@ def cmd_validate(args: argparse.Namespace) -> int:
             continue
         for warning in warnings:
             if args.strict:
-                print(f"{warning.location}: {warning.message} (an error under --strict)",
-                      file=sys.stderr)
+                print(
+                    f"{warning.location}: {warning.message} (an error under --strict)",
+                    file=sys.stderr,
+                )
             else:
                 print(f"{warning}", file=sys.stderr)
         if warnings and args.strict:
@@ -178,10 +178,7 @@ def _variable_lines(var: Variable, kind: str, input_names: Sequence[str] = ()) -
     if not var.terms:
         lines.append("    (no terms: used only in linear Sugeno terms)")
     for t in var.terms:
-        if t.shape == "linear":
-            names = (*input_names, "constant")
-        else:
-            names = SHAPE_PARAMS.get(t.shape, ())
+        names = (*input_names, "constant") if t.shape == "linear" else SHAPE_PARAMS.get(t.shape, ())
         params = " ".join(f"{n}={_num(v)}" for n, v in zip(names, t.params, strict=False))
         lines.append(f"    {t.name.ljust(width)}  {t.shape:<14} {params}")
     return lines

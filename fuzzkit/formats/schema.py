@@ -78,6 +78,7 @@ def json_schema() -> dict[str, Any]:
         "required": ["partition", "labels"],
         "additionalProperties": False,
     }
+
     def explicit_terms(kind: str) -> dict[str, Any]:
         # an input may have no terms when only linear Sugeno terms use it
         return {

@@ -280,8 +280,7 @@ class _Reader:
         coverage = "strict"
         if "coverage" in entries:
             coverage = (
-                self.choice(entries["coverage"][1], "a coverage policy", ("coverage",))
-                or coverage
+                self.choice(entries["coverage"][1], "a coverage policy", ("coverage",)) or coverage
             )
 
         rules: list[Rule] = []
