@@ -13,6 +13,7 @@ from string import Template
 
 import numpy as np
 import pytest
+from _sugeno_reference import sugeno_pi_by_hand
 
 from fuzzkit.errors import RuleBaseError
 from fuzzkit.formats.registry import load, loads
@@ -117,20 +118,6 @@ def test_nan_input_gives_nan_even_with_a_default() -> None:
 
 
 # --------------------------------------------------------------------------- shipped sugeno_pi
-
-
-def _part(x: float) -> tuple[float, float, float]:
-    x = min(max(x, -1.0), 1.0)
-    return max(0.0, -x), 1 - abs(x), max(0.0, x)
-
-
-def sugeno_pi_by_hand(e: float, de: float) -> float:
-    """The shipped rule base, one rule at a time; product AND makes the weights sum to 1."""
-    ec, dc = min(max(e, -1.0), 1.0), min(max(de, -1.0), 1.0)
-    gentle, firm, hold = 0.2 * ec + 0.5 * dc, 0.6 * ec + 1.0 * dc, 0.0
-    table = [[firm, gentle, gentle], [gentle, hold, gentle], [gentle, gentle, firm]]
-    me, md = _part(e), _part(de)
-    return sum(me[i] * md[j] * table[i][j] for i in range(3) for j in range(3))
 
 
 def test_shipped_sugeno_pi_is_the_gain_scheduled_law() -> None:
