@@ -139,6 +139,15 @@ def sugeno_rows() -> list[tuple[str, str, str, str]]:
                 f"{t.memory_bytes} B of tables",
             )
         )
+    f = fuzzkit.Engine(rb).point_function()
+    pts = np.random.default_rng(0).uniform(-1.2, 1.2, (2000, 2)).tolist()
+
+    def run_exact() -> None:
+        for e, de in pts:
+            f(e, de)
+
+    exact = min(_us(run_exact, len(pts)) for _ in range(3))
+    rows.append((f"exact engine, scalar point ({SUGENO})", "(reference)", f"{exact:.1f} us", ""))
     return rows
 
 

@@ -101,13 +101,22 @@ def test_weighted_sum_is_the_average_times_the_total_firing() -> None:
     assert np.any(np.abs(total - 1.0) > 0.1)  # the two really differ on these points
 
 
-def test_scalar_and_batch_paths_agree() -> None:
-    eng = Engine(loads(hand_doc()))
+@pytest.mark.parametrize("policy", ["clamp", "extend"])
+@pytest.mark.parametrize(("and_", "or_"), [("min", "max"), ("product", "probabilistic_sum")])
+def test_scalar_and_batch_paths_agree(policy: str, and_: str, or_: str) -> None:
+    rb = replace(loads(hand_doc("weighted_average", and_, or_)), out_of_range=policy)
+    eng = Engine(rb)
+    assert eng._scalar is not None  # the pure-Python path serves this rule base
     batch = eng.evaluate({"x": POINTS[:, 0], "y": POINTS[:, 1]})["z"]
-    one = [eng.evaluate_point(x=x, y=y)["z"] for x, y in POINTS[:50]]
+    one = [eng.evaluate_point(x=x, y=y)["z"] for x, y in POINTS]
     f = eng.point_function("z")
-    np.testing.assert_array_equal(one, batch[:50])
-    np.testing.assert_array_equal([f(x, y) for x, y in POINTS[:50]], batch[:50])
+    np.testing.assert_allclose(one, batch, rtol=1e-14, atol=1e-14)
+    np.testing.assert_array_equal([f(x, y) for x, y in POINTS], one)
+    for bad in ((math.nan, 0.5), (5.0, math.nan)):
+        assert math.isnan(eng.evaluate_point(x=bad[0], y=bad[1])["z"])
+    assert eng.evaluate_point(x=math.inf, y=0.5)["z"] == pytest.approx(
+        float(eng.evaluate({"x": math.inf, "y": 0.5})["z"]), rel=1e-14
+    )
 
 
 def test_nan_input_gives_nan_even_with_a_default() -> None:

@@ -33,7 +33,7 @@ Semantics
   ``a_j`` the term's activation (its rules' firing strengths aggregated with the aggregation
   operator) and ``c_j`` the term centre of :func:`fuzzkit.fuzzy.membership.centre`.
 * Mean of maximum is the midpoint of the smallest and largest of maximum (as in fuzzylite).
-* Sugeno outputs (``constant``/``linear`` terms; see :class:`_SugenoOutput`): every rule
+* Sugeno outputs (``constant``/``linear`` terms; see :mod:`fuzzkit.fuzzy.sugeno`): every rule
   consequent counts on its own with its weighted firing strength ``w`` and value ``z``;
   ``weighted_average`` is ``sum(w z) / sum(w)``, ``weighted_sum`` is ``sum(w z)``. Implication
   and aggregation do not apply (MATLAB ignores ImpMethod/AggMethod for Sugeno systems, and
@@ -57,6 +57,7 @@ from fuzzkit.errors import EvaluationError
 from fuzzkit.fuzzy import membership
 from fuzzkit.fuzzy.fastpath import PolyCentroid, ScalarPath, Segment, scalar_input
 from fuzzkit.fuzzy.model import Compound, Expression, Proposition, RuleBase, Variable
+from fuzzkit.fuzzy.sugeno import SugenoOutput, SugenoScalarPath, sugeno_scalar_path
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.intp]
@@ -666,53 +667,6 @@ class _Output:
         return np.where(height > 0, val, self.default)
 
 
-class _SugenoOutput:
-    """One Sugeno (Takagi-Sugeno-Kang) output: a weighted mean or sum over the fired rules.
-
-    Every consequent ``k`` of the output contributes its rule's weighted firing strength
-    ``w_k`` and its term's value ``z_k`` (a constant, or ``c . x + c0`` at the input values the
-    terms see): ``sum(w z) / sum(w)`` (``weighted_average``) or ``sum(w z)``
-    (``weighted_sum``). Implication and aggregation do not apply: rules sharing a term count
-    separately, as in MATLAB and fuzzylite. When ``sum(w) == 0`` the output takes its default.
-    """
-
-    def __init__(self, rb: RuleBase, out: Variable) -> None:
-        self.name = out.name
-        self.default = math.nan if out.default is None else float(out.default)
-        self.average = rb.defuzzifier == "weighted_average"
-        n = len(rb.inputs)
-        coef = np.zeros((len(out.terms), n + 1))
-        for t, term in enumerate(out.terms):
-            if term.shape == "constant":
-                coef[t, n] = term.params[0]
-            else:
-                coef[t] = term.params
-        inst = [
-            (r, out.term_index(c.term))
-            for r, rule in enumerate(rb.rules)
-            for c in rule.consequents
-            if c.variable == out.name
-        ]
-        self.inst_rules = np.array([r for r, _ in inst], dtype=np.intp)
-        per_inst = coef[np.array([t for _, t in inst], dtype=np.intp)].reshape(-1, n + 1)
-        self.slopes = per_inst[:, :n].T.copy()  # (inputs, consequents)
-        self.constants = per_inst[:, n].copy()
-        self.linear = bool(np.any(self.slopes != 0.0))
-
-    def __call__(self, firing: FloatArray, inputs: list[FloatArray]) -> FloatArray:
-        w = firing[:, self.inst_rules]
-        if self.linear:
-            z = np.stack(inputs, axis=1) @ self.slopes + self.constants
-            num = (w * z).sum(axis=1)
-        else:
-            num = w @ self.constants
-        tot = w.sum(axis=1)
-        if self.average:
-            with np.errstate(invalid="ignore", divide="ignore"):
-                num = num / tot
-        return np.where(tot > 0, num, self.default)
-
-
 # --------------------------------------------------------------------------- public API
 
 
@@ -746,12 +700,14 @@ class Engine:
         self.output_names = rulebase.output_names
         self._fuzzifiers = [_Fuzzifier(v, rulebase.out_of_range) for v in rulebase.inputs]
         self._firing = _Firing(rulebase)
-        self._outputs: list[_Output | _SugenoOutput] = [
-            _SugenoOutput(rulebase, o) if o.is_sugeno else _Output(rulebase, o)
+        self._outputs: list[_Output | SugenoOutput] = [
+            SugenoOutput(rulebase, o) if o.is_sugeno else _Output(rulebase, o)
             for o in rulebase.outputs
         ]
-        self._linear = any(isinstance(o, _SugenoOutput) and o.linear for o in self._outputs)
-        self._scalar = _scalar_path(rulebase, self._outputs)
+        self._linear = any(isinstance(o, SugenoOutput) and o.linear for o in self._outputs)
+        self._scalar: ScalarPath | SugenoScalarPath | None = _scalar_path(
+            rulebase, self._outputs
+        ) or sugeno_scalar_path(rulebase)
 
     def _coerce(self, inputs: Mapping[str, npt.ArrayLike]) -> list[FloatArray]:
         unknown = sorted(set(inputs) - set(self.input_names))
@@ -854,7 +810,7 @@ class Engine:
         return self._firing([fz(x) for fz, x in zip(self._fuzzifiers, flat, strict=True)])
 
 
-def _scalar_path(rb: RuleBase, outputs: list[_Output | _SugenoOutput]) -> ScalarPath | None:
+def _scalar_path(rb: RuleBase, outputs: list[_Output | SugenoOutput]) -> ScalarPath | None:
     """The pure-Python single-point evaluator, when the rule base has its shape."""
     if any(not t.is_piecewise_linear for v in rb.inputs for t in v.terms):
         return None
