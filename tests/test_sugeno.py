@@ -298,3 +298,30 @@ def test_membership_functions_refuse_sugeno_terms() -> None:
     term = load("sugeno_pi").output("du").term("gentle")
     with pytest.raises(ValueError, match="'gentle': linear is a Sugeno output term"):
         evaluate_term(term, 0.0)
+
+
+def test_mamdani_and_sugeno_outputs_side_by_side_follow_their_own_rules() -> None:
+    # Two rules conclude the same term. The Mamdani output's weighted average aggregates them
+    # per term (max), the Sugeno output counts each rule on its own (MATLAB, fuzzylite).
+    text = """\
+name: mixed
+inputs:
+  x: {range: [0, 1], terms: {lo: {shape: left_shoulder, points: [0, 1]},
+                             hi: {shape: right_shoulder, points: [0, 1]}}}
+outputs:
+  m: {range: [0, 10], terms: {A: {shape: singleton, value: 2}, B: {shape: singleton, value: 8}}}
+  s: {range: [0, 10], terms: {A: {shape: constant, value: 2}, B: {shape: constant, value: 8}}}
+defuzzifier: weighted_average
+rules:
+  - {if: {x: lo}, then: {m: A, s: A}}
+  - {if: {x: hi}, then: {m: A, s: A}, weight: 0.5}
+  - {if: {x: hi}, then: {m: B, s: B}}
+"""
+    eng = Engine(loads(text))
+    for x in (0.0, 0.3, 0.5, 0.9, 1.0):
+        lo, hi = 1 - x, x
+        a_max = max(lo, 0.5 * hi)
+        got = eng.evaluate_point(x=x)
+        assert got["m"] == pytest.approx((2 * a_max + 8 * hi) / (a_max + hi), rel=1e-14)
+        want_s = (2 * lo + 2 * 0.5 * hi + 8 * hi) / (lo + 0.5 * hi + hi)
+        assert got["s"] == pytest.approx(want_s, rel=1e-14)
