@@ -203,6 +203,13 @@ rules:
     written = dump(rb)
     assert "coefficients: {x: 2.0, load: -0.5}" in written
     assert registry.loads(written) == rb
+    jsonschema = pytest.importorskip("jsonschema", reason="jsonschema is not installed")
+    validator = jsonschema.Draft202012Validator(json_schema())
+    for doc in (yaml.safe_load(text), yaml.safe_load(written)):
+        assert validator.is_valid(doc)
+    doc = yaml.safe_load(text)
+    doc["outputs"]["z"]["terms"]["ramp"]["coefficients"] = "steep"
+    assert not validator.is_valid(doc)
 
 
 def test_table_with_empty_cells_round_trips_as_a_table() -> None:
