@@ -226,7 +226,8 @@ def describe_rulebase(rb: RuleBase) -> str:
         "",
         f"operators: and={ops.and_} or={ops.or_} implication={ops.implication} "
         f"aggregation={ops.aggregation}",
-        f"defuzzifier: {rb.defuzzifier}    out_of_range: {rb.out_of_range}",
+        f"defuzzifier: {rb.defuzzifier}    out_of_range: {rb.out_of_range}"
+        + (f"    coverage: {rb.coverage}" if rb.coverage != "strict" else ""),
         "",
         "inputs:",
     ]
