@@ -13,7 +13,7 @@ from string import Template
 
 import numpy as np
 import pytest
-from _sugeno_reference import sugeno_pi_by_hand
+from _sugeno_reference import hand_doc, hand_value, sugeno_pi_by_hand
 
 from fuzzkit.errors import RuleBaseError
 from fuzzkit.formats.registry import load, loads
@@ -21,54 +21,6 @@ from fuzzkit.fuzzy.inference import Engine
 from fuzzkit.fuzzy.model import AGGREGATIONS, IMPLICATIONS
 
 # --------------------------------------------------------------------------- a hand-checkable base
-
-# x: lo falls 1 -> 0 over [2, 8], hi rises; y: small falls over [0, 1], big rises.
-# r1: x lo AND y small -> A (4); r2: x hi OR y big -> B (0.5 x - 2 y + 1), weight 0.5;
-# r3: x NOT lo -> A again (rules sharing a term count separately).
-HAND = Template("""\
-name: hand
-inputs:
-  x: {range: [0, 10], terms: {lo: {shape: left_shoulder, points: [2, 8]},
-                              hi: {shape: right_shoulder, points: [2, 8]}}}
-  y: {range: [0, 1], terms: {small: {shape: triangle, points: [-1, 0, 1]},
-                             big: {shape: triangle, points: [0, 1, 2]}}}
-outputs:
-  z:
-    range: [-10, 10]
-    terms:
-      A: {shape: constant, value: 4}
-      B: {shape: linear, coefficients: {x: 0.5, y: -2}, constant: 1}
-operators: {and: $and_, or: $or_, implication: $imp, aggregation: $agg}
-defuzzifier: $defuzz
-rules:
-  - {if: {x: lo, y: small}, then: {z: A}}
-  - {if: {or: [{x: hi}, {y: big}]}, then: {z: B}, weight: 0.5}
-  - {if: {x: {not: lo}}, then: {z: A}}
-""")
-
-
-def hand_doc(
-    defuzz: str = "weighted_average",
-    and_: str = "min",
-    or_: str = "max",
-    imp: str = "min",
-    agg: str = "max",
-) -> str:
-    return HAND.substitute(defuzz=defuzz, and_=and_, or_=or_, imp=imp, agg=agg)
-
-
-def hand_value(x: float, y: float, defuzz: str, and_: str, or_: str) -> float:
-    x, y = min(max(x, 0.0), 10.0), min(max(y, 0.0), 1.0)  # clamp: the default policy
-    lo = min(1.0, max(0.0, (8 - x) / 6))
-    hi = min(1.0, max(0.0, (x - 2) / 6))
-    small, big = max(0.0, 1 - y), max(0.0, y)
-    w1 = min(lo, small) if and_ == "min" else lo * small
-    w2 = 0.5 * (max(hi, big) if or_ == "max" else hi + big - hi * big)
-    w3 = 1 - lo
-    num = 4 * w1 + (0.5 * x - 2 * y + 1) * w2 + 4 * w3
-    den = w1 + w2 + w3
-    return num / den if defuzz == "weighted_average" else num
-
 
 POINTS = np.random.default_rng(15).uniform([-2.0, -0.5], [12.0, 1.5], (400, 2))
 

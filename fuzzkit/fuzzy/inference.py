@@ -37,7 +37,8 @@ Semantics
   consequent counts on its own with its weighted firing strength ``w`` and value ``z``;
   ``weighted_average`` is ``sum(w z) / sum(w)``, ``weighted_sum`` is ``sum(w z)``. Implication
   and aggregation do not apply (MATLAB ignores ImpMethod/AggMethod for Sugeno systems, and
-  fuzzylite's WeightedAverage/WeightedSum read each activated term's degree). ``linear``
+  fuzzylite's WeightedAverage/WeightedSum, with aggregation none, read each activated
+  term's degree). ``linear``
   terms see the input values the membership functions see (clamped under ``clamp``), and
   the result is not clamped to the output's range. No rule fired (``sum(w) == 0``): default.
 """

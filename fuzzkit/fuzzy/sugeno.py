@@ -5,7 +5,8 @@ A Sugeno output's terms are ``constant`` (``z = value``) or ``linear``
 the output counts on its own with its rule's weighted firing strength ``w``:
 ``weighted_average`` is ``sum(w z) / sum(w)``, ``weighted_sum`` is ``sum(w z)``; when
 ``sum(w) == 0`` the output takes its default (NaN when none). Implication and aggregation do
-not apply (as in MATLAB and fuzzylite). ``linear`` terms see the same input values as the
+not apply (as in MATLAB, and in fuzzylite with aggregation none; see
+docs/rulebase-format.md). ``linear`` terms see the same input values as the
 membership functions (clamped under ``out_of_range: clamp``); results are not clamped.
 """
 
@@ -33,7 +34,7 @@ class SugenoOutput:
     ``w_k`` and its term's value ``z_k`` (a constant, or ``c . x + c0`` at the input values the
     terms see): ``sum(w z) / sum(w)`` (``weighted_average``) or ``sum(w z)``
     (``weighted_sum``). Implication and aggregation do not apply: rules sharing a term count
-    separately, as in MATLAB and fuzzylite. When ``sum(w) == 0`` the output takes its default.
+    separately, as in MATLAB and in fuzzylite with aggregation none. When ``sum(w) == 0`` the output takes its default.
     """
 
     def __init__(self, rb: RuleBase, out: Variable) -> None:
