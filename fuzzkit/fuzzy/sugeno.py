@@ -34,7 +34,8 @@ class SugenoOutput:
     ``w_k`` and its term's value ``z_k`` (a constant, or ``c . x + c0`` at the input values the
     terms see): ``sum(w z) / sum(w)`` (``weighted_average``) or ``sum(w z)``
     (``weighted_sum``). Implication and aggregation do not apply: rules sharing a term count
-    separately, as in MATLAB and in fuzzylite with aggregation none. When ``sum(w) == 0`` the output takes its default.
+    separately, as in MATLAB and in fuzzylite with aggregation none. When ``sum(w) == 0`` the
+    output takes its default.
     """
 
     def __init__(self, rb: RuleBase, out: Variable) -> None:
