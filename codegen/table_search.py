@@ -340,6 +340,8 @@ def build_table(
                 f"output {var.name} is undefined at {where} (no rule fires there); "
                 "add rules covering it or give the output a default"
             )
+        if layout is not None:
+            _check_q15_full_scale(var, vals)
     stored = _store(values, number_type, layout)
     table = LookupTable(
         rule_base_name=rb.name,
@@ -527,6 +529,18 @@ def _choose_splits(
             err = np.maximum(err, cell.max(axis=(1, 3)) / (hi - lo))
         worst.append(err)
     return (worst[1] < worst[0]).astype(np.uint8)
+
+
+def _check_q15_full_scale(var: Variable, values: FloatArray) -> None:
+    """Q15 stores outputs as fractions of max(|low|, |high|); Sugeno outputs can go beyond it."""
+    scale = max(abs(var.low), abs(var.high))
+    peak = float(np.max(np.abs(values)))
+    if peak > scale:
+        raise CodegenError(
+            f"output {var.name} reaches {peak:.6g}, beyond the Q15 full scale {scale:.6g} "
+            f"(the larger end of its range [{var.low:.6g}, {var.high:.6g}]); Sugeno outputs are "
+            "not clamped to their range: widen the range or use --type float or double"
+        )
 
 
 def _check_rule_base(rb: RuleBase, number_type: str) -> None:

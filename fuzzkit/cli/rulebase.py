@@ -30,9 +30,12 @@ def register(sub: Any) -> None:
         "validate",
         help="check rule-base files; list every problem",
         description="Check rule-base YAML files (paths or shipped names). Exit 0 "
-        "when all are valid, 2 listing every problem otherwise.",
+        "when all are valid, 2 listing every problem otherwise. Warnings (input ranges no "
+        "term covers, in rule bases with coverage: allow_gaps) are printed and do not fail "
+        "unless --strict is given.",
     )
     p.add_argument("files", nargs="+", metavar="FILE")
+    p.add_argument("--strict", action="store_true", help="treat warnings (coverage gaps) as errors")
     p.set_defaults(handler=cmd_validate)
 
     p = sub.add_parser(
@@ -114,18 +117,32 @@ def _count(n: int, noun: str) -> str:
 
 def cmd_validate(args: argparse.Namespace) -> int:
     """Load every file, print ``FILE: ok`` or every problem; exit 2 if any is invalid."""
+    from fuzzkit.formats.registry import load_with_warnings
+
     failed = 0
     for spec in args.files:
         try:
-            rb = _load(spec)
+            rb, warnings = load_with_warnings(spec)
         except RuleBaseError as exc:
             failed += 1
             for problem in exc.problems:
                 print(f"{problem}", file=sys.stderr)
             continue
+        for warning in warnings:
+            if args.strict:
+                print(
+                    f"{warning.location}: {warning.message} (an error under --strict)",
+                    file=sys.stderr,
+                )
+            else:
+                print(f"{warning}", file=sys.stderr)
+        if warnings and args.strict:
+            failed += 1
+            continue
+        note = f", {_count(len(warnings), 'warning')}" if warnings else ""
         print(
             f"{spec}: ok ({rb.name}: {_count(len(rb.inputs), 'input')}, "
-            f"{_count(len(rb.outputs), 'output')}, {_count(len(rb.rules), 'rule')})"
+            f"{_count(len(rb.outputs), 'output')}, {_count(len(rb.rules), 'rule')}{note})"
         )
     if failed:
         print(
@@ -152,14 +169,16 @@ def format_expression(expr: Expression, top: bool = True) -> str:
     return text if top else f"({text})"
 
 
-def _variable_lines(var: Variable, kind: str) -> list[str]:
+def _variable_lines(var: Variable, kind: str, input_names: Sequence[str] = ()) -> list[str]:
     head = f"  {var.name}  [{_num(var.low)}, {_num(var.high)}]"
     if kind == "output":
         head += f"  default {'NaN' if var.default is None else _num(var.default)}"
     lines = [head]
     width = max((len(t.name) for t in var.terms), default=0)
+    if not var.terms:
+        lines.append("    (no terms: used only in linear Sugeno terms)")
     for t in var.terms:
-        names = SHAPE_PARAMS.get(t.shape, ())
+        names = (*input_names, "constant") if t.shape == "linear" else SHAPE_PARAMS.get(t.shape, ())
         params = " ".join(f"{n}={_num(v)}" for n, v in zip(names, t.params, strict=False))
         lines.append(f"    {t.name.ljust(width)}  {t.shape:<14} {params}")
     return lines
@@ -207,7 +226,8 @@ def describe_rulebase(rb: RuleBase) -> str:
         "",
         f"operators: and={ops.and_} or={ops.or_} implication={ops.implication} "
         f"aggregation={ops.aggregation}",
-        f"defuzzifier: {rb.defuzzifier}    out_of_range: {rb.out_of_range}",
+        f"defuzzifier: {rb.defuzzifier}    out_of_range: {rb.out_of_range}"
+        + (f"    coverage: {rb.coverage}" if rb.coverage != "strict" else ""),
         "",
         "inputs:",
     ]
@@ -215,7 +235,7 @@ def describe_rulebase(rb: RuleBase) -> str:
         lines += _variable_lines(var, "input")
     lines.append("outputs:")
     for var in rb.outputs:
-        lines += _variable_lines(var, "output")
+        lines += _variable_lines(var, "output", rb.input_names)
     lines.append("")
     grid = _table_grid(rb)
     if grid is not None and rb.table is not None:

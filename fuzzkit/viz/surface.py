@@ -82,21 +82,10 @@ def surface_grid(
 
 def term_peak(term: Term, var: Variable) -> float:
     """Where a term is most typical: its peak (or plateau middle), clipped to the range."""
-    p = term.params
-    if term.shape == "triangle":
-        peak = p[1]
-    elif term.shape == "trapezoid":
-        peak = 0.5 * (p[1] + p[2])
-    elif term.shape == "left_shoulder":
-        peak = 0.5 * (var.low + p[0]) if p[0] > var.low else var.low
-    elif term.shape == "right_shoulder":
-        peak = 0.5 * (p[1] + var.high) if p[1] < var.high else var.high
-    elif term.shape == "sigmoid":
-        peak = var.high if p[0] > 0 else var.low
-    elif term.shape == "bell":
-        peak = p[2]
-    else:  # gaussian (mean) and singleton (value) keep the point first
-        peak = p[0]
+    # the weighted-average centre is exactly this point, for every shape
+    from fuzzkit.fuzzy.membership import centre
+
+    peak = centre(term, var.low, var.high)
     return float(min(max(peak, var.low), var.high))
 
 
