@@ -320,12 +320,12 @@ def test_cli_tune_ctrl_c_writes_the_best_so_far(
 
     calls = []
 
-    def interrupt(self: tuning.ProgressBar, p: Progress) -> None:
+    def interrupt(p: Progress) -> None:
         calls.append(p)
         if len(calls) == 2:
             raise KeyboardInterrupt
 
-    monkeypatch.setattr(tuning.ProgressBar, "__call__", interrupt)
+    monkeypatch.setattr(tuning, "progress_callback", lambda bar: interrupt)
     out = tmp_path / "gains.yaml"
     args = ["tune", "E1", "--controller", "pi", "--budget", "40", "--workers", "1"]
     assert main([*args, "--stiffness", "10", "--out", str(out)]) == 130

@@ -22,6 +22,9 @@ COMMAND_MODULES = ("rulebase", "codegen_cmd", "simulation", "tuning", "demo")
 EXIT_OK = 0
 EXIT_FAILURE = 1
 EXIT_BAD_INPUT = 2
+#: 128 + SIGINT / SIGPIPE, as a shell reports a command ended by that signal.
+EXIT_INTERRUPTED = 130
+EXIT_BROKEN_PIPE = 141
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -51,6 +54,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         code = args.handler(args)
+        sys.stdout.flush()  # a closed pipe shows here, not in the interpreter's exit
+    except BrokenPipeError:
+        # The reader went away (`fuzzkit validate ... | head`): stop quietly, as a command
+        # killed by SIGPIPE would. Point stdout at devnull so the exit flush cannot fail
+        # again (the recipe of the Python docs, "Note on SIGPIPE").
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+        return EXIT_BROKEN_PIPE
     except FuzzkitError as exc:
         print(f"fuzzkit: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -58,8 +70,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"fuzzkit: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
-        print("fuzzkit: interrupted", file=sys.stderr)
-        return 130
+        # Every writer is atomic (fuzzkit.fileio), so whatever is on disk now is complete.
+        print("fuzzkit: interrupted (Ctrl-C); nothing half-written", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except Exception as exc:  # a bug, not bad input: say so, traceback only on request
         if os.environ.get("FUZZKIT_DEBUG"):
             raise

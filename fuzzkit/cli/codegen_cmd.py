@@ -63,6 +63,7 @@ def register(sub: Any) -> None:
         default=None,
         help="bake fuzzy-PI gains (kp, ki, kx, u_min, u_max) in as defaults",
     )
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(handler=cmd_compile)
 
 
@@ -106,6 +107,7 @@ def cmd_compile(args: argparse.Namespace) -> int:
     from fuzzkit.errors import CodegenError, ConfigError
     from fuzzkit.fileio import write_tree_atomic
     from fuzzkit.formats.registry import load
+    from fuzzkit.progress import TaskBars
 
     # Cheap checks first, so a typo costs nothing and nothing is written.
     if args.target not in TARGETS:
@@ -127,9 +129,14 @@ def cmd_compile(args: argparse.Namespace) -> int:
     defaults = _fpi_defaults(args.gains)
 
     rb = load(args.rulebase)
-    table = make_table(
-        rb, number_type=number_type, tolerance=args.tolerance, resolution=args.resolution
-    )
+    with TaskBars(f"{rb.name}: ", quiet=args.quiet, unit="pt") as bars:
+        table = make_table(
+            rb,
+            number_type=number_type,
+            tolerance=args.tolerance,
+            resolution=args.resolution,
+            progress=bars,
+        )
     files = emit(rb, table, args.target, fpi_defaults=defaults)
     print(f"{rb.name}: {table.describe()}")
     if len(rb.inputs) != 2:

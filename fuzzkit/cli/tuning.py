@@ -107,27 +107,28 @@ def parse_stiffness(text: str) -> tuple[float, ...]:
 
 def _tune(args: argparse.Namespace) -> int:
     from fuzzkit.control.gains import read_gains_file, write_gains
-    from fuzzkit.studies.tuning import ProgressBar, tune
+    from fuzzkit.progress import progress_bar
+    from fuzzkit.studies.tuning import progress_callback, tune
 
     ks = parse_stiffness(args.stiffness)
     out = Path(args.out)
     check_output_path(out, "gains file")
     if out.is_file() and not args.replace:
         read_gains_file(out)  # an unreadable existing file is reported now, not after tuning
-    bar = None if args.quiet else ProgressBar()
-    result = tune(
-        args.experiments,
-        args.controller,
-        args.rulebase,
-        args.plant,
-        ks,
-        budget=args.budget,
-        seed=args.seed,
-        workers=args.workers,
-        callback=bar,
-    )
-    if bar is not None:
-        bar.done()
+    with progress_bar(
+        args.budget, f"tune {args.controller}", quiet=args.quiet, unit="gain set"
+    ) as bar:
+        result = tune(
+            args.experiments,
+            args.controller,
+            args.rulebase,
+            args.plant,
+            ks,
+            budget=args.budget,
+            seed=args.seed,
+            workers=args.workers,
+            callback=progress_callback(bar),
+        )
     _, kept = write_gains(out, result.to_entry(), merge=not args.replace)
     print(
         f"tuned {result.controller} on {' '.join(result.experiments)} ({result.plant}, "
