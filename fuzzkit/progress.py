@@ -30,12 +30,13 @@ def progress_bar(
     quiet: bool = False,
     unit: str = "it",
     leave: bool = True,
+    unit_scale: bool = False,
 ) -> Any:
     """A tqdm bar (with elapsed time and ETA) on ``stream`` (default stderr).
 
     It is a disabled, silent bar unless :func:`progress_wanted`; callers update it the same
-    way either way. Use it as a context manager so the line is ended (or the bar closed) on
-    an error or Ctrl-C too.
+    way either way. ``unit_scale`` writes large counts as 36.1k. Use it as a context manager
+    so the line is ended (or the bar closed) on an error or Ctrl-C too.
     """
     from tqdm import tqdm
 
@@ -47,7 +48,7 @@ def progress_bar(
         file=out,
         disable=not progress_wanted(out, quiet),
         dynamic_ncols=True,
-        unit_scale=True,
+        unit_scale=unit_scale,
         leave=leave,
     )
 
@@ -82,6 +83,7 @@ class TaskBars:
                 quiet=self.quiet,
                 unit=self.unit,
                 leave=False,
+                unit_scale=True,
             )
         if total != self.bar.total:
             self.bar.total = total
