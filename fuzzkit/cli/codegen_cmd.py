@@ -27,9 +27,13 @@ def register(sub: Any) -> None:
         "verified error bound and generate C (NAME.h, NAME.c) or Python (NAME.py) from it. "
         "Prints the table size and bound; --verify compiles/imports the result and compares "
         "it with the exact engine on 1e5 random points and the edge cases.",
+        epilog="examples:\n"
+        "  fuzzkit compile macvicar_whelan --target c --out gen --verify\n"
+        "  fuzzkit compile macvicar_whelan --target c --type q15 --tolerance 2e-3 --out gen_q15\n"
+        "  fuzzkit compile my_controller.yaml --target python --resolution 65 --out gen_py",
     )
     p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
-    p.add_argument("--target", required=True, help="c or python")
+    p.add_argument("--target", required=True, help="c or python (required)")
     p.add_argument(
         "--type",
         dest="number_type",

@@ -72,6 +72,14 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    p = sub.add_parser("demo", help="run the main job on the shipped defaults (make demo)")
+    p = sub.add_parser(
+        "demo",
+        help="run the main job on the shipped defaults (make demo)",
+        description="Validate the shipped rule bases, describe macvicar_whelan, draw its "
+        "control surface, compile it to C (float and Q15) and Python with --verify, and "
+        "compare PI with fuzzy-PI on E1 with recordings. Each step is an ordinary fuzzkit "
+        "command, printed before it runs, so any step can be copied and varied.",
+        epilog="examples:\n  fuzzkit demo\n  fuzzkit demo --out /tmp/demo && rerun /tmp/demo/*.rrd",
+    )
     p.add_argument("--out", default="demo-out", help="folder for the files it writes")
     p.set_defaults(handler=_run)

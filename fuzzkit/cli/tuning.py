@@ -25,15 +25,27 @@ def register(subparsers: Any) -> None:
             "Minimise the closed-loop cost (ITAE of the force error plus penalties for "
             "overshoot, force above the safety limit and contact loss; see fuzzkit.studies.tuning) "
             "over the experiments and stiffnesses given, by differential evolution and a "
-            "local polish. Ctrl-C stops early and still writes the best gains so far."
+            "local polish. Ctrl-C stops early and still writes the best gains so far "
+            "(exit status 130)."
         ),
+        epilog="examples:\n"
+        "  fuzzkit tune E1 E2 E3 --controller fuzzy-pi --out gains.yaml\n"
+        "  fuzzkit tune E2 --controller pi --stiffness 10 --budget 60 --out gains.yaml\n"
+        "  fuzzkit simulate E2 --gains gains.yaml      (use the tuned gains)",
     )
     tune.add_argument("experiments", nargs="+", metavar="EXPERIMENT", help="E1, E2, E3")
-    tune.add_argument("--controller", choices=CONTROLLERS, default="fuzzy-pi")
     tune.add_argument(
-        "--rulebase", default="macvicar_whelan", metavar="RB", help="shipped name or YAML path"
+        "--controller", choices=CONTROLLERS, default="fuzzy-pi", help="controller to tune"
     )
-    tune.add_argument("--plant", choices=sorted(PLANTS), default="planar")
+    tune.add_argument(
+        "--rulebase",
+        default="macvicar_whelan",
+        metavar="RB",
+        help="rule base for fuzzy-pi: shipped name or YAML path",
+    )
+    tune.add_argument(
+        "--plant", choices=sorted(PLANTS), default="planar", help="simulated robot to tune on"
+    )
     tune.add_argument(
         "--stiffness",
         default="5,10,20",
@@ -63,20 +75,39 @@ def register(subparsers: Any) -> None:
             "Write DIR/report.md with force plots, the control surface, the stiffness study, "
             "the comparison table and the paper's claims checked against the numbers, plus "
             "one .rrd per run. Tunes both controllers with a small budget unless --gains-dir "
-            "holds pi.yaml and fuzzy-pi.yaml."
+            "holds pi.yaml and fuzzy-pi.yaml. The folder appears complete or not at all: "
+            "Ctrl-C stops with exit status 130 and leaves no partial report."
         ),
+        epilog="examples:\n"
+        "  fuzzkit report --out report\n"
+        "  fuzzkit report --out report --plant both --budget 80 --workers 2\n"
+        "  fuzzkit report --out report --gains-dir tuned/ --no-rrd",
     )
-    rep.add_argument("--out", required=True, metavar="DIR", help="output folder")
-    rep.add_argument("--plant", choices=[*sorted(PLANTS), "both"], default="planar")
+    rep.add_argument(
+        "--out", required=True, metavar="DIR", help="output folder (its parent must exist)"
+    )
+    rep.add_argument(
+        "--plant",
+        choices=[*sorted(PLANTS), "both"],
+        default="planar",
+        help="plant(s) to run E1-E3 on",
+    )
     rep.add_argument(
         "--budget", type=int, default=40, help="tuning budget per controller (default 40)"
     )
     rep.add_argument("--gains-dir", metavar="DIR", help="folder with pi.yaml and fuzzy-pi.yaml")
-    rep.add_argument("--rulebase", default="macvicar_whelan", metavar="RB")
-    rep.add_argument("--seed", type=int, default=0)
-    rep.add_argument("--workers", type=int, default=None)
+    rep.add_argument(
+        "--rulebase",
+        default="macvicar_whelan",
+        metavar="RB",
+        help="rule base for fuzzy-pi: shipped name or YAML path",
+    )
+    rep.add_argument("--seed", type=int, default=0, help="optimiser seed")
+    rep.add_argument(
+        "--workers", type=int, default=None, help="tuning worker processes (default: every core)"
+    )
     rep.add_argument("--no-rrd", action="store_true", help="skip the .rrd recordings")
-    rep.add_argument("--quiet", action="store_true", help="no progress output")
+    rep.add_argument("--quiet", action="store_true", help="no progress bars")
     rep.set_defaults(handler=_report)
 
 
