@@ -17,9 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.codegen.lut import (
-    BOUND_MARGIN,
     CHECK_FACTOR,
-    COARSE_BOUND_MARGIN,
     DEFAULT_MAX_POINTS,
     DEFAULT_TOLERANCE,
     GRADING,
@@ -40,6 +38,7 @@ from fuzzkit.codegen.lut import (
     Q15ResolutionError,
     _is_uniform,
     _locate_float,
+    bound_margin,
     quantize_q15,
 )
 from fuzzkit.errors import CodegenError
@@ -455,10 +454,9 @@ def build_table(
             )
     return dataclasses.replace(
         table,
-        bound=tuple(
-            round_up(m * (BOUND_MARGIN if factor >= 8 else COARSE_BOUND_MARGIN)) for m in measured
-        ),
+        bound=tuple(round_up(m * bound_margin(factor)) for m in measured),
         measured=measured,
+        check_factor=factor,
         check_points=int(grids[0].size),
         splits=splits,
         fitted=fitted,
