@@ -138,3 +138,23 @@ def test_python_dash_m_fuzzkit_is_the_fuzzkit_command() -> None:
     assert res.stdout.startswith("macvicar_whelan: ok (macvicar_whelan: 2 inputs")
     bad = subprocess.run([*FUZZKIT, "validate", "no_such_rb"], capture_output=True, text=True)
     assert bad.returncode == 2 and "no_such_rb" in bad.stderr and "Traceback" not in bad.stderr
+
+
+@pytest.mark.slow
+def test_sigint_on_tune_exits_130_and_keeps_the_best_so_far(tmp_path: Path) -> None:
+    from fuzzkit.control.gains import read_gains_file
+
+    out = tmp_path / "gains.yaml"
+    args = ["tune", "E1", "--controller", "pi", "--stiffness", "10", "--budget", "400"]
+    proc = _start([*args, "--workers", "2", "--out", str(out)], tmp_path)
+    time.sleep(8.0)  # start-up plus the baseline evaluation, then well into the search
+    assert proc.poll() is None, "tune ended before the interrupt; raise the budget"
+    code, stdout, err = _interrupt(proc)
+    assert code == 130
+    assert err.strip().splitlines() == [
+        f"fuzzkit: interrupted (Ctrl-C); {out} holds the best gains so far"
+    ]
+    assert "(interrupted: best so far)" in stdout
+    entry = read_gains_file(out)["pi"]
+    assert entry.provenance["interrupted"] is True and entry.provenance["evaluations"] < 400
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["gains.yaml"]  # no temporary left

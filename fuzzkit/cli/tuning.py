@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from fuzzkit.cli import EXIT_INTERRUPTED
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
 
@@ -176,7 +177,12 @@ def _tune(args: argparse.Namespace) -> int:
     gains = ", ".join(f"{k}={v:.6g}" for k, v in result.gains.items())
     print(f"  gains: {gains}")
     print(f"wrote {out}" + (f" (kept the {', '.join(kept)} entry)" if kept else ""))
-    return 130 if result.interrupted else 0
+    if result.interrupted:
+        print(
+            f"fuzzkit: interrupted (Ctrl-C); {out} holds the best gains so far", file=sys.stderr
+        )
+        return EXIT_INTERRUPTED
+    return 0
 
 
 def _report(args: argparse.Namespace) -> int:
