@@ -163,16 +163,19 @@ def _log_labelled_axes(rec: Any, entity: str, rb: RuleBase, out: Variable, ticks
             _axis_title(vy, "input 2"),
             _axis_title(out, "output"),
         ),
-        2.2,
+        2.5,
         corner,
     )
     u = np.linspace(-1.0, 1.0, ticks)
     points: list[tuple[float, float, float]] = []
     labels: list[str] = []
+    # Each axis's ticks run along a different edge of the cube, just outside it, so that no
+    # two axes' end ticks share a corner.
+    edges = ([0.0, -1.15, -1.0], [1.15, 0.0, -1.0], [-1.0, 1.15, 0.0])
     for axis, var in enumerate((vx, vy, out)):
         raw = var.low + (u + 1.0) * 0.5 * (var.high - var.low)
         for t, r in zip(u, raw, strict=True):
-            p = [-1.0, -1.0, -1.0]
+            p = list(edges[axis])
             p[axis] = float(t)
             points.append((p[0], p[1], p[2]))
             labels.append(f"{var.name}={r:.4g}")
