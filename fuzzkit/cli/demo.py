@@ -52,7 +52,7 @@ def demo_steps(out: Path) -> list[list[str]]:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from fuzzkit.cli import main
+    from fuzzkit.cli import EXIT_BROKEN_PIPE, EXIT_INTERRUPTED, main
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -61,6 +61,8 @@ def _run(args: argparse.Namespace) -> int:
         start = time.perf_counter()
         code = main(step)
         print(f"  ({time.perf_counter() - start:.1f} s)", flush=True)
+        if code in (EXIT_INTERRUPTED, EXIT_BROKEN_PIPE):
+            return code  # Ctrl-C or a closed pipe: the step has said so, or no one listens
         if code != 0:
             print(f"demo: step failed with exit code {code}")
             return code
