@@ -407,6 +407,10 @@ def build_report(
 ) -> Path:
     """Run everything and write ``out/report.md``, its PNGs, and one .rrd per run.
 
+    Everything is written into a staging folder beside ``out`` that replaces it only when
+    complete (``fileio.staged_folder``): an error or Ctrl-C (KeyboardInterrupt, also raised
+    when the tuning is interrupted) leaves the previous report, or none.
+
     Parameters
     ----------
     out : output folder (created; its parent must exist).
