@@ -17,6 +17,7 @@ Rows
 
 from __future__ import annotations
 
+import math
 import subprocess
 import tempfile
 import time
@@ -151,6 +152,32 @@ def sugeno_rows() -> list[tuple[str, str, str, str]]:
     return rows
 
 
+def table_search_rows() -> list[tuple[str, str, str, str]]:
+    """The table search with and without a progress callback (``fuzzkit compile`` always
+    passes one, which evaluates in chunks): same run, alternatives side by side."""
+    rows = []
+    for name, kwargs in (
+        (NAME, {}),
+        ("three_input", {"tolerance": 0.05}),
+    ):
+        rb = fuzzkit.load(name)
+        times = {}
+        for label, progress in (("no callback", None), ("progress callback", _ignore)):
+            best = math.inf
+            for _ in range(2):
+                start = time.perf_counter()
+                make_table(rb, progress=progress, **kwargs)  # type: ignore[arg-type]
+                best = min(best, time.perf_counter() - start)
+            times[label] = best
+        for label, t in times.items():
+            rows.append((f"table search {name} ({label})", "(compare)", f"{t:.2f} s", ""))
+    return rows
+
+
+def _ignore(task: str, done: int, total: int) -> None:
+    """A progress callback that draws nothing."""
+
+
 def main() -> None:
     rb = fuzzkit.load(NAME)
     tables = {nt: make_table(rb, number_type=nt) for nt in ("float", "q15", "double")}
@@ -217,6 +244,7 @@ def main() -> None:
             )
         )
     rows += sugeno_rows()
+    rows.extend(table_search_rows())
     width = max(len(r[0]) for r in rows)
     print(f"{'measure':<{width}}  {'target':>12}  {'measured':>12}  verdict")
     for what, target, measured, verdict in rows:

@@ -33,9 +33,19 @@ def register(sub: Any) -> None:
         "when all are valid, 2 listing every problem otherwise. Warnings (input ranges no "
         "term covers, in rule bases with coverage: allow_gaps) are printed and do not fail "
         "unless --strict is given.",
+        epilog="examples:\n"
+        "  fuzzkit validate rulebases/*.yaml\n"
+        "  fuzzkit validate --strict my_controller.yaml macvicar_whelan",
     )
-    p.add_argument("files", nargs="+", metavar="FILE")
-    p.add_argument("--strict", action="store_true", help="treat warnings (coverage gaps) as errors")
+    p.add_argument(
+        "files",
+        nargs="+",
+        metavar="FILE",
+        help="rule-base YAML file or shipped rule-base name (any number)",
+    )
+    p.add_argument(
+        "--strict", action="store_true", help="treat warnings (coverage gaps) as errors"
+    )
     p.set_defaults(handler=cmd_validate)
 
     p = sub.add_parser(
@@ -43,6 +53,7 @@ def register(sub: Any) -> None:
         help="describe a rule base: variables, terms, rules",
         description="Print a rule base's variables with ranges, their terms with "
         "shapes and parameters, and its rules (as a grid for tables).",
+        epilog="examples:\n  fuzzkit info macvicar_whelan\n  fuzzkit info my_controller.yaml",
     )
     p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
     p.set_defaults(handler=cmd_info)
@@ -54,6 +65,9 @@ def register(sub: Any) -> None:
         "(--input NAME=VALUE for every input) or at every row of a CSV "
         "file (--points, header = input names; the rows are echoed "
         "with the outputs appended). NaN inputs give NaN outputs.",
+        epilog="examples:\n"
+        "  fuzzkit eval macvicar_whelan -i e=0.25 -i de=-0.1\n"
+        "  fuzzkit eval macvicar_whelan --points points.csv > out.csv",
     )
     p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
     group = p.add_mutually_exclusive_group(required=True)
@@ -79,6 +93,10 @@ def register(sub: Any) -> None:
         description="Compute the control surface output = F(input1, input2) with "
         "the exact engine and write it as a Rerun recording (3-D mesh "
         "plus the label-peak grid) and/or a PNG.",
+        epilog="examples:\n"
+        "  fuzzkit surface macvicar_whelan --png surface.png\n"
+        "  fuzzkit surface gaussian5 --rrd surface.rrd --resolution 201\n"
+        "  rerun surface.rrd     (open the recording in the Rerun viewer)",
     )
     p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
     p.add_argument("--rrd", metavar="OUT.rrd", help="Rerun recording to write")
@@ -98,6 +116,7 @@ def register(sub: Any) -> None:
         help="print the JSON Schema of the rule-base format",
         description="Print a JSON Schema (draft 2020-12) of the rule-base YAML "
         "format, e.g. for the YAML language server.",
+        epilog="example:\n  fuzzkit schema > fuzzkit-rulebase.schema.json",
     )
     p.set_defaults(handler=cmd_schema)
 

@@ -20,7 +20,8 @@ from pathlib import Path
 from typing import IO, Any
 
 from fuzzkit.errors import ConfigError
-from fuzzkit.fileio import write_atomic
+from fuzzkit.fileio import staged_folder, write_atomic
+from fuzzkit.progress import progress_bar
 
 CONTROLLERS = ("pi", "fuzzy-pi")
 LABELS = ("default", "tuned")
@@ -343,12 +344,6 @@ def claims_summary(results: Sequence[ClaimResult]) -> str:
 # --------------------------------------------------------------------------------------------
 
 
-def _log(stream: IO[str] | None, msg: str) -> None:
-    if stream is not None:
-        stream.write(msg + "\n")
-        stream.flush()
-
-
 def _gains_for(
     ctrl: str,
     gains_dir: Path | None,
@@ -375,22 +370,23 @@ def _gains_for(
         gains = dict(DEFAULT_GAINS[ctrl])
         gains.update(entry.gains)
         return gains, {**entry.provenance, "source": str(path)}
-    from fuzzkit.studies.tuning import ProgressBar, tune
+    from fuzzkit.studies.tuning import progress_callback, tune
 
-    _log(log, f"tuning {ctrl} on E1 E2 E3 (budget {budget})")
-    bar = ProgressBar(log) if log is not None else None
-    result = tune(
-        EXPERIMENT_NAMES,
-        ctrl,
-        rulebase,
-        "planar",
-        budget=budget,
-        seed=seed,
-        workers=workers,
-        callback=bar,
-    )
-    if bar is not None:
-        bar.done()
+    with progress_bar(
+        budget, f"tuning {ctrl}", stream=log, quiet=log is None, unit="gain set"
+    ) as bar:
+        result = tune(
+            EXPERIMENT_NAMES,
+            ctrl,
+            rulebase,
+            "planar",
+            budget=budget,
+            seed=seed,
+            workers=workers,
+            callback=progress_callback(bar),
+        )
+    if result.interrupted:  # a report is complete or not written: stop here, not after it
+        raise KeyboardInterrupt
     (out / "gains").mkdir(exist_ok=True)
     write_gains(out / "gains" / f"{ctrl}.yaml", result.to_entry(), merge=False)
     entry = result.to_entry()
@@ -411,6 +407,10 @@ def build_report(
 ) -> Path:
     """Run everything and write ``out/report.md``, its PNGs, and one .rrd per run.
 
+    Everything is written into a staging folder beside ``out`` that replaces it only when
+    complete (``fileio.staged_folder``): an error or Ctrl-C (KeyboardInterrupt, also raised
+    when the tuning is interrupted) leaves the previous report, or none.
+
     Parameters
     ----------
     out : output folder (created; its parent must exist).
@@ -421,7 +421,7 @@ def build_report(
     seed : optimiser seed (sensor noise seed 0, as ``fuzzkit compare``).
     workers : tuning worker processes (None: all cores).
     rrd : write the recordings (``out/rrd/*.rrd``).
-    log : where progress goes (None: nowhere).
+    log : where progress bars go (None: nowhere; drawn only on a terminal).
     stiffnesses_n_per_mm : the stiffness study's stiffnesses.
 
     Returns
@@ -447,75 +447,87 @@ def build_report(
     for p in plants:
         make_plant(p)  # unknown plant: fail before any work
     rb = load(rulebase)
-    out.mkdir(exist_ok=True)
-    if rrd:
-        (out / "rrd").mkdir(exist_ok=True)
+    final = out
+    # Everything is written into a staging folder that becomes ``out`` only when complete:
+    # Ctrl-C or an error at any point leaves no partial report.
+    with staged_folder(final, last="report.md", what="report folder") as out:
+        if rrd:
+            (out / "rrd").mkdir()
 
-    gains: dict[tuple[str, str], dict[str, float]] = {}
-    provenance: dict[str, dict[str, Any]] = {}
-    for ctrl in CONTROLLERS:
-        gains[(ctrl, "default")] = dict(DEFAULT_GAINS[ctrl])
-        g, prov = _gains_for(ctrl, gains_dir, out, budget, rulebase, seed, workers, log)
-        gains[(ctrl, "tuned")] = g
-        provenance[ctrl] = prov
+        gains: dict[tuple[str, str], dict[str, float]] = {}
+        provenance: dict[str, dict[str, Any]] = {}
+        for ctrl in CONTROLLERS:
+            gains[(ctrl, "default")] = dict(DEFAULT_GAINS[ctrl])
+            g, prov = _gains_for(ctrl, gains_dir, out, budget, rulebase, seed, workers, log)
+            gains[(ctrl, "tuned")] = g
+            provenance[ctrl] = prov
 
-    surface = load_surface(rulebase)
-    summaries: dict[Key, dict[str, Any]] = {}
-    figures: list[tuple[str, str]] = []
-    for plant in plants:
-        for name in EXPERIMENT_NAMES:
-            exp = experiment(name)
-            runs: dict[tuple[str, str], Any] = {}
+        surface = load_surface(rulebase)
+        summaries: dict[Key, dict[str, Any]] = {}
+        figures: list[tuple[str, str]] = []
+        n_runs = len(CONTROLLERS) * len(LABELS) * (
+            len(plants) * len(EXPERIMENT_NAMES) + len(stiffnesses_n_per_mm)
+        )
+        with progress_bar(n_runs, "runs", stream=log, quiet=log is None, unit="run") as bar:
+            for plant in plants:
+                for name in EXPERIMENT_NAMES:
+                    exp = experiment(name)
+                    runs: dict[tuple[str, str], Any] = {}
+                    for ctrl in CONTROLLERS:
+                        for label in LABELS:
+                            bar.set_description(f"{plant} {name} {ctrl} {label}")
+                            r = run(
+                                exp,
+                                plant,
+                                ctrl,
+                                gains=gains[(ctrl, label)],
+                                surface=surface if ctrl == "fuzzy-pi" else None,
+                            )
+                            runs[(ctrl, label)] = r
+                            summaries[(plant, name, ctrl, label)] = summary(r)
+                            if rrd:
+                                from fuzzkit.viz.traces import write_run_rrd
+
+                                write_run_rrd(
+                                    r, out / "rrd" / f"{plant}_{name}_{ctrl}_{label}.rrd"
+                                )
+                            bar.update(1)
+                    fname = f"force_{plant}_{name}.png"
+                    write_atomic(out / fname, force_figure(runs, f"{name} on {plant}: {exp.title}"))
+                    figures.append((fname, f"{name} on the {plant} plant"))
+
+            from fuzzkit.viz.surface import write_surface_png
+
+            write_surface_png(rb, out / "surface.png")
+
+            study: dict[tuple[str, str], list[tuple[float, Any]]] = {}
+            from fuzzkit.studies.metrics import axis_metrics
+
             for ctrl in CONTROLLERS:
                 for label in LABELS:
-                    _log(log, f"running {plant} {name} {ctrl} {label}")
-                    r = run(
-                        exp,
-                        plant,
-                        ctrl,
-                        gains=gains[(ctrl, label)],
-                        surface=surface if ctrl == "fuzzy-pi" else None,
-                    )
-                    runs[(ctrl, label)] = r
-                    summaries[(plant, name, ctrl, label)] = summary(r)
-                    if rrd:
-                        from fuzzkit.viz.traces import write_run_rrd
+                    bar.set_description(f"stiffness study {ctrl} {label}")
+                    rows = []
+                    for k in stiffnesses_n_per_mm:
+                        r = run(
+                            press_experiment(k * 1e3),
+                            "planar",
+                            ctrl,
+                            gains=gains[(ctrl, label)],
+                            surface=surface if ctrl == "fuzzy-pi" else None,
+                        )
+                        m = axis_metrics(r, 2)
+                        m["tripped"] = float(r.tripped)
+                        rows.append((k, m))
+                        bar.update(1)
+                    study[(ctrl, label)] = rows
+        write_atomic(out / "stiffness.png", stiffness_figure(study))
 
-                        write_run_rrd(r, out / "rrd" / f"{plant}_{name}_{ctrl}_{label}.rrd")
-            fname = f"force_{plant}_{name}.png"
-            write_atomic(out / fname, force_figure(runs, f"{name} on {plant}: {exp.title}"))
-            figures.append((fname, f"{name} on the {plant} plant"))
-
-    from fuzzkit.viz.surface import write_surface_png
-
-    write_surface_png(rb, out / "surface.png")
-
-    _log(log, "stiffness study")
-    study: dict[tuple[str, str], list[tuple[float, Any]]] = {}
-    from fuzzkit.studies.metrics import axis_metrics
-
-    for ctrl in CONTROLLERS:
-        for label in LABELS:
-            rows = []
-            for k in stiffnesses_n_per_mm:
-                r = run(
-                    press_experiment(k * 1e3),
-                    "planar",
-                    ctrl,
-                    gains=gains[(ctrl, label)],
-                    surface=surface if ctrl == "fuzzy-pi" else None,
-                )
-                m = axis_metrics(r, 2)
-                m["tripped"] = float(r.tripped)
-                rows.append((k, m))
-            study[(ctrl, label)] = rows
-    write_atomic(out / "stiffness.png", stiffness_figure(study))
-
-    claims = [c for p in plants for label in LABELS for c in assess_claims(summaries, p, label)]
-    text = _markdown(
-        plants, rulebase, gains, provenance, summaries, figures, study, claims, rrd, budget
-    )
-    return write_atomic(out / "report.md", text)
+        claims = [c for p in plants for label in LABELS for c in assess_claims(summaries, p, label)]
+        text = _markdown(
+            plants, rulebase, gains, provenance, summaries, figures, study, claims, rrd, budget
+        )
+        write_atomic(out / "report.md", text)
+    return final / "report.md"
 
 
 def _markdown(

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -125,6 +126,55 @@ def _mesh(x: FloatArray, y: FloatArray, z: FloatArray) -> tuple[FloatArray, npt.
     return vertices, triangles
 
 
+def _to_unit(values: FloatArray, var: Variable) -> FloatArray:
+    """``values`` of ``var`` mapped linearly from its range onto [-1, 1]."""
+    return np.asarray(2.0 * (values - var.low) / (var.high - var.low) - 1.0, dtype=np.float64)
+
+
+def _axis_title(var: Variable, role: str) -> str:
+    units = getattr(var, "units", None)  # optional on Variable (rule bases may carry units)
+    return f"{var.name}{f' ({units})' if units else ''} [{role}]"
+
+
+def _log_labelled_axes(rec: Any, entity: str, rb: RuleBase, out: Variable, ticks: int = 5) -> None:
+    """Axis arrows and tick marks for the normalised cube, labelled with raw values."""
+    import rerun as rr
+
+    from fuzzkit.viz.recording import log_axes
+
+    vx, vy = rb.inputs
+    corner = (-1.0, -1.0, -1.0)
+    log_axes(
+        rec,
+        f"{entity}/axes",
+        (
+            _axis_title(vx, "input 1"),
+            _axis_title(vy, "input 2"),
+            _axis_title(out, "output"),
+        ),
+        2.5,
+        corner,
+    )
+    u = np.linspace(-1.0, 1.0, ticks)
+    points: list[tuple[float, float, float]] = []
+    labels: list[str] = []
+    # Each axis's ticks run along a different edge of the cube, just outside it, so that no
+    # two axes' end ticks share a corner.
+    edges = ([0.0, -1.15, -1.0], [1.15, 0.0, -1.0], [-1.0, 1.15, 0.0])
+    for axis, var in enumerate((vx, vy, out)):
+        raw = var.low + (u + 1.0) * 0.5 * (var.high - var.low)
+        for t, r in zip(u, raw, strict=True):
+            p = list(edges[axis])
+            p[axis] = float(t)
+            points.append((p[0], p[1], p[2]))
+            labels.append(f"{var.name}={r:.4g}")
+    rec.log(
+        f"{entity}/ticks",
+        rr.Points3D(points, radii=[0.012], colors=[(200, 200, 200)], labels=labels),
+        static=True,
+    )
+
+
 def write_surface_rrd(
     rb: RuleBase,
     path: str | os.PathLike[str],
@@ -133,31 +183,55 @@ def write_surface_rrd(
 ) -> Path:
     """Write the control surface to a Rerun recording (``.rrd``), atomically.
 
+    The surface is drawn in normalised coordinates: every input and the output are mapped
+    linearly from their ranges onto [-1, 1], so a rule base with e in [-20, 20], de in
+    [-2, 2] and an output of 0-100 % is a readable cube, not a sliver; the axes are labelled
+    with the variables' names and the tick marks with raw values.
+
     Entities: ``surface/<output>`` (a ``Mesh3D`` with blue-to-red vertex colours),
-    ``surface/<output>/label_peaks`` (``Points3D`` at every pair of input term peaks, labelled)
-    and ``surface/<output>/description`` (a text document naming the rule base and axes).
+    ``surface/<output>/label_peaks`` (``Points3D`` at every pair of input term peaks, labelled),
+    ``surface/<output>/axes`` and ``/ticks`` (labelled axes and raw-value ticks) and
+    ``surface/<output>/description`` (a text document naming the rule base, axes and ranges).
+    The file carries a blueprint (``fuzzkit.viz.blueprints``) opening on the surface.
     """
     import rerun as rr
+
+    from fuzzkit.viz.blueprints import surface_blueprint
 
     name = _check_shape(rb, output)
     x, y, z = surface_grid(rb, resolution, name)
     out = rb.output(name)
-    vertices, triangles = _mesh(x, y, z)
+    vx, vy = rb.inputs
+    vertices, triangles = _mesh(_to_unit(x, vx), _to_unit(y, vy), _to_unit(z, out))
     peaks, labels = peak_grid(rb, name)
+    peaks_unit = np.column_stack(
+        [_to_unit(peaks[:, 0], vx), _to_unit(peaks[:, 1], vy), _to_unit(peaks[:, 2], out)]
+    )
+    entity = f"surface/{name}"
+    title = f"{rb.name}: {name} = F({vx.name}, {vy.name})"
 
-    with open_recording(path, "fuzzkit", f"surface-{rb.name}-{name}", send_properties=False) as rec:
-        vx, vy = rb.inputs
+    with open_recording(
+        path,
+        "fuzzkit",
+        f"surface-{rb.name}-{name}",
+        blueprint=surface_blueprint(entity, title),
+        send_properties=False,
+    ) as rec:
         rec.log(
-            f"surface/{name}/description",
+            f"{entity}/description",
             rr.TextDocument(
-                f"Control surface of {rb.name}: {name} = F({vx.name}, {vy.name}) on "
-                f"[{vx.low}, {vx.high}] x [{vy.low}, {vy.high}], {resolution} x {resolution} "
-                "grid, exact engine.",
+                f"Control surface of {rb.name}: {name} = F({vx.name}, {vy.name}), "
+                f"{resolution} x {resolution} grid, exact engine.\n\n"
+                "Drawn in normalised coordinates: each axis maps its variable's range onto "
+                f"[-1, 1]: {vx.name} [{vx.low:g}, {vx.high:g}] (x), "
+                f"{vy.name} [{vy.low:g}, {vy.high:g}] (y), "
+                f"{name} [{out.low:g}, {out.high:g}] (z). Tick labels give raw values.",
             ),
             static=True,
         )
+        rec.log(entity, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         rec.log(
-            f"surface/{name}",
+            entity,
             rr.Mesh3D(
                 vertex_positions=vertices,
                 triangle_indices=triangles,
@@ -166,12 +240,11 @@ def write_surface_rrd(
             static=True,
         )
         rec.log(
-            f"surface/{name}/label_peaks",
-            rr.Points3D(
-                peaks, radii=0.015 * (out.high - out.low), labels=labels, colors=[(20, 20, 20)]
-            ),
+            f"{entity}/label_peaks",
+            rr.Points3D(peaks_unit, radii=0.03, labels=labels, colors=[(235, 235, 235)]),
             static=True,
         )
+        _log_labelled_axes(rec, entity, rb, out)
     return Path(path)
 
 
