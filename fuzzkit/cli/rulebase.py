@@ -18,7 +18,9 @@ from typing import Any, TextIO
 
 from fuzzkit.errors import EvaluationError, Location, Problem, ProblemsError, RuleBaseError
 from fuzzkit.fileio import check_output_path
-from fuzzkit.fuzzy.model import SHAPE_PARAMS, Compound, Expression, Proposition, RuleBase, Variable
+from fuzzkit.fuzzy.describe import num as _num
+from fuzzkit.fuzzy.describe import range_text, rule_grid, rule_sentence
+from fuzzkit.fuzzy.model import SHAPE_PARAMS, RuleBase, Variable
 
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2
@@ -140,22 +142,13 @@ def cmd_validate(args: argparse.Namespace) -> int:
 # ---------------------------------------------------------------------------- info
 
 
-def _num(x: float) -> str:
-    return f"{x:.6g}"
-
-
-def format_expression(expr: Expression, top: bool = True) -> str:
-    """A condition as text: ``e is PS and (de is NS or de is not ZR)``."""
-    if isinstance(expr, Proposition):
-        return f"{expr.variable} is {'not ' if expr.negated else ''}{expr.term}"
-    text = f" {expr.op} ".join(format_expression(o, top=False) for o in expr.operands)
-    return text if top else f"({text})"
-
-
 def _variable_lines(var: Variable, kind: str) -> list[str]:
-    head = f"  {var.name}  [{_num(var.low)}, {_num(var.high)}]"
+    head = f"  {var.name}  {range_text(var)}"
     if kind == "output":
-        head += f"  default {'NaN' if var.default is None else _num(var.default)}"
+        default = "NaN" if var.default is None else _num(var.default)
+        if var.units and var.default is not None:
+            default += f" {var.units}"
+        head += f"  default {default}"
     lines = [head]
     width = max((len(t.name) for t in var.terms), default=0)
     for t in var.terms:
@@ -166,33 +159,17 @@ def _variable_lines(var: Variable, kind: str) -> list[str]:
 
 
 def _table_grid(rb: RuleBase) -> list[str] | None:
-    t = rb.table
-    if t is None:
+    grid = rule_grid(rb)
+    if grid is None:
         return None
-    try:
-        rows, cols = rb.input(t.rows).term_names, rb.input(t.columns).term_names
-    except KeyError:
-        return None
-    cell: dict[tuple[str, str], str] = {}
-    row_order: list[str] = []
-    for rule in rb.rules:
-        a = rule.antecedent
-        if not (isinstance(a, Compound) and len(a.operands) == 2):
-            return None
-        rp, cp = a.operands
-        if not (isinstance(rp, Proposition) and isinstance(cp, Proposition)):
-            return None
-        cell[rp.term, cp.term] = rule.consequents[0].term
-        row_order.append(rp.term)
-    # Keep the order the table was written in (e.g. the paper prints PL at the top).
-    rows_shown = list(dict.fromkeys(row_order + list(rows)))
-    corner = f"{t.rows}\\{t.columns}"
-    first = max(len(x) for x in [corner, *rows_shown])
-    width = max(len(x) for x in [*cols, *cell.values(), "-"])
-    lines = ["  " + " ".join([corner.ljust(first), *(x.ljust(width) for x in cols)]).rstrip()]
-    for r in rows_shown:
-        values = [cell.get((r, c), "-").ljust(width) for c in cols]
-        lines.append("  " + " ".join([r.ljust(first), *values]).rstrip())
+    corner = f"{grid.row_input}\\{grid.column_input}"
+    first = max(len(x) for x in [corner, *grid.rows])
+    width = max(len(x) for x in [*grid.columns, *(c for row in grid.cells for c in row)])
+    lines = [
+        "  " + " ".join([corner.ljust(first), *(x.ljust(width) for x in grid.columns)]).rstrip()
+    ]
+    for r, row in zip(grid.rows, grid.cells, strict=True):
+        lines.append("  " + " ".join([r.ljust(first), *(c.ljust(width) for c in row)]).rstrip())
     return lines
 
 
@@ -228,12 +205,7 @@ def describe_rulebase(rb: RuleBase) -> str:
         lines.append(f"rules: {len(rb.rules)}")
         width = len(str(len(rb.rules)))
         for k, rule in enumerate(rb.rules, start=1):
-            then = " and ".join(f"{c.variable} is {c.term}" for c in rule.consequents)
-            weight = f"  (weight {_num(rule.weight)})" if rule.weight != 1.0 else ""
-            lines.append(
-                f"  {str(k).rjust(width)}. if {format_expression(rule.antecedent)} "
-                f"then {then}{weight}"
-            )
+            lines.append(f"  {str(k).rjust(width)}. {rule_sentence(rule)}")
     return "\n".join(lines)
 
 

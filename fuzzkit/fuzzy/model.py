@@ -14,6 +14,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal, TypeAlias
 
+from fuzzkit.fuzzy.display import NotebookDisplay
+
 #: Membership-function shapes and the names of their parameters, in order.
 SHAPE_PARAMS: dict[str, tuple[str, ...]] = {
     "triangle": ("a", "b", "c"),
@@ -80,7 +82,8 @@ class Variable:
     """An input or output variable: its universe ``[low, high]`` and its terms.
 
     ``default`` is used for an output when no rule fires (``None`` means NaN); it is ignored
-    for inputs.
+    for inputs. ``units`` is the physical unit of the variable's values (``"N"``, ``"mm"``,
+    ``"%"``), for display only: labels, headers and recordings; ``None`` when unitless or unknown.
     """
 
     name: str
@@ -88,6 +91,7 @@ class Variable:
     high: float
     terms: tuple[Term, ...]
     default: float | None = None
+    units: str | None = None
 
     @property
     def term_names(self) -> tuple[str, ...]:
@@ -173,8 +177,8 @@ class Source:
 
 
 @dataclass(frozen=True, slots=True)
-class RuleBase:
-    """A complete Mamdani rule base."""
+class RuleBase(NotebookDisplay):
+    """A complete Mamdani rule base (displayed as tables in notebooks, see NotebookDisplay)."""
 
     name: str
     inputs: tuple[Variable, ...]
