@@ -70,7 +70,10 @@ def test_units_round_trip_through_the_writer(units: str) -> None:
         ("' K'", r":13:12: units of input 'de': expected no leading or trailing spaces"),
         ('"K\\ts"', r":13:12: units of input 'de': expected printable characters on one line"),
         ('"K\\ns"', r":13:12: units of input 'de': expected printable characters on one line"),
-        ("'" + "m" * 25 + "'", r":13:12: units of input 'de': expected at most 24 characters, got 25"),
+        (
+            "'" + "m" * 25 + "'",
+            r":13:12: units of input 'de': expected at most 24 characters, got 25",
+        ),
     ],
 )
 def test_bad_units_are_located_and_explained(value: str, match: str) -> None:
@@ -121,7 +124,7 @@ def test_generated_banners_name_the_units_sanitised() -> None:
     # symbols are spelt out.
     rb = _hostile_rulebase()
     tab = make_table(rb, number_type="double", resolution=9)
-    line = "Units: e [K], de [* / ? ?/ \'\'\' degC um^2], heat [%]"
+    line = "Units: e [K], de [* / ? ?/ ''' degC um^2], heat [%]"
     header = emit(rb, tab, "c")["temperature_pd.h"]
     assert line in header
     assert "in[0]  e in [-20.0, 20.0] [K]" in header
@@ -143,9 +146,7 @@ def test_generated_python_with_hostile_units_imports_and_matches_the_engine() ->
 @needs_cc
 @skip_no_cc
 @pytest.mark.parametrize("number_type", ["double", "q15"])
-def test_generated_c_with_hostile_units_compiles_strictly(
-    tmp_path: Path, number_type: str
-) -> None:
+def test_generated_c_with_hostile_units_compiles_strictly(tmp_path: Path, number_type: str) -> None:
     rb = _hostile_rulebase()
     tab = make_table(rb, number_type=number_type, resolution=9)  # type: ignore[arg-type]
     files = emit(rb, tab, "c")

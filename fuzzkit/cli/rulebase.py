@@ -74,10 +74,12 @@ def register(sub: Any) -> None:
 
     p = sub.add_parser(
         "surface",
-        help="write the control surface of a 2-input rule base",
+        help="write the control surface of a rule base over two of its inputs",
         description="Compute the control surface output = F(input1, input2) with "
         "the exact engine and write it as a Rerun recording (3-D mesh "
-        "plus the label-peak grid) and/or a PNG.",
+        "plus the label-peak grid; 2-input rule bases) and/or a PNG. With more than two "
+        "inputs, choose two with --inputs and hold the others with --fix (like MATLAB's "
+        "gensurf).",
     )
     p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
     p.add_argument("--rrd", metavar="OUT.rrd", help="Rerun recording to write")
@@ -90,6 +92,18 @@ def register(sub: Any) -> None:
         help="grid points per input (default 101)",
     )
     p.add_argument("--output", metavar="NAME", help="which output (default: the first)")
+    p.add_argument(
+        "--inputs",
+        metavar="X,Y",
+        help="the two inputs to span, e.g. --inputs e,r (default: the first two)",
+    )
+    p.add_argument(
+        "--fix",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="hold another input at VALUE (repeat per input; default: the middle of its range)",
+    )
     p.set_defaults(handler=cmd_surface)
 
     p = sub.add_parser(
@@ -217,7 +231,10 @@ def cmd_info(args: argparse.Namespace) -> int:
 # ---------------------------------------------------------------------------- eval
 
 
-def _parse_inputs(rb: RuleBase, items: Sequence[str]) -> dict[str, float]:
+def _parse_inputs(
+    rb: RuleBase, items: Sequence[str], option: str = "--input", every: bool = True
+) -> dict[str, float]:
+    """``NAME=VALUE`` items of ``option`` as input values; all inputs needed when ``every``."""
     from fuzzkit.fuzzy.validation import did_you_mean
 
     values: dict[str, float] = {}
@@ -226,26 +243,26 @@ def _parse_inputs(rb: RuleBase, items: Sequence[str]) -> dict[str, float]:
         name, sep, text = item.partition("=")
         name = name.strip()
         if not sep:
-            problems.append(f"--input {item!r}: expected NAME=VALUE")
+            problems.append(f"{option} {item!r}: expected NAME=VALUE")
             continue
         if name not in rb.input_names:
             problems.append(
-                f"--input {item!r}: unknown input {name!r}"
+                f"{option} {item!r}: unknown input {name!r}"
                 f"{did_you_mean(name, rb.input_names)}; expected one of "
                 f"{', '.join(rb.input_names)}"
             )
             continue
         if name in values:
-            problems.append(f"--input {item!r}: input {name!r} given twice")
+            problems.append(f"{option} {item!r}: input {name!r} given twice")
             continue
         try:
             values[name] = float(text)
         except ValueError:
-            problems.append(f"--input {item!r}: expected a number for {name!r}, got {text!r}")
+            problems.append(f"{option} {item!r}: expected a number for {name!r}, got {text!r}")
     missing = [
         n
         for n in rb.input_names
-        if n not in values and not any(p.startswith(f"--input '{n}=") for p in problems)
+        if every and n not in values and not any(p.startswith(f"{option} '{n}=") for p in problems)
     ]
     if missing:
         problems.append(
@@ -397,10 +414,20 @@ def _csv_rows(reader: Any, name: str) -> Iterator[list[str]]:
             ) from exc
 
 
+def _surface_inputs(text: str | None) -> tuple[str, ...] | None:
+    """``--inputs e,de`` as names (checked against the rule base by surface_axes)."""
+    if text is None:
+        return None
+    names = tuple(part.strip() for part in text.split(","))
+    if len(names) != 2 or not all(names):
+        raise EvaluationError(f"--inputs {text!r}: expected two input names, e.g. --inputs e,de")
+    return names
+
+
 def cmd_surface(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from fuzzkit.viz.surface import peak_grid, write_surface_png, write_surface_rrd
+    from fuzzkit.viz.surface import peak_grid, surface_axes, write_surface_png, write_surface_rrd
 
     if args.rrd is None and args.png is None:
         raise EvaluationError("nothing to write: give --rrd OUT.rrd and/or --png OUT.png")
@@ -411,19 +438,29 @@ def cmd_surface(args: argparse.Namespace) -> int:
         if path is not None:
             check_output_path(path, f"{option} file")
     rb = _load(args.rulebase)
+    inputs = _surface_inputs(args.inputs)
+    fixed = _parse_inputs(rb, args.fix, "--fix", every=False)
+    axes = surface_axes(rb, args.output, inputs, fixed)  # every check before any file
+    chosen = (axes.x.name, axes.y.name)
     if args.rrd is not None:
-        write_surface_rrd(rb, args.rrd, args.resolution, args.output)
+        if chosen != rb.input_names:
+            raise EvaluationError(
+                "--rrd draws the surface of a 2-input rule base over both inputs; "
+                "--inputs and --fix apply to --png only"
+            )
+        write_surface_rrd(rb, args.rrd, args.resolution, axes.output)
         print(f"wrote {args.rrd}")
     if args.png is not None:
-        write_surface_png(rb, args.png, args.resolution, args.output)
+        write_surface_png(rb, args.png, args.resolution, axes.output, chosen, axes.fixed)
         print(f"wrote {args.png}")
-    points, labels = peak_grid(rb, args.output)
-    name = args.output or rb.output_names[0]
+    points, labels = peak_grid(rb, axes.output, chosen, axes.fixed)
+    held = axes.fixed_text(rb)
     print(
-        f"{name} at the label peaks ({len(labels)} points): min {_num(np.nanmin(points[:, 2]))}"
+        f"{axes.output} at the label peaks ({len(labels)} points"
+        f"{', ' + held if held else ''}): min {_num(np.nanmin(points[:, 2]))}"
         f", max {_num(np.nanmax(points[:, 2]))}"
     )
-    vx, vy = rb.inputs
+    vx, vy = axes.x, axes.y
     z = points[:, 2].reshape(len(vx.terms), len(vy.terms))
     corner = f"{vx.name}\\{vy.name}"
     first = max(len(x) for x in [corner, *vx.term_names])

@@ -184,4 +184,3 @@ def to_html(rb: RuleBase) -> str:
         parts.append("</ol>")
     parts.append("</div>")
     return "\n".join(parts)
-
