@@ -442,12 +442,17 @@ def cmd_surface(args: argparse.Namespace) -> int:
     fixed = _parse_inputs(rb, args.fix, "--fix", every=False)
     axes = surface_axes(rb, args.output, inputs, fixed)  # every check before any file
     chosen = (axes.x.name, axes.y.name)
+    if args.rrd is not None and len(rb.inputs) != 2:
+        raise EvaluationError(
+            f"--rrd needs a rule base with exactly 2 inputs; {rb.name!r} has {len(rb.inputs)} "
+            f"({', '.join(rb.input_names)}); --png can span two and fix the others"
+        )
+    if args.rrd is not None and chosen != rb.input_names:
+        raise EvaluationError(
+            f"--rrd spans the inputs in declaration order ({', '.join(rb.input_names)}); "
+            "--inputs applies to --png only"
+        )
     if args.rrd is not None:
-        if chosen != rb.input_names:
-            raise EvaluationError(
-                "--rrd draws the surface of a 2-input rule base over both inputs; "
-                "--inputs and --fix apply to --png only"
-            )
         write_surface_rrd(rb, args.rrd, args.resolution, axes.output)
         print(f"wrote {args.rrd}")
     if args.png is not None:

@@ -41,10 +41,16 @@ def figure_format(path: str | os.PathLike[str], option: str = "output") -> str:
 
 
 def figure_bytes(fig: Any, fmt: str = "png", dpi: float | None = None) -> bytes:
-    """The figure rendered as ``fmt`` (png or svg). SVGs carry no date, so reruns are equal."""
+    """The figure rendered as ``fmt`` (png or svg); the same figure gives the same bytes.
+
+    SVGs carry no date, and their element ids come from a fixed salt instead of a random one.
+    """
+    import matplotlib
+
     buf = io.BytesIO()
     metadata = {"Date": None} if fmt == "svg" else None
-    fig.savefig(buf, format=fmt, dpi=dpi if dpi is not None else "figure", metadata=metadata)
+    with matplotlib.rc_context({"svg.hashsalt": "fuzzkit"}):
+        fig.savefig(buf, format=fmt, dpi=dpi if dpi is not None else "figure", metadata=metadata)
     return buf.getvalue()
 
 
