@@ -1,8 +1,9 @@
 """A rule base as people read it: labels with units, the rule table, rules as sentences.
 
 Shared by ``fuzzkit info``, the figures (:mod:`fuzzkit.viz.rulebase_plot`) and the notebook
-display of a :class:`~fuzzkit.fuzzy.model.RuleBase` (``_repr_markdown_`` / ``_repr_html_``), so
-that all of them say the same thing. Formats from the model's fields only.
+display of a :class:`~fuzzkit.fuzzy.model.RuleBase` (``_repr_markdown_`` / ``_repr_html_``,
+registered with :mod:`fuzzkit.fuzzy.display` on import), so that all of them say the same thing.
+Formats from the model's fields only.
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ from __future__ import annotations
 import html
 from dataclasses import dataclass
 
+from fuzzkit.fuzzy.display import register_renderer
 from fuzzkit.fuzzy.model import Compound, Expression, Proposition, Rule, RuleBase, Variable
 
 #: What an empty cell of a rule table shows (as in the YAML format).
@@ -184,3 +186,7 @@ def to_html(rb: RuleBase) -> str:
         parts.append("</ol>")
     parts.append("</div>")
     return "\n".join(parts)
+
+
+register_renderer("markdown", to_markdown)
+register_renderer("html", to_html)
