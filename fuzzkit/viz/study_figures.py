@@ -79,7 +79,8 @@ def force_figure(
     exp = any_run.experiment
     axes_idx = [i for i in (2, 0, 1) if exp.selection[i]]
     controllers = list(dict.fromkeys(c for c, _ in results))
-    fig = new_figure(10.0, 2.7 * len(axes_idx) + 1.0)
+    height = 2.7 * len(axes_idx) + 1.0
+    fig = new_figure(10.0, height)
     grid = fig.subplots(len(axes_idx), len(controllers), squeeze=False, sharex=True)
     contact = _first_contact_s(results) if zoom_s else None
     for col, ctrl in enumerate(controllers):
@@ -108,9 +109,16 @@ def force_figure(
                 start = max(float(any_run.t[0]), contact - 0.2 * zoom_s)
                 _add_zoom(ax, runs, i, (start, start + zoom_s))
     handles, labels = grid[0][0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="upper center", ncol=len(labels), bbox_to_anchor=(0.5, 0.955))
-    fig.suptitle(title, fontsize=11, y=0.995)
-    fig.tight_layout(rect=(0, 0, 1, 0.93))
+    # Title, then the legend, then the panels, spaced in inches whatever the figure's height.
+    fig.suptitle(title, fontsize=11, y=1 - 0.06 / height)
+    fig.legend(
+        handles,
+        labels,
+        loc="upper center",
+        ncol=len(labels),
+        bbox_to_anchor=(0.5, 1 - 0.3 / height),
+    )
+    fig.tight_layout(rect=(0, 0, 1, 1 - 0.58 / height))
     return fig
 
 
