@@ -381,8 +381,9 @@ class _Reader:
             if isinstance(node, ScalarNode) and node.tag in (_INT, _FLOAT, _BOOL):
                 hint = "; quote it"
             self.error(
-                node, f"expected the units of {what} as text such as 'N' or 'mm', "
-                f"got {describe(node)}{hint}"
+                node,
+                f"expected the units of {what} as text such as 'N' or 'mm', "
+                f"got {describe(node)}{hint}",
             )
             return None
         return str(node.value)  # its content is checked by validation (path ..., "units")
