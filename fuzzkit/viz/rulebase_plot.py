@@ -36,12 +36,14 @@ SAMPLES = 801
 
 
 def _term_curve(var: Variable, index: int) -> tuple[Any, Any]:
-    """``x`` over the range (with the term's corners, so edges are exact) and ``mu(x)``."""
+    """``x`` over the range and ``mu(x)``: a piecewise-linear term exactly, by its corners (a
+    few points, so SVGs stay small), a smooth one sampled at :data:`SAMPLES` points."""
     term = var.terms[index]
-    x = np.linspace(var.low, var.high, SAMPLES)
     if term.is_piecewise_linear:
-        corners = [p for p in breakpoints(term) if var.low <= p <= var.high]
-        x = np.unique(np.concatenate([x, corners]))
+        corners = [p for p in breakpoints(term) if var.low < p < var.high]
+        x = np.unique(np.array([var.low, *corners, var.high], dtype=np.float64))
+    else:
+        x = np.linspace(var.low, var.high, SAMPLES)
     return x, evaluate_term(term, x)
 
 
