@@ -90,6 +90,8 @@ class AxisSpec:
     q_low: int
     q_high: int
     recip: tuple[str, ...]
+    #: " [N]" after the range in comments, or "" (ASCII, comment-safe)
+    units: str = ""
 
 
 @dataclass(frozen=True)
@@ -104,6 +106,8 @@ class OutputSpec:
     bound: str
     tolerance: str
     scale: str
+    #: " [N]" after the range in comments, or "" (ASCII, comment-safe)
+    units: str = ""
 
 
 @dataclass(frozen=True)
@@ -119,6 +123,8 @@ class Spec:
     source_file: str
     source_sha256: str
     description: tuple[str, ...]
+    #: "e [N], de [N], du [mm]" when any variable has units, else ""
+    units_line: str
     n_inputs: int
     n_outputs: int
     inputs: tuple[AxisSpec, ...]
@@ -206,6 +212,18 @@ def _comment_safe(text: str) -> str:
         previous = clean
         clean = clean.replace("*/", "* /").replace("/*", "/ *").replace("??", "? ?")
     return clean
+
+
+#: Unit symbols a C comment cannot hold (comments are ASCII here), spelt out instead of "?".
+_UNIT_ASCII = {"°": "deg", "µ": "u", "μ": "u", "²": "^2", "³": "^3", "Ω": "Ohm", "·": "*"}
+
+
+def units_comment(units: str | None) -> str:
+    """A variable's units as generated comments show them: ``" [N]"``, ``" [degC]"`` or ``""``."""
+    if not units:
+        return ""
+    ascii_units = "".join(_UNIT_ASCII.get(ch, ch) for ch in units)
+    return f" [{_comment_safe(ascii_units)}]"
 
 
 def _check_float32_gains(gains: Mapping[str, float], source: str) -> None:
@@ -369,6 +387,7 @@ def build_spec(
                 q_low=q.q_low[a] if q is not None else 0,
                 q_high=q.q_high[a] if q is not None else 0,
                 recip=_wrap([str(int(v)) for v in q.recip[a]], 8) if q is not None else (),
+                units=units_comment(var.units),
             )
         )
     outputs = []
@@ -385,6 +404,7 @@ def build_spec(
                 bound=format(table.bound[k], ".3g"),
                 tolerance=format(table.tolerance[k], ".3g") if table.tolerance else "",
                 scale=_c_literal(table.q15.out_scale[k], "double") if table.q15 else "",
+                units=units_comment(var.units),
             )
         )
     split_bytes: tuple[str, ...] = ()
@@ -421,6 +441,9 @@ def build_spec(
         source_file=_comment_safe(file_name),
         source_sha256=sha,
         description=desc,
+        units_line=", ".join(f"{v.name}{units_comment(v.units)}" for v in rb.inputs + rb.outputs)
+        if any(v.units for v in rb.inputs + rb.outputs)
+        else "",
         n_inputs=len(rb.inputs),
         n_outputs=len(rb.outputs),
         inputs=tuple(axes),

@@ -16,6 +16,7 @@ from fuzzkit.fuzzy.model import (
     SHAPE_PARAMS,
 )
 from fuzzkit.fuzzy.partition import PARTITION_ENDS, PARTITION_KINDS
+from fuzzkit.fuzzy.validation import MAX_UNITS_CHARS
 
 
 def json_schema() -> dict[str, Any]:
@@ -98,6 +99,13 @@ def json_schema() -> dict[str, Any]:
                 "description": "[low, high]",
             },
             "terms": {"oneOf": [{"$ref": "#/$defs/partition"}, explicit_terms(kind)]},
+            "units": {
+                "type": ["string", "null"],
+                "minLength": 1,
+                "maxLength": MAX_UNITS_CHARS,
+                "pattern": r"^\S(.*\S)?$",
+                "description": "physical unit of the values, for labels only: N, mm, degC, %",
+            },
         }
         if kind == "output":
             props["default"] = {

@@ -329,7 +329,11 @@ class _Reader:
             self.hidden_under.add(base)
             self.broken_vars.add(name)
             return Variable(name, 0.0, 1.0, ())
-        allowed = ("range", "terms", "default") if kind == "output" else ("range", "terms")
+        allowed = (
+            ("range", "terms", "units", "default")
+            if kind == "output"
+            else ("range", "terms", "units")
+        )
         for key, (kn, _) in entries.items():
             if key == "default" and kind == "input":
                 self.error(
@@ -373,7 +377,27 @@ class _Reader:
             self.marks[(*base, "default")] = dnode
             if not (isinstance(dnode, ScalarNode) and dnode.tag == _NULL):
                 default = self.number(dnode, f"the default of {what}")
-        return Variable(name, low, high, terms, default)
+        units: str | None = None
+        if "units" in entries:
+            self.marks[(*base, "units")] = entries["units"][1]
+            units = self.units(entries["units"][1], what)
+        return Variable(name, low, high, terms, default, units)
+
+    def units(self, node: Node, what: str) -> str | None:
+        """The ``units:`` of a variable as written (``None`` for null or a non-string)."""
+        if isinstance(node, ScalarNode) and node.tag == _NULL:
+            return None
+        if not (isinstance(node, ScalarNode) and node.tag == STR_TAG):
+            hint = ""
+            if isinstance(node, ScalarNode) and node.tag in (_INT, _FLOAT, _BOOL):
+                hint = "; quote it"
+            self.error(
+                node,
+                f"expected the units of {what} as text such as 'N' or 'mm', "
+                f"got {describe(node)}{hint}",
+            )
+            return None
+        return str(node.value)  # its content is checked by validation (path ..., "units")
 
     def range(self, node: Node, what: str) -> tuple[float, float] | None:
         if not isinstance(node, SequenceNode) or len(node.value) != 2:

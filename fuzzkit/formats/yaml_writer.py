@@ -185,6 +185,8 @@ def dump(rb: RuleBase) -> str:
         section: dict[str, Any] = {}
         for var in group:
             spec: dict[str, Any] = {"range": _Flow([float(var.low), float(var.high)])}
+            if var.units is not None:
+                spec["units"] = var.units
             if kind == "output" and var.default is not None:
                 spec["default"] = float(var.default)
             spec["terms"] = _dump_terms(var, kind, rb.input_names)

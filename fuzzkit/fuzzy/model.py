@@ -14,6 +14,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal, TypeAlias
 
+from fuzzkit.fuzzy.display import NotebookDisplay
+
 #: Membership-function shapes and the names of their parameters, in order.
 SHAPE_PARAMS: dict[str, tuple[str, ...]] = {
     "triangle": ("a", "b", "c"),
@@ -110,7 +112,8 @@ class Variable:
     """An input or output variable: its universe ``[low, high]`` and its terms.
 
     ``default`` is used for an output when no rule fires (``None`` means NaN); it is ignored
-    for inputs.
+    for inputs. ``units`` is the physical unit of the variable's values (``"N"``, ``"mm"``,
+    ``"%"``), for display only: labels, headers and recordings; ``None`` when unitless or unknown.
     """
 
     name: str
@@ -118,6 +121,7 @@ class Variable:
     high: float
     terms: tuple[Term, ...]
     default: float | None = None
+    units: str | None = None
 
     @property
     def term_names(self) -> tuple[str, ...]:
@@ -208,9 +212,9 @@ class Source:
 
 
 @dataclass(frozen=True, slots=True)
-class RuleBase:
+class RuleBase(NotebookDisplay):
     """A complete rule base: Mamdani outputs, Sugeno outputs (``constant``/``linear`` terms), or
-    both.
+    both. Displayed as tables in notebooks (see NotebookDisplay).
 
     ``coverage`` (see COVERAGE_POLICIES) says whether an input range that no term covers is an
     error or a warning; importers of foreign formats set ``allow_gaps``.

@@ -8,7 +8,8 @@
   ``("inputs", "e", "terms", "NL")``, ``("inputs", "e", "terms", "NL", "points")`` for the
   piecewise-linear shapes and ``(..., "NL", "sigma")`` (the parameter's name) for the others;
 * ``("outputs", "du", "default")``, ``("outputs", "du", "terms", "Z", "coefficients")`` for a
-  linear Sugeno term's coefficients, ``("coverage",)``;
+  linear Sugeno term's coefficients, ``("coverage",)``,
+  ``("inputs", "e", "units")``;
 * ``("rules",)``, ``("rules", "table", "rows")``, and for rule ``k`` (its index in
   ``RuleBase.rules``): ``("rules", k, "weight")``, ``("rules", k, "then", j)`` for its ``j``-th
   consequent and ``("rules", k, "if", i, j, ...)`` for the sub-expression reached by taking
@@ -76,6 +77,9 @@ C_KEYWORDS = frozenset(
     """.split()  # noqa: SIM905 (a word list reads better than 60 quoted strings)
 )
 
+#: Units are a label (``N``, ``mm/s``, ``degC``), not prose; longer ones would crowd every axis.
+MAX_UNITS_CHARS = 24
+
 #: Python keywords, soft keywords (``match``, ``case``, ``type``, ``_``) included.
 PYTHON_KEYWORDS = frozenset(keyword.kwlist) | frozenset(keyword.softkwlist)
 
@@ -93,6 +97,19 @@ def identifier_problem(name: str) -> str | None:
     # C reserves these for the implementation; a generated symbol could clash with libc.
     if name.startswith("__") or (len(name) > 1 and name[0] == "_" and name[1].isupper()):
         return f"{name!r} is reserved in C (leading '__' or '_' + capital); choose another name"
+    return None
+
+
+def units_problem(units: str) -> str | None:
+    """Why ``units`` cannot label a variable (``None`` if it can): one short printable line."""
+    if not units.strip():
+        return "expected a unit such as 'N' or 'mm', got an empty string"
+    if units != units.strip():
+        return f"expected no leading or trailing spaces, got {units!r}"
+    if len(units) > MAX_UNITS_CHARS:
+        return f"expected at most {MAX_UNITS_CHARS} characters, got {len(units)}"
+    if not units.isprintable():
+        return f"expected printable characters on one line, got {units!r}"
     return None
 
 
@@ -355,6 +372,10 @@ def _check_variable(var: Variable, kind: str, base: Path, rb: RuleBase) -> list[
                     "be constant/linear (Sugeno) or all membership functions (Mamdani)",
                 )
             )
+    if var.units is not None:
+        why = units_problem(var.units)
+        if why:
+            out.append(((*base, "units"), f"units of {kind} {var.name!r}: {why}"))
     if kind == "output" and var.default is not None:
         d = var.default
         if not math.isfinite(d) or (range_ok and not var.low <= d <= var.high):

@@ -12,7 +12,6 @@ uses a lookup table for speed (see ``fuzzkit.studies.tuning``).
 
 from __future__ import annotations
 
-import io
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -38,6 +37,12 @@ RMS_TOL = (0.01, 0.10)  # N, fraction
 #: E3 "similar": per axis, RMS and settling time within this fraction (or the absolute floor).
 SIMILAR_REL = 0.25
 SIMILAR_ABS = {"rms_error": 0.05, "settling_time_s": 0.25}
+
+#: Experiments whose force figure gets a zoomed inset of this many seconds from first contact
+#: (E1's impact transient lasts about 0.1 s: invisible at its 5 s scale).
+ZOOM_S = {"E1": 0.3}
+#: Resolution of the report's PNGs.
+FIGURE_DPI = 80
 
 Key = tuple[str, str, str, str]  # plant, experiment, controller, gains label
 
@@ -184,104 +189,6 @@ def assess_claims(
         "; ".join(notes),
     )
     return out
-
-
-# --------------------------------------------------------------------------------------------
-# Figures
-# --------------------------------------------------------------------------------------------
-
-
-def _png(fig: Any) -> bytes:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=80)
-    return buf.getvalue()
-
-
-def force_figure(results: Mapping[tuple[str, str], Any], title: str) -> bytes:
-    """Force vs time per controlled axis: columns PI, fuzzy-PI; default and tuned; set point.
-
-    ``results`` maps ``(controller, gains label)`` to a ``RunResult`` of one experiment.
-    """
-    from matplotlib.figure import Figure
-
-    any_run = next(iter(results.values()))
-    exp = any_run.experiment
-    axes_idx = [i for i in (2, 0, 1) if exp.selection[i]]
-    fig = Figure(figsize=(9.0, 2.4 * len(axes_idx) + 0.6))
-    grid = fig.subplots(len(axes_idx), 2, squeeze=False, sharex=True)
-    styles = {"default": ("tab:gray", "-"), "tuned": ("tab:blue", "-")}
-    for col, ctrl in enumerate(CONTROLLERS):
-        for row, i in enumerate(axes_idx):
-            ax = grid[row][col]
-            for label in LABELS:
-                r = results.get((ctrl, label))
-                if r is None:
-                    continue
-                colour, ls = styles[label]
-                ax.plot(r.t, r.force_true[:, i], color=colour, ls=ls, lw=1.0, label=label)
-            ax.plot(any_run.t, any_run.setpoint[:, i], "k--", lw=0.8, label="set point")
-            ax.set_ylabel(f"f{'xyz'[i]} (N)")
-            ax.grid(alpha=0.3)
-            if row == 0:
-                ax.set_title(f"{'PI' if ctrl == 'pi' else 'fuzzy-PI'}")
-            if row == len(axes_idx) - 1:
-                ax.set_xlabel("time (s)")
-    grid[0][0].legend(fontsize=8, loc="lower right")
-    fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
-    return _png(fig)
-
-
-def stiffness_figure(study: Mapping[tuple[str, str], list[tuple[float, Any]]]) -> bytes:
-    """Overshoot and settling time against stiffness, per (controller, gains label).
-
-    ``study`` maps ``(controller, label)`` to ``[(stiffness N/mm, z-axis metrics)]``; a run
-    that never settles is drawn at the top of the settling axis with an x marker.
-    """
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(9.0, 3.4))
-    ax1, ax2 = fig.subplots(1, 2)
-    colours = {"pi": "tab:orange", "fuzzy-pi": "tab:blue"}
-    worst = max(
-        [_num(m["settling_time_s"], 0.0) for rows in study.values() for _, m in rows] + [1.0]
-    )
-    for (ctrl, label), rows in study.items():
-        ks = [k for k, _ in rows]
-        ls = "-" if label == "tuned" else "--"
-        name = f"{'PI' if ctrl == 'pi' else 'fuzzy-PI'} {label}"
-        ax1.plot(
-            ks,
-            [_num(m["overshoot_pct"], 0.0) for _, m in rows],
-            ls=ls,
-            marker="o",
-            ms=3,
-            color=colours[ctrl],
-            label=name,
-        )
-        settle = [m["settling_time_s"] for _, m in rows]
-        ax2.plot(
-            ks,
-            [worst * 1.1 if s is None else s for s in settle],
-            ls=ls,
-            marker="o",
-            ms=3,
-            color=colours[ctrl],
-            label=name,
-        )
-        never = [k for k, s in zip(ks, settle, strict=True) if s is None]
-        ax2.plot(never, [worst * 1.1] * len(never), "x", color=colours[ctrl], ms=8)
-    for ax in (ax1, ax2):
-        ax.set_xscale("log")
-        ax.set_xlabel("environment stiffness (N/mm)")
-        ax.grid(alpha=0.3)
-    ax1.set_yscale("symlog", linthresh=1.0)
-    ax1.set_ylabel("overshoot (%)")
-    ax2.set_ylabel("settling time (s); x = never")
-    ax1.legend(fontsize=7)
-    fig.suptitle("press 10 N on the hammer (planar plant)", fontsize=10)
-    fig.tight_layout()
-    return _png(fig)
 
 
 # --------------------------------------------------------------------------------------------
@@ -438,6 +345,8 @@ def build_report(
     from fuzzkit.studies.metrics import summary
     from fuzzkit.studies.plants import make_plant
     from fuzzkit.studies.runner import load_surface, run
+    from fuzzkit.viz.figures import figure_bytes
+    from fuzzkit.viz.study_figures import force_figure, stiffness_figure
 
     if out.exists() and not out.is_dir():
         raise ConfigError(f"{out}: exists and is not a folder (expected the report folder)")
@@ -493,7 +402,8 @@ def build_report(
                                 )
                             bar.update(1)
                     fname = f"force_{plant}_{name}.png"
-                    write_atomic(out / fname, force_figure(runs, f"{name} on {plant}: {exp.title}"))
+                    fig = force_figure(runs, f"{name} on {plant}: {exp.title}", ZOOM_S.get(name))
+                    write_atomic(out / fname, figure_bytes(fig, dpi=FIGURE_DPI))
                     figures.append((fname, f"{name} on the {plant} plant"))
 
             from fuzzkit.viz.surface import write_surface_png
@@ -520,7 +430,7 @@ def build_report(
                         rows.append((k, m))
                         bar.update(1)
                     study[(ctrl, label)] = rows
-        write_atomic(out / "stiffness.png", stiffness_figure(study))
+        write_atomic(out / "stiffness.png", figure_bytes(stiffness_figure(study), dpi=FIGURE_DPI))
 
         claims = [c for p in plants for label in LABELS for c in assess_claims(summaries, p, label)]
         text = _markdown(
