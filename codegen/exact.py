@@ -507,7 +507,9 @@ def build_exact_spec(
         zero=lit(0.0),
         one=lit(1.0),
         half=lit(0.5),
-        tie=lit(1e-12),
+        # levels this close count as one maximum: the engine's 1e-12 in double; float
+        # rounding of equal levels reaches a few float ulps
+        tie=lit(1e-12) if number_type == "double" else lit(2.0**-20),
         tiny=lit(1e-300) if number_type == "double" else lit(0.0),
         bisect_margin=lit(1.0 - 1e-15) if number_type == "double" else lit(1.0),
         extend_limit=lit(1e100) if number_type == "double" else lit(1e30),
