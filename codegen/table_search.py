@@ -529,25 +529,32 @@ def _choose_splits(
     return (worst[1] < worst[0]).astype(np.uint8)
 
 
-def _check_rule_base(rb: RuleBase, number_type: str) -> None:
+def table_problem(rb: RuleBase, number_type: str) -> str | None:
+    """Why ``rb`` cannot be made into a lookup table (None when it can)."""
     if number_type not in NUMBER_TYPES:
-        raise CodegenError(
-            f"unknown number type {number_type!r} (expected one of {', '.join(NUMBER_TYPES)})"
-        )
+        return f"unknown number type {number_type!r} (expected one of {', '.join(NUMBER_TYPES)})"
     if not 1 <= len(rb.inputs) <= 3:
-        raise CodegenError(
-            f"rule base {rb.name}: lookup tables support 1 to 3 inputs, got {len(rb.inputs)}"
-        )
+        return f"lookup tables support 1 to 3 inputs, got {len(rb.inputs)}"
     if not rb.outputs:
-        raise CodegenError(f"rule base {rb.name}: has no outputs")
+        return "has no outputs"
     if rb.out_of_range != "clamp":
-        raise CodegenError(
-            f"rule base {rb.name}: out_of_range is {rb.out_of_range!r}; a lookup table "
-            "clamps its inputs, so only 'clamp' can be compiled exactly"
+        return (
+            f"out_of_range is {rb.out_of_range!r}; a lookup table clamps its inputs, so only "
+            "'clamp' can be compiled exactly"
         )
     for var in rb.inputs + rb.outputs:
         if not (math.isfinite(var.low) and math.isfinite(var.high) and var.low < var.high):
-            raise CodegenError(f"variable {var.name}: range [{var.low}, {var.high}] is not usable")
+            return f"variable {var.name}: range [{var.low}, {var.high}] is not usable"
+    return None
+
+
+def _check_rule_base(rb: RuleBase, number_type: str) -> None:
+    why = table_problem(rb, number_type)
+    if why is None:
+        return
+    if why.startswith("unknown number type") or why.startswith("variable "):
+        raise CodegenError(why)
+    raise CodegenError(f"rule base {rb.name}: {why}")
 
 
 def make_table(
