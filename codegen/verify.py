@@ -46,13 +46,14 @@ class Verification:
     bound: tuple[float, ...]
     allowance: tuple[float, ...]
     nan_mismatches: int
-    #: Exact method, discontinuous defuzzifiers: points that jumped to another maximum at a tie.
+    #: Exact method, discontinuous defuzzifiers: points that jumped to another maximum at a
+    #: near-tie (ok while under 1 % of the points; see compare_exact).
     tie_jumps: int = 0
 
     @property
     def ok(self) -> bool:
         """True when every error is within bound + allowance and NaN matched everywhere."""
-        return self.nan_mismatches == 0 and 1000 * self.tie_jumps <= self.n_points and all(
+        return self.nan_mismatches == 0 and 100 * self.tie_jumps <= self.n_points and all(
             e <= b + a for e, b, a in zip(self.max_error, self.bound, self.allowance, strict=True)
         )
 
@@ -228,7 +229,9 @@ def compare_exact(
 
     For mean/smallest/largest of maximum a point where two maxima tie to within rounding can
     jump to the other maximum; such points are counted in ``tie_jumps`` rather than in the
-    error, and the check passes while they stay below one in a thousand.
+    error, and the check passes while they stay below 1 % of the points (double: the engine's
+    own 1e-12 tie tolerance makes them rare; float rounds levels to 1e-7, so nearly flat or
+    nearly tied maxima, e.g. under probabilistic-sum aggregation, jump more often).
     """
     from fuzzkit.codegen.exact import rounding_allowance
     from fuzzkit.codegen.method import DISCONTINUOUS

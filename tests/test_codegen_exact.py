@@ -22,6 +22,7 @@ from test_codegen_c import HARNESS
 from test_codegen_emit import GOLDEN, ULPS, golden_difference
 from test_inference_random import random_rulebase
 
+from fuzzkit.codegen.emit import emit
 from fuzzkit.codegen.exact import ROUNDING_BOUND, emit_exact, unsupported_reason
 from fuzzkit.codegen.method import compile_rulebase
 from fuzzkit.codegen.toolchain import SANITIZE_FLAGS, STRICT_FLAGS, CompiledTable, run_compiler
@@ -98,6 +99,7 @@ def test_random_family_in_c_matches_the_engine_to_rounding(seed: int) -> None:
                 # double: ties are the engine's own 1e-12, so only a coincidence can jump
                 assert result.tie_jumps <= 1, (rb, result.describe())
             else:
+                # float levels carry 1e-7 rounding: nearly tied or flat maxima may jump
                 assert result.ok, (rb, result.describe())
 
 
@@ -255,11 +257,16 @@ def test_python_uses_only_the_standard_library() -> None:
 @needs_cc
 @skip_no_cc
 def test_random_family_through_the_table_method_stays_within_its_bound() -> None:
-    for rb in random_family(3, 6):
+    tested = 0
+    for rb in random_family(3, 30):
         if rb.defuzzifier not in CONTINUOUS:
             continue
-        table = make_table(rb, number_type="double", resolution=9)
-        from fuzzkit.codegen.emit import emit
+        try:
+            table = make_table(rb, number_type="double", resolution=9)
+        except CodegenError as exc:  # no rule fires somewhere: a table refuses, as documented
+            assert "undefined" in str(exc)
+            continue
+        tested += 1
 
         files = emit(rb, table, "c")
         points = verification_points(rb, 2000)
@@ -270,6 +277,7 @@ def test_random_family_through_the_table_method_stays_within_its_bound() -> None
         module = load_module(emit(rb, table, "python"), rb.name)
         result = compare(rb, table, "py", python_outputs(module.eval, points), _exact(rb, points))
         assert result.ok, (rb, result.describe())
+    assert tested >= 3
 
 
 # --------------------------------------------------------------------------- choosing a method
