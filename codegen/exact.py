@@ -36,8 +36,8 @@ from fuzzkit.codegen.emit import (
 )
 from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy import membership
-from fuzzkit.fuzzy.inference import OutputPieces, PiecewiseLinearGeometry
-from fuzzkit.fuzzy.model import Compound, Expression, Proposition, RuleBase, Variable
+from fuzzkit.fuzzy.inference import OutputPieces, PiecewiseLinearGeometry, partition_centroid
+from fuzzkit.fuzzy.model import Compound, Expression, Proposition, Rule, RuleBase, Variable
 
 #: Number types the exact target computes in (Q15 has no exact inference: use a table).
 EXACT_NUMBER_TYPES = ("float", "double")
@@ -112,6 +112,31 @@ class ExactOutput:
     gl_nodes: tuple[str, ...]
     gl_weights: tuple[str, ...]
     empty: bool
+    # Grid rules: the consequent term of each (row, column) cell (n_terms = none)
+    grid_cons: tuple[str, ...] = ()
+    # Polynomial centroid (partition-style min/max outputs): the engine's own fast centroid
+    poly: PolySpec | None = None
+
+
+@dataclass(frozen=True)
+class PolySpec:
+    """Area and moment of each clipped function as piecewise cubics in its level.
+
+    Functions are the output terms, then the overlaps of term pairs (level = the smaller of
+    the two, sign -1): max(g_i) = sum g_i - sum min(g_i, g_j) when at most two terms overlap.
+    """
+
+    n_funcs: int
+    pieces: int
+    level_a: tuple[str, ...]  # index of the level (term), per function
+    level_b: tuple[str, ...]  # the pair's other term (same as level_a for a term)
+    sign: tuple[str, ...]
+    starts: tuple[str, ...]
+    inv_width: tuple[str, ...]
+    area: tuple[str, ...]  # 4 coefficients per piece, constant first
+    moment: tuple[str, ...]
+    low: str
+    width: str
 
 
 @dataclass(frozen=True)
@@ -161,6 +186,11 @@ class ExactSpec:
     and_: str
     or_: str
     weighted: bool
+    grid: bool  # rules form a 2-input table: loop over the non-zero memberships only
+    grid_weights: tuple[str, ...]
+    n_terms0: int
+    n_terms1: int
+    windows: tuple[WindowSpec, ...]  # grid rules on two window inputs: visit 2 x 2 cells
 
 
 def unsupported_reason(rb: RuleBase, number_type: str = "double") -> str | None:
@@ -272,6 +302,144 @@ def _fold(items: list[str], fmt: str, empty: str) -> str:
     return acc
 
 
+def grid_rules(rb: RuleBase) -> dict[tuple[int, int], Rule] | None:
+    """The rules as a 2-input table ``{(row term, column term): rule}``, or None.
+
+    A table is what lets the generated code visit only the cells whose memberships are both
+    non-zero (4 of 49 for a partition): every rule is ``x0 is A and x1 is B`` (no NOT, each cell
+    once), and every output's levels are per-term aggregates (max, or bounded sum with product
+    implication, or any aggregation for the weighted average).
+    """
+    ops = rb.operators
+    per_term = ops.aggregation == "max" or (
+        ops.aggregation == "bounded_sum" and ops.implication == "product"
+    )
+    if len(rb.inputs) != 2 or not (per_term or rb.defuzzifier == "weighted_average"):
+        return None
+    names = (rb.inputs[0].name, rb.inputs[1].name)
+    cells: dict[tuple[int, int], Rule] = {}
+    for rule in rb.rules:
+        ante = rule.antecedent
+        if not isinstance(ante, Compound) or ante.op != "and" or len(ante.operands) != 2:
+            return None
+        props = [p for p in ante.operands if isinstance(p, Proposition) and not p.negated]
+        by_var = {p.variable: p.term for p in props}
+        if len(props) != 2 or set(by_var) != set(names):
+            return None
+        key = (rb.inputs[0].term_index(by_var[names[0]]), rb.inputs[1].term_index(by_var[names[1]]))
+        targets = [c.variable for c in rule.consequents]
+        if key in cells or len(set(targets)) != len(targets):
+            return None
+        cells[key] = rule
+    return cells
+
+
+@dataclass(frozen=True)
+class WindowSpec:
+    """An input whose non-zero terms are always two neighbours (i, i + 1): where to look.
+
+    ``cuts`` are the term vertices inside the range; ``first[k]`` is the first of the two
+    terms for an input with k cuts at or below it; ``terms`` holds (b, c, rise, fall) per term
+    (trapezoid form), then a padding term that is 0 everywhere.
+    """
+
+    index: int
+    name: str
+    low: str
+    high: str
+    n_terms: int
+    cuts: tuple[str, ...]
+    first: tuple[str, ...]
+    terms: tuple[str, ...]
+
+
+def _window(var: Variable, index: int, lit: _Lit, vertical: float) -> WindowSpec | None:
+    if not all(t.is_piecewise_linear for t in var.terms):
+        return None
+    cuts = sorted({float(p) for t in var.terms for p in t.params if var.low < p < var.high})
+    edges = [var.low, *cuts, var.high]
+    n = len(var.terms)
+    first = []
+    for k in range(len(edges) - 1):
+        probe = [edges[k], 0.5 * (edges[k] + edges[k + 1])]
+        if k == len(edges) - 2:
+            probe.append(edges[k + 1])
+        active = {
+            j
+            for j, term in enumerate(var.terms)
+            for x in probe
+            if float(membership.evaluate_term(term, x)) > 0.0
+        }
+        if not active:
+            first.append(n - 1)
+        elif max(active) - min(active) > 1:
+            return None
+        else:
+            first.append(min(min(active), n - 1))
+    forms = []
+    for term in var.terms:
+        b, c, rise, fall = membership.trapezoid_form(term)
+        forms += [b, c, min(rise, vertical), min(fall, vertical)]
+    forms += [vertical, 0.0, 1.0, 0.0]  # 1 + (x - 1e30) * 1 < 0 for every x in range: 0
+    return WindowSpec(
+        index=index,
+        name=var.name,
+        low=lit(var.low),
+        high=lit(var.high),
+        n_terms=n,
+        cuts=tuple(lit(c) for c in cuts),
+        first=tuple(str(f) for f in first),
+        terms=_wrap([lit(v) for v in forms], 4),
+    )
+
+
+def _windows(rb: RuleBase, lit: _Lit) -> tuple[WindowSpec, ...] | None:
+    """Both inputs as windows (clamped, piecewise linear, two neighbours), or None."""
+    if rb.out_of_range != "clamp":
+        return None
+    vertical = 1e200 if lit.number_type == "double" else 1e30
+    found = [_window(v, i, lit, vertical) for i, v in enumerate(rb.inputs)]
+    if any(w is None for w in found):
+        return None
+    return tuple(w for w in found if w is not None)
+
+
+def _poly(rb: RuleBase, out: Variable, pieces: OutputPieces, geo: PiecewiseLinearGeometry, lit: _Lit, wrap: Callable[[list[str]], tuple[str, ...]]) -> PolySpec | None:
+    if rb.defuzzifier != "centroid":
+        return None
+    pc = partition_centroid(geo, rb, len(out.terms))
+    if pc is None:
+        return None
+    n_terms = len(out.terms)
+    p_max = pc.p_max
+    level_a, level_b, sign, starts, inv_w, area, moment = [], [], [], [], [], [], []
+    for f, sgn, piece in pc.functions:
+        a, b = (f, f) if f < n_terms else pc.pairs[f - n_terms]
+        level_a.append(str(a))
+        level_b.append(str(b))
+        sign.append(lit(float(sgn)))
+        n = len(piece.starts)
+        starts += [lit(v) for v in piece.starts] + [lit(1e30)] * (p_max - n)
+        inv_w += [lit(v) for v in piece.inv_width] + [lit(1.0)] * (p_max - n)
+        for coefs, dest in ((piece.area, area), (piece.moment, moment)):
+            for c in coefs:
+                dest += [lit(v) for v in c]
+            dest += [lit(0.0)] * (4 * (p_max - n))
+    return PolySpec(
+        n_funcs=len(pc.functions),
+        pieces=p_max,
+        level_a=tuple(level_a),
+        level_b=tuple(level_b),
+        sign=tuple(sign),
+        starts=wrap(starts),
+        inv_width=wrap(inv_w),
+        area=wrap(area),
+        moment=wrap(moment),
+        low=lit(pc.low),
+        width=lit(pc.width),
+    )
+
+
 def _output(
     rb: RuleBase,
     k: int,
@@ -279,6 +447,7 @@ def _output(
     lit: _Lit,
     agg_fmt: dict[str, str],
     wrap: Callable[[list[str]], tuple[str, ...]],
+    grid: dict[tuple[int, int], Rule] | None,
 ) -> ExactOutput:
     pieces = OutputPieces(rb, out)
     ops = rb.operators
@@ -288,6 +457,16 @@ def _output(
             if c.variable == out.name:
                 rules_of_term.setdefault(out.term_index(c.term), []).append(r)
     zero = lit(0.0)
+    grid_cons: tuple[str, ...] = ()
+    if grid is not None:
+        # one padding row and column of "no rule" for the window's neighbour past the end
+        t0, t1 = len(rb.inputs[0].terms) + 1, len(rb.inputs[1].terms) + 1
+        cons = [len(out.terms)] * (t0 * t1)
+        for (i, j), rule in grid.items():
+            for c in rule.consequents:
+                if c.variable == out.name:
+                    cons[i * t1 + j] = out.term_index(c.term)
+        grid_cons = _wrap([str(c) for c in cons], 16)
     empty_geo = dict(
         n_intervals=0, slots=0, z=(), slot_piece=(), slope=(), icpt=(), candidates=0, points=0,
         gl_nodes=(), gl_weights=(),
@@ -306,7 +485,7 @@ def _output(
             index=k, name=out.name, low=lit(out.low), high=lit(out.high),
             default=lit.maybe_nan(out.default), defuzzifier=rb.defuzzifier,
             n_pieces=len(out.terms), level_exprs=tuple(acts), centres=centres,
-            empty=pieces.empty, **empty_geo,  # type: ignore[arg-type]
+            empty=pieces.empty, grid_cons=grid_cons, **empty_geo,  # type: ignore[arg-type]
         )  # fmt: skip
     if pieces.empty:
         return ExactOutput(
@@ -323,6 +502,15 @@ def _output(
     else:
         levels = tuple(f"w[{int(r)}]" for r in pieces.inst_rules)
     geo = PiecewiseLinearGeometry(rb, out, pieces)
+    # the C target takes the engine's fast centroid; the Python target the general sweep
+    poly = None if lit.py else _poly(rb, out, pieces, geo, lit, wrap)
+    if poly is not None:
+        return ExactOutput(
+            index=k, name=out.name, low=lit(out.low), high=lit(out.high),
+            default=lit.maybe_nan(out.default), defuzzifier=rb.defuzzifier,
+            n_pieces=pieces.n_pieces, level_exprs=levels, centres=(), empty=False,
+            grid_cons=grid_cons, poly=poly, **empty_geo,  # type: ignore[arg-type]
+        )  # fmt: skip
     m, kmax = len(geo.z0), geo.kmax
     if ops.implication == "min" and ops.aggregation == "max":
         cand = kmax * kmax
@@ -359,6 +547,7 @@ def _output(
         if ops.aggregation == "probabilistic_sum"
         else (),
         empty=False,
+        grid_cons=grid_cons,
     )
 
 
@@ -440,7 +629,11 @@ def build_exact_spec(
         if any_weight:
             expr = f"({expr}) * {lit(rule.weight)}"
         rules.append(ExactRule(r, _comment_safe(_rule_text(rule.antecedent)), expr))
-    outputs = tuple(_output(rb, k, out, lit, agg_fmt, wrap) for k, out in enumerate(rb.outputs))
+    grid = None if py else grid_rules(rb)
+    windows = _windows(rb, lit) if grid is not None else None
+    outputs = tuple(
+        _output(rb, k, out, lit, agg_fmt, wrap, grid) for k, out in enumerate(rb.outputs)
+    )
     libm: set[str] = set()
     shapes = {t.shape for v in rb.inputs for t in v.terms}
     if shapes & {"gaussian", "sigmoid"}:
@@ -469,7 +662,10 @@ def build_exact_spec(
         + len(rb.rules)
         + max((o.n_pieces + 1 + 3 * o.n_intervals * max(o.points, 1) for o in outputs), default=0)
     )
-    code = " ".join([r.expr for r in rules] + [e for o in outputs for e in o.level_exprs])
+    # with grid rules the expressions are not emitted (the loop inlines its operators)
+    code = "" if grid is not None else " ".join(
+        [r.expr for r in rules] + [e for o in outputs for e in o.level_exprs]
+    )
     helpers = {h for h in ("min", "max", "psum") if f"{prefix}{h}(" in code}
     geo = [o for o in outputs if o.n_intervals]
     if (ops.implication == "product" and ops.aggregation == "max" and geo) or (
@@ -524,6 +720,19 @@ def build_exact_spec(
         and_=ops.and_,
         or_=ops.or_,
         weighted=any_weight,
+        grid=grid is not None,
+        grid_weights=()
+        if grid is None or not any_weight
+        else wrap(
+            [
+                lit(grid[(i, j)].weight if (i, j) in grid else 0.0)
+                for i in range(len(rb.inputs[0].terms) + 1)
+                for j in range(len(rb.inputs[1].terms) + 1)
+            ]
+        ),
+        n_terms0=len(rb.inputs[0].terms),
+        n_terms1=len(rb.inputs[1].terms) if len(rb.inputs) > 1 else 0,
+        windows=windows or (),
     )
 
 

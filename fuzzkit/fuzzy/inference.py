@@ -870,3 +870,6 @@ def evaluate_point(
 #: elementary intervals with every piece's line in them.
 OutputPieces = _Pieces
 PiecewiseLinearGeometry = _ExactGeometry
+#: Centroid tables of a partition-style output (``None`` when more than two terms overlap or the
+#: operators are not min/max): the engine's fast centroid, which generated code can reuse.
+partition_centroid = _partition_centroid

@@ -11,306 +11,231 @@
 #include "macvicar_whelan.h"
 #include <math.h>
 
-static double macvicar_whelan_min(double a, double b)
-{
-    return a < b ? a : b;
-}
-
-static double macvicar_whelan_max(double a, double b)
-{
-    return a > b ? a : b;
-}
-
-/* Output 0 (du): the 12 elementary intervals on which every term is linear
- * (bounds), and in each the 2 pieces that can be non-zero there: piece index (7 = none),
- * and the line slope * y + intercept of its term. */
-static const double macvicar_whelan_z0[13] = {
-    -1.0, -0.83333333333333326, -0.66666666666666663, -0.5, -0.33333333333333331,
-    -0.16666666666666663, 0.0, 0.16666666666666663, 0.33333333333333326, 0.5, 0.66666666666666663,
-    0.83333333333333326, 1.0,
-};
-static const unsigned char macvicar_whelan_piece0[24] = {
-    0, 1, 0, 1, 1, 2, 1, 2, 2, 3, 2, 3, 3, 4, 3, 4,
-    4, 5, 4, 5, 5, 6, 5, 6,
-};
-static const double macvicar_whelan_slope0[24] = {
-    -3.0, 3.0, -3.0, 2.9999999999999978, -3.0, 3.0000000000000022,
-    -3.0000000000000009, 2.9999999999999991, -2.9999999999999991, 3.0000000000000009,
-    -3.0000000000000004, 3.0000000000000004, -3.0, 3.0000000000000018, -3.0000000000000013,
-    2.9999999999999996, -3.0, 3.0, -3.0000000000000022, 3.0, -2.9999999999999978,
-    3.0, -3.0, 3.0,
-};
-static const double macvicar_whelan_icpt0[24] = {
-    -1.9999999999999998, 3.0, -2.0, 2.9999999999999982, -0.99999999999999978, 2.0000000000000013,
-    -1.0000000000000004, 1.9999999999999996, 0.0, 1.0000000000000002, 0.0, 1.0,
-    1.0, 0.0, 1.0000000000000004, 0.0, 2.0, -0.99999999999999989,
-    2.0000000000000013, -0.99999999999999989, 2.9999999999999982, -1.9999999999999998, 3.0, -2.0,
+/* Input 0 (e): at most two neighbouring terms are non-zero anywhere. With k = the number
+ * of its cuts (-0.66666666666666663, -0.33333333333333331, 0.0, 0.33333333333333331, 0.66666666666666663) at or below x, they are first[k] and first[k] + 1;
+ * terms as (b, c, rise, fall), then a term that is 0 everywhere. */
+static const unsigned char macvicar_whelan_first0[6] = { 0, 1, 2, 3, 4, 5 };
+static const double macvicar_whelan_term0[32] = {
+    0.0, -1.0, 0.0, 2.9999999999999996,
+    -0.66666666666666663, -0.66666666666666663, 2.9999999999999996, 3.0,
+    -0.33333333333333331, -0.33333333333333331, 3.0, 3.0,
+    0.0, 0.0, 3.0, 3.0,
+    0.33333333333333331, 0.33333333333333331, 3.0, 3.0,
+    0.66666666666666663, 0.66666666666666663, 3.0, 2.9999999999999996,
+    1.0, 0.0, 2.9999999999999996, 0.0,
+    9.9999999999999997e+199, 0.0, 1.0, 0.0,
 };
 
-/* The aggregated membership at y inside one interval: slot lines (s, c) and slot levels lv. */
-static double macvicar_whelan_agg(const double *s, const double *c, const double *lv, int slots, double y)
-{
-    double acc = 0.0;
-    int q;
-    for (q = 0; q < slots; q++) {
-        double ell = s[q] * y + c[q];
-        double imp;
-        if (ell < 0.0) {
-            ell = 0.0;
-        }
-        imp = lv[q] < ell ? lv[q] : ell;
-        acc = imp > acc ? imp : acc;
-    }
-    return acc;
-}
+/* Input 1 (de): at most two neighbouring terms are non-zero anywhere. With k = the number
+ * of its cuts (-0.66666666666666663, -0.33333333333333331, 0.0, 0.33333333333333331, 0.66666666666666663) at or below x, they are first[k] and first[k] + 1;
+ * terms as (b, c, rise, fall), then a term that is 0 everywhere. */
+static const unsigned char macvicar_whelan_first1[6] = { 0, 1, 2, 3, 4, 5 };
+static const double macvicar_whelan_term1[32] = {
+    0.0, -1.0, 0.0, 2.9999999999999996,
+    -0.66666666666666663, -0.66666666666666663, 2.9999999999999996, 3.0,
+    -0.33333333333333331, -0.33333333333333331, 3.0, 3.0,
+    0.0, 0.0, 3.0, 3.0,
+    0.33333333333333331, 0.33333333333333331, 3.0, 3.0,
+    0.66666666666666663, 0.66666666666666663, 3.0, 2.9999999999999996,
+    1.0, 0.0, 2.9999999999999996, 0.0,
+    9.9999999999999997e+199, 0.0, 1.0, 0.0,
+};
 
-static void macvicar_whelan_sort(double *p, int n)
-{
-    int i, j;
-    for (i = 1; i < n; i++) {
-        double v = p[i];
-        for (j = i; j > 0 && p[j - 1] > v; j--) {
-            p[j] = p[j - 1];
-        }
-        p[j] = v;
-    }
-}
+/* Output 0 (du): the consequent term of rule cell (row term of e) * 8 + (column term of de); 7 = no rule (last row and column: padding). */
+static const unsigned char macvicar_whelan_cons0[64] = {
+    0, 0, 0, 0, 1, 2, 3, 7, 0, 0, 0, 1, 2, 3, 4, 7,
+    0, 0, 1, 2, 3, 4, 5, 7, 0, 1, 2, 3, 4, 5, 6, 7,
+    1, 2, 3, 4, 5, 6, 6, 7, 2, 3, 4, 5, 6, 6, 6, 7,
+    3, 4, 5, 6, 6, 6, 6, 7, 7, 7, 7, 7, 7, 7, 7, 7,
+};
 
-/* The sorted points of the interval [z0, z1] where the aggregated set may bend: its ends and
- * where a level meets a line (min implication, max aggregation); writes `points` values. */
-static void macvicar_whelan_interval(const double *s, const double *c, const double *lv, int slots, double z0, double z1, double *p, int points)
+/* Output 0 (du), centroid: at most two terms overlap anywhere, so the aggregated set
+ * is sum(term_i clipped at L_i) - sum(overlap_ij clipped at min(L_i, L_j)); the area and moment of
+ * each clipped function are piecewise cubics in its level (in units of (y - low) / width):
+ * per function, its level's terms (a, b) and sign; per piece, start level, 1/width and the
+ * coefficients (constant first). */
+static const unsigned char macvicar_whelan_fa0[13] = { 0, 1, 2, 3, 4, 5, 6, 0, 1, 2, 3, 4, 5 };
+static const unsigned char macvicar_whelan_fb0[13] = { 0, 1, 2, 3, 4, 5, 6, 1, 2, 3, 4, 5, 6 };
+static const double macvicar_whelan_fsign0[13] = { 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0, -1.0, -1.0, -1.0 };
+static const double macvicar_whelan_fstart0[39] = {
+    0.0, 0.5, 1.0000000000000002, 0.0, 0.5, 1.0000000000000002,
+    0.0, 0.49999999999999972, 0.99999999999999989, 0.0, 0.5, 1.0,
+    0.0, 0.49999999999999983, 1.0000000000000002, 0.0, 0.5, 1.0,
+    0.0, 0.5, 1.0, 0.0, 0.5, 1e+30,
+    0.0, 0.50000000000000022, 1e+30, 0.0, 0.49999999999999994, 1e+30,
+    0.0, 0.50000000000000011, 1e+30, 0.0, 0.50000000000000011, 1e+30,
+    0.0, 0.50000000000000022, 1e+30,
+};
+static const double macvicar_whelan_finvw0[39] = {
+    2.0, 1.9999999999999991, 1.0000000000000002, 2.0, 1.9999999999999991, 1.0000000000000002,
+    2.0000000000000013, 1.9999999999999991, 1.0, 2.0, 2.0, 1.0,
+    2.0000000000000009, 1.9999999999999982, 1.0000000000000002, 2.0, 2.0, 1.0,
+    2.0, 2.0, 1.0, 2.0, 1.0, 1.0,
+    1.9999999999999991, 1.0, 1.0, 2.0000000000000004, 1.0, 1.0,
+    1.9999999999999996, 1.0000000000000002, 1.0, 1.9999999999999996, 1.0000000000000002, 1.0,
+    1.9999999999999991, 1.0, 1.0,
+};
+static const double macvicar_whelan_farea0[156] = {
+    0.0, 0.083333333333333454, -0.02083333333333337, -1.1102230246251565e-16, 0.062500000000000014,
+    0.041666666666666963, -0.020833333333333481, 0.0, 0.08333333333333337, 2.2204460492503131e-16,
+    0.0, 0.0, 0.0, 0.16666666666666696, -0.041666666666666963, 0.0,
+    0.125, 0.083333333333333925, -0.041666666666666963, 0.0, 0.16666666666666669,
+    4.4408920985006262e-16, -8.8817841970012523e-16, -4.4408920985006262e-16, 0.0,
+    0.16666666666666696, -0.041666666666666741, 0.0, 0.12499999999999996, 0.083333333333334147,
+    -0.041666666666667851, 4.4408920985006262e-16, 0.16666666666666663, 2.2204460492503131e-16,
+    -8.8817841970012523e-16, -4.4408920985006262e-16, 0.0, 0.16666666666666696,
+    -0.041666666666666741, 0.0, 0.125, 0.083333333333333925, -0.041666666666666963, 0.0,
+    0.16666666666666663, 2.2204460492503131e-16, -8.8817841970012523e-16, -4.4408920985006262e-16,
+    0.0, 0.16666666666666696, -0.041666666666666963, 0.0, 0.125, 0.083333333333333925,
+    -0.041666666666666963, 0.0, 0.16666666666666669, 4.4408920985006262e-16,
+    -8.8817841970012523e-16, -4.4408920985006262e-16, 0.0, 0.16666666666666696,
+    -0.041666666666666963, 0.0, 0.125, 0.083333333333334147, -0.041666666666667851,
+    4.4408920985006262e-16, 0.16666666666666666, 6.6613381477509392e-16, -8.8817841970012523e-16,
+    0.0, 0.0, 0.083333333333333537, -0.020833333333333592, 0.0, 0.062500000000000056,
+    0.041666666666666852, -0.020833333333333037, 0.0, 0.083333333333333384, 1.1102230246251565e-16,
+    0.0, 0.0, 0.0, 0.083333333333333481, -0.041666666666666741, 0.0,
+    0.041666666666666671, 1.1102230246251565e-16, -2.2204460492503131e-16, -1.1102230246251565e-16,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.083333333333333481,
+    -0.041666666666666852, 0.0, 0.041666666666666685, 1.1102230246251565e-16, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.083333333333333454,
+    -0.041666666666666963, 1.1102230246251565e-16, 0.041666666666666644, 1.1102230246251565e-16,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.083333333333333481, -0.041666666666666963, 0.0, 0.041666666666666657,
+    5.5511151231257827e-17, -2.2204460492503131e-16, -1.1102230246251565e-16, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.083333333333333454, -0.041666666666666741, -5.5511151231257827e-17,
+    0.041666666666666657, 5.5511151231257827e-17, -2.2204460492503131e-16, -1.1102230246251565e-16,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.083333333333333565,
+    -0.041666666666666741, -1.1102230246251565e-16, 0.041666666666666699, 1.1102230246251565e-16,
+    0.0, -1.1102230246251565e-16, 0.0, 0.0, 0.0, 0.0,
+};
+static const double macvicar_whelan_fmoment0[156] = {
+    0.0, 0.0069444444444444562, -0.0034722222222222376, 0.00057870370370370627,
+    0.0040509259259259283, 0.0017361111111111327, -0.0017361111111111049, 0.00057870370370370627,
+    0.0046296296296296328, 1.3877787807814457e-17, 0.0, 0.0, 0.0, 0.027777777777777832,
+    -0.0069444444444444753, 0.0, 0.020833333333333336, 0.013888888888888923,
+    -0.0069444444444444198, -1.1102230246251565e-16, 0.027777777777777787, 5.5511151231257827e-17,
+    0.0, -1.1102230246251565e-16, 0.0, 0.055555555555555663, -0.013888888888889062,
+    5.5511151231257827e-17, 0.041666666666666657, 0.027777777777777957, -0.013888888888889062,
+    -1.1102230246251565e-16, 0.055555555555555552, 2.2204460492503131e-16, 0.0, 0.0, 0.0,
+    0.083333333333333481, -0.020833333333333481, 0.0, 0.0625, 0.041666666666666963,
+    -0.020833333333333481, 2.2204460492503131e-16, 0.083333333333333315, 1.1102230246251565e-16,
+    -4.4408920985006262e-16, -2.2204460492503131e-16, 0.0, 0.11111111111111127,
+    -0.027777777777777901, -1.1102230246251565e-16, 0.083333333333333315, 0.055555555555555802,
+    -0.027777777777777679, -2.2204460492503131e-16, 0.11111111111111112, 2.2204460492503131e-16,
+    0.0, 0.0, 0.0, 0.13888888888888923, -0.034722222222222543, 0.0,
+    0.10416666666666666, 0.069444444444444642, -0.034722222222222321, -4.4408920985006262e-16,
+    0.13888888888888887, 2.2204460492503131e-16, -4.4408920985006262e-16, -4.4408920985006262e-16,
+    0.0, 0.076388888888889117, -0.017361111111111271, -0.00057870370370372015,
+    0.058449074074074119, 0.039930555555555691, -0.019097222222222543, -0.00057870370370372015,
+    0.078703703703703748, 2.2204460492503131e-16, -4.4408920985006262e-16, -2.2204460492503131e-16,
+    0.0, 0.0069444444444444579, -0.0034722222222222307, 0.0, 0.0034722222222222238,
+    6.9388939039072284e-18, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.02083333333333337, -0.010416666666666713, 0.0, 0.01041666666666667,
+    2.7755575615628914e-17, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.034722222222222279, -0.017361111111111216, 2.7755575615628914e-17,
+    0.017361111111111105, 5.5511151231257827e-17, -1.1102230246251565e-16, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.048611111111111202, -0.024305555555555691, 5.5511151231257827e-17,
+    0.024305555555555552, 5.5511151231257827e-17, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.062500000000000111, -0.031250000000000167, 5.5511151231257827e-17,
+    0.031249999999999993, 5.5511151231257827e-17, -1.1102230246251565e-16, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.076388888888889062, -0.038194444444444531, 5.5511151231257827e-17,
+    0.038194444444444475, 1.1102230246251565e-16, 0.0, -1.1102230246251565e-16, 0.0, 0.0,
+    0.0, 0.0,
+};
+
+/* A piecewise-linear term in trapezoid form p = (b, c, rise, fall):
+ * clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1). */
+static double macvicar_whelan_trap(double x, const double *p)
 {
-    int n = 2;
-    int i;
-    int j;
-    p[0] = z0;
-    p[1] = z1;
-    for (i = 0; i < slots; i++) {
-        for (j = 0; j < slots; j++) {
-            double x = s[i] != 0.0 ? (lv[j] - c[i]) / s[i] : z0;
-            p[n++] = x < z0 ? z0 : (x > z1 ? z1 : x);
-        }
-    }
-    macvicar_whelan_sort(p, n);
-    (void)points;
+    double r = 1.0 + (x - p[0]) * p[2];
+    double l = 1.0 + (p[1] - x) * p[3];
+    double m = r < l ? r : l;
+    return m < 0.0 ? 0.0 : (m > 1.0 ? 1.0 : m);
 }
 
 void macvicar_whelan_eval(const double in[MACVICAR_WHELAN_N_INPUTS], double out[MACVICAR_WHELAN_N_OUTPUTS])
 {
-    double x;
-    double mu[14];
-    double w[49];
-    int k;
+    double x0, x1, m0[2], m1[2];
+    int i0 = 0, j0 = 0, q;
+    double lv0[8]; /* piece levels of output 0, then 0 */
     if (in[0] != in[0] || in[1] != in[1]) {
         out[0] = NAN;
         return;
     }
 
-    /* Input 0 (e): clamped to its range, then its terms. */
-    x = in[0];
-    if (x < -1.0) {
-        x = -1.0;
-    } else if (x > 1.0) {
-        x = 1.0;
+    /* Input 0 (e): clamped to its range; its two possibly non-zero terms. */
+    x0 = in[0];
+    if (x0 < -1.0) {
+        x0 = -1.0;
+    } else if (x0 > 1.0) {
+        x0 = 1.0;
     }
-    {
-        /* NL: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        double r = 1.0 + (x - (0.0)) * 0.0;
-        double l = 1.0 + ((-1.0) - x) * 2.9999999999999996;
-        double m = r < l ? r : l;
-        mu[0] = m < 0.0 ? 0.0 : (m > 1.0 ? 1.0 : m);
-    }
-    {
-        /* NM: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        double r = 1.0 + (x - (-0.66666666666666663)) * 2.9999999999999996;
-        double l = 1.0 + ((-0.66666666666666663) - x) * 3.0;
-        double m = r < l ? r : l;
-        mu[1] = m < 0.0 ? 0.0 : (m > 1.0 ? 1.0 : m);
-    }
-    {
-        /* NS: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        double r = 1.0 + (x - (-0.33333333333333331)) * 3.0;
-        double l = 1.0 + ((-0.33333333333333331) - x) * 3.0;
-        double m = r < l ? r : l;
-        mu[2] = m < 0.0 ? 0.0 : (m > 1.0 ? 1.0 : m);
-    }
-    {
-        /* ZR: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        double r = 1.0 + (x - (0.0)) * 3.0;
-        double l = 1.0 + ((0.0) - x) * 3.0;
-        double m = r < l ? r : l;
-        mu[3] = m < 0.0 ? 0.0 : (m > 1.0 ? 1.0 : m);
-    }
-    {
-        /* PS: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        double r = 1.0 + (x - (0.33333333333333331)) * 3.0;
-        double l = 1.0 + ((0.33333333333333331) - x) * 3.0;
-        double m = r < l ? r : l;
-        mu[4] = m < 0.0 ? 0.0 : (m > 1.0 ? 1.0 : m);
-    }
-    {
-        /* PM: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        double r = 1.0 + (x - (0.66666666666666663)) * 3.0;
-        double l = 1.0 + ((0.66666666666666663) - x) * 2.9999999999999996;
-        double m = r < l ? r : l;
-        mu[5] = m < 0.0 ? 0.0 : (m > 1.0 ? 1.0 : m);
-    }
-    {
-        /* PL: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        double r = 1.0 + (x - (1.0)) * 2.9999999999999996;
-        double l = 1.0 + ((0.0) - x) * 0.0;
-        double m = r < l ? r : l;
-        mu[6] = m < 0.0 ? 0.0 : (m > 1.0 ? 1.0 : m);
-    }
+    q = 0;
+    q += x0 >= -0.66666666666666663;
+    q += x0 >= -0.33333333333333331;
+    q += x0 >= 0.0;
+    q += x0 >= 0.33333333333333331;
+    q += x0 >= 0.66666666666666663;
+    i0 = macvicar_whelan_first0[q];
+    m0[0] = macvicar_whelan_trap(x0, macvicar_whelan_term0 + 4 * i0);
+    m0[1] = macvicar_whelan_trap(x0, macvicar_whelan_term0 + 4 * (i0 + 1));
 
-    /* Input 1 (de): clamped to its range, then its terms. */
-    x = in[1];
-    if (x < -1.0) {
-        x = -1.0;
-    } else if (x > 1.0) {
-        x = 1.0;
+    /* Input 1 (de): clamped to its range; its two possibly non-zero terms. */
+    x1 = in[1];
+    if (x1 < -1.0) {
+        x1 = -1.0;
+    } else if (x1 > 1.0) {
+        x1 = 1.0;
     }
-    {
-        /* NL: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        double r = 1.0 + (x - (0.0)) * 0.0;
-        double l = 1.0 + ((-1.0) - x) * 2.9999999999999996;
-        double m = r < l ? r : l;
-        mu[7] = m < 0.0 ? 0.0 : (m > 1.0 ? 1.0 : m);
-    }
-    {
-        /* NM: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        double r = 1.0 + (x - (-0.66666666666666663)) * 2.9999999999999996;
-        double l = 1.0 + ((-0.66666666666666663) - x) * 3.0;
-        double m = r < l ? r : l;
-        mu[8] = m < 0.0 ? 0.0 : (m > 1.0 ? 1.0 : m);
-    }
-    {
-        /* NS: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        double r = 1.0 + (x - (-0.33333333333333331)) * 3.0;
-        double l = 1.0 + ((-0.33333333333333331) - x) * 3.0;
-        double m = r < l ? r : l;
-        mu[9] = m < 0.0 ? 0.0 : (m > 1.0 ? 1.0 : m);
-    }
-    {
-        /* ZR: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        double r = 1.0 + (x - (0.0)) * 3.0;
-        double l = 1.0 + ((0.0) - x) * 3.0;
-        double m = r < l ? r : l;
-        mu[10] = m < 0.0 ? 0.0 : (m > 1.0 ? 1.0 : m);
-    }
-    {
-        /* PS: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        double r = 1.0 + (x - (0.33333333333333331)) * 3.0;
-        double l = 1.0 + ((0.33333333333333331) - x) * 3.0;
-        double m = r < l ? r : l;
-        mu[11] = m < 0.0 ? 0.0 : (m > 1.0 ? 1.0 : m);
-    }
-    {
-        /* PM: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        double r = 1.0 + (x - (0.66666666666666663)) * 3.0;
-        double l = 1.0 + ((0.66666666666666663) - x) * 2.9999999999999996;
-        double m = r < l ? r : l;
-        mu[12] = m < 0.0 ? 0.0 : (m > 1.0 ? 1.0 : m);
-    }
-    {
-        /* PL: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        double r = 1.0 + (x - (1.0)) * 2.9999999999999996;
-        double l = 1.0 + ((0.0) - x) * 0.0;
-        double m = r < l ? r : l;
-        mu[13] = m < 0.0 ? 0.0 : (m > 1.0 ? 1.0 : m);
-    }
+    q = 0;
+    q += x1 >= -0.66666666666666663;
+    q += x1 >= -0.33333333333333331;
+    q += x1 >= 0.0;
+    q += x1 >= 0.33333333333333331;
+    q += x1 >= 0.66666666666666663;
+    j0 = macvicar_whelan_first1[q];
+    m1[0] = macvicar_whelan_trap(x1, macvicar_whelan_term1 + 4 * j0);
+    m1[1] = macvicar_whelan_trap(x1, macvicar_whelan_term1 + 4 * (j0 + 1));
 
-    /* Firing strengths (min AND, max OR, NOT = 1 - mu). */
-    w[0] = macvicar_whelan_min(mu[0], mu[7]); /* e is NL and de is NL */
-    w[1] = macvicar_whelan_min(mu[0], mu[8]); /* e is NL and de is NM */
-    w[2] = macvicar_whelan_min(mu[0], mu[9]); /* e is NL and de is NS */
-    w[3] = macvicar_whelan_min(mu[0], mu[10]); /* e is NL and de is ZR */
-    w[4] = macvicar_whelan_min(mu[0], mu[11]); /* e is NL and de is PS */
-    w[5] = macvicar_whelan_min(mu[0], mu[12]); /* e is NL and de is PM */
-    w[6] = macvicar_whelan_min(mu[0], mu[13]); /* e is NL and de is PL */
-    w[7] = macvicar_whelan_min(mu[1], mu[7]); /* e is NM and de is NL */
-    w[8] = macvicar_whelan_min(mu[1], mu[8]); /* e is NM and de is NM */
-    w[9] = macvicar_whelan_min(mu[1], mu[9]); /* e is NM and de is NS */
-    w[10] = macvicar_whelan_min(mu[1], mu[10]); /* e is NM and de is ZR */
-    w[11] = macvicar_whelan_min(mu[1], mu[11]); /* e is NM and de is PS */
-    w[12] = macvicar_whelan_min(mu[1], mu[12]); /* e is NM and de is PM */
-    w[13] = macvicar_whelan_min(mu[1], mu[13]); /* e is NM and de is PL */
-    w[14] = macvicar_whelan_min(mu[2], mu[7]); /* e is NS and de is NL */
-    w[15] = macvicar_whelan_min(mu[2], mu[8]); /* e is NS and de is NM */
-    w[16] = macvicar_whelan_min(mu[2], mu[9]); /* e is NS and de is NS */
-    w[17] = macvicar_whelan_min(mu[2], mu[10]); /* e is NS and de is ZR */
-    w[18] = macvicar_whelan_min(mu[2], mu[11]); /* e is NS and de is PS */
-    w[19] = macvicar_whelan_min(mu[2], mu[12]); /* e is NS and de is PM */
-    w[20] = macvicar_whelan_min(mu[2], mu[13]); /* e is NS and de is PL */
-    w[21] = macvicar_whelan_min(mu[3], mu[7]); /* e is ZR and de is NL */
-    w[22] = macvicar_whelan_min(mu[3], mu[8]); /* e is ZR and de is NM */
-    w[23] = macvicar_whelan_min(mu[3], mu[9]); /* e is ZR and de is NS */
-    w[24] = macvicar_whelan_min(mu[3], mu[10]); /* e is ZR and de is ZR */
-    w[25] = macvicar_whelan_min(mu[3], mu[11]); /* e is ZR and de is PS */
-    w[26] = macvicar_whelan_min(mu[3], mu[12]); /* e is ZR and de is PM */
-    w[27] = macvicar_whelan_min(mu[3], mu[13]); /* e is ZR and de is PL */
-    w[28] = macvicar_whelan_min(mu[4], mu[7]); /* e is PS and de is NL */
-    w[29] = macvicar_whelan_min(mu[4], mu[8]); /* e is PS and de is NM */
-    w[30] = macvicar_whelan_min(mu[4], mu[9]); /* e is PS and de is NS */
-    w[31] = macvicar_whelan_min(mu[4], mu[10]); /* e is PS and de is ZR */
-    w[32] = macvicar_whelan_min(mu[4], mu[11]); /* e is PS and de is PS */
-    w[33] = macvicar_whelan_min(mu[4], mu[12]); /* e is PS and de is PM */
-    w[34] = macvicar_whelan_min(mu[4], mu[13]); /* e is PS and de is PL */
-    w[35] = macvicar_whelan_min(mu[5], mu[7]); /* e is PM and de is NL */
-    w[36] = macvicar_whelan_min(mu[5], mu[8]); /* e is PM and de is NM */
-    w[37] = macvicar_whelan_min(mu[5], mu[9]); /* e is PM and de is NS */
-    w[38] = macvicar_whelan_min(mu[5], mu[10]); /* e is PM and de is ZR */
-    w[39] = macvicar_whelan_min(mu[5], mu[11]); /* e is PM and de is PS */
-    w[40] = macvicar_whelan_min(mu[5], mu[12]); /* e is PM and de is PM */
-    w[41] = macvicar_whelan_min(mu[5], mu[13]); /* e is PM and de is PL */
-    w[42] = macvicar_whelan_min(mu[6], mu[7]); /* e is PL and de is NL */
-    w[43] = macvicar_whelan_min(mu[6], mu[8]); /* e is PL and de is NM */
-    w[44] = macvicar_whelan_min(mu[6], mu[9]); /* e is PL and de is NS */
-    w[45] = macvicar_whelan_min(mu[6], mu[10]); /* e is PL and de is ZR */
-    w[46] = macvicar_whelan_min(mu[6], mu[11]); /* e is PL and de is PS */
-    w[47] = macvicar_whelan_min(mu[6], mu[12]); /* e is PL and de is PM */
-    w[48] = macvicar_whelan_min(mu[6], mu[13]); /* e is PL and de is PL */
+    /* Rules as a table: only the 2 x 2 cells of the non-zero terms can fire (min AND); each adds to its term's level (max). */
+    {
+        int a, b;
+        for (a = 0; a <= 7; a++) {
+            lv0[a] = 0.0;
+        }
+        for (a = 0; a < 2; a++) {
+            for (b = 0; b < 2; b++) {
+                const int cell = (i0 + a) * 8 + j0 + b;
+                double w;
+                int t;
+                w = m0[a] < m1[b] ? m0[a] : m1[b];
+                t = macvicar_whelan_cons0[cell];
+                lv0[t] = w > lv0[t] ? w : lv0[t];
+            }
+        }
+        lv0[7] = 0.0;
+    }
 
     /* Output 0 (du): centroid. */
     {
-        double lv[8];
-        double p[72];
-        double f[72];
-        lv[0] = macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(w[0], w[1]), w[2]), w[3]), w[7]), w[8]), w[9]), w[14]), w[15]), w[21]);
-        lv[1] = macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(w[4], w[10]), w[16]), w[22]), w[28]);
-        lv[2] = macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(w[5], w[11]), w[17]), w[23]), w[29]), w[35]);
-        lv[3] = macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(w[6], w[12]), w[18]), w[24]), w[30]), w[36]), w[42]);
-        lv[4] = macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(w[13], w[19]), w[25]), w[31]), w[37]), w[43]);
-        lv[5] = macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(w[20], w[26]), w[32]), w[38]), w[44]);
-        lv[6] = macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(w[27], w[33]), w[34]), w[39]), w[40]), w[41]), w[45]), w[46]), w[47]), w[48]);
-        lv[7] = 0.0;
-        /* The points of every interval and the aggregated set at them. */
-        for (k = 0; k < 12; k++) {
-            const double *s = macvicar_whelan_slope0 + k * 2;
-            const double *c = macvicar_whelan_icpt0 + k * 2;
-            double sl[2];
-            int q;
-            for (q = 0; q < 2; q++) {
-                sl[q] = lv[macvicar_whelan_piece0[k * 2 + q]];
+        double area = 0.0, moment = 0.0;
+        int f;
+        for (f = 0; f < 13; f++) {
+            double la = lv0[macvicar_whelan_fa0[f]], lb = lv0[macvicar_whelan_fb0[f]];
+            double lev = la < lb ? la : lb;
+            int k = f * 3;
+            double s;
+            const double *ca, *cm;
+            for (q = 1; q < 3; q++) {
+                k += lev >= macvicar_whelan_fstart0[f * 3 + q];
             }
-            macvicar_whelan_interval(s, c, sl, 2, macvicar_whelan_z0[k], macvicar_whelan_z0[k + 1], p + k * 6, 6);
-            for (q = 0; q < 6; q++) {
-                f[k * 6 + q] = macvicar_whelan_agg(s, c, sl, 2, p[k * 6 + q]);
-            }
+            s = (lev - macvicar_whelan_fstart0[k]) * macvicar_whelan_finvw0[k];
+            ca = macvicar_whelan_farea0 + 4 * k;
+            cm = macvicar_whelan_fmoment0 + 4 * k;
+            area += macvicar_whelan_fsign0[f] * (((ca[3] * s + ca[2]) * s + ca[1]) * s + ca[0]);
+            moment += macvicar_whelan_fsign0[f] * (((cm[3] * s + cm[2]) * s + cm[1]) * s + cm[0]);
         }
-
-        {
-            double area = 0.0, moment = 0.0;
-            int j;
-            for (k = 0; k < 12; k++) {
-                for (j = k * 6; j < (k + 1) * 6 - 1; j++) {
-                    double h = p[j + 1] - p[j];
-                    area += 0.5 * h * (f[j] + f[j + 1]);
-                    moment += h / 6.0 * (p[j] * (2.0 * f[j] + f[j + 1]) + p[j + 1] * (f[j] + 2.0 * f[j + 1]));
-                }
-            }
-            out[0] = area > 1e-300 ? moment / area : NAN;
-        }
+        out[0] = area > 1e-300 ? -1.0 + 2.0 * (moment / area) : NAN;
     }
 }
 

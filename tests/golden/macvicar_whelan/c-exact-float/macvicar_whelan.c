@@ -11,305 +11,222 @@
 #include "macvicar_whelan.h"
 #include <math.h>
 
-static float macvicar_whelan_min(float a, float b)
-{
-    return a < b ? a : b;
-}
-
-static float macvicar_whelan_max(float a, float b)
-{
-    return a > b ? a : b;
-}
-
-/* Output 0 (du): the 12 elementary intervals on which every term is linear
- * (bounds), and in each the 2 pieces that can be non-zero there: piece index (7 = none),
- * and the line slope * y + intercept of its term. */
-static const float macvicar_whelan_z0[13] = {
-    -1.0f, -0.833333313f, -0.666666687f, -0.5f, -0.333333343f, -0.166666672f,
-    0.0f, 0.166666672f, 0.333333343f, 0.5f, 0.666666687f, 0.833333313f,
-    1.0f,
-};
-static const unsigned char macvicar_whelan_piece0[24] = {
-    0, 1, 0, 1, 1, 2, 1, 2, 2, 3, 2, 3, 3, 4, 3, 4,
-    4, 5, 4, 5, 5, 6, 5, 6,
-};
-static const float macvicar_whelan_slope0[24] = {
-    -3.0f, 3.0f, -3.0f, 3.0f, -3.0f, 3.0f,
-    -3.0f, 3.0f, -3.0f, 3.0f, -3.0f, 3.0f,
-    -3.0f, 3.0f, -3.0f, 3.0f, -3.0f, 3.0f,
-    -3.0f, 3.0f, -3.0f, 3.0f, -3.0f, 3.0f,
-};
-static const float macvicar_whelan_icpt0[24] = {
-    -2.0f, 3.0f, -2.0f, 3.0f, -1.0f, 2.0f,
-    -1.0f, 2.0f, 0.0f, 1.0f, 0.0f, 1.0f,
-    1.0f, 0.0f, 1.0f, 0.0f, 2.0f, -1.0f,
-    2.0f, -1.0f, 3.0f, -2.0f, 3.0f, -2.0f,
+/* Input 0 (e): at most two neighbouring terms are non-zero anywhere. With k = the number
+ * of its cuts (-0.666666687f, -0.333333343f, 0.0f, 0.333333343f, 0.666666687f) at or below x, they are first[k] and first[k] + 1;
+ * terms as (b, c, rise, fall), then a term that is 0 everywhere. */
+static const unsigned char macvicar_whelan_first0[6] = { 0, 1, 2, 3, 4, 5 };
+static const float macvicar_whelan_term0[32] = {
+    0.0f, -1.0f, 0.0f, 3.0f,
+    -0.666666687f, -0.666666687f, 3.0f, 3.0f,
+    -0.333333343f, -0.333333343f, 3.0f, 3.0f,
+    0.0f, 0.0f, 3.0f, 3.0f,
+    0.333333343f, 0.333333343f, 3.0f, 3.0f,
+    0.666666687f, 0.666666687f, 3.0f, 3.0f,
+    1.0f, 0.0f, 3.0f, 0.0f,
+    1.00000002e+30f, 0.0f, 1.0f, 0.0f,
 };
 
-/* The aggregated membership at y inside one interval: slot lines (s, c) and slot levels lv. */
-static float macvicar_whelan_agg(const float *s, const float *c, const float *lv, int slots, float y)
-{
-    float acc = 0.0f;
-    int q;
-    for (q = 0; q < slots; q++) {
-        float ell = s[q] * y + c[q];
-        float imp;
-        if (ell < 0.0f) {
-            ell = 0.0f;
-        }
-        imp = lv[q] < ell ? lv[q] : ell;
-        acc = imp > acc ? imp : acc;
-    }
-    return acc;
-}
+/* Input 1 (de): at most two neighbouring terms are non-zero anywhere. With k = the number
+ * of its cuts (-0.666666687f, -0.333333343f, 0.0f, 0.333333343f, 0.666666687f) at or below x, they are first[k] and first[k] + 1;
+ * terms as (b, c, rise, fall), then a term that is 0 everywhere. */
+static const unsigned char macvicar_whelan_first1[6] = { 0, 1, 2, 3, 4, 5 };
+static const float macvicar_whelan_term1[32] = {
+    0.0f, -1.0f, 0.0f, 3.0f,
+    -0.666666687f, -0.666666687f, 3.0f, 3.0f,
+    -0.333333343f, -0.333333343f, 3.0f, 3.0f,
+    0.0f, 0.0f, 3.0f, 3.0f,
+    0.333333343f, 0.333333343f, 3.0f, 3.0f,
+    0.666666687f, 0.666666687f, 3.0f, 3.0f,
+    1.0f, 0.0f, 3.0f, 0.0f,
+    1.00000002e+30f, 0.0f, 1.0f, 0.0f,
+};
 
-static void macvicar_whelan_sort(float *p, int n)
-{
-    int i, j;
-    for (i = 1; i < n; i++) {
-        float v = p[i];
-        for (j = i; j > 0 && p[j - 1] > v; j--) {
-            p[j] = p[j - 1];
-        }
-        p[j] = v;
-    }
-}
+/* Output 0 (du): the consequent term of rule cell (row term of e) * 8 + (column term of de); 7 = no rule (last row and column: padding). */
+static const unsigned char macvicar_whelan_cons0[64] = {
+    0, 0, 0, 0, 1, 2, 3, 7, 0, 0, 0, 1, 2, 3, 4, 7,
+    0, 0, 1, 2, 3, 4, 5, 7, 0, 1, 2, 3, 4, 5, 6, 7,
+    1, 2, 3, 4, 5, 6, 6, 7, 2, 3, 4, 5, 6, 6, 6, 7,
+    3, 4, 5, 6, 6, 6, 6, 7, 7, 7, 7, 7, 7, 7, 7, 7,
+};
 
-/* The sorted points of the interval [z0, z1] where the aggregated set may bend: its ends and
- * where a level meets a line (min implication, max aggregation); writes `points` values. */
-static void macvicar_whelan_interval(const float *s, const float *c, const float *lv, int slots, float z0, float z1, float *p, int points)
+/* Output 0 (du), centroid: at most two terms overlap anywhere, so the aggregated set
+ * is sum(term_i clipped at L_i) - sum(overlap_ij clipped at min(L_i, L_j)); the area and moment of
+ * each clipped function are piecewise cubics in its level (in units of (y - low) / width):
+ * per function, its level's terms (a, b) and sign; per piece, start level, 1/width and the
+ * coefficients (constant first). */
+static const unsigned char macvicar_whelan_fa0[13] = { 0, 1, 2, 3, 4, 5, 6, 0, 1, 2, 3, 4, 5 };
+static const unsigned char macvicar_whelan_fb0[13] = { 0, 1, 2, 3, 4, 5, 6, 1, 2, 3, 4, 5, 6 };
+static const float macvicar_whelan_fsign0[13] = { 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, -1.0f, -1.0f, -1.0f, -1.0f, -1.0f, -1.0f };
+static const float macvicar_whelan_fstart0[39] = {
+    0.0f, 0.5f, 1.0f, 0.0f, 0.5f, 1.0f,
+    0.0f, 0.5f, 1.0f, 0.0f, 0.5f, 1.0f,
+    0.0f, 0.5f, 1.0f, 0.0f, 0.5f, 1.0f,
+    0.0f, 0.5f, 1.0f, 0.0f, 0.5f, 1.00000002e+30f,
+    0.0f, 0.5f, 1.00000002e+30f, 0.0f, 0.5f, 1.00000002e+30f,
+    0.0f, 0.5f, 1.00000002e+30f, 0.0f, 0.5f, 1.00000002e+30f,
+    0.0f, 0.5f, 1.00000002e+30f,
+};
+static const float macvicar_whelan_finvw0[39] = {
+    2.0f, 2.0f, 1.0f, 2.0f, 2.0f, 1.0f,
+    2.0f, 2.0f, 1.0f, 2.0f, 2.0f, 1.0f,
+    2.0f, 2.0f, 1.0f, 2.0f, 2.0f, 1.0f,
+    2.0f, 2.0f, 1.0f, 2.0f, 1.0f, 1.0f,
+    2.0f, 1.0f, 1.0f, 2.0f, 1.0f, 1.0f,
+    2.0f, 1.0f, 1.0f, 2.0f, 1.0f, 1.0f,
+    2.0f, 1.0f, 1.0f,
+};
+static const float macvicar_whelan_farea0[156] = {
+    0.0f, 0.0833333358f, -0.020833334f, -1.11022302e-16f, 0.0625f, 0.0416666679f,
+    -0.020833334f, 0.0f, 0.0833333358f, 2.22044605e-16f, 0.0f, 0.0f,
+    0.0f, 0.166666672f, -0.0416666679f, 0.0f, 0.125f, 0.0833333358f,
+    -0.0416666679f, 0.0f, 0.166666672f, 4.4408921e-16f, -8.8817842e-16f, -4.4408921e-16f,
+    0.0f, 0.166666672f, -0.0416666679f, 0.0f, 0.125f, 0.0833333358f,
+    -0.0416666679f, 4.4408921e-16f, 0.166666672f, 2.22044605e-16f, -8.8817842e-16f,
+    -4.4408921e-16f, 0.0f, 0.166666672f, -0.0416666679f, 0.0f, 0.125f,
+    0.0833333358f, -0.0416666679f, 0.0f, 0.166666672f, 2.22044605e-16f, -8.8817842e-16f,
+    -4.4408921e-16f, 0.0f, 0.166666672f, -0.0416666679f, 0.0f, 0.125f,
+    0.0833333358f, -0.0416666679f, 0.0f, 0.166666672f, 4.4408921e-16f, -8.8817842e-16f,
+    -4.4408921e-16f, 0.0f, 0.166666672f, -0.0416666679f, 0.0f, 0.125f,
+    0.0833333358f, -0.0416666679f, 4.4408921e-16f, 0.166666672f, 6.66133815e-16f, -8.8817842e-16f,
+    0.0f, 0.0f, 0.0833333358f, -0.020833334f, 0.0f, 0.0625f,
+    0.0416666679f, -0.020833334f, 0.0f, 0.0833333358f, 1.11022302e-16f, 0.0f,
+    0.0f, 0.0f, 0.0833333358f, -0.0416666679f, 0.0f, 0.0416666679f,
+    1.11022302e-16f, -2.22044605e-16f, -1.11022302e-16f, 0.0f, 0.0f, 0.0f,
+    0.0f, 0.0f, 0.0833333358f, -0.0416666679f, 0.0f, 0.0416666679f,
+    1.11022302e-16f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f,
+    0.0f, 0.0f, 0.0833333358f, -0.0416666679f, 1.11022302e-16f, 0.0416666679f,
+    1.11022302e-16f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f,
+    0.0f, 0.0f, 0.0833333358f, -0.0416666679f, 0.0f, 0.0416666679f,
+    5.55111512e-17f, -2.22044605e-16f, -1.11022302e-16f, 0.0f, 0.0f, 0.0f,
+    0.0f, 0.0f, 0.0833333358f, -0.0416666679f, -5.55111512e-17f, 0.0416666679f,
+    5.55111512e-17f, -2.22044605e-16f, -1.11022302e-16f, 0.0f, 0.0f, 0.0f,
+    0.0f, 0.0f, 0.0833333358f, -0.0416666679f, -1.11022302e-16f, 0.0416666679f,
+    1.11022302e-16f, 0.0f, -1.11022302e-16f, 0.0f, 0.0f, 0.0f,
+    0.0f,
+};
+static const float macvicar_whelan_fmoment0[156] = {
+    0.0f, 0.0069444445f, -0.00347222225f, 0.000578703708f, 0.00405092584f, 0.00173611112f,
+    -0.00173611112f, 0.000578703708f, 0.00462962966f, 1.38777878e-17f, 0.0f, 0.0f,
+    0.0f, 0.027777778f, -0.0069444445f, 0.0f, 0.020833334f, 0.013888889f,
+    -0.0069444445f, -1.11022302e-16f, 0.027777778f, 5.55111512e-17f, 0.0f, -1.11022302e-16f,
+    0.0f, 0.055555556f, -0.013888889f, 5.55111512e-17f, 0.0416666679f, 0.027777778f,
+    -0.013888889f, -1.11022302e-16f, 0.055555556f, 2.22044605e-16f, 0.0f, 0.0f,
+    0.0f, 0.0833333358f, -0.020833334f, 0.0f, 0.0625f, 0.0416666679f,
+    -0.020833334f, 2.22044605e-16f, 0.0833333358f, 1.11022302e-16f, -4.4408921e-16f,
+    -2.22044605e-16f, 0.0f, 0.111111112f, -0.027777778f, -1.11022302e-16f, 0.0833333358f,
+    0.055555556f, -0.027777778f, -2.22044605e-16f, 0.111111112f, 2.22044605e-16f, 0.0f,
+    0.0f, 0.0f, 0.138888896f, -0.0347222239f, 0.0f, 0.104166664f,
+    0.0694444478f, -0.0347222239f, -4.4408921e-16f, 0.138888896f, 2.22044605e-16f, -4.4408921e-16f,
+    -4.4408921e-16f, 0.0f, 0.0763888881f, -0.0173611119f, -0.000578703708f, 0.0584490746f,
+    0.039930556f, -0.019097222f, -0.000578703708f, 0.0787037015f, 2.22044605e-16f, -4.4408921e-16f,
+    -2.22044605e-16f, 0.0f, 0.0069444445f, -0.00347222225f, 0.0f, 0.00347222225f,
+    6.9388939e-18f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f,
+    0.0f, 0.0f, 0.020833334f, -0.010416667f, 0.0f, 0.010416667f,
+    2.77555756e-17f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f,
+    0.0f, 0.0f, 0.0347222239f, -0.0173611119f, 2.77555756e-17f, 0.0173611119f,
+    5.55111512e-17f, -1.11022302e-16f, 0.0f, 0.0f, 0.0f, 0.0f,
+    0.0f, 0.0f, 0.0486111119f, -0.024305556f, 5.55111512e-17f, 0.024305556f,
+    5.55111512e-17f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f,
+    0.0f, 0.0f, 0.0625f, -0.03125f, 5.55111512e-17f, 0.03125f,
+    5.55111512e-17f, -1.11022302e-16f, 0.0f, 0.0f, 0.0f, 0.0f,
+    0.0f, 0.0f, 0.0763888881f, -0.038194444f, 5.55111512e-17f, 0.038194444f,
+    1.11022302e-16f, 0.0f, -1.11022302e-16f, 0.0f, 0.0f, 0.0f,
+    0.0f,
+};
+
+/* A piecewise-linear term in trapezoid form p = (b, c, rise, fall):
+ * clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1). */
+static float macvicar_whelan_trap(float x, const float *p)
 {
-    int n = 2;
-    int i;
-    int j;
-    p[0] = z0;
-    p[1] = z1;
-    for (i = 0; i < slots; i++) {
-        for (j = 0; j < slots; j++) {
-            float x = s[i] != 0.0f ? (lv[j] - c[i]) / s[i] : z0;
-            p[n++] = x < z0 ? z0 : (x > z1 ? z1 : x);
-        }
-    }
-    macvicar_whelan_sort(p, n);
-    (void)points;
+    float r = 1.0f + (x - p[0]) * p[2];
+    float l = 1.0f + (p[1] - x) * p[3];
+    float m = r < l ? r : l;
+    return m < 0.0f ? 0.0f : (m > 1.0f ? 1.0f : m);
 }
 
 void macvicar_whelan_eval(const float in[MACVICAR_WHELAN_N_INPUTS], float out[MACVICAR_WHELAN_N_OUTPUTS])
 {
-    float x;
-    float mu[14];
-    float w[49];
-    int k;
+    float x0, x1, m0[2], m1[2];
+    int i0 = 0, j0 = 0, q;
+    float lv0[8]; /* piece levels of output 0, then 0 */
     if (in[0] != in[0] || in[1] != in[1]) {
         out[0] = NAN;
         return;
     }
 
-    /* Input 0 (e): clamped to its range, then its terms. */
-    x = in[0];
-    if (x < -1.0f) {
-        x = -1.0f;
-    } else if (x > 1.0f) {
-        x = 1.0f;
+    /* Input 0 (e): clamped to its range; its two possibly non-zero terms. */
+    x0 = in[0];
+    if (x0 < -1.0f) {
+        x0 = -1.0f;
+    } else if (x0 > 1.0f) {
+        x0 = 1.0f;
     }
-    {
-        /* NL: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        float r = 1.0f + (x - (0.0f)) * 0.0f;
-        float l = 1.0f + ((-1.0f) - x) * 3.0f;
-        float m = r < l ? r : l;
-        mu[0] = m < 0.0f ? 0.0f : (m > 1.0f ? 1.0f : m);
-    }
-    {
-        /* NM: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        float r = 1.0f + (x - (-0.666666687f)) * 3.0f;
-        float l = 1.0f + ((-0.666666687f) - x) * 3.0f;
-        float m = r < l ? r : l;
-        mu[1] = m < 0.0f ? 0.0f : (m > 1.0f ? 1.0f : m);
-    }
-    {
-        /* NS: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        float r = 1.0f + (x - (-0.333333343f)) * 3.0f;
-        float l = 1.0f + ((-0.333333343f) - x) * 3.0f;
-        float m = r < l ? r : l;
-        mu[2] = m < 0.0f ? 0.0f : (m > 1.0f ? 1.0f : m);
-    }
-    {
-        /* ZR: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        float r = 1.0f + (x - (0.0f)) * 3.0f;
-        float l = 1.0f + ((0.0f) - x) * 3.0f;
-        float m = r < l ? r : l;
-        mu[3] = m < 0.0f ? 0.0f : (m > 1.0f ? 1.0f : m);
-    }
-    {
-        /* PS: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        float r = 1.0f + (x - (0.333333343f)) * 3.0f;
-        float l = 1.0f + ((0.333333343f) - x) * 3.0f;
-        float m = r < l ? r : l;
-        mu[4] = m < 0.0f ? 0.0f : (m > 1.0f ? 1.0f : m);
-    }
-    {
-        /* PM: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        float r = 1.0f + (x - (0.666666687f)) * 3.0f;
-        float l = 1.0f + ((0.666666687f) - x) * 3.0f;
-        float m = r < l ? r : l;
-        mu[5] = m < 0.0f ? 0.0f : (m > 1.0f ? 1.0f : m);
-    }
-    {
-        /* PL: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        float r = 1.0f + (x - (1.0f)) * 3.0f;
-        float l = 1.0f + ((0.0f) - x) * 0.0f;
-        float m = r < l ? r : l;
-        mu[6] = m < 0.0f ? 0.0f : (m > 1.0f ? 1.0f : m);
-    }
+    q = 0;
+    q += x0 >= -0.666666687f;
+    q += x0 >= -0.333333343f;
+    q += x0 >= 0.0f;
+    q += x0 >= 0.333333343f;
+    q += x0 >= 0.666666687f;
+    i0 = macvicar_whelan_first0[q];
+    m0[0] = macvicar_whelan_trap(x0, macvicar_whelan_term0 + 4 * i0);
+    m0[1] = macvicar_whelan_trap(x0, macvicar_whelan_term0 + 4 * (i0 + 1));
 
-    /* Input 1 (de): clamped to its range, then its terms. */
-    x = in[1];
-    if (x < -1.0f) {
-        x = -1.0f;
-    } else if (x > 1.0f) {
-        x = 1.0f;
+    /* Input 1 (de): clamped to its range; its two possibly non-zero terms. */
+    x1 = in[1];
+    if (x1 < -1.0f) {
+        x1 = -1.0f;
+    } else if (x1 > 1.0f) {
+        x1 = 1.0f;
     }
-    {
-        /* NL: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        float r = 1.0f + (x - (0.0f)) * 0.0f;
-        float l = 1.0f + ((-1.0f) - x) * 3.0f;
-        float m = r < l ? r : l;
-        mu[7] = m < 0.0f ? 0.0f : (m > 1.0f ? 1.0f : m);
-    }
-    {
-        /* NM: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        float r = 1.0f + (x - (-0.666666687f)) * 3.0f;
-        float l = 1.0f + ((-0.666666687f) - x) * 3.0f;
-        float m = r < l ? r : l;
-        mu[8] = m < 0.0f ? 0.0f : (m > 1.0f ? 1.0f : m);
-    }
-    {
-        /* NS: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        float r = 1.0f + (x - (-0.333333343f)) * 3.0f;
-        float l = 1.0f + ((-0.333333343f) - x) * 3.0f;
-        float m = r < l ? r : l;
-        mu[9] = m < 0.0f ? 0.0f : (m > 1.0f ? 1.0f : m);
-    }
-    {
-        /* ZR: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        float r = 1.0f + (x - (0.0f)) * 3.0f;
-        float l = 1.0f + ((0.0f) - x) * 3.0f;
-        float m = r < l ? r : l;
-        mu[10] = m < 0.0f ? 0.0f : (m > 1.0f ? 1.0f : m);
-    }
-    {
-        /* PS: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        float r = 1.0f + (x - (0.333333343f)) * 3.0f;
-        float l = 1.0f + ((0.333333343f) - x) * 3.0f;
-        float m = r < l ? r : l;
-        mu[11] = m < 0.0f ? 0.0f : (m > 1.0f ? 1.0f : m);
-    }
-    {
-        /* PM: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        float r = 1.0f + (x - (0.666666687f)) * 3.0f;
-        float l = 1.0f + ((0.666666687f) - x) * 3.0f;
-        float m = r < l ? r : l;
-        mu[12] = m < 0.0f ? 0.0f : (m > 1.0f ? 1.0f : m);
-    }
-    {
-        /* PL: clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1) */
-        float r = 1.0f + (x - (1.0f)) * 3.0f;
-        float l = 1.0f + ((0.0f) - x) * 0.0f;
-        float m = r < l ? r : l;
-        mu[13] = m < 0.0f ? 0.0f : (m > 1.0f ? 1.0f : m);
-    }
+    q = 0;
+    q += x1 >= -0.666666687f;
+    q += x1 >= -0.333333343f;
+    q += x1 >= 0.0f;
+    q += x1 >= 0.333333343f;
+    q += x1 >= 0.666666687f;
+    j0 = macvicar_whelan_first1[q];
+    m1[0] = macvicar_whelan_trap(x1, macvicar_whelan_term1 + 4 * j0);
+    m1[1] = macvicar_whelan_trap(x1, macvicar_whelan_term1 + 4 * (j0 + 1));
 
-    /* Firing strengths (min AND, max OR, NOT = 1 - mu). */
-    w[0] = macvicar_whelan_min(mu[0], mu[7]); /* e is NL and de is NL */
-    w[1] = macvicar_whelan_min(mu[0], mu[8]); /* e is NL and de is NM */
-    w[2] = macvicar_whelan_min(mu[0], mu[9]); /* e is NL and de is NS */
-    w[3] = macvicar_whelan_min(mu[0], mu[10]); /* e is NL and de is ZR */
-    w[4] = macvicar_whelan_min(mu[0], mu[11]); /* e is NL and de is PS */
-    w[5] = macvicar_whelan_min(mu[0], mu[12]); /* e is NL and de is PM */
-    w[6] = macvicar_whelan_min(mu[0], mu[13]); /* e is NL and de is PL */
-    w[7] = macvicar_whelan_min(mu[1], mu[7]); /* e is NM and de is NL */
-    w[8] = macvicar_whelan_min(mu[1], mu[8]); /* e is NM and de is NM */
-    w[9] = macvicar_whelan_min(mu[1], mu[9]); /* e is NM and de is NS */
-    w[10] = macvicar_whelan_min(mu[1], mu[10]); /* e is NM and de is ZR */
-    w[11] = macvicar_whelan_min(mu[1], mu[11]); /* e is NM and de is PS */
-    w[12] = macvicar_whelan_min(mu[1], mu[12]); /* e is NM and de is PM */
-    w[13] = macvicar_whelan_min(mu[1], mu[13]); /* e is NM and de is PL */
-    w[14] = macvicar_whelan_min(mu[2], mu[7]); /* e is NS and de is NL */
-    w[15] = macvicar_whelan_min(mu[2], mu[8]); /* e is NS and de is NM */
-    w[16] = macvicar_whelan_min(mu[2], mu[9]); /* e is NS and de is NS */
-    w[17] = macvicar_whelan_min(mu[2], mu[10]); /* e is NS and de is ZR */
-    w[18] = macvicar_whelan_min(mu[2], mu[11]); /* e is NS and de is PS */
-    w[19] = macvicar_whelan_min(mu[2], mu[12]); /* e is NS and de is PM */
-    w[20] = macvicar_whelan_min(mu[2], mu[13]); /* e is NS and de is PL */
-    w[21] = macvicar_whelan_min(mu[3], mu[7]); /* e is ZR and de is NL */
-    w[22] = macvicar_whelan_min(mu[3], mu[8]); /* e is ZR and de is NM */
-    w[23] = macvicar_whelan_min(mu[3], mu[9]); /* e is ZR and de is NS */
-    w[24] = macvicar_whelan_min(mu[3], mu[10]); /* e is ZR and de is ZR */
-    w[25] = macvicar_whelan_min(mu[3], mu[11]); /* e is ZR and de is PS */
-    w[26] = macvicar_whelan_min(mu[3], mu[12]); /* e is ZR and de is PM */
-    w[27] = macvicar_whelan_min(mu[3], mu[13]); /* e is ZR and de is PL */
-    w[28] = macvicar_whelan_min(mu[4], mu[7]); /* e is PS and de is NL */
-    w[29] = macvicar_whelan_min(mu[4], mu[8]); /* e is PS and de is NM */
-    w[30] = macvicar_whelan_min(mu[4], mu[9]); /* e is PS and de is NS */
-    w[31] = macvicar_whelan_min(mu[4], mu[10]); /* e is PS and de is ZR */
-    w[32] = macvicar_whelan_min(mu[4], mu[11]); /* e is PS and de is PS */
-    w[33] = macvicar_whelan_min(mu[4], mu[12]); /* e is PS and de is PM */
-    w[34] = macvicar_whelan_min(mu[4], mu[13]); /* e is PS and de is PL */
-    w[35] = macvicar_whelan_min(mu[5], mu[7]); /* e is PM and de is NL */
-    w[36] = macvicar_whelan_min(mu[5], mu[8]); /* e is PM and de is NM */
-    w[37] = macvicar_whelan_min(mu[5], mu[9]); /* e is PM and de is NS */
-    w[38] = macvicar_whelan_min(mu[5], mu[10]); /* e is PM and de is ZR */
-    w[39] = macvicar_whelan_min(mu[5], mu[11]); /* e is PM and de is PS */
-    w[40] = macvicar_whelan_min(mu[5], mu[12]); /* e is PM and de is PM */
-    w[41] = macvicar_whelan_min(mu[5], mu[13]); /* e is PM and de is PL */
-    w[42] = macvicar_whelan_min(mu[6], mu[7]); /* e is PL and de is NL */
-    w[43] = macvicar_whelan_min(mu[6], mu[8]); /* e is PL and de is NM */
-    w[44] = macvicar_whelan_min(mu[6], mu[9]); /* e is PL and de is NS */
-    w[45] = macvicar_whelan_min(mu[6], mu[10]); /* e is PL and de is ZR */
-    w[46] = macvicar_whelan_min(mu[6], mu[11]); /* e is PL and de is PS */
-    w[47] = macvicar_whelan_min(mu[6], mu[12]); /* e is PL and de is PM */
-    w[48] = macvicar_whelan_min(mu[6], mu[13]); /* e is PL and de is PL */
+    /* Rules as a table: only the 2 x 2 cells of the non-zero terms can fire (min AND); each adds to its term's level (max). */
+    {
+        int a, b;
+        for (a = 0; a <= 7; a++) {
+            lv0[a] = 0.0f;
+        }
+        for (a = 0; a < 2; a++) {
+            for (b = 0; b < 2; b++) {
+                const int cell = (i0 + a) * 8 + j0 + b;
+                float w;
+                int t;
+                w = m0[a] < m1[b] ? m0[a] : m1[b];
+                t = macvicar_whelan_cons0[cell];
+                lv0[t] = w > lv0[t] ? w : lv0[t];
+            }
+        }
+        lv0[7] = 0.0f;
+    }
 
     /* Output 0 (du): centroid. */
     {
-        float lv[8];
-        float p[72];
-        float f[72];
-        lv[0] = macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(w[0], w[1]), w[2]), w[3]), w[7]), w[8]), w[9]), w[14]), w[15]), w[21]);
-        lv[1] = macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(w[4], w[10]), w[16]), w[22]), w[28]);
-        lv[2] = macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(w[5], w[11]), w[17]), w[23]), w[29]), w[35]);
-        lv[3] = macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(w[6], w[12]), w[18]), w[24]), w[30]), w[36]), w[42]);
-        lv[4] = macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(w[13], w[19]), w[25]), w[31]), w[37]), w[43]);
-        lv[5] = macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(w[20], w[26]), w[32]), w[38]), w[44]);
-        lv[6] = macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(macvicar_whelan_max(w[27], w[33]), w[34]), w[39]), w[40]), w[41]), w[45]), w[46]), w[47]), w[48]);
-        lv[7] = 0.0f;
-        /* The points of every interval and the aggregated set at them. */
-        for (k = 0; k < 12; k++) {
-            const float *s = macvicar_whelan_slope0 + k * 2;
-            const float *c = macvicar_whelan_icpt0 + k * 2;
-            float sl[2];
-            int q;
-            for (q = 0; q < 2; q++) {
-                sl[q] = lv[macvicar_whelan_piece0[k * 2 + q]];
+        float area = 0.0f, moment = 0.0f;
+        int f;
+        for (f = 0; f < 13; f++) {
+            float la = lv0[macvicar_whelan_fa0[f]], lb = lv0[macvicar_whelan_fb0[f]];
+            float lev = la < lb ? la : lb;
+            int k = f * 3;
+            float s;
+            const float *ca, *cm;
+            for (q = 1; q < 3; q++) {
+                k += lev >= macvicar_whelan_fstart0[f * 3 + q];
             }
-            macvicar_whelan_interval(s, c, sl, 2, macvicar_whelan_z0[k], macvicar_whelan_z0[k + 1], p + k * 6, 6);
-            for (q = 0; q < 6; q++) {
-                f[k * 6 + q] = macvicar_whelan_agg(s, c, sl, 2, p[k * 6 + q]);
-            }
+            s = (lev - macvicar_whelan_fstart0[k]) * macvicar_whelan_finvw0[k];
+            ca = macvicar_whelan_farea0 + 4 * k;
+            cm = macvicar_whelan_fmoment0 + 4 * k;
+            area += macvicar_whelan_fsign0[f] * (((ca[3] * s + ca[2]) * s + ca[1]) * s + ca[0]);
+            moment += macvicar_whelan_fsign0[f] * (((cm[3] * s + cm[2]) * s + cm[1]) * s + cm[0]);
         }
-
-        {
-            float area = 0.0f, moment = 0.0f;
-            int j;
-            for (k = 0; k < 12; k++) {
-                for (j = k * 6; j < (k + 1) * 6 - 1; j++) {
-                    float h = p[j + 1] - p[j];
-                    area += 0.5f * h * (f[j] + f[j + 1]);
-                    moment += h / 6.0f * (p[j] * (2.0f * f[j] + f[j + 1]) + p[j + 1] * (f[j] + 2.0f * f[j + 1]));
-                }
-            }
-            out[0] = area > 0.0f ? moment / area : NAN;
-        }
+        out[0] = area > 0.0f ? -1.0f + 2.0f * (moment / area) : NAN;
     }
 }
 

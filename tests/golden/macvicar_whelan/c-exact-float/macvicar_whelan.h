@@ -14,7 +14,7 @@
  * min/min/max with centroid defuzzification.
  *
  * C99, no heap, no recursion, bounded loops (constant worst-case time), every symbol prefixed
- * "macvicar_whelan_"; 1148 bytes of locals at most in macvicar_whelan_eval.
+ * "macvicar_whelan_"; 284 bytes of locals at most in macvicar_whelan_eval.
  * Uses from <math.h>: NAN.
  * Do not compile with -ffast-math: it removes the NaN checks this code relies on.
  */

@@ -21,100 +21,136 @@ static double three_input_max(double a, double b)
     return a > b ? a : b;
 }
 
-/* Output 0 (du): the 8 elementary intervals on which every term is linear
- * (bounds), and in each the 2 pieces that can be non-zero there: piece index (5 = none),
- * and the line slope * y + intercept of its term. */
-static const double three_input_z0[9] = {
-    -1.0, -0.75, -0.5, -0.25, 0.0, 0.24999999999999994,
-    0.49999999999999989, 0.75, 1.0,
+/* Output 0 (du), centroid: at most two terms overlap anywhere, so the aggregated set
+ * is sum(term_i clipped at L_i) - sum(overlap_ij clipped at min(L_i, L_j)); the area and moment of
+ * each clipped function are piecewise cubics in its level (in units of (y - low) / width):
+ * per function, its level's terms (a, b) and sign; per piece, start level, 1/width and the
+ * coefficients (constant first). */
+static const unsigned char three_input_fa0[9] = { 0, 1, 2, 3, 4, 0, 1, 2, 3 };
+static const unsigned char three_input_fb0[9] = { 0, 1, 2, 3, 4, 1, 2, 3, 4 };
+static const double three_input_fsign0[9] = { 1.0, 1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0, -1.0 };
+static const double three_input_fstart0[27] = {
+    0.0, 0.5, 1.0, 0.0, 0.49999999999999983, 1.0,
+    0.0, 0.5, 1.0, 0.0, 0.49999999999999989, 1.0000000000000002,
+    0.0, 0.5, 1.0, 0.0, 0.5, 1e+30,
+    0.0, 0.5, 1e+30, 0.0, 0.49999999999999989, 1e+30,
+    0.0, 0.5, 1e+30,
 };
-static const unsigned char three_input_piece0[16] = {
-    0, 1, 0, 1, 1, 2, 1, 2, 2, 3, 2, 3, 3, 4, 3, 4,
+static const double three_input_finvw0[27] = {
+    2.0, 2.0, 1.0, 2.0000000000000009, 1.9999999999999991, 1.0,
+    2.0, 2.0, 1.0, 2.0000000000000004, 1.9999999999999987, 1.0000000000000002,
+    2.0, 2.0, 1.0, 2.0, 1.0, 1.0,
+    2.0, 1.0, 1.0, 2.0000000000000004, 1.0, 1.0,
+    2.0, 1.0, 1.0,
 };
-static const double three_input_slope0[16] = {
-    -2.0, 2.0, -2.0, 2.0, -2.0, 2.0,
-    -1.9999999999999993, 1.9999999999999993, -2.0, 2.0, -2.0, 2.0,
-    -2.0, 2.0, -2.0, 2.0,
+static const double three_input_farea0[108] = {
+    0.0, 0.12500000000000017, -0.031250000000000222, 0.0, 0.09375, 0.062500000000000444,
+    -0.03125, 0.0, 0.125, 4.4408920985006262e-16, 0.0, 0.0,
+    0.0, 0.25000000000000044, -0.062500000000000444, 2.2204460492503131e-16, 0.18749999999999994,
+    0.12500000000000089, -0.062500000000000888, 0.0, 0.25, 8.8817841970012523e-16, 0.0,
+    0.0, 0.0, 0.25000000000000044, -0.062500000000000888, 0.0, 0.18750000000000003,
+    0.12500000000000044, -0.062499999999999112, -8.8817841970012523e-16, 0.25,
+    8.8817841970012523e-16, 0.0, 0.0, 0.0, 0.25000000000000033, -0.0625,
+    -2.2204460492503131e-16, 0.18749999999999994, 0.12500000000000089, -0.062500000000000888, 0.0,
+    0.25, 8.8817841970012523e-16, 0.0, 0.0, 0.0, 0.12500000000000022,
+    -0.031250000000000222, 0.0, 0.09375, 0.062500000000000444, -0.03125, 0.0,
+    0.125, 4.4408920985006262e-16, 0.0, 0.0, 0.0, 0.12500000000000022,
+    -0.062500000000000222, 0.0, 0.0625, 2.2204460492503131e-16, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.12500000000000019,
+    -0.062500000000000111, 0.0, 0.062499999999999986, 1.1102230246251565e-16,
+    -2.2204460492503131e-16, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.12500000000000022, -0.062500000000000222, 0.0, 0.0625, 2.2204460492503131e-16,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.12500000000000022, -0.062500000000000222, 0.0, 0.0625, 2.2204460492503131e-16,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
 };
-static const double three_input_icpt0[16] = {
-    -1.0, 2.0, -1.0, 2.0, 0.0, 1.0,
-    0.0, 0.99999999999999989, 1.0, 0.0, 1.0, 0.0,
-    2.0, -1.0, 2.0, -1.0,
+static const double three_input_fmoment0[108] = {
+    0.0, 0.015625000000000021, -0.0078125, 0.0013020833333333287, 0.0091145833333333322,
+    0.0039062500000000416, -0.00390625, 0.0013020833333333426, 0.010416666666666666,
+    4.163336342344337e-17, -5.5511151231257827e-17, 0.0, 0.0, 0.062500000000000056,
+    -0.015625000000000111, 0.0, 0.046874999999999986, 0.03125, -0.015624999999999778,
+    -2.2204460492503131e-16, 0.0625, 2.2204460492503131e-16, 0.0, 0.0, 0.0,
+    0.12500000000000022, -0.031250000000000222, 0.0, 0.09375, 0.062500000000000444,
+    -0.031250000000000444, -4.4408920985006262e-16, 0.125, 4.4408920985006262e-16, 0.0, 0.0,
+    0.0, 0.18750000000000039, -0.046875000000000444, 0.0, 0.14062499999999997,
+    0.093750000000000666, -0.046875000000000888, 0.0, 0.18749999999999997, 6.6613381477509392e-16,
+    -8.8817841970012523e-16, 0.0, 0.0, 0.10937500000000022, -0.023437500000000222,
+    -0.0013020833333332593, 0.084635416666666671, 0.058593750000000333, -0.027343750000000444,
+    -0.0013020833333334814, 0.11458333333333334, 2.2204460492503131e-16, 0.0,
+    -4.4408920985006262e-16, 0.0, 0.015625000000000028, -0.0078125000000000278, 0.0, 0.0078125,
+    2.7755575615628914e-17, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.046875000000000069, -0.023437500000000167, 0.0, 0.023437499999999993,
+    8.3266726846886741e-17, -1.1102230246251565e-16, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.078125000000000139, -0.039062500000000111, 5.5511151231257827e-17, 0.0390625,
+    1.1102230246251565e-16, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.10937500000000014, -0.054687500000000222, 1.1102230246251565e-16, 0.0546875,
+    1.1102230246251565e-16, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0,
 };
 
-/* Output 1 (dv): the 6 elementary intervals on which every term is linear
- * (bounds), and in each the 2 pieces that can be non-zero there: piece index (3 = none),
- * and the line slope * y + intercept of its term. */
-static const double three_input_z1[7] = {
-    -0.5, -0.25, -0.16666666666666669, 0.0, 0.16666666666666666, 0.24999999999999994,
-    0.5,
+/* Output 1 (dv), centroid: at most two terms overlap anywhere, so the aggregated set
+ * is sum(term_i clipped at L_i) - sum(overlap_ij clipped at min(L_i, L_j)); the area and moment of
+ * each clipped function are piecewise cubics in its level (in units of (y - low) / width):
+ * per function, its level's terms (a, b) and sign; per piece, start level, 1/width and the
+ * coefficients (constant first). */
+static const unsigned char three_input_fa1[5] = { 0, 1, 2, 0, 1 };
+static const unsigned char three_input_fb1[5] = { 0, 1, 2, 1, 2 };
+static const double three_input_fsign1[5] = { 1.0, 1.0, 1.0, -1.0, -1.0 };
+static const double three_input_fstart1[20] = {
+    0.0, 0.33333333333333337, 0.5, 1.0, 0.0, 0.33333333333333326,
+    1.0, 1e+30, 0.0, 0.33333333333333315, 0.49999999999999989, 1.0,
+    0.0, 0.33333333333333326, 1e+30, 1e+30, 0.0, 0.33333333333333337,
+    1e+30, 1e+30,
 };
-static const unsigned char three_input_piece1[12] = {
-    0, 3, 0, 1, 0, 1, 1, 2, 1, 2, 2, 3,
+static const double three_input_finvw1[20] = {
+    2.9999999999999996, 6.0000000000000018, 2.0, 1.0, 3.0000000000000009, 1.4999999999999998,
+    1.0, 1.0, 3.0000000000000018, 5.9999999999999973, 1.9999999999999996, 1.0,
+    3.0000000000000009, 1.0, 1.0, 1.0, 2.9999999999999996, 1.0,
+    1.0, 1.0,
 };
-static const double three_input_slope1[12] = {
-    -2.0, 0.0, -2.0, 4.0, -2.0000000000000004, 3.9999999999999991,
-    -4.0, 1.9999999999999989, -4.0, 2.0000000000000022, 2.0, 0.0,
+static const double three_input_farea1[80] = {
+    0.0, 0.16666666666666707, -0.027777777777778345, 0.0, 0.1388888888888889, 0.055555555555556246,
+    -0.0069444444444446418, 4.4408920985006262e-16, 0.1875, 0.12500000000000089, -0.0625, 0.0,
+    0.25, 8.8817841970012523e-16, 0.0, 0.0, 0.0, 0.16666666666666691,
+    -0.027777777777777901, 0.0, 0.13888888888888887, 0.22222222222222299, -0.11111111111111072,
+    -4.4408920985006262e-16, 0.25, 8.8817841970012523e-16, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0, 0.16666666666666691, -0.027777777777778123,
+    0.0, 0.13888888888888881, 0.055555555555556024, -0.0069444444444446418,
+    -4.4408920985006262e-16, 0.1875, 0.12500000000000089, -0.0625, 0.0, 0.25,
+    8.8817841970012523e-16, 0.0, 0.0, 0.0, 0.083333333333333426, -0.04166666666666663,
+    -5.5511151231257827e-17, 0.041666666666666657, 5.5511151231257827e-17, -2.2204460492503131e-16,
+    -1.1102230246251565e-16, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0, 0.083333333333333481, -0.041666666666666963,
+    0.0, 0.041666666666666657, 5.5511151231257827e-17, -2.2204460492503131e-16,
+    -1.1102230246251565e-16, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0,
 };
-static const double three_input_icpt1[12] = {
-    0.0, 0.0, 0.0, 1.0, 0.0, 0.99999999999999989,
-    1.0, 0.0, 1.0, 0.0, 0.0, 0.0,
+static const double three_input_fmoment1[80] = {
+    0.0, 0.041666666666666741, -0.013888888888888951, 0.0015432098765432167, 0.029320987654320986,
+    0.0092592592592593004, -0.0023148148148148806, 0.0001929012345678327, 0.036458333333333336,
+    0.015625000000000167, -0.015625000000000222, 0.0052083333333332593, 0.041666666666666671,
+    1.1102230246251565e-16, -2.2204460492503131e-16, -1.1102230246251565e-16, 0.0,
+    0.083333333333333509, -0.013888888888889173, 0.0, 0.069444444444444434, 0.11111111111111149,
+    -0.055555555555556246, 0.0, 0.125, 4.4408920985006262e-16, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.12500000000000022,
+    -0.013888888888889062, -0.0015432098765431057, 0.10956790123456785, 0.04629629629629628,
+    -0.0046296296296293171, -0.00019290123456849884, 0.15104166666666663, 0.10937500000000044,
+    -0.046875, -0.0052083333333339255, 0.20833333333333334, 4.4408920985006262e-16, 0.0, 0.0,
+    0.0, 0.031250000000000042, -0.017361111111111105, 0.0011574074074073848, 0.015046296296296294,
+    0.0, -5.5511151231257827e-17, -5.5511151231257827e-17, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.052083333333333454, -0.024305555555555802, -0.0011574074074073848, 0.026620370370370367,
+    5.5511151231257827e-17, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0, 0.0,
 };
-
-/* The aggregated membership at y inside one interval: slot lines (s, c) and slot levels lv. */
-static double three_input_agg(const double *s, const double *c, const double *lv, int slots, double y)
-{
-    double acc = 0.0;
-    int q;
-    for (q = 0; q < slots; q++) {
-        double ell = s[q] * y + c[q];
-        double imp;
-        if (ell < 0.0) {
-            ell = 0.0;
-        }
-        imp = lv[q] < ell ? lv[q] : ell;
-        acc = imp > acc ? imp : acc;
-    }
-    return acc;
-}
-
-static void three_input_sort(double *p, int n)
-{
-    int i, j;
-    for (i = 1; i < n; i++) {
-        double v = p[i];
-        for (j = i; j > 0 && p[j - 1] > v; j--) {
-            p[j] = p[j - 1];
-        }
-        p[j] = v;
-    }
-}
-
-/* The sorted points of the interval [z0, z1] where the aggregated set may bend: its ends and
- * where a level meets a line (min implication, max aggregation); writes `points` values. */
-static void three_input_interval(const double *s, const double *c, const double *lv, int slots, double z0, double z1, double *p, int points)
-{
-    int n = 2;
-    int i;
-    int j;
-    p[0] = z0;
-    p[1] = z1;
-    for (i = 0; i < slots; i++) {
-        for (j = 0; j < slots; j++) {
-            double x = s[i] != 0.0 ? (lv[j] - c[i]) / s[i] : z0;
-            p[n++] = x < z0 ? z0 : (x > z1 ? z1 : x);
-        }
-    }
-    three_input_sort(p, n);
-    (void)points;
-}
 
 void three_input_eval(const double in[THREE_INPUT_N_INPUTS], double out[THREE_INPUT_N_OUTPUTS])
 {
     double x;
     double mu[9];
     double w[12];
-    int k;
+    double lv0[6]; /* piece levels of output 0, then 0 */
+    double lv1[4]; /* piece levels of output 1, then 0 */
     if (in[0] != in[0] || in[1] != in[1] || in[2] != in[2]) {
         out[0] = NAN;
         out[1] = NAN;
@@ -206,82 +242,58 @@ void three_input_eval(const double in[THREE_INPUT_N_INPUTS], double out[THREE_IN
     w[9] = (three_input_min(mu[6], mu[2])) * 1.0; /* r is smooth and e is P */
     w[10] = (three_input_min(mu[6], mu[0])) * 1.0; /* r is smooth and e is N */
     w[11] = (three_input_min(mu[8], mu[2])) * 0.59999999999999998; /* r is rough and e is P */
+    lv0[0] = w[1];
+    lv0[1] = w[4];
+    lv0[2] = three_input_max(w[2], w[5]);
+    lv0[3] = three_input_max(w[3], w[11]);
+    lv0[4] = w[0];
+    lv0[5] = 0.0;
+    lv1[0] = three_input_max(w[6], w[7]);
+    lv1[1] = three_input_max(w[9], w[10]);
+    lv1[2] = three_input_max(w[2], w[8]);
+    lv1[3] = 0.0;
 
     /* Output 0 (du): centroid. */
     {
-        double lv[6];
-        double p[48];
-        double f[48];
-        lv[0] = w[1];
-        lv[1] = w[4];
-        lv[2] = three_input_max(w[2], w[5]);
-        lv[3] = three_input_max(w[3], w[11]);
-        lv[4] = w[0];
-        lv[5] = 0.0;
-        /* The points of every interval and the aggregated set at them. */
-        for (k = 0; k < 8; k++) {
-            const double *s = three_input_slope0 + k * 2;
-            const double *c = three_input_icpt0 + k * 2;
-            double sl[2];
-            int q;
-            for (q = 0; q < 2; q++) {
-                sl[q] = lv[three_input_piece0[k * 2 + q]];
+        double area = 0.0, moment = 0.0;
+        int f, q;
+        for (f = 0; f < 9; f++) {
+            double la = lv0[three_input_fa0[f]], lb = lv0[three_input_fb0[f]];
+            double lev = la < lb ? la : lb;
+            int k = f * 3;
+            double s;
+            const double *ca, *cm;
+            for (q = 1; q < 3; q++) {
+                k += lev >= three_input_fstart0[f * 3 + q];
             }
-            three_input_interval(s, c, sl, 2, three_input_z0[k], three_input_z0[k + 1], p + k * 6, 6);
-            for (q = 0; q < 6; q++) {
-                f[k * 6 + q] = three_input_agg(s, c, sl, 2, p[k * 6 + q]);
-            }
+            s = (lev - three_input_fstart0[k]) * three_input_finvw0[k];
+            ca = three_input_farea0 + 4 * k;
+            cm = three_input_fmoment0 + 4 * k;
+            area += three_input_fsign0[f] * (((ca[3] * s + ca[2]) * s + ca[1]) * s + ca[0]);
+            moment += three_input_fsign0[f] * (((cm[3] * s + cm[2]) * s + cm[1]) * s + cm[0]);
         }
-
-        {
-            double area = 0.0, moment = 0.0;
-            int j;
-            for (k = 0; k < 8; k++) {
-                for (j = k * 6; j < (k + 1) * 6 - 1; j++) {
-                    double h = p[j + 1] - p[j];
-                    area += 0.5 * h * (f[j] + f[j + 1]);
-                    moment += h / 6.0 * (p[j] * (2.0 * f[j] + f[j + 1]) + p[j + 1] * (f[j] + 2.0 * f[j + 1]));
-                }
-            }
-            out[0] = area > 1e-300 ? moment / area : 0.0;
-        }
+        out[0] = area > 1e-300 ? -1.0 + 2.0 * (moment / area) : 0.0;
     }
 
     /* Output 1 (dv): centroid. */
     {
-        double lv[4];
-        double p[36];
-        double f[36];
-        lv[0] = three_input_max(w[6], w[7]);
-        lv[1] = three_input_max(w[9], w[10]);
-        lv[2] = three_input_max(w[2], w[8]);
-        lv[3] = 0.0;
-        /* The points of every interval and the aggregated set at them. */
-        for (k = 0; k < 6; k++) {
-            const double *s = three_input_slope1 + k * 2;
-            const double *c = three_input_icpt1 + k * 2;
-            double sl[2];
-            int q;
-            for (q = 0; q < 2; q++) {
-                sl[q] = lv[three_input_piece1[k * 2 + q]];
+        double area = 0.0, moment = 0.0;
+        int f, q;
+        for (f = 0; f < 5; f++) {
+            double la = lv1[three_input_fa1[f]], lb = lv1[three_input_fb1[f]];
+            double lev = la < lb ? la : lb;
+            int k = f * 4;
+            double s;
+            const double *ca, *cm;
+            for (q = 1; q < 4; q++) {
+                k += lev >= three_input_fstart1[f * 4 + q];
             }
-            three_input_interval(s, c, sl, 2, three_input_z1[k], three_input_z1[k + 1], p + k * 6, 6);
-            for (q = 0; q < 6; q++) {
-                f[k * 6 + q] = three_input_agg(s, c, sl, 2, p[k * 6 + q]);
-            }
+            s = (lev - three_input_fstart1[k]) * three_input_finvw1[k];
+            ca = three_input_farea1 + 4 * k;
+            cm = three_input_fmoment1 + 4 * k;
+            area += three_input_fsign1[f] * (((ca[3] * s + ca[2]) * s + ca[1]) * s + ca[0]);
+            moment += three_input_fsign1[f] * (((cm[3] * s + cm[2]) * s + cm[1]) * s + cm[0]);
         }
-
-        {
-            double area = 0.0, moment = 0.0;
-            int j;
-            for (k = 0; k < 6; k++) {
-                for (j = k * 6; j < (k + 1) * 6 - 1; j++) {
-                    double h = p[j + 1] - p[j];
-                    area += 0.5 * h * (f[j] + f[j + 1]);
-                    moment += h / 6.0 * (p[j] * (2.0 * f[j] + f[j + 1]) + p[j + 1] * (f[j] + 2.0 * f[j + 1]));
-                }
-            }
-            out[1] = area > 1e-300 ? moment / area : 0.0;
-        }
+        out[1] = area > 1e-300 ? -0.5 + 1.0 * (moment / area) : 0.0;
     }
 }

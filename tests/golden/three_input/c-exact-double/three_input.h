@@ -13,7 +13,7 @@
  * feed-rate change dv. Uses OR, NOT, weights, several outputs, sigmoid and bell terms.
  *
  * C99, no heap, no recursion, bounded loops (constant worst-case time), every symbol prefixed
- * "three_input_"; 1368 bytes of locals at most in three_input_eval.
+ * "three_input_"; 216 bytes of locals at most in three_input_eval.
  * Uses from <math.h>: NAN, exp, fabs, pow (link with -lm).
  * Do not compile with -ffast-math: it removes the NaN checks this code relies on.
  */
