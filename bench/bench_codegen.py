@@ -34,11 +34,11 @@ import numpy as np
 import fuzzkit
 from fuzzkit.codegen.emit import emit
 from fuzzkit.codegen.exact import emit_exact
-from fuzzkit.errors import CodegenError
 from fuzzkit.codegen.lut import LookupTable
 from fuzzkit.codegen.table_search import make_table
 from fuzzkit.codegen.toolchain import STRICT_FLAGS, find_compiler, run_compiler
 from fuzzkit.codegen.verify import load_module
+from fuzzkit.errors import CodegenError
 
 NAME = "macvicar_whelan"
 C_CALLS = 10_000_000
@@ -116,9 +116,7 @@ def c_ns_per_call(
 def harness(name: str, ctype: str, ranges: tuple[float, ...], calls: int = C_CALLS) -> str:
     """The timing harness for a 2-input ``name``: points cycle over ranges, 10 % beyond."""
     lo0, hi0, lo1, hi1 = ranges
-    return HARNESS.format(
-        name=name, t=ctype, lo0=lo0, hi0=hi0, lo1=lo1, hi1=hi1, calls=calls
-    )
+    return HARNESS.format(name=name, t=ctype, lo0=lo0, hi0=hi0, lo1=lo1, hi1=hi1, calls=calls)
 
 
 def _best_of_three(exe: Path) -> float:
@@ -149,9 +147,13 @@ def measure_files(
         ranges = tuple(x for v in rb.inputs for x in (v.low, v.high))
         (folder / "bench.c").write_text(harness(name, ctype, ranges, calls))
         run_compiler([*cc, *STRICT_FLAGS, "-O2", "-c", f"{name}.c"], folder)
-        size = subprocess.run(
-            ["size", f"{name}.o"], cwd=folder, capture_output=True, text=True, check=True
-        ).stdout.splitlines()[1].split()
+        size = (
+            subprocess.run(
+                ["size", f"{name}.o"], cwd=folder, capture_output=True, text=True, check=True
+            )
+            .stdout.splitlines()[1]
+            .split()
+        )
         nbytes = int(size[0]) + int(size[1])
         run_compiler(
             [*cc, *STRICT_FLAGS, "-O2", "-o", "bench", "bench.c", f"{name}.c", "-lm"], folder
@@ -189,7 +191,11 @@ def methods_table() -> None:
                 table = make_table(rb, number_type="float", **kwargs)  # type: ignore[arg-type]
                 took = time.perf_counter() - start
                 variants.append(
-                    (label, emit(rb, table, "c"), f"{table.shape[0]}x{table.shape[1]}, built in {took:.1f} s")
+                    (
+                        label,
+                        emit(rb, table, "c"),
+                        f"{table.shape[0]}x{table.shape[1]}, built in {took:.1f} s",
+                    )
                 )
             except CodegenError as exc:
                 variants.append((label, None, str(exc).split(" (")[0]))
@@ -200,9 +206,8 @@ def methods_table() -> None:
             nbytes, ns, err = measure_files(rb, files, "float", 1_000_000)
             if name == NAME and label == "exact":
                 ok = nbytes <= TARGET_EXACT_BYTES and ns <= TARGET_EXACT_NS
-                note = (
-                    f"goal <= {TARGET_EXACT_BYTES} B, <= {TARGET_EXACT_NS:g} ns: "
-                    + ("ok" if ok else "MISSED")
+                note = f"goal <= {TARGET_EXACT_BYTES} B, <= {TARGET_EXACT_NS:g} ns: " + (
+                    "ok" if ok else "MISSED"
                 )
             rows.append((name, label, str(nbytes), f"{ns:.1f}", f"{err:.2g}", note))
     head = ("rule base", "method", "code+data B", "ns/call", "max err/range", "note")

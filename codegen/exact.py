@@ -288,8 +288,7 @@ def _rule_text(expr: Expression) -> str:
     if isinstance(expr, Proposition):
         return f"{expr.variable} is {'not ' if expr.negated else ''}{expr.term}"
     return f" {expr.op} ".join(
-        _rule_text(e) if isinstance(e, Proposition) else f"({_rule_text(e)})"
-        for e in expr.operands
+        _rule_text(e) if isinstance(e, Proposition) else f"({_rule_text(e)})" for e in expr.operands
     )
 
 
@@ -404,7 +403,14 @@ def _windows(rb: RuleBase, lit: _Lit) -> tuple[WindowSpec, ...] | None:
     return tuple(w for w in found if w is not None)
 
 
-def _poly(rb: RuleBase, out: Variable, pieces: OutputPieces, geo: PiecewiseLinearGeometry, lit: _Lit, wrap: Callable[[list[str]], tuple[str, ...]]) -> PolySpec | None:
+def _poly(
+    rb: RuleBase,
+    out: Variable,
+    pieces: OutputPieces,
+    geo: PiecewiseLinearGeometry,
+    lit: _Lit,
+    wrap: Callable[[list[str]], tuple[str, ...]],
+) -> PolySpec | None:
     if rb.defuzzifier != "centroid":
         return None
     pc = partition_centroid(geo, rb, len(out.terms))
@@ -412,7 +418,13 @@ def _poly(rb: RuleBase, out: Variable, pieces: OutputPieces, geo: PiecewiseLinea
         return None
     n_terms = len(out.terms)
     p_max = pc.p_max
-    level_a, level_b, sign, starts, inv_w, area, moment = [], [], [], [], [], [], []
+    level_a: list[str] = []
+    level_b: list[str] = []
+    sign: list[str] = []
+    starts: list[str] = []
+    inv_w: list[str] = []
+    area: list[str] = []
+    moment: list[str] = []
     for f, sgn, piece in pc.functions:
         a, b = (f, f) if f < n_terms else pc.pairs[f - n_terms]
         level_a.append(str(a))
@@ -472,7 +484,11 @@ def _output(
         gl_nodes=(), gl_weights=(),
     )  # fmt: skip
     if rb.defuzzifier == "weighted_average":
-        fmt = {"max": agg_fmt["max"], "bounded_sum": "{a} + {b}", "probabilistic_sum": agg_fmt["psum"]}
+        fmt = {
+            "max": agg_fmt["max"],
+            "bounded_sum": "{a} + {b}",
+            "probabilistic_sum": agg_fmt["psum"],
+        }
         acts = []
         for t in range(len(out.terms)):
             items = [f"w[{r}]" for r in rules_of_term.get(t, [])]
@@ -494,9 +510,9 @@ def _output(
             level_exprs=(), centres=(), empty=True, **empty_geo,  # type: ignore[arg-type]
         )  # fmt: skip
     if pieces.per_term:
-        fmt = agg_fmt["max"] if ops.aggregation == "max" else "{a} + {b}"
+        level_fmt = agg_fmt["max"] if ops.aggregation == "max" else "{a} + {b}"
         levels = tuple(
-            _fold([f"w[{r}]" for r in rules_of_term.get(t, [])], fmt, zero)
+            _fold([f"w[{r}]" for r in rules_of_term.get(t, [])], level_fmt, zero)
             for t in range(len(out.terms))
         )
     else:
@@ -605,7 +621,9 @@ def build_exact_spec(
         for j, term in enumerate(var.terms):
             mu_index[(var.name, term.name)] = offset + j
         inputs.append(
-            ExactInput(i, var.name, lit(var.low), lit(var.high), _input_terms(var, offset, lit, vertical))
+            ExactInput(
+                i, var.name, lit(var.low), lit(var.high), _input_terms(var, offset, lit, vertical)
+            )
         )
         offset += len(var.terms)
     ops = rb.operators
@@ -646,7 +664,8 @@ def build_exact_spec(
     note = (
         ""
         if has_fpi
-        else f"no fuzzy-PI API: it needs exactly 2 inputs (e, de), this rule base has {len(rb.inputs)}"
+        else "no fuzzy-PI API: it needs exactly 2 inputs (e, de), this rule base has "
+        f"{len(rb.inputs)}"
     )
     defaults = None
     if fpi_defaults is not None and has_fpi:
@@ -663,8 +682,10 @@ def build_exact_spec(
         + max((o.n_pieces + 1 + 3 * o.n_intervals * max(o.points, 1) for o in outputs), default=0)
     )
     # with grid rules the expressions are not emitted (the loop inlines its operators)
-    code = "" if grid is not None else " ".join(
-        [r.expr for r in rules] + [e for o in outputs for e in o.level_exprs]
+    code = (
+        ""
+        if grid is not None
+        else " ".join([r.expr for r in rules] + [e for o in outputs for e in o.level_exprs])
     )
     helpers = {h for h in ("min", "max", "psum") if f"{prefix}{h}(" in code}
     geo = [o for o in outputs if o.n_intervals]

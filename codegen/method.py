@@ -111,7 +111,10 @@ def compile_rulebase(
             )
         else:
             table = make_table(
-                rb, number_type=number_type, tolerance=tol, max_points=max(8, max_bytes // per_point)
+                rb,
+                number_type=number_type,
+                tolerance=tol,
+                max_points=max(8, max_bytes // per_point),
             )
     except CodegenError as exc:
         if exact_why is not None:

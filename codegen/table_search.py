@@ -194,7 +194,8 @@ def _chunked(rb: RuleBase, evaluate: Evaluator) -> Evaluator:
         result = {o: np.empty(total) for o in outs}
         starts = range(0, total, CHUNK_POINTS)
         quiet = len(starts) < 64 or not sys.stderr.isatty()
-        for s in tqdm(starts, desc=f"{rb.name}: sampling", unit="chunk", disable=quiet, leave=False):
+        bar = tqdm(starts, desc=f"{rb.name}: sampling", unit="chunk", disable=quiet, leave=False)
+        for s in bar:
             part = evaluate({n: f[s : s + CHUNK_POINTS] for n, f in zip(names, flat, strict=True)})
             for o in outs:
                 result[o][s : s + CHUNK_POINTS] = np.asarray(part[o], dtype=np.float64).reshape(-1)

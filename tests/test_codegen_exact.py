@@ -25,8 +25,8 @@ from test_inference_random import random_rulebase
 from fuzzkit.codegen.emit import emit
 from fuzzkit.codegen.exact import ROUNDING_BOUND, emit_exact, unsupported_reason
 from fuzzkit.codegen.method import compile_rulebase
-from fuzzkit.codegen.toolchain import SANITIZE_FLAGS, STRICT_FLAGS, CompiledTable, run_compiler
 from fuzzkit.codegen.table_search import make_table
+from fuzzkit.codegen.toolchain import SANITIZE_FLAGS, STRICT_FLAGS, CompiledTable, run_compiler
 from fuzzkit.codegen.verify import (
     _exact,
     compare,
@@ -92,9 +92,10 @@ def test_random_family_in_c_matches_the_engine_to_rounding(seed: int) -> None:
         for number_type in ("double", "float"):
             result = verify_exact_c(rb, number_type, emit_exact(rb, "c", number_type), n=3000)
             assert result.nan_mismatches == 0, (rb, result.describe())
-            assert all(
-                e <= a for e, a in zip(result.max_error, result.allowance, strict=True)
-            ), (rb, result.describe())
+            assert all(e <= a for e, a in zip(result.max_error, result.allowance, strict=True)), (
+                rb,
+                result.describe(),
+            )
             if rb.defuzzifier in CONTINUOUS or number_type == "double":
                 # double: ties are the engine's own 1e-12, so only a coincidence can jump
                 assert result.tie_jumps <= 1, (rb, result.describe())
@@ -120,7 +121,17 @@ def _sanitized_run(tmp_path: Path, cc: list[str], rb: RuleBase, number_type: str
     defines = ["-DWITH_FPI", "-DWITH_NAN"] if len(rb.inputs) == 2 else []
     try:
         run_compiler(
-            [*cc, *STRICT_FLAGS, *SANITIZE_FLAGS, *defines, "-o", "h", "main.c", f"{rb.name}.c", "-lm"],
+            [
+                *cc,
+                *STRICT_FLAGS,
+                *SANITIZE_FLAGS,
+                *defines,
+                "-o",
+                "h",
+                "main.c",
+                f"{rb.name}.c",
+                "-lm",
+            ],
             tmp_path,
         )
     except ToolchainError as exc:
@@ -141,7 +152,9 @@ def _sanitized_run(tmp_path: Path, cc: list[str], rb: RuleBase, number_type: str
     us = [float(line.split()[1]) for line in lines if line.startswith("u ")]
     if len(rb.inputs) == 2:
         assert len(us) == 400 and all(math.isfinite(u) for u in us)
-    got = np.array([[float(v) for v in line.split()] for line in lines if not line.startswith("u ")])
+    got = np.array(
+        [[float(v) for v in line.split()] for line in lines if not line.startswith("u ")]
+    )
     result = compare_exact(rb, number_type, "c sanitized", got, _exact(rb, args))
     assert result.ok, result.describe()
 
@@ -270,7 +283,9 @@ def test_random_family_through_the_table_method_stays_within_its_bound() -> None
 
         files = emit(rb, table, "c")
         points = verification_points(rb, 2000)
-        with CompiledTable(files, rb.name, "double", len(rb.inputs), 1, fpi=len(rb.inputs) == 2) as lib:
+        with CompiledTable(
+            files, rb.name, "double", len(rb.inputs), 1, fpi=len(rb.inputs) == 2
+        ) as lib:
             got = lib.eval_batch(points)
         result = compare(rb, table, "c", got, _exact(rb, points))
         assert result.ok, (rb, result.describe())
@@ -291,7 +306,7 @@ def test_auto_takes_the_exact_method_for_a_discontinuous_defuzzifier() -> None:
 
 def test_table_method_refuses_a_discontinuous_defuzzifier_without_a_resolution() -> None:
     rb = dataclasses.replace(rulebase("macvicar_whelan"), defuzzifier="largest_of_maximum")
-    with pytest.raises(CodegenError, match="discontinuous.*--method exact"):
+    with pytest.raises(CodegenError, match=r"discontinuous.*--method exact"):
         compile_rulebase(rb, "c", "float", method="table")
     result = compile_rulebase(rb, "c", "float", method="table", resolution=9)
     assert result.method == "table"
@@ -333,7 +348,7 @@ def test_exact_method_refuses_smooth_output_terms_with_the_reason(
 
 
 def test_exact_method_refuses_q15() -> None:
-    with pytest.raises(CodegenError, match="floating point.*--method table"):
+    with pytest.raises(CodegenError, match=r"floating point.*--method table"):
         emit_exact(rulebase("macvicar_whelan"), "c", "q15")
 
 
