@@ -104,26 +104,24 @@ def compile_rulebase(
         )
     tol = DEFAULT_TOLERANCE if tolerance is None else tolerance
     per_point = _VALUE_BYTES[number_type] * len(rb.outputs)
-    try:
-        if resolution is not None:
-            table = make_table(
-                rb, number_type=number_type, tolerance=tolerance, resolution=resolution
-            )
-        else:
+    if resolution is not None:  # the user chose the table's size: its errors are theirs to see
+        table = make_table(rb, number_type=number_type, tolerance=tolerance, resolution=resolution)
+    else:
+        try:
             table = make_table(
                 rb,
                 number_type=number_type,
                 tolerance=tol,
                 max_points=max(8, max_bytes // per_point),
             )
-    except CodegenError as exc:
-        if exact_why is not None:
-            raise
-        return _exact(
-            rb, target, number_type, fpi_defaults,
-            f"no table within --max-bytes {max_bytes} meets tolerance {tol:g}: "
-            + str(exc).split("; raise --tolerance")[0],
-        )  # fmt: skip
+        except CodegenError as exc:
+            if exact_why is not None:
+                raise
+            return _exact(
+                rb, target, number_type, fpi_defaults,
+                f"no table within --max-bytes {max_bytes} meets tolerance {tol:g}: "
+                + str(exc).split("; raise --tolerance")[0],
+            )  # fmt: skip
     if table.memory_bytes > max_bytes and exact_why is None and resolution is None:
         return _exact(
             rb, target, number_type, fpi_defaults,
