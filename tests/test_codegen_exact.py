@@ -382,3 +382,27 @@ def test_exact_output_matches_golden_files(name: str, target: str, number_type: 
     for rel, text in files.items():
         problem = golden_difference(text, expected[rel], ULPS[number_type], number_type)
         assert problem is None, f"{folder / rel}: {problem}; FUZZKIT_REFRESH_GOLDEN=1 rewrites it"
+
+
+# --------------------------------------------------------------------------- table search
+
+
+def test_oversized_resolution_is_refused_before_any_work() -> None:
+    with pytest.raises(CodegenError, match=r"255x255x255 table needs .* check points"):
+        make_table(rulebase("three_input"), number_type="float", resolution=255)
+
+
+@needs_cc
+@skip_no_cc
+def test_bound_certified_with_the_compiled_reference_equals_the_engines() -> None:
+    """Check grids above 65536 points are evaluated by the compiled exact method."""
+    from fuzzkit.codegen.table_search import _chunked, _engine_evaluator
+
+    rb = dataclasses.replace(rulebase("macvicar_whelan"), defuzzifier="bisector")
+    fast = make_table(rb, number_type="double", resolution=41)  # 321 x 321 check grid
+    slow = make_table(
+        rb, number_type="double", resolution=41, evaluate=_chunked(rb, _engine_evaluator(rb))
+    )
+    assert fast.check_points > 65_536
+    np.testing.assert_array_equal(fast.values[0], slow.values[0])
+    assert fast.bound == pytest.approx(slow.bound, rel=1e-9)
