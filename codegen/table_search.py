@@ -204,33 +204,39 @@ def _chunked(rb: RuleBase, evaluate: Evaluator) -> Evaluator:
     return run
 
 
-#: Calls with more points than this (dense check grids, never node grids: the table search
-#: caps those at 65536) go to the compiled exact method when a C compiler is available.
-ENGINE_POINTS = 65_536
+#: Check-grid calls with more points than this go to the compiled exact method when a C
+#: compiler is available (smaller ones cost little either way).
+ENGINE_POINTS = 4096
+
+
+class ReferenceEvaluator:
+    """The engine for node values, the compiled exact method for dense check grids; chunked.
+
+    Node values (:attr:`nodes`) come from the engine itself, so that they are its values bit
+    for bit (zeros on the knot lattice stay exact zeros). The check grids certifying the bound
+    are 16 to 64 times larger; there the compiled exact method (equal to the engine up to
+    rounding, about 1e-14 of the range) keeps a compile within seconds (bisector and mean of
+    maximum cost the vectorised engine about 20 us a point). Without a C compiler the engine
+    does everything.
+    """
+
+    def __init__(self, rb: RuleBase) -> None:
+        self.rb = rb
+        self.nodes = _chunked(rb, _engine_evaluator(rb))
+        self._compiled: list[Evaluator | None] = []
+
+    def __call__(self, inputs: Mapping[str, FloatArray]) -> Mapping[str, FloatArray]:
+        size = np.broadcast_shapes(*[np.shape(v) for v in inputs.values()])
+        if math.prod(size) <= ENGINE_POINTS:
+            return self.nodes(inputs)
+        if not self._compiled:  # built once, on first need
+            fast = _compiled_exact_evaluator(self.rb)
+            self._compiled.append(None if fast is None else _chunked(self.rb, fast))
+        return (self._compiled[0] or self.nodes)(inputs)
 
 
 def _default_evaluator(rb: RuleBase) -> Evaluator:
-    """The engine for node values, the compiled exact method for dense check grids; chunked.
-
-    Node values come from the engine itself, so that they are its values bit for bit (zeros on
-    the knot lattice stay exact zeros). The check grids certifying the bound are 16 to 64
-    times larger; there the compiled exact method (equal to the engine up to rounding, about
-    1e-14 of the range) is what keeps a compile within seconds. Without a C compiler the
-    engine does everything.
-    """
-    engine = _chunked(rb, _engine_evaluator(rb))
-    compiled: list[Evaluator | None] = []
-
-    def evaluate(inputs: Mapping[str, FloatArray]) -> Mapping[str, FloatArray]:
-        size = np.broadcast_shapes(*[np.shape(v) for v in inputs.values()])
-        if math.prod(size) <= ENGINE_POINTS:
-            return engine(inputs)
-        if not compiled:  # built once, on first need
-            fast = _compiled_exact_evaluator(rb)
-            compiled.append(None if fast is None else _chunked(rb, fast))
-        return (compiled[0] or engine)(inputs)
-
-    return evaluate
+    return ReferenceEvaluator(rb)
 
 
 def check_factor_for(counts: Sequence[int], check_factor: int = CHECK_FACTOR) -> int:
@@ -439,7 +445,8 @@ def build_table(
         layout, bps = _q15_layout(rb, bps)
     elif number_type == "float":
         bps = _float32_breakpoints(rb, bps)
-    values = _sample(rb, evaluator, bps)
+    node_evaluator = evaluator.nodes if isinstance(evaluator, ReferenceEvaluator) else evaluator
+    values = _sample(rb, node_evaluator, bps)
     for var, vals in zip(rb.outputs, values, strict=True):
         if not np.all(np.isfinite(vals)):
             bad = np.argwhere(~np.isfinite(vals))[0]
