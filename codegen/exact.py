@@ -53,6 +53,19 @@ ROUNDING_ULPS = 256
 EPSILON = {"double": 2.0**-52, "float": 2.0**-23}
 ROUNDING_BOUND = {k: ROUNDING_ULPS * v for k, v in EPSILON.items()}
 
+#: Defuzzifiers the exact method emits. Sugeno outputs (issue 15: ``constant`` and ``linear``
+#: terms, ``weighted_sum``) are a small addition: an output whose value is the weighted
+#: average or sum of per-rule values, like the weighted average's ``level_exprs``/``centres``.
+EXACT_DEFUZZIFIERS = (
+    "centroid",
+    "bisector",
+    "mean_of_maximum",
+    "smallest_of_maximum",
+    "largest_of_maximum",
+    "weighted_average",
+)
+SUGENO_SHAPES = ("constant", "linear")
+
 #: Shapes the generated code fuzzifies; trapezoid_form covers the piecewise-linear ones.
 _SMOOTH_INPUT_SHAPES = ("gaussian", "bell", "sigmoid", "singleton")
 
@@ -203,6 +216,12 @@ def unsupported_reason(rb: RuleBase, number_type: str = "double") -> str | None:
         return (
             f"the exact method computes in floating point; --type {number_type} is only "
             "available as a lookup table (use --method table)"
+        )
+    sugeno = [t.name for o in rb.outputs for t in o.terms if t.shape in SUGENO_SHAPES]
+    if sugeno or rb.defuzzifier not in EXACT_DEFUZZIFIERS:
+        return (
+            f"Sugeno outputs ({', '.join(sugeno) or rb.defuzzifier}) are not supported by the "
+            "exact method yet: compile with --method table"
         )
     for out in rb.outputs:
         for term in out.terms:

@@ -347,6 +347,16 @@ def test_exact_method_refuses_smooth_output_terms_with_the_reason(
         emit_exact(rb, "c", "double")
 
 
+def test_exact_method_refuses_sugeno_outputs_for_now() -> None:
+    base = rulebase("macvicar_whelan")
+    out = dataclasses.replace(base.outputs[0], terms=(Term("k", "constant", (0.5,)),))
+    rb = dataclasses.replace(base, outputs=(out,), rules=(), defuzzifier="weighted_average")
+    with pytest.raises(CodegenError, match=r"Sugeno outputs \(k\) are not supported"):
+        emit_exact(rb, "c", "double")
+    with pytest.raises(CodegenError, match=r"Sugeno outputs \(weighted_sum\)"):
+        emit_exact(dataclasses.replace(base, defuzzifier="weighted_sum"), "python")
+
+
 def test_exact_method_refuses_q15() -> None:
     with pytest.raises(CodegenError, match=r"floating point.*--method table"):
         emit_exact(rulebase("macvicar_whelan"), "c", "q15")
