@@ -46,6 +46,9 @@ from fuzzkit.codegen.lut import (
 from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy.model import RuleBase, Variable
 
+#: Diagonal errors (share of the output range) closer than this are a tie.
+SPLIT_TIE = 1e-12
+
 #: Fitted node values smaller than this share of the output range are solver noise: set to 0.
 SNAP_TO_ZERO = 1e-12
 
@@ -637,7 +640,9 @@ def _choose_splits(
             cell = diff[:-1, :-1].reshape(n0, k, n1, k)[:, 1:, :, 1:]
             err = np.maximum(err, cell.max(axis=(1, 3)) / (hi - lo))
         worst.append(err)
-    return (worst[1] < worst[0]).astype(np.uint8)
+    # the other diagonal only when it is better by more than rounding (of the reference too:
+    # check grids may come from the compiled exact method), so that ties stay on the main one
+    return (worst[1] < worst[0] - SPLIT_TIE).astype(np.uint8)
 
 
 def table_problem(rb: RuleBase, number_type: str) -> str | None:

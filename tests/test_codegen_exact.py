@@ -84,6 +84,7 @@ def test_shipped_rule_bases_in_c_match_the_engine_to_rounding(name: str, number_
     assert result.tie_jumps == 0
 
 
+@pytest.mark.slow
 @needs_cc
 @skip_no_cc
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -178,6 +179,7 @@ def test_macvicar_whelan_runs_clean_under_sanitizers_on_1e5_points(
     _sanitized_run(tmp_path, _compiler(compiler), rulebase("macvicar_whelan"), number_type, 100_000)
 
 
+@pytest.mark.slow
 @needs_cc
 @skip_no_cc
 @pytest.mark.parametrize("compiler", ["cc", "clang"])
