@@ -297,6 +297,25 @@ def test_random_family_through_the_table_method_stays_within_its_bound() -> None
     assert tested >= 3
 
 
+@needs_cc
+@skip_no_cc
+@pytest.mark.parametrize("name", SHIPPED)
+def test_shipped_rule_bases_through_the_table_method_stay_within_the_bound(name: str) -> None:
+    rb = rulebase(name)
+    table = make_table(rb, number_type="double", resolution=9)
+    points = verification_points(rb, 5000)
+    exact = _exact(rb, points)
+    with CompiledTable(
+        emit(rb, table, "c"), rb.name, "double", len(rb.inputs), len(rb.outputs),
+        fpi=len(rb.inputs) == 2,
+    ) as lib:  # fmt: skip
+        result = compare(rb, table, "c", lib.eval_batch(points), exact)
+    assert result.ok, result.describe()
+    module = load_module(emit(rb, table, "python"), rb.name)
+    result = compare(rb, table, "py", python_outputs(module.eval, points[:2000]), exact[:2000])
+    assert result.ok, result.describe()
+
+
 # --------------------------------------------------------------------------- choosing a method
 
 
