@@ -483,19 +483,27 @@ def _config(target: str) -> Any:
     return importlib.import_module(f"fuzzkit.codegen.backends.{target}.config")
 
 
-def render(spec: Spec) -> dict[str, str]:
-    """Render every file of ``spec.target``: ``{relative path: text}``."""
-    config = _config(spec.target)
-    env = _environment(spec.target)
+def render_files(target: str, name: str, spec: Any, files_key: str = "FILES") -> dict[str, str]:
+    """Render the templates ``config.<files_key>`` of ``target`` with ``spec``.
+
+    ``FILES`` are the lookup-table templates, ``EXACT_FILES`` the exact method's.
+    """
+    config = _config(target)
+    env = _environment(target)
     files: dict[str, str] = {}
-    outputs: Mapping[str, str] = config.FILES
+    outputs: Mapping[str, str] = getattr(config, files_key)
     for pattern, template in outputs.items():
-        path = pattern.format(name=spec.name)
+        path = pattern.format(name=name)
         try:
             files[path] = env.get_template(template).render(spec=spec)
         except jinja2.TemplateError as exc:  # a template bug, not user input
-            raise CodegenError(f"template {spec.target}/{template}: {exc}") from exc
+            raise CodegenError(f"template {target}/{template}: {exc}") from exc
     return files
+
+
+def render(spec: Spec) -> dict[str, str]:
+    """Render every file of ``spec.target``: ``{relative path: text}``."""
+    return render_files(spec.target, spec.name, spec)
 
 
 def emit(

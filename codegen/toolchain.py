@@ -127,6 +127,7 @@ class CompiledTable:
         fpi: bool,
         compiler: Sequence[str] | None = None,
         flags: Sequence[str] = (*STRICT_FLAGS, "-O2"),
+        libs: Sequence[str] = ("-lm",),
     ) -> None:
         cc = list(compiler) if compiler else find_compiler()
         if cc is None:
@@ -145,7 +146,9 @@ class CompiledTable:
         )
         sources = [rel for rel in files if rel.endswith(".c")] + ["fuzzkit_harness.c"]
         lib = folder / f"lib{name}.so"
-        run_compiler([*cc, *flags, "-shared", "-fPIC", "-o", str(lib), *sources], folder)
+        run_compiler(
+            [*cc, *flags, "-shared", "-fPIC", "-o", str(lib), *sources, *libs], folder
+        )
         self.library = ctypes.CDLL(str(lib))
         ptr = ctypes.POINTER(_CTYPES[number_type])
         self._batch = self.library.fuzzkit_batch_eval

@@ -100,7 +100,10 @@ def test_c_target_with_verify_and_baked_gains(
         (["--target", "c", "--type", "int8"], "unknown --type 'int8'"),
         (["--target", "python", "--type", "q15"], "applies to the C target"),
         (["--target", "c", "--tolerance", "-1"], "positive number"),
-        (["--target", "c", "--tolerance", "1e-7"], "cannot be met within"),
+        (["--target", "c", "--method", "table", "--tolerance", "1e-7"], "cannot be met within"),
+        (["--target", "c", "--method", "fastest"], "unknown --method 'fastest'"),
+        (["--target", "c", "--max-bytes", "0"], "--max-bytes must be a positive"),
+        (["--target", "c", "--type", "q15", "--method", "exact"], "only available as a lookup"),
         (["--target", "c", "--tolerance", "1", "--resolution", "5"], "not allowed with"),
         (["--target", "c", "--resolution", "1"], "between 2 and"),
     ],
@@ -254,3 +257,42 @@ def test_cli_gain_keys_are_the_emitters() -> None:
     from fuzzkit.codegen.emit import FPI_GAIN_KEYS
 
     assert GAIN_KEYS == FPI_GAIN_KEYS
+
+
+@needs_cc
+@skip_no_cc
+def test_user_rule_base_compiles_with_the_defaults_and_says_why(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "gen"
+    code, text, err = _run(
+        capsys, "compile", "temperature_pd", "--target", "c", "--out", str(out), "--verify"
+    )
+    assert code == 0, err
+    assert "method: exact (no table within --max-bytes 8192 meets tolerance 0.001" in text
+    assert "verify c exact (float): ok on 100144 points" in text
+    assert sorted(p.name for p in out.iterdir()) == ["temperature_pd.c", "temperature_pd.h"]
+    assert "no lookup table" in (out / "temperature_pd.c").read_text()
+
+
+def test_auto_takes_a_table_that_fits_and_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "gen"
+    code, text, err = _run(
+        capsys, "compile", "macvicar_whelan", "--target", "python", "--tolerance", "0.05",
+        "--out", str(out),
+    )  # fmt: skip
+    assert code == 0, err
+    assert "method: table (a " in text and "meets tolerance 0.05 within --max-bytes 8192" in text
+
+
+def test_exact_python_with_verify(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "gen"
+    code, text, err = _run(
+        capsys, "compile", "three_input", "--target", "python", "--method", "exact",
+        "--out", str(out), "--verify",
+    )  # fmt: skip
+    assert code == 0, err
+    assert "method: exact (--method exact)" in text
+    assert "verify python exact: ok" in text

@@ -1,4 +1,4 @@
-"""``fuzzkit compile``: a rule base to lookup-table C or Python, optionally verified.
+"""``fuzzkit compile``: a rule base to C or Python (lookup table or exact inference), verified.
 
 Everything is computed and checked before anything is written; the output folder then gets
 all files at once (``write_tree_atomic``) or none.
@@ -22,13 +22,17 @@ def register(sub: Any) -> None:
     """Add ``compile`` to the ``fuzzkit`` parser."""
     p = sub.add_parser(
         "compile",
-        help="compile a rule base to lookup-table C or Python",
-        description="Sample a rule base with the exact engine into a lookup table with a "
-        "verified error bound and generate C (NAME.h, NAME.c) or Python (NAME.py) from it. "
-        "Prints the table size and bound; --verify compiles/imports the result and compares "
-        "it with the exact engine on 1e5 random points and the edge cases.",
+        help="compile a rule base to C or Python (lookup table or exact inference)",
+        description="Generate C (NAME.h, NAME.c) or Python (NAME.py) for a rule base, either "
+        "as a lookup table sampled from the exact engine with a verified error bound "
+        "(--method table) or as the exact inference itself, rounding error only "
+        "(--method exact). --method auto (default) takes the table when one meets the "
+        "tolerance within --max-bytes and the exact method otherwise, and says why. "
+        "--verify compiles/imports the result and compares it with the exact engine on 1e5 "
+        "random points and the edge cases.",
         epilog="examples:\n"
         "  fuzzkit compile macvicar_whelan --target c --out gen --verify\n"
+        "  fuzzkit compile macvicar_whelan --target c --method exact --out gen_exact --verify\n"
         "  fuzzkit compile macvicar_whelan --target c --type q15 --tolerance 2e-3 --out gen_q15\n"
         "  fuzzkit compile my_controller.yaml --target python --resolution 65 --out gen_py",
     )
@@ -54,6 +58,19 @@ def register(sub: Any) -> None:
         default=None,
         metavar="N",
         help="breakpoints per input instead of a tolerance search",
+    )
+    p.add_argument(
+        "--method",
+        default="auto",
+        help="auto (default), table or exact",
+    )
+    p.add_argument(
+        "--max-bytes",
+        type=int,
+        default=None,
+        metavar="B",
+        help="auto: largest table (constant data bytes) to take before the exact method "
+        "(default 8192)",
     )
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     p.add_argument(
@@ -104,10 +121,15 @@ def cmd_compile(args: argparse.Namespace) -> int:
     """Handler of ``fuzzkit compile``."""
     from pathlib import Path
 
-    from fuzzkit.codegen.emit import TARGETS, emit
+    from fuzzkit.codegen.emit import TARGETS
     from fuzzkit.codegen.lut import NUMBER_TYPES
-    from fuzzkit.codegen.table_search import make_table
-    from fuzzkit.codegen.verify import verify_c, verify_python
+    from fuzzkit.codegen.method import DEFAULT_MAX_BYTES, compile_rulebase
+    from fuzzkit.codegen.verify import (
+        verify_c,
+        verify_exact_c,
+        verify_exact_python,
+        verify_python,
+    )
     from fuzzkit.errors import CodegenError, ConfigError
     from fuzzkit.fileio import write_tree_atomic
     from fuzzkit.formats.registry import load
@@ -132,28 +154,46 @@ def cmd_compile(args: argparse.Namespace) -> int:
         raise CodegenError(f"--tolerance must be a positive number, got {args.tolerance}")
     defaults = _fpi_defaults(args.gains)
 
+    max_bytes = DEFAULT_MAX_BYTES if args.max_bytes is None else args.max_bytes
+
     rb = load(args.rulebase)
     with TaskBars(f"{rb.name}: ", quiet=args.quiet, unit="pt") as bars:
-        table = make_table(
+        result = compile_rulebase(
             rb,
-            number_type=number_type,
+            args.target,
+            number_type,
+            method=args.method,
             tolerance=args.tolerance,
             resolution=args.resolution,
+            max_bytes=max_bytes,
+            fpi_defaults=defaults,
             progress=bars,
         )
-    files = emit(rb, table, args.target, fpi_defaults=defaults)
-    print(f"{rb.name}: {table.describe()}")
+    files = result.files
+    table = result.table
+    if table is not None:
+        print(f"{rb.name}: {table.describe()}")
+    else:
+        print(f"{rb.name}: exact inference ({number_type}), rounding error only")
+    print(f"method: {result.method} ({result.reason})")
+    for line in result.warnings:
+        print(line)
     if len(rb.inputs) != 2:
         print(f"note: no fuzzy-PI API (it needs 2 inputs, {rb.name} has {len(rb.inputs)})")
     if defaults is not None and len(rb.inputs) != 2:
         print("note: --gains ignored (no fuzzy-PI API)")
     if args.verify:
-        if args.target == "c":
-            result = verify_c(rb, table, files)
+        if table is None:
+            if args.target == "c":
+                result_v = verify_exact_c(rb, number_type, files)
+            else:
+                result_v = verify_exact_python(rb, files)
+        elif args.target == "c":
+            result_v = verify_c(rb, table, files)
         else:
-            result = verify_python(rb, table, files)
-        print(result.describe())
-        if not result.ok:
+            result_v = verify_python(rb, table, files)
+        print(result_v.describe())
+        if not result_v.ok:
             print("nothing written: the generated code does not match the exact engine")
             return EXIT_FAILURE
     written = write_tree_atomic(out, files)

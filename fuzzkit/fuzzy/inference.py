@@ -883,3 +883,13 @@ def evaluate_point(
 ) -> dict[str, float]:
     """Evaluate ``rulebase`` at one point; returns ``{output: float}``."""
     return engine_for(rulebase).evaluate_point(inputs, **kw)
+
+
+#: Public names of the output-stage building blocks, for code generators that emit the same
+#: breakpoint sweep (``fuzzkit.codegen.exact``): which rule feeds which piece, and the
+#: elementary intervals with every piece's line in them.
+OutputPieces = _Pieces
+PiecewiseLinearGeometry = _ExactGeometry
+#: Centroid tables of a partition-style output (``None`` when more than two terms overlap or the
+#: operators are not min/max): the engine's fast centroid, which generated code can reuse.
+partition_centroid = _partition_centroid

@@ -1,0 +1,807 @@
+"""The exact method: the inference itself as C or Python, no table (``--method exact``).
+
+:func:`build_exact_spec` precomputes in Python everything the generated code can take as data:
+the fuzzification constants of every input term, each rule's antecedent as an expression over
+the memberships, which rules feed which output piece, and for piecewise-linear outputs the
+engine's own elementary intervals with the line (slope, intercept) of every piece in them
+(``fuzzkit.fuzzy.inference.PiecewiseLinearGeometry``, the same breakpoint sweep). The templates
+(``backends/<target>/exact.*.jinja``) only lay that out; at run time the code intersects the
+firing levels with those lines, sorts the few points of each interval, and integrates the
+aggregated set exactly between them (trapezoid and moment formulas, Gauss-Legendre for the
+probabilistic sum), as the engine does. Everything is bounded at generation time: array sizes,
+loop counts (insertion sort of at most ``points_per_interval`` values, 60 bisection steps for a
+probabilistic-sum bisector), so the worst-case time is constant; nothing is allocated.
+
+The error against the exact engine is rounding only; :data:`ROUNDING_BOUND` states it.
+"""
+
+from __future__ import annotations
+
+import math
+import textwrap
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from fuzzkit.codegen.emit import (
+    FPI_GAIN_KEYS,
+    FpiDefaults,
+    _c_literal,
+    _check_float32_gains,
+    _comment_safe,
+    _py_literal,
+    _wrap,
+    check_identifier,
+    check_module_name,
+    source_sha256,
+)
+from fuzzkit.errors import CodegenError
+from fuzzkit.fuzzy import membership
+from fuzzkit.fuzzy.inference import OutputPieces, PiecewiseLinearGeometry, partition_centroid
+from fuzzkit.fuzzy.model import Compound, Expression, Proposition, Rule, RuleBase, Variable
+
+#: Number types the exact target computes in (Q15 has no exact inference: use a table).
+EXACT_NUMBER_TYPES = ("float", "double")
+
+#: Stated bound of |generated - exact engine| for the continuous defuzzifiers (centroid,
+#: bisector, weighted average) as a multiple of the number type's machine epsilon times the
+#: output's full scale (largest |range end|): 2^-52 S x 64 for double (Python too), 2^-23 S x 64
+#: for float. Tested on 1e5 random points plus edges for every shipped rule base and a random
+#: family; see codegen/README.md. mom/som/lom are discontinuous where two maxima tie: the
+#: bound holds away from ties (double: levels within 1e-12 of each other count as tied, as in
+#: the engine); at a tie a rounding difference can move the result to the other maximum.
+ROUNDING_ULPS = 256
+EPSILON = {"double": 2.0**-52, "float": 2.0**-23}
+ROUNDING_BOUND = {k: ROUNDING_ULPS * v for k, v in EPSILON.items()}
+
+#: Defuzzifiers the exact method emits. Sugeno outputs (issue 15: ``constant`` and ``linear``
+#: terms, ``weighted_sum``) are a small addition: an output whose value is the weighted
+#: average or sum of per-rule values, like the weighted average's ``level_exprs``/``centres``.
+EXACT_DEFUZZIFIERS = (
+    "centroid",
+    "bisector",
+    "mean_of_maximum",
+    "smallest_of_maximum",
+    "largest_of_maximum",
+    "weighted_average",
+)
+SUGENO_SHAPES = ("constant", "linear")
+
+#: Shapes the generated code fuzzifies; trapezoid_form covers the piecewise-linear ones.
+_SMOOTH_INPUT_SHAPES = ("gaussian", "bell", "sigmoid", "singleton")
+
+
+@dataclass(frozen=True)
+class ExactTerm:
+    """One input term as the templates need it: its kind and its constants as literals."""
+
+    index: int  # position in the flat membership array
+    name: str
+    kind: str  # "linear" (trapezoid form), "gaussian", "bell", "sigmoid", "singleton"
+    params: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class ExactInput:
+    """One input: its clamp (or extend) limits and its terms."""
+
+    index: int
+    name: str
+    low: str
+    high: str
+    terms: tuple[ExactTerm, ...]
+
+
+@dataclass(frozen=True)
+class ExactRule:
+    """One rule: its firing strength as an expression over ``mu[...]`` (weight applied)."""
+
+    index: int
+    text: str
+    expr: str
+
+
+@dataclass(frozen=True)
+class ExactOutput:
+    """One output: how its piece levels come from the rules and how it is defuzzified."""
+
+    index: int
+    name: str
+    low: str
+    high: str
+    default: str
+    defuzzifier: str
+    n_pieces: int
+    level_exprs: tuple[str, ...]  # weighted average: term activations; else piece levels
+    centres: tuple[str, ...]  # weighted average only
+    # Piecewise-linear geometry (empty for weighted average and for outputs no rule feeds)
+    n_intervals: int
+    slots: int
+    z: tuple[str, ...]
+    slot_piece: tuple[str, ...]
+    slope: tuple[str, ...]
+    icpt: tuple[str, ...]
+    candidates: int
+    points: int  # points per interval after the crossings (bounded sum)
+    gl_nodes: tuple[str, ...]
+    gl_weights: tuple[str, ...]
+    empty: bool
+    # Grid rules: the consequent term of each (row, column) cell (n_terms = none)
+    grid_cons: tuple[str, ...] = ()
+    # Polynomial centroid (partition-style min/max outputs): the engine's own fast centroid
+    poly: PolySpec | None = None
+
+
+@dataclass(frozen=True)
+class PolySpec:
+    """Area and moment of each clipped function as piecewise cubics in its level.
+
+    Functions are the output terms, then the overlaps of term pairs (level = the smaller of
+    the two, sign -1): max(g_i) = sum g_i - sum min(g_i, g_j) when at most two terms overlap.
+    """
+
+    n_funcs: int
+    pieces: int
+    level_a: tuple[str, ...]  # index of the level (term), per function
+    level_b: tuple[str, ...]  # the pair's other term (same as level_a for a term)
+    sign: tuple[str, ...]
+    starts: tuple[str, ...]
+    inv_width: tuple[str, ...]
+    area: tuple[str, ...]  # 4 coefficients per piece, constant first
+    moment: tuple[str, ...]
+    low: str
+    width: str
+
+
+@dataclass(frozen=True)
+class ExactSpec:
+    """Everything an exact-method template may use; nothing else reaches the generated text."""
+
+    name: str
+    upper: str
+    target: str
+    number_type: str
+    ctype: str
+    fsuffix: str  # libm suffix: "f" for float, "" for double
+    version: str
+    source_file: str
+    source_sha256: str
+    description: tuple[str, ...]
+    n_inputs: int
+    n_outputs: int
+    n_mu: int
+    n_rules: int
+    inputs: tuple[ExactInput, ...]
+    rules: tuple[ExactRule, ...]
+    outputs: tuple[ExactOutput, ...]
+    implication: str
+    aggregation: str
+    clamp: bool
+    libm: tuple[str, ...]
+    bound_note: tuple[str, ...]
+    has_fpi: bool
+    fpi_note: str
+    fpi_defaults: dict[str, str] | None
+    zero: str
+    one: str
+    half: str
+    tie: str
+    tiny: str
+    bisect_margin: str
+    extend_limit: str
+    vertical: str
+    stack_bytes: int
+    helpers: tuple[str, ...]  # C helper functions the code calls (min, max, psum, finite)
+    has_geometry: bool
+    max_base: int  # largest count of interval points before the bounded-sum crossings
+    piece_type: str
+    two: str
+    six: str
+    and_: str
+    or_: str
+    weighted: bool
+    grid: bool  # rules form a 2-input table: loop over the non-zero memberships only
+    grid_weights: tuple[str, ...]
+    n_terms0: int
+    n_terms1: int
+    windows: tuple[WindowSpec, ...]  # grid rules on two window inputs: visit 2 x 2 cells
+
+
+def unsupported_reason(rb: RuleBase, number_type: str = "double") -> str | None:
+    """Why the exact method cannot compile ``rb`` (None when it can).
+
+    It needs piecewise-linear output terms unless the defuzzifier is the weighted average
+    (which only uses the term centres), and a floating-point number type.
+    """
+    if number_type not in EXACT_NUMBER_TYPES:
+        return (
+            f"the exact method computes in floating point; --type {number_type} is only "
+            "available as a lookup table (use --method table)"
+        )
+    sugeno = [t.name for o in rb.outputs for t in o.terms if t.shape in SUGENO_SHAPES]
+    if sugeno or rb.defuzzifier not in EXACT_DEFUZZIFIERS:
+        return (
+            f"Sugeno outputs ({', '.join(sugeno) or rb.defuzzifier}) are not supported by the "
+            "exact method yet: compile with --method table"
+        )
+    for out in rb.outputs:
+        for term in out.terms:
+            if term.shape not in membership.SHAPES:
+                return (
+                    f"output {out.name!r} term {term.name!r}: shape {term.shape!r} is not "
+                    "supported by the exact method yet"
+                )
+            if rb.defuzzifier != "weighted_average" and not term.is_piecewise_linear:
+                return (
+                    f"output {out.name!r} term {term.name!r} is a {term.shape}: the exact "
+                    f"method integrates only piecewise-linear output terms in closed form "
+                    f"({rb.defuzzifier}); use triangle/trapezoid/shoulder terms, the "
+                    "weighted_average defuzzifier, or --method table"
+                )
+    for var in rb.inputs:
+        for term in var.terms:
+            if not term.is_piecewise_linear and term.shape not in _SMOOTH_INPUT_SHAPES:
+                return f"input {var.name!r} term {term.name!r}: unknown shape {term.shape!r}"
+    return None
+
+
+class _Lit:
+    """Literal formatting for one target and number type."""
+
+    def __init__(self, target: str, number_type: str) -> None:
+        self.py = target == "python"
+        self.number_type = number_type
+
+    def __call__(self, value: float) -> str:
+        if self.py:
+            return _py_literal(value)
+        return _c_literal(value, self.number_type)
+
+    def maybe_nan(self, value: float | None) -> str:
+        if value is None or math.isnan(value):
+            return "_NAN" if self.py else "NAN"
+        return self(float(value))
+
+
+def _input_terms(var: Variable, offset: int, lit: _Lit, vertical: float) -> tuple[ExactTerm, ...]:
+    terms = []
+    for j, term in enumerate(var.terms):
+        if term.is_piecewise_linear:
+            b, c, rise, fall = membership.trapezoid_form(term)
+            # the engine's 1e200 vertical slope overflows a float: any slope large enough to
+            # turn every representable non-zero distance into a step does the same
+            rise, fall = (min(s, vertical) for s in (rise, fall))
+            params = tuple(lit(v) for v in (b, c, rise, fall))
+            kind = "linear"
+        else:
+            kind = term.shape
+            if kind == "gaussian":
+                mean, sigma = term.params
+                params = (lit(mean), lit(sigma))
+            elif kind == "bell":
+                width, slope, centre = term.params
+                params = (lit(centre), lit(width), lit(2.0 * slope))
+            elif kind == "sigmoid":
+                slope, centre = term.params
+                params = (lit(slope), lit(centre))
+            else:
+                params = (lit(term.params[0]),)
+        terms.append(ExactTerm(offset + j, term.name, kind, params))
+    return tuple(terms)
+
+
+def _expression(
+    expr: Expression, rb: RuleBase, mu_index: dict[tuple[str, str], int], ops: dict[str, str]
+) -> str:
+    """The antecedent as source text over ``mu[k]`` (AND/OR folded left, as the engine)."""
+    if isinstance(expr, Proposition):
+        k = mu_index[(expr.variable, expr.term)]
+        return f"({ops['one']} - mu[{k}])" if expr.negated else f"mu[{k}]"
+    parts = [_expression(e, rb, mu_index, ops) for e in expr.operands]
+    acc = parts[0]
+    for p in parts[1:]:
+        acc = ops[expr.op].format(a=acc, b=p)
+    return acc
+
+
+def _rule_text(expr: Expression) -> str:
+    if isinstance(expr, Proposition):
+        return f"{expr.variable} is {'not ' if expr.negated else ''}{expr.term}"
+    return f" {expr.op} ".join(
+        _rule_text(e) if isinstance(e, Proposition) else f"({_rule_text(e)})" for e in expr.operands
+    )
+
+
+def _fold(items: list[str], fmt: str, empty: str) -> str:
+    if not items:
+        return empty
+    acc = items[0]
+    for item in items[1:]:
+        acc = fmt.format(a=acc, b=item)
+    return acc
+
+
+def grid_rules(rb: RuleBase) -> dict[tuple[int, int], Rule] | None:
+    """The rules as a 2-input table ``{(row term, column term): rule}``, or None.
+
+    A table is what lets the generated code visit only the cells whose memberships are both
+    non-zero (4 of 49 for a partition): every rule is ``x0 is A and x1 is B`` (no NOT, each cell
+    once), and every output's levels are per-term aggregates (max, or bounded sum with product
+    implication, or any aggregation for the weighted average).
+    """
+    ops = rb.operators
+    per_term = ops.aggregation == "max" or (
+        ops.aggregation == "bounded_sum" and ops.implication == "product"
+    )
+    if len(rb.inputs) != 2 or not (per_term or rb.defuzzifier == "weighted_average"):
+        return None
+    names = (rb.inputs[0].name, rb.inputs[1].name)
+    cells: dict[tuple[int, int], Rule] = {}
+    for rule in rb.rules:
+        ante = rule.antecedent
+        if not isinstance(ante, Compound) or ante.op != "and" or len(ante.operands) != 2:
+            return None
+        props = [p for p in ante.operands if isinstance(p, Proposition) and not p.negated]
+        by_var = {p.variable: p.term for p in props}
+        if len(props) != 2 or set(by_var) != set(names):
+            return None
+        key = (rb.inputs[0].term_index(by_var[names[0]]), rb.inputs[1].term_index(by_var[names[1]]))
+        targets = [c.variable for c in rule.consequents]
+        if key in cells or len(set(targets)) != len(targets):
+            return None
+        cells[key] = rule
+    return cells
+
+
+@dataclass(frozen=True)
+class WindowSpec:
+    """An input whose non-zero terms are always two neighbours (i, i + 1): where to look.
+
+    ``cuts`` are the term vertices inside the range; ``first[k]`` is the first of the two
+    terms for an input with k cuts at or below it; ``terms`` holds (b, c, rise, fall) per term
+    (trapezoid form), then a padding term that is 0 everywhere.
+    """
+
+    index: int
+    name: str
+    low: str
+    high: str
+    n_terms: int
+    cuts: tuple[str, ...]
+    first: tuple[str, ...]
+    terms: tuple[str, ...]
+
+
+def _window(var: Variable, index: int, lit: _Lit, vertical: float) -> WindowSpec | None:
+    if not all(t.is_piecewise_linear for t in var.terms):
+        return None
+    cuts = sorted({float(p) for t in var.terms for p in t.params if var.low < p < var.high})
+    edges = [var.low, *cuts, var.high]
+    n = len(var.terms)
+    first = []
+    for k in range(len(edges) - 1):
+        probe = [edges[k], 0.5 * (edges[k] + edges[k + 1])]
+        if k == len(edges) - 2:
+            probe.append(edges[k + 1])
+        active = {
+            j
+            for j, term in enumerate(var.terms)
+            for x in probe
+            if float(membership.evaluate_term(term, x)) > 0.0
+        }
+        if not active:
+            first.append(n - 1)
+        elif max(active) - min(active) > 1:
+            return None
+        else:
+            first.append(min(min(active), n - 1))
+    forms = []
+    for term in var.terms:
+        b, c, rise, fall = membership.trapezoid_form(term)
+        forms += [b, c, min(rise, vertical), min(fall, vertical)]
+    forms += [vertical, 0.0, 1.0, 0.0]  # 1 + (x - 1e30) * 1 < 0 for every x in range: 0
+    return WindowSpec(
+        index=index,
+        name=var.name,
+        low=lit(var.low),
+        high=lit(var.high),
+        n_terms=n,
+        cuts=tuple(lit(c) for c in cuts),
+        first=tuple(str(f) for f in first),
+        terms=_wrap([lit(v) for v in forms], 4),
+    )
+
+
+def _windows(rb: RuleBase, lit: _Lit) -> tuple[WindowSpec, ...] | None:
+    """Both inputs as windows (clamped, piecewise linear, two neighbours), or None."""
+    if rb.out_of_range != "clamp":
+        return None
+    vertical = 1e200 if lit.number_type == "double" else 1e30
+    found = [_window(v, i, lit, vertical) for i, v in enumerate(rb.inputs)]
+    if any(w is None for w in found):
+        return None
+    return tuple(w for w in found if w is not None)
+
+
+def _poly(
+    rb: RuleBase,
+    out: Variable,
+    pieces: OutputPieces,
+    geo: PiecewiseLinearGeometry,
+    lit: _Lit,
+    wrap: Callable[[list[str]], tuple[str, ...]],
+) -> PolySpec | None:
+    if rb.defuzzifier != "centroid":
+        return None
+    pc = partition_centroid(geo, rb, len(out.terms))
+    if pc is None:
+        return None
+    n_terms = len(out.terms)
+    p_max = pc.p_max
+    level_a: list[str] = []
+    level_b: list[str] = []
+    sign: list[str] = []
+    starts: list[str] = []
+    inv_w: list[str] = []
+    area: list[str] = []
+    moment: list[str] = []
+    for f, sgn, piece in pc.functions:
+        a, b = (f, f) if f < n_terms else pc.pairs[f - n_terms]
+        level_a.append(str(a))
+        level_b.append(str(b))
+        sign.append(lit(float(sgn)))
+        n = len(piece.starts)
+        starts += [lit(v) for v in piece.starts] + [lit(1e30)] * (p_max - n)
+        inv_w += [lit(v) for v in piece.inv_width] + [lit(1.0)] * (p_max - n)
+        for coefs, dest in ((piece.area, area), (piece.moment, moment)):
+            for c in coefs:
+                dest += [lit(v) for v in c]
+            dest += [lit(0.0)] * (4 * (p_max - n))
+    return PolySpec(
+        n_funcs=len(pc.functions),
+        pieces=p_max,
+        level_a=tuple(level_a),
+        level_b=tuple(level_b),
+        sign=tuple(sign),
+        starts=wrap(starts),
+        inv_width=wrap(inv_w),
+        area=wrap(area),
+        moment=wrap(moment),
+        low=lit(pc.low),
+        width=lit(pc.width),
+    )
+
+
+def _output(
+    rb: RuleBase,
+    k: int,
+    out: Variable,
+    lit: _Lit,
+    agg_fmt: dict[str, str],
+    wrap: Callable[[list[str]], tuple[str, ...]],
+    grid: dict[tuple[int, int], Rule] | None,
+) -> ExactOutput:
+    pieces = OutputPieces(rb, out)
+    ops = rb.operators
+    rules_of_term: dict[int, list[int]] = {}
+    for r, rule in enumerate(rb.rules):
+        for c in rule.consequents:
+            if c.variable == out.name:
+                rules_of_term.setdefault(out.term_index(c.term), []).append(r)
+    zero = lit(0.0)
+    grid_cons: tuple[str, ...] = ()
+    if grid is not None:
+        # one padding row and column of "no rule" for the window's neighbour past the end
+        t0, t1 = len(rb.inputs[0].terms) + 1, len(rb.inputs[1].terms) + 1
+        cons = [len(out.terms)] * (t0 * t1)
+        for (i, j), rule in grid.items():
+            for c in rule.consequents:
+                if c.variable == out.name:
+                    cons[i * t1 + j] = out.term_index(c.term)
+        grid_cons = _wrap([str(c) for c in cons], 16)
+    empty_geo = dict(
+        n_intervals=0, slots=0, z=(), slot_piece=(), slope=(), icpt=(), candidates=0, points=0,
+        gl_nodes=(), gl_weights=(),
+    )  # fmt: skip
+    if rb.defuzzifier == "weighted_average":
+        fmt = {
+            "max": agg_fmt["max"],
+            "bounded_sum": "{a} + {b}",
+            "probabilistic_sum": agg_fmt["psum"],
+        }
+        acts = []
+        for t in range(len(out.terms)):
+            items = [f"w[{r}]" for r in rules_of_term.get(t, [])]
+            a = _fold(items, fmt[ops.aggregation], zero)
+            if ops.aggregation == "bounded_sum" and len(items) > 1:
+                a = agg_fmt["min"].format(a=a, b=lit(1.0))
+            acts.append(a)
+        centres = tuple(lit(membership.centre(t, out.low, out.high)) for t in out.terms)
+        return ExactOutput(
+            index=k, name=out.name, low=lit(out.low), high=lit(out.high),
+            default=lit.maybe_nan(out.default), defuzzifier=rb.defuzzifier,
+            n_pieces=len(out.terms), level_exprs=tuple(acts), centres=centres,
+            empty=pieces.empty, grid_cons=grid_cons, **empty_geo,  # type: ignore[arg-type]
+        )  # fmt: skip
+    if pieces.empty:
+        return ExactOutput(
+            index=k, name=out.name, low=lit(out.low), high=lit(out.high),
+            default=lit.maybe_nan(out.default), defuzzifier=rb.defuzzifier, n_pieces=0,
+            level_exprs=(), centres=(), empty=True, **empty_geo,  # type: ignore[arg-type]
+        )  # fmt: skip
+    if pieces.per_term:
+        level_fmt = agg_fmt["max"] if ops.aggregation == "max" else "{a} + {b}"
+        levels = tuple(
+            _fold([f"w[{r}]" for r in rules_of_term.get(t, [])], level_fmt, zero)
+            for t in range(len(out.terms))
+        )
+    else:
+        levels = tuple(f"w[{int(r)}]" for r in pieces.inst_rules)
+    geo = PiecewiseLinearGeometry(rb, out, pieces)
+    # the C target takes the engine's fast centroid; the Python target the general sweep
+    poly = None if lit.py else _poly(rb, out, pieces, geo, lit, wrap)
+    if poly is not None:
+        return ExactOutput(
+            index=k, name=out.name, low=lit(out.low), high=lit(out.high),
+            default=lit.maybe_nan(out.default), defuzzifier=rb.defuzzifier,
+            n_pieces=pieces.n_pieces, level_exprs=levels, centres=(), empty=False,
+            grid_cons=grid_cons, poly=poly, **empty_geo,  # type: ignore[arg-type]
+        )  # fmt: skip
+    m, kmax = len(geo.z0), geo.kmax
+    if ops.implication == "min" and ops.aggregation == "max":
+        cand = kmax * kmax
+    elif ops.implication == "min":
+        cand = kmax
+    elif ops.aggregation == "max":
+        cand = kmax * (kmax - 1) // 2
+    else:
+        cand = 0
+    base = 2 + cand
+    points = 2 * base - 1 if ops.aggregation == "bounded_sum" else base
+    xg, wg = geo.gl
+    z = [*geo.z0.tolist(), float(geo.z1[-1])]
+    return ExactOutput(
+        index=k,
+        name=out.name,
+        low=lit(out.low),
+        high=lit(out.high),
+        default=lit.maybe_nan(out.default),
+        defuzzifier=rb.defuzzifier,
+        n_pieces=pieces.n_pieces,
+        level_exprs=levels,
+        centres=(),
+        n_intervals=m,
+        slots=kmax,
+        z=wrap([lit(v) for v in z]),
+        slot_piece=_wrap([str(int(p)) for p in geo.slot_piece.ravel()], 16),
+        slope=wrap([lit(float(v)) for v in geo.slope.ravel()]),
+        icpt=wrap([lit(float(v)) for v in geo.icpt.ravel()]),
+        candidates=cand,
+        points=points,
+        gl_nodes=tuple(lit(float(v)) for v in xg) if ops.aggregation == "probabilistic_sum" else (),
+        gl_weights=tuple(lit(float(v)) for v in wg)
+        if ops.aggregation == "probabilistic_sum"
+        else (),
+        empty=False,
+        grid_cons=grid_cons,
+    )
+
+
+def _bound_note(number_type: str, target: str) -> str:
+    eps = "2^-52" if number_type == "double" else "2^-23"
+    what = "Python floats" if target == "python" else f"{number_type} arithmetic"
+    return (
+        f"Exact inference in {what}: the only error against fuzzkit's exact engine is rounding, "
+        f"at most {ROUNDING_ULPS} x {eps} x the output's full scale (largest |range end|) for "
+        "centroid, bisector and weighted average. mean/smallest/largest of maximum jump where "
+        "two maxima tie; there a rounding difference can pick the other one."
+    )
+
+
+def build_exact_spec(
+    rb: RuleBase,
+    target: str,
+    number_type: str = "double",
+    *,
+    fpi_defaults: FpiDefaults | None = None,
+) -> ExactSpec:
+    """Collect, check and format everything the exact-method templates need.
+
+    Raises
+    ------
+    CodegenError
+        Unknown target, a name that cannot be an identifier, a Q15 type, or output terms the
+        method cannot integrate (see :func:`unsupported_reason`).
+    """
+    from fuzzkit import __version__
+    from fuzzkit.codegen.emit import TARGETS
+
+    if target not in TARGETS:
+        raise CodegenError(f"unknown target {target!r} (expected one of {', '.join(TARGETS)})")
+    if target == "python" and number_type != "double":
+        raise CodegenError(f"the python target computes in double; got --type {number_type}")
+    why = unsupported_reason(rb, number_type)
+    if why is not None:
+        raise CodegenError(f"rule base {rb.name!r}: --method exact: {why}")
+    name = check_module_name(check_identifier(rb.name, "rule base name"))
+    for var in rb.inputs + rb.outputs:
+        check_identifier(var.name, f"variable name ({rb.name})")
+    py = target == "python"
+    lit = _Lit(target, number_type)
+    per_line = 4 if py else 6
+
+    def wrap(items: list[str]) -> tuple[str, ...]:
+        return _wrap(items, per_line)
+
+    vertical = 1e200 if number_type == "double" else 1e30
+    inputs = []
+    mu_index: dict[tuple[str, str], int] = {}
+    offset = 0
+    for i, var in enumerate(rb.inputs):
+        for j, term in enumerate(var.terms):
+            mu_index[(var.name, term.name)] = offset + j
+        inputs.append(
+            ExactInput(
+                i, var.name, lit(var.low), lit(var.high), _input_terms(var, offset, lit, vertical)
+            )
+        )
+        offset += len(var.terms)
+    ops = rb.operators
+    prefix = "" if py else f"{name}_"
+    agg_fmt = {
+        "min": "min({a}, {b})" if py else prefix + "min({a}, {b})",
+        "max": "max({a}, {b})" if py else prefix + "max({a}, {b})",
+        "psum": "_psum({a}, {b})" if py else prefix + "psum({a}, {b})",
+        "product": "{a} * {b}",
+    }
+    expr_ops = {
+        "and": agg_fmt["min"] if ops.and_ == "min" else agg_fmt["product"],
+        "or": agg_fmt["max"] if ops.or_ == "max" else agg_fmt["psum"],
+        "one": lit(1.0),
+    }
+    weights = [r.weight for r in rb.rules]
+    any_weight = any(w != 1.0 for w in weights)
+    rules = []
+    for r, rule in enumerate(rb.rules):
+        expr = _expression(rule.antecedent, rb, mu_index, expr_ops)
+        if any_weight:
+            expr = f"({expr}) * {lit(rule.weight)}"
+        rules.append(ExactRule(r, _comment_safe(_rule_text(rule.antecedent)), expr))
+    grid = None if py else grid_rules(rb)
+    windows = _windows(rb, lit) if grid is not None else None
+    outputs = tuple(
+        _output(rb, k, out, lit, agg_fmt, wrap, grid) for k, out in enumerate(rb.outputs)
+    )
+    libm: set[str] = set()
+    shapes = {t.shape for v in rb.inputs for t in v.terms}
+    if shapes & {"gaussian", "sigmoid"}:
+        libm.add("exp")
+    if "bell" in shapes:
+        libm.update({"pow", "fabs"})
+    if rb.defuzzifier == "bisector" and ops.aggregation != "probabilistic_sum":
+        libm.add("sqrt")
+    has_fpi = len(rb.inputs) == 2
+    note = (
+        ""
+        if has_fpi
+        else "no fuzzy-PI API: it needs exactly 2 inputs (e, de), this rule base has "
+        f"{len(rb.inputs)}"
+    )
+    defaults = None
+    if fpi_defaults is not None and has_fpi:
+        gains = {k: float(getattr(fpi_defaults, k)) for k in FPI_GAIN_KEYS}
+        if not py and number_type == "float":
+            _check_float32_gains(gains, fpi_defaults.source)
+        defaults = {k: lit(v) for k, v in gains.items()}
+    file_name, sha = source_sha256(rb)
+    desc = tuple(textwrap.wrap(_comment_safe(" ".join(rb.description.split())), 88)[:8])
+    real_bytes = 8 if number_type == "double" else 4
+    stack = real_bytes * (
+        offset
+        + len(rb.rules)
+        + max((o.n_pieces + 1 + 3 * o.n_intervals * max(o.points, 1) for o in outputs), default=0)
+    )
+    # with grid rules the expressions are not emitted (the loop inlines its operators)
+    code = (
+        ""
+        if grid is not None
+        else " ".join([r.expr for r in rules] + [e for o in outputs for e in o.level_exprs])
+    )
+    helpers = {h for h in ("min", "max", "psum") if f"{prefix}{h}(" in code}
+    geo = [o for o in outputs if o.n_intervals]
+    if (ops.implication == "product" and ops.aggregation == "max" and geo) or (
+        rb.defuzzifier == "bisector" and ops.aggregation != "probabilistic_sum" and geo
+    ):
+        helpers.add("finite")
+    max_base = max((2 + o.candidates for o in geo), default=0)
+    max_pieces = max((o.n_pieces for o in geo), default=0)
+    return ExactSpec(
+        name=name,
+        upper=name.upper(),
+        target=target,
+        number_type=number_type,
+        ctype=number_type,
+        fsuffix="f" if number_type == "float" else "",
+        version=__version__,
+        source_file=_comment_safe(file_name),
+        source_sha256=sha,
+        description=desc,
+        n_inputs=len(rb.inputs),
+        n_outputs=len(rb.outputs),
+        n_mu=offset,
+        n_rules=len(rb.rules),
+        inputs=tuple(inputs),
+        rules=tuple(rules),
+        outputs=outputs,
+        implication=ops.implication,
+        aggregation=ops.aggregation,
+        clamp=rb.out_of_range == "clamp",
+        libm=tuple(sorted(libm)),
+        bound_note=tuple(textwrap.wrap(_bound_note(number_type, target), 88)),
+        has_fpi=has_fpi,
+        fpi_note=note,
+        fpi_defaults=defaults,
+        zero=lit(0.0),
+        one=lit(1.0),
+        half=lit(0.5),
+        # levels this close count as one maximum: the engine's 1e-12 in double; float
+        # rounding of equal levels reaches a few float ulps
+        tie=lit(1e-12) if number_type == "double" else lit(2.0**-20),
+        tiny=lit(1e-300) if number_type == "double" else lit(0.0),
+        bisect_margin=lit(1.0 - 1e-15) if number_type == "double" else lit(1.0),
+        extend_limit=lit(1e100) if number_type == "double" else lit(1e30),
+        vertical=lit(vertical),
+        stack_bytes=stack,
+        helpers=tuple(sorted(helpers)),
+        has_geometry=bool(geo),
+        max_base=max_base,
+        piece_type="unsigned char" if max_pieces < 255 else "unsigned short",
+        two=lit(2.0),
+        six=lit(6.0),
+        and_=ops.and_,
+        or_=ops.or_,
+        weighted=any_weight,
+        grid=grid is not None,
+        grid_weights=()
+        if grid is None or not any_weight
+        else wrap(
+            [
+                lit(grid[(i, j)].weight if (i, j) in grid else 0.0)
+                for i in range(len(rb.inputs[0].terms) + 1)
+                for j in range(len(rb.inputs[1].terms) + 1)
+            ]
+        ),
+        n_terms0=len(rb.inputs[0].terms),
+        n_terms1=len(rb.inputs[1].terms) if len(rb.inputs) > 1 else 0,
+        windows=windows or (),
+    )
+
+
+def emit_exact(
+    rb: RuleBase,
+    target: str,
+    number_type: str = "double",
+    *,
+    fpi_defaults: FpiDefaults | None = None,
+) -> dict[str, str]:
+    """Generate the exact-method ``target`` sources for ``rb``: ``{relative path: text}``."""
+    from fuzzkit.codegen.emit import render_files
+
+    spec = build_exact_spec(rb, target, number_type, fpi_defaults=fpi_defaults)
+    return render_files(target, spec.name, spec, "EXACT_FILES")
+
+
+def rounding_allowance(rb: RuleBase, number_type: str) -> tuple[float, ...]:
+    """The stated rounding bound of each output in output units."""
+    eps = ROUNDING_BOUND[number_type]
+    return tuple(eps * max(abs(v.low), abs(v.high)) for v in rb.outputs)
+
+
+__all__ = [
+    "EXACT_NUMBER_TYPES",
+    "ROUNDING_BOUND",
+    "ExactSpec",
+    "build_exact_spec",
+    "emit_exact",
+    "rounding_allowance",
+    "unsupported_reason",
+]

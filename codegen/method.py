@@ -1,0 +1,166 @@
+"""Choosing how a rule base is compiled: a lookup table, the exact inference, or ``auto``.
+
+``auto`` (the default of ``fuzzkit compile``) takes the table when one meets the tolerance
+within the size budget (``max_bytes``) and the exact method otherwise, and says why. Mean,
+smallest and largest of maximum are discontinuous (the result jumps where two maxima swap), so
+a piecewise-linear table's honest bound there is a large share of the range: ``auto`` takes the
+exact method for them and ``table`` refuses them unless a resolution is given, in which case it
+warns with the measured bound.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from fuzzkit.codegen.emit import FpiDefaults, emit
+from fuzzkit.codegen.exact import emit_exact, unsupported_reason
+from fuzzkit.codegen.lut import DEFAULT_TOLERANCE, LookupTable, NumberType
+from fuzzkit.codegen.table_search import ProgressFn, make_table, table_problem
+from fuzzkit.errors import CodegenError
+from fuzzkit.fuzzy.model import RuleBase
+
+METHODS = ("auto", "table", "exact")
+#: Size budget of ``auto`` for a table's constant data (a small microcontroller's share).
+DEFAULT_MAX_BYTES = 8192
+#: Defuzzifiers whose surface jumps: no table is made for them silently.
+DISCONTINUOUS = frozenset({"mean_of_maximum", "smallest_of_maximum", "largest_of_maximum"})
+_VALUE_BYTES = {"float": 4, "double": 8, "q15": 2}
+
+
+@dataclass(frozen=True)
+class Compiled:
+    """What ``compile_rulebase`` made: the method used, the files, the table if any, and notes."""
+
+    method: str
+    files: dict[str, str]
+    table: LookupTable | None
+    reason: str
+    warnings: tuple[str, ...] = ()
+
+
+def compile_rulebase(
+    rb: RuleBase,
+    target: str,
+    number_type: NumberType,
+    *,
+    method: str = "auto",
+    tolerance: float | None = None,
+    resolution: int | Sequence[int] | None = None,
+    max_bytes: int = DEFAULT_MAX_BYTES,
+    fpi_defaults: FpiDefaults | None = None,
+    progress: ProgressFn | None = None,
+) -> Compiled:
+    """Generate ``target`` sources for ``rb`` by ``method`` (see the module docstring).
+
+    ``progress`` is told how the table search goes (see ``table_search.ProgressFn``).
+
+    Raises
+    ------
+    CodegenError
+        Unknown method, a method that cannot compile this rule base (with the reason), or a
+        table that cannot meet the tolerance.
+    """
+    if method not in METHODS:
+        raise CodegenError(f"unknown --method {method!r} (expected one of {', '.join(METHODS)})")
+    if max_bytes <= 0:
+        raise CodegenError(f"--max-bytes must be a positive number of bytes, got {max_bytes}")
+    exact_why = unsupported_reason(rb, number_type)
+    if method == "exact":
+        return _exact(rb, target, number_type, fpi_defaults, "--method exact")
+    table_why = table_problem(rb, number_type)
+    discontinuous = rb.defuzzifier in DISCONTINUOUS
+    if method == "table":
+        if table_why is not None:
+            raise CodegenError(f"rule base {rb.name!r}: --method table: {table_why}")
+        if discontinuous and resolution is None:
+            raise CodegenError(
+                f"rule base {rb.name!r}: {rb.defuzzifier} is discontinuous (the result jumps "
+                "where two maxima swap), so no table meets a useful tolerance: use --method "
+                "exact (or give --resolution to get a table with its measured bound)"
+            )
+        table = make_table(
+            rb,
+            number_type=number_type,
+            tolerance=tolerance,
+            resolution=resolution,
+            progress=progress,
+        )
+        warnings: tuple[str, ...] = ()
+        if discontinuous:
+            worst = max(
+                b / (hi - lo) for b, (lo, hi) in zip(table.bound, table.output_ranges, strict=True)
+            )
+            warnings = (
+                f"warning: {rb.defuzzifier} is discontinuous; this table's verified bound is "
+                f"{100 * worst:.3g} % of the output range (--method exact has rounding error only)",
+            )
+        files = emit(rb, table, target, fpi_defaults=fpi_defaults)
+        return Compiled("table", files, table, "--method table", warnings)
+    # auto
+    if exact_why is None:
+        if discontinuous:
+            return _exact(
+                rb, target, number_type, fpi_defaults,
+                f"{rb.defuzzifier} is discontinuous: a table cannot follow its jumps",
+            )  # fmt: skip
+        if table_why is not None:
+            return _exact(rb, target, number_type, fpi_defaults, f"no table: {table_why}")
+    elif table_why is not None:
+        raise CodegenError(
+            f"rule base {rb.name!r} cannot be compiled: the exact method: {exact_why}; "
+            f"a table: {table_why}"
+        )
+    tol = DEFAULT_TOLERANCE if tolerance is None else tolerance
+    per_point = _VALUE_BYTES[number_type] * len(rb.outputs)
+    if resolution is not None:  # the user chose the table's size: its errors are theirs to see
+        table = make_table(
+            rb,
+            number_type=number_type,
+            tolerance=tolerance,
+            resolution=resolution,
+            progress=progress,
+        )
+    else:
+        try:
+            table = make_table(
+                rb,
+                number_type=number_type,
+                tolerance=tol,
+                max_points=max(8, max_bytes // per_point),
+                progress=progress,
+            )
+        except CodegenError as exc:
+            if exact_why is not None:
+                raise
+            return _exact(
+                rb, target, number_type, fpi_defaults,
+                f"no table within --max-bytes {max_bytes} meets tolerance {tol:g}: "
+                + str(exc).split("; raise --tolerance")[0],
+            )  # fmt: skip
+    if table.memory_bytes > max_bytes and exact_why is None and resolution is None:
+        return _exact(
+            rb, target, number_type, fpi_defaults,
+            f"the table meeting tolerance {tol:g} needs {table.memory_bytes} bytes "
+            f"> --max-bytes {max_bytes}",
+        )  # fmt: skip
+    files = emit(rb, table, target, fpi_defaults=fpi_defaults)
+    why = (
+        f"a {table.memory_bytes}-byte table meets tolerance {tol:g} within --max-bytes {max_bytes}"
+        if resolution is None
+        else "--resolution given"
+    )
+    if exact_why is not None:
+        why += f" (the exact method cannot: {exact_why})"
+    return Compiled("table", files, table, why)
+
+
+def _exact(
+    rb: RuleBase,
+    target: str,
+    number_type: str,
+    fpi_defaults: FpiDefaults | None,
+    reason: str,
+) -> Compiled:
+    files = emit_exact(rb, target, number_type, fpi_defaults=fpi_defaults)
+    return Compiled("exact", files, None, reason)
