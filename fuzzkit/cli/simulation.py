@@ -13,6 +13,9 @@ from fuzzkit.fileio import check_output_path
 
 CONTROLLERS = ("pi", "fuzzy-pi")
 
+#: ``fuzzkit compare --protocol`` choices (fuzzkit.studies.protocol.PROTOCOLS).
+PROTOCOL_CHOICES = ("matched", "tuned", "default")
+
 
 def register(subparsers: Any) -> None:
     """Add the ``simulate`` and ``compare`` subcommands."""
@@ -56,6 +59,15 @@ def register(subparsers: Any) -> None:
         "--gains",
         metavar="GAINS.yaml",
         help="gains file (fuzzkit.control.gains), e.g. from fuzzkit tune",
+    )
+    cmp_.add_argument(
+        "--protocol",
+        choices=PROTOCOL_CHOICES,
+        default="matched",
+        help="which gains each controller runs with: matched (default; fuzzy-PI gains derived "
+        "from the PI's through the rule base's measured slope at the origin, so both have the "
+        "same small-signal gain), tuned (both controllers' tuned gains from --gains), default "
+        "(the hand-set defaults, --gains on top); see docs/simulation.md",
     )
     cmp_.add_argument("--json", action="store_true", help="print every run's metrics as JSON")
     cmp_.add_argument("--rrd-dir", metavar="DIR", help="write one .rrd per run into DIR")
@@ -165,27 +177,36 @@ def _compare(args: argparse.Namespace) -> int:
         experiment(name)  # reject unknown names before any simulation runs
     if args.rrd_dir and not Path(args.rrd_dir).is_dir():
         raise ConfigError(f"{args.rrd_dir}: folder does not exist")
+    from fuzzkit.studies.protocol import format_gains, protocol_gains
+    from fuzzkit.studies.runner import run
+
     surface = _surface_for("fuzzy-pi", args.rulebase)
-    if args.gains:
-        for controller in CONTROLLERS:
-            if not load_gains(args.gains, controller, required=False):
-                print(
-                    f"note: {args.gains} has no gains for {controller}: it runs on the defaults",
-                    file=sys.stderr,
-                )
+    chosen = protocol_gains(args.protocol, surface, args.gains)
     rows = []
     for name in args.experiments:
         for controller in CONTROLLERS:
-            result = _run_one(
-                name, controller, args, surface if controller == "fuzzy-pi" else None, False
+            result = run(
+                experiment(name),
+                args.plant,
+                controller,
+                gains=chosen[controller].gains,
+                surface=surface if controller == "fuzzy-pi" else None,
+                seed=args.seed,
             )
             if args.rrd_dir:
                 from fuzzkit.viz.traces import write_run_rrd
 
                 write_run_rrd(result, Path(args.rrd_dir) / f"{name.upper()}_{controller}.rrd")
-            rows.append(summary(result))
+            row = summary(result)
+            row["protocol"] = args.protocol
+            row["gains"] = dict(chosen[controller].gains)
+            row["gains_source"] = chosen[controller].source
+            rows.append(row)
     if args.json:
         print(json.dumps(rows, indent=2))
     else:
+        print(f"protocol: {args.protocol} (rule base {args.rulebase})")
+        for controller in CONTROLLERS:
+            print(f"  {format_gains(chosen[controller])}")
         print(comparison_table(rows))
     return 0
