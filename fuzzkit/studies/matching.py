@@ -9,6 +9,14 @@ MacVicar-Whelan surface has slope 1.5 at the origin (not 1), and bends quickly
 (``F(0.02, 0) = 0.0278``, a secant slope of 1.39), so "the table is the saturated sum, so the
 slope is 1" is wrong by 50 %.
 
+What matching cannot do: the min/centroid surface is not differentiable at the origin. Its
+partial slopes are 1.5 along each axis and ``F ~ 1.5 (x + y)`` while ``e`` and ``de`` have
+opposite signs (the error shrinking), but while they have the same sign (the error growing)
+the rule ``(PS, PS) -> PM`` fires too and ``F ~ 1.5 max(x, y) + 2.5 min(x, y)`` (slope 4 along
+the diagonal). Matched gains equalise the PI and the fuzzy-PI on the axes and while the error
+shrinks; while it grows, the fuzzy-PI has up to 4/3 of the PI's gain: that is part of the
+surface's shape, which is what the comparison is meant to expose.
+
 Matching rule (:func:`matched_fuzzy_gains`): keep the fuzzy-PI's ``Ki`` (it sets the error's
 full scale, ``1/Ki`` newtons, i.e. where the surface saturates) and solve the other two
 scaling factors from ``Kx * Ki * s_e = ki_pi`` and ``Kx * Kp * s_de = kp_pi``. A slope that is

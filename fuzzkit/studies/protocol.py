@@ -78,9 +78,7 @@ def protocol_gains(
     if protocol == "default":
         fz = dict(DEFAULT_GAINS["fuzzy-pi"])
         fz.update(fz_file)
-        out["fuzzy-pi"] = ControllerGains(
-            "fuzzy-pi", fz, f"file{where}" if fz_file else "default"
-        )
+        out["fuzzy-pi"] = ControllerGains("fuzzy-pi", fz, f"file{where}" if fz_file else "default")
         return out
     ref = dict(DEFAULT_GAINS["fuzzy-pi"])
     ref.update(fz_file)
