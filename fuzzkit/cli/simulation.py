@@ -84,12 +84,12 @@ def load_gains(path: str | None, controller: str, required: bool = True) -> dict
 def _run_one(
     exp_name: str, controller: str, args: argparse.Namespace, surface: Any, required: bool = True
 ) -> Any:
-    from fuzzkit.studies.experiments import experiment
+    from fuzzkit.studies.e3_arm6 import resolve
     from fuzzkit.studies.runner import run
 
-    exp = experiment(exp_name)
+    exp, plant = resolve(exp_name, args.plant)  # E3 on arm6 is the paper's 3-D geometry
     gains = load_gains(args.gains, controller, required)
-    return run(exp, args.plant, controller, gains=gains, surface=surface, seed=args.seed)
+    return run(exp, plant, controller, gains=gains, surface=surface, seed=args.seed)
 
 
 def _surface_for(controller: str, rulebase: str) -> Any:
@@ -176,6 +176,7 @@ def _compare(args: argparse.Namespace) -> int:
         experiment(name)  # reject unknown names before any simulation runs
     if args.rrd_dir and not Path(args.rrd_dir).is_dir():
         raise ConfigError(f"{args.rrd_dir}: folder does not exist")
+    from fuzzkit.studies.e3_arm6 import resolve
     from fuzzkit.studies.protocol import format_gains, protocol_gains
     from fuzzkit.studies.runner import run
 
@@ -184,9 +185,10 @@ def _compare(args: argparse.Namespace) -> int:
     rows = []
     for name in args.experiments:
         for controller in CONTROLLERS:
+            exp, plant = resolve(name, args.plant)  # E3 on arm6: the paper's 3-D geometry
             result = run(
-                experiment(name),
-                args.plant,
+                exp,
+                plant,
                 controller,
                 gains=chosen[controller].gains,
                 surface=surface if controller == "fuzzy-pi" else None,
