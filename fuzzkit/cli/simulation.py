@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -89,7 +90,7 @@ def _run_one(
 
     exp, plant = resolve(exp_name, args.plant)  # E3 on arm6 is the paper's 3-D geometry
     gains = load_gains(args.gains, controller, required)
-    return run(exp, plant, controller, gains=gains, surface=surface, seed=args.seed)
+    return run(exp, plant, controller, gains=gains, surface=surface, seed=args.seed), plant
 
 
 def _surface_for(controller: str, rulebase: str) -> Any:
@@ -116,11 +117,11 @@ def _simulate(args: argparse.Namespace) -> int:
     if args.rrd:
         check_output_path(args.rrd, ".rrd file")
     surface = _surface_for(args.controller, args.rulebase)
-    result = _run_one(args.experiment, args.controller, args, surface)
+    result, plant = _run_one(args.experiment, args.controller, args, surface)
     if args.rrd:
         from fuzzkit.viz.traces import write_run_rrd
 
-        write_run_rrd(result, args.rrd)
+        write_run_rrd(result, args.rrd, plant)
     data = summary(result)
     if args.json:
         print(json.dumps(data, indent=2))
@@ -182,6 +183,21 @@ def _compare(args: argparse.Namespace) -> int:
 
     surface = _surface_for("fuzzy-pi", args.rulebase)
     chosen = protocol_gains(args.protocol, surface, args.gains)
+    if args.gains:
+        for controller in CONTROLLERS:
+            has = bool(load_gains(args.gains, controller, required=False))
+            if not has and not (controller == "fuzzy-pi" and args.protocol == "matched"):
+                print(
+                    f"note: {args.gains} has no gains for {controller}: it runs on the defaults",
+                    file=sys.stderr,
+                )
+            if has and controller == "fuzzy-pi" and args.protocol == "matched":
+                print(
+                    f"note: --protocol matched uses only ki and the limits of {args.gains}'s "
+                    "fuzzy-pi gains; kp and kx are matched to the PI (--protocol default or "
+                    "tuned runs them as they are)",
+                    file=sys.stderr,
+                )
     rows = []
     for name in args.experiments:
         for controller in CONTROLLERS:
@@ -197,7 +213,9 @@ def _compare(args: argparse.Namespace) -> int:
             if args.rrd_dir:
                 from fuzzkit.viz.traces import write_run_rrd
 
-                write_run_rrd(result, Path(args.rrd_dir) / f"{name.upper()}_{controller}.rrd")
+                write_run_rrd(
+                    result, Path(args.rrd_dir) / f"{name.upper()}_{controller}.rrd", plant
+                )
             row = summary(result)
             row["protocol"] = args.protocol
             row["gains"] = dict(chosen[controller].gains)

@@ -145,7 +145,8 @@ def _tune(args: argparse.Namespace) -> int:
         f"{result.wall_time_s:.1f} s"
         + (" (interrupted: best so far)" if result.interrupted else "")
     )
-    for line in tune_report_lines(result, compare_cases(result, seed=0)):
+    cases = [] if result.kept_defaults else compare_cases(result, seed=0)
+    for line in tune_report_lines(result, cases):
         print(line)
     print(f"wrote {out}" + (f" (kept the {', '.join(kept)} entry)" if kept else ""))
     return 130 if result.interrupted else 0
@@ -187,7 +188,8 @@ def tune_report_lines(result: Any, cases: Any) -> list[str]:
             "worse than the defaults on "
             + ", ".join(f"{k} ({c:.4g} vs {b:.4g}, {_pct(c, b)})" for k, c, b in refused)
         )
-    lines.append("  per case, tuning cost and the full run (default -> tuned gains):")
+    if cases:
+        lines.append("  per case, tuning cost and the full run (default -> tuned gains):")
     for c in cases:
         parts = [f"cost {c.default_cost:.4g} -> {c.tuned_cost:.4g} ({c.cost_change_pct:+.1f} %)"]
         for axis, d in c.default_axes.items():

@@ -75,7 +75,7 @@ def _wall() -> Plane:
         x_max=WALL_CAD_X + 0.02,
         y_min=Y_START - 0.03,
         y_max=Y_END + 0.03,
-        name="side wall",
+        name="side_wall",
     )
 
 
