@@ -59,3 +59,11 @@ def test_x_and_z_settle_at_their_set_points_and_behave_alike(controller: str) ->
 
 def test_planar_e3_is_documented_as_a_different_variant() -> None:
     assert "into a side wall" in experiment("E3").scenario.description
+
+
+@pytest.mark.slow
+def test_force_figure_of_the_two_controllers() -> None:
+    from fuzzkit.viz.force_axes import force_axes_png
+
+    png = force_axes_png({"PI": _run("pi"), "fuzzy-PI": _run("fuzzy-pi")}, "E3 on arm6")
+    assert png.startswith(b"\x89PNG\r\n\x1a\n") and len(png) > 20_000  # two panels of curves
