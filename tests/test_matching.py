@@ -171,6 +171,15 @@ def test_tuned_protocol_needs_both_controllers(mw_surface: Surface, tmp_path: Pa
     f.write_text(f.read_text() + "fuzzy-pi:\n  kp: 0.3\n  ki: 0.06\n  kx: 1.0e-4\n")
     chosen = protocol_gains("tuned", mw_surface, f)
     assert chosen["fuzzy-pi"].gains["kx"] == 1e-4 and chosen["pi"].gains["kp"] == 3e-5
+    assert "kept" not in chosen["pi"].source
+    # A file where tuning kept the defaults says so in the gains line.
+    f.write_text(
+        "pi:\n  gains: {kp: 4.0e-5, ki: 1.0e-5}\n  provenance: {kept_defaults: true}\n"
+        "fuzzy-pi:\n  kp: 0.3\n  ki: 0.06\n  kx: 1.0e-4\n"
+    )
+    chosen = protocol_gains("tuned", mw_surface, f)
+    assert chosen["pi"].source.endswith("(the search kept the default gains)")
+    assert "kept" not in chosen["fuzzy-pi"].source
 
 
 def test_cli_compare_protocol_prints_the_gains(capsys: pytest.CaptureFixture[str]) -> None:

@@ -18,7 +18,7 @@ import os
 from dataclasses import dataclass
 
 from fuzzkit.control.controllers import Surface
-from fuzzkit.control.gains import read_gains
+from fuzzkit.control.gains import read_gains, read_gains_file
 from fuzzkit.errors import ConfigError
 from fuzzkit.studies.experiments import DEFAULT_GAINS
 from fuzzkit.studies.matching import matched_fuzzy_gains
@@ -65,10 +65,14 @@ def protocol_gains(
                 "fuzzy-pi (fuzzkit tune E1 E2 E3 --controller pi --out FILE, then the same "
                 "with --controller fuzzy-pi)"
             )
+        entries = read_gains_file(gains_path)
         for ctrl in ("pi", "fuzzy-pi"):
             g = dict(DEFAULT_GAINS[ctrl])
             g.update(read_gains(gains_path, ctrl, required=True))
-            out[ctrl] = ControllerGains(ctrl, g, f"tuned{where}")
+            entry = entries.get(ctrl)
+            kept = entry is not None and entry.provenance.get("kept_defaults") is True
+            note = " (the search kept the default gains)" if kept else ""
+            out[ctrl] = ControllerGains(ctrl, g, f"tuned{where}{note}")
         return out
     pi = dict(DEFAULT_GAINS["pi"])
     pi_file = read_gains(gains_path, "pi")
