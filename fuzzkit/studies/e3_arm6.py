@@ -12,11 +12,13 @@ World (scenario frame, like every scenario; the plant places it in the IRB 140's
 * a rough floor, a :class:`~fuzzkit.plants.arm6.HeightField` rough in x *and* y (0.2 mm RMS,
   2 mm grid), 1 mm higher than the CAD floor at z = -0.30 and tilted by 0.8 deg along the
   path, as E2's workpiece;
-* a side wall, a :class:`~fuzzkit.plants.arm6.Plane` facing -x, 2 mm further away than the
+* a side wall, a :class:`~fuzzkit.plants.arm6.Plane` facing -x, 1 mm further away than the
   CAD wall at x = 0.55 where the path starts, and receding by 0.5 deg (1.75 mm over the
-  path), so x has a slow disturbance to follow as z has the tilt;
-* the nominal path: down onto the floor with the tool 1 mm into the CAD wall and 2 mm into the
-  CAD floor (programmed interference, as E2), then 200 mm along +y at 25 mm/s.
+  path), so x has a slow disturbance to follow as z has the tilt (down 2.8 mm over the path);
+* the nominal path: a diagonal approach at 20 mm/s (22 mm in x and z) onto the CAD corner,
+  ending with the tool 1 mm into the CAD wall (so just touching the real one) and 2 mm into
+  the CAD floor (programmed interference, as E2); 0.4 s at rest; then 200 mm along +y at
+  25 mm/s.
 
 The force loop engages on contact and controls x and z; y follows the path.
 """
@@ -40,8 +42,7 @@ FLOOR_CAD_Z = -0.30
 WALL_CAD_X = 0.55
 FLOOR_OFFSET_M = 0.001
 FLOOR_TILT_DEG = -0.8  # along the path (y)
-WALL_OFFSET_M = 0.001  # at the path start the wall is further away than programmed: the x loop
-# closes a 1 mm gap once the floor contact engages it
+WALL_OFFSET_M = 0.001  # at the path start the wall is this much further than programmed
 WALL_YAW_DEG = 0.5  # the wall is not quite parallel to the path
 Y_START, Y_END = -0.10, 0.10
 SPEED_M_S = 0.025
