@@ -23,7 +23,9 @@ from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import write_atomic
 
 CONTROLLERS = ("pi", "fuzzy-pi")
-LABELS = ("default", "tuned")
+#: Gains labels, one per comparison protocol (docs/comparison.md): the hand-set defaults, the
+#: fuzzy-PI matched to the default PI's small-signal gain (the PI runs its defaults), tuned.
+LABELS = ("default", "matched", "tuned")
 EXPERIMENT_NAMES = ("E1", "E2", "E3")
 
 #: Stiffnesses of the press study (N/mm).
@@ -208,7 +210,11 @@ def force_figure(results: Mapping[tuple[str, str], Any], title: str) -> bytes:
     axes_idx = [i for i in (2, 0, 1) if exp.selection[i]]
     fig = Figure(figsize=(9.0, 2.4 * len(axes_idx) + 0.6))
     grid = fig.subplots(len(axes_idx), 2, squeeze=False, sharex=True)
-    styles = {"default": ("tab:gray", "-"), "tuned": ("tab:blue", "-")}
+    styles = {
+        "default": ("tab:gray", "-"),
+        "matched": ("tab:orange", "-"),
+        "tuned": ("tab:blue", "-"),
+    }
     for col, ctrl in enumerate(CONTROLLERS):
         for row, i in enumerate(axes_idx):
             ax = grid[row][col]
@@ -247,7 +253,7 @@ def stiffness_figure(study: Mapping[tuple[str, str], list[tuple[float, Any]]]) -
     )
     for (ctrl, label), rows in study.items():
         ks = [k for k, _ in rows]
-        ls = "-" if label == "tuned" else "--"
+        ls = {"tuned": "-", "matched": ":"}.get(label, "--")
         name = f"{'PI' if ctrl == 'pi' else 'fuzzy-PI'} {label}"
         ax1.plot(
             ks,
@@ -451,6 +457,9 @@ def build_report(
     if rrd:
         (out / "rrd").mkdir(exist_ok=True)
 
+    from fuzzkit.studies.matching import matched_fuzzy_gains
+
+    surface = load_surface(rulebase)
     gains: dict[tuple[str, str], dict[str, float]] = {}
     provenance: dict[str, dict[str, Any]] = {}
     for ctrl in CONTROLLERS:
@@ -458,8 +467,9 @@ def build_report(
         g, prov = _gains_for(ctrl, gains_dir, out, budget, rulebase, seed, workers, log)
         gains[(ctrl, "tuned")] = g
         provenance[ctrl] = prov
+    gains[("pi", "matched")] = dict(DEFAULT_GAINS["pi"])
+    gains[("fuzzy-pi", "matched")] = matched_fuzzy_gains(surface, DEFAULT_GAINS["pi"]).gains
 
-    surface = load_surface(rulebase)
     summaries: dict[Key, dict[str, Any]] = {}
     figures: list[tuple[str, str]] = []
     for plant in plants:
@@ -545,7 +555,11 @@ def _markdown(
         "## Gains",
         "",
         "Default gains are the hand-tuned `DEFAULT_GAINS` (like the paper's, by trial and error, "
-        "for 10 N/mm). Tuned gains minimise `fuzzkit.studies.tuning.run_cost` "
+        "for 10 N/mm); with them the fuzzy-PI has 1.5x the PI's small-signal gain "
+        "(`macvicar_whelan`). Matched gains: the PI runs its defaults and the fuzzy-PI's "
+        "scaling factors are derived from them through the rule base's measured slopes at the "
+        "origin, so both have the same small-signal gain (docs/comparison.md). Tuned gains "
+        "minimise `fuzzkit.studies.tuning.run_cost` "
         "(ITAE of the force error plus penalties for overshoot, force above the safety limit "
         "and contact loss) over "
         "E1-E3 and the stiffnesses listed, on the planar plant.",
@@ -557,12 +571,13 @@ def _markdown(
         prov = provenance.get(ctrl, {})
         for label in LABELS:
             g = gains[(ctrl, label)]
-            cost = prov.get("default_cost" if label == "default" else "cost")
-            src = (
-                "fuzzkit.studies.experiments.DEFAULT_GAINS"
-                if label == "default"
-                else prov.get("source")
-            )
+            cost = {"default": prov.get("default_cost"), "tuned": prov.get("cost")}.get(label)
+            src = {
+                "default": "fuzzkit.studies.experiments.DEFAULT_GAINS",
+                "matched": "fuzzkit.studies.matching (measured slopes)"
+                if ctrl == "fuzzy-pi"
+                else "fuzzkit.studies.experiments.DEFAULT_GAINS",
+            }.get(label, prov.get("source"))
             kx = f"{g['kx']:.4g}" if "kx" in g else "-"
             md.append(f"| {ctrl} | {label} | {g['kp']:.4g} | {g['ki']:.4g} | {kx} | ")
             md[-1] += f"{'-' if cost is None else f'{float(cost):.5g}'} | {src} |"
