@@ -440,7 +440,7 @@ def build_report(
         Unusable output folder, missing or bad gains files, unknown plant or rule base.
     """
     from fuzzkit.formats.registry import load
-    from fuzzkit.studies.experiments import DEFAULT_GAINS, experiment, press_experiment
+    from fuzzkit.studies.experiments import DEFAULT_GAINS, press_experiment
     from fuzzkit.studies.metrics import summary
     from fuzzkit.studies.plants import make_plant
     from fuzzkit.studies.runner import load_surface, run
@@ -457,6 +457,7 @@ def build_report(
     if rrd:
         (out / "rrd").mkdir(exist_ok=True)
 
+    from fuzzkit.studies.e3_arm6 import resolve
     from fuzzkit.studies.matching import matched_fuzzy_gains
 
     surface = load_surface(rulebase)
@@ -474,14 +475,15 @@ def build_report(
     figures: list[tuple[str, str]] = []
     for plant in plants:
         for name in EXPERIMENT_NAMES:
-            exp = experiment(name)
+            exp = resolve(name, plant)[0]  # E3 on arm6: the paper's 3-D geometry
             runs: dict[tuple[str, str], Any] = {}
             for ctrl in CONTROLLERS:
                 for label in LABELS:
                     _log(log, f"running {plant} {name} {ctrl} {label}")
+                    plant_obj = resolve(name, plant)[1]
                     r = run(
                         exp,
-                        plant,
+                        plant_obj,
                         ctrl,
                         gains=gains[(ctrl, label)],
                         surface=surface if ctrl == "fuzzy-pi" else None,
@@ -491,7 +493,9 @@ def build_report(
                     if rrd:
                         from fuzzkit.viz.traces import write_run_rrd
 
-                        write_run_rrd(r, out / "rrd" / f"{plant}_{name}_{ctrl}_{label}.rrd")
+                        write_run_rrd(
+                            r, out / "rrd" / f"{plant}_{name}_{ctrl}_{label}.rrd", plant_obj
+                        )
             fname = f"force_{plant}_{name}.png"
             write_atomic(out / fname, force_figure(runs, f"{name} on {plant}: {exp.title}"))
             figures.append((fname, f"{name} on the {plant} plant"))
