@@ -10,10 +10,14 @@ Rows
 * Generated Python ``eval`` and ``FuzzyPI.step``; target <= 2 us per step.
 * The exact engine, one scalar point (``Engine.evaluate_point``), for comparison.
 * Table memory of the default (tolerance 1e-3) tables; target <= 4 KiB.
+* The same C harness around the shipped Sugeno rule base ``sugeno_pi`` (float, Q15): ns per
+  call and table bytes at the default tolerance (no target; documented in
+  docs/rulebase-format.md).
 """
 
 from __future__ import annotations
 
+import math
 import subprocess
 import tempfile
 import time
@@ -29,6 +33,7 @@ from fuzzkit.codegen.toolchain import STRICT_FLAGS, find_compiler, run_compiler
 from fuzzkit.codegen.verify import load_module
 
 NAME = "macvicar_whelan"
+SUGENO = "sugeno_pi"
 C_CALLS = 10_000_000
 TARGET_C_NS = 5.0
 TARGET_PY_US = 2.0
@@ -85,10 +90,11 @@ def c_ns_per_call(
     cc = find_compiler()
     if cc is None:
         return None
+    name = rb.name
     files = emit(rb, table, "c")
     if baseline:
         ctype = "int16_t" if table.number_type == "q15" else table.number_type
-        files[f"{NAME}.c"] = TRIVIAL.format(name=NAME, t=ctype)
+        files[f"{name}.c"] = TRIVIAL.format(name=name, t=ctype)
     q15 = table.number_type == "q15"
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
@@ -96,13 +102,13 @@ def c_ns_per_call(
             (folder / rel).write_text(text)
         (folder / "bench.c").write_text(
             HARNESS.format(
-                name=NAME,
+                name=name,
                 t="int16_t" if q15 else table.number_type,
                 scale="27000.0" if q15 else "1.0",
                 calls=C_CALLS,
             )
         )
-        run_compiler([*cc, *STRICT_FLAGS, "-O2", "-o", "bench", "bench.c", f"{NAME}.c"], folder)
+        run_compiler([*cc, *STRICT_FLAGS, "-O2", "-o", "bench", "bench.c", f"{name}.c"], folder)
         runs = []
         for _ in range(3):  # best of three: the machine is shared
             out = subprocess.run(
@@ -116,6 +122,60 @@ def _us(fn: object, n: int) -> float:
     start = time.perf_counter()
     fn()  # type: ignore[operator]
     return (time.perf_counter() - start) / n * 1e6
+
+
+def sugeno_rows() -> list[tuple[str, str, str, str]]:
+    """The shipped first-order Sugeno rule base through the table target (issue 15)."""
+    rb = fuzzkit.load(SUGENO)
+    rows = []
+    for nt in ("float", "q15"):
+        t = make_table(rb, number_type=nt)
+        ns = c_ns_per_call(rb, t)
+        rows.append(
+            (
+                f"C {SUGENO}_eval ({nt}, tol 1e-3: {t.shape[0]}x{t.shape[1]}, "
+                f"bound {t.bound[0]:.2g})",
+                "(measured)",
+                "no compiler" if ns is None else f"{ns:.2f} ns",
+                f"{t.memory_bytes} B of tables",
+            )
+        )
+    f = fuzzkit.Engine(rb).point_function()
+    pts = np.random.default_rng(0).uniform(-1.2, 1.2, (2000, 2)).tolist()
+
+    def run_exact() -> None:
+        for e, de in pts:
+            f(e, de)
+
+    exact = min(_us(run_exact, len(pts)) for _ in range(3))
+    rows.append((f"exact engine, scalar point ({SUGENO})", "(reference)", f"{exact:.1f} us", ""))
+    return rows
+
+
+def table_search_rows() -> list[tuple[str, str, str, str]]:
+    """The table search with and without a progress callback (``fuzzkit compile`` always
+    passes one, which evaluates in chunks): same run, alternatives side by side."""
+    rows = []
+    for name, kwargs in (
+        (NAME, {}),
+        ("three_input", {"tolerance": 0.05}),
+    ):
+        rb = fuzzkit.load(name)
+        times = {}
+        for label, progress in (("no callback", None), ("progress callback", _ignore)):
+            best = math.inf
+            for _ in range(2):
+                start = time.perf_counter()
+                make_table(rb, progress=progress, **kwargs)  # type: ignore[arg-type]
+                best = min(best, time.perf_counter() - start)
+            times[label] = best
+        for label, t in times.items():
+            rows.append((f"table search {name} ({label})", "(compare)", f"{t:.2f} s", ""))
+    return rows
+
+
+def _ignore(task: str, done: int, total: int) -> None:
+    """A progress callback that draws nothing."""
 
 
 def main() -> None:
@@ -183,6 +243,8 @@ def main() -> None:
                 "ok" if t.memory_bytes <= TARGET_BYTES else "MISSED",
             )
         )
+    rows += sugeno_rows()
+    rows.extend(table_search_rows())
     width = max(len(r[0]) for r in rows)
     print(f"{'measure':<{width}}  {'target':>12}  {'measured':>12}  verdict")
     for what, target, measured, verdict in rows:

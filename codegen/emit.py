@@ -21,7 +21,14 @@ from typing import Any
 import jinja2
 import numpy as np
 
-from fuzzkit.codegen.lut import Q15_RECIP_BITS, Q15_T_BITS, ROUNDING_ALLOWANCE, LookupTable
+from fuzzkit.codegen.lut import (
+    Q15_RECIP_BITS,
+    Q15_T_BITS,
+    REFINE_FACTOR,
+    ROUNDING_ALLOWANCE,
+    LookupTable,
+    bound_margin,
+)
 from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy.model import RuleBase
 from fuzzkit.fuzzy.validation import C_KEYWORDS, IDENTIFIER, PYTHON_KEYWORDS, identifier_problem
@@ -83,6 +90,8 @@ class AxisSpec:
     q_low: int
     q_high: int
     recip: tuple[str, ...]
+    #: " [N]" after the range in comments, or "" (ASCII, comment-safe)
+    units: str = ""
 
 
 @dataclass(frozen=True)
@@ -97,6 +106,8 @@ class OutputSpec:
     bound: str
     tolerance: str
     scale: str
+    #: " [N]" after the range in comments, or "" (ASCII, comment-safe)
+    units: str = ""
 
 
 @dataclass(frozen=True)
@@ -112,6 +123,8 @@ class Spec:
     source_file: str
     source_sha256: str
     description: tuple[str, ...]
+    #: "e [N], de [N], du [mm]" when any variable has units, else ""
+    units_line: str
     n_inputs: int
     n_outputs: int
     inputs: tuple[AxisSpec, ...]
@@ -119,10 +132,9 @@ class Spec:
     shape: str
     n_points: int
     memory_bytes: int
-    check_points: int
+    check_note: tuple[str, ...]
     bound_summary: str
     rounding_note: tuple[str, ...]
-    margin_percent: int
     split_bytes: tuple[str, ...]
     has_fpi: bool
     fpi_note: str
@@ -133,6 +145,27 @@ class Spec:
     t_one: int
     t_half: int
     recip_shift: int
+
+
+def _check_note(table: LookupTable) -> str:
+    """How the bound in a generated header was measured, as ``build_table`` did it."""
+    factor = table.check_factor
+    grid = (
+        f"a grid {factor}x denser than the table along every axis"
+        if factor
+        else "a grid at least 4x denser than the table along every axis"
+    )
+    refined = (
+        f"; the worst cells resampled {REFINE_FACTOR}x per axis"
+        if len(table.breakpoints) == 2 and factor
+        else ""
+    )
+    margin = round(100 * (bound_margin(factor) - 1.0))
+    return (
+        f"Verified bound: the largest |table - exact engine| over {table.check_points} check "
+        f"points ({grid}, so every cell centre and edge midpoint is one{refined}) + {margin} % "
+        "for the points between them, rounded up to 3 significant digits:"
+    )
 
 
 def check_identifier(name: str, what: str) -> str:
@@ -179,6 +212,18 @@ def _comment_safe(text: str) -> str:
         previous = clean
         clean = clean.replace("*/", "* /").replace("/*", "/ *").replace("??", "? ?")
     return clean
+
+
+#: Unit symbols a C comment cannot hold (comments are ASCII here), spelt out instead of "?".
+_UNIT_ASCII = {"°": "deg", "µ": "u", "μ": "u", "²": "^2", "³": "^3", "Ω": "Ohm", "·": "*"}
+
+
+def units_comment(units: str | None) -> str:
+    """A variable's units as generated comments show them: ``" [N]"``, ``" [degC]"`` or ``""``."""
+    if not units:
+        return ""
+    ascii_units = "".join(_UNIT_ASCII.get(ch, ch) for ch in units)
+    return f" [{_comment_safe(ascii_units)}]"
 
 
 def _check_float32_gains(gains: Mapping[str, float], source: str) -> None:
@@ -342,6 +387,7 @@ def build_spec(
                 q_low=q.q_low[a] if q is not None else 0,
                 q_high=q.q_high[a] if q is not None else 0,
                 recip=_wrap([str(int(v)) for v in q.recip[a]], 8) if q is not None else (),
+                units=units_comment(var.units),
             )
         )
     outputs = []
@@ -358,6 +404,7 @@ def build_spec(
                 bound=format(table.bound[k], ".3g"),
                 tolerance=format(table.tolerance[k], ".3g") if table.tolerance else "",
                 scale=_c_literal(table.q15.out_scale[k], "double") if table.q15 else "",
+                units=units_comment(var.units),
             )
         )
     split_bytes: tuple[str, ...] = ()
@@ -394,6 +441,9 @@ def build_spec(
         source_file=_comment_safe(file_name),
         source_sha256=sha,
         description=desc,
+        units_line=", ".join(f"{v.name}{units_comment(v.units)}" for v in rb.inputs + rb.outputs)
+        if any(v.units for v in rb.inputs + rb.outputs)
+        else "",
         n_inputs=len(rb.inputs),
         n_outputs=len(rb.outputs),
         inputs=tuple(axes),
@@ -401,12 +451,9 @@ def build_spec(
         shape="x".join(str(n) for n in shape),
         n_points=table.n_points,
         memory_bytes=table.memory_bytes,
-        check_points=table.check_points,
+        check_note=tuple(textwrap.wrap(_check_note(table), 92)),
         bound_summary=bound_summary,
         rounding_note=tuple(textwrap.wrap(_rounding_note(nt, target), 88)),
-        margin_percent=round(100 * (table.bound[0] / table.measured[0] - 1))
-        if table.measured and table.measured[0] > 0
-        else 0,
         split_bytes=split_bytes,
         has_fpi=has_fpi,
         fpi_note=note.replace("NAME", name),

@@ -52,6 +52,13 @@ BOUND_MARGIN = 1.05
 #: The margin when only a 4x check grid was affordable (large 3-input tables): 10% over the
 #: 4x maximum was seen on random points of a 9x9x9 table.
 COARSE_BOUND_MARGIN = 1.2
+
+
+def bound_margin(check_factor: int) -> float:
+    """The factor the check-grid maximum is multiplied by for a grid ``check_factor`` x denser."""
+    return BOUND_MARGIN if check_factor >= 8 else COARSE_BOUND_MARGIN
+
+
 #: What verification allows on top of the bound, as a fraction of each output's full scale
 #: (largest |range end|). The bound already models the stored values and, for float, the
 #: float32 breakpoints, constants and arithmetic of the generated C operation for operation
@@ -117,8 +124,9 @@ class LookupTable:
     code uses, as the target number type keeps them (float32, float64 or int16 Q15 codes):
     the samples, or when ``fitted`` least-squares values with the knot-lattice nodes kept
     exact (see ``_fit_values``). ``measured[k]`` is the largest
-    absolute error (output units) on the check grid for ``number_type``, ``bound[k]`` that
-    times ``BOUND_MARGIN`` (the published, verified bound), and
+    absolute error (output units) on the check grid for ``number_type`` (``check_factor`` x
+    denser than the table per axis; 0 when unknown), ``bound[k]`` that times
+    :func:`bound_margin` rounded up to 3 significant digits (the published, verified bound), and
     ``tolerance[k]`` the absolute tolerance it was held to (empty when none was: a table of
     a given resolution). For two inputs, ``splits[i, j]``
     says along which diagonal cell ``(i, j)`` is cut into two linear triangles (see
@@ -141,6 +149,7 @@ class LookupTable:
     measured: tuple[float, ...] = ()
     splits: npt.NDArray[np.uint8] | None = None
     fitted: bool = False
+    check_factor: int = 0
 
     @property
     def shape(self) -> tuple[int, ...]:

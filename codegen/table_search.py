@@ -11,15 +11,13 @@ from __future__ import annotations
 import dataclasses
 import decimal
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.codegen.lut import (
-    BOUND_MARGIN,
     CHECK_FACTOR,
-    COARSE_BOUND_MARGIN,
     DEFAULT_MAX_POINTS,
     DEFAULT_TOLERANCE,
     GRADING,
@@ -40,10 +38,19 @@ from fuzzkit.codegen.lut import (
     Q15ResolutionError,
     _is_uniform,
     _locate_float,
+    bound_margin,
     quantize_q15,
 )
 from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy.model import RuleBase, Variable
+
+#: ``progress(task, done, total)``: reports exact-engine points evaluated (``done``) out of
+#: those expected (``total``, which may grow) for the table ``task`` names; each table built
+#: is a new task. A caller draws it (``fuzzkit compile`` draws a bar); codegen never prints.
+ProgressFn = Callable[[str, int, int], None]
+
+#: Points per exact-engine call when progress is reported.
+PROGRESS_CHUNK = 1 << 16
 
 #: Fitted node values smaller than this share of the output range are solver noise: set to 0.
 SNAP_TO_ZERO = 1e-12
@@ -139,6 +146,38 @@ def _default_evaluator(rb: RuleBase) -> Evaluator:
         return engine.evaluate(inputs)
 
     return evaluate
+
+
+class _Metered:
+    """An evaluator that evaluates in chunks of ``PROGRESS_CHUNK`` points and reports each.
+
+    The exact engine is pointwise, so chunking does not change any value (a test holds it).
+    """
+
+    def __init__(self, evaluate: Evaluator, progress: ProgressFn, task: str, total: int) -> None:
+        self.evaluate = evaluate
+        self.progress = progress
+        self.task = task
+        self.total = total
+        self.done = 0
+
+    def __call__(self, inputs: Mapping[str, FloatArray]) -> Mapping[str, FloatArray]:
+        names = list(inputs)
+        arrays = np.broadcast_arrays(*(np.asarray(inputs[n], dtype=np.float64) for n in names))
+        shape = arrays[0].shape
+        flat = [a.ravel() for a in arrays]
+        size = flat[0].size
+        self.total = max(self.total, self.done + size)
+        parts: dict[str, list[FloatArray]] = {}
+        for start in range(0, size, PROGRESS_CHUNK):
+            stop = min(size, start + PROGRESS_CHUNK)
+            chunk = self.evaluate({n: f[start:stop] for n, f in zip(names, flat, strict=True)})
+            for key, value in chunk.items():
+                arr = np.broadcast_to(np.asarray(value, dtype=np.float64), (stop - start,))
+                parts.setdefault(key, []).append(arr)
+            self.done += stop - start
+            self.progress(self.task, self.done, self.total)
+        return {k: np.concatenate(v).reshape(shape) for k, v in parts.items()}
 
 
 def _sample(
@@ -301,6 +340,17 @@ def _store(
     )
 
 
+def _check_factor(counts: Sequence[int], check_factor: int) -> int:
+    """How much denser than the table the check grid is, per axis."""
+    # A multiple of 4, so the 4x sub-grid the 2-D diagonals are chosen on is part of it.
+    factor = 4 * math.ceil(max(check_factor, {1: 16, 2: 8, 3: 8}[len(counts)]) / 4)
+    # Three inputs: 8x costs 512 check points per cell, so large tables fall back to 4x (the
+    # contract's minimum), which the margin then has to cover.
+    if len(counts) == 3 and math.prod(8 * (int(n) - 1) + 1 for n in counts) > 4_000_000:
+        factor = 4 * math.ceil(check_factor / 4)
+    return factor
+
+
 def build_table(
     rb: RuleBase,
     counts: Sequence[int],
@@ -310,6 +360,7 @@ def build_table(
     evaluate: Evaluator | None = None,
     check_factor: int = CHECK_FACTOR,
     fit: bool = True,
+    progress: ProgressFn | None = None,
 ) -> LookupTable:
     """Sample ``rb`` with ``counts[i]`` breakpoints on input ``i`` and measure the bound.
 
@@ -317,7 +368,7 @@ def build_table(
     per output; ``()`` when None); :func:`make_table` enforces it. ``evaluate`` defaults to
     the exact engine. ``fit`` (two inputs) stores least-squares node values instead of the
     exact samples where that is safe (see ``_fit_values``); ``values`` always holds the
-    samples.
+    samples. ``progress`` is told the points evaluated (see :data:`ProgressFn`).
     """
     _check_rule_base(rb, number_type)
     if check_factor < 4:
@@ -331,6 +382,14 @@ def build_table(
         layout, bps = _q15_layout(rb, bps)
     elif number_type == "float":
         bps = _float32_breakpoints(rb, bps)
+    # The check grid depends on the breakpoints only: size it first, so that progress is
+    # reported against the real total.
+    sizes = [len(b) for b in bps]
+    factor = _check_factor(sizes, check_factor)
+    if progress is not None:
+        checks = math.prod(factor * (n - 1) + 1 for n in sizes)
+        shape = "x".join(map(str, sizes))
+        evaluator = _Metered(evaluator, progress, f"{shape} table", math.prod(sizes) + checks)
     values = _sample(rb, evaluator, bps)
     for var, vals in zip(rb.outputs, values, strict=True):
         if not np.all(np.isfinite(vals)):
@@ -340,6 +399,8 @@ def build_table(
                 f"output {var.name} is undefined at {where} (no rule fires there); "
                 "add rules covering it or give the output a default"
             )
+        if layout is not None:
+            _check_q15_full_scale(var, vals)
     stored = _store(values, number_type, layout)
     table = LookupTable(
         rule_base_name=rb.name,
@@ -358,12 +419,6 @@ def build_table(
         else tuple(tolerance * (v.high - v.low) for v in rb.outputs),
         check_points=0,
     )
-    # A multiple of 4, so the 4x sub-grid the 2-D diagonals are chosen on is part of it.
-    factor = 4 * math.ceil(max(check_factor, {1: 16, 2: 8, 3: 8}[len(bps)]) / 4)
-    # Three inputs: 8x costs 512 check points per cell, so large tables fall back to 4x (the
-    # contract's minimum), which the margin then has to cover.
-    if len(bps) == 3 and math.prod(8 * (len(b) - 1) + 1 for b in bps) > 4_000_000:
-        factor = 4 * math.ceil(check_factor / 4)
     check_axes = [_check_grid_axis(bp, factor) for bp in bps]
     if number_type == "float":
         # A float C function only ever sees float32 inputs: certify it on such inputs (the
@@ -401,10 +456,9 @@ def build_table(
             )
     return dataclasses.replace(
         table,
-        bound=tuple(
-            round_up(m * (BOUND_MARGIN if factor >= 8 else COARSE_BOUND_MARGIN)) for m in measured
-        ),
+        bound=tuple(round_up(m * bound_margin(factor)) for m in measured),
         measured=measured,
+        check_factor=factor,
         check_points=int(grids[0].size),
         splits=splits,
         fitted=fitted,
@@ -529,6 +583,18 @@ def _choose_splits(
     return (worst[1] < worst[0]).astype(np.uint8)
 
 
+def _check_q15_full_scale(var: Variable, values: FloatArray) -> None:
+    """Q15 stores outputs as fractions of max(|low|, |high|); Sugeno outputs can go beyond it."""
+    scale = max(abs(var.low), abs(var.high))
+    peak = float(np.max(np.abs(values)))
+    if peak > scale:
+        raise CodegenError(
+            f"output {var.name} reaches {peak:.6g}, beyond the Q15 full scale {scale:.6g} "
+            f"(the larger end of its range [{var.low:.6g}, {var.high:.6g}]); Sugeno outputs are "
+            "not clamped to their range: widen the range or use --type float or double"
+        )
+
+
 def _check_rule_base(rb: RuleBase, number_type: str) -> None:
     if number_type not in NUMBER_TYPES:
         raise CodegenError(
@@ -558,6 +624,7 @@ def make_table(
     resolution: int | Sequence[int] | None = None,
     max_points: int = DEFAULT_MAX_POINTS,
     evaluate: Evaluator | None = None,
+    progress: ProgressFn | None = None,
 ) -> LookupTable:
     """The smallest table found whose verified bound meets ``tolerance``, or one of ``resolution``.
 
@@ -578,6 +645,9 @@ def make_table(
         Cap on grid nodes for the search.
     evaluate
         The reference evaluator (default: the exact engine); for tests.
+    progress
+        Told the exact-engine points evaluated for each table tried (see
+        :data:`ProgressFn`); the search may try several tables, each a new task.
 
     Raises
     ------
@@ -601,12 +671,17 @@ def make_table(
             )
         given = None if tolerance is None else tol
         table = build_table(
-            rb, counts, number_type=number_type, tolerance=given, evaluate=evaluator
+            rb,
+            counts,
+            number_type=number_type,
+            tolerance=given,
+            evaluate=evaluator,
+            progress=progress,
         )
         if tolerance is not None:
             _enforce(table, f"resolution {resolution}")
         return table
-    return _search(rb, number_type, tol, max_points, evaluator)
+    return _search(rb, number_type, tol, max_points, evaluator, progress)
 
 
 def _enforce(table: LookupTable, what: str) -> None:
@@ -624,7 +699,12 @@ def _enforce(table: LookupTable, what: str) -> None:
 
 
 def _search(
-    rb: RuleBase, number_type: NumberType, tol: float, max_points: int, evaluator: Evaluator
+    rb: RuleBase,
+    number_type: NumberType,
+    tol: float,
+    max_points: int,
+    evaluator: Evaluator,
+    progress: ProgressFn | None,
 ) -> LookupTable:
     # Interpolation error falls like h**2, so each miss predicts the spacing needed; nodes on
     # the knots make the error non-monotonic in h, hence the small downward sweep at the end.
@@ -643,7 +723,12 @@ def _search(
             break
         try:
             last = build_table(
-                rb, counts, number_type=number_type, tolerance=tol, evaluate=evaluator
+                rb,
+                counts,
+                number_type=number_type,
+                tolerance=tol,
+                evaluate=evaluator,
+                progress=progress,
             )
         except Q15ResolutionError as exc:
             # The search chose these breakpoints, not the user: say what cannot be done.
@@ -673,7 +758,12 @@ def _search(
             continue
         try:
             trial = build_table(
-                rb, counts, number_type=number_type, tolerance=tol, evaluate=evaluator
+                rb,
+                counts,
+                number_type=number_type,
+                tolerance=tol,
+                evaluate=evaluator,
+                progress=progress,
             )
         except Q15ResolutionError:  # pragma: no cover - fewer points than a success
             continue

@@ -27,9 +27,15 @@ _EXPORTS = {
     "load": "fuzzkit.formats.registry",
     "loads": "fuzzkit.formats.registry",
     "available": "fuzzkit.formats.registry",
+    "dump": "fuzzkit.formats.yaml_writer",
 }
 
 __all__ = ["__version__", *sorted(_EXPORTS)]
+
+
+def __dir__() -> list[str]:
+    """The public names (resolved lazily) next to the module's own, for dir() and help()."""
+    return sorted({*_EXPORTS, *(name for name in globals() if name.startswith("__"))})
 
 
 def __getattr__(name: str) -> Any:

@@ -29,12 +29,19 @@ class Location:
 
 @dataclass(frozen=True, slots=True)
 class Problem:
-    """One thing wrong with an input, with where it is."""
+    """One thing wrong with an input, with where it is.
+
+    ``severity`` is ``"error"`` (the input cannot be used) or ``"warning"`` (it can, but
+    something deserves a look, e.g. a coverage gap); warnings print with a ``warning:`` prefix.
+    """
 
     location: Location
     message: str
+    severity: str = "error"
 
     def __str__(self) -> str:
+        if self.severity == "warning":
+            return f"{self.location}: warning: {self.message}"
         return f"{self.location}: {self.message}"
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import shutil
 import tempfile
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
@@ -137,3 +138,49 @@ def write_tree_atomic(
             raise ConfigError(f"{where}: cannot write ({exc.strerror})") from exc
         raise
     return list(targets)
+
+
+@contextmanager
+def staged_folder(
+    folder: str | os.PathLike[str], last: str | None = None, what: str = "folder"
+) -> Iterator[Path]:
+    """Yield an empty staging folder beside ``folder``; on success its entries move into
+    ``folder``, on any error or Ctrl-C it is removed and ``folder`` is left as it was.
+
+    For commands that write many files (a report): a reader finds the old output or the
+    complete new one, never a mix. A new ``folder`` appears in one rename; into an existing
+    one each entry is renamed into place (a sub-folder of the same name is replaced whole),
+    ``last`` (say ``report.md``) after all others, so its presence marks a complete output.
+
+    Raises
+    ------
+    ConfigError
+        ``folder`` is a file, its parent is missing, or nothing can be created there.
+    """
+    target = Path(folder)
+    parent = target.parent if str(target.parent) else Path(".")
+    if target.exists() and not target.is_dir():
+        raise ConfigError(f"{target}: exists and is not a folder (expected the {what})")
+    if not parent.is_dir():
+        raise ConfigError(f"{target}: folder {parent} does not exist")
+    try:
+        stage = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".partial", dir=parent))
+    except OSError as exc:
+        raise ConfigError(f"{target}: cannot write here ({exc.strerror})") from exc
+    try:
+        yield stage
+        os.chmod(stage, 0o777 & ~_umask())  # mkdtemp makes it owner-only
+        if not target.exists():
+            os.rename(stage, target)
+            return
+        entries = sorted(stage.iterdir(), key=lambda p: (p.name == last, p.name))
+        for entry in entries:
+            dest = target / entry.name
+            if entry.is_dir() and dest.is_dir():
+                old = stage / f".{entry.name}.old"
+                os.rename(dest, old)
+                os.rename(entry, dest)
+            else:
+                os.replace(entry, dest)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)

@@ -31,7 +31,44 @@ def mu(term: Term, x: np.ndarray) -> np.ndarray:
             return np.where(x >= p[1], 1.0, np.where(x <= p[0], 0.0, (x - p[0]) / (p[1] - p[0])))
         if term.shape == "gaussian":
             return np.exp(-((x - p[0]) ** 2) / (2.0 * p[1] ** 2))
+        if term.shape == "bell":
+            return 1.0 / (1.0 + np.abs((x - p[2]) / p[0]) ** (2.0 * p[1]))
+        if term.shape == "sigmoid":
+            return 1.0 / (1.0 + np.exp(-p[0] * (x - p[1])))
+        # MATLAB's gauss2mf, smf, zmf, pimf, dsigmf, psigmf as its documentation writes them
+        if term.shape == "gaussian_product":
+            left = np.where(x <= p[0], np.exp(-((x - p[0]) ** 2) / (2.0 * p[1] ** 2)), 1.0)
+            right = np.where(x >= p[2], np.exp(-((x - p[2]) ** 2) / (2.0 * p[3] ** 2)), 1.0)
+            return left * right
+        if term.shape == "s_shape":
+            return _smf(x, p[0], p[1])
+        if term.shape == "z_shape":
+            return _zmf(x, p[0], p[1])
+        if term.shape == "pi_shape":
+            return _smf(x, p[0], p[1]) * _zmf(x, p[2], p[3])
+        if term.shape in ("sigmoid_difference", "sigmoid_product"):
+            s1 = 1.0 / (1.0 + np.exp(-p[0] * (x - p[1])))
+            s2 = 1.0 / (1.0 + np.exp(-p[2] * (x - p[3])))
+            return np.abs(s1 - s2) if term.shape == "sigmoid_difference" else s1 * s2
     raise AssertionError(term.shape)
+
+
+def _smf(x: np.ndarray, a: float, b: float) -> np.ndarray:
+    m = (a + b) / 2
+    return np.select(
+        [x <= a, x <= m, x <= b],
+        [0.0, 2 * ((x - a) / (b - a)) ** 2, 1 - 2 * ((x - b) / (b - a)) ** 2],
+        1.0,
+    )
+
+
+def _zmf(x: np.ndarray, a: float, b: float) -> np.ndarray:
+    m = (a + b) / 2
+    return np.select(
+        [x <= a, x <= m, x <= b],
+        [1.0, 1 - 2 * ((x - a) / (b - a)) ** 2, 2 * ((x - b) / (b - a)) ** 2],
+        0.0,
+    )
 
 
 def reference(rb: RuleBase, point: dict[str, float], n: int = GRID) -> float | None:

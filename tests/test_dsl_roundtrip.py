@@ -21,6 +21,7 @@ from fuzzkit.fuzzy.model import (
     OR_OPERATORS,
     OUT_OF_RANGE_POLICIES,
     SHAPE_PARAMS,
+    SUGENO_DEFUZZIFIERS,
     Compound,
     Consequent,
     Expression,
@@ -69,7 +70,20 @@ def _random_variable(rng: random.Random, name: str, kind: str) -> Variable:
     for i, label in enumerate(labels):
         c = low + i * step
         terms.append(Term(label, "triangle", (c - step, c, c + step)))
-    shapes = ["trapezoid", "left_shoulder", "right_shoulder", "gaussian", "bell", "sigmoid"]
+    shapes = [
+        "trapezoid",
+        "left_shoulder",
+        "right_shoulder",
+        "gaussian",
+        "bell",
+        "sigmoid",
+        "gaussian_product",
+        "s_shape",
+        "z_shape",
+        "pi_shape",
+        "sigmoid_difference",
+        "sigmoid_product",
+    ]
     for j in range(rng.randint(0, 3)):
         shape = rng.choice(shapes)
         a = low + rng.random() * span * 0.5
@@ -81,6 +95,12 @@ def _random_variable(rng: random.Random, name: str, kind: str) -> Variable:
             "gaussian": (a, 0.05 + rng.random()),
             "bell": (0.1 + rng.random(), 1.0 + rng.random(), a),
             "sigmoid": (rng.choice([-1, 1]) * (1 + 10 * rng.random()), a),
+            "gaussian_product": (pts[0], 0.1 + rng.random(), pts[1], 0.1 + rng.random()),
+            "s_shape": tuple(pts[:2]),
+            "z_shape": tuple(pts[:2]),
+            "pi_shape": tuple(pts),
+            "sigmoid_difference": (5.0, pts[0], 3.0 + rng.random(), pts[2]),
+            "sigmoid_product": (5.0, pts[0], -3.0 - rng.random(), pts[2]),
         }[shape]
         assert len(params) == len(SHAPE_PARAMS[shape])
         terms.append(Term(f"{name}_x{j}", shape, tuple(float(p) for p in params)))
@@ -100,10 +120,26 @@ def _random_expression(rng: random.Random, inputs: list[Variable], depth: int) -
     )
 
 
+def _sugeno_output(rng: random.Random, name: str, n_inputs: int) -> Variable:
+    terms = []
+    for j in range(rng.randint(1, 4)):
+        if rng.random() < 0.5:
+            terms.append(Term(f"{name}_c{j}", "constant", (rng.uniform(-5, 5),)))
+        else:
+            params = tuple(rng.choice([0.0, rng.uniform(-3, 3)]) for _ in range(n_inputs + 1))
+            terms.append(Term(f"{name}_l{j}", "linear", params))
+    return Variable(name, -10.0, 10.0, tuple(terms), rng.choice([None, 0.0]))
+
+
 def _random_rulebase(seed: int) -> RuleBase:
     rng = random.Random(seed)
+    sugeno = seed % 3 == 0
     inputs = [_random_variable(rng, f"in{i}", "input") for i in range(rng.randint(1, 3))]
-    outputs = [_random_variable(rng, f"out{i}", "output") for i in range(rng.randint(1, 2))]
+    n_out = rng.randint(1, 2)
+    if sugeno:
+        outputs = [_sugeno_output(rng, f"out{i}", len(inputs)) for i in range(n_out)]
+    else:
+        outputs = [_random_variable(rng, f"out{i}", "output") for i in range(n_out)]
     rules = []
     for _ in range(rng.randint(1, 8)):
         cons = tuple(
@@ -123,8 +159,13 @@ def _random_rulebase(seed: int) -> RuleBase:
             rng.choice(IMPLICATIONS),
             rng.choice(AGGREGATIONS),
         ),
-        defuzzifier=rng.choice([d for d in DEFUZZIFIERS if d != "weighted_average"]),
+        defuzzifier=rng.choice(
+            SUGENO_DEFUZZIFIERS
+            if sugeno
+            else [d for d in DEFUZZIFIERS if d not in SUGENO_DEFUZZIFIERS]
+        ),
         out_of_range=rng.choice(OUT_OF_RANGE_POLICIES),
+        coverage=rng.choice(["strict", "allow_gaps"]),
         description=rng.choice(["", "plain", "with: colon, # hash and 'quotes'\nand a newline"]),
     )
 
@@ -134,6 +175,41 @@ def test_random_python_built_models_round_trip(seed: int) -> None:
     rb = _random_rulebase(seed)
     assert check(rb) == [], check(rb)
     assert registry.loads(dump(rb)) == rb
+
+
+def test_sugeno_input_without_terms_and_coefficient_list_round_trip() -> None:
+    text = """
+name: tsk
+inputs:
+  x: {range: [0, 1], terms: {lo: {shape: left_shoulder, points: [0, 1]},
+                             hi: {shape: right_shoulder, points: [0, 1]}}}
+  load: {range: [0, 5], terms: {}}
+outputs:
+  z:
+    range: [-10, 10]
+    terms:
+      flat: {shape: constant, value: -1.5}
+      ramp: {shape: linear, coefficients: [2.0, -0.5], constant: 0.25}
+defuzzifier: weighted_sum
+coverage: allow_gaps
+rules:
+  - {if: {x: lo}, then: {z: flat}}
+  - {if: {x: hi}, then: {z: ramp}, weight: 0.5}
+"""
+    rb = registry.loads(text)
+    assert rb.input("load").terms == ()
+    assert rb.output("z").term("ramp").params == (2.0, -0.5, 0.25)
+    assert rb.coverage == "allow_gaps"
+    written = dump(rb)
+    assert "coefficients: {x: 2.0, load: -0.5}" in written
+    assert registry.loads(written) == rb
+    jsonschema = pytest.importorskip("jsonschema", reason="jsonschema is not installed")
+    validator = jsonschema.Draft202012Validator(json_schema())
+    for doc in (yaml.safe_load(text), yaml.safe_load(written)):
+        assert validator.is_valid(doc)
+    doc = yaml.safe_load(text)
+    doc["outputs"]["z"]["terms"]["ramp"]["coefficients"] = "steep"
+    assert not validator.is_valid(doc)
 
 
 def test_table_with_empty_cells_round_trips_as_a_table() -> None:

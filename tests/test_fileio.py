@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from fuzzkit.errors import ConfigError
-from fuzzkit.fileio import atomic_output, write_atomic, write_tree_atomic
+from fuzzkit.fileio import atomic_output, staged_folder, write_atomic, write_tree_atomic
 
 
 def test_tree_is_written_with_subfolders_and_umask_permissions(tmp_path: Path) -> None:
@@ -80,3 +80,72 @@ def test_single_file_and_context_manager(tmp_path: Path) -> None:
         write_atomic(tmp_path, "x")
     with pytest.raises(ConfigError, match="does not exist"):
         write_atomic(tmp_path / "missing" / "x.txt", "x")
+
+
+def test_staged_folder_appears_whole_on_success(tmp_path: Path) -> None:
+    out = tmp_path / "report"
+    with staged_folder(out, last="report.md") as stage:
+        assert not out.exists() and stage.parent == tmp_path
+        (stage / "sub").mkdir()
+        (stage / "sub" / "a.txt").write_text("a")
+        (stage / "report.md").write_text("r")
+    assert sorted(str(p.relative_to(out)) for p in out.rglob("*")) == [
+        "report.md",
+        "sub",
+        "sub/a.txt",
+    ]
+    assert list(tmp_path.iterdir()) == [out]
+    umask = os.umask(0)
+    os.umask(umask)
+    assert stat.S_IMODE(out.stat().st_mode) == 0o777 & ~umask  # as mkdir would make it
+
+
+@pytest.mark.parametrize("error", [KeyboardInterrupt, RuntimeError])
+def test_staged_folder_interrupted_leaves_nothing_new(
+    tmp_path: Path, error: type[BaseException]
+) -> None:
+    with pytest.raises(error), staged_folder(tmp_path / "new") as stage:
+        (stage / "half.png").write_bytes(b"\x89PNG")
+        raise error
+    assert list(tmp_path.iterdir()) == []
+
+    old = tmp_path / "old"
+    (old / "rrd").mkdir(parents=True)
+    (old / "report.md").write_text("previous")
+    (old / "rrd" / "run.rrd").write_text("previous run")
+    with pytest.raises(error), staged_folder(old) as stage:
+        (stage / "rrd").mkdir()
+        (stage / "report.md").write_text("new")
+        raise error
+    assert list(tmp_path.iterdir()) == [old]
+    assert (old / "report.md").read_text() == "previous"
+    assert (old / "rrd" / "run.rrd").read_text() == "previous run"
+
+
+def test_staged_folder_into_an_existing_folder_replaces_what_it_wrote(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    (out / "rrd").mkdir(parents=True)
+    (out / "rrd" / "stale.rrd").write_text("stale")
+    (out / "report.md").write_text("old")
+    (out / "notes.txt").write_text("the user's own file")
+    with staged_folder(out, last="report.md") as stage:
+        (stage / "rrd").mkdir()
+        (stage / "rrd" / "fresh.rrd").write_text("fresh")
+        (stage / "report.md").write_text("new")
+    assert sorted(str(p.relative_to(out)) for p in out.rglob("*")) == [
+        "notes.txt",
+        "report.md",
+        "rrd",
+        "rrd/fresh.rrd",
+    ]
+    assert (out / "report.md").read_text() == "new"
+    assert list(tmp_path.iterdir()) == [out]
+
+
+def test_staged_folder_refuses_a_file_or_a_missing_parent(tmp_path: Path) -> None:
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    with pytest.raises(ConfigError, match="exists and is not a folder"), staged_folder(blocker):
+        pass
+    with pytest.raises(ConfigError, match="does not exist"), staged_folder(tmp_path / "a" / "b"):
+        pass

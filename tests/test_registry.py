@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import os
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -71,49 +69,3 @@ def test_missing_file_is_a_rule_base_error(tmp_path: Path) -> None:
 def test_loads_names_the_source_in_errors() -> None:
     with pytest.raises(RuleBaseError, match=r"^snippet:1:1: expected a rule base"):
         loads("[1, 2]\n", source="snippet")
-
-
-def test_shipped_names_resolve_after_a_plain_non_editable_install(tmp_path: Path) -> None:
-    """``pip install .`` (not editable) must ship the YAML files as package data."""
-    src = tmp_path / "src"
-    # Build from a copy so the shared working tree gets no build/ or egg-info folders.
-    shutil.copytree(
-        ROOT,
-        src,
-        ignore=shutil.ignore_patterns(
-            ".git", ".venv*", "build", "*.egg-info", "__pycache__", ".*cache", "tests"
-        ),
-    )
-    target = tmp_path / "site"
-    pip = subprocess.run(
-        [
-            sys.executable, "-m", "pip", "install", "--quiet", "--no-deps",
-            "--target", str(target), str(src),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=240,
-    )  # fmt: skip
-    assert pip.returncode == 0, pip.stderr[-3000:]
-    assert not (target / "fuzzkit" / "__editable__").exists()
-    # -S skips site-packages' .pth files, so the editable install's import hook cannot shadow
-    # the installed copy; site-packages itself stays importable through PYTHONPATH (for yaml).
-    site_dirs = [p for p in sys.path if p.endswith("site-packages")]
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(target), *site_dirs])}
-    code = (
-        "import fuzzkit; rb = fuzzkit.load('macvicar_whelan'); "
-        "print(fuzzkit.__file__); print(fuzzkit.available()); print(len(rb.rules))"
-    )
-    run = subprocess.run(
-        [sys.executable, "-S", "-c", code],
-        capture_output=True,
-        text=True,
-        env=env,
-        cwd=tmp_path,
-        timeout=120,
-    )
-    assert run.returncode == 0, run.stderr
-    where, names, count = run.stdout.strip().splitlines()
-    assert Path(where).is_relative_to(target)
-    assert names == repr(SHIPPED_FILES)
-    assert count == "49"

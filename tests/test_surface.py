@@ -54,7 +54,14 @@ def test_peak_grid_points_and_labels() -> None:
 @pytest.mark.parametrize(
     ("name", "kwargs", "error", "match"),
     [
-        ("three_input", {}, EvaluationError, "exactly 2 inputs; 'three_input' has 3"),
+        ("three_input", {"inputs": ("e",)}, EvaluationError, "exactly 2 inputs, got 1"),
+        ("three_input", {"inputs": ("e", "x")}, EvaluationError, "unknown input 'x'"),
+        ("three_input", {"inputs": ("r", "r")}, EvaluationError, "got 'r' twice"),
+        ("three_input", {"fixed": {"e": 0.0}}, EvaluationError, "cannot fix 'e': it is one"),
+        ("three_input", {"fixed": {"rr": 0.0}}, EvaluationError, "did you mean 'r'"),
+        ("three_input", {"fixed": {"r": 1.5}}, EvaluationError, r"inside its range \[0, 1\]"),
+        ("three_input", {"fixed": {"r": float("nan")}}, EvaluationError, "got nan"),
+        ("three_input", {"output": "dw"}, EvaluationError, "did you mean 'dv'"),
         ("macvicar_whelan", {"resolution": 1}, ConfigError, "between 2 and 1001, got 1"),
         ("macvicar_whelan", {"resolution": 5000}, ConfigError, "between 2 and 1001"),
         ("macvicar_whelan", {"output": "dv"}, EvaluationError, "unknown output 'dv'"),
@@ -114,5 +121,5 @@ def test_png_is_a_png_of_the_requested_size(tmp_path: Path) -> None:
     data = png.read_bytes()
     assert data[:8] == b"\x89PNG\r\n\x1a\n"
     width, height = struct.unpack(">II", data[16:24])  # IHDR
-    assert (width, height) == (700, 550)
+    assert (width, height) == (760, 560)
     assert [p.name for p in tmp_path.iterdir()] == ["s.png"]

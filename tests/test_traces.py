@@ -46,11 +46,11 @@ def test_rrd_is_valid_and_has_every_entity(result: RunResult, tmp_path: Path) ->
         "/forces/z/setpoint",
         "/forces/x/measured",
         "/forces/x/setpoint",
-        "/control/z/e",
-        "/control/z/de",
-        "/control/z/du",
-        "/control/z/u",
-        "/control/x/u",
+        "/control/error/z/e",
+        "/control/error/z/de",
+        "/control/correction/z/du",
+        "/control/correction/z/u",
+        "/control/correction/x/u",
         "/joints/q1",
         "/joints/q2",
         "/world/arm",
@@ -64,7 +64,7 @@ def test_rrd_is_valid_and_has_every_entity(result: RunResult, tmp_path: Path) ->
     assert not missing, f"missing entities {missing}; found {sorted(rows)}"
     # Every controller period of the force series is there (plus the static style row).
     assert rows["/forces/z/measured"] >= len(result.t)
-    assert "/control/y/u" not in rows  # y is not force-controlled in E1
+    assert "/control/correction/y/u" not in rows  # y is not force-controlled in E1
 
 
 def test_bad_output_path_writes_nothing(result: RunResult, tmp_path: Path) -> None:

@@ -321,16 +321,20 @@ def test_cli_tune_ctrl_c_writes_the_best_so_far(
 
     calls = []
 
-    def interrupt(self: tuning.ProgressBar, p: Progress) -> None:
+    def interrupt(p: Progress) -> None:
         calls.append(p)
         if len(calls) == 2:
             raise KeyboardInterrupt
 
-    monkeypatch.setattr(tuning.ProgressBar, "__call__", interrupt)
+    monkeypatch.setattr(tuning, "progress_callback", lambda bar: interrupt)
     out = tmp_path / "gains.yaml"
     args = ["tune", "E1", "--controller", "pi", "--budget", "40", "--workers", "1"]
     assert main([*args, "--stiffness", "10", "--out", str(out)]) == 130
-    assert "interrupted: best so far" in capsys.readouterr().out
+    captured = capsys.readouterr()
+    assert "interrupted: best so far" in captured.out
+    assert captured.err.strip().splitlines() == [
+        f"fuzzkit: interrupted (Ctrl-C); {out} holds the best gains so far"
+    ]
     prov = read_gains_file(out)["pi"].provenance
     assert prov["interrupted"] is True and prov["evaluations"] < 40
 

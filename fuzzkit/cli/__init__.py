@@ -17,11 +17,43 @@ from collections.abc import Sequence
 from fuzzkit.errors import FuzzkitError
 
 #: Modules under fuzzkit.cli that contribute subcommands, in help order.
-COMMAND_MODULES = ("rulebase", "codegen_cmd", "simulation", "tuning", "demo")
+COMMAND_MODULES = ("rulebase", "plot", "codegen_cmd", "simulation", "tuning", "demo")
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
 EXIT_BAD_INPUT = 2
+#: 128 + SIGINT / SIGPIPE, as a shell reports a command ended by that signal.
+EXIT_INTERRUPTED = 130
+EXIT_BROKEN_PIPE = 141
+
+
+class HelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """Examples kept as written, descriptions wrapped, every default shown.
+
+    Text with line breaks (the epilog's examples) is printed as written; a one-line
+    description is wrapped to the terminal. An option's default is appended as
+    ``(default: X)`` unless its help already says "default"; flags (``store_true``) and
+    options without a default get nothing.
+    """
+
+    def _fill_text(self, text: str, width: int, indent: str) -> str:
+        if "\n" in text:
+            return super()._fill_text(text, width, indent)
+        return argparse.HelpFormatter._fill_text(self, text, width, indent)
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        default = action.default
+        takes_value = action.nargs != 0
+        if (
+            takes_value
+            and action.option_strings
+            and default not in (None, argparse.SUPPRESS)
+            and "default" not in text
+        ):
+            shown = " ".join(map(str, default)) if isinstance(default, list) else default
+            text = f"{text} (default: {shown})" if text else f"default: {shown}"
+        return text
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -30,6 +62,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="fuzzkit",
         description="Fuzzy-logic controller design kit: author, evaluate, compile, verify.",
+        formatter_class=HelpFormatter,
+        epilog="examples:\n"
+        "  fuzzkit validate rulebases/*.yaml\n"
+        "  fuzzkit compile macvicar_whelan --target c --out gen --verify\n"
+        "  fuzzkit simulate E1 --controller fuzzy-pi --rrd e1.rrd\n"
+        "  fuzzkit COMMAND --help     (every command's options, defaults and examples)",
     )
     parser.add_argument("--version", action="version", version=f"fuzzkit {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -42,6 +80,8 @@ def build_parser() -> argparse.ArgumentParser:
                 continue  # that command group is not built yet
             raise
         module.register(sub)
+    for command in sub.choices.values():
+        command.formatter_class = HelpFormatter
     return parser
 
 
@@ -51,6 +91,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         code = args.handler(args)
+        sys.stdout.flush()  # a closed pipe shows here, not in the interpreter's exit
+    except BrokenPipeError:
+        # The reader went away (`fuzzkit validate ... | head`): stop quietly, as a command
+        # killed by SIGPIPE would. Point stdout at devnull so the exit flush cannot fail
+        # again (the recipe of the Python docs, "Note on SIGPIPE").
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+        return EXIT_BROKEN_PIPE
     except FuzzkitError as exc:
         print(f"fuzzkit: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -58,8 +107,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"fuzzkit: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
-        print("fuzzkit: interrupted", file=sys.stderr)
-        return 130
+        # Every writer is atomic (fuzzkit.fileio), so whatever is on disk now is complete.
+        print("fuzzkit: interrupted (Ctrl-C); nothing half-written", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except Exception as exc:  # a bug, not bad input: say so, traceback only on request
         if os.environ.get("FUZZKIT_DEBUG"):
             raise

@@ -27,9 +27,13 @@ def register(sub: Any) -> None:
         "verified error bound and generate C (NAME.h, NAME.c) or Python (NAME.py) from it. "
         "Prints the table size and bound; --verify compiles/imports the result and compares "
         "it with the exact engine on 1e5 random points and the edge cases.",
+        epilog="examples:\n"
+        "  fuzzkit compile macvicar_whelan --target c --out gen --verify\n"
+        "  fuzzkit compile macvicar_whelan --target c --type q15 --tolerance 2e-3 --out gen_q15\n"
+        "  fuzzkit compile my_controller.yaml --target python --resolution 65 --out gen_py",
     )
     p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
-    p.add_argument("--target", required=True, help="c or python")
+    p.add_argument("--target", required=True, help="c or python (required)")
     p.add_argument(
         "--type",
         dest="number_type",
@@ -63,6 +67,7 @@ def register(sub: Any) -> None:
         default=None,
         help="bake fuzzy-PI gains (kp, ki, kx, u_min, u_max) in as defaults",
     )
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(handler=cmd_compile)
 
 
@@ -106,6 +111,7 @@ def cmd_compile(args: argparse.Namespace) -> int:
     from fuzzkit.errors import CodegenError, ConfigError
     from fuzzkit.fileio import write_tree_atomic
     from fuzzkit.formats.registry import load
+    from fuzzkit.progress import TaskBars
 
     # Cheap checks first, so a typo costs nothing and nothing is written.
     if args.target not in TARGETS:
@@ -127,9 +133,14 @@ def cmd_compile(args: argparse.Namespace) -> int:
     defaults = _fpi_defaults(args.gains)
 
     rb = load(args.rulebase)
-    table = make_table(
-        rb, number_type=number_type, tolerance=args.tolerance, resolution=args.resolution
-    )
+    with TaskBars(f"{rb.name}: ", quiet=args.quiet, unit="pt") as bars:
+        table = make_table(
+            rb,
+            number_type=number_type,
+            tolerance=args.tolerance,
+            resolution=args.resolution,
+            progress=bars,
+        )
     files = emit(rb, table, args.target, fpi_defaults=defaults)
     print(f"{rb.name}: {table.describe()}")
     if len(rb.inputs) != 2:

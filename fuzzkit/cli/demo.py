@@ -52,7 +52,7 @@ def demo_steps(out: Path) -> list[list[str]]:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from fuzzkit.cli import main
+    from fuzzkit.cli import EXIT_BROKEN_PIPE, EXIT_INTERRUPTED, main
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -61,6 +61,8 @@ def _run(args: argparse.Namespace) -> int:
         start = time.perf_counter()
         code = main(step)
         print(f"  ({time.perf_counter() - start:.1f} s)", flush=True)
+        if code in (EXIT_INTERRUPTED, EXIT_BROKEN_PIPE):
+            return code  # Ctrl-C or a closed pipe: the step has said so, or no one listens
         if code != 0:
             print(f"demo: step failed with exit code {code}")
             return code
@@ -72,6 +74,14 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    p = sub.add_parser("demo", help="run the main job on the shipped defaults (make demo)")
+    p = sub.add_parser(
+        "demo",
+        help="run the main job on the shipped defaults (make demo)",
+        description="Validate the shipped rule bases, describe macvicar_whelan, draw its "
+        "control surface, compile it to C (float and Q15) and Python with --verify, and "
+        "compare PI with fuzzy-PI on E1 with recordings. Each step is an ordinary fuzzkit "
+        "command, printed before it runs, so any step can be copied and varied.",
+        epilog="examples:\n  fuzzkit demo\n  fuzzkit demo --out /tmp/demo && rerun /tmp/demo/*.rrd",
+    )
     p.add_argument("--out", default="demo-out", help="folder for the files it writes")
     p.set_defaults(handler=_run)

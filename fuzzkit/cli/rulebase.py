@@ -18,7 +18,9 @@ from typing import Any, TextIO
 
 from fuzzkit.errors import EvaluationError, Location, Problem, ProblemsError, RuleBaseError
 from fuzzkit.fileio import check_output_path
-from fuzzkit.fuzzy.model import SHAPE_PARAMS, Compound, Expression, Proposition, RuleBase, Variable
+from fuzzkit.fuzzy.describe import num as _num
+from fuzzkit.fuzzy.describe import range_text, rule_grid, rule_sentence
+from fuzzkit.fuzzy.model import SHAPE_PARAMS, RuleBase, Variable
 
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2
@@ -30,9 +32,22 @@ def register(sub: Any) -> None:
         "validate",
         help="check rule-base files; list every problem",
         description="Check rule-base YAML files (paths or shipped names). Exit 0 "
-        "when all are valid, 2 listing every problem otherwise.",
+        "when all are valid, 2 listing every problem otherwise. Warnings (input ranges no "
+        "term covers, in rule bases with coverage: allow_gaps) are printed and do not fail "
+        "unless --strict is given.",
+        epilog="examples:\n"
+        "  fuzzkit validate rulebases/*.yaml\n"
+        "  fuzzkit validate --strict my_controller.yaml macvicar_whelan",
     )
-    p.add_argument("files", nargs="+", metavar="FILE")
+    p.add_argument(
+        "files",
+        nargs="+",
+        metavar="FILE",
+        help="rule-base YAML file or shipped rule-base name (any number)",
+    )
+    p.add_argument(
+        "--strict", action="store_true", help="treat warnings (coverage gaps) as errors"
+    )
     p.set_defaults(handler=cmd_validate)
 
     p = sub.add_parser(
@@ -40,6 +55,7 @@ def register(sub: Any) -> None:
         help="describe a rule base: variables, terms, rules",
         description="Print a rule base's variables with ranges, their terms with "
         "shapes and parameters, and its rules (as a grid for tables).",
+        epilog="examples:\n  fuzzkit info macvicar_whelan\n  fuzzkit info my_controller.yaml",
     )
     p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
     p.set_defaults(handler=cmd_info)
@@ -51,6 +67,9 @@ def register(sub: Any) -> None:
         "(--input NAME=VALUE for every input) or at every row of a CSV "
         "file (--points, header = input names; the rows are echoed "
         "with the outputs appended). NaN inputs give NaN outputs.",
+        epilog="examples:\n"
+        "  fuzzkit eval macvicar_whelan -i e=0.25 -i de=-0.1\n"
+        "  fuzzkit eval macvicar_whelan --points points.csv > out.csv",
     )
     p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
     group = p.add_mutually_exclusive_group(required=True)
@@ -72,10 +91,17 @@ def register(sub: Any) -> None:
 
     p = sub.add_parser(
         "surface",
-        help="write the control surface of a 2-input rule base",
+        help="write the control surface of a rule base over two of its inputs",
         description="Compute the control surface output = F(input1, input2) with "
         "the exact engine and write it as a Rerun recording (3-D mesh "
-        "plus the label-peak grid) and/or a PNG.",
+        "plus the label-peak grid; 2-input rule bases) and/or a PNG. With more than two "
+        "inputs, choose two with --inputs and hold the others with --fix (like MATLAB's "
+        "gensurf).",
+        epilog="examples:\n"
+        "  fuzzkit surface macvicar_whelan --png surface.png\n"
+        "  fuzzkit surface gaussian5 --rrd surface.rrd --resolution 201\n"
+        "  fuzzkit surface three_input --inputs e,de --fix r=0.5 --png slice.png\n"
+        "  rerun surface.rrd     (open the recording in the Rerun viewer)",
     )
     p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
     p.add_argument("--rrd", metavar="OUT.rrd", help="Rerun recording to write")
@@ -88,6 +114,18 @@ def register(sub: Any) -> None:
         help="grid points per input (default 101)",
     )
     p.add_argument("--output", metavar="NAME", help="which output (default: the first)")
+    p.add_argument(
+        "--inputs",
+        metavar="X,Y",
+        help="the two inputs to span, e.g. --inputs e,r (default: the first two)",
+    )
+    p.add_argument(
+        "--fix",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="hold another input at VALUE (repeat per input; default: the middle of its range)",
+    )
     p.set_defaults(handler=cmd_surface)
 
     p = sub.add_parser(
@@ -95,6 +133,7 @@ def register(sub: Any) -> None:
         help="print the JSON Schema of the rule-base format",
         description="Print a JSON Schema (draft 2020-12) of the rule-base YAML "
         "format, e.g. for the YAML language server.",
+        epilog="example:\n  fuzzkit schema > fuzzkit-rulebase.schema.json",
     )
     p.set_defaults(handler=cmd_schema)
 
@@ -114,18 +153,32 @@ def _count(n: int, noun: str) -> str:
 
 def cmd_validate(args: argparse.Namespace) -> int:
     """Load every file, print ``FILE: ok`` or every problem; exit 2 if any is invalid."""
+    from fuzzkit.formats.registry import load_with_warnings
+
     failed = 0
     for spec in args.files:
         try:
-            rb = _load(spec)
+            rb, warnings = load_with_warnings(spec)
         except RuleBaseError as exc:
             failed += 1
             for problem in exc.problems:
                 print(f"{problem}", file=sys.stderr)
             continue
+        for warning in warnings:
+            if args.strict:
+                print(
+                    f"{warning.location}: {warning.message} (an error under --strict)",
+                    file=sys.stderr,
+                )
+            else:
+                print(f"{warning}", file=sys.stderr)
+        if warnings and args.strict:
+            failed += 1
+            continue
+        note = f", {_count(len(warnings), 'warning')}" if warnings else ""
         print(
             f"{spec}: ok ({rb.name}: {_count(len(rb.inputs), 'input')}, "
-            f"{_count(len(rb.outputs), 'output')}, {_count(len(rb.rules), 'rule')})"
+            f"{_count(len(rb.outputs), 'output')}, {_count(len(rb.rules), 'rule')}{note})"
         )
     if failed:
         print(
@@ -140,59 +193,36 @@ def cmd_validate(args: argparse.Namespace) -> int:
 # ---------------------------------------------------------------------------- info
 
 
-def _num(x: float) -> str:
-    return f"{x:.6g}"
-
-
-def format_expression(expr: Expression, top: bool = True) -> str:
-    """A condition as text: ``e is PS and (de is NS or de is not ZR)``."""
-    if isinstance(expr, Proposition):
-        return f"{expr.variable} is {'not ' if expr.negated else ''}{expr.term}"
-    text = f" {expr.op} ".join(format_expression(o, top=False) for o in expr.operands)
-    return text if top else f"({text})"
-
-
-def _variable_lines(var: Variable, kind: str) -> list[str]:
-    head = f"  {var.name}  [{_num(var.low)}, {_num(var.high)}]"
+def _variable_lines(var: Variable, kind: str, input_names: Sequence[str] = ()) -> list[str]:
+    head = f"  {var.name}  {range_text(var)}"
     if kind == "output":
-        head += f"  default {'NaN' if var.default is None else _num(var.default)}"
+        default = "NaN" if var.default is None else _num(var.default)
+        if var.units and var.default is not None:
+            default += f" {var.units}"
+        head += f"  default {default}"
     lines = [head]
     width = max((len(t.name) for t in var.terms), default=0)
+    if not var.terms:
+        lines.append("    (no terms: used only in linear Sugeno terms)")
     for t in var.terms:
-        names = SHAPE_PARAMS.get(t.shape, ())
+        names = (*input_names, "constant") if t.shape == "linear" else SHAPE_PARAMS.get(t.shape, ())
         params = " ".join(f"{n}={_num(v)}" for n, v in zip(names, t.params, strict=False))
         lines.append(f"    {t.name.ljust(width)}  {t.shape:<14} {params}")
     return lines
 
 
 def _table_grid(rb: RuleBase) -> list[str] | None:
-    t = rb.table
-    if t is None:
+    grid = rule_grid(rb)
+    if grid is None:
         return None
-    try:
-        rows, cols = rb.input(t.rows).term_names, rb.input(t.columns).term_names
-    except KeyError:
-        return None
-    cell: dict[tuple[str, str], str] = {}
-    row_order: list[str] = []
-    for rule in rb.rules:
-        a = rule.antecedent
-        if not (isinstance(a, Compound) and len(a.operands) == 2):
-            return None
-        rp, cp = a.operands
-        if not (isinstance(rp, Proposition) and isinstance(cp, Proposition)):
-            return None
-        cell[rp.term, cp.term] = rule.consequents[0].term
-        row_order.append(rp.term)
-    # Keep the order the table was written in (e.g. the paper prints PL at the top).
-    rows_shown = list(dict.fromkeys(row_order + list(rows)))
-    corner = f"{t.rows}\\{t.columns}"
-    first = max(len(x) for x in [corner, *rows_shown])
-    width = max(len(x) for x in [*cols, *cell.values(), "-"])
-    lines = ["  " + " ".join([corner.ljust(first), *(x.ljust(width) for x in cols)]).rstrip()]
-    for r in rows_shown:
-        values = [cell.get((r, c), "-").ljust(width) for c in cols]
-        lines.append("  " + " ".join([r.ljust(first), *values]).rstrip())
+    corner = f"{grid.row_input}\\{grid.column_input}"
+    first = max(len(x) for x in [corner, *grid.rows])
+    width = max(len(x) for x in [*grid.columns, *(c for row in grid.cells for c in row)])
+    lines = [
+        "  " + " ".join([corner.ljust(first), *(x.ljust(width) for x in grid.columns)]).rstrip()
+    ]
+    for r, row in zip(grid.rows, grid.cells, strict=True):
+        lines.append("  " + " ".join([r.ljust(first), *(c.ljust(width) for c in row)]).rstrip())
     return lines
 
 
@@ -207,7 +237,8 @@ def describe_rulebase(rb: RuleBase) -> str:
         "",
         f"operators: and={ops.and_} or={ops.or_} implication={ops.implication} "
         f"aggregation={ops.aggregation}",
-        f"defuzzifier: {rb.defuzzifier}    out_of_range: {rb.out_of_range}",
+        f"defuzzifier: {rb.defuzzifier}    out_of_range: {rb.out_of_range}"
+        + (f"    coverage: {rb.coverage}" if rb.coverage != "strict" else ""),
         "",
         "inputs:",
     ]
@@ -215,7 +246,7 @@ def describe_rulebase(rb: RuleBase) -> str:
         lines += _variable_lines(var, "input")
     lines.append("outputs:")
     for var in rb.outputs:
-        lines += _variable_lines(var, "output")
+        lines += _variable_lines(var, "output", rb.input_names)
     lines.append("")
     grid = _table_grid(rb)
     if grid is not None and rb.table is not None:
@@ -228,12 +259,7 @@ def describe_rulebase(rb: RuleBase) -> str:
         lines.append(f"rules: {len(rb.rules)}")
         width = len(str(len(rb.rules)))
         for k, rule in enumerate(rb.rules, start=1):
-            then = " and ".join(f"{c.variable} is {c.term}" for c in rule.consequents)
-            weight = f"  (weight {_num(rule.weight)})" if rule.weight != 1.0 else ""
-            lines.append(
-                f"  {str(k).rjust(width)}. if {format_expression(rule.antecedent)} "
-                f"then {then}{weight}"
-            )
+            lines.append(f"  {str(k).rjust(width)}. {rule_sentence(rule)}")
     return "\n".join(lines)
 
 
@@ -245,7 +271,10 @@ def cmd_info(args: argparse.Namespace) -> int:
 # ---------------------------------------------------------------------------- eval
 
 
-def _parse_inputs(rb: RuleBase, items: Sequence[str]) -> dict[str, float]:
+def _parse_inputs(
+    rb: RuleBase, items: Sequence[str], option: str = "--input", every: bool = True
+) -> dict[str, float]:
+    """``NAME=VALUE`` items of ``option`` as input values; all inputs needed when ``every``."""
     from fuzzkit.fuzzy.validation import did_you_mean
 
     values: dict[str, float] = {}
@@ -254,26 +283,26 @@ def _parse_inputs(rb: RuleBase, items: Sequence[str]) -> dict[str, float]:
         name, sep, text = item.partition("=")
         name = name.strip()
         if not sep:
-            problems.append(f"--input {item!r}: expected NAME=VALUE")
+            problems.append(f"{option} {item!r}: expected NAME=VALUE")
             continue
         if name not in rb.input_names:
             problems.append(
-                f"--input {item!r}: unknown input {name!r}"
+                f"{option} {item!r}: unknown input {name!r}"
                 f"{did_you_mean(name, rb.input_names)}; expected one of "
                 f"{', '.join(rb.input_names)}"
             )
             continue
         if name in values:
-            problems.append(f"--input {item!r}: input {name!r} given twice")
+            problems.append(f"{option} {item!r}: input {name!r} given twice")
             continue
         try:
             values[name] = float(text)
         except ValueError:
-            problems.append(f"--input {item!r}: expected a number for {name!r}, got {text!r}")
+            problems.append(f"{option} {item!r}: expected a number for {name!r}, got {text!r}")
     missing = [
         n
         for n in rb.input_names
-        if n not in values and not any(p.startswith(f"--input '{n}=") for p in problems)
+        if every and n not in values and not any(p.startswith(f"{option} '{n}=") for p in problems)
     ]
     if missing:
         problems.append(
@@ -425,10 +454,20 @@ def _csv_rows(reader: Any, name: str) -> Iterator[list[str]]:
             ) from exc
 
 
+def _surface_inputs(text: str | None) -> tuple[str, ...] | None:
+    """``--inputs e,de`` as names (checked against the rule base by surface_axes)."""
+    if text is None:
+        return None
+    names = tuple(part.strip() for part in text.split(","))
+    if len(names) != 2 or not all(names):
+        raise EvaluationError(f"--inputs {text!r}: expected two input names, e.g. --inputs e,de")
+    return names
+
+
 def cmd_surface(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from fuzzkit.viz.surface import peak_grid, write_surface_png, write_surface_rrd
+    from fuzzkit.viz.surface import peak_grid, surface_axes, write_surface_png, write_surface_rrd
 
     if args.rrd is None and args.png is None:
         raise EvaluationError("nothing to write: give --rrd OUT.rrd and/or --png OUT.png")
@@ -439,19 +478,34 @@ def cmd_surface(args: argparse.Namespace) -> int:
         if path is not None:
             check_output_path(path, f"{option} file")
     rb = _load(args.rulebase)
+    inputs = _surface_inputs(args.inputs)
+    fixed = _parse_inputs(rb, args.fix, "--fix", every=False)
+    axes = surface_axes(rb, args.output, inputs, fixed)  # every check before any file
+    chosen = (axes.x.name, axes.y.name)
+    if args.rrd is not None and len(rb.inputs) != 2:
+        raise EvaluationError(
+            f"--rrd needs a rule base with exactly 2 inputs; {rb.name!r} has {len(rb.inputs)} "
+            f"({', '.join(rb.input_names)}); --png can span two and fix the others"
+        )
+    if args.rrd is not None and chosen != rb.input_names:
+        raise EvaluationError(
+            f"--rrd spans the inputs in declaration order ({', '.join(rb.input_names)}); "
+            "--inputs applies to --png only"
+        )
     if args.rrd is not None:
-        write_surface_rrd(rb, args.rrd, args.resolution, args.output)
+        write_surface_rrd(rb, args.rrd, args.resolution, axes.output)
         print(f"wrote {args.rrd}")
     if args.png is not None:
-        write_surface_png(rb, args.png, args.resolution, args.output)
+        write_surface_png(rb, args.png, args.resolution, axes.output, chosen, axes.fixed)
         print(f"wrote {args.png}")
-    points, labels = peak_grid(rb, args.output)
-    name = args.output or rb.output_names[0]
+    points, labels = peak_grid(rb, axes.output, chosen, axes.fixed)
+    held = axes.fixed_text(rb)
     print(
-        f"{name} at the label peaks ({len(labels)} points): min {_num(np.nanmin(points[:, 2]))}"
+        f"{axes.output} at the label peaks ({len(labels)} points"
+        f"{', ' + held if held else ''}): min {_num(np.nanmin(points[:, 2]))}"
         f", max {_num(np.nanmax(points[:, 2]))}"
     )
-    vx, vy = rb.inputs
+    vx, vy = axes.x, axes.y
     z = points[:, 2].reshape(len(vx.terms), len(vy.terms))
     corner = f"{vx.name}\\{vy.name}"
     first = max(len(x) for x in [corner, *vx.term_names])

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from fuzzkit.cli import EXIT_INTERRUPTED
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
 
@@ -25,15 +26,27 @@ def register(subparsers: Any) -> None:
             "Minimise the closed-loop cost (ITAE of the force error plus penalties for "
             "overshoot, force above the safety limit and contact loss; see fuzzkit.studies.tuning) "
             "over the experiments and stiffnesses given, by differential evolution and a "
-            "local polish. Ctrl-C stops early and still writes the best gains so far."
+            "local polish. Ctrl-C stops early and still writes the best gains so far "
+            "(exit status 130)."
         ),
+        epilog="examples:\n"
+        "  fuzzkit tune E1 E2 E3 --controller fuzzy-pi --out gains.yaml\n"
+        "  fuzzkit tune E2 --controller pi --stiffness 10 --budget 60 --out gains.yaml\n"
+        "  fuzzkit simulate E2 --gains gains.yaml      (use the tuned gains)",
     )
     tune.add_argument("experiments", nargs="+", metavar="EXPERIMENT", help="E1, E2, E3")
-    tune.add_argument("--controller", choices=CONTROLLERS, default="fuzzy-pi")
     tune.add_argument(
-        "--rulebase", default="macvicar_whelan", metavar="RB", help="shipped name or YAML path"
+        "--controller", choices=CONTROLLERS, default="fuzzy-pi", help="controller to tune"
     )
-    tune.add_argument("--plant", choices=sorted(PLANTS), default="planar")
+    tune.add_argument(
+        "--rulebase",
+        default="macvicar_whelan",
+        metavar="RB",
+        help="rule base for fuzzy-pi: shipped name or YAML path",
+    )
+    tune.add_argument(
+        "--plant", choices=sorted(PLANTS), default="planar", help="simulated robot to tune on"
+    )
     tune.add_argument(
         "--stiffness",
         default="5,10,20",
@@ -71,20 +84,39 @@ def register(subparsers: Any) -> None:
             "Write DIR/report.md with force plots, the control surface, the stiffness study, "
             "the comparison table and the paper's claims checked against the numbers, plus "
             "one .rrd per run. Tunes both controllers with a small budget unless --gains-dir "
-            "holds pi.yaml and fuzzy-pi.yaml."
+            "holds pi.yaml and fuzzy-pi.yaml. The folder appears complete or not at all: "
+            "Ctrl-C stops with exit status 130 and leaves no partial report."
         ),
+        epilog="examples:\n"
+        "  fuzzkit report --out report\n"
+        "  fuzzkit report --out report --plant both --budget 80 --workers 2\n"
+        "  fuzzkit report --out report --gains-dir tuned/ --no-rrd",
     )
-    rep.add_argument("--out", required=True, metavar="DIR", help="output folder")
-    rep.add_argument("--plant", choices=[*sorted(PLANTS), "both"], default="planar")
+    rep.add_argument(
+        "--out", required=True, metavar="DIR", help="output folder (its parent must exist)"
+    )
+    rep.add_argument(
+        "--plant",
+        choices=[*sorted(PLANTS), "both"],
+        default="planar",
+        help="plant(s) to run E1-E3 on",
+    )
     rep.add_argument(
         "--budget", type=int, default=40, help="tuning budget per controller (default 40)"
     )
     rep.add_argument("--gains-dir", metavar="DIR", help="folder with pi.yaml and fuzzy-pi.yaml")
-    rep.add_argument("--rulebase", default="macvicar_whelan", metavar="RB")
-    rep.add_argument("--seed", type=int, default=0)
-    rep.add_argument("--workers", type=int, default=None)
+    rep.add_argument(
+        "--rulebase",
+        default="macvicar_whelan",
+        metavar="RB",
+        help="rule base for fuzzy-pi: shipped name or YAML path",
+    )
+    rep.add_argument("--seed", type=int, default=0, help="optimiser seed")
+    rep.add_argument(
+        "--workers", type=int, default=None, help="tuning worker processes (default: every core)"
+    )
     rep.add_argument("--no-rrd", action="store_true", help="skip the .rrd recordings")
-    rep.add_argument("--quiet", action="store_true", help="no progress output")
+    rep.add_argument("--quiet", action="store_true", help="no progress bars")
     rep.set_defaults(handler=_report)
 
 
@@ -115,7 +147,8 @@ def parse_stiffness(text: str) -> tuple[float, ...]:
 
 def _tune(args: argparse.Namespace) -> int:
     from fuzzkit.control.gains import read_gains_file, write_gains
-    from fuzzkit.studies.tuning import ProgressBar, tune
+    from fuzzkit.progress import progress_bar
+    from fuzzkit.studies.tuning import progress_callback, tune
     from fuzzkit.studies.tuning_check import compare_cases
 
     ks = parse_stiffness(args.stiffness)
@@ -123,21 +156,21 @@ def _tune(args: argparse.Namespace) -> int:
     check_output_path(out, "gains file")
     if out.is_file() and not args.replace:
         read_gains_file(out)  # an unreadable existing file is reported now, not after tuning
-    bar = None if args.quiet else ProgressBar()
-    result = tune(
-        args.experiments,
-        args.controller,
-        args.rulebase,
-        args.plant,
-        ks,
-        budget=args.budget,
-        seed=args.seed,
-        workers=args.workers,
-        callback=bar,
-        admit=args.admit,
-    )
-    if bar is not None:
-        bar.done()
+    with progress_bar(
+        args.budget, f"tune {args.controller}", quiet=args.quiet, unit="gain set"
+    ) as bar:
+        result = tune(
+            args.experiments,
+            args.controller,
+            args.rulebase,
+            args.plant,
+            ks,
+            budget=args.budget,
+            seed=args.seed,
+            workers=args.workers,
+            callback=progress_callback(bar),
+            admit=args.admit,
+        )
     _, kept = write_gains(out, result.to_entry(), merge=not args.replace)
     print(
         f"tuned {result.controller} on {' '.join(result.experiments)} ({result.plant}, "
@@ -145,11 +178,18 @@ def _tune(args: argparse.Namespace) -> int:
         f"{result.wall_time_s:.1f} s"
         + (" (interrupted: best so far)" if result.interrupted else "")
     )
-    cases = [] if result.kept_defaults else compare_cases(result, seed=0)
+    # the full per-case runs: not after Ctrl-C (the user wants out), not when nothing changed
+    skip = result.kept_defaults or result.interrupted
+    cases = [] if skip else compare_cases(result, seed=0)
     for line in tune_report_lines(result, cases):
         print(line)
     print(f"wrote {out}" + (f" (kept the {', '.join(kept)} entry)" if kept else ""))
-    return 130 if result.interrupted else 0
+    if result.interrupted:
+        print(
+            f"fuzzkit: interrupted (Ctrl-C); {out} holds the best gains so far", file=sys.stderr
+        )
+        return EXIT_INTERRUPTED
+    return 0
 
 
 def _pct(new: float, old: float) -> str:

@@ -12,7 +12,7 @@ from importlib import resources
 from pathlib import Path
 
 from fuzzkit.errors import Location, Problem, RuleBaseError
-from fuzzkit.formats.yaml_reader import load_file, loads_rulebase
+from fuzzkit.formats.yaml_reader import load_file_with_warnings, loads_rulebase_with_warnings
 from fuzzkit.fuzzy.model import RuleBase
 from fuzzkit.fuzzy.validation import did_you_mean
 
@@ -56,15 +56,24 @@ def load(name_or_path: str | os.PathLike[str]) -> RuleBase:
     >>> rb.input_names
     ('e', 'de')
     """
+    return load_with_warnings(name_or_path)[0]
+
+
+def load_with_warnings(name_or_path: str | os.PathLike[str]) -> tuple[RuleBase, list[Problem]]:
+    """:func:`load`, also returning the warnings (coverage gaps under ``coverage: allow_gaps``).
+
+    Each warning is a :class:`~fuzzkit.errors.Problem` with severity ``warning``, located at
+    ``file:line:col``. ``fuzzkit validate`` prints them (``--strict`` makes them errors).
+    """
     if isinstance(name_or_path, os.PathLike):
-        return load_file(Path(name_or_path))
+        return load_file_with_warnings(Path(name_or_path))
     spec = str(name_or_path)
     if _looks_like_path(spec):
-        return load_file(spec)
+        return load_file_with_warnings(spec)
     names = available()
     if spec not in names:
         if Path(spec).exists():  # a file (or a folder, which load_file reports) right here
-            return load_file(spec)
+            return load_file_with_warnings(spec)
         raise RuleBaseError(
             [
                 Problem(
@@ -78,9 +87,9 @@ def load(name_or_path: str | os.PathLike[str]) -> RuleBase:
     if not resource.is_file():
         resource = resources.files(_PACKAGE).joinpath(spec + ".yml")
     text = resource.read_text(encoding="utf-8")
-    return loads_rulebase(text, source=f"<shipped>/{resource.name}")
+    return loads_rulebase_with_warnings(text, source=f"<shipped>/{resource.name}")
 
 
 def loads(text: str, source: str = "<string>") -> RuleBase:
     """Parse rule-base YAML from a string; ``source`` names it in error messages."""
-    return loads_rulebase(text, source)
+    return loads_rulebase_with_warnings(text, source)[0]

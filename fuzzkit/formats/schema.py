@@ -7,6 +7,7 @@ from typing import Any
 from fuzzkit.fuzzy.model import (
     AGGREGATIONS,
     AND_OPERATORS,
+    COVERAGE_POLICIES,
     DEFUZZIFIERS,
     IMPLICATIONS,
     OR_OPERATORS,
@@ -15,6 +16,7 @@ from fuzzkit.fuzzy.model import (
     SHAPE_PARAMS,
 )
 from fuzzkit.fuzzy.partition import PARTITION_ENDS, PARTITION_KINDS
+from fuzzkit.fuzzy.validation import MAX_UNITS_CHARS
 
 
 def json_schema() -> dict[str, Any]:
@@ -27,8 +29,22 @@ def json_schema() -> dict[str, Any]:
     name = {"type": "string", "pattern": r"^[A-Za-z_][A-Za-z0-9_]*$"}
     shape_defs: list[dict[str, Any]] = []
     for shape, params in SHAPE_PARAMS.items():
-        if shape in PIECEWISE_LINEAR_SHAPES:
-            props: dict[str, Any] = {
+        props: dict[str, Any]
+        if shape == "linear":
+            props = {
+                "coefficients": {
+                    "oneOf": [
+                        {"type": "object", "propertyNames": name, "additionalProperties": number},
+                        {"type": "array", "items": number},
+                    ],
+                    "description": "one per input: {input: coefficient} (missing = 0) or a "
+                    "list in input order",
+                },
+                "constant": number,
+            }
+            required = ["shape", "coefficients", "constant"]
+        elif shape in PIECEWISE_LINEAR_SHAPES:
+            props = {
                 "points": {
                     "type": "array",
                     "items": number,
@@ -63,12 +79,15 @@ def json_schema() -> dict[str, Any]:
         "required": ["partition", "labels"],
         "additionalProperties": False,
     }
-    explicit_terms = {
-        "type": "object",
-        "propertyNames": {"allOf": [name, {"not": {"const": "partition"}}]},
-        "additionalProperties": {"$ref": "#/$defs/term"},
-        "minProperties": 1,
-    }
+
+    def explicit_terms(kind: str) -> dict[str, Any]:
+        # an input may have no terms when only linear Sugeno terms use it
+        return {
+            "type": "object",
+            "propertyNames": {"allOf": [name, {"not": {"const": "partition"}}]},
+            "additionalProperties": {"$ref": "#/$defs/term"},
+            "minProperties": 0 if kind == "input" else 1,
+        }
 
     def variable(kind: str) -> dict[str, Any]:
         props: dict[str, Any] = {
@@ -79,7 +98,14 @@ def json_schema() -> dict[str, Any]:
                 "maxItems": 2,
                 "description": "[low, high]",
             },
-            "terms": {"oneOf": [{"$ref": "#/$defs/partition"}, explicit_terms]},
+            "terms": {"oneOf": [{"$ref": "#/$defs/partition"}, explicit_terms(kind)]},
+            "units": {
+                "type": ["string", "null"],
+                "minLength": 1,
+                "maxLength": MAX_UNITS_CHARS,
+                "pattern": r"^\S(.*\S)?$",
+                "description": "physical unit of the values, for labels only: N, mm, degC, %",
+            },
         }
         if kind == "output":
             props["default"] = {
@@ -150,7 +176,7 @@ def json_schema() -> dict[str, Any]:
         "$schema": "https://json-schema.org/draft/2020-12/schema",
         "$id": "https://fuzzkit.invalid/schema/rulebase.json",
         "title": "fuzzkit rule base",
-        "description": "A Mamdani fuzzy rule base (see docs/rulebase-format.md).",
+        "description": "A Mamdani or Sugeno fuzzy rule base (see docs/rulebase-format.md).",
         "type": "object",
         "properties": {
             "name": {**name, "description": "identifier; the C symbol prefix"},
@@ -179,6 +205,11 @@ def json_schema() -> dict[str, Any]:
             },
             "defuzzifier": {"enum": list(DEFUZZIFIERS)},
             "out_of_range": {"enum": list(OUT_OF_RANGE_POLICIES)},
+            "coverage": {
+                "enum": list(COVERAGE_POLICIES),
+                "description": "strict: an input range no term covers is an error; "
+                "allow_gaps: a warning",
+            },
             "rules": {
                 "oneOf": [
                     {"type": "array", "items": {"$ref": "#/$defs/rule"}, "minItems": 1},

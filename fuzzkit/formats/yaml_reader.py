@@ -61,6 +61,7 @@ TOP_KEYS = (
     "operators",
     "defuzzifier",
     "out_of_range",
+    "coverage",
     "rules",
 )
 OPERATOR_KEYS = ("and", "or", "implication", "aggregation")
@@ -119,6 +120,8 @@ class _Reader:
     #: semantic problems exactly at these paths are unreliable (e.g. coverage of a bad range)
     hidden_at: set[Path] = field(default_factory=set)
     broken_vars: set[str] = field(default_factory=set)
+    #: the inputs' names in order, once read (linear Sugeno terms name their coefficients)
+    input_names: list[str] = field(default_factory=list)
 
     # ------------------------------------------------------------------ primitives
 
@@ -233,6 +236,7 @@ class _Reader:
             description = self.text(entries["description"][1], "a description") or ""
 
         inputs = self.variables(entries, "input", root)
+        self.input_names = [v.name for v in inputs]
         outputs = self.variables(entries, "output", root)
 
         ops = Operators()
@@ -273,6 +277,12 @@ class _Reader:
                 or out_of_range
             )
 
+        coverage = "strict"
+        if "coverage" in entries:
+            coverage = (
+                self.choice(entries["coverage"][1], "a coverage policy", ("coverage",)) or coverage
+            )
+
         rules: list[Rule] = []
         table: RuleTable | None = None
         if "rules" in entries:
@@ -290,6 +300,7 @@ class _Reader:
             out_of_range=out_of_range,
             description=description,
             table=table,
+            coverage=coverage,
         )
 
     # ------------------------------------------------------------------ variables
@@ -318,7 +329,11 @@ class _Reader:
             self.hidden_under.add(base)
             self.broken_vars.add(name)
             return Variable(name, 0.0, 1.0, ())
-        allowed = ("range", "terms", "default") if kind == "output" else ("range", "terms")
+        allowed = (
+            ("range", "terms", "units", "default")
+            if kind == "output"
+            else ("range", "terms", "units")
+        )
         for key, (kn, _) in entries.items():
             if key == "default" and kind == "input":
                 self.error(
@@ -362,7 +377,27 @@ class _Reader:
             self.marks[(*base, "default")] = dnode
             if not (isinstance(dnode, ScalarNode) and dnode.tag == _NULL):
                 default = self.number(dnode, f"the default of {what}")
-        return Variable(name, low, high, terms, default)
+        units: str | None = None
+        if "units" in entries:
+            self.marks[(*base, "units")] = entries["units"][1]
+            units = self.units(entries["units"][1], what)
+        return Variable(name, low, high, terms, default, units)
+
+    def units(self, node: Node, what: str) -> str | None:
+        """The ``units:`` of a variable as written (``None`` for null or a non-string)."""
+        if isinstance(node, ScalarNode) and node.tag == _NULL:
+            return None
+        if not (isinstance(node, ScalarNode) and node.tag == STR_TAG):
+            hint = ""
+            if isinstance(node, ScalarNode) and node.tag in (_INT, _FLOAT, _BOOL):
+                hint = "; quote it"
+            self.error(
+                node,
+                f"expected the units of {what} as text such as 'N' or 'mm', "
+                f"got {describe(node)}{hint}",
+            )
+            return None
+        return str(node.value)  # its content is checked by validation (path ..., "units")
 
     def range(self, node: Node, what: str) -> tuple[float, float] | None:
         if not isinstance(node, SequenceNode) or len(node.value) != 2:
@@ -487,6 +522,8 @@ class _Reader:
             f"{shape} term {label!r}",
         )
         params: list[float] = []
+        if shape == "linear":
+            return Term(label, shape, self.linear(entries, tpath))
         if shape in PIECEWISE_LINEAR_SHAPES:
             if "points" not in entries:
                 self.hidden_under.add(tpath)
@@ -513,6 +550,65 @@ class _Reader:
                     value = 1.0
                 params.append(value)
         return Term(label, shape, tuple(params))
+
+    def linear(self, entries: dict[str, tuple[Node, Node]], tpath: Path) -> tuple[float, ...]:
+        """A linear Sugeno term's parameters: coefficients in input order, then the constant.
+
+        ``coefficients`` is a mapping of input name to coefficient (inputs left out have 0) or
+        a list in the rule base's input order; ``constant`` is the constant term.
+        """
+        label = tpath[-1]
+        n = len(self.input_names)
+        coefs: list[float] = [0.0] * n
+        ok = True
+        if "coefficients" in entries:
+            cnode = entries["coefficients"][1]
+            self.marks[(*tpath, "coefficients")] = cnode
+            if isinstance(cnode, SequenceNode):
+                values = [self.number(i, f"a coefficient of term {label!r}") for i in cnode.value]
+                if any(v is None for v in values):
+                    ok = False
+                elif len(values) != n:
+                    self.error(
+                        cnode,
+                        f"linear term {label!r} has {len(values)} coefficient(s), expected {n} "
+                        f"(one per input, in order: {', '.join(self.input_names)})",
+                    )
+                    ok = False
+                else:
+                    coefs = [v for v in values if v is not None]
+            else:
+                cmap = self.mapping(
+                    cnode,
+                    f"the coefficients of term {label!r} as a mapping {{input: number}} or a "
+                    "list in input order",
+                )
+                if cmap is None:
+                    ok = False
+                for name, (kn, vn) in (cmap or {}).items():
+                    if name not in self.input_names:
+                        self.error(
+                            kn,
+                            f"unknown input {name!r} in the coefficients of term {label!r}"
+                            f"{did_you_mean(name, self.input_names)}; expected one of "
+                            f"{', '.join(self.input_names) or '(none)'}",
+                        )
+                        ok = False
+                        continue
+                    value = self.number(vn, f"the coefficient of {name!r} in term {label!r}")
+                    if value is None:
+                        ok = False
+                    else:
+                        coefs[self.input_names.index(name)] = value
+        constant = 0.0
+        if "constant" in entries:
+            self.marks[(*tpath, "constant")] = entries["constant"][1]
+            got = self.number(entries["constant"][1], f"the constant of term {label!r}")
+            ok = ok and got is not None
+            constant = got if got is not None else 0.0
+        if not ok:
+            self.hidden_under.add(tpath)
+        return (*coefs, constant)
 
     # ------------------------------------------------------------------ rules
 
@@ -948,11 +1044,21 @@ def _compose(text: str, file: str) -> Node | None:
 def loads_rulebase(text: str, source: str = "<string>") -> RuleBase:
     """Parse rule-base YAML ``text``; ``source`` names it in messages and in ``rb.source``.
 
+    Coverage gaps are errors unless the document says ``coverage: allow_gaps`` (then they are
+    warnings, which :func:`loads_rulebase_with_warnings` returns).
+
     Raises
     ------
     RuleBaseError
         Listing every problem as ``source:line:col: message``, sorted by position.
     """
+    return loads_rulebase_with_warnings(text, source)[0]
+
+
+def loads_rulebase_with_warnings(
+    text: str, source: str = "<string>"
+) -> tuple[RuleBase, list[Problem]]:
+    """:func:`loads_rulebase`, also returning the warnings (severity ``warning``), located."""
     size = len(text.encode("utf-8", errors="replace"))
     if size > MAX_FILE_BYTES:
         raise RuleBaseError(
@@ -995,7 +1101,7 @@ def loads_rulebase(text: str, source: str = "<string>") -> RuleBase:
     reader = _Reader(source, text.split("\n"))
     try:
         rb = reader.rule_base(root)
-        issues = validation.check(rb) if rb is not None else []
+        found = validation.diagnose(rb) if rb is not None else validation.Diagnosis([], [])
     except RecursionError:
         raise RuleBaseError(
             [
@@ -1006,11 +1112,15 @@ def loads_rulebase(text: str, source: str = "<string>") -> RuleBase:
             ]
         ) from None
     problems = list(reader.problems)
-    if rb is not None:
+    warnings: list[Problem] = []
+    for issues, severity, into in (
+        (found.errors, "error", problems),
+        (found.warnings, "warning", warnings),
+    ):
         for path, message in issues:
             if path in reader.hidden_at or any(path[: len(h)] == h for h in reader.hidden_under):
                 continue
-            problems.append(Problem(_locate(reader, path, root), message))
+            into.append(Problem(_locate(reader, path, root), message, severity))
     if problems:
         unique = list(dict.fromkeys(problems))
         unique.sort(key=lambda p: (p.location.line, p.location.col))
@@ -1018,7 +1128,8 @@ def loads_rulebase(text: str, source: str = "<string>") -> RuleBase:
     if rb is None:  # pragma: no cover - a missing model always comes with a problem
         raise RuntimeError("no rule base and no problem")
     digest = hashlib.sha256(text.encode("utf-8")).hexdigest()
-    return replace(rb, source=Source(source, digest))
+    warnings.sort(key=lambda p: (p.location.line, p.location.col))
+    return replace(rb, source=Source(source, digest)), warnings
 
 
 def _locate(reader: _Reader, path: Path, root: Node) -> Location:
@@ -1031,6 +1142,11 @@ def _locate(reader: _Reader, path: Path, root: Node) -> Location:
 
 def load_file(path: str | FsPath) -> RuleBase:
     """Read and parse a rule-base YAML file (see :func:`loads_rulebase`)."""
+    return load_file_with_warnings(path)[0]
+
+
+def load_file_with_warnings(path: str | FsPath) -> tuple[RuleBase, list[Problem]]:
+    """:func:`load_file`, also returning the warnings (see :func:`loads_rulebase_with_warnings`)."""
     p = FsPath(path)
     name = str(path)
     try:
@@ -1060,4 +1176,4 @@ def load_file(path: str | FsPath) -> RuleBase:
         raise RuleBaseError(
             [Problem(Location(name), f"not UTF-8 text (byte {exc.start}); expected a YAML file")]
         ) from None
-    return loads_rulebase(text, name)
+    return loads_rulebase_with_warnings(text, name)

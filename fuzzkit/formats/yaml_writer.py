@@ -55,7 +55,7 @@ _Dumper.add_representer(
 _Dumper.add_representer(_Literal, lambda d, v: d.represent_scalar(STR_TAG, v, style="|"))
 
 
-def _dump_terms(var: Variable, kind: str) -> dict[str, Any]:
+def _dump_terms(var: Variable, kind: str, input_names: Sequence[str]) -> dict[str, Any]:
     labels = var.term_names
     if len(labels) >= 2 and math.isfinite(var.low) and math.isfinite(var.high):
         default_ends = "shoulder" if kind == "input" else "triangle"
@@ -68,7 +68,12 @@ def _dump_terms(var: Variable, kind: str) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for t in var.terms:
         spec = {"shape": t.shape}
-        if t.shape in PIECEWISE_LINEAR_SHAPES or t.shape not in SHAPE_PARAMS:
+        if t.shape == "linear" and len(t.params) == len(input_names) + 1:
+            spec["coefficients"] = _FlowMap(
+                zip(input_names, map(float, t.params[:-1]), strict=True)
+            )
+            spec["constant"] = float(t.params[-1])
+        elif t.shape in PIECEWISE_LINEAR_SHAPES or t.shape not in SHAPE_PARAMS:
             spec["points"] = _Flow(float(x) for x in t.params)
         else:
             spec.update(zip(SHAPE_PARAMS[t.shape], map(float, t.params), strict=True))
@@ -180,9 +185,11 @@ def dump(rb: RuleBase) -> str:
         section: dict[str, Any] = {}
         for var in group:
             spec: dict[str, Any] = {"range": _Flow([float(var.low), float(var.high)])}
+            if var.units is not None:
+                spec["units"] = var.units
             if kind == "output" and var.default is not None:
                 spec["default"] = float(var.default)
-            spec["terms"] = _dump_terms(var, kind)
+            spec["terms"] = _dump_terms(var, kind, rb.input_names)
             section[var.name] = spec
         doc[kind + "s"] = section
     ops = rb.operators
@@ -196,6 +203,8 @@ def dump(rb: RuleBase) -> str:
     )
     doc["defuzzifier"] = rb.defuzzifier
     doc["out_of_range"] = rb.out_of_range
+    if rb.coverage != "strict":
+        doc["coverage"] = rb.coverage
     table = _dump_table(rb)
     if table is not None:
         doc["rules"] = table

@@ -1,4 +1,4 @@
-"""The exact Mamdani engine, vectorised over numpy arrays.
+"""The exact engine (Mamdani and Sugeno outputs), vectorised over numpy arrays.
 
 ``Engine(rb).evaluate({"e": e, "de": de})`` evaluates a rule base at any number of points at
 once (inputs are broadcast together); :func:`evaluate` and :func:`evaluate_point` are the
@@ -33,6 +33,14 @@ Semantics
   ``a_j`` the term's activation (its rules' firing strengths aggregated with the aggregation
   operator) and ``c_j`` the term centre of :func:`fuzzkit.fuzzy.membership.centre`.
 * Mean of maximum is the midpoint of the smallest and largest of maximum (as in fuzzylite).
+* Sugeno outputs (``constant``/``linear`` terms; see :mod:`fuzzkit.fuzzy.sugeno`): every rule
+  consequent counts on its own with its weighted firing strength ``w`` and value ``z``;
+  ``weighted_average`` is ``sum(w z) / sum(w)``, ``weighted_sum`` is ``sum(w z)``. Implication
+  and aggregation do not apply (MATLAB ignores ImpMethod/AggMethod for Sugeno systems, and
+  fuzzylite's WeightedAverage/WeightedSum, with aggregation none, read each activated
+  term's degree). ``linear``
+  terms see the input values the membership functions see (clamped under ``clamp``), and
+  the result is not clamped to the output's range. No rule fired (``sum(w) == 0``): default.
 """
 
 from __future__ import annotations
@@ -50,6 +58,7 @@ from fuzzkit.errors import EvaluationError
 from fuzzkit.fuzzy import membership
 from fuzzkit.fuzzy.fastpath import PolyCentroid, ScalarPath, Segment, scalar_input
 from fuzzkit.fuzzy.model import Compound, Expression, Proposition, RuleBase, Variable
+from fuzzkit.fuzzy.sugeno import SugenoOutput, SugenoScalarPath, sugeno_scalar_path
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.intp]
@@ -78,13 +87,16 @@ class _Fuzzifier:
         self.core_start, self.core_end, self.rise, self.fall = (forms[:, k] for k in range(4))
         self.smooth = [(i, t) for i, t in enumerate(var.terms) if not t.is_piecewise_linear]
 
-    def __call__(self, x: FloatArray) -> FloatArray:
+    def prepare(self, x: FloatArray) -> FloatArray:
+        """The input value the terms see: clamped to the range, or bounded under ``extend``."""
         # bare ufuncs rather than np.clip: this runs once per input per call, and the
         # per-call overhead dominates scalar evaluation
         if self.clamp:
-            x = _fmin(_fmax(x, self.low), self.high)
-        else:
-            x = _fmin(_fmax(x, -_EXTEND_LIMIT), _EXTEND_LIMIT)
+            return _fmin(_fmax(x, self.low), self.high)
+        return _fmin(_fmax(x, -_EXTEND_LIMIT), _EXTEND_LIMIT)
+
+    def __call__(self, x: FloatArray) -> FloatArray:
+        x = self.prepare(x)
         xc = x[:, None]
         # x is finite and slopes are at most 1e200, so nothing overflows or becomes NaN
         pl = _fmin(
@@ -590,7 +602,7 @@ class _Output:
             else:
                 self.geometry = _GridGeometry(rb, out, self.pieces)
 
-    def __call__(self, firing: FloatArray) -> FloatArray:
+    def __call__(self, firing: FloatArray, inputs: list[FloatArray]) -> FloatArray:
         b = firing.shape[0]
         if self.pieces.empty:
             return np.full(b, self.default)
@@ -689,8 +701,14 @@ class Engine:
         self.output_names = rulebase.output_names
         self._fuzzifiers = [_Fuzzifier(v, rulebase.out_of_range) for v in rulebase.inputs]
         self._firing = _Firing(rulebase)
-        self._outputs = [_Output(rulebase, o) for o in rulebase.outputs]
-        self._scalar = _scalar_path(rulebase, self._outputs)
+        self._outputs: list[_Output | SugenoOutput] = [
+            SugenoOutput(rulebase, o) if o.is_sugeno else _Output(rulebase, o)
+            for o in rulebase.outputs
+        ]
+        self._linear = any(isinstance(o, SugenoOutput) and o.linear for o in self._outputs)
+        self._scalar: ScalarPath | SugenoScalarPath | None = _scalar_path(
+            rulebase, self._outputs
+        ) or sugeno_scalar_path(rulebase)
 
     def _coerce(self, inputs: Mapping[str, npt.ArrayLike]) -> list[FloatArray]:
         unknown = sorted(set(inputs) - set(self.input_names))
@@ -737,9 +755,11 @@ class Engine:
             flat = [np.where(bad, 0.0, a) for a in flat]
         mus = [fz(x) for fz, x in zip(self._fuzzifiers, flat, strict=True)]
         firing = self._firing(mus)
+        if self._linear:
+            flat = [fz.prepare(x) for fz, x in zip(self._fuzzifiers, flat, strict=True)]
         result = {}
         for out in self._outputs:
-            val = out(firing)
+            val = out(firing, flat)
             result[out.name] = np.where(bad, np.nan, val) if any_bad else val
         return result
 
@@ -791,11 +811,11 @@ class Engine:
         return self._firing([fz(x) for fz, x in zip(self._fuzzifiers, flat, strict=True)])
 
 
-def _scalar_path(rb: RuleBase, outputs: list[_Output]) -> ScalarPath | None:
+def _scalar_path(rb: RuleBase, outputs: list[_Output | SugenoOutput]) -> ScalarPath | None:
     """The pure-Python single-point evaluator, when the rule base has its shape."""
     if any(not t.is_piecewise_linear for v in rb.inputs for t in v.terms):
         return None
-    if any(o.fast_centroid is None for o in outputs):
+    if any(not isinstance(o, _Output) or o.fast_centroid is None for o in outputs):
         return None
     pos = {v.name: i for i, v in enumerate(rb.inputs)}
     out_pos = {v.name: i for i, v in enumerate(rb.outputs)}
@@ -832,7 +852,7 @@ def _scalar_path(rb: RuleBase, outputs: list[_Output]) -> ScalarPath | None:
     ]
     outs = []
     for o, var in zip(outputs, rb.outputs, strict=True):
-        if o.fast_centroid is None:  # checked above; keeps the type checker informed
+        if not isinstance(o, _Output) or o.fast_centroid is None:  # checked above (for mypy)
             return None
         outs.append((o.fast_centroid, len(var.terms), o.default))
     return ScalarPath(inputs, table, rb.operators.and_ == "product", outs)

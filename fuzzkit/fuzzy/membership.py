@@ -11,7 +11,7 @@ The piecewise-linear shapes (triangle, trapezoid, shoulders) are also available 
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import cast
 
 import numpy as np
@@ -101,6 +101,81 @@ def singleton(x: FloatArray, value: float) -> FloatArray:
     return cast(FloatArray, out)
 
 
+def _keep_nan(x: FloatArray, mu: FloatArray) -> FloatArray:
+    return cast(FloatArray, np.where(np.isnan(x), np.nan, mu))
+
+
+def gaussian_product(
+    x: FloatArray, mean1: float, sigma1: float, mean2: float, sigma2: float
+) -> FloatArray:
+    """Two-sided gaussian (MATLAB ``gauss2mf``, fuzzylite ``GaussianProduct``).
+
+    ``mu = f1 * f2`` with ``f1 = exp(-(x - mean1)^2 / (2 sigma1^2))`` for ``x < mean1`` (else 1)
+    and ``f2 = exp(-(x - mean2)^2 / (2 sigma2^2))`` for ``x > mean2`` (else 1): a plateau of 1
+    on ``[mean1, mean2]`` when ``mean1 <= mean2``, a peak below 1 otherwise. NaN gives NaN.
+    """
+    xs = np.clip(x, -_XMAX, _XMAX)
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        f1 = np.where(xs < mean1, np.exp(-0.5 * ((xs - mean1) / sigma1) ** 2), 1.0)
+        f2 = np.where(xs > mean2, np.exp(-0.5 * ((xs - mean2) / sigma2) ** 2), 1.0)
+    return _keep_nan(x, f1 * f2)
+
+
+def s_shape(x: FloatArray, start: float, end: float) -> FloatArray:
+    """S-shaped spline (MATLAB ``smf``, fuzzylite ``SShape``), 0 before ``start``, 1 after ``end``.
+
+    With ``m = (start + end)/2`` and ``w = end - start``: ``mu = 2 ((x - start)/w)^2`` on
+    ``[start, m]``, ``1 - 2 ((x - end)/w)^2`` on ``[m, end]``. NaN gives NaN.
+    """
+    xs = np.clip(x, -_XMAX, _XMAX)
+    w = end - start
+    mid = 0.5 * (start + end)
+    with np.errstate(over="ignore", invalid="ignore"):
+        rising = np.where(
+            xs <= mid, 2.0 * ((xs - start) / w) ** 2, 1.0 - 2.0 * ((xs - end) / w) ** 2
+        )
+        mu = np.where(xs <= start, 0.0, np.where(xs >= end, 1.0, rising))
+    return _keep_nan(x, mu)
+
+
+def z_shape(x: FloatArray, start: float, end: float) -> FloatArray:
+    """Z-shaped spline (MATLAB ``zmf``, fuzzylite ``ZShape``), 1 before ``start``, 0 after ``end``.
+
+    ``mu = 1 - s_shape(x, start, end)``: ``1 - 2 ((x - start)/w)^2`` on ``[start, m]``,
+    ``2 ((x - end)/w)^2`` on ``[m, end]``. NaN gives NaN.
+    """
+    return 1.0 - s_shape(x, start, end)
+
+
+def pi_shape(x: FloatArray, a: float, b: float, c: float, d: float) -> FloatArray:
+    """Pi-shaped spline (MATLAB ``pimf``, fuzzylite ``PiShape``).
+
+    ``mu = s_shape(x, a, b) * z_shape(x, c, d)``: rises from 0 at ``a`` to 1 at ``b``, stays 1
+    to ``c``, falls to 0 at ``d``. NaN gives NaN.
+    """
+    return s_shape(x, a, b) * z_shape(x, c, d)
+
+
+def sigmoid_difference(
+    x: FloatArray, slope1: float, centre1: float, slope2: float, centre2: float
+) -> FloatArray:
+    """Difference of two sigmoids (MATLAB ``dsigmf``, fuzzylite ``SigmoidDifference``).
+
+    ``mu = |sigmoid(x, slope1, centre1) - sigmoid(x, slope2, centre2)|``. NaN gives NaN.
+    """
+    return cast(FloatArray, np.abs(sigmoid(x, slope1, centre1) - sigmoid(x, slope2, centre2)))
+
+
+def sigmoid_product(
+    x: FloatArray, slope1: float, centre1: float, slope2: float, centre2: float
+) -> FloatArray:
+    """Product of two sigmoids (MATLAB ``psigmf``, fuzzylite ``SigmoidProduct``).
+
+    ``mu = sigmoid(x, slope1, centre1) * sigmoid(x, slope2, centre2)``. NaN gives NaN.
+    """
+    return sigmoid(x, slope1, centre1) * sigmoid(x, slope2, centre2)
+
+
 SHAPES: dict[str, Callable[..., FloatArray]] = {
     "triangle": triangle,
     "trapezoid": trapezoid,
@@ -110,12 +185,46 @@ SHAPES: dict[str, Callable[..., FloatArray]] = {
     "bell": bell,
     "sigmoid": sigmoid,
     "singleton": singleton,
+    "gaussian_product": gaussian_product,
+    "s_shape": s_shape,
+    "z_shape": z_shape,
+    "pi_shape": pi_shape,
+    "sigmoid_difference": sigmoid_difference,
+    "sigmoid_product": sigmoid_product,
 }
 
 
 def evaluate_term(term: Term, x: npt.ArrayLike) -> FloatArray:
-    """Membership of ``x`` (any shape) in ``term``."""
+    """Membership of ``x`` (any shape) in ``term``.
+
+    Raises
+    ------
+    ValueError
+        For a Sugeno term (``constant``, ``linear``): it is an output value, not a membership
+        function (see :func:`sugeno_value`).
+    """
+    if term.is_sugeno:
+        raise ValueError(
+            f"term {term.name!r}: {term.shape} is a Sugeno output term, not a membership function"
+        )
     return SHAPES[term.shape](np.asarray(x, dtype=np.float64), *term.params)
+
+
+def sugeno_value(term: Term, inputs: Sequence[FloatArray]) -> FloatArray:
+    """The output value of a Sugeno term at the given input values (arrays of one shape).
+
+    ``constant``: its value everywhere. ``linear``: ``c_1 x_1 + ... + c_n x_n + constant`` with
+    ``inputs`` in the rule base's input order. NaN in a used input gives NaN.
+    """
+    if term.shape == "constant":
+        return np.full(np.shape(inputs[0]) if inputs else (), term.params[0])
+    if term.shape == "linear":
+        z = np.full(np.shape(inputs[0]) if inputs else (), term.params[-1])
+        for c, x in zip(term.params[:-1], inputs, strict=True):
+            if c != 0.0:
+                z = z + c * x
+        return z
+    raise ValueError(f"term {term.name!r}: shape {term.shape!r} is not a Sugeno term")
 
 
 def trapezoid_form(term: Term) -> tuple[float, float, float, float]:
@@ -149,7 +258,8 @@ def centre(term: Term, low: float, high: float) -> float:
     The midpoint of the set of points of ``[low, high]`` where the term reaches its largest
     membership: the peak of a triangle, the middle of a trapezoid's core, the middle of a
     shoulder's core within the range, the mean of a gaussian or bell (clamped to the range),
-    the range end a sigmoid opens towards, a singleton's value.
+    the range end a sigmoid opens towards, a singleton's value. The smooth MATLAB shapes follow
+    the same rule (the difference and product of sigmoids on a grid of 65537 points).
     """
     p = term.params
     if term.shape == "triangle":
@@ -167,4 +277,24 @@ def centre(term: Term, low: float, high: float) -> float:
         return float(np.clip(p[2], low, high))
     if term.shape == "sigmoid":
         return high if p[0] > 0 else low
+    if term.shape == "s_shape":
+        return (float(np.clip(p[1], low, high)) + high) / 2
+    if term.shape == "z_shape":
+        return (low + float(np.clip(p[0], low, high))) / 2
+    if term.shape == "pi_shape":
+        lo, hi = max(p[1], low), min(p[2], high)
+        return (lo + hi) / 2 if lo <= hi else float(np.clip((p[1] + p[2]) / 2, low, high))
+    if term.shape == "gaussian_product":
+        m1, s1, m2, s2 = p
+        if m1 <= m2:
+            lo, hi = max(m1, low), min(m2, high)
+            return (lo + hi) / 2 if lo <= hi else float(np.clip((m1 + m2) / 2, low, high))
+        # the two tails overlap: their product is a gaussian with this mean
+        return float(np.clip((m1 * s2**2 + m2 * s1**2) / (s1**2 + s2**2), low, high))
+    if term.shape in ("sigmoid_difference", "sigmoid_product"):
+        # no closed form for the maximum in general: a grid of 2^16 + 1 points
+        grid = np.linspace(low, high, 65537)
+        mu = evaluate_term(term, grid)
+        at_max = grid[mu >= mu.max() - 1e-12]
+        return float(0.5 * (at_max[0] + at_max[-1]))
     return float(p[0])  # singleton

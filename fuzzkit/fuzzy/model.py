@@ -14,6 +14,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal, TypeAlias
 
+from fuzzkit.fuzzy.display import NotebookDisplay
+
 #: Membership-function shapes and the names of their parameters, in order.
 SHAPE_PARAMS: dict[str, tuple[str, ...]] = {
     "triangle": ("a", "b", "c"),
@@ -24,7 +26,25 @@ SHAPE_PARAMS: dict[str, tuple[str, ...]] = {
     "bell": ("width", "slope", "centre"),
     "sigmoid": ("slope", "centre"),
     "singleton": ("value",),
+    # Smooth shapes as in MATLAB's Fuzzy Logic Toolbox (gauss2mf, smf, zmf, pimf, dsigmf,
+    # psigmf) and fuzzylite (GaussianProduct, SShape, ZShape, PiShape, SigmoidDifference,
+    # SigmoidProduct); formulas in fuzzkit.fuzzy.membership.
+    "gaussian_product": ("mean1", "sigma1", "mean2", "sigma2"),
+    "s_shape": ("start", "end"),
+    "z_shape": ("start", "end"),
+    "pi_shape": ("a", "b", "c", "d"),
+    "sigmoid_difference": ("slope1", "centre1", "slope2", "centre2"),
+    "sigmoid_product": ("slope1", "centre1", "slope2", "centre2"),
+    # Sugeno (Takagi-Sugeno-Kang) output terms: not membership functions but the rule's output
+    # value. ``linear`` has one coefficient per input, in the rule base's input order, then the
+    # constant term: ``z = c_1 x_1 + ... + c_n x_n + constant`` (its params have n + 1 entries;
+    # the names here are the YAML keys).
+    "constant": ("value",),
+    "linear": ("coefficients", "constant"),
 }
+
+#: Sugeno output terms (zero order ``constant``, first order ``linear``).
+SUGENO_SHAPES = frozenset({"constant", "linear"})
 
 #: Shapes that are piecewise linear (the exact engine integrates these in closed form).
 PIECEWISE_LINEAR_SHAPES = frozenset(
@@ -42,10 +62,16 @@ DEFUZZIFIERS = (
     "smallest_of_maximum",
     "largest_of_maximum",
     "weighted_average",
+    "weighted_sum",
 )
+#: Defuzzifiers of Sugeno outputs (``sum(w z) / sum(w)`` and ``sum(w z)`` over the rules).
+SUGENO_DEFUZZIFIERS = ("weighted_average", "weighted_sum")
 #: What happens to an input outside its declared range: ``clamp`` (default) evaluates the
 #: membership functions at the nearest range end; ``extend`` evaluates them where the input is.
 OUT_OF_RANGE_POLICIES = ("clamp", "extend")
+#: What an input range with no term above zero is: ``strict`` (default) makes it an error,
+#: ``allow_gaps`` a warning (rules cannot fire there; outputs take their default or NaN).
+COVERAGE_POLICIES = ("strict", "allow_gaps")
 
 AndOperator: TypeAlias = Literal["min", "product"]
 OrOperator: TypeAlias = Literal["max", "probabilistic_sum"]
@@ -58,6 +84,7 @@ Defuzzifier: TypeAlias = Literal[
     "smallest_of_maximum",
     "largest_of_maximum",
     "weighted_average",
+    "weighted_sum",
 ]
 OutOfRange: TypeAlias = Literal["clamp", "extend"]
 
@@ -74,13 +101,19 @@ class Term:
     def is_piecewise_linear(self) -> bool:
         return self.shape in PIECEWISE_LINEAR_SHAPES
 
+    @property
+    def is_sugeno(self) -> bool:
+        """A Sugeno output term (``constant`` or ``linear``) rather than a membership function."""
+        return self.shape in SUGENO_SHAPES
+
 
 @dataclass(frozen=True, slots=True)
 class Variable:
     """An input or output variable: its universe ``[low, high]`` and its terms.
 
     ``default`` is used for an output when no rule fires (``None`` means NaN); it is ignored
-    for inputs.
+    for inputs. ``units`` is the physical unit of the variable's values (``"N"``, ``"mm"``,
+    ``"%"``), for display only: labels, headers and recordings; ``None`` when unitless or unknown.
     """
 
     name: str
@@ -88,10 +121,16 @@ class Variable:
     high: float
     terms: tuple[Term, ...]
     default: float | None = None
+    units: str | None = None
 
     @property
     def term_names(self) -> tuple[str, ...]:
         return tuple(t.name for t in self.terms)
+
+    @property
+    def is_sugeno(self) -> bool:
+        """An output whose terms are Sugeno terms (validation makes them all one family)."""
+        return bool(self.terms) and all(t.is_sugeno for t in self.terms)
 
     def term_index(self, name: str) -> int:
         """Index of the term called ``name``; ``KeyError`` if there is none."""
@@ -173,8 +212,13 @@ class Source:
 
 
 @dataclass(frozen=True, slots=True)
-class RuleBase:
-    """A complete Mamdani rule base."""
+class RuleBase(NotebookDisplay):
+    """A complete rule base: Mamdani outputs, Sugeno outputs (``constant``/``linear`` terms), or
+    both. Displayed as tables in notebooks (see NotebookDisplay).
+
+    ``coverage`` (see COVERAGE_POLICIES) says whether an input range that no term covers is an
+    error or a warning; importers of foreign formats set ``allow_gaps``.
+    """
 
     name: str
     inputs: tuple[Variable, ...]
@@ -186,6 +230,7 @@ class RuleBase:
     description: str = ""
     table: RuleTable | None = None
     source: Source | None = field(default=None, compare=False)
+    coverage: str = "strict"
 
     @property
     def input_names(self) -> tuple[str, ...]:

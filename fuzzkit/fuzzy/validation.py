@@ -7,7 +7,9 @@
 * ``("inputs", "e")``, ``("inputs", "e", "range")``, ``("inputs", "e", "terms")`` (coverage),
   ``("inputs", "e", "terms", "NL")``, ``("inputs", "e", "terms", "NL", "points")`` for the
   piecewise-linear shapes and ``(..., "NL", "sigma")`` (the parameter's name) for the others;
-* ``("outputs", "du", "default")``;
+* ``("outputs", "du", "default")``, ``("outputs", "du", "terms", "Z", "coefficients")`` for a
+  linear Sugeno term's coefficients, ``("coverage",)``,
+  ``("inputs", "e", "units")``;
 * ``("rules",)``, ``("rules", "table", "rows")``, and for rule ``k`` (its index in
   ``RuleBase.rules``): ``("rules", k, "weight")``, ``("rules", k, "then", j)`` for its ``j``-th
   consequent and ``("rules", k, "if", i, j, ...)`` for the sub-expression reached by taking
@@ -16,6 +18,12 @@
 
 The YAML loader maps these paths to ``file:line:col``; :func:`ensure_valid` (what engines call)
 raises one :class:`~fuzzkit.errors.RuleBaseError` naming every problem with its path.
+
+Coverage gaps (part of an input's range where no term is above zero) are the one kind of
+problem that can be a warning: :func:`diagnose` returns errors and warnings separately, and
+``check(rb, allow_gaps=True)`` returns only the errors. By default ``RuleBase.coverage`` decides
+(``strict``: gaps are errors; ``allow_gaps``: warnings). Importers of foreign formats build
+models with ``coverage="allow_gaps"``.
 """
 
 from __future__ import annotations
@@ -25,18 +33,21 @@ import keyword
 import math
 import re
 from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
 from typing import TypeAlias
 
 from fuzzkit.errors import Location, Problem, RuleBaseError
 from fuzzkit.fuzzy.model import (
     AGGREGATIONS,
     AND_OPERATORS,
+    COVERAGE_POLICIES,
     DEFUZZIFIERS,
     IMPLICATIONS,
     OR_OPERATORS,
     OUT_OF_RANGE_POLICIES,
     PIECEWISE_LINEAR_SHAPES,
     SHAPE_PARAMS,
+    SUGENO_DEFUZZIFIERS,
     Compound,
     Expression,
     RuleBase,
@@ -66,6 +77,9 @@ C_KEYWORDS = frozenset(
     """.split()  # noqa: SIM905 (a word list reads better than 60 quoted strings)
 )
 
+#: Units are a label (``N``, ``mm/s``, ``degC``), not prose; longer ones would crowd every axis.
+MAX_UNITS_CHARS = 24
+
 #: Python keywords, soft keywords (``match``, ``case``, ``type``, ``_``) included.
 PYTHON_KEYWORDS = frozenset(keyword.kwlist) | frozenset(keyword.softkwlist)
 
@@ -83,6 +97,19 @@ def identifier_problem(name: str) -> str | None:
     # C reserves these for the implementation; a generated symbol could clash with libc.
     if name.startswith("__") or (len(name) > 1 and name[0] == "_" and name[1].isupper()):
         return f"{name!r} is reserved in C (leading '__' or '_' + capital); choose another name"
+    return None
+
+
+def units_problem(units: str) -> str | None:
+    """Why ``units`` cannot label a variable (``None`` if it can): one short printable line."""
+    if not units.strip():
+        return "expected a unit such as 'N' or 'mm', got an empty string"
+    if units != units.strip():
+        return f"expected no leading or trailing spaces, got {units!r}"
+    if len(units) > MAX_UNITS_CHARS:
+        return f"expected at most {MAX_UNITS_CHARS} characters, got {len(units)}"
+    if not units.isprintable():
+        return f"expected printable characters on one line, got {units!r}"
     return None
 
 
@@ -116,7 +143,7 @@ def term_param_path(term: Term) -> PathPart:
     return SHAPE_PARAMS[term.shape][0] if term.shape in SHAPE_PARAMS else "shape"
 
 
-def _check_term(term: Term, base: Path) -> list[Issue]:
+def _check_term(term: Term, base: Path, n_inputs: int = 0) -> list[Issue]:
     shape, p = term.shape, term.params
     if shape not in SHAPE_PARAMS:
         return [
@@ -126,6 +153,8 @@ def _check_term(term: Term, base: Path) -> list[Issue]:
                 f"expected one of {', '.join(SHAPE_PARAMS)}",
             )
         ]
+    if shape == "linear":
+        return _check_linear(term, base, n_inputs)
     names = SHAPE_PARAMS[shape]
     pwl = shape in PIECEWISE_LINEAR_SHAPES
     where: Path = (*base, "points") if pwl else base
@@ -172,6 +201,39 @@ def _check_term(term: Term, base: Path) -> list[Issue]:
         return out
     elif shape == "sigmoid" and p[0] == 0:
         return [((*base, "slope"), "sigmoid slope must be non-zero, got 0.0")]
+    elif shape == "gaussian_product":
+        return [
+            ((*base, n), f"gaussian_product {n} must be > 0, got {_fmt(v)}")
+            for n, v in (("sigma1", p[1]), ("sigma2", p[3]))
+            if not v > 0
+        ]
+    elif shape in ("s_shape", "z_shape"):
+        if not p[0] < p[1]:
+            return [((*base, "start"), f"{shape} needs start < end, got {_fmt_list(p)}")]
+    elif shape == "pi_shape":
+        if not (p[0] < p[1] and p[2] < p[3]):
+            return [((*base, "a"), f"pi_shape needs a < b and c < d, got {_fmt_list(p)}")]
+    elif shape in ("sigmoid_difference", "sigmoid_product"):
+        return [
+            ((*base, n), f"{shape} {n} must be non-zero, got 0.0")
+            for n, v in (("slope1", p[0]), ("slope2", p[2]))
+            if v == 0
+        ]
+    return []
+
+
+def _check_linear(term: Term, base: Path, n_inputs: int) -> list[Issue]:
+    p = term.params
+    if len(p) != n_inputs + 1:
+        return [
+            (
+                (*base, "coefficients"),
+                f"linear term needs {n_inputs} coefficient(s) (one per input) and a constant, "
+                f"got {len(p)} numbers in all",
+            )
+        ]
+    if not all(math.isfinite(v) for v in p):
+        return [((*base, "coefficients"), f"linear coefficients must be finite, got {list(p)}")]
     return []
 
 
@@ -199,7 +261,20 @@ def _support(term: Term) -> list[_Piece]:
         return [(p[0], False, inf, False)]
     if term.shape == "singleton":
         return [(p[0], True, p[0], True)]
-    return [(-inf, False, inf, False)]  # gaussian, bell, sigmoid: > 0 everywhere
+    if term.shape == "s_shape":
+        return [(p[0], False, inf, False)]
+    if term.shape == "z_shape":
+        return [(-inf, False, p[1], False)]
+    if term.shape == "pi_shape":
+        return [(p[0], False, p[3], False)] if p[0] < p[3] else []
+    if term.shape == "sigmoid_difference":
+        a1, c1, a2, c2 = p
+        if a1 == a2:
+            return [] if c1 == c2 else [(-inf, False, inf, False)]
+        x0 = (a1 * c1 - a2 * c2) / (a1 - a2)  # where the two sigmoids are equal
+        return [(-inf, False, x0, False), (x0, False, inf, False)]
+    # gaussian, bell, sigmoid, gaussian_product, sigmoid_product: > 0 everywhere
+    return [(-inf, False, inf, False)]
 
 
 def _covered(x: float, pieces: Sequence[_Piece]) -> bool:
@@ -244,7 +319,7 @@ def uncovered(var: Variable) -> list[tuple[float, float]]:
 # ---------------------------------------------------------------------------- variables
 
 
-def _check_variable(var: Variable, kind: str, base: Path) -> list[Issue]:
+def _check_variable(var: Variable, kind: str, base: Path, rb: RuleBase) -> list[Issue]:
     out: list[Issue] = []
     why = identifier_problem(var.name)
     if why:
@@ -258,8 +333,13 @@ def _check_variable(var: Variable, kind: str, base: Path) -> list[Issue]:
                 f"got [{_fmt(var.low)}, {_fmt(var.high)}]",
             )
         )
-    if not var.terms:
-        out.append(((*base, "terms"), f"{kind} {var.name!r} has no terms"))
+    if not var.terms and not (kind == "input" and _used_in_linear(rb, var.name)):
+        hint = (
+            " (an input may have none only when a linear output term uses it)"
+            if kind == "input"
+            else ""
+        )
+        out.append(((*base, "terms"), f"{kind} {var.name!r} has no terms{hint}"))
     seen: set[str] = set()
     for term in var.terms:
         tpath: Path = (*base, "terms", term.name)
@@ -269,20 +349,33 @@ def _check_variable(var: Variable, kind: str, base: Path) -> list[Issue]:
         why = identifier_problem(term.name)
         if why:
             out.append((tpath, f"term name: {why}"))
-        out.extend(_check_term(term, tpath))
-    if kind == "input" and range_ok and var.terms and all(map(_term_is_valid, var.terms)):
-        gaps = uncovered(var)
-        if gaps:
-            text = ", ".join(
-                f"[{_fmt(lo)}, {_fmt(hi)}]" if lo != hi else f"at {_fmt(lo)}" for lo, hi in gaps
+        if kind == "input" and term.is_sugeno:
+            out.append(
+                (
+                    (*tpath, "shape"),
+                    f"{term.shape} is a Sugeno output term; input terms must be membership "
+                    "functions (triangle, gaussian, ...)",
+                )
             )
+            continue
+        out.extend(_check_term(term, tpath, len(rb.inputs)))
+    if kind == "output":
+        families = {t.is_sugeno for t in var.terms}
+        if len(families) > 1:
+            sugeno = [t.name for t in var.terms if t.is_sugeno]
+            mamdani = [t.name for t in var.terms if not t.is_sugeno]
             out.append(
                 (
                     (*base, "terms"),
-                    f"input {var.name!r} is not covered on {text} (no term has membership > 0 "
-                    "there, so no rule could fire)",
+                    f"output {var.name!r} mixes Sugeno terms ({', '.join(sugeno)}) with "
+                    f"membership functions ({', '.join(mamdani)}); all terms of one output must "
+                    "be constant/linear (Sugeno) or all membership functions (Mamdani)",
                 )
             )
+    if var.units is not None:
+        why = units_problem(var.units)
+        if why:
+            out.append(((*base, "units"), f"units of {kind} {var.name!r}: {why}"))
     if kind == "output" and var.default is not None:
         d = var.default
         if not math.isfinite(d) or (range_ok and not var.low <= d <= var.high):
@@ -291,6 +384,41 @@ def _check_variable(var: Variable, kind: str, base: Path) -> list[Issue]:
                     (*base, "default"),
                     f"default must be a finite number inside the range [{_fmt(var.low)}, "
                     f"{_fmt(var.high)}], got {_fmt(d)}",
+                )
+            )
+    return out
+
+
+def _used_in_linear(rb: RuleBase, name: str) -> bool:
+    """Whether a ``linear`` output term has a non-zero coefficient for input ``name``."""
+    try:
+        pos = rb.input_names.index(name)
+    except ValueError:
+        return False
+    return any(
+        t.shape == "linear" and len(t.params) == len(rb.inputs) + 1 and t.params[pos] != 0.0
+        for v in rb.outputs
+        for t in v.terms
+    )
+
+
+def _coverage_gaps(rb: RuleBase) -> list[Issue]:
+    """One issue per input with a part of its range where no term is above zero."""
+    out: list[Issue] = []
+    for var in rb.inputs:
+        range_ok = math.isfinite(var.low) and math.isfinite(var.high) and var.low < var.high
+        if not (range_ok and var.terms and all(map(_term_is_valid, var.terms))):
+            continue
+        gaps = uncovered(var)
+        if gaps:
+            text = ", ".join(
+                f"[{_fmt(lo)}, {_fmt(hi)}]" if lo != hi else f"at {_fmt(lo)}" for lo, hi in gaps
+            )
+            out.append(
+                (
+                    ("inputs", var.name, "terms"),
+                    f"input {var.name!r} is not covered on {text} (no term has membership > 0 "
+                    "there; where no rule fires, the outputs take their default, or NaN)",
                 )
             )
     return out
@@ -389,11 +517,40 @@ def _check_rules(rb: RuleBase) -> list[Issue]:
 # ---------------------------------------------------------------------------- whole model
 
 
-def check(rb: RuleBase) -> list[Issue]:
-    """Every semantic problem of ``rb`` as ``(path, message)``; empty when it is valid.
+@dataclass(frozen=True, slots=True)
+class Diagnosis:
+    """What :func:`diagnose` found: errors make a rule base unusable, warnings do not."""
 
-    See the module docstring for the form of the paths.
+    errors: list[Issue]
+    warnings: list[Issue]
+
+
+def diagnose(rb: RuleBase, allow_gaps: bool | None = None) -> Diagnosis:
+    """Every problem of ``rb``, split into errors and warnings.
+
+    A coverage gap (part of an input's range where no term is above zero) is a warning when
+    ``allow_gaps`` is true, an error when it is false; ``None`` (default) follows
+    ``rb.coverage``. Everything else is an error.
     """
+    gaps_allowed = rb.coverage == "allow_gaps" if allow_gaps is None else allow_gaps
+    errors = _errors(rb)
+    gaps = _coverage_gaps(rb)
+    if gaps_allowed:
+        return Diagnosis(errors, gaps)
+    hint = " (set coverage: allow_gaps to make this a warning)"
+    return Diagnosis(errors + [(path, message + hint) for path, message in gaps], [])
+
+
+def check(rb: RuleBase, allow_gaps: bool | None = None) -> list[Issue]:
+    """Every error of ``rb`` as ``(path, message)``; empty when it is usable.
+
+    Coverage gaps count as errors unless allowed (see :func:`diagnose`, which also returns
+    them as warnings). See the module docstring for the form of the paths.
+    """
+    return diagnose(rb, allow_gaps).errors
+
+
+def _errors(rb: RuleBase) -> list[Issue]:
     out: list[Issue] = []
     why = identifier_problem(rb.name)
     if why:
@@ -417,7 +574,7 @@ def check(rb: RuleBase) -> list[Issue]:
                 )
             else:
                 seen[var.name] = kind
-            out.extend(_check_variable(var, kind, base))
+            out.extend(_check_variable(var, kind, base, rb))
 
     ops = rb.operators
     for key, value, allowed in (
@@ -443,18 +600,17 @@ def check(rb: RuleBase) -> list[Issue]:
                 f"expected one of {', '.join(DEFUZZIFIERS)}",
             )
         )
-    elif rb.defuzzifier != "weighted_average":
-        for var in rb.outputs:
-            for term in var.terms:
-                if term.shape == "singleton":
-                    out.append(
-                        (
-                            ("outputs", var.name, "terms", term.name, "shape"),
-                            f"singleton output term {term.name!r} has no area, so defuzzifier "
-                            f"{rb.defuzzifier!r} cannot use it; expected defuzzifier "
-                            "weighted_average or a shape with area",
-                        )
-                    )
+    else:
+        out.extend(_check_defuzzifier(rb))
+    if rb.coverage not in COVERAGE_POLICIES:
+        out.append(
+            (
+                ("coverage",),
+                f"unknown coverage policy {rb.coverage!r}"
+                f"{did_you_mean(rb.coverage, COVERAGE_POLICIES)}; expected one of "
+                f"{', '.join(COVERAGE_POLICIES)}",
+            )
+        )
     if rb.out_of_range not in OUT_OF_RANGE_POLICIES:
         out.append(
             (
@@ -465,6 +621,41 @@ def check(rb: RuleBase) -> list[Issue]:
             )
         )
     out.extend(_check_rules(rb))
+    return out
+
+
+def _check_defuzzifier(rb: RuleBase) -> list[Issue]:
+    """The defuzzifier fits every output: Sugeno ones need a weighted one, singletons too."""
+    out: list[Issue] = []
+    d = rb.defuzzifier
+    for var in rb.outputs:
+        if var.is_sugeno and d not in SUGENO_DEFUZZIFIERS:
+            out.append(
+                (
+                    ("defuzzifier",),
+                    f"output {var.name!r} has Sugeno terms (constant/linear), which need "
+                    f"defuzzifier {' or '.join(SUGENO_DEFUZZIFIERS)}, got {d!r}",
+                )
+            )
+        elif not var.is_sugeno and d == "weighted_sum":
+            out.append(
+                (
+                    ("defuzzifier",),
+                    f"weighted_sum is for Sugeno outputs (constant/linear terms), but output "
+                    f"{var.name!r} has membership-function terms; expected another defuzzifier",
+                )
+            )
+        elif not var.is_sugeno and d != "weighted_average":
+            for term in var.terms:
+                if term.shape == "singleton":
+                    out.append(
+                        (
+                            ("outputs", var.name, "terms", term.name, "shape"),
+                            f"singleton output term {term.name!r} has no area, so defuzzifier "
+                            f"{d!r} cannot use it; expected defuzzifier "
+                            "weighted_average or a shape with area",
+                        )
+                    )
     return out
 
 
@@ -479,16 +670,24 @@ def format_path(path: Path) -> str:
     return text
 
 
-def ensure_valid(rb: RuleBase) -> None:
-    """Raise :class:`~fuzzkit.errors.RuleBaseError` listing every problem of ``rb``, if any.
+def as_problems(rb: RuleBase, issues: Iterable[Issue], severity: str = "error") -> list[Problem]:
+    """Issues as problems located at ``rb.source.path`` (``<rulebase>`` when built in Python).
 
-    Locations name ``rb.source.path`` (``<rulebase>`` for a model built in Python) with line 0;
-    each message starts with the logical path of the problem (e.g. ``inputs.e.terms.NL``).
+    Line 0 (unknown); each message starts with the logical path (e.g. ``inputs.e.terms.NL``).
     """
-    issues = check(rb)
-    if not issues:
-        return
     file = rb.source.path if rb.source is not None else "<rulebase>"
-    raise RuleBaseError(
-        Problem(Location(file), f"{format_path(path)}: {message}") for path, message in issues
-    )
+    return [
+        Problem(Location(file), f"{format_path(path)}: {message}", severity)
+        for path, message in issues
+    ]
+
+
+def ensure_valid(rb: RuleBase, allow_gaps: bool | None = None) -> None:
+    """Raise :class:`~fuzzkit.errors.RuleBaseError` listing every error of ``rb``, if any.
+
+    Coverage gaps are errors unless allowed (``allow_gaps``, or ``rb.coverage`` when ``None``).
+    Locations are those of :func:`as_problems`.
+    """
+    issues = check(rb, allow_gaps)
+    if issues:
+        raise RuleBaseError(as_problems(rb, issues))

@@ -12,7 +12,6 @@ uses a lookup table for speed (see ``fuzzkit.studies.tuning``).
 
 from __future__ import annotations
 
-import io
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -20,7 +19,8 @@ from pathlib import Path
 from typing import IO, Any
 
 from fuzzkit.errors import ConfigError
-from fuzzkit.fileio import write_atomic
+from fuzzkit.fileio import staged_folder, write_atomic
+from fuzzkit.progress import progress_bar
 
 CONTROLLERS = ("pi", "fuzzy-pi")
 #: Gains labels, one per comparison protocol (docs/comparison.md): the hand-set defaults, the
@@ -39,6 +39,12 @@ RMS_TOL = (0.01, 0.10)  # N, fraction
 #: E3 "similar": per axis, RMS and settling time within this fraction (or the absolute floor).
 SIMILAR_REL = 0.25
 SIMILAR_ABS = {"rms_error": 0.05, "settling_time_s": 0.25}
+
+#: Experiments whose force figure gets a zoomed inset of this many seconds from first contact
+#: (E1's impact transient lasts about 0.1 s: invisible at its 5 s scale).
+ZOOM_S = {"E1": 0.3}
+#: Resolution of the report's PNGs.
+FIGURE_DPI = 80
 
 Key = tuple[str, str, str, str]  # plant, experiment, controller, gains label
 
@@ -188,108 +194,6 @@ def assess_claims(
 
 
 # --------------------------------------------------------------------------------------------
-# Figures
-# --------------------------------------------------------------------------------------------
-
-
-def _png(fig: Any) -> bytes:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=80)
-    return buf.getvalue()
-
-
-def force_figure(results: Mapping[tuple[str, str], Any], title: str) -> bytes:
-    """Force vs time per controlled axis: columns PI, fuzzy-PI; default and tuned; set point.
-
-    ``results`` maps ``(controller, gains label)`` to a ``RunResult`` of one experiment.
-    """
-    from matplotlib.figure import Figure
-
-    any_run = next(iter(results.values()))
-    exp = any_run.experiment
-    axes_idx = [i for i in (2, 0, 1) if exp.selection[i]]
-    fig = Figure(figsize=(9.0, 2.4 * len(axes_idx) + 0.6))
-    grid = fig.subplots(len(axes_idx), 2, squeeze=False, sharex=True)
-    styles = {
-        "default": ("tab:gray", "-"),
-        "matched": ("tab:orange", "-"),
-        "tuned": ("tab:blue", "-"),
-    }
-    for col, ctrl in enumerate(CONTROLLERS):
-        for row, i in enumerate(axes_idx):
-            ax = grid[row][col]
-            for label in LABELS:
-                r = results.get((ctrl, label))
-                if r is None:
-                    continue
-                colour, ls = styles[label]
-                ax.plot(r.t, r.force_true[:, i], color=colour, ls=ls, lw=1.0, label=label)
-            ax.plot(any_run.t, any_run.setpoint[:, i], "k--", lw=0.8, label="set point")
-            ax.set_ylabel(f"f{'xyz'[i]} (N)")
-            ax.grid(alpha=0.3)
-            if row == 0:
-                ax.set_title(f"{'PI' if ctrl == 'pi' else 'fuzzy-PI'}")
-            if row == len(axes_idx) - 1:
-                ax.set_xlabel("time (s)")
-    grid[0][0].legend(fontsize=8, loc="lower right")
-    fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
-    return _png(fig)
-
-
-def stiffness_figure(study: Mapping[tuple[str, str], list[tuple[float, Any]]]) -> bytes:
-    """Overshoot and settling time against stiffness, per (controller, gains label).
-
-    ``study`` maps ``(controller, label)`` to ``[(stiffness N/mm, z-axis metrics)]``; a run
-    that never settles is drawn at the top of the settling axis with an x marker.
-    """
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(9.0, 3.4))
-    ax1, ax2 = fig.subplots(1, 2)
-    colours = {"pi": "tab:orange", "fuzzy-pi": "tab:blue"}
-    worst = max(
-        [_num(m["settling_time_s"], 0.0) for rows in study.values() for _, m in rows] + [1.0]
-    )
-    for (ctrl, label), rows in study.items():
-        ks = [k for k, _ in rows]
-        ls = {"tuned": "-", "matched": ":"}.get(label, "--")
-        name = f"{'PI' if ctrl == 'pi' else 'fuzzy-PI'} {label}"
-        ax1.plot(
-            ks,
-            [_num(m["overshoot_pct"], 0.0) for _, m in rows],
-            ls=ls,
-            marker="o",
-            ms=3,
-            color=colours[ctrl],
-            label=name,
-        )
-        settle = [m["settling_time_s"] for _, m in rows]
-        ax2.plot(
-            ks,
-            [worst * 1.1 if s is None else s for s in settle],
-            ls=ls,
-            marker="o",
-            ms=3,
-            color=colours[ctrl],
-            label=name,
-        )
-        never = [k for k, s in zip(ks, settle, strict=True) if s is None]
-        ax2.plot(never, [worst * 1.1] * len(never), "x", color=colours[ctrl], ms=8)
-    for ax in (ax1, ax2):
-        ax.set_xscale("log")
-        ax.set_xlabel("environment stiffness (N/mm)")
-        ax.grid(alpha=0.3)
-    ax1.set_yscale("symlog", linthresh=1.0)
-    ax1.set_ylabel("overshoot (%)")
-    ax2.set_ylabel("settling time (s); x = never")
-    ax1.legend(fontsize=7)
-    fig.suptitle("press 10 N on the hammer (planar plant)", fontsize=10)
-    fig.tight_layout()
-    return _png(fig)
-
-
-# --------------------------------------------------------------------------------------------
 # Markdown
 # --------------------------------------------------------------------------------------------
 
@@ -349,12 +253,6 @@ def claims_summary(results: Sequence[ClaimResult]) -> str:
 # --------------------------------------------------------------------------------------------
 
 
-def _log(stream: IO[str] | None, msg: str) -> None:
-    if stream is not None:
-        stream.write(msg + "\n")
-        stream.flush()
-
-
 def _gains_for(
     ctrl: str,
     gains_dir: Path | None,
@@ -381,22 +279,23 @@ def _gains_for(
         gains = dict(DEFAULT_GAINS[ctrl])
         gains.update(entry.gains)
         return gains, {**entry.provenance, "source": str(path)}
-    from fuzzkit.studies.tuning import ProgressBar, tune
+    from fuzzkit.studies.tuning import progress_callback, tune
 
-    _log(log, f"tuning {ctrl} on E1 E2 E3 (budget {budget})")
-    bar = ProgressBar(log) if log is not None else None
-    result = tune(
-        EXPERIMENT_NAMES,
-        ctrl,
-        rulebase,
-        "planar",
-        budget=budget,
-        seed=seed,
-        workers=workers,
-        callback=bar,
-    )
-    if bar is not None:
-        bar.done()
+    with progress_bar(
+        budget, f"tuning {ctrl}", stream=log, quiet=log is None, unit="gain set"
+    ) as bar:
+        result = tune(
+            EXPERIMENT_NAMES,
+            ctrl,
+            rulebase,
+            "planar",
+            budget=budget,
+            seed=seed,
+            workers=workers,
+            callback=progress_callback(bar),
+        )
+    if result.interrupted:  # a report is complete or not written: stop here, not after it
+        raise KeyboardInterrupt
     (out / "gains").mkdir(exist_ok=True)
     write_gains(out / "gains" / f"{ctrl}.yaml", result.to_entry(), merge=False)
     entry = result.to_entry()
@@ -417,6 +316,10 @@ def build_report(
 ) -> Path:
     """Run everything and write ``out/report.md``, its PNGs, and one .rrd per run.
 
+    Everything is written into a staging folder beside ``out`` that replaces it only when
+    complete (``fileio.staged_folder``): an error or Ctrl-C (KeyboardInterrupt, also raised
+    when the tuning is interrupted) leaves the previous report, or none.
+
     Parameters
     ----------
     out : output folder (created; its parent must exist).
@@ -427,7 +330,7 @@ def build_report(
     seed : optimiser seed (sensor noise seed 0, as ``fuzzkit compare``).
     workers : tuning worker processes (None: all cores).
     rrd : write the recordings (``out/rrd/*.rrd``).
-    log : where progress goes (None: nowhere).
+    log : where progress bars go (None: nowhere; drawn only on a terminal).
     stiffnesses_n_per_mm : the stiffness study's stiffnesses.
 
     Returns
@@ -444,6 +347,8 @@ def build_report(
     from fuzzkit.studies.metrics import summary
     from fuzzkit.studies.plants import make_plant
     from fuzzkit.studies.runner import load_surface, run
+    from fuzzkit.viz.figures import figure_bytes
+    from fuzzkit.viz.study_figures import force_figure, stiffness_figure
 
     if out.exists() and not out.is_dir():
         raise ConfigError(f"{out}: exists and is not a folder (expected the report folder)")
@@ -453,83 +358,95 @@ def build_report(
     for p in plants:
         make_plant(p)  # unknown plant: fail before any work
     rb = load(rulebase)
-    out.mkdir(exist_ok=True)
-    if rrd:
-        (out / "rrd").mkdir(exist_ok=True)
+    final = out
+    # Everything is written into a staging folder that becomes ``out`` only when complete:
+    # Ctrl-C or an error at any point leaves no partial report.
+    with staged_folder(final, last="report.md", what="report folder") as out:
+        if rrd:
+            (out / "rrd").mkdir()
 
-    from fuzzkit.studies.e3_arm6 import resolve
-    from fuzzkit.studies.matching import matched_fuzzy_gains
+        from fuzzkit.studies.e3_arm6 import resolve
+        from fuzzkit.studies.matching import matched_fuzzy_gains
 
-    surface = load_surface(rulebase)
-    gains: dict[tuple[str, str], dict[str, float]] = {}
-    provenance: dict[str, dict[str, Any]] = {}
-    for ctrl in CONTROLLERS:
-        gains[(ctrl, "default")] = dict(DEFAULT_GAINS[ctrl])
-        g, prov = _gains_for(ctrl, gains_dir, out, budget, rulebase, seed, workers, log)
-        gains[(ctrl, "tuned")] = g
-        provenance[ctrl] = prov
-    gains[("pi", "matched")] = dict(DEFAULT_GAINS["pi"])
-    gains[("fuzzy-pi", "matched")] = matched_fuzzy_gains(surface, DEFAULT_GAINS["pi"]).gains
+        surface = load_surface(rulebase)
+        gains: dict[tuple[str, str], dict[str, float]] = {}
+        provenance: dict[str, dict[str, Any]] = {}
+        for ctrl in CONTROLLERS:
+            gains[(ctrl, "default")] = dict(DEFAULT_GAINS[ctrl])
+            g, prov = _gains_for(ctrl, gains_dir, out, budget, rulebase, seed, workers, log)
+            gains[(ctrl, "tuned")] = g
+            provenance[ctrl] = prov
+        gains[("pi", "matched")] = dict(DEFAULT_GAINS["pi"])
+        gains[("fuzzy-pi", "matched")] = matched_fuzzy_gains(surface, DEFAULT_GAINS["pi"]).gains
+        summaries: dict[Key, dict[str, Any]] = {}
+        figures: list[tuple[str, str]] = []
+        n_runs = len(CONTROLLERS) * len(LABELS) * (
+            len(plants) * len(EXPERIMENT_NAMES) + len(stiffnesses_n_per_mm)
+        )
+        with progress_bar(n_runs, "runs", stream=log, quiet=log is None, unit="run") as bar:
+            for plant in plants:
+                for name in EXPERIMENT_NAMES:
+                    exp = resolve(name, plant)[0]  # E3 on arm6: the paper's 3-D geometry
+                    runs: dict[tuple[str, str], Any] = {}
+                    for ctrl in CONTROLLERS:
+                        for label in LABELS:
+                            bar.set_description(f"{plant} {name} {ctrl} {label}")
+                            plant_obj = resolve(name, plant)[1]
+                            r = run(
+                                exp,
+                                plant_obj,
+                                ctrl,
+                                gains=gains[(ctrl, label)],
+                                surface=surface if ctrl == "fuzzy-pi" else None,
+                            )
+                            runs[(ctrl, label)] = r
+                            summaries[(plant, name, ctrl, label)] = summary(r)
+                            if rrd:
+                                from fuzzkit.viz.traces import write_run_rrd
 
-    summaries: dict[Key, dict[str, Any]] = {}
-    figures: list[tuple[str, str]] = []
-    for plant in plants:
-        for name in EXPERIMENT_NAMES:
-            exp = resolve(name, plant)[0]  # E3 on arm6: the paper's 3-D geometry
-            runs: dict[tuple[str, str], Any] = {}
+                                write_run_rrd(
+                                    r,
+                                    out / "rrd" / f"{plant}_{name}_{ctrl}_{label}.rrd",
+                                    plant_obj,
+                                )
+                            bar.update(1)
+                    fname = f"force_{plant}_{name}.png"
+                    fig = force_figure(runs, f"{name} on {plant}: {exp.title}", ZOOM_S.get(name))
+                    write_atomic(out / fname, figure_bytes(fig, dpi=FIGURE_DPI))
+                    figures.append((fname, f"{name} on the {plant} plant"))
+
+            from fuzzkit.viz.surface import write_surface_png
+
+            write_surface_png(rb, out / "surface.png")
+
+            study: dict[tuple[str, str], list[tuple[float, Any]]] = {}
+            from fuzzkit.studies.metrics import axis_metrics
+
             for ctrl in CONTROLLERS:
                 for label in LABELS:
-                    _log(log, f"running {plant} {name} {ctrl} {label}")
-                    plant_obj = resolve(name, plant)[1]
-                    r = run(
-                        exp,
-                        plant_obj,
-                        ctrl,
-                        gains=gains[(ctrl, label)],
-                        surface=surface if ctrl == "fuzzy-pi" else None,
-                    )
-                    runs[(ctrl, label)] = r
-                    summaries[(plant, name, ctrl, label)] = summary(r)
-                    if rrd:
-                        from fuzzkit.viz.traces import write_run_rrd
-
-                        write_run_rrd(
-                            r, out / "rrd" / f"{plant}_{name}_{ctrl}_{label}.rrd", plant_obj
+                    bar.set_description(f"stiffness study {ctrl} {label}")
+                    rows = []
+                    for k in stiffnesses_n_per_mm:
+                        r = run(
+                            press_experiment(k * 1e3),
+                            "planar",
+                            ctrl,
+                            gains=gains[(ctrl, label)],
+                            surface=surface if ctrl == "fuzzy-pi" else None,
                         )
-            fname = f"force_{plant}_{name}.png"
-            write_atomic(out / fname, force_figure(runs, f"{name} on {plant}: {exp.title}"))
-            figures.append((fname, f"{name} on the {plant} plant"))
+                        m = axis_metrics(r, 2)
+                        m["tripped"] = float(r.tripped)
+                        rows.append((k, m))
+                        bar.update(1)
+                    study[(ctrl, label)] = rows
+        write_atomic(out / "stiffness.png", figure_bytes(stiffness_figure(study), dpi=FIGURE_DPI))
 
-    from fuzzkit.viz.surface import write_surface_png
-
-    write_surface_png(rb, out / "surface.png")
-
-    _log(log, "stiffness study")
-    study: dict[tuple[str, str], list[tuple[float, Any]]] = {}
-    from fuzzkit.studies.metrics import axis_metrics
-
-    for ctrl in CONTROLLERS:
-        for label in LABELS:
-            rows = []
-            for k in stiffnesses_n_per_mm:
-                r = run(
-                    press_experiment(k * 1e3),
-                    "planar",
-                    ctrl,
-                    gains=gains[(ctrl, label)],
-                    surface=surface if ctrl == "fuzzy-pi" else None,
-                )
-                m = axis_metrics(r, 2)
-                m["tripped"] = float(r.tripped)
-                rows.append((k, m))
-            study[(ctrl, label)] = rows
-    write_atomic(out / "stiffness.png", stiffness_figure(study))
-
-    claims = [c for p in plants for label in LABELS for c in assess_claims(summaries, p, label)]
-    text = _markdown(
-        plants, rulebase, gains, provenance, summaries, figures, study, claims, rrd, budget
-    )
-    return write_atomic(out / "report.md", text)
+        claims = [c for p in plants for label in LABELS for c in assess_claims(summaries, p, label)]
+        text = _markdown(
+            plants, rulebase, gains, provenance, summaries, figures, study, claims, rrd, budget
+        )
+        write_atomic(out / "report.md", text)
+    return final / "report.md"
 
 
 def _markdown(

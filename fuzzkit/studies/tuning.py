@@ -53,11 +53,10 @@ import math
 import multiprocessing
 import os
 import signal
-import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import IO, Any
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -906,42 +905,16 @@ def tune(
     return optimise(problem, budget, seed, workers, callback, baseline, admit)
 
 
-class ProgressBar:
-    """A plain-text progress bar for :class:`Progress` updates (no dependency).
+def progress_callback(bar: Any) -> Callable[[Progress], None]:
+    """A ``callback`` for :func:`optimise` that moves a tqdm bar (``fuzzkit.progress``) to
+    each :class:`Progress`: evaluations out of the budget, ETA, stage and best cost so far."""
 
-    On a terminal it redraws one line; otherwise it prints a line at every tenth of the budget.
-    """
-
-    def __init__(self, stream: IO[str] | None = None, width: int = 24) -> None:
-        self.stream = stream if stream is not None else sys.stderr
-        self.width = width
-        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
-        self._last_decile = -1
-
-    def __call__(self, p: Progress) -> None:
-        """Show ``p``."""
-        frac = min(1.0, p.evaluations / max(1, p.budget))
-        filled = round(frac * self.width)
-        bar = "#" * filled + "-" * (self.width - filled)
-        line = (
-            f"tune [{bar}] {p.evaluations}/{p.budget} {p.stage:<8} best admissible "
-            f"{p.best_cost:.5g} (default {p.baseline_cost:.5g}"
-        )
+    def show(p: Progress) -> None:
+        bar.total = p.budget
+        bar.update(p.evaluations - bar.n)
+        text = f"{p.stage}, best admissible {p.best_cost:.4g} (default {p.baseline_cost:.4g}"
         if p.cheapest_cost < p.best_cost - 1e-12:
-            line += f"; cheapest {p.cheapest_cost:.5g} is worse than the default somewhere"
-        line += f") {p.elapsed_s:.0f} s"
-        if self.tty:
-            self.stream.write("\r" + line)
-            self.stream.flush()
-            return
-        decile = int(frac * 10)
-        if decile != self._last_decile:
-            self._last_decile = decile
-            self.stream.write(line + "\n")
-            self.stream.flush()
+            text += f"; cheapest {p.cheapest_cost:.4g} is worse than the default somewhere"
+        bar.set_postfix_str(text + ")", refresh=True)
 
-    def done(self) -> None:
-        """End the bar's line (terminal only)."""
-        if self.tty:
-            self.stream.write("\n")
-            self.stream.flush()
+    return show

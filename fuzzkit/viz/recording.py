@@ -19,9 +19,16 @@ from fuzzkit.fileio import atomic_output
 
 @contextmanager
 def open_recording(
-    path: str | os.PathLike[str], application_id: str, recording_id: str, **kwargs: Any
+    path: str | os.PathLike[str],
+    application_id: str,
+    recording_id: str,
+    blueprint: Any = None,
+    **kwargs: Any,
 ) -> Iterator[Any]:
     """A ``rr.RecordingStream`` whose data lands in ``path`` atomically when the block ends.
+
+    ``blueprint`` (``fuzzkit.viz.blueprints``) is stored in the file as its default layout:
+    the viewer opens on it instead of an automatic one.
 
     Raises
     ------
@@ -33,7 +40,7 @@ def open_recording(
     with atomic_output(path, what=".rrd file") as tmp:
         rec = rr.RecordingStream(application_id, recording_id=recording_id, **kwargs)
         # saving first sends everything logged afterwards into the file
-        rec.save(tmp)
+        rec.save(tmp, default_blueprint=blueprint)
         try:
             yield rec
         finally:
@@ -57,4 +64,31 @@ def log_series(
         entity,
         indexes=[times],
         columns=rr.Scalars.columns(scalars=np.asarray(values, dtype=np.float64)),
+    )
+
+
+def log_axes(
+    rec: Any,
+    entity: str,
+    labels: tuple[str, str, str],
+    length: float | tuple[float, float, float],
+    origin: tuple[float, float, float] = (0.0, 0.0, 0.0),
+) -> None:
+    """Log three labelled arrows (x red, y green, z blue) from ``origin``: the scene's axes.
+
+    Rerun draws no axis titles in 3-D views; these say what each direction is and its unit.
+    """
+    import rerun as rr
+
+    lx, ly, lz = (length, length, length) if isinstance(length, float | int) else length
+    rec.log(
+        entity,
+        rr.Arrows3D(
+            origins=[origin] * 3,
+            vectors=[(lx, 0.0, 0.0), (0.0, ly, 0.0), (0.0, 0.0, lz)],
+            colors=[(230, 80, 60), (60, 170, 80), (60, 110, 230)],
+            labels=list(labels),
+            show_labels=True,
+        ),
+        static=True,
     )

@@ -4,7 +4,10 @@ Same time series as :mod:`fuzzkit.viz.traces` (so the two plants' recordings com
 plus the arm in three dimensions. Entity layout (timeline ``sim_time``, a duration in seconds):
 
 * ``forces/<axis>/measured``, ``/true``, ``/setpoint`` (N, task frame)
-* ``control/<axis>/e``, ``/du``, ``/u`` (N, mm) for every force-controlled axis
+* ``control/error/<axis>/e``, ``/de`` (N), ``control/correction/<axis>/du``, ``/u`` (mm) for
+  every force-controlled axis; every series name ends with its unit
+* ``world/axes`` (labelled x, y, z arrows, 0.1 m); the file carries the same blueprint as the
+  planar recordings (:mod:`fuzzkit.viz.blueprints`)
 * ``joints/<axis name>`` (degrees): the IRB 140's six axis angles
 * ``world/arm`` (line strip: base, every DH frame origin, flange, TCP), ``world/tool`` (the tool
   axis from flange to tip and its contact sphere), ``world/force`` (arrow at the tool tip: the
@@ -36,7 +39,12 @@ from fuzzkit.plants.arm6 import (
 )
 from fuzzkit.studies.runner import RunResult
 from fuzzkit.viz.recording import log_series, open_recording
-from fuzzkit.viz.run_series import log_control_series, log_paths
+from fuzzkit.viz.run_series import (
+    log_control_series,
+    log_paths,
+    log_world_axes,
+    run_recording_blueprint,
+)
 
 Vec = npt.NDArray[np.float64]
 
@@ -121,9 +129,11 @@ def write_rrd(
         path,
         f"fuzzkit_{exp.name}_{result.controller}_arm6",
         f"{exp.name}-{result.controller}-arm6",
+        blueprint=run_recording_blueprint(result, f"{exp.name} {result.controller}, 6-DOF arm"),
     ) as rec:
         times = rr.TimeColumn("sim_time", duration=result.t)
         log_control_series(rec, result, times)
+        log_world_axes(rec)
         for j in range(6):
             log_series(
                 rec,

@@ -4,13 +4,17 @@ with ``rerun FILE``.
 Entity layout (timeline ``sim_time``, a duration in seconds):
 
 * ``forces/<axis>/measured``, ``forces/<axis>/setpoint``, ``forces/<axis>/true`` (N, task frame)
-* ``control/<axis>/e``, ``/de`` (N), ``/du``, ``/u`` (mm) for every force-controlled axis
+* ``control/error/<axis>/e``, ``/de`` (N) and ``control/correction/<axis>/du``, ``/u`` (mm)
+  for every force-controlled axis; every series name ends with its unit
+* ``world/axes`` (labelled x, y, z arrows, 0.1 m)
 * ``joints/q<i>`` (rad)
 * ``world/arm`` (line strip base -> joints -> tool tip), ``world/tool`` (tool contact disc),
   ``world/contacts`` (contact points), ``world/tool_path`` and ``world/nominal_path`` (static),
   ``world/environment/<name>`` (static outlines of the table, hammer, workpiece, wall)
 
-Everything in ``world/`` is in metres, base frame.
+Everything in ``world/`` is in metres, base frame, z up. The file carries a blueprint
+(:mod:`fuzzkit.viz.blueprints`): the viewer opens on force vs set point per axis, the control
+signals and the 3-D scene.
 """
 
 from __future__ import annotations
@@ -26,9 +30,15 @@ from fuzzkit.errors import ConfigError
 from fuzzkit.plants.environment import Box, EnvObject, RoughSurface, Table
 from fuzzkit.studies.runner import RunResult
 from fuzzkit.viz.recording import log_series, open_recording
-from fuzzkit.viz.run_series import log_control_series, log_paths
+from fuzzkit.viz.run_series import (
+    log_control_series,
+    log_paths,
+    log_world_axes,
+    run_recording_blueprint,
+)
 
 Vec = npt.NDArray[np.float64]
+
 
 def _outline(obj: EnvObject, x_lo: float, x_hi: float) -> Vec:
     """A polyline (k, 3) drawing an environment object in the x-z plane."""
@@ -61,10 +71,14 @@ def write_rrd(result: RunResult, path: str | os.PathLike[str], geometry_every: i
 
     exp = result.experiment
     with open_recording(
-        path, f"fuzzkit_{exp.name}_{result.controller}", f"{exp.name}-{result.controller}"
+        path,
+        f"fuzzkit_{exp.name}_{result.controller}",
+        f"{exp.name}-{result.controller}",
+        blueprint=run_recording_blueprint(result, f"{exp.name} {result.controller}, planar arm"),
     ) as rec:
         times = rr.TimeColumn("sim_time", duration=result.t)
         log_control_series(rec, result, times)
+        log_world_axes(rec)
         for j in range(result.joint_angles.shape[1]):
             log_series(
                 rec,

@@ -1,0 +1,45 @@
+"""``fuzzkit plot``: the membership functions and rules of a rule base as one figure."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+EXIT_OK = 0
+
+
+def register(sub: Any) -> None:
+    """Add the ``plot`` subcommand to the ``fuzzkit`` parser."""
+    p = sub.add_parser(
+        "plot",
+        help="draw a rule base's membership functions and rules (PNG or SVG)",
+        description="Draw the membership functions of every input and output (units on "
+        "the axes) and the rules as one figure: a coloured grid for a rule table, numbered "
+        "rules otherwise. The file is written whole or not at all.",
+        epilog="examples:\n"
+        "  fuzzkit plot macvicar_whelan --out macvicar_whelan.svg\n"
+        "  fuzzkit plot my_controller.yaml -o my_controller.png",
+    )
+    p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
+    p.add_argument(
+        "--out",
+        "-o",
+        required=True,
+        metavar="FILE.png|FILE.svg",
+        help="figure to write; the format follows the suffix",
+    )
+    p.set_defaults(handler=cmd_plot)
+
+
+def cmd_plot(args: argparse.Namespace) -> int:
+    from fuzzkit.fileio import check_output_path
+    from fuzzkit.formats.registry import load
+    from fuzzkit.viz.figures import figure_format
+    from fuzzkit.viz.rulebase_plot import write_rulebase_plot
+
+    figure_format(args.out, "--out")
+    check_output_path(args.out, "--out file")
+    rb = load(args.rulebase)
+    write_rulebase_plot(rb, args.out)
+    print(f"wrote {args.out}")
+    return EXIT_OK

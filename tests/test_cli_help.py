@@ -1,0 +1,87 @@
+"""Every ``fuzzkit`` help text: examples that parse, help for every option, defaults shown."""
+
+from __future__ import annotations
+
+import argparse
+import re
+import shlex
+
+import pytest
+
+from fuzzkit.cli import build_parser
+
+
+def _commands() -> dict[str, argparse.ArgumentParser]:
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return dict(sub.choices)
+
+
+COMMANDS = sorted(_commands())
+
+
+def _example_lines(help_text: str) -> list[str]:
+    _, _, tail = help_text.partition("\nexample")
+    return [ln.strip() for ln in tail.splitlines() if ln.strip().startswith("fuzzkit ")]
+
+
+def test_the_known_commands_are_all_there() -> None:
+    expected = {"validate", "info", "eval", "surface", "schema", "compile", "simulate"}
+    assert expected | {"compare", "tune", "report", "demo"} <= set(COMMANDS)
+
+
+@pytest.mark.parametrize("name", ["<top>", *COMMANDS])
+def test_help_has_examples_that_parse(name: str) -> None:
+    parser = build_parser() if name == "<top>" else _commands()[name]
+    text = parser.format_help()
+    lines = _example_lines(text)
+    assert lines, f"fuzzkit {name} --help shows no example"
+    commands = set()
+    for line in lines:
+        # drop shell redirections, chains and trailing remarks
+        cmd = re.split(r"\s+(?:>|&&|\()", line)[0]
+        argv = shlex.split(cmd)[1:]
+        if "COMMAND" in argv:
+            continue
+        try:
+            args = build_parser().parse_args(argv)
+        except SystemExit as exc:  # pragma: no cover - the failure message is the point
+            pytest.fail(f"example does not parse: {line!r} ({exc})")
+        commands.add(args.command)
+    assert name == "<top>" or name in commands, f"no example of fuzzkit {name} itself"
+
+
+@pytest.mark.parametrize("name", COMMANDS)
+def test_every_argument_has_help_and_every_default_is_shown(name: str) -> None:
+    parser = _commands()[name]
+    assert parser.description, f"fuzzkit {name} has no description"
+    formatter = parser._get_formatter()
+    for action in parser._actions:
+        if isinstance(action, argparse._HelpAction):
+            continue
+        text = formatter._get_help_string(action) or ""
+        label = "/".join(action.option_strings) or action.dest
+        assert text.strip(), f"fuzzkit {name}: {label} has no help text"
+        has_default = action.default not in (None, False, argparse.SUPPRESS)
+        if has_default and action.nargs != 0:
+            assert "default" in text, f"fuzzkit {name}: {label} hides its default"
+
+
+@pytest.mark.parametrize(
+    "name, option, shown",
+    [
+        ("simulate", "--controller", "(default: fuzzy-pi)"),
+        ("simulate", "--plant", "(default: planar)"),
+        ("simulate", "--seed", "(default: 0)"),
+        ("report", "--plant", "(default: planar)"),
+        ("report", "--seed", "(default: 0)"),
+        ("report", "--workers", "(default: every core)"),
+        ("demo", "--out", "(default: demo-out)"),
+        ("compare", "--rulebase", "(default: macvicar_whelan)"),
+    ],
+)
+def test_the_defaults_the_issue_names_are_in_the_help(name: str, option: str, shown: str) -> None:
+    text = " ".join(_commands()[name].format_help().split())
+    options = text[text.index("options:") :]
+    block = options[options.index(option + " ") :]
+    assert shown in block[:200]

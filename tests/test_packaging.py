@@ -1,0 +1,134 @@
+"""Packaging: one top-level package, the documentation in the sdist, a wheel that runs the demo.
+
+Built from a clean copy of the repository (no build folders, no virtual environments), the way a
+user or a release job builds it, then installed outside the repository.
+"""
+
+from __future__ import annotations
+
+import pydoc
+import shutil
+import subprocess
+import sys
+import tarfile
+import zipfile
+from pathlib import Path
+
+import pytest
+
+import fuzzkit
+
+ROOT = Path(__file__).resolve().parent.parent
+
+#: What the README's API tour uses from ``import fuzzkit``.
+API_TOUR = ("Engine", "available", "dump", "evaluate", "evaluate_point", "load", "loads")
+
+
+def test_import_fuzzkit_shows_the_api_tour_in_dir_and_help() -> None:
+    assert set(API_TOUR) <= set(dir(fuzzkit))
+    text = pydoc.render_doc(fuzzkit, renderer=pydoc.plaintext)
+    for name in API_TOUR:
+        assert name in text
+    assert callable(fuzzkit.evaluate_point)
+    with pytest.raises(AttributeError, match="no attribute 'nope'"):
+        _ = fuzzkit.nope  # type: ignore[attr-defined]
+
+
+def test_python_dash_m_fuzzkit_is_the_fuzzkit_command() -> None:
+    run = subprocess.run(
+        [sys.executable, "-m", "fuzzkit", "--version"], capture_output=True, text=True, timeout=60
+    )
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip() == f"fuzzkit {fuzzkit.__version__}"
+
+
+@pytest.fixture(scope="module")
+def dists(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    """(wheel, sdist) built from a clean copy of the repository."""
+    tmp = tmp_path_factory.mktemp("dist")
+    src = tmp / "src"
+    shutil.copytree(
+        ROOT,
+        src,
+        ignore=shutil.ignore_patterns(
+            ".git", ".venv*", "build", "dist", "*.egg-info", "__pycache__", ".*cache", "*-out"
+        ),
+    )
+    out = tmp / "dist"
+    built = subprocess.run(
+        [sys.executable, "-m", "build", "--sdist", "--wheel", "--outdir", str(out), str(src)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert built.returncode == 0, built.stdout[-3000:] + built.stderr[-3000:]
+    (wheel,) = out.glob("*.whl")
+    (sdist,) = out.glob("*.tar.gz")
+    return wheel, sdist
+
+
+@pytest.mark.slow
+def test_wheel_installs_one_top_level_package(dists: tuple[Path, Path]) -> None:
+    wheel, _ = dists
+    with zipfile.ZipFile(wheel) as zf:
+        names = zf.namelist()
+    top = {n.split("/", 1)[0] for n in names}
+    assert {t for t in top if not t.endswith(".dist-info")} == {"fuzzkit"}
+    for expected in (
+        "fuzzkit/codegen/emit.py",
+        "fuzzkit/codegen/backends/c/source.c.jinja",
+        "fuzzkit/planar_sim/arm.py",
+        "fuzzkit/rulebases/macvicar_whelan.yaml",
+        "fuzzkit/py.typed",
+    ):
+        assert expected in names
+    assert any(n.endswith(".dist-info/licenses/LICENSE") for n in names)
+
+
+@pytest.mark.slow
+def test_sdist_carries_license_readme_and_docs(dists: tuple[Path, Path]) -> None:
+    _, sdist = dists
+    with tarfile.open(sdist) as tf:
+        names = {n.split("/", 1)[1] for n in tf.getnames() if "/" in n}
+    for expected in ("LICENSE", "README.md", "docs/rulebase-format.md", "pyproject.toml"):
+        assert expected in names
+    assert any(n.startswith("tests/golden/") for n in names)
+
+
+@pytest.mark.slow
+@pytest.mark.needs_cc
+def test_wheel_runs_the_demo_outside_the_repository(
+    dists: tuple[Path, Path], tmp_path: Path
+) -> None:
+    if shutil.which("cc") is None and shutil.which("gcc") is None:
+        pytest.skip("no C compiler: the demo compiles the generated C")
+    wheel, _ = dists
+    target = tmp_path / "site"
+    pip = subprocess.run(
+        [sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--target", str(target),
+         str(wheel)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )  # fmt: skip
+    assert pip.returncode == 0, pip.stderr[-3000:]
+    # -S: site-packages' .pth files (the editable install's finder) cannot shadow the wheel;
+    # site-packages itself stays reachable through PYTHONPATH for numpy, pymunk, ...
+    site_dirs = [p for p in sys.path if p.endswith("site-packages")]
+    env = {"PATH": "/usr/bin:/bin", "PYTHONPATH": ":".join([str(target), *site_dirs])}
+    out = tmp_path / "demo"
+    run = subprocess.run(
+        [sys.executable, "-S", "-m", "fuzzkit", "demo", "--out", str(out)],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=tmp_path,
+        timeout=600,
+    )
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
+    assert str(target) in subprocess.run(
+        [sys.executable, "-S", "-c", "import fuzzkit; print(fuzzkit.__file__)"],
+        capture_output=True, text=True, env=env, cwd=tmp_path, timeout=60,
+    ).stdout  # fmt: skip
+    assert (out / "c" / "macvicar_whelan.c").is_file()
+    assert (out / "macvicar_whelan_surface.png").stat().st_size > 1000

@@ -1,0 +1,485 @@
+"""Figures a user looks at: ``fuzzkit plot``, surfaces over any two inputs, the report's
+figures, the notebook display of a rule base, and that none of it touches pyplot's backend."""
+
+from __future__ import annotations
+
+import html.parser
+import struct
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+import pytest
+
+from fuzzkit import evaluate_point, load
+from fuzzkit.cli import main
+from fuzzkit.formats.yaml_reader import load_file
+from fuzzkit.fuzzy.model import RuleBase
+from fuzzkit.viz import rulebase_plot
+from fuzzkit.viz.figures import figure_bytes
+from fuzzkit.viz.rulebase_plot import plot_rulebase
+from fuzzkit.viz.study_figures import force_figure, stiffness_figure
+from fuzzkit.viz.surface import surface_axes, surface_figure, surface_grid
+
+DATA = Path(__file__).parent / "data"
+TEMPERATURE = DATA / "temperature_pd.yaml"
+SHIPPED = ("macvicar_whelan", "paper_table1", "gaussian5", "three_input")
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def temperature() -> RuleBase:
+    return load_file(TEMPERATURE)
+
+
+def _table_from_yaml(path: Path) -> list[list[str]]:
+    """The cells block of a table rule base read as plain text (independent of the loader)."""
+    lines = path.read_text().splitlines()
+    start = next(i for i, line in enumerate(lines) if line.strip() == "cells: |") + 1
+    return [line.split() for line in lines[start:] if line.strip()]
+
+
+# --------------------------------------------------------------------------- fuzzkit plot
+
+
+@pytest.mark.parametrize("name", [*SHIPPED, str(TEMPERATURE)])
+def test_plot_writes_a_png(tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str) -> None:
+    png = tmp_path / "rb.png"
+    code, out, err = run(capsys, "plot", name, "--out", str(png))
+    assert code == 0, err
+    data = png.read_bytes()
+    assert data[:8] == PNG_MAGIC
+    width, height = struct.unpack(">II", data[16:24])
+    assert width == 1250 and height >= 460
+    assert out == f"wrote {png}\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["rb.png"]
+
+
+def test_plot_writes_a_valid_svg_without_a_date(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    first, second = tmp_path / "a.svg", tmp_path / "b.svg"
+    for path in (first, second):
+        assert run(capsys, "plot", "three_input", "-o", str(path))[0] == 0
+    root = ET.parse(first).getroot()
+    assert root.tag == "{http://www.w3.org/2000/svg}svg"
+    assert first.read_bytes() == second.read_bytes()  # deterministic: no timestamp
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (
+            ["macvicar_whelan", "--out", "x.pdf"],
+            "--out x.pdf: expected a file name ending in .png or .svg",
+        ),
+        (["macvicar_whelan", "--out", "x"], "got 'no suffix'"),
+        (["macvicar_whelan", "--out", "no/such/x.png"], "folder no/such does not exist"),
+        (["no_such_rulebase", "--out", "x.png"], "no_such_rulebase"),
+    ],
+)
+def test_plot_refuses_bad_arguments_and_writes_nothing(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    args: list[str],
+    message: str,
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    code, _, err = run(capsys, "plot", *args)
+    assert code == 2
+    assert message in err and "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_plot_failure_leaves_the_previous_file_whole(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    target = tmp_path / "rb.png"
+    target.write_bytes(b"previous")
+
+    def broken(*args: object, **kwargs: object) -> None:
+        raise ValueError("renderer failed")
+
+    monkeypatch.setattr(rulebase_plot, "plot_rulebase", broken)
+    code, _, err = run(capsys, "plot", "macvicar_whelan", "--out", str(target))
+    assert code == 2 and "renderer failed" in err
+    assert target.read_bytes() == b"previous"
+    assert [p.name for p in tmp_path.iterdir()] == ["rb.png"]
+
+
+def test_plot_has_one_panel_per_variable_with_units_and_the_rule_table() -> None:
+    rb = temperature()
+    fig = plot_rulebase(rb)
+    panels, rules = fig.axes[:-1], fig.axes[-1]
+    assert [ax.get_xlabel() for ax in panels] == [
+        "input e [K]",
+        "input de [K/s]",
+        "output heat [%]",
+    ]
+    # Every cell of the YAML table, in place: row i, column j at data position (j, i).
+    expected = _table_from_yaml(TEMPERATURE)
+    cells = {
+        (round(t.get_position()[1]), round(t.get_position()[0])): t.get_text() for t in rules.texts
+    }
+    assert [[cells[i, j] for j in range(5)] for i in range(5)] == expected
+    assert [t.get_text() for t in rules.get_xticklabels()] == ["NB", "NS", "ZE", "PS", "PB"]
+    assert rules.get_ylabel() == "rows: e [K]"
+
+
+def test_plotted_membership_functions_are_the_shapes() -> None:
+    # Closed forms of the partition's triangles: NS of e peaks at -10, reaches 0 at -20 and 0.
+    fig = plot_rulebase(temperature())
+    e_panel = fig.axes[0]
+    curves = [line for line in e_panel.get_lines() if len(line.get_xdata()) > 2]
+    assert len(curves) == 5
+    x, mu = (np.asarray(a, dtype=float) for a in curves[1].get_data())
+    for at, want in [
+        (-20.0, 0.0),
+        (-15.0, 0.5),
+        (-10.0, 1.0),
+        (-2.5, 0.25),
+        (0.0, 0.0),
+        (15.0, 0.0),
+    ]:
+        assert np.interp(at, x, mu) == pytest.approx(want, abs=1e-12)
+    assert (x[0], x[-1]) == (-20.0, 20.0)
+
+
+def test_list_rules_are_shown_as_numbered_sentences() -> None:
+    rb = load("three_input")
+    fig = plot_rulebase(rb)
+    assert len(fig.axes) == len(rb.inputs) + len(rb.outputs) + 1
+    text = fig.axes[-1].texts[0].get_text().replace("\u00a0", " ")
+    assert text.splitlines()[0] == " 1. if e is P and de is P then du is PB"
+    assert "12. if r is rough and e is P then du is PS  (weight 0.6)" in text
+    assert " 3. if e is Z and de is Z then du is ZE and dv is faster  (weight 0.7)" in text
+
+
+def test_a_long_rule_list_is_cut_with_a_note() -> None:
+    rb = load("three_input")
+    many = RuleBase(rb.name, rb.inputs, rb.outputs, rb.rules * 10, rb.operators)
+    text = plot_rulebase(many).axes[-1].texts[0].get_text()
+    assert "more lines (fuzzkit info lists every rule)" in text.splitlines()[-1]
+    assert len(text.splitlines()) < 120
+
+
+# --------------------------------------------------------------------------- surfaces
+
+
+def test_surface_over_two_inputs_of_three_holds_the_others() -> None:
+    rb = load("three_input")
+    x, y, z = surface_grid(rb, 9, "dv", inputs=("e", "r"), fixed={"de": 0.2})
+    assert (x[0], x[-1], y[0], y[-1]) == (-1.0, 1.0, 0.0, 1.0)
+    for i, j in [(0, 0), (2, 7), (4, 4), (8, 1)]:
+        want = evaluate_point(rb, e=x[i], de=0.2, r=y[j])["dv"]
+        assert z[i, j] == pytest.approx(want, abs=1e-12)
+
+
+def test_surface_holds_unfixed_inputs_at_the_middle_of_their_range() -> None:
+    rb = load("three_input")
+    axes = surface_axes(rb, inputs=("de", "e"))
+    assert axes.fixed == {"r": 0.5}
+    _, _, z = surface_grid(rb, 5, inputs=("de", "e"))
+    assert z[1, 3] == pytest.approx(evaluate_point(rb, de=-0.5, e=0.5, r=0.5)["du"], abs=1e-12)
+
+
+def test_surface_cli_with_inputs_and_fix(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    png = tmp_path / "s.png"
+    code, out, err = run(
+        capsys, "surface", "three_input", "--png", str(png), "--inputs", "e,r",
+        "--fix", "de=0.5", "--output", "dv", "--resolution", "11",
+    )  # fmt: skip
+    assert code == 0, err
+    assert png.read_bytes()[:8] == PNG_MAGIC
+    assert "dv at the label peaks (9 points, de = 0.5)" in out
+    lines = out.splitlines()
+    assert lines[2].split() == ["e\\r", "smooth", "medium", "rough"]
+    rb = load("three_input")
+    # Row e=N (peak -1), column r=rough (sigmoid peaks at the range end, 1).
+    want = evaluate_point(rb, e=-1.0, de=0.5, r=1.0)["dv"]
+    assert float(lines[3].split()[3]) == pytest.approx(want, abs=1e-4)
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--inputs", "e"], "--inputs 'e': expected two input names"),
+        (["--inputs", "e,x"], "unknown input 'x' for the surface"),
+        (["--inputs", "e,,"], "expected two input names"),
+        (["--fix", "de"], "--fix 'de': expected NAME=VALUE"),
+        (["--fix", "de=abc"], "--fix 'de=abc': expected a number for 'de'"),
+        (["--fix", "dd=0"], "unknown input 'dd' (did you mean 'de'?)"),
+        (["--fix", "r=0.2", "--fix", "r=0.3"], "input 'r' given twice"),
+        (["--fix", "e=0"], "cannot fix 'e': it is one of the surface's two axes (e, de)"),
+        (["--inputs", "e,r", "--fix", "de=2"], "inside its range [-1, 1], got 2"),
+        (["--inputs", "e,r", "--fix", "de=inf"], "got inf"),
+        (["--rrd", "s.rrd"], "--rrd needs a rule base with exactly 2 inputs"),
+    ],
+)
+def test_surface_cli_refuses_bad_inputs_and_fix(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    args: list[str],
+    message: str,
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    code, _, err = run(capsys, "surface", "three_input", "--png", "s.png", *args)
+    assert code == 2
+    assert message in err and "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def _render(fig: Any) -> np.ndarray:
+    fig.canvas.draw()
+    return np.asarray(fig.canvas.buffer_rgba())[..., :3].astype(int).copy()
+
+
+def _label_to_ticks_px(fig: Any, axis: Any) -> float:
+    """Pixels between an axis label and its nearest tick label, measured on the rendered
+    image (3-D tick labels report unusable window extents): each is found as the pixels that
+    change when it alone is hidden."""
+    from scipy import ndimage
+
+    full = _render(fig)
+    axis.label.set_visible(False)
+    no_label = _render(fig)
+    axis.label.set_visible(True)
+    for tick in axis.get_ticklabels():
+        tick.set_visible(False)
+    no_ticks = _render(fig)
+    for tick in axis.get_ticklabels():
+        tick.set_visible(True)
+    label = np.any(full != no_label, axis=2)
+    ticks = np.any(full != no_ticks, axis=2)
+    assert label.any() and ticks.any()
+    return float(ndimage.distance_transform_edt(~ticks)[label].min())
+
+
+#: The old layout had the ``de`` label 3.6 px from the ``-0.25`` tick label (5.1 px for K/s).
+MIN_LABEL_GAP_PX = 10.0
+
+
+@pytest.mark.parametrize("name", ["macvicar_whelan", "temperature"])
+def test_surface_figure_has_units_a_colour_bar_and_no_label_collisions(name: str) -> None:
+    rb = temperature() if name == "temperature" else load(name)
+    fig = surface_figure(rb, resolution=11)
+    ax3d, bar = fig.axes
+    out = rb.outputs[0]
+    unit = f" [{out.units}]" if out.units else ""
+    assert bar.get_ylabel() == out.name + unit
+    assert bar.get_ylim() == (out.low, out.high)
+    if name == "temperature":
+        assert (ax3d.get_xlabel(), ax3d.get_ylabel(), ax3d.get_zlabel()) == (
+            "e [K]",
+            "de [K/s]",
+            "heat [%]",
+        )
+    for axis in (ax3d.xaxis, ax3d.yaxis, ax3d.zaxis):
+        assert _label_to_ticks_px(fig, axis) >= MIN_LABEL_GAP_PX, axis.label.get_text()
+
+
+# --------------------------------------------------------------------------- report figures
+
+
+def _fake_run(t: np.ndarray, fz: np.ndarray, contact_at: float) -> SimpleNamespace:
+    force = np.zeros((t.size, 3))
+    force[:, 2] = fz
+    setpoint = np.zeros((t.size, 3))
+    setpoint[:, 2] = 10.0
+    return SimpleNamespace(
+        t=t,
+        force_true=force,
+        setpoint=setpoint,
+        in_contact=t >= contact_at,
+        experiment=SimpleNamespace(selection=(True, False, True)),
+    )
+
+
+def _fake_results() -> dict[tuple[str, str], SimpleNamespace]:
+    t = np.arange(1, 1251) * 0.004
+    rise = np.clip(t - 1.9, 0.0, None)
+    runs = {}
+    for ctrl in ("pi", "fuzzy-pi"):
+        for label, tau in (("default", 0.04), ("tuned", 0.02)):
+            runs[(ctrl, label)] = _fake_run(t, 10.0 * (1 - np.exp(-rise / tau)), 1.9)
+    return runs
+
+
+def test_force_figure_shows_both_gains_in_every_panel_and_one_legend() -> None:
+    fig = force_figure(_fake_results(), "E1", zoom_s=0.3)
+    panels = fig.axes  # the insets are children of the panels
+    assert len(panels) == 4
+    for ax in panels:
+        lines = {line.get_label(): line for line in ax.get_lines()}
+        default, tuned = lines["default gains"], lines["tuned gains"]
+        # The default is drawn under the tuned line and wider, so it shows around it.
+        assert default.get_zorder() < tuned.get_zorder()
+        assert default.get_linewidth() > tuned.get_linewidth()
+        assert ax.get_legend() is None
+    assert len(fig.legends) == 1
+    assert [t.get_text() for t in fig.legends[0].get_texts()] == [
+        "default gains",
+        "tuned gains",
+        "set point",
+    ]
+
+
+def test_force_figure_zoom_inset_spans_the_first_contact() -> None:
+    fig = force_figure(_fake_results(), "E1", zoom_s=0.3)
+    insets = [child for ax in fig.axes for child in ax.child_axes]
+    assert len(insets) == 4  # one per panel
+    for ins in insets:
+        lo, hi = ins.get_xlim()
+        assert lo < 1.9 < hi and hi - lo == pytest.approx(0.3)
+    no_zoom = force_figure(_fake_results(), "E2")
+    assert not any(ax.child_axes for ax in no_zoom.axes)
+
+
+def _metrics(overshoot: float | None, settling: float | None) -> dict[str, Any]:
+    return {"overshoot_pct": overshoot, "settling_time_s": settling}
+
+
+def test_stiffness_figure_uses_log_axes_and_a_never_settled_row() -> None:
+    study = {
+        ("pi", "default"): [(5.0, _metrics(0.0, 0.2)), (50.0, _metrics(3.0, 0.05)),
+                            (500.0, _metrics(400.0, None))],
+        ("fuzzy-pi", "tuned"): [(5.0, _metrics(1.0, 0.1)), (50.0, _metrics(5.0, None)),
+                                (500.0, _metrics(500.0, None))],
+    }  # fmt: skip
+    fig = stiffness_figure(study)
+    overshoot, settling, never = fig.axes
+    assert overshoot.get_yscale() == settling.get_yscale() == "log"
+    assert overshoot.get_xscale() == settling.get_xscale() == "log"
+    # Never-settled runs are not drawn at an invented time on the settling axis...
+    for line in settling.get_lines():
+        y = np.asarray(line.get_ydata(), dtype=float)
+        assert np.nanmax(y) <= 0.2
+    # ... but as x markers in their own row, at exactly their stiffnesses.
+    marks = {
+        i: sorted(np.asarray(line.get_xdata(), dtype=float).tolist())
+        for i, line in enumerate(never.get_lines())
+    }
+    assert marks == {0: [500.0], 1: [50.0, 500.0]}
+    assert [t.get_text() for t in never.get_yticklabels()] == ["PI default", "fuzzy-PI tuned"]
+    assert "never settled" in never.get_title(loc="left")
+    # The zero overshoot sits on the floor, with the note explaining the marker.
+    assert any("below 0.1 %" in t.get_text() for t in overshoot.texts)
+    assert figure_bytes(fig)[:8] == PNG_MAGIC
+
+
+# --------------------------------------------------------------------------- notebooks
+
+
+BACKEND_SCRIPT = """
+import sys, matplotlib
+before = matplotlib.get_backend()
+import fuzzkit
+from fuzzkit.viz.rulebase_plot import plot_rulebase, write_rulebase_plot
+from fuzzkit.viz.surface import surface_figure, write_surface_png
+rb = fuzzkit.load("three_input")
+fig1 = plot_rulebase(rb)
+fig2 = surface_figure(rb, resolution=5, inputs=("e", "r"))
+write_rulebase_plot(rb, sys.argv[1] + "/p.png")
+write_surface_png(rb, sys.argv[1] + "/s.png", resolution=5)
+print(before, matplotlib.get_backend(), "matplotlib.pyplot" in sys.modules,
+      type(fig1).__name__, type(fig2).__name__)
+"""
+
+
+def test_no_global_backend_change_and_no_pyplot(tmp_path: Path) -> None:
+    # A notebook's backend must survive: run where the backend is set to a non-Agg one.
+    proc = subprocess.run(
+        [sys.executable, "-c", BACKEND_SCRIPT, str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={"MPLBACKEND": "svg", "PATH": "/usr/bin:/bin"},
+        check=False,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split() == ["svg", "svg", "False", "Figure", "Figure"]
+
+
+class _Collect(html.parser.HTMLParser):
+    def __init__(self) -> None:
+        super().__init__()
+        self.stack: list[str] = []
+        self.cells: list[str] = []
+        self.ok = True
+
+    def handle_starttag(self, tag: str, attrs: Any) -> None:
+        self.stack.append(tag)
+
+    def handle_endtag(self, tag: str) -> None:
+        self.ok &= bool(self.stack) and self.stack.pop() == tag
+
+    def handle_data(self, data: str) -> None:
+        if {"td", "th", "li"} & set(self.stack):
+            self.cells.append(data)
+
+
+def test_markdown_repr_lists_variables_units_operators_and_the_table() -> None:
+    rb = temperature()
+    md = rb._repr_markdown_()
+    assert "| input | `e` | [-20, 20] | K | NB NS ZE PS PB |" in md
+    assert "| input | `de` | [-2, 2] | K/s | NB NS ZE PS PB |" in md
+    assert "| output | `heat` | [0, 100] | % | NONE LOW MID HIGH FULL |" in md
+    assert "and=min, or=max, implication=min, aggregation=max; defuzzifier centroid" in md
+    rows = [line for line in md.splitlines() if line.startswith("| **")]
+    table = [[c.strip() for c in row.strip("|").split("|")][1:] for row in rows]
+    assert table == _table_from_yaml(TEMPERATURE)
+
+
+def test_html_repr_is_well_formed_escaped_and_complete() -> None:
+    rb = temperature()
+    hostile = RuleBase(
+        rb.name,
+        rb.inputs,
+        rb.outputs,
+        rb.rules,
+        rb.operators,
+        description="<script>x</script> & co",
+    )
+    text = hostile._repr_html_()
+    assert "<script>" not in text and "&lt;script&gt;x&lt;/script&gt; &amp; co" in text
+    parser = _Collect()
+    parser.feed(rb._repr_html_())
+    assert parser.ok and parser.stack == []
+    start = parser.cells.index("input")
+    assert parser.cells[start : start + 5] == ["input", "e", "[-20, 20]", "K", "NB NS ZE PS PB"]
+    table = _table_from_yaml(TEMPERATURE)
+    for label in ("NONE", "LOW", "MID", "HIGH", "FULL"):  # one cell each, as in the YAML
+        assert parser.cells.count(label) == sum(row.count(label) for row in table)
+
+
+def test_list_rules_repr_has_every_rule_as_a_sentence() -> None:
+    rb = load("three_input")
+    md = rb._repr_markdown_()
+    assert "1. if e is P and de is P then du is PB" in md
+    assert "8. if r is medium and e is not Z then dv is slower  (weight 0.5)" in md
+    parser = _Collect()
+    parser.feed(rb._repr_html_())
+    assert parser.ok
+    items = [c for c in parser.cells if c.startswith("if ")]
+    assert len(items) == len(rb.rules) == 12
+
+
+def test_display_mixin_keeps_the_model_a_frozen_slotted_record() -> None:
+    rb = temperature()
+    assert not hasattr(rb, "__dict__")  # slots survive the mixin
+    with pytest.raises(AttributeError):
+        rb.name = "other"  # type: ignore[misc]
+    assert hash(rb) == hash(temperature()) and rb == temperature()

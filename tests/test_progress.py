@@ -1,0 +1,108 @@
+"""Progress bars (fuzzkit.progress, tqdm): shown on a terminal only, fed by library callbacks."""
+
+from __future__ import annotations
+
+import io
+import re
+
+import numpy as np
+import pytest
+
+from fuzzkit.codegen.table_search import make_table
+from fuzzkit.formats.registry import load
+from fuzzkit.progress import TaskBars, progress_bar, progress_wanted
+from fuzzkit.studies.tuning import Progress, progress_callback
+
+
+class FakeTerminal(io.StringIO):
+    """A text stream that says it is a terminal."""
+
+    def isatty(self) -> bool:
+        return True
+
+
+def test_progress_is_wanted_on_a_terminal_unless_quiet() -> None:
+    assert progress_wanted(FakeTerminal())
+    assert not progress_wanted(FakeTerminal(), quiet=True)
+    assert not progress_wanted(io.StringIO())  # a pipe or a log file
+    assert not progress_wanted(None)
+
+
+def test_a_bar_on_a_terminal_shows_counts_and_an_eta() -> None:
+    term = FakeTerminal()
+    with progress_bar(10, "work", stream=term, unit="run") as bar:
+        for _ in range(4):
+            bar.update(1)
+    text = term.getvalue()
+    assert "work" in text and "4/10" in text
+    # tqdm's [elapsed<remaining, rate] block: the ETA
+    assert re.search(r"\[\d\d:\d\d<\d\d:\d\d", text)
+
+
+def test_no_output_when_not_a_terminal_or_quiet() -> None:
+    for stream, quiet in ((io.StringIO(), False), (FakeTerminal(), True)):
+        with progress_bar(3, "work", stream=stream, quiet=quiet) as bar:
+            bar.update(3)
+        assert stream.getvalue() == ""
+
+
+def test_tuning_progress_moves_the_bar_to_each_report() -> None:
+    term = FakeTerminal()
+    with progress_bar(None, "tune", stream=term) as bar:
+        show = progress_callback(bar)
+        show(Progress("baseline", 1, 40, 5.0, 5.0, 0.1))
+        show(Progress("global", 13, 40, 3.25, 5.0, 1.0))
+        assert (bar.n, bar.total) == (13, 40)
+    text = term.getvalue()
+    assert "13/40" in text and "global, best 3.25 (default 5)" in text
+
+
+def test_task_bars_open_one_bar_per_task() -> None:
+    term = FakeTerminal()
+    with TaskBars("rb: ", stream=term) as bars:
+        bars("5x5 table", 10, 100)
+        first = bars.bar
+        bars("5x5 table", 100, 100)
+        assert bars.bar is first and first.n == 100
+        bars("9x9 table", 50, 400)
+        assert bars.bar is not first and (bars.bar.n, bars.bar.total) == (50, 400)
+    assert bars.bar is None
+    assert "rb: 9x9 table" in term.getvalue()
+
+
+@pytest.mark.parametrize(
+    "rulebase, kwargs", [("macvicar_whelan", {}), ("three_input", {"resolution": 7})]
+)
+def test_table_search_reports_every_evaluated_point_and_the_same_table(
+    rulebase: str, kwargs: dict[str, int]
+) -> None:
+    from fuzzkit.fuzzy.inference import Engine
+
+    rb = load(rulebase)
+    engine = Engine(rb)
+    counted = {"points": 0}
+
+    def counting(inputs):  # type: ignore[no-untyped-def]
+        counted["points"] += int(np.broadcast_arrays(*inputs.values())[0].size)
+        return engine.evaluate(inputs)
+
+    calls: list[tuple[str, int, int]] = []
+    with_progress = make_table(
+        rb,
+        evaluate=counting,
+        progress=lambda *a: calls.append(a),
+        **kwargs,  # type: ignore[arg-type]
+    )
+    plain = make_table(rb, **kwargs)  # type: ignore[arg-type]
+    # Chunked evaluation changes no number of the table or its bound.
+    assert with_progress.shape == plain.shape and with_progress.bound == plain.bound
+    for a, b in zip(with_progress.stored, plain.stored, strict=True):
+        np.testing.assert_array_equal(a, b)
+    # Per task, done only grows and never passes total; the last "done" of every task adds
+    # up to the points the evaluator really saw.
+    last: dict[str, int] = {}
+    for task, done, total in calls:
+        assert done <= total and done >= last.get(task, 0)
+        last[task] = done
+    assert sum(last.values()) == counted["points"]
+    assert all(re.fullmatch(r"\d+(x\d+)* table", t) for t in last)

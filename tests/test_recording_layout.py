@@ -1,0 +1,176 @@
+"""What a user sees when opening an .rrd: the blueprint, series names with units, colours that
+show on the dark theme, separate unit subtrees, and a surface drawn in normalised coordinates.
+
+Read back with ``rerun rrd print -vvv`` (the file as the viewer gets it).
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from fuzzkit.formats.registry import loads
+from fuzzkit.studies.experiments import experiment
+from fuzzkit.studies.runner import RunResult, run
+from fuzzkit.viz.traces import write_run_rrd
+
+
+def _rerun_cli() -> str:
+    exe = Path(sys.executable).with_name("rerun")
+    found = str(exe) if exe.exists() else shutil.which("rerun")
+    if found is None:
+        pytest.skip("the rerun CLI (rerun-sdk) is not on PATH")
+    return found
+
+
+def _dump(path: Path) -> str:
+    res = subprocess.run(
+        [_rerun_cli(), "rrd", "print", "-vvv", str(path)], capture_output=True, text=True
+    )
+    assert res.returncode == 0, res.stderr
+    return res.stdout
+
+
+def _series_styles(text: str) -> dict[str, tuple[str, int]]:
+    """{series name: (entity, colour as 0xRRGGBBAA)} of every SeriesLines in the dump."""
+    styles: dict[str, tuple[str, int]] = {}
+    entity = ""
+    for line in text.splitlines():
+        m = re.search(r"with \d+ rows .*? - (/\S+) - ", line)
+        if m:
+            entity = m.group(1)
+            continue
+        m = re.search(r"row_\w+\s+┆ \[(\d+)\]\s+┆ \[([^\]]+)\]", line)
+        if m and entity.startswith(("/forces/", "/control/", "/joints/")):
+            styles[m.group(2)] = (entity, int(m.group(1)))
+    return styles
+
+
+def _luminance(rgba: int) -> float:
+    r, g, b = (rgba >> 24) & 255, (rgba >> 16) & 255, (rgba >> 8) & 255
+    return 0.2126 * r + 0.7152 * g + 0.0722 * b
+
+
+@pytest.fixture(scope="module")
+def e1() -> RunResult:
+    return run(experiment("E1"), "planar", "pi", seed=1, duration_s=0.5)
+
+
+def test_run_series_carry_units_and_visible_colours(e1: RunResult, tmp_path: Path) -> None:
+    styles = _series_styles(_dump(write_run_rrd(e1, tmp_path / "e1.rrd")))
+    assert "fz measured (N)" in styles and "fz set point (N)" in styles and "uz (mm)" in styles
+    for name, (entity, colour) in styles.items():
+        unit = re.search(r"\((N|mm|rad|deg)\)$", name)
+        assert unit, f"{entity}: series {name!r} has no unit"
+        # one unit per subtree: forces and errors in N, corrections in mm
+        if entity.startswith(("/forces/", "/control/error/")):
+            assert unit.group(1) == "N", (entity, name)
+        elif entity.startswith("/control/correction/"):
+            assert unit.group(1) == "mm", (entity, name)
+        else:
+            assert entity.startswith("/joints/"), entity
+        # the viewer's background is near black: every line must stand out from it
+        assert _luminance(colour) > 60, f"{name} is too dark ({colour:#010x})"
+    for axis in ("x", "z"):  # E1 controls x and z
+        entity, colour = styles[f"f{axis} set point (N)"]
+        assert entity == f"/forces/{axis}/setpoint" and _luminance(colour) > 150
+        assert styles[f"e{axis} (N)"][0] == f"/control/error/{axis}/e"
+        assert styles[f"de{axis} (N)"][0] == f"/control/error/{axis}/de"
+        assert styles[f"du{axis} (mm)"][0] == f"/control/correction/{axis}/du"
+
+
+def test_run_recording_ships_its_blueprint(e1: RunResult, tmp_path: Path) -> None:
+    text = _dump(write_run_rrd(e1, tmp_path / "e1.rrd"))
+    assert re.search(r"store_id: StoreId\(\s*Blueprint,", text), "no blueprint in the file"
+    flat = " ".join(text.split())
+    for view, origin in [
+        ("force z vs set point (N)", "forces/z"),
+        ("force x vs set point (N)", "forces/x"),
+        ("force error e, de (N)", "control/error"),
+        ("position correction du, u (mm)", "control/correction"),
+    ]:
+        assert re.search(rf"\[{re.escape(view)}\] ┆ \[{re.escape(origin)}\]", flat), view
+    assert "[3-D scene: E1 pi, planar arm (m)]" in flat
+    assert "force y vs set point" not in flat  # y is not force-controlled in E1
+    # the 3-D scene's axes are labelled
+    for label in ("x (m)", "y (m)", "z (m)"):
+        assert label in flat
+
+
+class _Capture:
+    """Stands in for an archetype class and records what it was given."""
+
+    def __init__(self, real: Any, store: list[dict[str, Any]]) -> None:
+        self.real, self.store = real, store
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        self.store.append({"args": args, **kwargs})
+        return self.real(*args, **kwargs)
+
+
+def test_surface_of_a_non_normalised_rule_base_is_drawn_in_a_unit_cube(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import rerun as rr
+
+    from fuzzkit.fuzzy.inference import Engine
+    from fuzzkit.viz.surface import write_surface_rrd
+
+    labels = "[NL, NM, NS, ZR, PS, PM, PL]"
+    rb = loads(
+        f"""
+name: heater
+inputs:
+  e:  {{range: [-20, 20], terms: {{partition: triangular, labels: {labels}, ends: shoulder}}}}
+  de: {{range: [-2, 2], terms: {{partition: triangular, labels: {labels}, ends: shoulder}}}}
+outputs:
+  power: {{range: [0, 100], terms: {{partition: triangular, labels: {labels}}}}}
+defuzzifier: centroid
+rules:
+  table:
+    rows: e
+    columns: de
+    output: power
+    cells: |
+      NL NL NL NL NM NS ZR
+      NL NL NL NM NS ZR PS
+      NL NL NM NS ZR PS PM
+      NL NM NS ZR PS PM PL
+      NM NS ZR PS PM PL PL
+      NS ZR PS PM PL PL PL
+      ZR PS PM PL PL PL PL
+"""
+    )
+    meshes: list[dict[str, Any]] = []
+    points: list[dict[str, Any]] = []
+    texts: list[dict[str, Any]] = []
+    monkeypatch.setattr(rr, "TextDocument", _Capture(rr.TextDocument, texts))
+    monkeypatch.setattr(rr, "Mesh3D", _Capture(rr.Mesh3D, meshes))
+    monkeypatch.setattr(rr, "Points3D", _Capture(rr.Points3D, points))
+    path = write_surface_rrd(rb, tmp_path / "heater.rrd", resolution=21)
+    (mesh,) = meshes
+    v = np.asarray(mesh["vertex_positions"])
+    # every axis spans [-1, 1] (the output may not reach its range ends)
+    assert v[:, 0].min() == -1.0 and v[:, 0].max() == 1.0
+    assert v[:, 1].min() == -1.0 and v[:, 1].max() == 1.0
+    assert v[:, 2].min() >= -1.0 and v[:, 2].max() <= 1.0 and np.ptp(v[:, 2]) > 1.0
+    # and maps back to the engine's raw values, independently evaluated
+    e_raw = -20.0 + (v[:, 0] + 1.0) * 20.0
+    de_raw = -2.0 + (v[:, 1] + 1.0) * 2.0
+    power = np.asarray(Engine(rb).evaluate({"e": e_raw, "de": de_raw})["power"])
+    np.testing.assert_allclose(v[:, 2], power / 50.0 - 1.0, atol=1e-12)
+    # tick labels carry raw values at the ends of each axis
+    ticks = next(p for p in points if any(lb == "e=-20" for lb in p.get("labels", [])))
+    assert {"e=20", "de=-2", "de=2", "power=0", "power=100"} <= set(ticks["labels"])
+    flat = " ".join(_dump(path).split())
+    assert "e [input 1]" in flat and "power [output]" in flat
+    (about,) = texts
+    assert "e [-20, 20] (x), de [-2, 2] (y), power [0, 100] (z)" in about["args"][0]
+    assert re.search(r"store_id: StoreId\( Blueprint,", flat)
