@@ -438,13 +438,17 @@ def test_kept_defaults_are_reported_with_the_reason() -> None:
     assert r.kept_defaults
     assert r.refusals() == [("E1@10N/mm", 0.6, 0.5)]
     text = "\n".join(tune_report_lines(r, []))
-    assert "kept the default gains" in text
+    assert "kept the default gains: every cheaper candidate was worse" in text
     assert "was refused: worse than the defaults on E1@10N/mm (0.6 vs 0.5, +20.0 %)" in text
     assert "(the defaults)" in text
     # An admissible cheapest candidate is the result: nothing refused, nothing to explain.
     ok = _result(gains={"kp": 1e-4, "ki": 3e-5}, cost=0.8, cheapest_case_costs={})
     assert not ok.kept_defaults and ok.refusals() == []
     assert "kept the default gains" not in "\n".join(tune_report_lines(ok, []))
+    # Nothing cheaper at all: said as such.
+    none = _result(cheapest_cost=1.0, cheapest_case_costs={"E1@10N/mm": 0.5, "E1@100N/mm": 1.5})
+    assert none.refusals() == []
+    assert "none of the 10 gain sets tried was cheaper" in "\n".join(tune_report_lines(none, []))
 
 
 @pytest.mark.slow

@@ -217,9 +217,14 @@ def tune_report_lines(result: Any, cases: Any) -> list[str]:
         f"({_pct(result.cost, result.baseline_cost)})"
     )
     refused = result.refusals()
-    if result.kept_defaults:
+    if result.kept_defaults and refused:
         lines.append(
-            "  kept the default gains: no candidate of the search was cheaper and admissible"
+            "  kept the default gains: every cheaper candidate was worse than them somewhere"
+        )
+    elif result.kept_defaults:
+        lines.append(
+            f"  kept the default gains: none of the {result.evaluations} gain sets tried was "
+            "cheaper"
         )
     if refused:
         lines.append(
