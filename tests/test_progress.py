@@ -54,7 +54,7 @@ def test_tuning_progress_moves_the_bar_to_each_report() -> None:
         show(Progress("global", 13, 40, 3.25, 5.0, 1.0))
         assert (bar.n, bar.total) == (13, 40)
     text = term.getvalue()
-    assert "13/40" in text and "global, best 3.25 (default 5)" in text
+    assert "13/40" in text and "global, best admissible 3.25 (default 5)" in text
 
 
 def test_task_bars_open_one_bar_per_task() -> None:

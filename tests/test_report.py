@@ -116,7 +116,8 @@ def test_report_writes_markdown_figures_and_recordings(tmp_path: Path) -> None:
         assert (out / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
         assert (out / png).stat().st_size < 200_000  # small enough to commit
     rrds = sorted(p.name for p in (out / "rrd").iterdir())
-    assert len(rrds) == 12 and "planar_E2_fuzzy-pi_tuned.rrd" in rrds
+    assert len(rrds) == 18 and "planar_E2_fuzzy-pi_tuned.rrd" in rrds
+    assert "planar_E2_fuzzy-pi_matched.rrd" in rrds
     text = path.read_text()
     for section in (
         "## Verdicts at a glance",
@@ -128,7 +129,8 @@ def test_report_writes_markdown_figures_and_recordings(tmp_path: Path) -> None:
         assert section in text
     assert "| pi | tuned | 2e-05 | 1.5e-05 | - |" in text
     # The verdict rows are the ones assess_claims derives (the text is not canned).
-    assert text.count("| E1: fuzzy-PI overshoots less than PI | planar |") == 2
+    assert text.count("| E1: fuzzy-PI overshoots less than PI | planar |") == 3
+    assert "| fuzzy-pi | matched | 0.2 | 0.05 | 0.0001333 | - | fuzzkit.studies.matching" in text
 
 
 def test_report_rejects_bad_inputs(tmp_path: Path) -> None:

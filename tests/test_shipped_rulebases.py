@@ -112,6 +112,44 @@ def test_paper_table1_is_not_the_canonical_table_and_mostly_follows_de() -> None
     assert spread_down <= 2 < spread_across == 6
 
 
+def test_paper_table1_transposed_reads_the_printed_rows_as_de() -> None:
+    rb = load("paper_table1_transposed")
+    cells: dict[tuple[str, str], str] = {}
+    for rule in rb.rules:
+        a = rule.antecedent
+        assert isinstance(a, Compound) and a.op == "and"
+        terms = {p.variable: p.term for p in a.operands if isinstance(p, Proposition)}
+        cells[terms["de"], terms["e"]] = rule.consequents[0].term
+    lines = PAPER_TABLE_I.splitlines()
+    columns = lines[0].split()[1:]
+    assert len(cells) == 49
+    for line in lines[1:]:
+        row, *values = line.split()
+        for col, value in zip(columns, values, strict=True):
+            assert cells[row, col] == value.upper(), (row, col)  # printed row = de
+    assert "transposed reading" in rb.description and rb.input_names == ("e", "de")
+
+
+def test_paper_table1_transposed_is_the_printed_surface_with_inputs_swapped() -> None:
+    from _mamdani_reference import reference
+
+    printed, transposed = load("paper_table1"), load("paper_table1_transposed")
+    rng = np.random.default_rng(7)
+    points = [(0.0, 0.5), (0.5, 0.0), (-1.0, 1.0), *rng.uniform(-1.0, 1.0, (6, 2)).tolist()]
+    for e, de in points:
+        got = evaluate_point(transposed, {"e": e, "de": de})["du"]
+        want = reference(printed, {"e": de, "de": e})  # independent fine-grid Mamdani
+        assert want is not None and got == pytest.approx(want, abs=1e-6), (e, de)
+    # What the transposition does near the origin: the printed table ignores e when de = 0
+    # (no integral action), the transposed one ignores de when e = 0 (no proportional action).
+    for x in (0.1, 0.3, 0.6):
+        assert evaluate_point(printed, {"e": x, "de": 0.0})["du"] == pytest.approx(0, abs=1e-12)
+        assert evaluate_point(transposed, {"e": 0.0, "de": x})["du"] == pytest.approx(
+            0, abs=1e-12
+        )
+        assert evaluate_point(transposed, {"e": x, "de": 0.0})["du"] > 0.05
+
+
 def expected_peak_output(k: int) -> float:
     """Centroid of output label k (-3..3) alone at full strength, clipped to [-1, 1].
 

@@ -21,6 +21,7 @@ from fuzzkit.studies.tuning import (
     TUNING_HORIZON_S,
     GainSpace,
     Progress,
+    TuneResult,
     TuningProblem,
     evaluate_gains,
     optimise,
@@ -358,3 +359,112 @@ def test_cli_tune_bad_arguments(
     err = capsys.readouterr().err
     assert match in err and "Traceback" not in err
     assert not (tmp_path / "g.yaml").exists()
+
+
+# --------------------------------------------------------------------------------------------
+# Admission per case, progress, and what the command says
+# --------------------------------------------------------------------------------------------
+
+
+def _two_stiffness_problem() -> TuningProblem:
+    return TuningProblem.build(
+        [press_on_spring()],
+        "pi",
+        rulebase=saturated_sum_surface,
+        plant=SpringPlant,
+        stiffnesses_n_per_mm=(5.0, 40.0),
+        space=SPRING_SPACE,
+    )
+
+
+def test_tuned_gains_no_worse_than_defaults_on_every_stiffness() -> None:
+    problem = _two_stiffness_problem()
+    seen: list[Progress] = []
+    result = optimise(problem, budget=24, seed=2, workers=1, callback=seen.append)
+    tuned = evaluate_gains(problem, result.gains)  # priced again, outside the optimiser
+    default = evaluate_gains(problem, result.baseline_gains)
+    assert len(tuned) == 2
+    for t, d in zip(tuned, default, strict=True):
+        assert t <= d + 1e-12
+    # The progress shows the cost of what would be saved, never a refused candidate's.
+    assert seen[-1].best_cost == pytest.approx(result.cost, rel=1e-12)
+    assert all(p.best_cost <= p.baseline_cost + 1e-12 for p in seen)
+    assert all(p.cheapest_cost <= p.best_cost + 1e-12 for p in seen)
+
+
+def test_experiment_rule_may_trade_one_stiffness_for_another() -> None:
+    problem = _two_stiffness_problem()
+    per_case = optimise(problem, budget=24, seed=2, workers=1)
+    per_exp = optimise(problem, budget=24, seed=2, workers=1, admit="experiment")
+    assert per_exp.admit == "experiment" and per_case.admit == "case"
+    # The looser rule admits everything the strict one does: never a dearer result.
+    assert per_exp.cost <= per_case.cost + 1e-12
+    with pytest.raises(ConfigError, match="unknown admission rule"):
+        optimise(problem, budget=10, workers=1, admit="loose")
+
+
+def _result(**kw: object) -> TuneResult:
+    base = dict(
+        controller="pi",
+        gains={"kp": 4e-5, "ki": 1e-5},
+        cost=1.0,
+        experiment_costs={"E1": 1.0},
+        case_costs={"E1@10N/mm": 0.5, "E1@100N/mm": 1.5},
+        baseline_gains={"kp": 4e-5, "ki": 1e-5},
+        baseline_cost=1.0,
+        baseline_experiment_costs={"E1": 1.0},
+        evaluations=10,
+        budget=10,
+        seed=0,
+        interrupted=False,
+        wall_time_s=1.0,
+        experiments=("E1",),
+        stiffnesses_n_per_mm=(10.0, 100.0),
+        plant="planar",
+        rulebase=None,
+        baseline_case_costs={"E1@10N/mm": 0.5, "E1@100N/mm": 1.5},
+        cheapest_gains={"kp": 1e-4, "ki": 3e-5},
+        cheapest_cost=0.8,
+        cheapest_case_costs={"E1@10N/mm": 0.6, "E1@100N/mm": 1.0},
+    )
+    base.update(kw)
+    return TuneResult(**base)  # type: ignore[arg-type]
+
+
+def test_kept_defaults_are_reported_with_the_reason() -> None:
+    from fuzzkit.cli.tuning import tune_report_lines
+
+    r = _result()
+    assert r.kept_defaults
+    assert r.refusals() == [("E1@10N/mm", 0.6, 0.5)]
+    text = "\n".join(tune_report_lines(r, []))
+    assert "kept the default gains: every cheaper candidate was worse" in text
+    assert "was refused: worse than the defaults on E1@10N/mm (0.6 vs 0.5, +20.0 %)" in text
+    assert "(the defaults)" in text
+    # An admissible cheapest candidate is the result: nothing refused, nothing to explain.
+    ok = _result(gains={"kp": 1e-4, "ki": 3e-5}, cost=0.8, cheapest_case_costs={})
+    assert not ok.kept_defaults and ok.refusals() == []
+    assert "kept the default gains" not in "\n".join(tune_report_lines(ok, []))
+    # Nothing cheaper at all: said as such.
+    none = _result(cheapest_cost=1.0, cheapest_case_costs={"E1@10N/mm": 0.5, "E1@100N/mm": 1.5})
+    assert none.refusals() == []
+    assert "none of the 10 gain sets tried was cheaper" in "\n".join(tune_report_lines(none, []))
+
+
+@pytest.mark.slow
+def test_readme_tour_tuned_gains_no_worse_at_any_stiffness() -> None:
+    """The README's tour (tune E1 over 10, 100, 1000 N/mm) with a small budget: at every
+    stiffness, the saved gains cost no more than the defaults when run again from scratch."""
+    ks = (10.0, 100.0, 1000.0)
+    result = tune(["E1"], "fuzzy-pi", stiffnesses_n_per_mm=ks, budget=12, seed=0, workers=2)
+    from fuzzkit.studies.runner import load_surface
+
+    surface = load_surface("macvicar_whelan")
+    h = TUNING_HORIZON_S["E1"]
+    for k in ks:
+        exp = with_stiffness(experiment("E1"), k * 1e3)
+        costs = [
+            run_cost(run(exp, "planar", "fuzzy-pi", gains=g, surface=surface, duration_s=h))
+            for g in (result.gains, result.baseline_gains)
+        ]
+        assert costs[0] <= costs[1] * (1 + 1e-3) + 1e-9, (k, costs)

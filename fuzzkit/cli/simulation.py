@@ -13,6 +13,9 @@ from fuzzkit.fileio import check_output_path
 
 CONTROLLERS = ("pi", "fuzzy-pi")
 
+#: ``fuzzkit compare --protocol`` choices (fuzzkit.studies.protocol.PROTOCOLS).
+PROTOCOL_CHOICES = ("matched", "tuned", "default")
+
 
 def register(subparsers: Any) -> None:
     """Add the ``simulate`` and ``compare`` subcommands."""
@@ -91,6 +94,15 @@ def register(subparsers: Any) -> None:
         metavar="GAINS.yaml",
         help="gains file (fuzzkit.control.gains), e.g. from fuzzkit tune",
     )
+    cmp_.add_argument(
+        "--protocol",
+        choices=PROTOCOL_CHOICES,
+        default="matched",
+        help="which gains each controller runs with: matched (default; fuzzy-PI gains derived "
+        "from the PI's through the rule base's measured slope at the origin, so both have the "
+        "same small-signal gain), tuned (both controllers' tuned gains from --gains), default "
+        "(the hand-set defaults, --gains on top); see docs/simulation.md",
+    )
     cmp_.add_argument("--json", action="store_true", help="print every run's metrics as JSON")
     cmp_.add_argument("--rrd-dir", metavar="DIR", help="write one .rrd per run into DIR")
     cmp_.set_defaults(handler=_compare)
@@ -107,12 +119,12 @@ def load_gains(path: str | None, controller: str, required: bool = True) -> dict
 def _run_one(
     exp_name: str, controller: str, args: argparse.Namespace, surface: Any, required: bool = True
 ) -> Any:
-    from fuzzkit.studies.experiments import experiment
+    from fuzzkit.studies.e3_arm6 import resolve
     from fuzzkit.studies.runner import run
 
-    exp = experiment(exp_name)
+    exp, plant = resolve(exp_name, args.plant)  # E3 on arm6 is the paper's 3-D geometry
     gains = load_gains(args.gains, controller, required)
-    return run(exp, args.plant, controller, gains=gains, surface=surface, seed=args.seed)
+    return run(exp, plant, controller, gains=gains, surface=surface, seed=args.seed), plant
 
 
 def _surface_for(controller: str, rulebase: str) -> Any:
@@ -139,11 +151,11 @@ def _simulate(args: argparse.Namespace) -> int:
     if args.rrd:
         check_output_path(args.rrd, ".rrd file")
     surface = _surface_for(args.controller, args.rulebase)
-    result = _run_one(args.experiment, args.controller, args, surface)
+    result, plant = _run_one(args.experiment, args.controller, args, surface)
     if args.rrd:
         from fuzzkit.viz.traces import write_run_rrd
 
-        write_run_rrd(result, args.rrd)
+        write_run_rrd(result, args.rrd, plant)
     data = summary(result)
     if args.json:
         print(json.dumps(data, indent=2))
@@ -199,27 +211,55 @@ def _compare(args: argparse.Namespace) -> int:
         experiment(name)  # reject unknown names before any simulation runs
     if args.rrd_dir and not Path(args.rrd_dir).is_dir():
         raise ConfigError(f"{args.rrd_dir}: folder does not exist")
+    from fuzzkit.studies.e3_arm6 import resolve
+    from fuzzkit.studies.protocol import format_gains, protocol_gains
+    from fuzzkit.studies.runner import run
+
     surface = _surface_for("fuzzy-pi", args.rulebase)
+    chosen = protocol_gains(args.protocol, surface, args.gains)
     if args.gains:
         for controller in CONTROLLERS:
-            if not load_gains(args.gains, controller, required=False):
+            has = bool(load_gains(args.gains, controller, required=False))
+            if not has and not (controller == "fuzzy-pi" and args.protocol == "matched"):
                 print(
                     f"note: {args.gains} has no gains for {controller}: it runs on the defaults",
+                    file=sys.stderr,
+                )
+            if has and controller == "fuzzy-pi" and args.protocol == "matched":
+                print(
+                    f"note: --protocol matched uses only ki and the limits of {args.gains}'s "
+                    "fuzzy-pi gains; kp and kx are matched to the PI (--protocol default or "
+                    "tuned runs them as they are)",
                     file=sys.stderr,
                 )
     rows = []
     for name in args.experiments:
         for controller in CONTROLLERS:
-            result = _run_one(
-                name, controller, args, surface if controller == "fuzzy-pi" else None, False
+            exp, plant = resolve(name, args.plant)  # E3 on arm6: the paper's 3-D geometry
+            result = run(
+                exp,
+                plant,
+                controller,
+                gains=chosen[controller].gains,
+                surface=surface if controller == "fuzzy-pi" else None,
+                seed=args.seed,
             )
             if args.rrd_dir:
                 from fuzzkit.viz.traces import write_run_rrd
 
-                write_run_rrd(result, Path(args.rrd_dir) / f"{name.upper()}_{controller}.rrd")
-            rows.append(summary(result))
+                write_run_rrd(
+                    result, Path(args.rrd_dir) / f"{name.upper()}_{controller}.rrd", plant
+                )
+            row = summary(result)
+            row["protocol"] = args.protocol
+            row["gains"] = dict(chosen[controller].gains)
+            row["gains_source"] = chosen[controller].source
+            rows.append(row)
     if args.json:
         print(json.dumps(rows, indent=2))
     else:
+        print(f"protocol: {args.protocol} (rule base {args.rulebase})")
+        for controller in CONTROLLERS:
+            print(f"  {format_gains(chosen[controller])}")
         print(comparison_table(rows))
     return 0

@@ -66,6 +66,14 @@ def register(subparsers: Any) -> None:
         action="store_true",
         help="overwrite --out (default: keep the other controller's entry if the file has one)",
     )
+    tune.add_argument(
+        "--admit",
+        choices=("case", "experiment"),
+        default="case",
+        help="which gain sets may be saved: case (default) = no worse than the default gains "
+        "on every experiment x stiffness case; experiment = no worse on each experiment's "
+        "mean over the stiffnesses (a compromise: may be worse at some stiffness)",
+    )
     tune.add_argument("--quiet", action="store_true", help="no progress bar")
     tune.set_defaults(handler=_tune)
 
@@ -141,6 +149,7 @@ def _tune(args: argparse.Namespace) -> int:
     from fuzzkit.control.gains import read_gains_file, write_gains
     from fuzzkit.progress import progress_bar
     from fuzzkit.studies.tuning import progress_callback, tune
+    from fuzzkit.studies.tuning_check import compare_cases
 
     ks = parse_stiffness(args.stiffness)
     out = Path(args.out)
@@ -160,6 +169,7 @@ def _tune(args: argparse.Namespace) -> int:
             seed=args.seed,
             workers=args.workers,
             callback=progress_callback(bar),
+            admit=args.admit,
         )
     _, kept = write_gains(out, result.to_entry(), merge=not args.replace)
     print(
@@ -168,14 +178,11 @@ def _tune(args: argparse.Namespace) -> int:
         f"{result.wall_time_s:.1f} s"
         + (" (interrupted: best so far)" if result.interrupted else "")
     )
-    print(
-        f"  cost {result.cost:.6g} vs default gains {result.baseline_cost:.6g} "
-        f"({-result.improvement_pct:+.1f} %)"
-    )
-    for name, c in result.experiment_costs.items():
-        print(f"  {name}: {c:.6g} (default {result.baseline_experiment_costs[name]:.6g})")
-    gains = ", ".join(f"{k}={v:.6g}" for k, v in result.gains.items())
-    print(f"  gains: {gains}")
+    # the full per-case runs: not after Ctrl-C (the user wants out), not when nothing changed
+    skip = result.kept_defaults or result.interrupted
+    cases = [] if skip else compare_cases(result, seed=0)
+    for line in tune_report_lines(result, cases):
+        print(line)
     print(f"wrote {out}" + (f" (kept the {', '.join(kept)} entry)" if kept else ""))
     if result.interrupted:
         print(
@@ -183,6 +190,70 @@ def _tune(args: argparse.Namespace) -> int:
         )
         return EXIT_INTERRUPTED
     return 0
+
+
+def _pct(new: float, old: float) -> str:
+    return f"{100.0 * (new - old) / old:+.1f} %" if old > 0.0 else "n/a"
+
+
+def _metric(v: Any, unit: str, digits: int, missing: str = "never") -> str:
+    return missing if v is None else f"{v:.{digits}f}{unit}"
+
+
+def tune_report_lines(result: Any, cases: Any) -> list[str]:
+    """What ``fuzzkit tune`` prints after the search: the rule, the verdict, per-case numbers.
+
+    ``result`` is a ``fuzzkit.studies.tuning.TuneResult``, ``cases`` the
+    ``fuzzkit.studies.tuning_check.compare_cases`` of it.
+    """
+    rule = (
+        "no worse than the default gains on every case (experiment x stiffness)"
+        if result.admit == "case"
+        else "no worse than the default gains on each experiment's mean over the stiffnesses"
+    )
+    lines = [f"  admissible: {rule}"]
+    lines.append(
+        f"  cost {result.cost:.6g} vs default gains {result.baseline_cost:.6g} "
+        f"({_pct(result.cost, result.baseline_cost)})"
+    )
+    refused = result.refusals()
+    if result.kept_defaults and refused:
+        lines.append(
+            "  kept the default gains: every cheaper candidate was worse than them somewhere"
+        )
+    elif result.kept_defaults:
+        lines.append(
+            f"  kept the default gains: none of the {result.evaluations} gain sets tried was "
+            "cheaper"
+        )
+    if refused:
+        lines.append(
+            f"  the cheapest candidate (cost {result.cheapest_cost:.6g}, "
+            f"{_pct(result.cheapest_cost, result.baseline_cost)} vs the defaults) was refused: "
+            "worse than the defaults on "
+            + ", ".join(f"{k} ({c:.4g} vs {b:.4g}, {_pct(c, b)})" for k, c, b in refused)
+        )
+    if cases:
+        lines.append("  per case, tuning cost and the full run (default -> tuned gains):")
+    for c in cases:
+        parts = [f"cost {c.default_cost:.4g} -> {c.tuned_cost:.4g} ({c.cost_change_pct:+.1f} %)"]
+        for axis, d in c.default_axes.items():
+            t = c.tuned_axes[axis]
+            parts.append(
+                f"{axis}: settling {_metric(d['settling_time_s'], ' s', 2)} -> "
+                f"{_metric(t['settling_time_s'], ' s', 2)}, overshoot "
+                f"{_metric(d['overshoot_pct'], ' %', 1, 'n/a')} -> "
+                f"{_metric(t['overshoot_pct'], ' %', 1, 'n/a')}"
+            )
+        if c.default_tripped or c.tuned_tripped:
+            parts.append(f"safety trip {c.default_tripped} -> {c.tuned_tripped}")
+        verdict = "worse" if c.tuned_cost > c.default_cost + 1e-12 else "no worse"
+        lines.append(f"    {c.label} ({verdict}): " + "; ".join(parts))
+    for name, cost in result.experiment_costs.items():
+        lines.append(f"  {name}: {cost:.6g} (default {result.baseline_experiment_costs[name]:.6g})")
+    gains = ", ".join(f"{k}={v:.6g}" for k, v in result.gains.items())
+    lines.append(f"  gains: {gains}" + (" (the defaults)" if result.kept_defaults else ""))
+    return lines
 
 
 def _report(args: argparse.Namespace) -> int:

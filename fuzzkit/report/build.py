@@ -23,7 +23,9 @@ from fuzzkit.fileio import staged_folder, write_atomic
 from fuzzkit.progress import progress_bar
 
 CONTROLLERS = ("pi", "fuzzy-pi")
-LABELS = ("default", "tuned")
+#: Gains labels, one per comparison protocol (docs/comparison.md): the hand-set defaults, the
+#: fuzzy-PI matched to the default PI's small-signal gain (the PI runs its defaults), tuned.
+LABELS = ("default", "matched", "tuned")
 EXPERIMENT_NAMES = ("E1", "E2", "E3")
 
 #: Stiffnesses of the press study (N/mm).
@@ -341,7 +343,7 @@ def build_report(
         Unusable output folder, missing or bad gains files, unknown plant or rule base.
     """
     from fuzzkit.formats.registry import load
-    from fuzzkit.studies.experiments import DEFAULT_GAINS, experiment, press_experiment
+    from fuzzkit.studies.experiments import DEFAULT_GAINS, press_experiment
     from fuzzkit.studies.metrics import summary
     from fuzzkit.studies.plants import make_plant
     from fuzzkit.studies.runner import load_surface, run
@@ -363,6 +365,10 @@ def build_report(
         if rrd:
             (out / "rrd").mkdir()
 
+        from fuzzkit.studies.e3_arm6 import resolve
+        from fuzzkit.studies.matching import matched_fuzzy_gains
+
+        surface = load_surface(rulebase)
         gains: dict[tuple[str, str], dict[str, float]] = {}
         provenance: dict[str, dict[str, Any]] = {}
         for ctrl in CONTROLLERS:
@@ -370,8 +376,8 @@ def build_report(
             g, prov = _gains_for(ctrl, gains_dir, out, budget, rulebase, seed, workers, log)
             gains[(ctrl, "tuned")] = g
             provenance[ctrl] = prov
-
-        surface = load_surface(rulebase)
+        gains[("pi", "matched")] = dict(DEFAULT_GAINS["pi"])
+        gains[("fuzzy-pi", "matched")] = matched_fuzzy_gains(surface, DEFAULT_GAINS["pi"]).gains
         summaries: dict[Key, dict[str, Any]] = {}
         figures: list[tuple[str, str]] = []
         n_runs = len(CONTROLLERS) * len(LABELS) * (
@@ -380,14 +386,15 @@ def build_report(
         with progress_bar(n_runs, "runs", stream=log, quiet=log is None, unit="run") as bar:
             for plant in plants:
                 for name in EXPERIMENT_NAMES:
-                    exp = experiment(name)
+                    exp = resolve(name, plant)[0]  # E3 on arm6: the paper's 3-D geometry
                     runs: dict[tuple[str, str], Any] = {}
                     for ctrl in CONTROLLERS:
                         for label in LABELS:
                             bar.set_description(f"{plant} {name} {ctrl} {label}")
+                            plant_obj = resolve(name, plant)[1]
                             r = run(
                                 exp,
-                                plant,
+                                plant_obj,
                                 ctrl,
                                 gains=gains[(ctrl, label)],
                                 surface=surface if ctrl == "fuzzy-pi" else None,
@@ -398,7 +405,9 @@ def build_report(
                                 from fuzzkit.viz.traces import write_run_rrd
 
                                 write_run_rrd(
-                                    r, out / "rrd" / f"{plant}_{name}_{ctrl}_{label}.rrd"
+                                    r,
+                                    out / "rrd" / f"{plant}_{name}_{ctrl}_{label}.rrd",
+                                    plant_obj,
                                 )
                             bar.update(1)
                     fname = f"force_{plant}_{name}.png"
@@ -467,7 +476,11 @@ def _markdown(
         "## Gains",
         "",
         "Default gains are the hand-tuned `DEFAULT_GAINS` (like the paper's, by trial and error, "
-        "for 10 N/mm). Tuned gains minimise `fuzzkit.studies.tuning.run_cost` "
+        "for 10 N/mm); with them the fuzzy-PI has 1.5x the PI's small-signal gain "
+        "(`macvicar_whelan`). Matched gains: the PI runs its defaults and the fuzzy-PI's "
+        "scaling factors are derived from them through the rule base's measured slopes at the "
+        "origin, so both have the same small-signal gain (docs/comparison.md). Tuned gains "
+        "minimise `fuzzkit.studies.tuning.run_cost` "
         "(ITAE of the force error plus penalties for overshoot, force above the safety limit "
         "and contact loss) over "
         "E1-E3 and the stiffnesses listed, on the planar plant.",
@@ -479,12 +492,13 @@ def _markdown(
         prov = provenance.get(ctrl, {})
         for label in LABELS:
             g = gains[(ctrl, label)]
-            cost = prov.get("default_cost" if label == "default" else "cost")
-            src = (
-                "fuzzkit.studies.experiments.DEFAULT_GAINS"
-                if label == "default"
-                else prov.get("source")
-            )
+            cost = {"default": prov.get("default_cost"), "tuned": prov.get("cost")}.get(label)
+            src = {
+                "default": "fuzzkit.studies.experiments.DEFAULT_GAINS",
+                "matched": "fuzzkit.studies.matching (measured slopes)"
+                if ctrl == "fuzzy-pi"
+                else "fuzzkit.studies.experiments.DEFAULT_GAINS",
+            }.get(label, prov.get("source"))
             kx = f"{g['kx']:.4g}" if "kx" in g else "-"
             md.append(f"| {ctrl} | {label} | {g['kp']:.4g} | {g['ki']:.4g} | {kx} | ")
             md[-1] += f"{'-' if cost is None else f'{float(cost):.5g}'} | {src} |"

@@ -31,8 +31,13 @@ point, whose ``2 * dims`` trial points per iteration also run in parallel. Both 
 the cost plus ``PENALTY`` times how much worse than the default gains a candidate is on each
 experiment, which steers the search towards candidates the final choice may return.
 ``budget`` caps the number of gain sets simulated, the default gains included. The result is
-the cheapest gain set found that is *no worse than the default gains on any experiment* it was
-tuned for (the defaults themselves qualify, so this never fails).
+the cheapest *admissible* gain set found: by default (``admit="case"``) one that is no worse
+than the default gains on *every case*, i.e. every (experiment, stiffness) pair it was tuned
+for, so robust gains never trade the nominal stiffness away for a stiffer one; with
+``admit="experiment"`` one no worse on each experiment's mean over the stiffnesses (a
+compromise: it may be worse at some stiffness, and the CLI says by how much). The defaults
+themselves are admissible, so this never fails; when nothing beats them, they are returned
+and :attr:`TuneResult.kept_defaults` says so, with the cheapest candidate that was refused.
 
 Speed: experiments are simulated over short horizons (:data:`TUNING_HORIZON_S`: first contact
 plus the transient that the gains decide), and the fuzzy surface is a 201 x 201 bilinear lookup
@@ -74,8 +79,12 @@ DEFAULT_STIFFNESSES_N_PER_MM: tuple[float, ...] = (5.0, 10.0, 20.0)
 #: where the gains make the difference, and drops the rest of the path.
 TUNING_HORIZON_S: dict[str, float] = {"E1": 3.5, "E2": 4.5, "E3": 6.0, "press": 1.5}
 
-#: Weight of the search's penalty for being worse than the default gains on an experiment.
+#: Weight of the search's penalty for being worse than the default gains on a case
+#: (or an experiment, with ``admit="experiment"``).
 PENALTY = 10.0
+
+#: Admission rules: no worse than the defaults on every case, or on every experiment's mean.
+ADMIT_RULES = ("case", "experiment")
 
 #: Samples per side of the lookup table standing in for the exact fuzzy engine while tuning.
 TABLE_SIZE = 201
@@ -413,9 +422,11 @@ class Progress:
     stage: str  # "baseline", "global" or "polish"
     evaluations: int
     budget: int
-    best_cost: float
+    best_cost: float  # cost of the cheapest *admissible* gain set so far (what would be saved)
     baseline_cost: float
     elapsed_s: float
+    #: cost of the cheapest gain set so far, admissible or not (inf before any)
+    cheapest_cost: float = math.inf
 
 
 @dataclass(frozen=True, slots=True)
@@ -445,6 +456,35 @@ class TuneResult:
     plant: str
     rulebase: str | None
     history: tuple[float, ...] = field(default=())
+    #: per-case costs of the default gains
+    baseline_case_costs: dict[str, float] = field(default_factory=dict)
+    #: the admission rule used (:data:`ADMIT_RULES`)
+    admit: str = "case"
+    #: the cheapest gain set found, admissible or not, and its per-case costs: when it was
+    #: refused, it says why the result is not cheaper
+    cheapest_gains: dict[str, float] = field(default_factory=dict)
+    cheapest_cost: float = math.inf
+    cheapest_case_costs: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def kept_defaults(self) -> bool:
+        """True when no candidate was admissible and cheaper: the result is the defaults."""
+        return self.gains == self.baseline_gains
+
+    def refusals(self) -> list[tuple[str, float, float]]:
+        """Why the cheapest candidate was refused: ``(case, its cost, the defaults' cost)`` for
+        every case (or experiment, with ``admit="experiment"``) on which it is worse than the
+        defaults; empty when it was admissible."""
+        if not self.cheapest_case_costs or self.cheapest_cost >= self.cost - 1e-12:
+            return []
+        if self.admit == "case":
+            pairs = [
+                (k, c, self.baseline_case_costs[k]) for k, c in self.cheapest_case_costs.items()
+            ]
+        else:
+            per = _means_by_experiment(self.cheapest_case_costs)
+            pairs = [(k, c, self.baseline_experiment_costs[k]) for k, c in per.items()]
+        return [(k, c, b) for k, c, b in pairs if c > b + 1e-12]
 
     @property
     def improvement_pct(self) -> float:
@@ -473,6 +513,8 @@ class TuneResult:
             "seed": self.seed,
             "budget": self.budget,
             "evaluations": self.evaluations,
+            "admit": self.admit,
+            "kept_defaults": self.kept_defaults,
             "interrupted": self.interrupted,
             "cost_definition": (
                 "fuzzkit.studies.tuning.run_cost (ITAE + overshoot, peak, trip, loss)"
@@ -481,6 +523,14 @@ class TuneResult:
         if self.rulebase is None:
             del prov["rulebase"]
         return GainsEntry(self.controller, dict(self.gains), prov)
+
+
+def _means_by_experiment(case_costs: Mapping[str, float]) -> dict[str, float]:
+    """Per-experiment means of costs keyed by case label (``E1@10N/mm``)."""
+    groups: dict[str, list[float]] = {}
+    for label, c in case_costs.items():
+        groups.setdefault(label.split("@", 1)[0], []).append(c)
+    return {k: sum(v) / len(v) for k, v in groups.items()}
 
 
 def default_workers() -> int:
@@ -501,9 +551,13 @@ class _Pricer:
         workers: int,
         budget: int,
         callback: Callable[[Progress], None] | None,
+        admit: str = "case",
     ) -> None:
         self.problem = problem
         self.budget = budget
+        self.admit = admit
+        self.cheapest: Evaluation | None = None
+        self.best_admissible: Evaluation | None = None
         self.callback = callback
         self.records: list[Evaluation] = []
         self.memo: dict[tuple[float, ...], Evaluation] = {}
@@ -563,48 +617,60 @@ class _Pricer:
                 self.memo[keyed[i]] = ev
                 if self.best is None or self.score(ev) < self.score(self.best):
                     self.best = ev
+                if self.cheapest is None or ev.cost < self.cheapest.cost:
+                    self.cheapest = ev
+                if self.admissible(ev) and (
+                    self.best_admissible is None or ev.cost < self.best_admissible.cost
+                ):
+                    self.best_admissible = ev
             self.history.append(self.best.cost if self.best else math.inf)
             self._report()
         inf = Evaluation({}, (), (), math.inf)
         return [self.memo.get(k, inf) for k in keyed]
 
+    def _pairs(self, ev: Evaluation) -> list[tuple[float, float]]:
+        """(candidate, baseline) costs on each unit the admission rule compares."""
+        if self.baseline is None:
+            return []
+        if self.admit == "case":
+            return list(zip(ev.case_costs, self.baseline.case_costs, strict=True))
+        return list(zip(ev.experiment_costs, self.baseline.experiment_costs, strict=True))
+
+    def admissible(self, ev: Evaluation) -> bool:
+        """No worse than the baseline on any case (or experiment, per ``admit``)."""
+        return bool(ev.case_costs) and all(c <= b + 1e-12 for c, b in self._pairs(ev))
+
     def score(self, ev: Evaluation) -> float:
-        """What the search minimises: the cost plus a penalty for each experiment on which
-        ``ev`` is worse than the baseline, which steers the search towards gain sets that
-        :meth:`choose` may return."""
+        """What the search minimises: the cost plus a penalty for each case (or experiment) on
+        which ``ev`` is worse than the baseline, which steers the search towards gain sets
+        that :meth:`choose` may return."""
         if self.baseline is None or not ev.experiment_costs:
             return ev.cost
-        worse = sum(
-            max(0.0, c - b)
-            for c, b in zip(ev.experiment_costs, self.baseline.experiment_costs, strict=True)
-        )
+        worse = sum(max(0.0, c - b) for c, b in self._pairs(ev))
         return ev.cost + PENALTY * worse
 
     def _report(self) -> None:
         if self.callback is None or self.best is None:
             return
         base = self.baseline.cost if self.baseline is not None else self.best.cost
+        admissible = self.best_admissible.cost if self.best_admissible is not None else base
         self.callback(
             Progress(
                 stage=self.stage,
                 evaluations=len(self.records),
                 budget=self.budget,
-                best_cost=self.best.cost,
+                best_cost=admissible,
                 baseline_cost=base,
                 elapsed_s=time.perf_counter() - self.t0,
+                cheapest_cost=self.cheapest.cost if self.cheapest is not None else math.inf,
             )
         )
 
     def choose(self) -> Evaluation:
-        """The cheapest evaluation no worse than the baseline on any experiment."""
+        """The cheapest admissible evaluation (the baseline itself is admissible)."""
         if self.baseline is None:
             raise RuntimeError("no baseline evaluation")
-        base = self.baseline.experiment_costs
-        ok = [
-            ev
-            for ev in self.records
-            if all(c <= b + 1e-12 for c, b in zip(ev.experiment_costs, base, strict=True))
-        ]
+        ok = [ev for ev in self.records if self.admissible(ev)]
         return min(ok or [self.baseline], key=lambda ev: ev.cost)
 
 
@@ -625,6 +691,7 @@ def optimise(
     workers: int | None = None,
     callback: Callable[[Progress], None] | None = None,
     baseline: Mapping[str, float] | None = None,
+    admit: str = "case",
 ) -> TuneResult:
     """Search ``problem.space`` for the gain set of least cost (see the module docstring).
 
@@ -637,22 +704,26 @@ def optimise(
     callback : called with a :class:`Progress` after every batch; it may raise
         ``KeyboardInterrupt`` (as Ctrl-C does) to stop the search.
     baseline : the reference gains (default: ``fuzzkit.studies.experiments.DEFAULT_GAINS``).
+    admit : ``case`` (no worse than the baseline on every experiment x stiffness case) or
+        ``experiment`` (no worse on each experiment's mean over the stiffnesses).
 
     Returns
     -------
-    The best gain set no worse than the baseline on any experiment; ``interrupted`` is True
-    when Ctrl-C (KeyboardInterrupt) stopped the search early.
+    The cheapest admissible gain set; ``interrupted`` is True when Ctrl-C
+    (KeyboardInterrupt) stopped the search early.
 
     Raises
     ------
     ConfigError
-        ``budget`` below 10 or ``workers`` below 1.
+        ``budget`` below 10, ``workers`` below 1 or an unknown ``admit`` rule.
     """
     from scipy.optimize import differential_evolution
     from scipy.stats import qmc
 
     if budget < 10:
         raise ConfigError(f"budget must be >= 10 evaluations (got {budget})")
+    if admit not in ADMIT_RULES:
+        raise ConfigError(f"unknown admission rule {admit!r} (expected case or experiment)")
     nworkers = default_workers() if workers is None else workers
     if nworkers < 1:
         raise ConfigError(f"workers must be >= 1 (got {nworkers})")
@@ -663,7 +734,7 @@ def optimise(
         raise ConfigError(f"baseline gains lack {', '.join(missing)}")
     lo, hi = space.log_bounds
     ndim = len(space.names)
-    pricer = _Pricer(problem, nworkers, budget, callback)
+    pricer = _Pricer(problem, nworkers, budget, callback, admit)
     interrupted = False
     try:
         pricer.baseline = pricer.price([{n: base_gains[n] for n in space.names}])[0]
@@ -703,6 +774,7 @@ def optimise(
         raise KeyboardInterrupt
     chosen = pricer.choose()
     base = pricer.baseline
+    cheapest = pricer.cheapest or base
     names = problem.experiments
     return TuneResult(
         controller=problem.controller,
@@ -723,6 +795,11 @@ def optimise(
         plant=problem.plant_name,
         rulebase=problem.rulebase_name,
         history=tuple(pricer.history),
+        baseline_case_costs=dict(zip(problem.labels, base.case_costs, strict=True)),
+        admit=admit,
+        cheapest_gains=problem.full_gains(cheapest.gains),
+        cheapest_cost=cheapest.cost,
+        cheapest_case_costs=dict(zip(problem.labels, cheapest.case_costs, strict=True)),
     )
 
 
@@ -775,6 +852,7 @@ def tune(
     horizon_s: float | None = None,
     baseline: Mapping[str, float] | None = None,
     noise_seed: int = 0,
+    admit: str = "case",
 ) -> TuneResult:
     """Find the gains of least cost for ``controller`` over experiments and stiffnesses.
 
@@ -795,6 +873,7 @@ def tune(
     horizon_s : simulated time per run (default :data:`TUNING_HORIZON_S`).
     baseline : reference gains (default ``DEFAULT_GAINS``).
     noise_seed : sensor-noise seed of every run.
+    admit : admission rule, ``case`` (default) or ``experiment`` (see :func:`optimise`).
 
     Returns
     -------
@@ -823,7 +902,7 @@ def tune(
         horizon_s=horizon_s,
         noise_seed=noise_seed,
     )
-    return optimise(problem, budget, seed, workers, callback, baseline)
+    return optimise(problem, budget, seed, workers, callback, baseline, admit)
 
 
 def progress_callback(bar: Any) -> Callable[[Progress], None]:
@@ -833,8 +912,9 @@ def progress_callback(bar: Any) -> Callable[[Progress], None]:
     def show(p: Progress) -> None:
         bar.total = p.budget
         bar.update(p.evaluations - bar.n)
-        bar.set_postfix_str(
-            f"{p.stage}, best {p.best_cost:.4g} (default {p.baseline_cost:.4g})", refresh=True
-        )
+        text = f"{p.stage}, best admissible {p.best_cost:.4g} (default {p.baseline_cost:.4g}"
+        if p.cheapest_cost < p.best_cost - 1e-12:
+            text += f"; cheapest {p.cheapest_cost:.4g} is worse than the default somewhere"
+        bar.set_postfix_str(text + ")", refresh=True)
 
     return show

@@ -18,6 +18,7 @@ from fuzzkit.viz.figures import new_figure
 #: stay visible where they coincide. (colour, line width, alpha, zorder)
 GAINS_STYLE: dict[str, tuple[str, float, float, int]] = {
     "default": ("tab:orange", 3.0, 0.55, 2),
+    "matched": ("tab:green", 1.6, 0.8, 3),
     "tuned": ("tab:blue", 1.1, 1.0, 3),
 }
 SETPOINT_STYLE = {"color": "black", "ls": "--", "lw": 0.9, "zorder": 4}
@@ -140,7 +141,7 @@ def stiffness_figure(study: Mapping[tuple[str, str], Sequence[tuple[float, Any]]
     floor_used = False
     for row, ((ctrl, label), rows) in enumerate(series):
         colour = colours.get(ctrl, "tab:gray")
-        ls = "-" if label == "tuned" else "--"
+        ls = {"tuned": "-", "matched": ":"}.get(label, "--")
         name = f"{_controller_name(ctrl)} {label}"
         ks = np.array([k for k, _ in rows])
         over = np.array(

@@ -56,9 +56,16 @@ FORCE_SCALE_M_PER_N = 0.002
 def _wire(obj: EnvObject3, x_lo: float, x_hi: float) -> list[Vec]:
     """Line strips drawing a 3-D object that Boxes3D cannot (planes, surfaces)."""
     if isinstance(obj, Plane):
-        lo, hi = max(obj.x_min, x_lo), min(obj.x_max, x_hi)
         y0, y1 = max(obj.y_min, -0.3), min(obj.y_max, 0.3)
-        z = obj.point[2]  # the scenario's tables are horizontal
+        nx, ny, nz = obj.normal
+        px, py, pz = obj.point
+        if abs(nz) < abs(nx):  # a wall: a 100 mm high rectangle in the plane, along y
+            corners = [(y0, pz), (y1, pz), (y1, pz + 0.1), (y0, pz + 0.1), (y0, pz)]
+            return [
+                np.array([[px - (ny * (y - py) + nz * (z - pz)) / nx, y, z] for y, z in corners])
+            ]
+        lo, hi = max(obj.x_min, x_lo), min(obj.x_max, x_hi)
+        z = pz  # the scenario's tables are horizontal
         return [np.array([[lo, y0, z], [hi, y0, z], [hi, y1, z], [lo, y1, z], [lo, y0, z]])]
     if isinstance(obj, ExtrudedProfile):
         s = obj.surface
