@@ -132,7 +132,17 @@ def compile_rulebase(
             )
         except CodegenError as exc:
             if exact_why is not None:
-                raise
+                # No exact alternative (Q15, say): a table over the budget beats no code; the
+                # reason printed says it is over --max-bytes.
+                table = make_table(rb, number_type=number_type, tolerance=tol, progress=progress)
+                files = emit(rb, table, target, fpi_defaults=fpi_defaults)
+                return Compiled(
+                    "table",
+                    files,
+                    table,
+                    f"a {table.memory_bytes}-byte table meets tolerance {tol:g}, over --max-bytes "
+                    f"{max_bytes}: the exact method cannot be used ({exact_why})",
+                )
             return _exact(
                 rb, target, number_type, fpi_defaults,
                 f"no table within --max-bytes {max_bytes} meets tolerance {tol:g}: "

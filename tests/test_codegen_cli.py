@@ -287,6 +287,25 @@ def test_auto_takes_a_table_that_fits_and_says_so(
     assert "method: table (a " in text and "meets tolerance 0.05 within --max-bytes 8192" in text
 
 
+def test_auto_q15_has_no_exact_alternative_so_a_table_over_budget_is_taken_and_said(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # make demo's Q15 step: the table meeting 1e-3 is larger than --max-bytes, and Q15 has no
+    # exact method, so auto keeps the table and says it is over the budget.
+    out = tmp_path / "gen"
+    code, text, err = _run(
+        capsys, "compile", "macvicar_whelan", "--target", "c", "--type", "q15",
+        "--max-bytes", "4096", "--out", str(out),
+    )  # fmt: skip
+    assert code == 0, err
+    line = next(ln for ln in text.splitlines() if ln.startswith("method: "))
+    assert line.startswith("method: table (a ")
+    size = int(line.split("method: table (a ")[1].split("-byte")[0])
+    assert size > 4096
+    assert "over --max-bytes 4096: the exact method cannot be used" in line
+    assert sorted(p.name for p in out.iterdir()) == ["macvicar_whelan.c", "macvicar_whelan.h"]
+
+
 def test_exact_python_with_verify(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "gen"
     code, text, err = _run(
