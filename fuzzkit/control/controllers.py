@@ -269,8 +269,9 @@ class HybridForceController:
       correction) until ``engage_samples`` consecutive valid samples each have a force above it
       on some axis ("on contact the controller takes over"); an invalid sample restarts the
       count;
-    * **force safety limit**: when any accepted force exceeds ``force_limit_n`` on
-      ``trip_samples`` consecutive samples, the controller latches ``tripped``, stops
+    * **force safety limit**: when any force exceeds ``force_limit_n`` on ``trip_samples``
+      consecutive samples, the last of them accepted by the gate (or on ``spike_confirm``
+      consecutive samples, gated or not), the controller latches ``tripped``, stops
       correcting, and backs off along the measured force direction by ``backoff_m`` at
       ``backoff_speed_m_s``; only :meth:`reset` clears it;
     * **sensor faults**: a sample with NaN/inf on a force-controlled axis (or ``None``) holds
@@ -354,18 +355,18 @@ class HybridForceController:
             self._above = 0
             return self._output()
         f = np.where(np.isfinite(force), force, 0.0)
-        if not self._plausible(f):
+        plausible = self._plausible(f)
+        if not self.tripped:
+            # The trip sees every finite sample, gated or not: a real force that rises faster
+            # than the gate still trips, after spike_confirm samples at the latest.
+            self._over = self._over + 1 if float(np.max(np.abs(f))) > self.force_limit_n else 0
+            if self._over >= (self.trip_samples if plausible else self.spike_confirm):
+                self._trip(f)
+        if not plausible and not self.tripped:
             self.faults += 1
             self.rejected += 1
             self._above = 0
             return self._output()
-        if not self.tripped:
-            if float(np.max(np.abs(f))) > self.force_limit_n:
-                self._over += 1
-            else:
-                self._over = 0
-            if self._over >= self.trip_samples:
-                self._trip(f)
         if self.tripped:
             step = self.backoff_speed_m_s * self.period_s
             if float(np.linalg.norm(self._backoff)) < self.backoff_m:
