@@ -285,7 +285,7 @@ def test_codegen_lookup_table_plugs_in_as_a_surface() -> None:
 def test_a_real_over_force_faster_than_the_gate_still_trips() -> None:
     h = _hybrid(force_limit_n=30.0)
     h.step(np.array([0.0, 0.0, 10.0]))
-    for k in range(h.spike_confirm):
+    for _ in range(h.spike_confirm):
         assert not h.tripped
         h.step(np.array([0.0, 0.0, 200.0]))  # every sample jumps past the gate
     assert h.tripped

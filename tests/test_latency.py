@@ -99,5 +99,7 @@ def test_four_times_the_default_gains_are_stable_without_delay_and_unstable_at_5
     assert runs[5].tripped
     assert float(np.max(np.abs(runs[5].force_true[-50:]))) < 1.0
     # the same 5 periods with the default gains stay stable
-    default = run(exp, "planar", controller, surface=surface, seed=1, latency=(5, 0), duration_s=2.0)
+    default = run(
+        exp, "planar", controller, surface=surface, seed=1, latency=(5, 0), duration_s=2.0
+    )
     assert not default.tripped and float(np.std(default.force_true[-125:, 2])) < 0.5

@@ -392,10 +392,13 @@ class HybridForceController:
     def _plausible(self, f: Vec) -> bool:
         """Spike gate: accept ``f`` unless it jumps past the gate from the last accepted sample
         (a run of ``spike_confirm`` rejections means the level really changed: accept it)."""
-        if self._accepted is not None and self._rejected_run < self.spike_confirm:
-            if float(np.max(np.abs(f - self._accepted))) > self.spike_gate_n:
-                self._rejected_run += 1
-                return False
+        if (
+            self._accepted is not None
+            and self._rejected_run < self.spike_confirm
+            and float(np.max(np.abs(f - self._accepted))) > self.spike_gate_n
+        ):
+            self._rejected_run += 1
+            return False
         self._accepted = f.copy()
         self._rejected_run = 0
         return True

@@ -61,7 +61,7 @@ FAULTS: dict[str, Faults] = {
 
 
 def fault(name: str, seed: int = 0) -> Faults:
-    """The fault kind called ``name`` (see :data:`FAULTS`) with its randomness seeded by ``seed``."""
+    """The fault kind called ``name`` (see :data:`FAULTS`), its randomness seeded by ``seed``."""
     faults = FAULTS.get(name)
     if faults is None:
         raise ConfigError(f"unknown fault {name!r} (expected one of {', '.join(FAULTS)})")
