@@ -191,7 +191,20 @@ def test_stiffness_sweep(controller: str) -> None:
 @pytest.mark.slow
 def test_summary_has_the_issue_keys() -> None:
     data = summary(_run("E3", "pi"))
-    assert set(data) == {"experiment", "controller", "plant", "sim_time_s", "wall_time_s", "axes"}
+    assert set(data) == {
+        "experiment",
+        "controller",
+        "plant",
+        "stiffness",
+        "latency_periods",
+        "fault",
+        "seed",
+        "safety_limit",
+        "tripped",
+        "sim_time_s",
+        "wall_time_s",
+        "axes",
+    }
     assert list(data["axes"]) == ["z", "x"]
     for m in data["axes"].values():
         assert tuple(m) == SUMMARY_AXIS_KEYS

@@ -68,6 +68,12 @@ def fault(name: str, seed: int = 0) -> Faults:
     return replace(faults, seed=seed)
 
 
+def fault_name(faults: Faults) -> str:
+    """The name of ``faults`` in :data:`FAULTS` (any seed), or ``custom``."""
+    unseeded = replace(faults, seed=0)
+    return next((name for name, f in FAULTS.items() if f == unseeded), "custom")
+
+
 class FaultInjector:
     """Applies :class:`Faults` to one run's measured force samples, in order."""
 

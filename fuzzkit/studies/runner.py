@@ -25,7 +25,7 @@ from fuzzkit.control.controllers import (
 from fuzzkit.errors import ConfigError
 from fuzzkit.plants.contract import ContactPlant, PlantSample, Scenario, task_to_base
 from fuzzkit.studies.experiments import DEFAULT_GAINS, Experiment
-from fuzzkit.studies.faults import FaultInjector, Faults, fault
+from fuzzkit.studies.faults import FaultInjector, Faults, fault, fault_name
 from fuzzkit.studies.plants import make_plant
 
 Vec = npt.NDArray[np.float64]
@@ -62,7 +62,9 @@ class RunResult:
     contact_points: list[Vec]
     faults: int
     tripped: bool
+    seed: int  # of the sensor noise
     latency_periods: tuple[int, int]  # (sensor, command), fault delay included
+    fault: str  # the fault kind's name in fuzzkit.studies.faults.FAULTS, or "custom"
     fault_seed: int
     trip_time_s: float | None
     engaged_time_s: float | None
@@ -227,7 +229,9 @@ def run(
         contact_points=contact_points,
         faults=ctrl.faults,
         tripped=ctrl.tripped,
+        seed=seed,
         latency_periods=(sensor_delay, command_delay),
+        fault=fault_name(faults),
         fault_seed=faults.seed,
         trip_time_s=ctrl.trip_time_s,
         engaged_time_s=engaged_at,
