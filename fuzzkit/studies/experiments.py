@@ -16,18 +16,28 @@ task frame (``fuzzkit.plants.contract`` explains frames and signs). Metrics are 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.errors import ConfigError
-from fuzzkit.plants.contract import Scenario
+from fuzzkit.studies.task import AXES, DEFAULT_LATENCY, Experiment
+
+__all__ = [
+    "AXES",
+    "DEFAULT_GAINS",
+    "DEFAULT_LATENCY",
+    "EXPERIMENTS",
+    "Experiment",
+    "experiment",
+    "press_experiment",
+    "scaled_gains",
+    "with_stiffness",
+]
 from fuzzkit.plants.environment import Box, Waypoint
 
 Vec = npt.NDArray[np.float64]
-
-AXES = ("x", "y", "z")
 
 #: Default gains, tuned by hand (like the paper's, "by trial and error") for the default contact
 #: stiffness of 10 N/mm and a 4 ms period. PI: metres per newton. Fuzzy-PI: Ki scales e and Kp
@@ -37,38 +47,6 @@ DEFAULT_GAINS: dict[str, dict[str, float]] = {
     "pi": {"kp": 4.0e-5, "ki": 1.0e-5, "u_min": -0.05, "u_max": 0.05},
     "fuzzy-pi": {"kp": 0.2, "ki": 0.05, "kx": 2.0e-4, "u_min": -0.05, "u_max": 0.05},
 }
-
-
-#: Default (sensor, command) latency in periods of 4 ms: one period each way, as on an ABB EGM
-#: cell (docs/simulation.md, "Latency", says why).
-DEFAULT_LATENCY: tuple[int, int] = (1, 1)
-
-
-@dataclass(frozen=True, slots=True)
-class Experiment:
-    """One experiment: a world plus what the force loop must do in it.
-
-    ``setpoints`` and ``selection`` are per task axis (x, y, z). ``engage_threshold_n``: the
-    force loop takes over when a measured force exceeds it (None: active from the start).
-    ``hold_path_on_contact``: the nominal path stops when the loop takes over.
-    ``steady_window_s``: the final stretch used for steady-state statistics.
-    ``latency_periods``: (sensor-to-controller, controller-to-motion) delays in periods.
-    ``engage_samples``: consecutive samples above the threshold needed to engage. ``fault``:
-    the sensor fault kind injected by default (a name of ``fuzzkit.studies.faults.FAULTS``).
-    """
-
-    name: str
-    title: str
-    scenario: Scenario
-    setpoints: tuple[float, float, float]
-    selection: tuple[bool, bool, bool]
-    force_limit_n: float
-    engage_threshold_n: float | None = 1.0
-    hold_path_on_contact: bool = False
-    steady_window_s: float = 1.0
-    latency_periods: tuple[int, int] = DEFAULT_LATENCY
-    engage_samples: int = 3
-    fault: str = "none"
 
 
 #: The shipped experiments: scenario files ``fuzzkit/studies/scenarios/<name>.yaml``.

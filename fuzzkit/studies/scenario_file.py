@@ -28,8 +28,8 @@ from fuzzkit.formats.yaml_reader import (
 from fuzzkit.plants.contact import ContactModel, SensorModel, ToolModel
 from fuzzkit.plants.contract import Scenario
 from fuzzkit.plants.environment import Box, EnvObject, RoughSurface, Table, Waypoint
-from fuzzkit.studies.experiments import AXES, Experiment
 from fuzzkit.studies.faults import FAULTS
+from fuzzkit.studies.task import AXES, Experiment
 
 SCENARIO_DOCUMENT = DocumentKind(
     "scenario",
