@@ -102,6 +102,12 @@ def register(subparsers: Any) -> None:
     cmp_.add_argument("--plant", choices=sorted(PLANTS), default="planar")
     cmp_.add_argument("--seed", type=int, default=0)
     cmp_.add_argument(
+        "--latency",
+        type=_latency,
+        metavar="SENSOR[,COMMAND]",
+        help="sensor and command delays in periods (default: each scenario's)",
+    )
+    cmp_.add_argument(
         "--gains",
         metavar="GAINS.yaml",
         help="gains file (fuzzkit.control.gains), e.g. from fuzzkit tune",
