@@ -4,6 +4,7 @@ delay destabilises aggressive gains."""
 from __future__ import annotations
 
 import functools
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -103,3 +104,35 @@ def test_four_times_the_default_gains_are_stable_without_delay_and_unstable_at_5
         exp, "planar", controller, surface=surface, seed=1, latency=(5, 0), duration_s=2.0
     )
     assert not default.tripped and float(np.std(default.force_true[-125:, 2])) < 0.5
+
+
+def test_stability_map_boundary_is_the_last_delay_of_the_first_stable_run() -> None:
+    from fuzzkit.studies.latency_sweep import StabilityMap
+
+    m = StabilityMap(
+        "pi",
+        (1.0, 2.0, 4.0),
+        (0, 1, 2, 3),
+        ((True, True, True, True), (True, True, False, True), (False, True, True, True)),
+    )
+    # a stable island past the first unstable delay does not count
+    assert m.boundary() == {1.0: 3, 2.0: 1, 4.0: None}
+
+
+@pytest.mark.slow
+def test_the_stable_delay_shrinks_as_the_gain_grows_and_the_figure_is_written(
+    tmp_path: Path,
+) -> None:
+    from fuzzkit.studies.latency_sweep import stability_map
+    from fuzzkit.viz.latency import write_stability_png
+
+    maps = [
+        stability_map(c, (1.0, 3.0, 8.0), (0, 2, 4), _surface() if c == "fuzzy-pi" else None)
+        for c in ("pi", "fuzzy-pi")
+    ]
+    for m in maps:
+        bound = [-1 if b is None else b for b in m.boundary().values()]
+        assert bound == sorted(bound, reverse=True), m
+        assert bound[0] == 4 and bound[-1] == 0  # defaults survive 4 periods; 8x gains none
+    png = write_stability_png(maps, tmp_path / "b.png")
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
