@@ -21,7 +21,7 @@ from fuzzkit.studies.metrics import (
     steady_state_error,
     summary,
 )
-from fuzzkit.studies.runner import Faults, RunResult, load_surface, run
+from fuzzkit.studies.runner import RunResult, load_surface, run
 
 CONTROLLERS = ("pi", "fuzzy-pi")
 
@@ -125,28 +125,7 @@ def test_e3_both_axes_within_1n_in_steady_state(controller: str) -> None:
     assert r.tool_position[-1, 0] > 0.52
 
 
-# -- faults -------------------------------------------------------------------------------------
-
-FAULTS = {
-    "nan": Faults(nan_probability=0.2, seed=3),
-    "dropout_100ms": Faults(dropout=(2.2, 0.1)),
-    "spikes": Faults(spike_probability=0.03, spike_n=40.0, seed=4),
-    "delay_2": Faults(delay_steps=2),
-}
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("controller", CONTROLLERS)
-@pytest.mark.parametrize("fault", sorted(FAULTS))
-def test_sensor_faults_never_drive_force_past_the_safety_limit(controller: str, fault: str) -> None:
-    exp = experiment("E1")
-    r = run(exp, "planar", controller, surface=_surface(), seed=1, faults=FAULTS[fault])
-    assert float(np.max(np.abs(r.force_true))) < exp.force_limit_n
-    assert not r.tripped
-    if fault in ("nan", "dropout_100ms"):
-        assert r.faults > 0  # counted, and held
-    # Still regulating at the end.
-    assert abs(float(np.mean(r.force_true[-100:, 2])) - 10.0) < 1.5
+# -- faults: tests/test_safety.py runs every fault kind of fuzzkit.studies.faults.FAULTS -------
 
 
 # -- environment stiffness ------------------------------------------------------------------------
