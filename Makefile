@@ -38,6 +38,12 @@ test: $(STAMP)
 	$(MAKE) --no-print-directory lint typecheck imports VENV=$(VENV)
 	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) -q -p no:cacheprovider
 
+# The safety matrix (tests/test_safety.py) over 50 noise/fault seeds per case instead of the
+# 10 of `make test`: every experiment x controller x fault kind x plant.
+verify: $(STAMP)
+	FUZZKIT_VERIFY_SEEDS=50 $(BIN)/python -m pytest -n $(PYTEST_WORKERS) -q -p no:cacheprovider \
+		tests/test_safety.py
+
 # The suite against the newest versions pyproject.toml's ranges allow (not the lock): run it on
 # purpose to catch a dependency drift before the next `make lock` does.
 test-latest:

@@ -89,3 +89,7 @@ class SimulationError(FuzzkitError, RuntimeError):
 
 class ConfigError(FuzzkitError, ValueError):
     """A configuration file (gains, robot description, experiment options) is malformed."""
+
+
+class ScenarioError(ProblemsError):
+    """A scenario file is malformed; every problem is listed as ``file:line:col``."""

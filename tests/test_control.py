@@ -129,6 +129,14 @@ def test_reset_clears_state() -> None:
             lambda: HybridForceController([None] * 3, [0.0] * 3, 0.004, force_limit_n=0),
             "force_limit",
         ),
+        (
+            lambda: HybridForceController([None] * 3, [0.0] * 3, 0.004, engage_samples=0),
+            "engage_samples",
+        ),
+        (
+            lambda: HybridForceController([None] * 3, [0.0] * 3, 0.004, spike_gate_n=-1.0),
+            "spike_gate_n",
+        ),
     ],
 )
 def test_bad_parameters_are_rejected(build: object, match: str) -> None:
@@ -154,8 +162,60 @@ def test_engagement_waits_for_contact() -> None:
     for _ in range(10):
         assert not np.any(h.step(np.array([0.0, 0.0, 0.2])))
     assert not h.engaged
+    for _ in range(h.engage_samples - 1):
+        h.step(np.array([0.0, 0.0, 2.0]))
+        assert not h.engaged
     h.step(np.array([0.0, 0.0, 2.0]))
-    assert h.engaged
+    assert h.engaged and h.engage_samples == 3
+
+
+@pytest.mark.parametrize(
+    "samples",
+    [
+        [2.0],  # one sample above the threshold
+        [2.0, 2.0],  # two
+        [2.0, 2.0, math.nan, 2.0],  # an invalid sample restarts the count
+        [2.0, 0.5, 2.0, 2.0],  # so does one below the threshold
+        [40.0, 0.0, -40.0, 0.0, 40.0],  # isolated spikes never even pass the gate
+    ],
+)
+def test_engagement_needs_consecutive_valid_samples(samples: list[float]) -> None:
+    h = _hybrid(engage_threshold_n=1.0)
+    h.step(np.zeros(3))
+    for f in samples:
+        out = h.step(np.array([0.0, 0.0, f]))
+        assert not h.engaged and not np.any(out)
+
+
+def test_spike_gate_rejects_isolated_spikes_and_follows_a_real_step() -> None:
+    h = _hybrid(force_limit_n=30.0)  # gate: half the limit, 15 N
+    assert h.spike_gate_n == 15.0
+    u0 = h.step(np.array([0.0, 0.0, 10.0])).copy()
+    out = h.step(np.array([0.0, 0.0, 50.0]))  # a 40 N spike: held like a NaN
+    assert np.array_equal(out, u0) and h.rejected == 1 and h.faults == 1
+    u0 = h.step(np.array([0.0, 0.0, 10.0])).copy()  # back to the level: accepted
+    # A real step to 28 N: rejected spike_confirm times, then accepted.
+    outs = [h.step(np.array([0.0, 0.0, 28.0])).copy() for _ in range(h.spike_confirm + 1)]
+    assert all(np.array_equal(o, u0) for o in outs[:-1])
+    assert outs[-1][2] < u0[2]  # the controller now sees 28 N > 10 N and backs away
+    assert h.rejected == 1 + h.spike_confirm
+
+
+def test_safety_limit_needs_consecutive_samples_then_latches_and_backs_off() -> None:
+    h = _hybrid(force_limit_n=30.0, backoff_m=0.002, backoff_speed_m_s=0.1)
+    for f in (10.0, 20.0, 28.0, 34.0, 26.0):  # one sample over the limit: no trip
+        h.step(np.array([0.0, 0.0, f]))
+    assert not h.tripped
+    h.step(np.array([0.0, 0.0, 34.0]))
+    out_before = h.step(np.array([0.0, 0.0, 40.0])).copy()
+    assert h.tripped
+    outs = [h.step(np.array([0.0, 0.0, 35.0])).copy() for _ in range(20)]
+    # Moves away from the surface (negative task z) by the back-off distance, then stops.
+    assert outs[-1][2] < out_before[2]
+    assert outs[-1][2] == pytest.approx(outs[-2][2])
+    assert out_before[2] - outs[-1][2] == pytest.approx(0.002, abs=0.0005)
+    h.reset()
+    assert not h.tripped
 
 
 def test_nan_on_controlled_axis_holds_and_counts_but_not_on_free_axis() -> None:
@@ -166,24 +226,6 @@ def test_nan_on_controlled_axis_holds_and_counts_but_not_on_free_axis() -> None:
     assert h.faults == 2
     h.step(np.array([0.0, math.nan, 5.0]))  # y is not force-controlled: not a fault
     assert h.faults == 2
-
-
-def test_safety_limit_needs_consecutive_samples_then_latches_and_backs_off() -> None:
-    h = _hybrid(force_limit_n=30.0, backoff_m=0.002, backoff_speed_m_s=0.1)
-    h.step(np.array([0.0, 0.0, 10.0]))
-    h.step(np.array([0.0, 0.0, 80.0]))  # one spike: no trip
-    assert not h.tripped
-    h.step(np.array([0.0, 0.0, 10.0]))
-    h.step(np.array([0.0, 0.0, 40.0]))
-    out_before = h.step(np.array([0.0, 0.0, 40.0])).copy()
-    assert h.tripped
-    outs = [h.step(np.array([0.0, 0.0, 5.0])).copy() for _ in range(20)]
-    # Moves away from the surface (negative task z) by the back-off distance, then stops.
-    assert outs[-1][2] < out_before[2]
-    assert outs[-1][2] == pytest.approx(outs[-2][2])
-    assert out_before[2] - outs[-1][2] == pytest.approx(0.002, abs=0.0005)
-    h.reset()
-    assert not h.tripped
 
 
 def test_make_axis_controllers_follows_selection() -> None:
@@ -238,3 +280,12 @@ def test_codegen_lookup_table_plugs_in_as_a_surface() -> None:
         assert surf(e, de) == pytest.approx(exact(e, de), abs=0.02)
     f = FuzzyPI(surf, kp=0.2, ki=0.05, kx=2e-4)
     assert f.step(10.0, 5.0) > 0.0
+
+
+def test_a_real_over_force_faster_than_the_gate_still_trips() -> None:
+    h = _hybrid(force_limit_n=30.0)
+    h.step(np.array([0.0, 0.0, 10.0]))
+    for _ in range(h.spike_confirm):
+        assert not h.tripped
+        h.step(np.array([0.0, 0.0, 200.0]))  # every sample jumps past the gate
+    assert h.tripped

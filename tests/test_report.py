@@ -111,6 +111,7 @@ def test_report_writes_markdown_figures_and_recordings(tmp_path: Path) -> None:
         "force_planar_E3.png",
         "surface.png",
         "stiffness.png",
+        "latency.png",
     ):
         assert png in names
         assert (out / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
@@ -125,6 +126,11 @@ def test_report_writes_markdown_figures_and_recordings(tmp_path: Path) -> None:
         "## The paper's claims",
         "![E1 on the planar plant](force_planar_E1.png)",
         "stiffness.png",
+        "## Latency",
+        "![largest stable delay against the gain factor](latency.png)",
+        # the default gains are stable through the whole sweep, 8x them not even without delay
+        "| 1 | >= 6 | >= 6 |",
+        "| 8 | 0 | 0 |",
     ):
         assert section in text
     assert "| pi | tuned | 2e-05 | 1.5e-05 | - |" in text

@@ -130,10 +130,15 @@ def register(sub: Any) -> None:
 
     p = sub.add_parser(
         "schema",
-        help="print the JSON Schema of the rule-base format",
+        help="print the JSON Schema of the rule-base (or scenario) format",
         description="Print a JSON Schema (draft 2020-12) of the rule-base YAML "
         "format, e.g. for the YAML language server.",
         epilog="example:\n  fuzzkit schema > fuzzkit-rulebase.schema.json",
+    )
+    p.add_argument(
+        "--scenario",
+        action="store_true",
+        help="the schema of scenario files (fuzzkit simulate TASK.yaml) instead",
     )
     p.set_defaults(handler=cmd_schema)
 
@@ -522,6 +527,11 @@ def cmd_surface(args: argparse.Namespace) -> int:
 
 
 def cmd_schema(args: argparse.Namespace) -> int:
+    if args.scenario:
+        from fuzzkit.studies.scenario_file import json_schema as scenario_schema
+
+        print(json.dumps(scenario_schema(), indent=2))
+        return EXIT_OK
     from fuzzkit.formats.schema import json_schema
 
     print(json.dumps(json_schema(), indent=2))

@@ -12,6 +12,30 @@ from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
 
 CONTROLLERS = ("pi", "fuzzy-pi")
+FAULT_KINDS = ("none", "spike", "nan", "dropout", "delay")  # fuzzkit.studies.faults.FAULTS
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (value > 0.0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
+    return value
+
+
+def _latency(text: str) -> tuple[int, int | None]:
+    parts = text.split(",")
+    try:
+        values = [int(p) for p in parts]
+    except ValueError:
+        values = []
+    if not 1 <= len(values) <= 2 or min(values, default=-1) < 0:
+        raise argparse.ArgumentTypeError(
+            f"expected SENSOR[,COMMAND], whole periods >= 0 (e.g. 2 or 2,1), got {text!r}"
+        )
+    return values[0], values[1] if len(values) == 2 else None
 
 #: ``fuzzkit compare --protocol`` choices (fuzzkit.studies.protocol.PROTOCOLS).
 PROTOCOL_CHOICES = ("matched", "tuned", "default")
@@ -31,7 +55,11 @@ def register(subparsers: Any) -> None:
         "  rerun e3_pi.rrd     (open the recording in the Rerun viewer)\n"
         "  fuzzkit simulate E2 --gains gains.yaml --json",
     )
-    sim.add_argument("experiment", metavar="EXPERIMENT", help="E1, E2 or E3")
+    sim.add_argument(
+        "experiment",
+        metavar="EXPERIMENT",
+        help="E1, E2, E3 (shipped scenarios) or a scenario file TASK.yaml",
+    )
     sim.add_argument(
         "--controller", choices=CONTROLLERS, default="fuzzy-pi", help="force controller"
     )
@@ -47,7 +75,28 @@ def register(subparsers: Any) -> None:
         default="planar",
         help="simulated robot: planar two-link arm or 6-DOF arm",
     )
-    sim.add_argument("--seed", type=int, default=0, help="sensor-noise seed")
+    sim.add_argument(
+        "--seed", type=int, default=0, help="seed of the sensor noise and of the faults"
+    )
+    sim.add_argument(
+        "--stiffness",
+        type=_positive_float,
+        metavar="N_PER_MM",
+        help="contact stiffness of the environment (N/mm; default: the scenario's)",
+    )
+    sim.add_argument(
+        "--latency",
+        type=_latency,
+        metavar="SENSOR[,COMMAND]",
+        help="sensor-to-controller and controller-to-motion delays in periods (default: the "
+        "scenario's; one number sets the sensor delay only)",
+    )
+    sim.add_argument(
+        "--fault",
+        choices=FAULT_KINDS,
+        help="inject a sensor fault at the strength the test suite uses (default: the "
+        "scenario's, none for E1-E3)",
+    )
     sim.add_argument("--rrd", metavar="OUT.rrd", help="write a Rerun recording of the run")
     sim.add_argument("--json", action="store_true", help="print the metrics as JSON")
     sim.add_argument(
@@ -90,6 +139,12 @@ def register(subparsers: Any) -> None:
     )
     cmp_.add_argument("--seed", type=int, default=0, help="sensor-noise seed")
     cmp_.add_argument(
+        "--latency",
+        type=_latency,
+        metavar="SENSOR[,COMMAND]",
+        help="sensor and command delays in periods (default: each scenario's)",
+    )
+    cmp_.add_argument(
         "--gains",
         metavar="GAINS.yaml",
         help="gains file (fuzzkit.control.gains), e.g. from fuzzkit tune",
@@ -120,11 +175,31 @@ def _run_one(
     exp_name: str, controller: str, args: argparse.Namespace, surface: Any, required: bool = True
 ) -> Any:
     from fuzzkit.studies.e3_arm6 import resolve
+    from fuzzkit.studies.experiments import with_stiffness
+    from fuzzkit.studies.faults import fault
     from fuzzkit.studies.runner import run
 
     exp, plant = resolve(exp_name, args.plant)  # E3 on arm6 is the paper's 3-D geometry
+    stiffness = getattr(args, "stiffness", None)
+    if stiffness is not None:
+        exp = with_stiffness(exp, stiffness * 1e3)
+    latency = None
+    if getattr(args, "latency", None) is not None:
+        sensor, command = args.latency
+        latency = (sensor, exp.latency_periods[1] if command is None else command)
+    kind = getattr(args, "fault", None) or exp.fault
     gains = load_gains(args.gains, controller, required)
-    return run(exp, plant, controller, gains=gains, surface=surface, seed=args.seed), plant
+    result = run(
+        exp,
+        plant,
+        controller,
+        gains=gains,
+        surface=surface,
+        seed=args.seed,
+        faults=fault(kind, args.seed),
+        latency=latency,
+    )
+    return result, plant
 
 
 def _surface_for(controller: str, rulebase: str) -> Any:
@@ -165,13 +240,20 @@ def _simulate(args: argparse.Namespace) -> int:
         f"{data['sim_time_s']:.2f} s simulated in {data['wall_time_s']:.2f} s"
     )
     print(f"  {result.experiment.title}")
+    sensor, command = data["latency_periods"]
+    print(
+        f"  stiffness {data['stiffness']:g} N/mm, latency {sensor} + {command} periods "
+        f"(sensor + command), fault {data['fault']}, seed {data['seed']}, "
+        f"safety limit {data['safety_limit']:g} N"
+    )
     for name, m in data["axes"].items():
         print(
             f"  {name}: set {m['setpoint']:g} N, first contact {_fmt(m['first_contact_s'])} s, "
             f"overshoot {_fmt(m['overshoot_pct'], 1)} %, settling {_fmt(m['settling_time_s'])} s, "
             f"steady error {_fmt(m['steady_state_error_mean'])} +- "
             f"{_fmt(m['steady_state_error_std'])} N, RMS moving {_fmt(m['rms_error'])} N, "
-            f"peak {_fmt(m['peak_force'], 1)} N, contact lost {_fmt(m['contact_lost_s'])} s"
+            f"peak {_fmt(m['peak_force_true'], 1)} N true ({_fmt(m['peak_force_measured'], 1)} N "
+            f"measured), contact lost {_fmt(m['contact_lost_s'])} s"
         )
     if result.faults or result.tripped:
         print(f"  sensor faults: {result.faults}, safety trip: {result.tripped}")

@@ -257,12 +257,21 @@ class HybridForceController:
 
     One :class:`AxisController` per task axis (x, y, z), a diagonal selection matrix ``S``
     (``selection[i]`` is 1 for a force-controlled axis, 0 for a motion-only one), per-axis set
-    points, and three safeguards:
+    points, and four safeguards:
 
-    * **engagement**: with ``engage_threshold_n`` set, the loop stays idle (zero correction)
-      until the measured force exceeds it on any axis: "on contact the controller takes over";
-    * **force safety limit**: when any measured force exceeds ``force_limit_n`` on
-      ``trip_samples`` consecutive samples, the controller latches ``tripped``, stops
+    * **spike gate**: a sample that differs from the last accepted one by more than
+      ``spike_gate_n`` on any axis (default: half of ``force_limit_n``) is rejected like a
+      NaN (correction held, ``faults`` and ``rejected`` count it), unless ``spike_confirm``
+      samples in a row have been rejected: then the new level is accepted. An isolated sensor
+      spike never reaches the axis controllers, the engagement or the trip logic; a real force
+      step faster than the gate is seen ``spike_confirm`` periods late;
+    * **engagement** (debounced): with ``engage_threshold_n`` set, the loop stays idle (zero
+      correction) until ``engage_samples`` consecutive valid samples each have a force above it
+      on some axis ("on contact the controller takes over"); an invalid sample restarts the
+      count;
+    * **force safety limit**: when any force exceeds ``force_limit_n`` on ``trip_samples``
+      consecutive samples, the last of them accepted by the gate (or on ``spike_confirm``
+      consecutive samples, gated or not), the controller latches ``tripped``, stops
       correcting, and backs off along the measured force direction by ``backoff_m`` at
       ``backoff_speed_m_s``; only :meth:`reset` clears it;
     * **sensor faults**: a sample with NaN/inf on a force-controlled axis (or ``None``) holds
@@ -281,6 +290,9 @@ class HybridForceController:
         trip_samples: int = 2,
         backoff_m: float = 0.005,
         backoff_speed_m_s: float = 0.02,
+        engage_samples: int = 3,
+        spike_gate_n: float | None = None,
+        spike_confirm: int = 4,
     ) -> None:
         if len(controllers) != 3 or len(setpoints) != 3:
             raise ConfigError(
@@ -290,6 +302,12 @@ class HybridForceController:
             raise ConfigError(f"force_limit_n must be > 0 (got {force_limit_n})")
         if trip_samples < 1:
             raise ConfigError(f"trip_samples must be >= 1 (got {trip_samples})")
+        if engage_samples < 1:
+            raise ConfigError(f"engage_samples must be >= 1 (got {engage_samples})")
+        if spike_confirm < 1:
+            raise ConfigError(f"spike_confirm must be >= 1 (got {spike_confirm})")
+        if spike_gate_n is not None and not spike_gate_n > 0.0:
+            raise ConfigError(f"spike_gate_n must be > 0 or None (got {spike_gate_n})")
         self.controllers = list(controllers)
         self.selection = np.array([0.0 if c is None else 1.0 for c in controllers])
         self.setpoints = np.asarray(setpoints, dtype=np.float64)
@@ -299,6 +317,9 @@ class HybridForceController:
         self.trip_samples = trip_samples
         self.backoff_m = backoff_m
         self.backoff_speed_m_s = backoff_speed_m_s
+        self.engage_samples = engage_samples
+        self.spike_gate_n = 0.5 * force_limit_n if spike_gate_n is None else spike_gate_n
+        self.spike_confirm = spike_confirm
         self.reset()
 
     def reset(self) -> None:
@@ -311,7 +332,11 @@ class HybridForceController:
         self.de = np.zeros(3)
         self.du = np.zeros(3)
         self.faults = 0
+        self.rejected = 0
         self.engaged = self.engage_threshold_n is None
+        self._above = 0
+        self._accepted: Vec | None = None
+        self._rejected_run = 0
         self.tripped = False
         self.trip_time_s: float | None = None
         self._over = 0
@@ -327,15 +352,21 @@ class HybridForceController:
         valid = force is not None and bool(np.all(np.isfinite(force[self.selection > 0])))
         if force is None or not valid:
             self.faults += 1
+            self._above = 0
             return self._output()
         f = np.where(np.isfinite(force), force, 0.0)
+        plausible = self._plausible(f)
         if not self.tripped:
-            if float(np.max(np.abs(f))) > self.force_limit_n:
-                self._over += 1
-            else:
-                self._over = 0
-            if self._over >= self.trip_samples:
+            # The trip sees every finite sample, gated or not: a real force that rises faster
+            # than the gate still trips, after spike_confirm samples at the latest.
+            self._over = self._over + 1 if float(np.max(np.abs(f))) > self.force_limit_n else 0
+            if self._over >= (self.trip_samples if plausible else self.spike_confirm):
                 self._trip(f)
+        if not plausible and not self.tripped:
+            self.faults += 1
+            self.rejected += 1
+            self._above = 0
+            return self._output()
         if self.tripped:
             step = self.backoff_speed_m_s * self.period_s
             if float(np.linalg.norm(self._backoff)) < self.backoff_m:
@@ -343,7 +374,8 @@ class HybridForceController:
             return self._output()
         if not self.engaged:
             thr = self.engage_threshold_n if self.engage_threshold_n is not None else 0.0
-            if float(np.max(np.abs(f))) <= thr:
+            self._above = self._above + 1 if float(np.max(np.abs(f))) > thr else 0
+            if self._above < self.engage_samples:
                 return self._output()
             self.engaged = True
         for i, c in enumerate(self.controllers):
@@ -356,6 +388,20 @@ class HybridForceController:
         self.de = self.e - self._e_last if self._e_last is not None else np.zeros(3)
         self._e_last = self.e.copy()
         return self._output()
+
+    def _plausible(self, f: Vec) -> bool:
+        """Spike gate: accept ``f`` unless it jumps past the gate from the last accepted sample
+        (a run of ``spike_confirm`` rejections means the level really changed: accept it)."""
+        if (
+            self._accepted is not None
+            and self._rejected_run < self.spike_confirm
+            and float(np.max(np.abs(f - self._accepted))) > self.spike_gate_n
+        ):
+            self._rejected_run += 1
+            return False
+        self._accepted = f.copy()
+        self._rejected_run = 0
+        return True
 
     def _trip(self, f: Vec) -> None:
         self.tripped = True

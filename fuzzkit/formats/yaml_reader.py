@@ -28,7 +28,7 @@ from pathlib import Path as FsPath
 import yaml
 from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 
-from fuzzkit.errors import Location, Problem, RuleBaseError
+from fuzzkit.errors import Location, Problem, ProblemsError, RuleBaseError
 from fuzzkit.fuzzy import validation
 from fuzzkit.fuzzy.model import (
     PIECEWISE_LINEAR_SHAPES,
@@ -928,6 +928,11 @@ class _Reader:
         return locate
 
 
+#: The generic primitives of :class:`_Reader` (mapping, keys, number, name, text, sequence,
+#: error), for readers of other strict YAML documents (scenario files).
+NodeReader = _Reader
+
+
 class _At(Node):
     """A pseudo-node marking a position inside a scalar (a table cell)."""
 
@@ -944,7 +949,7 @@ _CORE_TAGS = frozenset(
 )
 
 
-def _foreign_tags(root: Node, source: str) -> list[Problem]:
+def _foreign_tags(root: Node, source: str, plural: str = "rule bases") -> list[Problem]:
     """A problem for every node with an explicit tag outside plain YAML (``!!python/...``).
 
     SafeLoader would refuse to construct them; fuzzkit reads nodes itself, so it says so
@@ -963,7 +968,7 @@ def _foreign_tags(root: Node, source: str) -> list[Problem]:
             problems.append(
                 Problem(
                     Location(source, mark.line + 1, mark.column + 1),
-                    f"unsupported YAML tag {node.tag!r} (rule bases are plain YAML: "
+                    f"unsupported YAML tag {node.tag!r} ({plural} are plain YAML: "
                     "mappings, lists, strings and numbers)",
                 )
             )
@@ -1017,7 +1022,9 @@ def _expanded_size(root: Node, limit: int) -> int:
     return size[id(root)]
 
 
-def _compose(text: str, file: str) -> Node | None:
+def _compose(text: str, file: str, kind: DocumentKind | None = None) -> Node | None:
+    kind = kind or RULE_BASE_DOCUMENT
+    error = kind.error
     try:
         return yaml.compose(text, Loader=yaml.SafeLoader)
     except yaml.MarkedYAMLError as exc:
@@ -1026,19 +1033,80 @@ def _compose(text: str, file: str) -> Node | None:
         what = " ".join(x for x in (exc.context, exc.problem) if x) or "invalid YAML"
         if "\t" in text and "'\\t'" in what:
             what += " (YAML forbids tabs for indentation; use spaces)"
-        raise RuleBaseError([Problem(where, f"invalid YAML: {what}")]) from None
+        raise error([Problem(where, f"invalid YAML: {what}")]) from None
     except yaml.YAMLError as exc:
-        raise RuleBaseError([Problem(Location(file), f"invalid YAML: {exc}")]) from None
+        raise error([Problem(Location(file), f"invalid YAML: {exc}")]) from None
     except RecursionError:
-        raise RuleBaseError(
+        raise error(
             [
                 Problem(
                     Location(file),
-                    "invalid rule base: YAML nested too deeply "
+                    f"invalid {kind.noun}: YAML nested too deeply "
                     "(expected a few levels of mappings and lists)",
                 )
             ]
         ) from None
+
+
+@dataclass(frozen=True, slots=True)
+class DocumentKind:
+    """What a strict YAML document holds, for the messages of :func:`compose_document`."""
+
+    noun: str  # "rule base"
+    plural: str  # "rule bases"
+    empty_hint: str  # what a non-empty document has
+    error: type[ProblemsError]
+
+
+RULE_BASE_DOCUMENT = DocumentKind(
+    "rule base",
+    "rule bases",
+    "expected a mapping with name, inputs, outputs and rules",
+    RuleBaseError,
+)
+
+
+def compose_document(text: str, source: str, kind: DocumentKind) -> Node:
+    """Compose ``text`` into a node tree with the limits every fuzzkit YAML file obeys.
+
+    Refuses (raising ``kind.error`` with located problems) files over :data:`MAX_FILE_BYTES`,
+    invalid or empty YAML, alias bombs and recursive aliases (more than :data:`MAX_NODES`
+    nodes once expanded), and explicit tags outside plain YAML. Readers such as
+    :class:`NodeReader` then convert the tree by hand.
+    """
+    size = len(text.encode("utf-8", errors="replace"))
+    if size > MAX_FILE_BYTES:
+        raise kind.error(
+            [
+                Problem(
+                    Location(source),
+                    f"file is {size} bytes; {kind.plural} are "
+                    f"limited to {MAX_FILE_BYTES} bytes (1 MiB)",
+                )
+            ]
+        )
+    root = _compose(text, source, kind)
+    if root is None:
+        raise kind.error([Problem(Location(source), f"file is empty; {kind.empty_hint}")])
+    try:
+        nodes = _expanded_size(root, MAX_NODES)
+    except _TooBig as exc:
+        raise kind.error([Problem(Location(source), str(exc))]) from None
+    if nodes > MAX_NODES:
+        raise kind.error(
+            [
+                Problem(
+                    Location(source),
+                    f"the document expands to more than "
+                    f"{MAX_NODES} nodes through aliases (an alias bomb?); "
+                    f"{kind.plural} are far smaller",
+                )
+            ]
+        )
+    foreign = _foreign_tags(root, source, kind.plural)
+    if foreign:
+        raise kind.error(foreign)
+    return root
 
 
 def loads_rulebase(text: str, source: str = "<string>") -> RuleBase:
@@ -1059,45 +1127,7 @@ def loads_rulebase_with_warnings(
     text: str, source: str = "<string>"
 ) -> tuple[RuleBase, list[Problem]]:
     """:func:`loads_rulebase`, also returning the warnings (severity ``warning``), located."""
-    size = len(text.encode("utf-8", errors="replace"))
-    if size > MAX_FILE_BYTES:
-        raise RuleBaseError(
-            [
-                Problem(
-                    Location(source),
-                    f"file is {size} bytes; rule bases are "
-                    f"limited to {MAX_FILE_BYTES} bytes (1 MiB)",
-                )
-            ]
-        )
-    root = _compose(text, source)
-    if root is None:
-        raise RuleBaseError(
-            [
-                Problem(
-                    Location(source),
-                    "file is empty; expected a mapping with name, inputs, outputs and rules",
-                )
-            ]
-        )
-    try:
-        nodes = _expanded_size(root, MAX_NODES)
-    except _TooBig as exc:
-        raise RuleBaseError([Problem(Location(source), str(exc))]) from None
-    if nodes > MAX_NODES:
-        raise RuleBaseError(
-            [
-                Problem(
-                    Location(source),
-                    f"the document expands to more than "
-                    f"{MAX_NODES} nodes through aliases (an alias bomb?); "
-                    "rule bases are far smaller",
-                )
-            ]
-        )
-    foreign = _foreign_tags(root, source)
-    if foreign:
-        raise RuleBaseError(foreign)
+    root = compose_document(text, source, RULE_BASE_DOCUMENT)
     reader = _Reader(source, text.split("\n"))
     try:
         rb = reader.rule_base(root)
@@ -1140,6 +1170,39 @@ def _locate(reader: _Reader, path: Path, root: Node) -> Location:
     return reader.loc(root)
 
 
+def read_document(path: str | FsPath, kind: DocumentKind) -> str:
+    """The text of a strict YAML file, refusing (with ``kind.error``) what is not one."""
+    p = FsPath(path)
+    name = str(path)
+    try:
+        size = p.stat().st_size
+        if size > MAX_FILE_BYTES:
+            raise kind.error(
+                [
+                    Problem(
+                        Location(name),
+                        f"file is {size} bytes; {kind.plural} are "
+                        f"limited to {MAX_FILE_BYTES} bytes (1 MiB)",
+                    )
+                ]
+            )
+        data = p.read_bytes()
+    except IsADirectoryError:
+        raise kind.error(
+            [Problem(Location(name), "is a directory (expected a .yaml file)")]
+        ) from None
+    except OSError as exc:
+        raise kind.error(
+            [Problem(Location(name), f"cannot read: {exc.strerror or exc}")]
+        ) from None
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise kind.error(
+            [Problem(Location(name), f"not UTF-8 text (byte {exc.start}); expected a YAML file")]
+        ) from None
+
+
 def load_file(path: str | FsPath) -> RuleBase:
     """Read and parse a rule-base YAML file (see :func:`loads_rulebase`)."""
     return load_file_with_warnings(path)[0]
@@ -1147,33 +1210,4 @@ def load_file(path: str | FsPath) -> RuleBase:
 
 def load_file_with_warnings(path: str | FsPath) -> tuple[RuleBase, list[Problem]]:
     """:func:`load_file`, also returning the warnings (see :func:`loads_rulebase_with_warnings`)."""
-    p = FsPath(path)
-    name = str(path)
-    try:
-        size = p.stat().st_size
-        if size > MAX_FILE_BYTES:
-            raise RuleBaseError(
-                [
-                    Problem(
-                        Location(name),
-                        f"file is {size} bytes; rule bases are "
-                        f"limited to {MAX_FILE_BYTES} bytes (1 MiB)",
-                    )
-                ]
-            )
-        data = p.read_bytes()
-    except IsADirectoryError:
-        raise RuleBaseError(
-            [Problem(Location(name), "is a directory (expected a .yaml file)")]
-        ) from None
-    except OSError as exc:
-        raise RuleBaseError(
-            [Problem(Location(name), f"cannot read: {exc.strerror or exc}")]
-        ) from None
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise RuleBaseError(
-            [Problem(Location(name), f"not UTF-8 text (byte {exc.start}); expected a YAML file")]
-        ) from None
-    return loads_rulebase_with_warnings(text, name)
+    return loads_rulebase_with_warnings(read_document(path, RULE_BASE_DOCUMENT), str(path))

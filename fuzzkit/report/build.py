@@ -445,8 +445,54 @@ def build_report(
         text = _markdown(
             plants, rulebase, gains, provenance, summaries, figures, study, claims, rrd, budget
         )
+        text += _latency_section(out, surface, log)
         write_atomic(out / "report.md", text)
     return final / "report.md"
+
+
+#: The latency sweep of the report: gain factors x sensor delays (periods).
+LATENCY_FACTORS = (1.0, 2.0, 4.0, 8.0)
+LATENCY_DELAYS = tuple(range(7))
+
+
+def _latency_section(out: Path, surface: Any, stream: IO[str] | None) -> str:
+    """Run the latency sweep, write ``latency.png`` and return the report's Latency section."""
+    from fuzzkit.studies.experiments import DEFAULT_LATENCY
+    from fuzzkit.studies.latency_sweep import stability_map
+    from fuzzkit.viz.latency import write_stability_png
+
+    if stream is not None:
+        print("latency sweep ...", file=stream, flush=True)
+    maps = [
+        stability_map(c, LATENCY_FACTORS, LATENCY_DELAYS, surface if c == "fuzzy-pi" else None)
+        for c in CONTROLLERS
+    ]
+    write_stability_png(maps, out / "latency.png")
+    md = [
+        "",
+        "## Latency",
+        "",
+        f"Default latency of E1-E3: {DEFAULT_LATENCY[0]} period sensor, {DEFAULT_LATENCY[1]} "
+        "period command (ABB EGM at 4 ms). Stability boundary: press 10 N on the hammer at "
+        "10 N/mm with the default gains times a factor, sensor delay "
+        f"{LATENCY_DELAYS[0]}-{LATENCY_DELAYS[-1]} periods; stable means no trip and the last "
+        "0.5 s within 0.5 N (`fuzzkit.studies.latency_sweep`).",
+        "",
+        "![largest stable delay against the gain factor](latency.png)",
+        "",
+        "| gain factor | " + " | ".join(f"{m.controller}: largest stable delay" for m in maps)
+        + " |",
+        "|---|" + "---|" * len(maps),
+    ]
+    top = LATENCY_DELAYS[-1]
+    for factor in LATENCY_FACTORS:
+        cells = []
+        for m in maps:
+            b = m.boundary()[factor]
+            cells.append("unstable at 0" if b is None else f">= {b}" if b == top else str(b))
+        md.append(f"| {factor:g} | " + " | ".join(cells) + " |")
+    md.append("")
+    return "\n".join(md)
 
 
 def _markdown(

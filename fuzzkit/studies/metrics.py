@@ -146,6 +146,9 @@ def axis_metrics(result: RunResult, axis: int) -> dict[str, float | None]:
         "steady_state_error_std": None,
         "rms_error": None,
         "peak_force": float(np.max(np.abs(f))) if len(f) else None,
+        # the plant's contact force (as peak_force) next to what the sensor delivered
+        "peak_force_true": float(np.max(np.abs(f))) if len(f) else None,
+        "peak_force_measured": _nanmax_abs(result.force_sensor[:, axis]),
         "contact_lost_s": None,
     }
     own = axis_first_contact(result, axis)
@@ -191,12 +194,21 @@ SUMMARY_AXIS_KEYS = (
     "steady_state_error_std",
     "rms_error",
     "peak_force",
+    "peak_force_true",
+    "peak_force_measured",
     "contact_lost_s",
 )
 
 
+def _nanmax_abs(x: Vec) -> float | None:
+    finite = x[np.isfinite(x)]
+    return float(np.max(np.abs(finite))) if len(finite) else None
+
+
 def summary(result: RunResult) -> dict[str, Any]:
-    """The JSON summary of a run: experiment, controller, plant, times, per-axis metrics.
+    """The JSON summary of a run: experiment, controller, plant, the run's conditions
+    (``stiffness`` in N/mm, ``latency_periods`` [sensor, command], ``fault``, ``seed``,
+    ``safety_limit``, ``tripped``), times, and per-axis metrics.
 
     Only force-controlled axes appear under ``axes`` (z first). Values that do not apply (the
     overshoot of a 0 N set point, the RMS while moving of a held path) are None (JSON null).
@@ -210,6 +222,12 @@ def summary(result: RunResult) -> dict[str, Any]:
         "experiment": result.experiment.name,
         "controller": result.controller,
         "plant": result.plant,
+        "stiffness": result.experiment.scenario.contact.stiffness_n_per_m / 1e3,
+        "latency_periods": list(result.latency_periods),
+        "fault": result.fault,
+        "seed": result.seed,
+        "safety_limit": result.experiment.force_limit_n,
+        "tripped": result.tripped,
         "sim_time_s": round(result.sim_time_s, 6),
         "wall_time_s": round(result.wall_time_s, 4),
         "axes": axes,

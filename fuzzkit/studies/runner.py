@@ -8,6 +8,7 @@ and signs). One :class:`RunResult` holds every series of a run, one sample per p
 from __future__ import annotations
 
 import time
+from collections import deque
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -24,53 +25,10 @@ from fuzzkit.control.controllers import (
 from fuzzkit.errors import ConfigError
 from fuzzkit.plants.contract import ContactPlant, PlantSample, Scenario, task_to_base
 from fuzzkit.studies.experiments import DEFAULT_GAINS, Experiment
+from fuzzkit.studies.faults import FaultInjector, Faults, fault, fault_name
 from fuzzkit.studies.plants import make_plant
 
 Vec = npt.NDArray[np.float64]
-
-
-@dataclass(frozen=True, slots=True)
-class Faults:
-    """Sensor faults injected into the measured force before the controller sees it.
-
-    ``nan_probability``: each sample is NaN with this probability. ``dropout``: ``(start_s,
-    length_s)`` during which every sample is missing (NaN). ``spike_probability`` /
-    ``spike_n``: a sample gets a random-signed spike of this size on x and z (the plane of the
-    experiments). ``delay_steps``: the
-    controller sees the sample of ``delay_steps`` periods ago. Seeded, deterministic.
-    """
-
-    nan_probability: float = 0.0
-    dropout: tuple[float, float] | None = None
-    spike_probability: float = 0.0
-    spike_n: float = 0.0
-    delay_steps: int = 0
-    seed: int = 0
-
-
-class _FaultInjector:
-    def __init__(self, faults: Faults) -> None:
-        self.f = faults
-        self.rng = np.random.default_rng(faults.seed)
-        self.queue: list[Vec] = []
-
-    def __call__(self, t_s: float, force: Vec) -> Vec:
-        f = self.f
-        out = force.copy()
-        if f.spike_probability > 0.0 and self.rng.random() < f.spike_probability:
-            out = out + self.rng.choice([-1.0, 1.0]) * f.spike_n * np.array([1.0, 0.0, 1.0])
-        if f.nan_probability > 0.0 and self.rng.random() < f.nan_probability:
-            out = np.full(3, np.nan)
-        if f.dropout is not None and f.dropout[0] <= t_s < f.dropout[0] + f.dropout[1]:
-            out = np.full(3, np.nan)
-        if f.delay_steps > 0:
-            self.queue.append(out)
-            if len(self.queue) <= f.delay_steps:
-                return np.full(3, np.nan)
-            return self.queue.pop(0)
-        return out
-
-
 
 
 @dataclass(slots=True)
@@ -81,7 +39,10 @@ class RunResult:
     controller: str
     plant: str
     t: Vec
-    force: Vec  # measured, task frame (n, 3), NaN where no sample reached the controller
+    # the sample the controller consumed (sensor_delay periods old), task frame (n, 3), NaN
+    # where no valid sample reached the controller
+    force: Vec
+    force_sensor: Vec  # what the sensor interface delivered this period (after faults) (n, 3)
     force_true: Vec  # (n, 3)
     setpoint: Vec  # (n, 3)
     e: Vec
@@ -90,6 +51,7 @@ class RunResult:
     u: Vec  # task-frame correction S*u (+ back-off), (n, 3)
     tool_position: Vec  # base frame (n, 3)
     nominal_position: Vec
+    target_position: Vec  # nominal + the correction the plant received (base frame)
     joint_angles: Vec
     in_contact: npt.NDArray[np.bool_]  # any object touches the tool
     # normal contact force per task axis (n, 3), friction excluded (PlantSample.force_normal);
@@ -100,6 +62,10 @@ class RunResult:
     contact_points: list[Vec]
     faults: int
     tripped: bool
+    seed: int  # of the sensor noise
+    latency_periods: tuple[int, int]  # (sensor, command), fault delay included
+    fault: str  # the fault kind's name in fuzzkit.studies.faults.FAULTS, or "custom"
+    fault_seed: int
     trip_time_s: float | None
     engaged_time_s: float | None
     wall_time_s: float
@@ -138,6 +104,7 @@ def build_controller(
         period_s=exp.scenario.period_s,
         force_limit_n=exp.force_limit_n,
         engage_threshold_n=exp.engage_threshold_n,
+        engage_samples=exp.engage_samples,
     )
 
 
@@ -152,17 +119,32 @@ def run(
     seed: int = 0,
     faults: Faults | None = None,
     duration_s: float | None = None,
+    latency: tuple[int, int] | None = None,
 ) -> RunResult:
     """Run ``exp`` in closed loop on ``plant`` and record every period.
 
     ``controller`` is ``pi`` or ``fuzzy-pi`` (the latter needs ``surface``, see
-    :func:`load_surface`); a ready ``hybrid`` controller overrides both.
+    :func:`load_surface`); a ready ``hybrid`` controller overrides both. ``faults``: the
+    injected sensor faults (default: the experiment's, seeded by ``seed``). ``latency``:
+    ``(sensor, command)`` delays in periods (default: the experiment's).
+
+    Timing of period k: the plant moves with the correction it receives, its measured force
+    passes the fault injection into the sensor queue, the controller consumes the sample of
+    ``sensor`` periods ago (the queue starts filled with the reset sample's force), and its
+    correction enters the command queue, whose output (``command`` periods old; zeros at the
+    start) the plant receives in period k + 1.
     """
     if isinstance(plant, str):
         plant = make_plant(plant)
     ctrl = hybrid or build_controller(exp, controller, gains, surface)
     scn = exp.scenario
-    inject = _FaultInjector(faults) if faults is not None else None
+    if faults is None:
+        faults = fault(exp.fault, seed)
+    sensor_delay, command_delay = exp.latency_periods if latency is None else latency
+    if min(sensor_delay, command_delay) < 0:
+        raise ConfigError(f"latency must be >= 0 periods (got {sensor_delay}, {command_delay})")
+    sensor_delay += faults.delay_steps
+    inject = FaultInjector(faults)
     n = round((duration_s or scn.duration_s) / scn.period_s)
     period = scn.period_s
 
@@ -173,8 +155,11 @@ def run(
     engaged_at: float | None = None
     path_t = 0.0
     correction_task = np.zeros(3)
+    applied = np.zeros(3)
     wall0 = time.perf_counter()
     sample: PlantSample = plant.reset(scn, seed=seed)
+    sensor_queue: deque[Vec] = deque(sample.force.copy() for _ in range(sensor_delay))
+    command_queue: deque[Vec] = deque(np.zeros(3) for _ in range(command_delay))
     for _ in range(n):
         held = ctrl.tripped or (
             exp.hold_path_on_contact and ctrl.engaged and engaged_at is not None
@@ -182,9 +167,13 @@ def run(
         path_before = path_t
         if not held:
             path_t += period
-        sample = plant.step(task_to_base(scn, correction_task), path_t)
-        measured = sample.force if inject is None else inject(sample.t_s, sample.force)
+        sample = plant.step(task_to_base(scn, applied), path_t)
+        delivered = inject(sample.t_s, sample.force)
+        sensor_queue.append(delivered)
+        measured = sensor_queue.popleft()
         correction_task = ctrl.step(measured)
+        command_queue.append(correction_task.copy())
+        applied = command_queue.popleft()
         if ctrl.engaged and engaged_at is None:
             engaged_at = sample.t_s
         for m in sample.messages:
@@ -195,6 +184,7 @@ def run(
             (
                 sample.t_s,
                 measured,
+                delivered,
                 sample.force_true,
                 ctrl.setpoints,
                 ctrl.e.copy(),
@@ -203,6 +193,7 @@ def run(
                 correction_task.copy(),
                 sample.tool_position,
                 sample.nominal_position,
+                sample.target_position,
                 sample.joint_angles,
                 sample.in_contact,
                 _NO_NORMAL if sample.force_normal is None else sample.force_normal,
@@ -220,6 +211,7 @@ def run(
         plant=plant.name,
         t=arr["t"].astype(np.float64),
         force=arr["force"].astype(np.float64),
+        force_sensor=arr["force_sensor"].astype(np.float64),
         force_true=arr["force_true"].astype(np.float64),
         setpoint=arr["setpoint"].astype(np.float64),
         e=arr["e"].astype(np.float64),
@@ -228,6 +220,7 @@ def run(
         u=arr["u"].astype(np.float64),
         tool_position=arr["tool_position"].astype(np.float64),
         nominal_position=arr["nominal_position"].astype(np.float64),
+        target_position=arr["target_position"].astype(np.float64),
         joint_angles=arr["joint_angles"].astype(np.float64),
         in_contact=arr["in_contact"].astype(bool),
         force_normal=arr["force_normal"].astype(np.float64).reshape(-1, 3),
@@ -236,6 +229,10 @@ def run(
         contact_points=contact_points,
         faults=ctrl.faults,
         tripped=ctrl.tripped,
+        seed=seed,
+        latency_periods=(sensor_delay, command_delay),
+        fault=fault_name(faults),
+        fault_seed=faults.seed,
         trip_time_s=ctrl.trip_time_s,
         engaged_time_s=engaged_at,
         wall_time_s=wall,
@@ -246,6 +243,7 @@ def run(
 _SERIES = (
     "t",
     "force",
+    "force_sensor",
     "force_true",
     "setpoint",
     "e",
@@ -254,6 +252,7 @@ _SERIES = (
     "u",
     "tool_position",
     "nominal_position",
+    "target_position",
     "joint_angles",
     "in_contact",
     "force_normal",

@@ -1,0 +1,97 @@
+"""Latency stability study: for each gain factor, how many periods of delay the loop survives.
+
+The test problem is :func:`~fuzzkit.studies.experiments.press_experiment` (press 10 N on the
+hammer from 0.2 mm above it, 10 N/mm): it isolates the force loop from the approach. The gains
+are the defaults times a factor (PI: ``kp`` and ``ki``; fuzzy-PI: ``kx``), the delay is sensor
+delay with no command delay (the loop only sees the sum; the correction always reaches the
+plant one period after it is computed).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from fuzzkit.control.controllers import Surface
+from fuzzkit.studies.experiments import DEFAULT_GAINS, press_experiment
+from fuzzkit.studies.runner import RunResult, run
+
+#: A run is stable when it does not trip and, over its last 0.5 s, the force's mean is within
+#: this of the set point and its standard deviation below it (N).
+STABLE_BAND_N = 0.5
+
+
+@dataclass(frozen=True, slots=True)
+class StabilityMap:
+    """``stable[i][j]``: the loop with ``factors[i]`` x the default gains and ``delays[j]``
+    periods of sensor delay settles (see :func:`is_stable`)."""
+
+    controller: str
+    factors: tuple[float, ...]
+    delays: tuple[int, ...]
+    stable: tuple[tuple[bool, ...], ...]
+
+    def boundary(self) -> dict[float, int | None]:
+        """Per gain factor, the largest delay up to which every delay of the sweep is stable
+        (None: unstable even without delay)."""
+        out: dict[float, int | None] = {}
+        for factor, row in zip(self.factors, self.stable, strict=True):
+            last: int | None = None
+            for delay, ok in zip(self.delays, row, strict=True):
+                if not ok:
+                    break
+                last = delay
+            out[factor] = last
+        return out
+
+
+def scaled_default_gains(controller: str, factor: float) -> dict[str, float]:
+    """The default gains of ``controller`` with the loop gain multiplied by ``factor``."""
+    g = dict(DEFAULT_GAINS[controller])
+    for key in ("kp", "ki") if controller == "pi" else ("kx",):
+        g[key] *= factor
+    return g
+
+
+def is_stable(result: RunResult, setpoint_n: float = 10.0) -> bool:
+    """True when the run did not trip and its last 0.5 s sits within :data:`STABLE_BAND_N`."""
+    tail = result.force_true[result.t >= result.t[-1] - 0.5, 2]
+    return (
+        not result.tripped
+        and abs(float(np.mean(tail)) - setpoint_n) < STABLE_BAND_N
+        and float(np.std(tail)) < STABLE_BAND_N
+    )
+
+
+def stability_map(
+    controller: str,
+    factors: Sequence[float],
+    delays: Sequence[int],
+    surface: Surface | None = None,
+    plant: str = "planar",
+    duration_s: float = 2.0,
+) -> StabilityMap:
+    """Run the press experiment for every gain factor and delay (one seed: 1)."""
+    exp = press_experiment(1.0e4)
+    rows = []
+    for factor in factors:
+        rows.append(
+            tuple(
+                is_stable(
+                    run(
+                        exp,
+                        plant,
+                        controller,
+                        gains=scaled_default_gains(controller, factor),
+                        surface=surface,
+                        seed=1,
+                        latency=(delay, 0),
+                        duration_s=duration_s,
+                    )
+                )
+                for delay in delays
+            )
+        )
+    return StabilityMap(controller, tuple(factors), tuple(delays), tuple(rows))

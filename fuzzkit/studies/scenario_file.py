@@ -1,0 +1,497 @@
+"""Scenario files: an experiment (world, path, force-control task, latency, fault) as YAML.
+
+The shipped experiments E1-E3 are such files (``fuzzkit/studies/scenarios/*.yaml``); a user's
+own task is one more. Loading is as strict as for rule bases (the same composing, limits and
+``file:line:col`` problems, all reported together, :mod:`fuzzkit.formats.yaml_reader`). The
+format is documented in ``docs/simulation.md`` (Scenario files); :func:`json_schema` is its
+JSON Schema.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from yaml.nodes import Node, ScalarNode
+
+from fuzzkit.errors import ConfigError, Location, Problem, ScenarioError
+from fuzzkit.formats.yaml_reader import (
+    DocumentKind,
+    NodeReader,
+    compose_document,
+    describe,
+    read_document,
+)
+from fuzzkit.plants.contact import ContactModel, SensorModel, ToolModel
+from fuzzkit.plants.contract import Scenario
+from fuzzkit.plants.environment import Box, EnvObject, RoughSurface, Table, Waypoint
+from fuzzkit.studies.faults import FAULTS
+from fuzzkit.studies.task import AXES, Experiment
+
+SCENARIO_DOCUMENT = DocumentKind(
+    "scenario",
+    "scenarios",
+    "expected a mapping with name, duration_s, path, objects and force_control",
+    ScenarioError,
+)
+
+TOP_KEYS = (
+    "name",
+    "title",
+    "description",
+    "duration_s",
+    "period_s",
+    "tool",
+    "path",
+    "objects",
+    "contact",
+    "sensor",
+    "force_control",
+    "safety_limit_n",
+    "engage",
+    "steady_window_s",
+    "latency_periods",
+    "fault",
+)
+REQUIRED_KEYS = ("name", "duration_s", "path", "objects", "force_control", "safety_limit_n")
+WAYPOINT_KEYS = ("t_s", "x", "y", "z")
+ENGAGE_KEYS = ("threshold_n", "samples", "hold_path")
+LATENCY_KEYS = ("sensor", "command")
+#: Environment objects by their key in ``objects``; RoughSurface also takes ``tilt_deg``.
+OBJECT_KINDS: dict[str, type[Any]] = {"table": Table, "box": Box, "rough_surface": RoughSurface}
+#: Keys of the plain sections, each a dataclass read field by field.
+SECTIONS: dict[str, type[Any]] = {"tool": ToolModel, "contact": ContactModel, "sensor": SensorModel}
+SHIPPED = ("E1", "E2", "E3")
+
+_NULL = "tag:yaml.org,2002:null"
+_BOOL = "tag:yaml.org,2002:bool"
+
+
+class _ScenarioReader(NodeReader):
+    """Converts a composed scenario document into an :class:`Experiment`."""
+
+    def positive(self, node: Node, what: str, allow_zero: bool = False) -> float | None:
+        v = self.number(node, what)
+        if v is None:
+            return None
+        if not math.isfinite(v) or v < 0.0 or (v == 0.0 and not allow_zero):
+            bound = ">= 0" if allow_zero else "> 0"
+            self.error(node, f"{what} must be a finite number {bound} (got {v:g})")
+            return None
+        return v
+
+    def integer(self, node: Node, what: str, minimum: int = 0) -> int | None:
+        if isinstance(node, ScalarNode) and node.tag == "tag:yaml.org,2002:int":
+            value = int(node.value)
+            if value >= minimum:
+                return value
+        self.error(node, f"expected an integer >= {minimum} for {what}, got {describe(node)}")
+        return None
+
+    def boolean(self, node: Node, what: str) -> bool | None:
+        if isinstance(node, ScalarNode) and node.tag == _BOOL:
+            return bool(node.value.lower() in ("true", "yes", "on"))
+        self.error(node, f"expected true or false for {what}, got {describe(node)}")
+        return None
+
+    def record(self, cls: type[Any], node: Node, what: str, extra: tuple[str, ...] = ()) -> Any:
+        """A dataclass of ``cls`` from a mapping keyed by its field names (defaults apply)."""
+        entries = self.mapping(node, what)
+        if entries is None:
+            return None
+        fields = {f.name: f for f in dataclasses.fields(cls)}
+        required = [
+            n
+            for n, f in fields.items()
+            if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+        ]
+        if "tilt_deg" in extra and "tilt_deg" in entries:
+            required = [r for r in required if r != "tilt_rad"]
+        self.keys(entries, node, tuple(fields) + extra, required, what)
+        values: dict[str, Any] = {}
+        ok = True
+        for key, (_, vnode) in entries.items():
+            if key == "tilt_deg":
+                if "tilt_rad" in entries:
+                    self.error(vnode, f"{what}: give tilt_deg or tilt_rad, not both")
+                    ok = False
+                    continue
+                deg = self.number(vnode, f"{what} tilt_deg")
+                ok &= deg is not None
+                if deg is not None:
+                    values["tilt_rad"] = math.radians(deg)
+                continue
+            f = fields.get(key)
+            if f is None:
+                ok = False
+                continue
+            value = self._field(f, vnode, f"{what} {key}")
+            ok &= value is not None
+            values[key] = value
+        if not ok or any(r not in entries for r in required):
+            return None
+        try:
+            return cls(**values)
+        except (ConfigError, ValueError) as exc:
+            self.error(node, f"{what}: {exc}")
+            return None
+
+    def _field(self, f: dataclasses.Field[Any], node: Node, what: str) -> Any:
+        kind = str(f.type)
+        if kind == "str":
+            return self.name(node, f"a name for {what}")
+        if kind == "int":
+            return self.integer(node, what)
+        if kind.startswith("tuple"):
+            items = self.sequence(node, what)
+            if items is None:
+                return None
+            if len(items) != 3:
+                self.error(node, f"expected 3 numbers (x, y, z) for {what}, got {len(items)}")
+                return None
+            nums = [self.number(n, what) for n in items]
+            return None if any(v is None for v in nums) else tuple(nums)
+        value = self.number(node, what)
+        if value is not None and not math.isfinite(value):
+            self.error(node, f"{what} must be finite (got {value})")
+            return None
+        return value
+
+    def path(self, node: Node) -> tuple[Waypoint, ...] | None:
+        items = self.sequence(node, "path")
+        if items is None:
+            return None
+        if not items:
+            self.error(node, "path needs at least one waypoint")
+            return None
+        out: list[Waypoint] = []
+        for k, item in enumerate(items):
+            entries = self.mapping(item, f"path[{k}] (a mapping with t_s, x, z)")
+            if entries is None:
+                continue
+            self.keys(entries, item, WAYPOINT_KEYS, ("t_s", "x", "z"), f"path[{k}]")
+            vals = {key: self.number(v, f"path[{k}] {key}") for key, (_, v) in entries.items()}
+            if any(vals.get(key) is None for key in ("t_s", "x", "z")) or len(vals) != len(
+                [key for key in vals if key in WAYPOINT_KEYS]
+            ):
+                continue
+            t = vals["t_s"]
+            if out and t is not None and t < out[-1].t_s:
+                before = out[-1].t_s
+                self.error(
+                    entries["t_s"][1],
+                    f"path[{k}]: time {t:g} s is before the previous {before:g} s",
+                )
+                continue
+            out.append(Waypoint(t, vals["x"], vals.get("y") or 0.0, vals["z"]))  # type: ignore[arg-type]
+        return tuple(out) if len(out) == len(items) else None
+
+    def objects(self, node: Node) -> tuple[EnvObject, ...] | None:
+        items = self.sequence(node, "objects")
+        if items is None:
+            return None
+        out: list[EnvObject] = []
+        for k, item in enumerate(items):
+            entries = self.mapping(item, f"objects[{k}] (one of {', '.join(OBJECT_KINDS)})")
+            if entries is None:
+                continue
+            if len(entries) != 1:
+                self.error(item, f"objects[{k}]: expected one key ({', '.join(OBJECT_KINDS)})")
+                continue
+            ((kind, (_, vnode)),) = entries.items()
+            cls = OBJECT_KINDS.get(kind)
+            if cls is None:
+                self.keys(entries, item, tuple(OBJECT_KINDS), (), f"objects[{k}]")
+                continue
+            extra = ("tilt_deg",) if cls is RoughSurface else ()
+            obj = self.record(cls, vnode, f"objects[{k}] {kind}", extra)
+            if obj is not None:
+                out.append(obj)
+        return tuple(out) if len(out) == len(items) else None
+
+    def force_control(
+        self, node: Node
+    ) -> tuple[tuple[float, float, float], tuple[bool, bool, bool]] | None:
+        entries = self.mapping(node, "force_control (set point in N per task axis x, y, z)")
+        if entries is None:
+            return None
+        self.keys(entries, node, AXES, (), "force_control")
+        if not entries:
+            self.error(node, "force_control needs at least one axis (x, y or z)")
+            return None
+        setpoints = [0.0, 0.0, 0.0]
+        selection = [False, False, False]
+        for axis, (_, vnode) in entries.items():
+            if axis not in AXES:
+                return None
+            value = self.number(vnode, f"the {axis} set point")
+            if value is None:
+                return None
+            i = AXES.index(axis)
+            setpoints[i], selection[i] = value, True
+        x, y, z = setpoints
+        sx, sy, sz = selection
+        return (x, y, z), (sx, sy, sz)
+
+    def engage(self, node: Node) -> tuple[float | None, int, bool] | None:
+        entries = self.mapping(node, "engage")
+        if entries is None:
+            return None
+        self.keys(entries, node, ENGAGE_KEYS, (), "engage")
+        threshold: float | None = 1.0
+        samples, hold = 3, False
+        ok = True
+        if "threshold_n" in entries:
+            tnode = entries["threshold_n"][1]
+            if isinstance(tnode, ScalarNode) and tnode.tag == _NULL:
+                threshold = None  # active from the start
+            else:
+                threshold = self.positive(tnode, "engage threshold_n", allow_zero=True)
+                ok &= threshold is not None
+        if "samples" in entries:
+            s = self.integer(entries["samples"][1], "engage samples", minimum=1)
+            ok &= s is not None
+            samples = s or samples
+        if "hold_path" in entries:
+            h = self.boolean(entries["hold_path"][1], "engage hold_path")
+            ok &= h is not None
+            hold = bool(h)
+        return (threshold, samples, hold) if ok else None
+
+    def latency(self, node: Node) -> tuple[int, int] | None:
+        entries = self.mapping(node, "latency_periods (sensor and command delays in periods)")
+        if entries is None:
+            return None
+        self.keys(entries, node, LATENCY_KEYS, LATENCY_KEYS, "latency_periods")
+        vals = [
+            self.integer(entries[k][1], f"latency_periods {k}") if k in entries else None
+            for k in LATENCY_KEYS
+        ]
+        if vals[0] is None or vals[1] is None:
+            return None
+        return vals[0], vals[1]
+
+    def experiment(self, root: Node) -> Experiment | None:
+        top = self.mapping(root, "a scenario (a mapping)")
+        if top is None:
+            return None
+        self.keys(top, root, TOP_KEYS, REQUIRED_KEYS, "the scenario")
+
+        def get(key: str) -> Node | None:
+            return top[key][1] if key in top else None
+
+        values: dict[str, Any] = {}
+        for key in ("name", "title", "description"):
+            node = get(key)
+            if node is not None:
+                values[key] = self.text(node, key)
+        for key in ("duration_s", "period_s", "safety_limit_n", "steady_window_s"):
+            node = get(key)
+            if node is not None:
+                values[key] = self.positive(node, key)
+        sections = {}
+        for key, cls in SECTIONS.items():
+            node = get(key)
+            sections[key] = cls() if node is None else self.record(cls, node, key)
+        path = objects = fc = latency = None
+        engage: tuple[float | None, int, bool] | None = (1.0, 3, False)
+        fault = "none"
+        for key, (_, node) in top.items():
+            if key == "path":
+                path = self.path(node)
+            elif key == "objects":
+                objects = self.objects(node)
+            elif key == "force_control":
+                fc = self.force_control(node)
+            elif key == "engage":
+                engage = self.engage(node)
+            elif key == "latency_periods":
+                latency = self.latency(node)
+            elif key == "fault":
+                name = self.name(node, "a fault kind")
+                if name is not None and name not in FAULTS:
+                    self.error(
+                        node, f"unknown fault {name!r}; expected one of {', '.join(FAULTS)}"
+                    )
+                fault = name or fault
+        if path is None or objects is None or fc is None or engage is None:
+            return None
+        if self.problems or any(v is None for v in (*values.values(), *sections.values())):
+            return None
+        try:
+            scn = Scenario(
+                name=values["name"],
+                path=path,
+                objects=objects,
+                duration_s=values["duration_s"],
+                contact=sections["contact"],
+                sensor=sections["sensor"],
+                tool=sections["tool"],
+                period_s=values.get("period_s", 0.004),
+                description=values.get("description", ""),
+            )
+        except ConfigError as exc:
+            self.error(root, str(exc))
+            return None
+        extra: dict[str, Any] = {}
+        if latency is not None:
+            extra["latency_periods"] = latency
+        if "steady_window_s" in values:
+            extra["steady_window_s"] = values["steady_window_s"]
+        return Experiment(
+            name=values["name"],
+            title=values.get("title", values.get("description", values["name"])),
+            scenario=scn,
+            setpoints=fc[0],
+            selection=fc[1],
+            force_limit_n=values["safety_limit_n"],
+            engage_threshold_n=engage[0],
+            engage_samples=engage[1],
+            hold_path_on_contact=engage[2],
+            fault=fault,
+            **extra,
+        )
+
+
+def loads_scenario(text: str, source: str = "<string>") -> Experiment:
+    """Parse scenario YAML ``text``; ``source`` names it in messages.
+
+    Raises
+    ------
+    ScenarioError
+        Listing every problem as ``source:line:col: message``, sorted by position.
+    """
+    root = compose_document(text, source, SCENARIO_DOCUMENT)
+    reader = _ScenarioReader(source, text.split("\n"))
+    exp = reader.experiment(root)
+    if reader.problems or exp is None:
+        problems = list(dict.fromkeys(reader.problems)) or [
+            Problem(Location(source), "not a valid scenario")
+        ]
+        problems.sort(key=lambda p: (p.location.line, p.location.col))
+        raise ScenarioError(problems)
+    return exp
+
+
+def load_scenario(path: str | Path) -> Experiment:
+    """Read and parse a scenario YAML file (see :func:`loads_scenario`)."""
+    return loads_scenario(read_document(path, SCENARIO_DOCUMENT), str(path))
+
+
+def shipped_scenario_text(name: str) -> str:
+    """The text of a shipped scenario (E1, E2, E3)."""
+    return resources.files("fuzzkit.studies.scenarios").joinpath(f"{name}.yaml").read_text("utf-8")
+
+
+def json_schema() -> dict[str, Any]:
+    """A JSON Schema (draft 2020-12) of the scenario format, for editors and linters.
+
+    Structural only; the loader also checks values (positive durations, waypoint order ...).
+    """
+    number = {"type": "number"}
+
+    def record(cls: type[Any], extra: dict[str, Any] | None = None) -> dict[str, Any]:
+        props: dict[str, Any] = {}
+        required = []
+        for f in dataclasses.fields(cls):
+            t = str(f.type)
+            if t == "str":
+                props[f.name] = {"type": "string"}
+            elif t == "int":
+                props[f.name] = {"type": "integer", "minimum": 0}
+            elif t.startswith("tuple"):
+                props[f.name] = {"type": "array", "items": number, "minItems": 3, "maxItems": 3}
+            else:
+                props[f.name] = number
+            if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+                required.append(f.name)
+        props.update(extra or {})
+        return {
+            "type": "object",
+            "properties": props,
+            "required": required,
+            "additionalProperties": False,
+        }
+
+    rough = record(RoughSurface, {"tilt_deg": number})
+    rough["required"] = [r for r in rough["required"] if r != "tilt_rad"]
+    return {
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "title": "fuzzkit scenario",
+        "type": "object",
+        "required": list(REQUIRED_KEYS),
+        "additionalProperties": False,
+        "properties": {
+            "name": {"type": "string"},
+            "title": {"type": "string"},
+            "description": {"type": "string"},
+            "duration_s": {"type": "number", "exclusiveMinimum": 0},
+            "period_s": {"type": "number", "exclusiveMinimum": 0},
+            "safety_limit_n": {"type": "number", "exclusiveMinimum": 0},
+            "steady_window_s": {"type": "number", "exclusiveMinimum": 0},
+            "tool": record(ToolModel),
+            "contact": record(ContactModel),
+            "sensor": record(SensorModel),
+            "path": {
+                "type": "array",
+                "minItems": 1,
+                "items": {
+                    "type": "object",
+                    "properties": {k: number for k in WAYPOINT_KEYS},
+                    "required": ["t_s", "x", "z"],
+                    "additionalProperties": False,
+                },
+            },
+            "objects": {
+                "type": "array",
+                "items": {
+                    "oneOf": [
+                        {
+                            "type": "object",
+                            "properties": {"table": record(Table)},
+                            "required": ["table"],
+                            "additionalProperties": False,
+                        },
+                        {
+                            "type": "object",
+                            "properties": {"box": record(Box)},
+                            "required": ["box"],
+                            "additionalProperties": False,
+                        },
+                        {
+                            "type": "object",
+                            "properties": {"rough_surface": rough},
+                            "required": ["rough_surface"],
+                            "additionalProperties": False,
+                        },
+                    ]
+                },
+            },
+            "force_control": {
+                "type": "object",
+                "properties": {a: number for a in AXES},
+                "minProperties": 1,
+                "additionalProperties": False,
+            },
+            "engage": {
+                "type": "object",
+                "properties": {
+                    "threshold_n": {"type": ["number", "null"], "minimum": 0},
+                    "samples": {"type": "integer", "minimum": 1},
+                    "hold_path": {"type": "boolean"},
+                },
+                "additionalProperties": False,
+            },
+            "latency_periods": {
+                "type": "object",
+                "properties": {k: {"type": "integer", "minimum": 0} for k in LATENCY_KEYS},
+                "required": list(LATENCY_KEYS),
+                "additionalProperties": False,
+            },
+            "fault": {"enum": list(FAULTS)},
+        },
+    }
+

@@ -1,0 +1,51 @@
+"""The latency stability boundary of each controller as a PNG figure."""
+
+from __future__ import annotations
+
+import io
+from collections.abc import Sequence
+from pathlib import Path
+
+from fuzzkit.fileio import write_atomic
+from fuzzkit.studies.latency_sweep import StabilityMap
+
+
+def write_stability_png(
+    maps: Sequence[StabilityMap], path: str | Path, period_ms: float = 4.0
+) -> Path:
+    """Plot, per controller, the largest stable delay against the gain factor; write a PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6.4, 4.2), dpi=110)
+    ax = fig.add_subplot(1, 1, 1)
+    styles = {"pi": ("o-", "PI"), "fuzzy-pi": ("s--", "fuzzy-PI (macvicar_whelan)")}
+    top = 0
+    for m in maps:
+        marker, label = styles.get(m.controller, ("^-", m.controller))
+        bound = m.boundary()
+        xs = list(bound)
+        ys = [-1 if b is None else b for b in bound.values()]
+        top = max(top, *m.delays)
+        ax.plot(xs, ys, marker, label=label)
+    ax.set_xscale("log", base=2)
+    factors = sorted({f for m in maps for f in m.factors})
+    ax.set_xticks(factors, [f"{f:g}" for f in factors])
+    ax.minorticks_off()
+    ax.set_xlabel("gain factor (x the default gains)")
+    ax.set_ylabel(f"largest stable sensor delay (periods of {period_ms:g} ms)")
+    ax.set_ylim(-1.5, top + 0.5)
+    ax.axhline(top, color="0.8", lw=0.8)
+    ax.text(
+        factors[-1], top - 0.35, f"top of the sweep ({top}): stable at every delay tried ",
+        fontsize=8, ha="right",
+    )
+    ax.set_title("press 10 N at 10 N/mm: stable below each line")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="lower left")
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png")
+    return write_atomic(path, buf.getvalue())
