@@ -623,8 +623,9 @@ def losses(rb: RuleBase) -> list[str]:
         mid = (var.low + var.high) / 2
         if var.default != mid:
             out.append(
-                f"output {var.name!r}: default {var.default} (MATLAB gives the middle of "
-                f"the range, {fmt(mid)}, when no rule fires)"
+                f"output {var.name!r}: default "
+                f"{'NaN (none)' if var.default is None else fmt(var.default)} "
+                f"(MATLAB gives the middle of the range, {fmt(mid)}, when no rule fires)"
             )
     if is_sugeno(rb) and (rb.operators.implication, rb.operators.aggregation) != ("min", "max"):
         out.append("implication/aggregation of a Sugeno system (MATLAB ignores them)")
