@@ -18,7 +18,9 @@ import os
 import re
 import shutil
 import subprocess
+from collections.abc import Callable
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 import numpy.typing as npt
@@ -28,7 +30,7 @@ ROOT = Path(__file__).resolve().parent.parent
 FUZZYLITE = shutil.which("fuzzylite")
 INTEROP_PYTHON = Path(os.environ.get("FUZZKIT_INTEROP_PYTHON", ROOT / ".venv-interop/bin/python"))
 PYFUZZYLITE_SCRIPT = ROOT / "tests" / "peers" / "pyfuzzylite_eval.py"
-RESOLUTION = 20000
+RESOLUTION = 10000
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -42,14 +44,25 @@ def _has_pyfuzzylite() -> bool:
     return done.returncode == 0
 
 
-needs_fuzzylite = pytest.mark.skipif(
+_skip_fuzzylite = pytest.mark.skipif(
     FUZZYLITE is None,
     reason="the fuzzylite program is missing (apt-get install fuzzylite, or `make interop`)",
 )
-needs_pyfuzzylite = pytest.mark.skipif(
+_skip_pyfuzzylite = pytest.mark.skipif(
     not _has_pyfuzzylite(),
     reason=f"pyfuzzylite is missing in {INTEROP_PYTHON} (`make interop` builds .venv-interop)",
 )
+F = TypeVar("F", bound=Callable[..., object])
+
+
+def needs_fuzzylite(test: F) -> F:
+    """Mark ``test`` ``needs_fuzzylite`` (``-m needs_fuzzylite``); skip it without the program."""
+    return pytest.mark.needs_fuzzylite(_skip_fuzzylite(test))  # type: ignore[no-any-return]
+
+
+def needs_pyfuzzylite(test: F) -> F:
+    """Mark ``test`` ``needs_pyfuzzylite``; skip it without .venv-interop."""
+    return pytest.mark.needs_pyfuzzylite(_skip_pyfuzzylite(test))  # type: ignore[no-any-return]
 
 
 def _run(args: list[str]) -> None:

@@ -37,6 +37,7 @@ from fuzzkit.formats.foreign import (
     is_sugeno,
     parse_number,
     read_text,
+    trapezoid_term,
 )
 from fuzzkit.fuzzy.model import (
     Consequent,
@@ -238,11 +239,7 @@ def _mf_term(
     if kind == "trimf":
         return Term(name, "triangle", tuple(p))
     if kind == "trapmf":
-        if p[0] == p[1] == -math.inf and math.isfinite(p[2]) and math.isfinite(p[3]):
-            return Term(name, "left_shoulder", (p[2], p[3]))
-        if p[2] == p[3] == math.inf and math.isfinite(p[0]) and math.isfinite(p[1]):
-            return Term(name, "right_shoulder", (p[0], p[1]))
-        return Term(name, "trapezoid", tuple(p))
+        return trapezoid_term(name, p)
     if kind == "gaussmf":
         return Term(name, "gaussian", (p[1], p[0]))
     if kind == "gbellmf":
@@ -508,9 +505,10 @@ def loads(text: str, source: str = "<string>") -> RuleBase:
         for i in range(1, count + 1):
             sec = by_name.get(f"{title}{i}")
             if sec is None:
+                declared = sys.keys[f"Num{title}s"]
                 found.add(
-                    sys.line,
-                    1,
+                    declared.line,
+                    declared.col,
                     f"Num{title}s={count} but [{title}{i}] is missing (truncated file?)",
                 )
                 continue

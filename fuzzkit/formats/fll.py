@@ -35,6 +35,7 @@ from fuzzkit.formats.foreign import (
     parse_number,
     points_to_term,
     read_text,
+    trapezoid_term,
 )
 from fuzzkit.formats.rule_text import parse_rule, rule_text
 from fuzzkit.fuzzy.model import Operators, Rule, RuleBase, Term, Variable
@@ -228,7 +229,7 @@ def named_term(
     if cls == "Triangle":
         return Term(name, "triangle", tuple(args))
     if cls == "Trapezoid":
-        return Term(name, "trapezoid", tuple(args))
+        return trapezoid_term(name, args)
     if cls == "Ramp":
         if args[0] > args[1]:
             return Term(name, "left_shoulder", (args[1], args[0]))

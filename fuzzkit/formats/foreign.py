@@ -208,6 +208,19 @@ def points_to_term(name: str, points: Sequence[tuple[float, float]]) -> Term | s
     return Term(name, shape, tuple(xs))
 
 
+def trapezoid_term(name: str, p: Sequence[float]) -> Term:
+    """A trapezoid ``(a, b, c, d)``; with ``-inf -inf`` or ``inf inf`` feet, the shoulder it is.
+
+    MATLAB and fuzzylite write shoulders that way, and their formulas give exactly fuzzkit's
+    shoulders everywhere (1 beyond the open side, linear between the finite points).
+    """
+    if p[0] == p[1] == -math.inf and math.isfinite(p[2]) and math.isfinite(p[3]):
+        return Term(name, "left_shoulder", (p[2], p[3]))
+    if p[2] == p[3] == math.inf and math.isfinite(p[0]) and math.isfinite(p[1]):
+        return Term(name, "right_shoulder", (p[0], p[1]))
+    return Term(name, "trapezoid", tuple(p))
+
+
 def term_to_points(term: Term) -> list[tuple[float, float]] | None:
     """A piecewise-linear term as a point list (constant beyond its ends), else None."""
     p = term.params
