@@ -35,7 +35,7 @@ from fuzzkit.formats.registry import load  # noqa: E402
 from fuzzkit.fuzzy.inference import evaluate  # noqa: E402
 from fuzzkit.fuzzy.model import RuleBase  # noqa: E402
 
-SEEDS = range(40)
+SEEDS = range(24)
 EXAMPLES = ["heater.fis", "gripper_iec.fcl", "gripper_named.fcl", "feed.fll"]
 
 

@@ -333,11 +333,11 @@ def loads(text: str, source: str = "<string>") -> RuleBase:
         if block == "RULEBLOCK":
             if head in ("AND", "OR", "ACT"):
                 table = {"AND": _AND, "OR": _OR, "ACT": _ACT}[head]
-                value = _word(s, table, found)
-                if value is not None:
-                    if head in ops and ops[head][0] != value:
+                op = _word(s, table, found)
+                if op is not None:
+                    if head in ops and ops[head][0] != op:
                         found.add(s.line, s.col, f"{head} given twice with different values")
-                    ops[head] = (value, s)
+                    ops[head] = (op, s)
             elif head == "ACCU":
                 accu = _word(s, _ACCU, found)
                 if accu is not None:

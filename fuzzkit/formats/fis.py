@@ -280,26 +280,26 @@ def _variable(
     terms: list[Term] = []
     seen: dict[str, int] = {}
     for i in range(1, n_mfs + 1):
-        v = sec.keys.get(f"MF{i}")
-        if v is None:
+        mf = sec.keys.get(f"MF{i}")
+        if mf is None:
             found.add(
                 sec.line, 1, f"{where}: NumMFs={n_mfs} but MF{i} is missing (truncated file?)"
             )
             continue
-        m = _MF.match(v.text)
+        m = _MF.match(mf.text)
         if m is None:
             found.add(
-                v.line, v.col, f"{where} MF{i}: expected 'name':'type',[params], got {v.text!r}"
+                mf.line, mf.col, f"{where} MF{i}: expected 'name':'type',[params], got {mf.text!r}"
             )
             continue
         tname, mf_kind = m.group(1), m.group(2)
-        params = _vector(m.group(3), v.line, v.col + m.start(3), found, f"{where} MF{i}")
+        params = _vector(m.group(3), mf.line, mf.col + m.start(3), found, f"{where} MF{i}")
         if params is None:
             continue
         if tname in seen:
             found.add(
-                v.line,
-                v.col,
+                mf.line,
+                mf.col,
                 f"{where} MF{i}: term name {tname!r} is already MF{seen[tname]} of {name!r}; "
                 "a rule-base name must be unambiguous",
             )
@@ -307,9 +307,9 @@ def _variable(
         seen[tname] = i
         term = _mf_term(tname, mf_kind, params, kind == "output" and sugeno, n_inputs)
         if isinstance(term, str):
-            found.add(v.line, v.col, f"{where} MF{i} ({tname!r}): {term}")
+            found.add(mf.line, mf.col, f"{where} MF{i} ({tname!r}): {term}")
             continue
-        found.mark((*base, "terms", tname), v.line, v.col)
+        found.mark((*base, "terms", tname), mf.line, mf.col)
         terms.append(term)
     extra = [k for k in sec.keys if re.fullmatch(r"MF\d+", k) and not 1 <= int(k[2:]) <= n_mfs]
     for k in extra:

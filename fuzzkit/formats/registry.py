@@ -52,8 +52,9 @@ def dumps(rb: RuleBase, fmt: str, *, allow_loss: bool = False, dialect: str = "n
 
 
 def _load_path(path: str | os.PathLike[str]) -> RuleBase:
-    reader = READERS.get(Path(path).suffix.lower())
-    return reader(path) if reader is not None else load_file(path)
+    p = Path(path)
+    reader = READERS.get(p.suffix.lower())
+    return reader(p) if reader is not None else load_file(p)
 
 
 def available() -> list[str]:
