@@ -192,3 +192,13 @@ def test_simulate_takes_an_fll_rule_base(
     for metrics in (ours, theirs):
         metrics.pop("wall_time_s")
     assert theirs == ours  # the same rule base, so the same run
+
+
+def test_terms_draws_every_variable(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    png = tmp_path / "mf.png"
+    code, _, err = run(capsys, "terms", str(EXAMPLES / "feed.fll"), "--png", str(png))
+    assert code == 0, err
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    code, _, err = run(capsys, "terms", str(tmp_path / "missing.fis"), "--png", str(png) + "2")
+    assert code == 2 and "missing.fis: cannot read" in err
+    assert not Path(str(png) + "2").exists()

@@ -17,7 +17,7 @@ from collections.abc import Sequence
 from fuzzkit.errors import FuzzkitError
 
 #: Modules under fuzzkit.cli that contribute subcommands, in help order.
-COMMAND_MODULES = ("rulebase", "interop", "codegen_cmd", "simulation", "tuning", "demo")
+COMMAND_MODULES = ("rulebase", "interop", "terms", "codegen_cmd", "simulation", "tuning", "demo")
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
