@@ -29,6 +29,7 @@ from _peers import (
     pyfuzzylite_export,
 )
 from _random_rulebases import MAXIMA, random_rulebase
+from test_interop_formats import needs_sugeno_model
 
 from fuzzkit.formats import fcl, fis, fll
 from fuzzkit.formats.registry import dumps, load
@@ -165,3 +166,17 @@ def test_fll_pyfuzzylite_writes_imports_to_the_same_outputs(name: str, tmp_path:
     largest_difference(
         imported, evaluate(imported, points), pyfuzzylite_eval(theirs, points, tmp_path)
     )
+
+
+@needs_fuzzylite
+@needs_sugeno_model
+@pytest.mark.parametrize("name", ["heater_sugeno.fis", "feed_sugeno.fll"])
+def test_sugeno_examples_evaluate_the_same_in_fuzzylite(name: str, tmp_path: Path) -> None:
+    # no integration on either side: weighted averages agree to rounding
+    path = EXAMPLES / name
+    rb = load(path)
+    points = _points(rb, 5)
+    theirs = fuzzylite_eval(path, path.suffix[1:], points, tmp_path)
+    ours = evaluate(rb, points)
+    for var in rb.outputs:
+        np.testing.assert_allclose(ours[var.name], theirs[var.name], rtol=0, atol=1e-9)
