@@ -141,6 +141,8 @@ def read_text(path: str | FsPath, what: str) -> str:
 
 def parse_number(token: str) -> float | None:
     """``token`` as a float (``inf``, ``-inf`` and ``nan`` in any case), or None if it is not."""
+    if "_" in token:  # Python's float() reads "1_000"; no rule-base format does
+        return None
     try:
         value = float(token)
     except ValueError:
