@@ -382,3 +382,13 @@ def test_every_problem_is_listed_not_only_the_first() -> None:
     with pytest.raises(RuleBaseError) as err:
         fis.loads(text, "t")
     assert len(err.value.problems) >= 2
+
+
+def test_hostile_nesting_and_unterminated_comments_fail_cleanly_and_fast() -> None:
+    deep = FLL.replace(
+        "if level is low then", "if " + "(" * 5000 + "level is low" + ")" * 5000 + " then"
+    )
+    with pytest.raises(RuleBaseError, match=r"t:24:\d+: parentheses nested deeper than 32"):
+        fll.loads(deep, "t")
+    with pytest.raises(RuleBaseError, match="missing END_FUNCTION_BLOCK"):
+        fcl.loads(FCL.replace("END_RULEBLOCK", "(*" * 200_000, 1), "t")

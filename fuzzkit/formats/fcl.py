@@ -62,7 +62,8 @@ _METHOD = {
 #: except gbell, whose (a, b, mean) becomes Bell's (centre, width, slope)).
 _JFL = {"TRIAN": "Triangle", "TRAPE": "Trapezoid", "GAUSS": "Gaussian", "SIGM": None, "GBELL": None}
 _PAIR = re.compile(r"\(\s*([^,()]+?)\s*,\s*([^,()]+?)\s*\)")
-_COMMENTS = re.compile(r"\(\*.*?\*\)|/\*.*?\*/|//[^\n]*", re.DOTALL)
+# an unterminated comment runs to the end of the file (one match, so scanning stays linear)
+_COMMENTS = re.compile(r"\(\*.*?(?:\*\)|\Z)|/\*.*?(?:\*/|\Z)|//[^\n]*", re.DOTALL)
 
 
 @dataclass

@@ -29,6 +29,8 @@ from fuzzkit.fuzzy.model import (
     Variable,
 )
 
+#: Parentheses nest at most this deep (a hostile file must not exhaust the stack).
+MAX_DEPTH = 32
 HEDGES = frozenset({"very", "somewhat", "seldom", "extremely", "any"})
 _TOKEN = re.compile(r"\(|\)|[^\s()]+")
 
@@ -55,6 +57,7 @@ class _Parser:
     ) -> None:
         self.toks = [_Tok(m.group(), col0 + m.start()) for m in _TOKEN.finditer(text)]
         self.i = 0
+        self.depth = 0
         self.line = line
         self.end_col = col0 + len(text)
         self.inputs, self.outputs, self.found = inputs, outputs, found
@@ -110,7 +113,11 @@ class _Parser:
         tok = self.peek()
         if tok is not None and tok.text == "(":
             self.take()
+            self.depth += 1
+            if self.depth > MAX_DEPTH:
+                raise self.fail(tok, f"parentheses nested deeper than {MAX_DEPTH}")
             inner = self.condition()
+            self.depth -= 1
             self.expect(")")
             return inner
         negated = False
