@@ -73,13 +73,15 @@ MAXIMA = ("mean_of_maximum", "smallest_of_maximum", "largest_of_maximum")
 def random_rulebase(seed: int, out_of_range: str = "extend") -> RuleBase:
     """A valid rule base: 1-3 inputs, 1-2 outputs, NOT, AND/OR, weights, every operator.
 
+    The defuzzifier cycles with ``seed`` through the five Mamdani ones.
+
     Rule bases with a maxima defuzzifier get piecewise-linear outputs, min implication and max
     aggregation, so that their aggregated sets have exactly flat tops or slopes no smaller than
     a term's: fuzzylite 6 counts values within 1e-6 of its running maximum as maximal, which
     lets it drift along a nearly flat top (a bell's peak, a product-scaled edge).
     """
     rng = np.random.default_rng(seed)
-    defuzzifier = str(rng.choice(MAMDANI_DEFUZZIFIERS))
+    defuzzifier = MAMDANI_DEFUZZIFIERS[seed % len(MAMDANI_DEFUZZIFIERS)]  # each one in turn
     maxima = defuzzifier in MAXIMA
     inputs = tuple(_variable(rng, f"x{i}", False, True) for i in range(int(rng.integers(1, 4))))
     outputs = tuple(
