@@ -71,6 +71,8 @@ class _FaultInjector:
         return out
 
 
+
+
 @dataclass(slots=True)
 class RunResult:
     """Everything a run produced: time series (one row per controller period) and a summary."""

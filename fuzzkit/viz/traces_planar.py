@@ -30,7 +30,6 @@ from fuzzkit.viz.run_series import log_control_series, log_paths
 
 Vec = npt.NDArray[np.float64]
 
-
 def _outline(obj: EnvObject, x_lo: float, x_hi: float) -> Vec:
     """A polyline (k, 3) drawing an environment object in the x-z plane."""
     if isinstance(obj, Table):
