@@ -12,6 +12,11 @@ LATEST_VENV ?= .venv-latest
 # which would drag the project's environment back to an old rerun-sdk.
 BENCH_VENV ?= .venv-bench
 BENCH_STAMP := $(BENCH_VENV)/.peers-installed
+# The independent implementations the interop tests compare with: pyfuzzylite (own environment,
+# for the same numpy<2 reason) and the fuzzylite 6 program from Debian's fuzzylite package.
+INTEROP_VENV ?= .venv-interop
+INTEROP_STAMP := $(INTEROP_VENV)/.peers-installed
+SUDO ?= $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 DEMO_OUT ?= demo-out
 PYTEST_WORKERS ?= 2
 # mypy and import-linter do not follow setuptools' editable-install finder, which is what maps
@@ -19,7 +24,7 @@ PYTEST_WORKERS ?= 2
 # laid out as the wheel installs it (fuzzkit/, fuzzkit/codegen, fuzzkit/planar_sim, ...).
 PACKAGE_TREE := build/package-tree
 
-.PHONY: demo test test-latest verify bench lint typecheck imports golden lock clean package-tree
+.PHONY: demo test test-latest verify bench interop lint typecheck imports golden lock clean package-tree
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -90,9 +95,25 @@ $(BENCH_STAMP): | $(BENCH_VENV)/bin/python
 bench: $(STAMP) $(BENCH_STAMP)
 	$(BIN)/python bench/run.py --peers-python $(BENCH_VENV)/bin/python
 
+$(INTEROP_VENV)/bin/python:
+	$(PYTHON) -m venv $(INTEROP_VENV)
+
+$(INTEROP_STAMP): | $(INTEROP_VENV)/bin/python
+	$(INTEROP_VENV)/bin/python -m pip install --quiet --upgrade pip
+	$(INTEROP_VENV)/bin/python -m pip install --quiet "pyfuzzylite==8.0.6"
+	touch $@
+
+# FIS/FCL/FLL equivalence with fuzzylite 6 and pyfuzzylite 8: installs both, runs the marked
+# tests (skips listed with -rs), then prints the largest differences per format.
+interop: $(STAMP) $(INTEROP_STAMP)
+	command -v fuzzylite >/dev/null || { $(SUDO) apt-get update && $(SUDO) apt-get install -y fuzzylite; }
+	FUZZKIT_INTEROP_PYTHON=$(INTEROP_VENV)/bin/python $(BIN)/python -m pytest -q -n 0 \
+		-p no:cacheprovider -m "needs_fuzzylite or needs_pyfuzzylite" -rs tests
+	FUZZKIT_INTEROP_PYTHON=$(INTEROP_VENV)/bin/python $(BIN)/python bench/interop_equivalence.py
+
 # Rewrite the expected generated files under tests/golden/ after an intended change.
 golden: $(STAMP)
 	FUZZKIT_REFRESH_GOLDEN=1 $(BIN)/python -m pytest -q tests -k golden
 
 clean:
-	rm -rf $(VENV) $(LATEST_VENV) $(BENCH_VENV) $(DEMO_OUT) build dist *.egg-info .pytest_cache .mypy_cache .ruff_cache
+	rm -rf $(VENV) $(LATEST_VENV) $(BENCH_VENV) $(INTEROP_VENV) $(DEMO_OUT) build dist *.egg-info .pytest_cache .mypy_cache .ruff_cache

@@ -17,7 +17,16 @@ from collections.abc import Sequence
 from fuzzkit.errors import FuzzkitError
 
 #: Modules under fuzzkit.cli that contribute subcommands, in help order.
-COMMAND_MODULES = ("rulebase", "plot", "codegen_cmd", "simulation", "tuning", "demo")
+COMMAND_MODULES = (
+    "rulebase",
+    "plot",
+    "interop",
+    "terms",
+    "codegen_cmd",
+    "simulation",
+    "tuning",
+    "demo",
+)
 
 EXIT_OK = 0
 EXIT_FAILURE = 1

@@ -1,5 +1,9 @@
 """Find rule bases by shipped name or by path: the entry point most users call.
 
+A path is read by its extension: ``.yaml``/``.yml`` (fuzzkit's format), ``.fis`` (MATLAB),
+``.fcl`` (IEC 61131-7, both dialects) or ``.fll`` (fuzzylite), so every command that takes a
+rule base takes any of them.
+
 Shipped rule bases live in the package ``fuzzkit.rulebases`` (the repository's ``rulebases/``
 folder) and are read with :mod:`importlib.resources`, so names resolve the same way from a
 source checkout, an editable install and a plain ``pip install .``.
@@ -12,12 +16,49 @@ from importlib import resources
 from pathlib import Path
 
 from fuzzkit.errors import Location, Problem, RuleBaseError
+from fuzzkit.formats import fcl, fis, fll
 from fuzzkit.formats.yaml_reader import load_file_with_warnings, loads_rulebase_with_warnings
 from fuzzkit.fuzzy.model import RuleBase
 from fuzzkit.fuzzy.validation import did_you_mean
 
 _PACKAGE = "fuzzkit.rulebases"
 _SUFFIXES = (".yaml", ".yml")
+#: Foreign formats: extension -> reader of a path, returning the rule base and its warnings.
+READERS = {
+    fis.SUFFIX: fis.load_with_warnings,
+    fcl.SUFFIX: fcl.load_with_warnings,
+    fll.SUFFIX: fll.load_with_warnings,
+}
+#: Foreign formats: name -> text of a rule base (``allow_loss``, and for FCL a ``dialect``).
+EXPORT_FORMATS = ("fis", "fcl", "fll")
+
+
+def dumps(rb: RuleBase, fmt: str, *, allow_loss: bool = False, dialect: str = "named") -> str:
+    """``rb`` as the text of foreign format ``fmt`` (``fis``, ``fcl`` or ``fll``).
+
+    Raises
+    ------
+    ExportError
+        The format cannot hold part of ``rb`` (each part listed); see each module's
+        ``refusals`` and ``losses``.
+    ValueError
+        Unknown format or FCL dialect.
+    """
+    if fmt == "fis":
+        return fis.dumps(rb, allow_loss=allow_loss)
+    if fmt == "fll":
+        return fll.dumps(rb, allow_loss=allow_loss)
+    if fmt == "fcl":
+        if dialect not in ("named", "iec"):
+            raise ValueError(f"unknown FCL dialect {dialect!r}; expected named or iec")
+        return fcl.dumps(rb, dialect="iec" if dialect == "iec" else "named", allow_loss=allow_loss)
+    raise ValueError(f"unknown format {fmt!r}; expected one of {', '.join(EXPORT_FORMATS)}")
+
+
+def _load_path(path: str | os.PathLike[str]) -> tuple[RuleBase, list[Problem]]:
+    p = Path(path)
+    reader = READERS.get(p.suffix.lower())
+    return reader(p) if reader is not None else load_file_with_warnings(p)
 
 
 def available() -> list[str]:
@@ -32,7 +73,7 @@ def available() -> list[str]:
 
 def _looks_like_path(spec: str) -> bool:
     return (
-        spec.endswith(_SUFFIXES)
+        spec.lower().endswith(_SUFFIXES + tuple(READERS))
         or os.sep in spec
         or "/" in spec
         or (os.altsep is not None and os.altsep in spec)
@@ -40,10 +81,11 @@ def _looks_like_path(spec: str) -> bool:
 
 
 def load(name_or_path: str | os.PathLike[str]) -> RuleBase:
-    """Load a rule base from a YAML file path or by the name of a shipped rule base.
+    """Load a rule base from a file path or by the name of a shipped rule base.
 
-    A string ending in ``.yaml``/``.yml`` or containing a path separator is a path; any other
-    string is a shipped name (see :func:`available`).
+    A string ending in ``.yaml``/``.yml``/``.fis``/``.fcl``/``.fll`` or containing a path
+    separator is a path, read by its extension (YAML when it has none of the foreign ones);
+    any other string is a shipped name (see :func:`available`).
 
     Raises
     ------
@@ -66,20 +108,21 @@ def load_with_warnings(name_or_path: str | os.PathLike[str]) -> tuple[RuleBase, 
     ``file:line:col``. ``fuzzkit validate`` prints them (``--strict`` makes them errors).
     """
     if isinstance(name_or_path, os.PathLike):
-        return load_file_with_warnings(Path(name_or_path))
+        return _load_path(Path(name_or_path))
     spec = str(name_or_path)
     if _looks_like_path(spec):
-        return load_file_with_warnings(spec)
+        return _load_path(spec)
     names = available()
     if spec not in names:
         if Path(spec).exists():  # a file (or a folder, which load_file reports) right here
-            return load_file_with_warnings(spec)
+            return _load_path(spec)
         raise RuleBaseError(
             [
                 Problem(
                     Location(spec),
                     f"no shipped rule base or file called {spec!r}{did_you_mean(spec, names)}; "
-                    f"shipped: {', '.join(names)} (or give a path to a .yaml file)",
+                    f"shipped: {', '.join(names)} "
+                    "(or give a path to a .yaml, .fis, .fcl or .fll file)",
                 )
             ]
         )

@@ -1,0 +1,268 @@
+"""What the FIS, FCL and FLL importers and exporters share.
+
+A foreign file is read as text with a size limit; each importer records where every part of the
+model came from (a *mark* per logical path, as :mod:`fuzzkit.fuzzy.validation` names them) so
+that the semantic checks run on the finished model can be reported as ``file:line:col`` too.
+Exporters refuse what their format cannot hold (:class:`ExportError`) unless the caller allows
+the listed losses.
+
+Shape conversions used by more than one format live here: point lists (FCL's IEC dialect and
+FLL's ``Discrete``) to and from fuzzkit's piecewise-linear shapes, and number formatting that
+round-trips every float exactly.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path as FsPath
+from typing import NoReturn
+
+from fuzzkit.errors import FuzzkitError, Location, Problem, RuleBaseError
+from fuzzkit.fuzzy import validation
+from fuzzkit.fuzzy.model import Compound, Expression, Proposition, RuleBase, Source, Term
+from fuzzkit.fuzzy.validation import Path
+
+#: Foreign rule-base files are text of at most this many bytes (as for YAML).
+MAX_FILE_BYTES = 1 << 20
+
+#: Sugeno (Takagi-Sugeno-Kang) output shapes: ``constant (value,)`` and ``linear
+#: (c_1, ..., c_n, c_0)`` with one coefficient per input in the rule base's input order.
+SUGENO_SHAPES = frozenset({"constant", "linear"})
+#: Defuzzifiers of Sugeno rule bases.
+SUGENO_DEFUZZIFIERS = frozenset({"weighted_average", "weighted_sum"})
+
+
+class ExportError(FuzzkitError, ValueError):
+    """A rule base holds something the target format cannot express; every item is listed."""
+
+    def __init__(self, fmt: str, name: str, items: Sequence[str], hint: str = "") -> None:
+        self.items = tuple(items)
+        lines = "\n".join(f"  - {item}" for item in self.items)
+        super().__init__(
+            f"{name}: cannot export to {fmt} without changing its meaning:\n{lines}"
+            + (f"\n{hint}" if hint else "")
+        )
+
+
+def is_sugeno(rb: RuleBase) -> bool:
+    """True when the rule base's outputs are Sugeno terms (constant or linear)."""
+    return any(t.shape in SUGENO_SHAPES for v in rb.outputs for t in v.terms)
+
+
+@dataclass
+class Collector:
+    """Problems found while reading one file, and where each part of the model came from."""
+
+    source: str
+    problems: list[Problem] = field(default_factory=list)
+    marks: dict[Path, Location] = field(default_factory=dict)
+
+    def at(self, line: int, col: int = 0) -> Location:
+        return Location(self.source, line, col)
+
+    def add(self, line: int, col: int, message: str) -> None:
+        self.problems.append(Problem(self.at(line, col), message))
+
+    def mark(self, path: Path, line: int, col: int = 0) -> None:
+        self.marks.setdefault(path, self.at(line, col))
+
+    def locate(self, path: Path) -> Location:
+        """The mark of the longest prefix of ``path`` that has one (the file if none)."""
+        for n in range(len(path), -1, -1):
+            loc = self.marks.get(path[:n])
+            if loc is not None:
+                return loc
+        return Location(self.source)
+
+    def raise_if_any(self) -> None:
+        if self.problems:
+            self.fail()
+
+    def fail(self) -> NoReturn:
+        """Raise the problems gathered so far (there must be at least one)."""
+        unique = list(dict.fromkeys(self.problems))
+        unique.sort(key=lambda p: (p.location.line, p.location.col))
+        raise RuleBaseError(unique)
+
+
+def finish(rb: RuleBase, found: Collector, text: str) -> tuple[RuleBase, list[Problem]]:
+    """Check ``rb`` semantically, report every problem located in the file, attach its source.
+
+    Imported systems get ``coverage: allow_gaps``: many published ones (MATLAB's tipper among
+    them) have input values where no term is above zero, and their tools evaluate them anyway
+    (the output's default there). A gap is returned as a located warning, which ``fuzzkit
+    validate`` prints and ``--strict`` makes an error.
+
+    Raises
+    ------
+    RuleBaseError
+        Listing the reader's problems and the semantic ones, sorted by position.
+    """
+    rb = replace(rb, coverage="allow_gaps")
+    found_issues = validation.diagnose(rb)
+    for path, message in found_issues.errors:
+        found.problems.append(
+            Problem(found.locate(path), f"{validation.format_path(path)}: {message}")
+        )
+    found.raise_if_any()
+    warnings = [
+        Problem(found.locate(path), f"{validation.format_path(path)}: {message}", "warning")
+        for path, message in found_issues.warnings
+    ]
+    digest = hashlib.sha256(text.encode("utf-8")).hexdigest()
+    return replace(rb, source=Source(found.source, digest)), warnings
+
+
+def read_text(path: str | FsPath, what: str) -> str:
+    """The UTF-8 text of a rule-base file ``what`` (e.g. ``a .fis file``), size-checked."""
+    p = FsPath(path)
+    name = str(path)
+    try:
+        size = p.stat().st_size
+        if size > MAX_FILE_BYTES:
+            raise RuleBaseError(
+                [
+                    Problem(
+                        Location(name),
+                        f"file is {size} bytes; rule bases are limited to "
+                        f"{MAX_FILE_BYTES} bytes (1 MiB)",
+                    )
+                ]
+            )
+        data = p.read_bytes()
+    except IsADirectoryError:
+        raise RuleBaseError(
+            [Problem(Location(name), f"is a directory (expected {what})")]
+        ) from None
+    except OSError as exc:
+        raise RuleBaseError(
+            [Problem(Location(name), f"cannot read: {exc.strerror or exc}")]
+        ) from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise RuleBaseError(
+            [Problem(Location(name), f"not UTF-8 text (byte {exc.start}); expected {what}")]
+        ) from None
+
+
+def parse_number(token: str) -> float | None:
+    """``token`` as a float (``inf``, ``-inf`` and ``nan`` in any case), or None if it is not."""
+    if "_" in token:  # Python's float() reads "1_000"; no rule-base format does
+        return None
+    try:
+        value = float(token)
+    except ValueError:
+        return None
+    return value
+
+
+def fmt(x: float) -> str:
+    """Shortest text that reads back as exactly ``x``: ``1``, ``0.25``, ``-inf``, ``nan``."""
+    x = float(x)
+    if math.isnan(x):
+        return "nan"
+    if math.isinf(x):
+        return "inf" if x > 0 else "-inf"
+    if x.is_integer() and abs(x) < 1e16:
+        return str(int(x))
+    return repr(x)
+
+
+# ---------------------------------------------------------------------------- point lists
+
+
+def points_to_term(name: str, points: Sequence[tuple[float, float]]) -> Term | str:
+    """A point list (membership held constant beyond its ends) as a fuzzkit term, or why not.
+
+    Exactly the lists that draw a triangle, trapezoid or shoulder are accepted: x increasing,
+    every y 0 or 1, the 1s consecutive; repeated end values are dropped (``(0,1) (2,1) (4,0)``
+    is a left shoulder from 2 to 4). A single point ``(x, 1)`` stands for a singleton.
+    """
+    xs = [p[0] for p in points]
+    ys = [p[1] for p in points]
+    if not points:
+        return "a point list needs at least one point"
+    if any(not math.isfinite(v) for v in xs + ys):
+        return "point coordinates must be finite numbers"
+    if any(b < a for a, b in itertools.pairwise(xs)):
+        return f"point x values must not decrease, got {', '.join(fmt(x) for x in xs)}"
+    if any(y not in (0.0, 1.0) for y in ys):
+        return (
+            "only point lists with memberships 0 and 1 (a triangle, trapezoid or shoulder) "
+            f"are exact in fuzzkit, got memberships {', '.join(fmt(y) for y in ys)}"
+        )
+    if len(points) == 1:
+        return (
+            Term(name, "singleton", (xs[0],)) if ys[0] == 1.0 else "a single point must be (x, 1)"
+        )
+    # membership is constant beyond the ends: repeated values there carry no shape
+    while len(ys) > 1 and ys[0] == ys[1]:
+        xs, ys = xs[1:], ys[1:]
+    while len(ys) > 1 and ys[-1] == ys[-2]:
+        xs, ys = xs[:-1], ys[:-1]
+    pattern = tuple(int(y) for y in ys)
+    shapes = {
+        (0, 1, 0): "triangle",
+        (0, 1, 1, 0): "trapezoid",
+        (1, 0): "left_shoulder",
+        (0, 1): "right_shoulder",
+    }
+    shape = shapes.get(pattern)
+    if shape is None:
+        return (
+            "the points do not draw a triangle (0 1 0), trapezoid (0 1 1 0) or shoulder "
+            f"(1 0 or 0 1); memberships {' '.join(map(str, pattern))}"
+        )
+    return Term(name, shape, tuple(xs))
+
+
+def trapezoid_term(name: str, p: Sequence[float]) -> Term:
+    """A trapezoid ``(a, b, c, d)``; with ``-inf -inf`` or ``inf inf`` feet, the shoulder it is.
+
+    MATLAB and fuzzylite write shoulders that way, and their formulas give exactly fuzzkit's
+    shoulders everywhere (1 beyond the open side, linear between the finite points).
+    """
+    if p[0] == p[1] == -math.inf and math.isfinite(p[2]) and math.isfinite(p[3]):
+        return Term(name, "left_shoulder", (p[2], p[3]))
+    if p[2] == p[3] == math.inf and math.isfinite(p[0]) and math.isfinite(p[1]):
+        return Term(name, "right_shoulder", (p[0], p[1]))
+    return Term(name, "trapezoid", tuple(p))
+
+
+def term_to_points(term: Term) -> list[tuple[float, float]] | None:
+    """A piecewise-linear term as a point list (constant beyond its ends), else None."""
+    p = term.params
+    if term.shape == "triangle":
+        return [(p[0], 0.0), (p[1], 1.0), (p[2], 0.0)]
+    if term.shape == "trapezoid":
+        return [(p[0], 0.0), (p[1], 1.0), (p[2], 1.0), (p[3], 0.0)]
+    if term.shape == "left_shoulder":
+        return [(p[0], 1.0), (p[1], 0.0)]
+    if term.shape == "right_shoulder":
+        return [(p[0], 0.0), (p[1], 1.0)]
+    return None
+
+
+# ---------------------------------------------------------------------------- rules
+
+
+def combine(op: str, operands: Sequence[Expression]) -> Expression:
+    """One proposition as itself, several as an ``and``/``or`` compound."""
+    if len(operands) == 1:
+        return operands[0]
+    return Compound("and" if op == "and" else "or", tuple(operands))
+
+
+def flat_conditions(expr: Expression) -> tuple[str, list[Proposition]] | None:
+    """A flat AND/OR of propositions as ``(op, propositions)``; None for nested expressions."""
+    if isinstance(expr, Proposition):
+        return "and", [expr]
+    props = [e for e in expr.operands if isinstance(e, Proposition)]
+    if len(props) != len(expr.operands):
+        return None
+    return expr.op, props
