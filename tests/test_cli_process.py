@@ -14,8 +14,11 @@ import pytest
 FUZZKIT = [sys.executable, "-m", "fuzzkit"]
 
 
-def _start(args: list[str], cwd: Path) -> subprocess.Popen[str]:
+def _start(
+    args: list[str], cwd: Path, extra_env: dict[str, str] | None = None
+) -> subprocess.Popen[str]:
     env = {k: v for k, v in os.environ.items() if k != "FUZZKIT_DEBUG"}
+    env.update(extra_env or {})
     return subprocess.Popen(
         [*FUZZKIT, *args],
         cwd=cwd,
@@ -82,11 +85,14 @@ def test_sigint_on_report_keeps_an_existing_report_as_it_was(tmp_path: Path) -> 
 @pytest.mark.slow
 def test_sigint_on_compile_exits_130_and_writes_nothing(tmp_path: Path) -> None:
     out = tmp_path / "gen"
-    # A 3-input table at 41 points per input takes the exact engine well over ten seconds.
+    # A 3-input table at 41 points per input takes the exact engine well over ten seconds
+    # (CC names no compiler, so the table search cannot use the compiled exact sampler).
     proc = _start(
-        ["compile", "three_input", "--target", "c", "--resolution", "41", "--out", str(out)],
+        ["compile", "three_input", "--target", "python", "--method", "table",
+         "--resolution", "41", "--out", str(out)],
         tmp_path,
-    )
+        {"CC": "no-such-compiler"},
+    )  # fmt: skip
     time.sleep(4.0)
     assert proc.poll() is None, "compile ended before the interrupt; make the job larger"
     code, _, err = _interrupt(proc)

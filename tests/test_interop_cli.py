@@ -135,9 +135,18 @@ def test_surface_and_compile_read_foreign_files(
     code, _, err = run(capsys, "surface", src, "--png", str(png), "--resolution", "21")
     assert code == 0, err
     assert png.stat().st_size > 0
-    # a lookup table clamps its inputs, which MATLAB does not: refused, saying so
-    code, _, err = run(capsys, "compile", src, "--target", "python", "--out", str(tmp_path / "no"))
+    # a lookup table clamps its inputs, which MATLAB does not: --method table refuses, saying
+    # so, and auto takes the exact method, which evaluates the terms where the input is
+    code, _, err = run(
+        capsys, "compile", src, "--target", "python", "--method", "table",
+        "--out", str(tmp_path / "no"),
+    )  # fmt: skip
     assert code == 2 and "out_of_range is 'extend'" in err
+    code, out, err = run(
+        capsys, "compile", src, "--target", "python", "--out", str(tmp_path / "exact"), "--verify"
+    )
+    assert code == 0, err
+    assert "method: exact (no table: out_of_range is 'extend'" in out
     src = str(EXAMPLES / "feed.fll")  # lock-range: true, so clamped like the table
     code, _, err = run(
         capsys,
@@ -194,14 +203,15 @@ def test_simulate_takes_an_fll_rule_base(
     assert theirs == ours  # the same rule base, so the same run
 
 
-def test_terms_draws_every_variable(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_plot_draws_a_foreign_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     png = tmp_path / "mf.png"
-    code, _, err = run(capsys, "terms", str(EXAMPLES / "feed.fll"), "--png", str(png))
+    code, _, err = run(capsys, "plot", str(EXAMPLES / "feed.fll"), "--out", str(png))
     assert code == 0, err
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    code, _, err = run(capsys, "terms", str(tmp_path / "missing.fis"), "--png", str(png) + "2")
+    second = tmp_path / "missing.png"
+    code, _, err = run(capsys, "plot", str(tmp_path / "missing.fis"), "--out", str(second))
     assert code == 2 and "missing.fis: cannot read" in err
-    assert not Path(str(png) + "2").exists()
+    assert not second.exists()
 
 
 GAPPY_FIS = """[System]

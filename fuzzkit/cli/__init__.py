@@ -21,7 +21,6 @@ COMMAND_MODULES = (
     "rulebase",
     "plot",
     "interop",
-    "terms",
     "codegen_cmd",
     "simulation",
     "tuning",

@@ -21,6 +21,9 @@ def register(sub: Any) -> None:
         description="Read a MATLAB .fis, IEC 61131-7 .fcl (point lists or named shapes) or "
         "fuzzylite .fll file, check it like a YAML rule base, and write it as fuzzkit YAML. "
         "Constructs fuzzkit cannot express are refused with file:line:col, never approximated.",
+        epilog="examples:\n"
+        "  fuzzkit import tank.fis --out tank.yaml\n"
+        "  fuzzkit import docs/examples/gripper_iec.fcl --out gripper.yaml",
     )
     p.add_argument("file", metavar="FILE", help="a .fis, .fcl or .fll file")
     p.add_argument("--out", required=True, metavar="RULEBASE.yaml", help="YAML file to write")
@@ -33,9 +36,19 @@ def register(sub: Any) -> None:
         "MATLAB .fis, FCL or fuzzylite FLL. What the format cannot express is refused, every "
         "item listed; what it would change (e.g. input clamping, which .fis and FCL lack) is "
         "refused unless --allow-loss is given.",
+        epilog="examples:\n"
+        "  fuzzkit export macvicar_whelan --format fll --out macvicar_whelan.fll\n"
+        "  fuzzkit export my_controller.yaml --format fcl --dialect iec --out ctrl.fcl\n"
+        "  fuzzkit export macvicar_whelan --format fis --allow-loss --out mw.fis",
     )
     p.add_argument("rulebase", metavar="RULEBASE", help="a rule-base path or a shipped name")
-    p.add_argument("--format", required=True, choices=("fis", "fcl", "fll"), dest="fmt")
+    p.add_argument(
+        "--format",
+        required=True,
+        choices=("fis", "fcl", "fll"),
+        dest="fmt",
+        help="MATLAB .fis, IEC 61131-7 FCL or fuzzylite FLL (required)",
+    )
     p.add_argument(
         "--dialect",
         choices=("named", "iec"),
