@@ -260,7 +260,9 @@ class HybridForceController:
     points, and three safeguards:
 
     * **engagement**: with ``engage_threshold_n`` set, the loop stays idle (zero correction)
-      until the measured force exceeds it on any axis: "on contact the controller takes over";
+      until ``engage_samples`` consecutive valid samples exceed it on some axis: "on contact
+      the controller takes over", and a single spike cannot make it (an invalid sample
+      restarts the count);
     * **force safety limit**: when any measured force exceeds ``force_limit_n`` on
       ``trip_samples`` consecutive samples, the controller latches ``tripped``, stops
       correcting, and backs off along the measured force direction by ``backoff_m`` at
@@ -281,6 +283,7 @@ class HybridForceController:
         trip_samples: int = 2,
         backoff_m: float = 0.005,
         backoff_speed_m_s: float = 0.02,
+        engage_samples: int = 3,
     ) -> None:
         if len(controllers) != 3 or len(setpoints) != 3:
             raise ConfigError(
@@ -290,6 +293,8 @@ class HybridForceController:
             raise ConfigError(f"force_limit_n must be > 0 (got {force_limit_n})")
         if trip_samples < 1:
             raise ConfigError(f"trip_samples must be >= 1 (got {trip_samples})")
+        if engage_samples < 1:
+            raise ConfigError(f"engage_samples must be >= 1 (got {engage_samples})")
         self.controllers = list(controllers)
         self.selection = np.array([0.0 if c is None else 1.0 for c in controllers])
         self.setpoints = np.asarray(setpoints, dtype=np.float64)
@@ -299,6 +304,7 @@ class HybridForceController:
         self.trip_samples = trip_samples
         self.backoff_m = backoff_m
         self.backoff_speed_m_s = backoff_speed_m_s
+        self.engage_samples = engage_samples
         self.reset()
 
     def reset(self) -> None:
@@ -315,6 +321,7 @@ class HybridForceController:
         self.tripped = False
         self.trip_time_s: float | None = None
         self._over = 0
+        self._engage_count = 0
         self._backoff = np.zeros(3)
         self._backoff_dir = np.zeros(3)
         self._e_last: Vec | None = None
@@ -327,6 +334,7 @@ class HybridForceController:
         valid = force is not None and bool(np.all(np.isfinite(force[self.selection > 0])))
         if force is None or not valid:
             self.faults += 1
+            self._engage_count = 0
             return self._output()
         f = np.where(np.isfinite(force), force, 0.0)
         if not self.tripped:
@@ -344,6 +352,10 @@ class HybridForceController:
         if not self.engaged:
             thr = self.engage_threshold_n if self.engage_threshold_n is not None else 0.0
             if float(np.max(np.abs(f))) <= thr:
+                self._engage_count = 0
+                return self._output()
+            self._engage_count += 1
+            if self._engage_count < self.engage_samples:
                 return self._output()
             self.engaged = True
         for i, c in enumerate(self.controllers):

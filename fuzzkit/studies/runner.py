@@ -7,7 +7,9 @@ and signs). One :class:`RunResult` holds every series of a run, one sample per p
 
 from __future__ import annotations
 
+import math
 import time
+from collections import deque
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -48,18 +50,35 @@ class Faults:
     seed: int = 0
 
 
+def fault_schedule(faults: Faults, periods: int) -> tuple[Vec, npt.NDArray[np.bool_]]:
+    """The random part of a fault run, drawn up front: per period, the spike sign (0: none)
+    and whether the sample is NaN. Both loops (Python and compiled) inject from this one draw."""
+    rng = np.random.default_rng(faults.seed)
+    spike = np.zeros(periods)
+    nan = np.zeros(periods, dtype=bool)
+    for k in range(periods):
+        if faults.spike_probability > 0.0 and rng.random() < faults.spike_probability:
+            spike[k] = rng.choice([-1.0, 1.0])
+        if faults.nan_probability > 0.0 and rng.random() < faults.nan_probability:
+            nan[k] = True
+    return spike, nan
+
+
 class _FaultInjector:
-    def __init__(self, faults: Faults) -> None:
+    def __init__(self, faults: Faults, periods: int) -> None:
         self.f = faults
-        self.rng = np.random.default_rng(faults.seed)
+        self.spike, self.nan = fault_schedule(faults, periods)
+        self.k = 0
         self.queue: list[Vec] = []
 
     def __call__(self, t_s: float, force: Vec) -> Vec:
         f = self.f
+        k = self.k
+        self.k += 1
         out = force.copy()
-        if f.spike_probability > 0.0 and self.rng.random() < f.spike_probability:
-            out = out + self.rng.choice([-1.0, 1.0]) * f.spike_n * np.array([1.0, 0.0, 1.0])
-        if f.nan_probability > 0.0 and self.rng.random() < f.nan_probability:
+        if self.spike[k] != 0.0:
+            out = out + self.spike[k] * f.spike_n * np.array([1.0, 0.0, 1.0])
+        if self.nan[k]:
             out = np.full(3, np.nan)
         if f.dropout is not None and f.dropout[0] <= t_s < f.dropout[0] + f.dropout[1]:
             out = np.full(3, np.nan)
@@ -69,8 +88,6 @@ class _FaultInjector:
                 return np.full(3, np.nan)
             return self.queue.pop(0)
         return out
-
-
 
 
 @dataclass(slots=True)
@@ -104,6 +121,17 @@ class RunResult:
     engaged_time_s: float | None
     wall_time_s: float
     messages: dict[str, int] = field(default_factory=dict)
+    #: which loop ran: "python" (this module) or "compiled" (fuzzkit.studies.compiled)
+    loop: str = "python"
+    #: CPU time of the loop alone (s, time.process_time), start-up excluded
+    cpu_time_s: float = 0.0
+    #: which controller implementation ran (exact engine, lookup table, generated C ...)
+    controller_impl: str = ""
+
+    @property
+    def real_time_factor(self) -> float:
+        """Simulated seconds per CPU second of the loop."""
+        return self.sim_time_s / self.cpu_time_s if self.cpu_time_s > 0.0 else math.inf
 
     @property
     def sim_time_s(self) -> float:
@@ -152,18 +180,25 @@ def run(
     seed: int = 0,
     faults: Faults | None = None,
     duration_s: float | None = None,
+    latency: tuple[int, int] = (0, 0),
+    controller_impl: str = "",
 ) -> RunResult:
     """Run ``exp`` in closed loop on ``plant`` and record every period.
 
     ``controller`` is ``pi`` or ``fuzzy-pi`` (the latter needs ``surface``, see
-    :func:`load_surface`); a ready ``hybrid`` controller overrides both.
+    :func:`load_surface`); a ready ``hybrid`` controller overrides both. ``latency`` is
+    ``(sensor_delay, command_delay)`` in periods: per period the plant steps with the
+    correction computed ``command_delay`` periods ago (zeros before), its measured force
+    (after fault injection) reaches the controller ``sensor_delay`` periods later (the reset
+    sample's force before). ``controller_impl`` is only a label for the result.
     """
+    sensor_delay, command_delay = _check_latency(latency)
     if isinstance(plant, str):
         plant = make_plant(plant)
     ctrl = hybrid or build_controller(exp, controller, gains, surface)
     scn = exp.scenario
-    inject = _FaultInjector(faults) if faults is not None else None
     n = round((duration_s or scn.duration_s) / scn.period_s)
+    inject = _FaultInjector(faults, n) if faults is not None else None
     period = scn.period_s
 
     records: list[tuple[Any, ...]] = []
@@ -173,8 +208,12 @@ def run(
     engaged_at: float | None = None
     path_t = 0.0
     correction_task = np.zeros(3)
-    wall0 = time.perf_counter()
     sample: PlantSample = plant.reset(scn, seed=seed)
+    sensor_queue = deque([sample.force] * sensor_delay)
+    command_queue = deque([np.zeros(3)] * command_delay)
+    applied = np.zeros(3)
+    wall0 = time.perf_counter()
+    cpu0 = time.process_time()
     for _ in range(n):
         held = ctrl.tripped or (
             exp.hold_path_on_contact and ctrl.engaged and engaged_at is not None
@@ -182,9 +221,12 @@ def run(
         path_before = path_t
         if not held:
             path_t += period
-        sample = plant.step(task_to_base(scn, correction_task), path_t)
+        sample = plant.step(task_to_base(scn, applied), path_t)
         measured = sample.force if inject is None else inject(sample.t_s, sample.force)
-        correction_task = ctrl.step(measured)
+        sensor_queue.append(measured)
+        correction_task = ctrl.step(sensor_queue.popleft())
+        command_queue.append(correction_task)
+        applied = command_queue.popleft()
         if ctrl.engaged and engaged_at is None:
             engaged_at = sample.t_s
         for m in sample.messages:
@@ -212,6 +254,7 @@ def run(
         arm_points.append(sample.arm_points)
         contact_points.append(sample.contact_points)
     wall = time.perf_counter() - wall0
+    cpu = time.process_time() - cpu0
     columns = list(zip(*records, strict=True)) if records else [() for _ in _SERIES]
     arr = {k: np.asarray(v) for k, v in zip(_SERIES, columns, strict=True)}
     return RunResult(
@@ -240,7 +283,32 @@ def run(
         engaged_time_s=engaged_at,
         wall_time_s=wall,
         messages=messages,
+        loop="python",
+        cpu_time_s=cpu,
+        controller_impl=controller_impl or _impl_label(controller, hybrid, surface),
     )
+
+
+def _check_latency(latency: tuple[int, int]) -> tuple[int, int]:
+    """``(sensor_delay, command_delay)`` as non-negative integers, or a ConfigError."""
+    if (
+        len(latency) != 2
+        or any(isinstance(v, bool) or int(v) != v or v < 0 for v in latency)
+    ):
+        raise ConfigError(
+            f"latency must be (sensor_delay, command_delay), integers >= 0 (got {latency!r})"
+        )
+    return int(latency[0]), int(latency[1])
+
+
+def _impl_label(
+    controller: str, hybrid: HybridForceController | None, surface: Surface | None
+) -> str:
+    if hybrid is not None:
+        return "custom"
+    if controller == "pi":
+        return "pi (python)"
+    return f"fuzzy-pi surface {getattr(surface, '__name__', 'callable')} (python)"
 
 
 _SERIES = (
