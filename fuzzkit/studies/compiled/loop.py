@@ -40,7 +40,7 @@ def compiled_supports(plant: str) -> bool:
 
 
 @lru_cache(maxsize=8)
-def load_table(rulebase: str = "macvicar_whelan", tolerance: float = 1e-4) -> Any:
+def load_table(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3) -> Any:
     """The double lookup table of a rule base (shipped name or YAML path), as ``fuzzkit compile
     --target c --type double --tolerance`` builds it: what the compiled fuzzy-PI evaluates."""
     from fuzzkit.codegen.table_search import make_table
