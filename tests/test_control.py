@@ -154,8 +154,24 @@ def test_engagement_waits_for_contact() -> None:
     for _ in range(10):
         assert not np.any(h.step(np.array([0.0, 0.0, 0.2])))
     assert not h.engaged
+    # debounced: engage_samples (default 3) consecutive valid samples above the threshold
+    h.step(np.array([0.0, 0.0, 2.0]))
+    h.step(np.array([0.0, 0.0, 2.0]))
+    assert not h.engaged
     h.step(np.array([0.0, 0.0, 2.0]))
     assert h.engaged
+
+
+@pytest.mark.parametrize(
+    "between", [np.array([0.0, 0.0, 0.2]), np.array([0.0, 0.0, math.nan])], ids=["low", "nan"]
+)
+def test_single_spikes_do_not_engage(between: np.ndarray) -> None:
+    h = _hybrid(engage_threshold_n=1.0, engage_samples=3)
+    for _ in range(20):  # spike, spike, then a low or missing sample restarts the count
+        assert not np.any(h.step(np.array([0.0, 0.0, 40.0])))
+        assert not np.any(h.step(np.array([0.0, 0.0, 40.0])))
+        h.step(between)
+    assert not h.engaged
 
 
 def test_nan_on_controlled_axis_holds_and_counts_but_not_on_free_axis() -> None:
