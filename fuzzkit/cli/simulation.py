@@ -33,6 +33,20 @@ def register(subparsers: Any) -> None:
     )
     sim.add_argument("--plant", choices=sorted(PLANTS), default="planar")
     sim.add_argument("--seed", type=int, default=0, help="sensor-noise seed")
+    sim.add_argument(
+        "--loop",
+        choices=("compiled", "python"),
+        default=None,
+        help="compiled (numba, arm6 only; fuzzy-pi runs as the rule base's double lookup "
+        "table) or python (the reference loop; fuzzy-pi on the exact engine). Default: "
+        "compiled where the plant supports it",
+    )
+    sim.add_argument(
+        "--latency",
+        default="0,0",
+        metavar="SENSOR,COMMAND",
+        help="sensor and command delays in controller periods (default 0,0)",
+    )
     sim.add_argument("--rrd", metavar="OUT.rrd", help="write a Rerun recording of the run")
     sim.add_argument("--json", action="store_true", help="print the metrics as JSON")
     sim.add_argument(
@@ -97,15 +111,40 @@ def _fmt(v: Any, digits: int = 2) -> str:
     return str(v)
 
 
+def parse_latency(text: str) -> tuple[int, int]:
+    """``"S,C"`` -> ``(sensor_delay, command_delay)``, integers >= 0 (periods)."""
+    parts = text.split(",")
+    try:
+        values = tuple(int(p) for p in parts)
+    except ValueError:
+        values = ()
+    if len(values) != 2 or min(values) < 0:
+        raise ConfigError(
+            f"--latency: expected SENSOR,COMMAND delays in periods, integers >= 0 (got {text!r})"
+        )
+    return values[0], values[1]
+
+
 def _simulate(args: argparse.Namespace) -> int:
+    from fuzzkit.studies.batch import RunSpec, gains_items, run_spec
     from fuzzkit.studies.experiments import experiment
     from fuzzkit.studies.metrics import summary
 
     experiment(args.experiment)  # reject a bad name before loading anything
     if args.rrd:
         check_output_path(args.rrd, ".rrd file")
-    surface = _surface_for(args.controller, args.rulebase)
-    result = _run_one(args.experiment, args.controller, args, surface)
+    spec = RunSpec(
+        experiment=args.experiment.upper(),
+        controller=args.controller,
+        plant=args.plant,
+        latency=parse_latency(args.latency),
+        seed=args.seed,
+        gains=gains_items(load_gains(args.gains, args.controller)),
+        gains_label=args.gains or "default",
+        rulebase=args.rulebase,
+        loop=args.loop or "auto",
+    )
+    result = run_spec(spec)
     if args.rrd:
         from fuzzkit.viz.traces import write_run_rrd
 
@@ -116,7 +155,9 @@ def _simulate(args: argparse.Namespace) -> int:
         return 0
     print(
         f"{data['experiment']} {data['controller']} on {data['plant']}: "
-        f"{data['sim_time_s']:.2f} s simulated in {data['wall_time_s']:.2f} s"
+        f"{data['sim_time_s']:.2f} s simulated in {data['wall_time_s']:.2f} s "
+        f"({data['loop']} loop, {data['real_time_factor']}x real time in CPU time; "
+        f"controller: {data['controller_impl']})"
     )
     print(f"  {result.experiment.title}")
     for name, m in data["axes"].items():

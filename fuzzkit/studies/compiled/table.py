@@ -7,7 +7,13 @@ cell, then linear interpolation on the cell's triangle (the diagonal each cell's
 
 from __future__ import annotations
 
+import hashlib
+import io
 import math
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -59,14 +65,27 @@ def table2(
     return float(w00 + hi_ * (vm - w00) + lo_ * (w11 - vm))
 
 
-def table_arrays(table: Any) -> tuple[FloatArray, FloatArray, FloatArray, IntArray]:
-    """``(breakpoints e, breakpoints de, values, splits)`` of a 2-input, 1-output double table.
+@dataclass(frozen=True, slots=True)
+class TableArrays:
+    """A 2-input, 1-output double lookup table as the compiled loop reads it, and its name."""
+
+    bp0: FloatArray  # breakpoints of e
+    bp1: FloatArray  # breakpoints of de
+    values: FloatArray  # (len(bp0), len(bp1))
+    splits: IntArray  # (len(bp0) - 1, len(bp1) - 1): 1 where a cell is split on its anti-diagonal
+    label: str
+
+
+def table_arrays(table: Any) -> TableArrays:
+    """The :class:`TableArrays` of a ``fuzzkit.codegen.lut.LookupTable`` (double, 2 inputs).
 
     Raises
     ------
     ConfigError
         If the table is not a double table with two inputs and one output.
     """
+    if isinstance(table, TableArrays):
+        return table
     if table.number_type != "double" or len(table.breakpoints) != 2 or len(table.stored) != 1:
         raise ConfigError(
             "the compiled loop runs a double lookup table with inputs (e, de) and one output "
@@ -79,9 +98,55 @@ def table_arrays(table: Any) -> tuple[FloatArray, FloatArray, FloatArray, IntArr
         if table.splits is None
         else np.ascontiguousarray(table.splits, dtype=np.int64)
     )
-    return (
-        np.ascontiguousarray(table.breakpoints[0], dtype=np.float64),
-        np.ascontiguousarray(table.breakpoints[1], dtype=np.float64),
-        tab,
-        splits,
+    shape = "x".join(str(s) for s in table.shape)
+    return TableArrays(
+        bp0=np.ascontiguousarray(table.breakpoints[0], dtype=np.float64),
+        bp1=np.ascontiguousarray(table.breakpoints[1], dtype=np.float64),
+        values=tab,
+        splits=splits,
+        label=f"lookup table {table.rule_base_name} {shape} double, bound {table.bound[0]:.2e}",
     )
+
+
+def cache_dir() -> Path:
+    """Where built tables are kept: ``$FUZZKIT_CACHE_DIR``, else ``~/.cache/fuzzkit/tables``."""
+    env = os.environ.get("FUZZKIT_CACHE_DIR")
+    if env:
+        return Path(env)
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "fuzzkit" / "tables"
+
+
+def cached_table(rb: Any, tolerance: float, build: Callable[[], Any]) -> TableArrays:
+    """The table of rule base ``rb`` at ``tolerance``, built by ``build()`` once and kept on disk.
+
+    Building (search plus certification of the bound) costs seconds; a run should not pay it
+    every time. The key is the SHA-256 of the rule base model, the tolerance and the fuzzkit
+    version, so an edited rule base or a new release builds afresh. An unreadable cache file is
+    rebuilt, never trusted.
+    """
+    from fuzzkit import __version__
+    from fuzzkit.fileio import write_atomic
+
+    key = hashlib.sha256(f"{rb!r}|{tolerance!r}|{__version__}".encode()).hexdigest()[:32]
+    path = cache_dir() / f"{key}.npz"
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            return TableArrays(
+                bp0=z["bp0"], bp1=z["bp1"], values=z["values"], splits=z["splits"],
+                label=str(z["label"]),
+            )
+    except (OSError, KeyError, ValueError):
+        pass
+    arrays = table_arrays(build())
+    buf = io.BytesIO()
+    np.savez(
+        buf, bp0=arrays.bp0, bp1=arrays.bp1, values=arrays.values, splits=arrays.splits,
+        label=np.array(arrays.label),
+    )
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        write_atomic(path, buf.getvalue())
+    except OSError:
+        pass  # a read-only home only costs the rebuild next time
+    return arrays
