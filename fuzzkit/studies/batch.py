@@ -158,6 +158,115 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+class BatchExecutor:
+    """Maps a function over items, in order, on a pool that lives as long as the executor.
+
+    ``scheduler``: address of a ``dask.distributed`` scheduler (``tcp://host:8786``); the items
+    run on its workers (each needs fuzzkit installed, e.g. ``dask worker`` started from the
+    project's environment). Otherwise ``workers`` local processes (None: every core; 1: in this
+    process). Local workers ignore Ctrl-C: stopping is the parent's business.
+
+    Raises
+    ------
+    ConfigError
+        If the scheduler cannot be reached, or ``workers < 1``.
+    """
+
+    def __init__(self, workers: int | None = None, scheduler: str | None = None) -> None:
+        self.scheduler = scheduler
+        self.workers = default_workers() if workers is None else workers
+        if self.workers < 1:
+            raise ConfigError(f"workers must be >= 1 (got {self.workers})")
+        self._pool: ProcessPoolExecutor | None = None
+        self._client: Any = None
+        if scheduler is not None:
+            from distributed import Client
+
+            try:
+                self._client = Client(scheduler, timeout="10s")
+            except (OSError, TimeoutError) as exc:
+                raise ConfigError(
+                    f"cannot reach the dask scheduler at {scheduler} ({exc})"
+                ) from exc
+        elif self.workers > 1:
+            import multiprocessing
+
+            methods = multiprocessing.get_all_start_methods()
+            # fork shares the already imported modules (fast start); spawn elsewhere
+            ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+            self._pool = ProcessPoolExecutor(
+                self.workers, mp_context=ctx, initializer=_ignore_sigint
+            )
+
+    @property
+    def where(self) -> str:
+        """Where the items run, for messages."""
+        if self._client is not None:
+            return f"dask cluster {self.scheduler}"
+        return "this process" if self._pool is None else f"{self.workers} local processes"
+
+    def map(
+        self,
+        fn: Callable[[T], R],
+        items: Sequence[T],
+        progress: Callable[[int], None] | None = None,
+    ) -> list[R]:
+        """``[fn(x) for x in items]``; ``progress`` gets the count finished after each item.
+
+        ``fn`` must be a module-level function and the items picklable.
+        """
+        items = list(items)
+        if not items:
+            return []
+        if self._client is not None:
+            from distributed import as_completed as dask_completed
+
+            # pure=False: equal items are still separate runs (each counted in the progress)
+            futures = self._client.map(fn, items, pure=False)
+            done = 0
+            for _ in dask_completed(futures):
+                done += 1
+                if progress:
+                    progress(done)
+            results: list[R] = self._client.gather(futures)
+            return results
+        if self._pool is None or len(items) == 1:
+            out: list[R] = []
+            for x in items:
+                out.append(fn(x))
+                if progress:
+                    progress(len(out))
+            return out
+        pending = [self._pool.submit(fn, x) for x in items]
+        done = 0
+        for _ in _as_completed(pending):
+            done += 1
+            if progress:
+                progress(done)
+        return [f.result() for f in pending]
+
+    def close(self, abort: bool = False) -> None:
+        """Stop the workers (``abort``: drop queued items instead of finishing them)."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=not abort, cancel_futures=abort)
+            self._pool = None
+        if self._client is not None:
+            self._client.close()
+            self._client = None
+
+    def __enter__(self) -> BatchExecutor:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close(abort=exc[0] is not None)
+
+
+def _ignore_sigint() -> None:
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def map_runs(
     fn: Callable[[T], R],
     items: Sequence[T],
@@ -166,70 +275,18 @@ def map_runs(
     scheduler: str | None = None,
     progress: Callable[[int], None] | None = None,
 ) -> list[R]:
-    """``[fn(x) for x in items]``, in order, spread over workers.
-
-    ``scheduler``: address of a ``dask.distributed`` scheduler (``tcp://host:8786``); the items
-    run on its workers. Otherwise ``workers`` local processes (None: every core; 1: in this
-    process). ``progress`` is called with the number of items finished after each one.
-    ``fn`` must be a module-level function and the items picklable.
-
-    Raises
-    ------
-    ConfigError
-        If the scheduler cannot be reached.
-    """
+    """``[fn(x) for x in items]`` in order, on a one-off :class:`BatchExecutor`."""
     if not items:
         return []
-    if scheduler is not None:
-        return _map_dask(fn, items, scheduler, progress)
-    n = default_workers() if workers is None else max(1, workers)
-    if n == 1 or len(items) == 1:
-        out: list[R] = []
-        for x in items:
-            out.append(fn(x))
-            if progress:
-                progress(len(out))
-        return out
-    with ProcessPoolExecutor(max_workers=min(n, len(items))) as pool:
-        futures = [pool.submit(fn, x) for x in items]
-        done = 0
-        for _ in _as_completed(futures):
-            done += 1
-            if progress:
-                progress(done)
-        return [f.result() for f in futures]
+    n = default_workers() if workers is None else workers
+    with BatchExecutor(min(n, len(items)), scheduler) as ex:
+        return ex.map(fn, items, progress)
 
 
 def _as_completed(futures: Iterable[Any]) -> Iterator[Any]:
     from concurrent.futures import as_completed
 
     yield from as_completed(list(futures))
-
-
-def _map_dask(
-    fn: Callable[[T], R],
-    items: Sequence[T],
-    scheduler: str,
-    progress: Callable[[int], None] | None,
-) -> list[R]:
-    from distributed import Client, as_completed
-
-    try:
-        client = Client(scheduler, timeout="10s")
-    except (OSError, TimeoutError) as exc:
-        raise ConfigError(f"cannot reach the dask scheduler at {scheduler} ({exc})") from exc
-    try:
-        # pure=False: equal items are still separate runs (each counted in the progress)
-        futures = client.map(fn, list(items), pure=False)
-        done = 0
-        for _ in as_completed(futures):
-            done += 1
-            if progress:
-                progress(done)
-        results: list[R] = client.gather(futures)
-        return results
-    finally:
-        client.close()
 
 
 def spec_dict(spec: RunSpec) -> dict[str, Any]:
