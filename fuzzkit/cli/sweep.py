@@ -51,7 +51,10 @@ def register(subparsers: Any) -> None:
     p.add_argument("--plant", choices=sorted(PLANTS), default="arm6")
     p.add_argument("--rulebase", default="macvicar_whelan", metavar="RB")
     p.add_argument(
-        "--loop", choices=("compiled", "python"), default=None, help="default: compiled if supported"
+        "--loop",
+        choices=("compiled", "python"),
+        default=None,
+        help="default: compiled where the plant supports it",
     )
     p.add_argument("--duration", type=float, default=None, metavar="S", help="simulated time")
     p.add_argument("--out", required=True, metavar="RUNS.csv|RUNS.parquet")

@@ -47,6 +47,24 @@ def register(subparsers: Any) -> None:
     tune.add_argument(
         "--workers", type=int, default=None, help="worker processes (default: every core)"
     )
+    tune.add_argument(
+        "--latency",
+        default="0:0",
+        metavar="S:C[,S:C...]",
+        help="sensor:command delays in periods to tune over at once (default 0:0)",
+    )
+    tune.add_argument(
+        "--loop",
+        choices=("compiled", "python"),
+        default=None,
+        help="default: the compiled loop where the plant has one (arm6)",
+    )
+    tune.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="ADDRESS",
+        help="dask.distributed scheduler (tcp://host:8786): price the candidates on its workers",
+    )
     tune.add_argument("--out", required=True, metavar="GAINS.yaml", help="gains file to write")
     tune.add_argument(
         "--replace",
@@ -106,10 +124,12 @@ def parse_stiffness(text: str) -> tuple[float, ...]:
 
 
 def _tune(args: argparse.Namespace) -> int:
+    from fuzzkit.cli.sweep import parse_latencies
     from fuzzkit.control.gains import read_gains_file, write_gains
     from fuzzkit.studies.tuning import ProgressBar, tune
 
     ks = parse_stiffness(args.stiffness)
+    latencies = parse_latencies(args.latency)
     out = Path(args.out)
     check_output_path(out, "gains file")
     if out.is_file() and not args.replace:
@@ -125,6 +145,9 @@ def _tune(args: argparse.Namespace) -> int:
         seed=args.seed,
         workers=args.workers,
         callback=bar,
+        latencies=latencies,
+        loop=args.loop or "auto",
+        scheduler=args.scheduler,
     )
     if bar is not None:
         bar.done()

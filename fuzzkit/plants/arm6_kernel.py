@@ -299,10 +299,8 @@ def rotation_error(rt: FloatArray, r: FloatArray, out: FloatArray) -> None:
     if w < 0.0:
         w, x, y, z = -w, -x, -y, -z
     sn = math.sqrt(x * x + y * y + z * z)
-    if sn < 1e-12:
-        k = 2.0 / w if w > 0.0 else 2.0
-    else:
-        k = 2.0 * math.atan2(sn, w) / sn
+    # small angle: angle ~ 2*s/w, exact to machine precision there
+    k = (2.0 / w if w > 0.0 else 2.0) if sn < 1e-12 else 2.0 * math.atan2(sn, w) / sn
     out[0], out[1], out[2] = k * x, k * y, k * z
 
 
@@ -371,7 +369,7 @@ def _ik_error(
 
 @jit
 def _at_limit(q: FloatArray, lo: FloatArray, hi: FloatArray) -> bool:
-    for i in range(q.shape[0]):
+    for i in range(q.shape[0]):  # noqa: SIM110 - a plain loop compiles in nopython mode
         if q[i] <= lo[i] + 1e-12 or q[i] >= hi[i] - 1e-12:
             return True
     return False
@@ -490,8 +488,12 @@ def ik(
 
 @jit
 def pose_at(
-    path_t: FloatArray, path_pos: FloatArray, path_quat: FloatArray, t_s: float,
-    pos: FloatArray, quat: FloatArray,
+    path_t: FloatArray,
+    path_pos: FloatArray,
+    path_quat: FloatArray,
+    t_s: float,
+    pos: FloatArray,
+    quat: FloatArray,
 ) -> None:
     """Position and orientation of the nominal path at ``t_s`` (CartesianPath.pose_at)."""
     m = path_t.shape[0]
@@ -548,8 +550,14 @@ def matrix_from_quat(q: FloatArray, r: FloatArray) -> None:
 
 @jit
 def _object_contact(
-    kind: int, op: FloatArray, terms: FloatArray, nterms: int, c: FloatArray, radius: float,
-    nrm: FloatArray, pt: FloatArray,
+    kind: int,
+    op: FloatArray,
+    terms: FloatArray,
+    nterms: int,
+    c: FloatArray,
+    radius: float,
+    nrm: FloatArray,
+    pt: FloatArray,
 ) -> float:
     """Penetration depth (> 0 when touching, else <= 0) of the tool sphere; normal and point out.
 
@@ -567,7 +575,7 @@ def _object_contact(
             return -1.0
         nrm[0], nrm[1], nrm[2] = nx, ny, nz
         pt[0], pt[1], pt[2] = c[0] - dist * nx, c[1] - dist * ny, c[2] - dist * nz
-        return depth
+        return float(depth)
     if kind == KIND_BOX:
         d = np.empty(3)
         qq = np.empty(3)
@@ -616,14 +624,22 @@ def _object_contact(
         return -1.0
     nrm[0], nrm[1], nrm[2] = -slope * inv, -0.0 * inv, inv
     pt[0], pt[1], pt[2] = c[0], c[1], h
-    return depth
+    return float(depth)
 
 
 @jit
 def contact_step(
-    a_kind: IntArray, a_p: FloatArray, a_terms: FloatArray, a_nterms: IntArray,
-    stick: FloatArray, params: FloatArray, c: FloatArray, v: FloatArray,
-    force: FloatArray, points: FloatArray, normals: FloatArray,
+    a_kind: IntArray,
+    a_p: FloatArray,
+    a_terms: FloatArray,
+    a_nterms: IntArray,
+    stick: FloatArray,
+    params: FloatArray,
+    c: FloatArray,
+    v: FloatArray,
+    force: FloatArray,
+    points: FloatArray,
+    normals: FloatArray,
 ) -> int:
     """Contact3Solver.step: force the tool exerts (base, into ``force``), contact points and
     per-contact normal forces (rows of ``points`` / ``normals``); returns the contact count."""
@@ -635,9 +651,7 @@ def contact_step(
     nrm = np.empty(3)
     pt = np.empty(3)
     for i in range(a_kind.shape[0]):
-        depth = _object_contact(
-            a_kind[i], a_p[i], a_terms[i], a_nterms[i], c, radius, nrm, pt
-        )
+        depth = _object_contact(a_kind[i], a_p[i], a_terms[i], a_nterms[i], c, radius, nrm, pt)
         if depth <= 0.0:
             stick[i, 0] = stick[i, 1] = stick[i, 2] = 0.0
             continue
@@ -674,15 +688,37 @@ def contact_step(
 
 @jit
 def plant_step(
-    a_links: FloatArray, a_tool_r: FloatArray, a_tool_p: FloatArray, a_lower: FloatArray,
-    a_upper: FloatArray, a_dq_max: FloatArray, a_path_t: FloatArray, a_path_pos: FloatArray,
-    a_path_quat: FloatArray, a_kind: IntArray, a_p: FloatArray, a_terms: FloatArray,
-    a_nterms: IntArray, a_rot_task: FloatArray, params: FloatArray, q: FloatArray,
-    q_ref: FloatArray, q_ik: FloatArray, stick: FloatArray, state: FloatArray,
-    noise: FloatArray, correction_base: FloatArray, path_time_s: float,
+    a_links: FloatArray,
+    a_tool_r: FloatArray,
+    a_tool_p: FloatArray,
+    a_lower: FloatArray,
+    a_upper: FloatArray,
+    a_dq_max: FloatArray,
+    a_path_t: FloatArray,
+    a_path_pos: FloatArray,
+    a_path_quat: FloatArray,
+    a_kind: IntArray,
+    a_p: FloatArray,
+    a_terms: FloatArray,
+    a_nterms: IntArray,
+    a_rot_task: FloatArray,
+    params: FloatArray,
+    q: FloatArray,
+    q_ref: FloatArray,
+    q_ik: FloatArray,
+    stick: FloatArray,
+    state: FloatArray,
+    noise: FloatArray,
+    correction_base: FloatArray,
+    path_time_s: float,
     # outputs
-    nominal: FloatArray, tcp: FloatArray, rot: FloatArray, origins: FloatArray,
-    force_true: FloatArray, force_measured: FloatArray, points: FloatArray,
+    nominal: FloatArray,
+    tcp: FloatArray,
+    rot: FloatArray,
+    origins: FloatArray,
+    force_true: FloatArray,
+    force_measured: FloatArray,
+    points: FloatArray,
     normals: FloatArray,
 ) -> tuple[int, int, bool]:
     """One period of ``Arm6Plant.step``; returns ``(ik status, contact count, speed limited)``.
@@ -698,8 +734,17 @@ def plant_step(
     for j in range(3):
         target[j] = nominal[j] + correction_base[j]
     status = ik(
-        rt, target, q_ik, a_links, a_tool_r, a_tool_p, a_lower, a_upper,
-        params[P_TOL_P], params[P_TOL_O], int(params[P_IK_ITER]),
+        rt,
+        target,
+        q_ik,
+        a_links,
+        a_tool_r,
+        a_tool_p,
+        a_lower,
+        a_upper,
+        params[P_TOL_P],
+        params[P_TOL_O],
+        int(params[P_IK_ITER]),
     )
     lag = params[P_LAG]
     scale = 1.0
@@ -722,9 +767,7 @@ def plant_step(
         v[j] = (tcp[j] - state[S_P_PREV + j]) / dt
         state[S_P_PREV + j] = tcp[j]
     f = np.empty(3)
-    count = contact_step(
-        a_kind, a_p, a_terms, a_nterms, stick, params, tcp, v, f, points, normals
-    )
+    count = contact_step(a_kind, a_p, a_terms, a_nterms, stick, params, tcp, v, f, points, normals)
     r = a_rot_task
     for j in range(3):
         force_true[j] = r[0, j] * f[0] + r[1, j] * f[1] + r[2, j] * f[2]

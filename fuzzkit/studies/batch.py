@@ -180,10 +180,11 @@ class BatchExecutor:
         self._pool: ProcessPoolExecutor | None = None
         self._client: Any = None
         if scheduler is not None:
-            from distributed import Client
+            import distributed
 
+            client_class: Any = distributed.Client  # untyped library
             try:
-                self._client = Client(scheduler, timeout="10s")
+                self._client = client_class(scheduler, timeout="10s")
             except (OSError, TimeoutError) as exc:
                 raise ConfigError(
                     f"cannot reach the dask scheduler at {scheduler} ({exc})"
@@ -219,13 +220,13 @@ class BatchExecutor:
         if not items:
             return []
         if self._client is not None:
-            from distributed import as_completed as dask_completed
+            import distributed
+
+            dask_completed: Any = distributed.as_completed  # untyped library
 
             # pure=False: equal items are still separate runs (each counted in the progress)
             futures = self._client.map(fn, items, pure=False)
-            done = 0
-            for _ in dask_completed(futures):
-                done += 1
+            for done, _ in enumerate(dask_completed(futures), start=1):
                 if progress:
                     progress(done)
             results: list[R] = self._client.gather(futures)
@@ -238,9 +239,7 @@ class BatchExecutor:
                     progress(len(out))
             return out
         pending = [self._pool.submit(fn, x) for x in items]
-        done = 0
-        for _ in _as_completed(pending):
-            done += 1
+        for done, _ in enumerate(_as_completed(pending), start=1):
             if progress:
                 progress(done)
         return [f.result() for f in pending]

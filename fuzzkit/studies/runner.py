@@ -192,7 +192,7 @@ def run(
     (after fault injection) reaches the controller ``sensor_delay`` periods later (the reset
     sample's force before). ``controller_impl`` is only a label for the result.
     """
-    sensor_delay, command_delay = _check_latency(latency)
+    sensor_delay, command_delay = check_latency(latency)
     if isinstance(plant, str):
         plant = make_plant(plant)
     ctrl = hybrid or build_controller(exp, controller, gains, surface)
@@ -289,12 +289,9 @@ def run(
     )
 
 
-def _check_latency(latency: tuple[int, int]) -> tuple[int, int]:
+def check_latency(latency: tuple[int, int]) -> tuple[int, int]:
     """``(sensor_delay, command_delay)`` as non-negative integers, or a ConfigError."""
-    if (
-        len(latency) != 2
-        or any(isinstance(v, bool) or int(v) != v or v < 0 for v in latency)
-    ):
+    if len(latency) != 2 or any(isinstance(v, bool) or int(v) != v or v < 0 for v in latency):
         raise ConfigError(
             f"latency must be (sensor_delay, command_delay), integers >= 0 (got {latency!r})"
         )

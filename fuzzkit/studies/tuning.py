@@ -45,9 +45,6 @@ simulations are deterministic, the pool preserves order, the optimiser is seeded
 from __future__ import annotations
 
 import math
-import multiprocessing
-import os
-import signal
 import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -60,6 +57,7 @@ import numpy.typing as npt
 from fuzzkit.control.controllers import Surface, engine_table_surface, tabulated_surface
 from fuzzkit.errors import ConfigError
 from fuzzkit.plants.contract import ContactPlant
+from fuzzkit.studies.batch import default_workers
 from fuzzkit.studies.experiments import DEFAULT_GAINS, Experiment, experiment, with_stiffness
 from fuzzkit.studies.plants import make_plant
 from fuzzkit.studies.runner import RunResult, run
@@ -207,6 +205,15 @@ class TuningProblem:
     weights: CostWeights
     noise_seed: int
     stiffnesses_n_per_mm: tuple[float, ...] | None
+    #: ``(sensor, command)`` delay of each case, in periods (parallel to ``cases``)
+    case_latencies: tuple[tuple[int, int], ...] = ()
+    latencies: tuple[tuple[int, int], ...] = ((0, 0),)
+    #: ``auto`` (the compiled loop where the plant has one), ``compiled`` or ``python``
+    loop: str = "auto"
+
+    def latency_of(self, case: int) -> tuple[int, int]:
+        """The latency of case ``case``."""
+        return self.case_latencies[case] if self.case_latencies else (0, 0)
 
     @classmethod
     def build(
@@ -221,6 +228,8 @@ class TuningProblem:
         weights: CostWeights = CostWeights(),
         horizon_s: float | None = None,
         noise_seed: int = 0,
+        latencies: Sequence[tuple[int, int]] = ((0, 0),),
+        loop: str = "auto",
     ) -> TuningProblem:
         """Check the arguments and assemble the problem (arguments as for :func:`tune`).
 
@@ -274,6 +283,20 @@ class TuningProblem:
                 labels.append(f"{exp.name}@{k_mm:g}N/mm")
                 groups.append(gi)
                 horizons.append(h)
+        lats = tuple((int(a), int(b)) for a, b in latencies)
+        if not lats or any(min(pair) < 0 for pair in lats):
+            raise ConfigError(f"latencies must be (sensor, command) pairs >= 0 (got {lats})")
+        if loop not in ("auto", "compiled", "python"):
+            raise ConfigError(f"unknown loop {loop!r} (expected auto, compiled or python)")
+        if len(lats) > 1 or lats[0] != (0, 0):
+            n_cases = len(cases)
+            cases = [c for c in cases for _ in lats]
+            labels = [f"{lab}@lat{a}:{b}" for lab in labels for a, b in lats]
+            groups = [g for g in groups for _ in lats]
+            horizons = [h for h in horizons for _ in lats]
+            case_lats = tuple(pair for _ in range(n_cases) for pair in lats)
+        else:
+            case_lats = tuple((0, 0) for _ in cases)
         sp = space or SPACES[controller]
         fixed = {k: v for k, v in DEFAULT_GAINS[controller].items() if k not in sp.names}
         return cls(
@@ -290,6 +313,9 @@ class TuningProblem:
             weights=weights,
             noise_seed=noise_seed,
             stiffnesses_n_per_mm=ks,
+            case_latencies=case_lats,
+            latencies=lats,
+            loop=loop,
         )
 
     def full_gains(self, gains: Mapping[str, float]) -> dict[str, float]:
@@ -326,12 +352,34 @@ class TuningProblem:
 
 
 class _Runner:
-    """Prices gain sets for one problem in this process (the surface table is built once)."""
+    """Prices gain sets for one problem in this process (the surface table is built once).
+
+    Runs the compiled loop (:mod:`fuzzkit.studies.compiled`) where the plant has one, with the
+    rule base's double lookup table as the fuzzy surface; the Python loop otherwise, with a
+    201 x 201 bilinear table.
+    """
 
     def __init__(self, problem: TuningProblem) -> None:
+        from fuzzkit.studies.compiled.loop import compiled_supports, compiled_table
+
         self.problem = problem
         self.surface: Surface | None = None
-        if isinstance(problem.surface, str):
+        self.table: Any = None
+        self.compiled = (
+            problem.loop != "python"
+            and isinstance(problem.plant, str)
+            and compiled_supports(problem.plant)
+            and (problem.surface is None or isinstance(problem.surface, str))
+        )
+        if problem.loop == "compiled" and not self.compiled:
+            raise ConfigError(
+                f"the compiled loop does not run plant {problem.plant_name} "
+                "(or a surface given as a function); use loop='python'"
+            )
+        if self.compiled:
+            if isinstance(problem.surface, str):
+                self.table = compiled_table(problem.surface)
+        elif isinstance(problem.surface, str):
             from fuzzkit.formats.registry import load
             from fuzzkit.fuzzy.inference import Engine
 
@@ -341,21 +389,36 @@ class _Runner:
 
     def case_costs(self, gains: Mapping[str, float]) -> tuple[float, ...]:
         """The cost of ``gains`` (searched names only, or complete) on every case."""
+        from fuzzkit.studies.compiled.loop import run_compiled
+
         p = self.problem
         full = p.full_gains(gains)
         out = []
-        for exp, horizon in zip(p.cases, p.horizons, strict=True):
-            plant = make_plant(p.plant) if isinstance(p.plant, str) else p.plant()
+        for i, (exp, horizon) in enumerate(zip(p.cases, p.horizons, strict=True)):
             try:
-                result = run(
-                    exp,
-                    plant,
-                    p.controller,
-                    gains=full,
-                    surface=self.surface,
-                    seed=p.noise_seed,
-                    duration_s=horizon,
-                )
+                if self.compiled:
+                    result = run_compiled(
+                        exp,
+                        str(p.plant),
+                        p.controller,
+                        gains=full,
+                        table=self.table,
+                        seed=p.noise_seed,
+                        duration_s=horizon,
+                        latency=p.latency_of(i),
+                    )
+                else:
+                    plant = make_plant(p.plant) if isinstance(p.plant, str) else p.plant()
+                    result = run(
+                        exp,
+                        plant,
+                        p.controller,
+                        gains=full,
+                        surface=self.surface,
+                        seed=p.noise_seed,
+                        duration_s=horizon,
+                        latency=p.latency_of(i),
+                    )
             except (ArithmeticError, ValueError):
                 # Gains that break the simulation (overflow, unreachable targets) are merely
                 # bad candidates: price them like a run that failed.
@@ -374,22 +437,25 @@ def evaluate_gains(problem: TuningProblem, gains: Mapping[str, float]) -> tuple[
     return _Runner(problem).case_costs(gains)
 
 
-# Worker-process state: one runner per process, built by the pool initializer.
-_WORKER: _Runner | None = None
+# Worker-side state: one runner per problem and process, built on the first task that needs it.
+_RUNNERS: dict[str, _Runner] = {}
 
 
-def _init_worker(problem: TuningProblem) -> None:
-    global _WORKER
-    # Ctrl-C is the parent's business: it stops the search and keeps the best so far; workers
-    # that died of KeyboardInterrupt mid-task would hang the pool instead.
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    _WORKER = _Runner(problem)
+def _problem_key(problem: TuningProblem) -> str:
+    import hashlib
+    import pickle
+
+    return hashlib.sha256(pickle.dumps(problem)).hexdigest()
 
 
-def _worker_costs(gains: dict[str, float]) -> tuple[float, ...]:
-    if _WORKER is None:  # pragma: no cover - the initializer always ran
-        raise RuntimeError("tuning worker used before initialisation")
-    return _WORKER.case_costs(gains)
+def _worker_costs(task: tuple[str, TuningProblem, dict[str, float]]) -> tuple[float, ...]:
+    """Price one gain set in a worker (local process or Dask worker)."""
+    key, problem, gains = task
+    runner = _RUNNERS.get(key)
+    if runner is None:
+        _RUNNERS.clear()  # one problem at a time: keep the memory of one table
+        runner = _RUNNERS[key] = _Runner(problem)
+    return runner.case_costs(gains)
 
 
 # --------------------------------------------------------------------------------------------
@@ -484,14 +550,6 @@ class TuneResult:
         return GainsEntry(self.controller, dict(self.gains), prov)
 
 
-def default_workers() -> int:
-    """The number of cores this process may use."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # pragma: no cover - not Linux
-        return max(1, os.cpu_count() or 1)
-
-
 class _Pricer:
     """Prices batches of log10 points (in a process pool or in-process), remembers every
     result, enforces the budget and reports progress."""
@@ -502,7 +560,10 @@ class _Pricer:
         workers: int,
         budget: int,
         callback: Callable[[Progress], None] | None,
+        scheduler: str | None = None,
     ) -> None:
+        from fuzzkit.studies.batch import BatchExecutor
+
         self.problem = problem
         self.budget = budget
         self.callback = callback
@@ -513,13 +574,12 @@ class _Pricer:
         self.best: Evaluation | None = None
         self.history: list[float] = []
         self.t0 = time.perf_counter()
-        self.pool: Any = None
         self.runner: _Runner | None = None
-        if workers > 1:
-            methods = multiprocessing.get_all_start_methods()
-            # fork shares the already imported modules (fast start); spawn elsewhere.
-            ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
-            self.pool = ctx.Pool(workers, initializer=_init_worker, initargs=(problem,))
+        self.key = _problem_key(problem)
+        # candidates run on the sweep's executor: local processes or a Dask cluster
+        self.executor: BatchExecutor | None = None
+        if workers > 1 or scheduler is not None:
+            self.executor = BatchExecutor(workers, scheduler)
         else:
             self.runner = _Runner(problem)
 
@@ -530,13 +590,9 @@ class _Pricer:
 
     def close(self, abort: bool = False) -> None:
         """Stop the workers (``abort``: without waiting for running tasks)."""
-        if self.pool is not None:
-            if abort:
-                self.pool.terminate()
-            else:
-                self.pool.close()
-            self.pool.join()
-            self.pool = None
+        if self.executor is not None:
+            self.executor.close(abort)
+            self.executor = None
 
     def price(self, gains_list: Sequence[Mapping[str, float]]) -> list[Evaluation]:
         """Price ``gains_list`` (memoised; new points beyond the budget are priced inf)."""
@@ -550,8 +606,10 @@ class _Pricer:
         todo = todo[: max(0, self.remaining)]
         fresh = [dict(gains_list[i]) for i in todo]
         if fresh:
-            if self.pool is not None:
-                results = self.pool.map(_worker_costs, fresh, chunksize=1)
+            if self.executor is not None:
+                results = self.executor.map(
+                    _worker_costs, [(self.key, self.problem, g) for g in fresh]
+                )
             else:
                 if self.runner is None:  # pragma: no cover - set in __init__ without a pool
                     raise RuntimeError("no runner for in-process pricing")
@@ -626,6 +684,7 @@ def optimise(
     workers: int | None = None,
     callback: Callable[[Progress], None] | None = None,
     baseline: Mapping[str, float] | None = None,
+    scheduler: str | None = None,
 ) -> TuneResult:
     """Search ``problem.space`` for the gain set of least cost (see the module docstring).
 
@@ -638,6 +697,7 @@ def optimise(
     callback : called with a :class:`Progress` after every batch; it may raise
         ``KeyboardInterrupt`` (as Ctrl-C does) to stop the search.
     baseline : the reference gains (default: ``fuzzkit.studies.experiments.DEFAULT_GAINS``).
+    scheduler : a ``dask.distributed`` scheduler address: price the candidates on its workers.
 
     Returns
     -------
@@ -664,7 +724,7 @@ def optimise(
         raise ConfigError(f"baseline gains lack {', '.join(missing)}")
     lo, hi = space.log_bounds
     ndim = len(space.names)
-    pricer = _Pricer(problem, nworkers, budget, callback)
+    pricer = _Pricer(problem, nworkers, budget, callback, scheduler)
     interrupted = False
     try:
         pricer.baseline = pricer.price([{n: base_gains[n] for n in space.names}])[0]
@@ -776,6 +836,9 @@ def tune(
     horizon_s: float | None = None,
     baseline: Mapping[str, float] | None = None,
     noise_seed: int = 0,
+    latencies: Sequence[tuple[int, int]] = ((0, 0),),
+    loop: str = "auto",
+    scheduler: str | None = None,
 ) -> TuneResult:
     """Find the gains of least cost for ``controller`` over experiments and stiffnesses.
 
@@ -796,6 +859,9 @@ def tune(
     horizon_s : simulated time per run (default :data:`TUNING_HORIZON_S`).
     baseline : reference gains (default ``DEFAULT_GAINS``).
     noise_seed : sensor-noise seed of every run.
+    latencies : ``(sensor, command)`` delays (periods) to tune over at once.
+    loop : ``auto`` (compiled where the plant has a compiled loop), ``compiled`` or ``python``.
+    scheduler : a ``dask.distributed`` scheduler address to price the candidates on.
 
     Returns
     -------
@@ -823,8 +889,10 @@ def tune(
         weights=weights,
         horizon_s=horizon_s,
         noise_seed=noise_seed,
+        latencies=latencies,
+        loop=loop,
     )
-    return optimise(problem, budget, seed, workers, callback, baseline)
+    return optimise(problem, budget, seed, workers, callback, baseline, scheduler)
 
 
 class ProgressBar:

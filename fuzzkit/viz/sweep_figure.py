@@ -61,9 +61,7 @@ def write_sweep_figure(
                 vals = [
                     float(r[col])
                     for r in rows
-                    if r["controller"] == ctrl
-                    and case_label(r) == case
-                    and r.get(col) is not None
+                    if r["controller"] == ctrl and case_label(r) == case and r.get(col) is not None
                 ]
                 x = i + (ci - (len(controllers) - 1) / 2) * width
                 xs.extend([x] * len(vals))

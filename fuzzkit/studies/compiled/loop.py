@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from functools import lru_cache
 from typing import Any
 
@@ -22,7 +22,13 @@ from fuzzkit.plants.arm6_kernel import IK_STATUS_NAMES, UnsupportedPlant, pack, 
 from fuzzkit.studies.compiled import kernel as K
 from fuzzkit.studies.compiled.table import TableArrays, cached_table, table_arrays
 from fuzzkit.studies.experiments import DEFAULT_GAINS, Experiment
-from fuzzkit.studies.runner import Faults, RunResult, _check_latency, build_controller, fault_schedule
+from fuzzkit.studies.runner import (
+    Faults,
+    RunResult,
+    build_controller,
+    check_latency,
+    fault_schedule,
+)
 
 #: Plants the compiled loop runs.
 COMPILED_PLANTS = ("arm6",)
@@ -91,7 +97,7 @@ def run_compiled(
         raise ConfigError(f"unknown controller {controller!r} (expected pi or fuzzy-pi)")
     if controller == "fuzzy-pi" and table is None:
         raise ConfigError("the compiled fuzzy-pi needs a lookup table (load_table)")
-    sensor_delay, command_delay = _check_latency(latency)
+    sensor_delay, command_delay = check_latency(latency)
     # The Python controller object validates the gains and holds the safeguard settings.
     hybrid = build_controller(exp, controller, gains, lambda e, de: 0.0)
     g = dict(DEFAULT_GAINS[controller])
@@ -241,5 +247,6 @@ def _warm_up(args: tuple[Any, ...], rec: dict[str, Any], scalars: Any) -> None:
         return
     state = [np.array(x, copy=True) if isinstance(x, np.ndarray) else x for x in args]
     empty = [v[:0] for v in rec.values()]
-    K.run_arm6(*state, *empty, scalars.copy())
+    kernel: Callable[..., None] = K.run_arm6  # called with the argument list built above
+    kernel(*state, *empty, scalars.copy())
     _WARM = True

@@ -133,7 +133,10 @@ def cached_table(rb: Any, tolerance: float, build: Callable[[], Any]) -> TableAr
     try:
         with np.load(path, allow_pickle=False) as z:
             return TableArrays(
-                bp0=z["bp0"], bp1=z["bp1"], values=z["values"], splits=z["splits"],
+                bp0=z["bp0"],
+                bp1=z["bp1"],
+                values=z["values"],
+                splits=z["splits"],
                 label=str(z["label"]),
             )
     except (OSError, KeyError, ValueError):
@@ -141,7 +144,11 @@ def cached_table(rb: Any, tolerance: float, build: Callable[[], Any]) -> TableAr
     arrays = table_arrays(build())
     buf = io.BytesIO()
     np.savez(
-        buf, bp0=arrays.bp0, bp1=arrays.bp1, values=arrays.values, splits=arrays.splits,
+        buf,
+        bp0=arrays.bp0,
+        bp1=arrays.bp1,
+        values=arrays.values,
+        splits=arrays.splits,
         label=np.array(arrays.label),
     )
     try:
