@@ -108,7 +108,8 @@ def test_compiled_loop_equals_python_loop_through_a_safety_trip() -> None:
 
 def test_table_kernel_reproduces_the_lookup_table_arithmetic() -> None:
     table = load_table()
-    bp0, bp1, tab, splits = table_arrays(table)
+    ta = table_arrays(table)
+    bp0, bp1, tab, splits = ta.bp0, ta.bp1, ta.values, ta.splits
     rng = np.random.default_rng(0)
     pts = np.concatenate(
         [
