@@ -26,7 +26,7 @@ import numpy.typing as npt
 
 from fuzzkit.plants.arm6 import Arm6Plant, Box3, ExtrudedProfile, Plane
 from fuzzkit.plants.environment import _roughness_terms
-from fuzzkit.plants.jit import jit
+from fuzzkit.jit import jit
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
