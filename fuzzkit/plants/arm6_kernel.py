@@ -24,9 +24,9 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from fuzzkit.jit import jit
 from fuzzkit.plants.arm6 import Arm6Plant, Box3, ExtrudedProfile, Plane
 from fuzzkit.plants.environment import _roughness_terms
-from fuzzkit.jit import jit
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]

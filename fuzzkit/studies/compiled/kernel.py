@@ -18,8 +18,8 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from fuzzkit.plants.arm6_kernel import plant_step, pose_at
 from fuzzkit.jit import jit
+from fuzzkit.plants.arm6_kernel import plant_step, pose_at
 from fuzzkit.studies.compiled.table import table2
 
 FloatArray = npt.NDArray[np.float64]
