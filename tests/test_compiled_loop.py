@@ -131,3 +131,30 @@ def test_compiled_loop_rejects_what_it_does_not_model() -> None:
         run_compiled(exp, "arm6", "fuzzy-pi")
     with pytest.raises(ConfigError, match="latency"):
         run_compiled(exp, "arm6", "pi", latency=(-1, 0))
+
+
+@pytest.mark.slow
+def test_compiled_table_loop_equals_a_loop_running_the_generated_c() -> None:
+    """The compiled fuzzy-PI's arithmetic is the generated C's: a Python loop that calls the
+    compiled generated C (ctypes) for every sample gives the compiled loop's force traces."""
+    from fuzzkit.codegen.toolchain import find_compiler
+
+    if find_compiler() is None:
+        pytest.skip("no C compiler found")
+    from fuzzkit.studies.batch import RunSpec, run_spec
+
+    spec = RunSpec("E2", "fuzzy-pi", "arm6", seed=4, duration_s=4.0)
+    co = run_spec(spec)
+    py = run_spec(RunSpec("E2", "fuzzy-pi", "arm6", seed=4, duration_s=4.0, loop="python",
+                          fuzzy_impl="c"))  # fmt: skip
+    assert "generated C" in py.controller_impl and "lookup table" in co.controller_impl
+    _assert_same(py, co)
+
+
+def test_fuzzy_implementation_must_fit_the_loop() -> None:
+    from fuzzkit.studies.batch import RunSpec, run_spec
+
+    with pytest.raises(ConfigError, match="compiled loop runs the fuzzy-PI as the lookup table"):
+        run_spec(RunSpec("E1", "fuzzy-pi", "arm6", fuzzy_impl="c", duration_s=0.1))
+    with pytest.raises(ConfigError, match="unknown fuzzy implementation"):
+        run_spec(RunSpec("E1", "fuzzy-pi", "arm6", fuzzy_impl="fast", duration_s=0.1))

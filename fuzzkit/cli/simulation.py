@@ -42,6 +42,14 @@ def register(subparsers: Any) -> None:
         "compiled where the plant supports it",
     )
     sim.add_argument(
+        "--fuzzy-impl",
+        choices=("auto", "exact", "table", "c"),
+        default="auto",
+        help="how fuzzy-pi evaluates its surface: exact engine (python loop), the generated "
+        "double lookup table (both loops), or the generated C through ctypes (python loop; "
+        "needs a C compiler). Default: table when compiled, exact in python",
+    )
+    sim.add_argument(
         "--latency",
         default="0,0",
         metavar="SENSOR,COMMAND",
@@ -143,6 +151,7 @@ def _simulate(args: argparse.Namespace) -> int:
         gains_label=args.gains or "default",
         rulebase=args.rulebase,
         loop=args.loop or "auto",
+        fuzzy_impl=args.fuzzy_impl,
     )
     result = run_spec(spec)
     if args.rrd:

@@ -19,12 +19,17 @@ from functools import lru_cache
 from typing import Any, TypeVar
 
 from fuzzkit.errors import ConfigError
+from fuzzkit.studies.compiled.table import table_arrays
 from fuzzkit.studies.runner import RunResult
 
 T = TypeVar("T")
 R = TypeVar("R")
 
 LOOPS = ("auto", "compiled", "python")
+#: How a fuzzy-PI's surface is evaluated: ``exact`` engine (Python loop), the generated
+#: double lookup ``table`` (both loops), the generated ``c`` through ctypes (Python loop);
+#: ``auto``: the table in the compiled loop, the exact engine in the Python loop.
+FUZZY_IMPLS = ("auto", "exact", "table", "c")
 
 
 @dataclass(frozen=True, slots=True)
@@ -49,6 +54,7 @@ class RunSpec:
     rulebase: str = "macvicar_whelan"
     loop: str = "auto"
     duration_s: float | None = None
+    fuzzy_impl: str = "auto"
 
     def resolved_loop(self) -> str:
         """``compiled`` or ``python``: what ``auto`` means for this plant."""
@@ -88,7 +94,15 @@ def run_spec(spec: RunSpec) -> RunResult:
             raise ConfigError(f"stiffness must be a positive number of N/mm (got {k})")
         exp = with_stiffness(exp, k * 1e3)
     gains = dict(spec.gains)
+    impl = spec.fuzzy_impl
+    if impl not in FUZZY_IMPLS:
+        raise ConfigError(f"unknown fuzzy implementation {impl!r} (expected {FUZZY_IMPLS})")
     if spec.resolved_loop() == "compiled":
+        if impl not in ("auto", "table"):
+            raise ConfigError(
+                f"the compiled loop runs the fuzzy-PI as the lookup table, not {impl!r}; "
+                "use --loop python"
+            )
         from fuzzkit.studies.compiled.loop import compiled_table, run_compiled
 
         table = compiled_table(spec.rulebase) if spec.controller == "fuzzy-pi" else None
@@ -104,8 +118,24 @@ def run_spec(spec: RunSpec) -> RunResult:
         )
     from fuzzkit.studies.runner import run
 
-    surface = _exact_surface(spec.rulebase) if spec.controller == "fuzzy-pi" else None
-    impl = "pi (python)" if surface is None else f"exact engine {spec.rulebase} (python)"
+    surface: Any = None
+    label = "pi (python)"
+    if spec.controller == "fuzzy-pi":
+        if impl in ("auto", "exact"):
+            surface = _exact_surface(spec.rulebase)
+            label = f"exact engine {spec.rulebase} (python)"
+        elif impl == "table":
+            from fuzzkit.control.controllers import lookup_table_surface
+            from fuzzkit.studies.compiled.loop import load_table
+
+            table = load_table(spec.rulebase)
+            surface = lookup_table_surface(table)
+            label = table_arrays(table).label + " (python)"
+        else:
+            from fuzzkit.studies.compiled.generated_c import c_surface
+
+            surface = c_surface(spec.rulebase)
+            label = f"{surface.__name__} (python loop)"
     return run(
         exp,
         spec.plant,
@@ -115,7 +145,7 @@ def run_spec(spec: RunSpec) -> RunResult:
         seed=spec.seed,
         latency=spec.latency,
         duration_s=spec.duration_s,
-        controller_impl=impl,
+        controller_impl=label,
     )
 
 
