@@ -12,6 +12,8 @@ exactly: where the measured force is NaN (no sample, injected fault), engagement
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -158,3 +160,37 @@ def test_fuzzy_implementation_must_fit_the_loop() -> None:
         run_spec(RunSpec("E1", "fuzzy-pi", "arm6", fuzzy_impl="c", duration_s=0.1))
     with pytest.raises(ConfigError, match="unknown fuzzy implementation"):
         run_spec(RunSpec("E1", "fuzzy-pi", "arm6", fuzzy_impl="fast", duration_s=0.1))
+
+
+def test_table_cache_builds_once_and_rebuilds_a_damaged_file(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from fuzzkit.formats.registry import load
+    from fuzzkit.studies.compiled.table import cached_table
+
+    monkeypatch.setenv("FUZZKIT_CACHE_DIR", str(tmp_path))
+    rb = load("macvicar_whelan")
+    table = load_table()
+    builds: list[int] = []
+
+    def build() -> object:
+        builds.append(1)
+        return table
+
+    first = cached_table(rb, 1e-3, build)
+    second = cached_table(rb, 1e-3, build)
+    assert len(builds) == 1
+    for a, b in (
+        (first.values, second.values),
+        (first.bp0, second.bp0),
+        (first.splits, second.splits),
+    ):
+        np.testing.assert_array_equal(a, b)
+    assert second.label == first.label
+    (cached,) = tmp_path.glob("*.npz")
+    cached.write_bytes(b"not a table")
+    third = cached_table(rb, 1e-3, build)
+    assert len(builds) == 2
+    np.testing.assert_array_equal(third.values, first.values)
+    cached_table(rb, 2e-3, build)  # another tolerance is another table
+    assert len(builds) == 3
