@@ -14,7 +14,7 @@ import math
 import os
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any, TypeVar
 
@@ -316,11 +316,6 @@ def _as_completed(futures: Iterable[Any]) -> Iterator[Any]:
     from concurrent.futures import as_completed
 
     yield from as_completed(list(futures))
-
-
-def spec_dict(spec: RunSpec) -> dict[str, Any]:
-    """``spec`` as a plain mapping (for messages and provenance)."""
-    return asdict(spec)
 
 
 def gains_items(gains: Mapping[str, float]) -> tuple[tuple[str, float], ...]:
