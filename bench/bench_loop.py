@@ -14,6 +14,9 @@ Tables
    factor with 4 substeps per 4 ms period.
 3. Sweep throughput: runs per wall second of ``fuzzkit sweep`` (all local cores), compiled
    loop (60 runs) vs Python loop (12 runs).
+5. The engine at scale: ``Engine.evaluate`` on 1e6 MacVicar-Whelan points, traced peak memory
+   and CPU time, chunked (now) vs one pass (``chunk_points`` set huge: the old behaviour); and
+   an output with gaussian terms (compiled grid integration), ms per point.
 4. Tuning time: ``tune E1 --budget N`` over 5/10/20 N/mm, and a robust tune over 3 stiffnesses x
    3 latencies, on arm6 with the Python loop (before) and the compiled loop (after); the planar
    tune (whose plant has no compiled loop) for reference.
@@ -171,6 +174,51 @@ def tune_times(budget: int, workers: int) -> list[tuple[str, float, int, float, 
     return rows
 
 
+def engine_scale() -> list[tuple[str, float, float]]:
+    """``(case, peak MB, CPU s)`` of large batches, and ms per point of a gaussian output."""
+    import dataclasses
+    import tracemalloc
+
+    import numpy as np
+
+    from fuzzkit.formats.registry import load
+    from fuzzkit.fuzzy.inference import Engine
+    from fuzzkit.fuzzy.model import Term
+
+    rb = load("macvicar_whelan")
+    eng = Engine(rb)
+    rng = np.random.default_rng(0)
+    e, de = rng.uniform(-1, 1, 1_000_000), rng.uniform(-1, 1, 1_000_000)
+    rows = []
+    for label, chunk in (
+        ("1e6 points, chunked (now)", eng.chunk_points),
+        ("1e6 points, one pass", 10**9),
+    ):
+        eng.chunk_points = chunk
+        tracemalloc.start()
+        t0 = time.process_time()
+        eng.evaluate({"e": e, "de": de})
+        cpu = time.process_time() - t0
+        peak = tracemalloc.get_traced_memory()[1] / 1e6
+        tracemalloc.stop()
+        rows.append((label, peak, cpu))
+    out = rb.outputs[0]
+    terms = tuple(Term(t.name, "gaussian", (float(t.params[1]), 0.15)) for t in out.terms)
+    for d in ("centroid", "bisector", "mean_of_maximum"):
+        g = Engine(
+            dataclasses.replace(rb, outputs=(dataclasses.replace(out, terms=terms),), defuzzifier=d)
+        )
+        g.evaluate({"e": e[:2], "de": de[:2]})  # load the compiled kernel
+        tracemalloc.start()
+        t0 = time.process_time()
+        g.evaluate({"e": e[:200], "de": de[:200]})
+        cpu = time.process_time() - t0
+        peak = tracemalloc.get_traced_memory()[1] / 1e6
+        tracemalloc.stop()
+        rows.append((f"gaussian output, {d}, ms per point", peak, 1e3 * cpu / 200))
+    return rows
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the benchmark and print its tables; returns 0."""
     from fuzzkit.studies.batch import default_workers
@@ -201,6 +249,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     print("\n2. planar plant: where a period's CPU time goes (us, or x real time for caps)")
     for name, value in planar_breakdown():
         print(f"  {name:<54}{value:>9.2f}")
+
+    print("\n5. the engine at scale (traced peak MB, CPU s or ms per point)")
+    for name, peak, cpu in engine_scale():
+        print(f"  {name:<44}{peak:>10.1f} MB{cpu:>10.3f}")
 
     print(f"\n3. sweep throughput on {workers} local processes")
     for name, rate, _ in sweep_throughput(workers):
