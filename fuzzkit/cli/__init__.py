@@ -17,7 +17,15 @@ from collections.abc import Sequence
 from fuzzkit.errors import FuzzkitError
 
 #: Modules under fuzzkit.cli that contribute subcommands, in help order.
-COMMAND_MODULES = ("rulebase", "plot", "codegen_cmd", "simulation", "tuning", "demo")
+COMMAND_MODULES = (
+    "rulebase",
+    "plot",
+    "codegen_cmd",
+    "simulation",
+    "tuning",
+    "demo",
+    "sweep",
+)
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
