@@ -25,6 +25,9 @@ def register(subparsers: Any) -> None:
             "as CSV or Parquet, plus a summary figure. Uses all local cores, or the Dask "
             "cluster at --scheduler."
         ),
+        epilog="examples:\n"
+        "  fuzzkit sweep E1 E2 --stiffness 5,10,20 --latency 0:0,2:1 --seeds 3 --out runs.csv\n"
+        "  fuzzkit sweep E2 --controller pi --scheduler tcp://127.0.0.1:8786 --out runs.parquet",
     )
     p.add_argument("experiments", nargs="+", metavar="SCENARIO", help="E1, E2, E3")
     p.add_argument("--controller", default="pi,fuzzy-pi", help="comma list (default pi,fuzzy-pi)")
@@ -47,8 +50,18 @@ def register(subparsers: Any) -> None:
         metavar="FILE[,FILE...]",
         help="gains files to compare (each one a value of the sweep); default gains otherwise",
     )
-    p.add_argument("--plant", choices=sorted(PLANTS), default="arm6")
-    p.add_argument("--rulebase", default="macvicar_whelan", metavar="RB")
+    p.add_argument(
+        "--plant",
+        choices=sorted(PLANTS),
+        default="arm6",
+        help="simulated robot (arm6 runs on the compiled loop)",
+    )
+    p.add_argument(
+        "--rulebase",
+        default="macvicar_whelan",
+        metavar="RB",
+        help="rule base for fuzzy-pi: shipped name or YAML path",
+    )
     p.add_argument(
         "--loop",
         choices=("compiled", "python"),
@@ -56,7 +69,12 @@ def register(subparsers: Any) -> None:
         help="default: compiled where the plant supports it",
     )
     p.add_argument("--duration", type=float, default=None, metavar="S", help="simulated time")
-    p.add_argument("--out", required=True, metavar="RUNS.csv|RUNS.parquet")
+    p.add_argument(
+        "--out",
+        required=True,
+        metavar="RUNS.csv|RUNS.parquet",
+        help="the table of runs, one row per run (CSV or Parquet by the suffix)",
+    )
     p.add_argument(
         "--figure", default=None, metavar="PNG", help="summary figure (default: OUT with .png)"
     )

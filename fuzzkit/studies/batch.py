@@ -87,7 +87,9 @@ def run_spec(spec: RunSpec) -> RunResult:
     """Run ``spec`` and return the whole :class:`RunResult` (traces included).
 
     The compiled loop runs the fuzzy-PI as the rule base's double lookup table (the generated
-    code's arithmetic); the Python loop runs it on the exact engine.
+    code's arithmetic); the Python loop runs it on the exact engine. A plant the compiled loop
+    does not model (E3 on arm6: its 3-D ``HeightField`` floor) runs in the Python loop, and the
+    result's ``loop`` says so: ``python (fallback: ...)``.
     """
     from fuzzkit.studies.experiments import with_stiffness
     from fuzzkit.studies.faults import fault
@@ -130,8 +132,6 @@ def run_spec(spec: RunSpec) -> RunResult:
         except UnsupportedPlant as exc:
             # e.g. E3 on arm6 (its 3-D HeightField floor): the Python loop runs it, and says so
             fallback = f" (fallback: {exc})"
-            if impl == "auto":
-                impl = "table"  # what the compiled loop would have evaluated
     from fuzzkit.studies.runner import run
 
     surface: Any = None
