@@ -218,6 +218,18 @@ def test_safety_limit_needs_consecutive_samples_then_latches_and_backs_off() -> 
     assert not h.tripped
 
 
+@pytest.mark.parametrize(
+    "between", [np.array([0.0, 0.0, 0.2]), np.array([0.0, 0.0, math.nan])], ids=["low", "nan"]
+)
+def test_single_spikes_do_not_engage(between: np.ndarray) -> None:
+    h = _hybrid(engage_threshold_n=1.0, engage_samples=3)
+    for _ in range(20):  # spike, spike, then a low or missing sample restarts the count
+        assert not np.any(h.step(np.array([0.0, 0.0, 40.0])))
+        assert not np.any(h.step(np.array([0.0, 0.0, 40.0])))
+        h.step(between)
+    assert not h.engaged
+
+
 def test_nan_on_controlled_axis_holds_and_counts_but_not_on_free_axis() -> None:
     h = _hybrid()
     u1 = h.step(np.array([0.0, 0.0, 5.0])).copy()

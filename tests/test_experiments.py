@@ -182,8 +182,18 @@ def test_summary_has_the_issue_keys() -> None:
         "tripped",
         "sim_time_s",
         "wall_time_s",
+        "loop",
+        "controller_impl",
+        "cpu_time_s",
+        "real_time_factor",
         "axes",
     }
+    assert data["loop"] == "python"
+    # simulated seconds per CPU second of the loop
+    assert data["real_time_factor"] == pytest.approx(
+        data["sim_time_s"] / data["cpu_time_s"],
+        abs=0.051,  # rounded to 0.1
+    )
     assert list(data["axes"]) == ["z", "x"]
     for m in data["axes"].values():
         assert tuple(m) == SUMMARY_AXIS_KEYS

@@ -471,3 +471,27 @@ def test_readme_tour_tuned_gains_no_worse_at_any_stiffness() -> None:
             for g in (result.gains, result.baseline_gains)
         ]
         assert costs[0] <= costs[1] * (1 + 1e-3) + 1e-9, (k, costs)
+
+
+def test_tuning_runs_keep_each_experiments_latency_unless_told() -> None:
+    """Without ``latencies`` a case runs at its experiment's own latency, as ``simulate`` does:
+    pricing it equals pricing at that latency given explicitly, and differs from (0, 0)."""
+    from fuzzkit.studies.experiments import DEFAULT_GAINS
+
+    gains = dict(DEFAULT_GAINS["pi"])
+    own = TuningProblem.build(["E2"], "pi", plant="arm6", stiffnesses_n_per_mm=None, horizon_s=2.0)
+    assert own.latency_of(0) is None
+    lat = experiment("E2").latency_periods
+    assert lat != (0, 0)
+
+    def price(problem: TuningProblem) -> tuple[float, ...]:
+        return evaluate_gains(problem, gains)
+
+    explicit = TuningProblem.build(
+        ["E2"], "pi", plant="arm6", stiffnesses_n_per_mm=None, horizon_s=2.0, latencies=[lat]
+    )
+    zero = TuningProblem.build(
+        ["E2"], "pi", plant="arm6", stiffnesses_n_per_mm=None, horizon_s=2.0, latencies=[(0, 0)]
+    )
+    assert price(own) == price(explicit)
+    assert price(own) != price(zero)

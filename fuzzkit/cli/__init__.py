@@ -25,6 +25,7 @@ COMMAND_MODULES = (
     "simulation",
     "tuning",
     "demo",
+    "sweep",
 )
 
 EXIT_OK = 0

@@ -97,6 +97,23 @@ def register(subparsers: Any) -> None:
         help="inject a sensor fault at the strength the test suite uses (default: the "
         "scenario's, none for E1-E3)",
     )
+    sim.add_argument(
+        "--loop",
+        choices=("compiled", "python"),
+        default=None,
+        help="compiled (numba, arm6 only; fuzzy-pi runs as the rule base's double lookup "
+        "table) or python (the reference loop; fuzzy-pi on the exact engine). Default: "
+        "compiled where the plant supports it (not E3 on arm6, whose 3-D floor the compiled "
+        "loop does not model: it runs in Python and says so)",
+    )
+    sim.add_argument(
+        "--fuzzy-impl",
+        choices=("auto", "exact", "table", "c"),
+        default="auto",
+        help="how fuzzy-pi evaluates its surface: exact engine (python loop), the generated "
+        "double lookup table (both loops), or the generated C through ctypes (python loop; "
+        "needs a C compiler). Default: table when compiled, exact in python",
+    )
     sim.add_argument("--rrd", metavar="OUT.rrd", help="write a Rerun recording of the run")
     sim.add_argument("--json", action="store_true", help="print the metrics as JSON")
     sim.add_argument(
@@ -171,37 +188,6 @@ def load_gains(path: str | None, controller: str, required: bool = True) -> dict
     return read_gains(path, controller, required)
 
 
-def _run_one(
-    exp_name: str, controller: str, args: argparse.Namespace, surface: Any, required: bool = True
-) -> Any:
-    from fuzzkit.studies.e3_arm6 import resolve
-    from fuzzkit.studies.experiments import with_stiffness
-    from fuzzkit.studies.faults import fault
-    from fuzzkit.studies.runner import run
-
-    exp, plant = resolve(exp_name, args.plant)  # E3 on arm6 is the paper's 3-D geometry
-    stiffness = getattr(args, "stiffness", None)
-    if stiffness is not None:
-        exp = with_stiffness(exp, stiffness * 1e3)
-    latency = None
-    if getattr(args, "latency", None) is not None:
-        sensor, command = args.latency
-        latency = (sensor, exp.latency_periods[1] if command is None else command)
-    kind = getattr(args, "fault", None) or exp.fault
-    gains = load_gains(args.gains, controller, required)
-    result = run(
-        exp,
-        plant,
-        controller,
-        gains=gains,
-        surface=surface,
-        seed=args.seed,
-        faults=fault(kind, args.seed),
-        latency=latency,
-    )
-    return result, plant
-
-
 def _surface_for(controller: str, rulebase: str) -> Any:
     if controller != "fuzzy-pi":
         return None
@@ -218,26 +204,62 @@ def _fmt(v: Any, digits: int = 2) -> str:
     return str(v)
 
 
+def parse_latency(text: str) -> tuple[int, int]:
+    """``"S,C"`` -> ``(sensor_delay, command_delay)``, integers >= 0 (periods)."""
+    parts = text.split(",")
+    try:
+        values = tuple(int(p) for p in parts)
+    except ValueError:
+        values = ()
+    if len(values) != 2 or min(values) < 0:
+        raise ConfigError(
+            f"--latency: expected SENSOR,COMMAND delays in periods, integers >= 0 (got {text!r})"
+        )
+    return values[0], values[1]
+
+
 def _simulate(args: argparse.Namespace) -> int:
     from fuzzkit.studies.experiments import experiment
     from fuzzkit.studies.metrics import summary
 
-    experiment(args.experiment)  # reject a bad name before loading anything
+    exp = experiment(args.experiment)  # reject a bad name before loading anything
     if args.rrd:
         check_output_path(args.rrd, ".rrd file")
-    surface = _surface_for(args.controller, args.rulebase)
-    result, plant = _run_one(args.experiment, args.controller, args, surface)
+    from fuzzkit.studies.batch import RunSpec, experiment_and_plant, gains_items, run_spec
+
+    latency = None
+    if args.latency is not None:
+        sensor, command = args.latency
+        latency = (sensor, exp.latency_periods[1] if command is None else command)
+    spec = RunSpec(
+        experiment=args.experiment,
+        controller=args.controller,
+        plant=args.plant,
+        stiffness_n_per_mm=args.stiffness,
+        latency=latency,
+        seed=args.seed,
+        gains=gains_items(load_gains(args.gains, args.controller)),
+        gains_label=args.gains or "default",
+        rulebase=args.rulebase,
+        loop=args.loop or "auto",
+        fuzzy_impl=args.fuzzy_impl,
+        fault=args.fault,
+    )
+    result = run_spec(spec)
     if args.rrd:
         from fuzzkit.viz.traces import write_run_rrd
 
-        write_run_rrd(result, args.rrd, plant)
+        plant = experiment_and_plant(spec)[1]  # the 3-D E3's floor and wall, for the drawing
+        write_run_rrd(result, args.rrd, None if isinstance(plant, str) else plant)
     data = summary(result)
     if args.json:
         print(json.dumps(data, indent=2))
         return 0
     print(
         f"{data['experiment']} {data['controller']} on {data['plant']}: "
-        f"{data['sim_time_s']:.2f} s simulated in {data['wall_time_s']:.2f} s"
+        f"{data['sim_time_s']:.2f} s simulated in {data['wall_time_s']:.2f} s "
+        f"({data['loop']} loop, {data['real_time_factor']}x real time in CPU time; "
+        f"controller: {data['controller_impl']})"
     )
     print(f"  {result.experiment.title}")
     sensor, command = data["latency_periods"]

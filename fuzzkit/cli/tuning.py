@@ -60,6 +60,25 @@ def register(subparsers: Any) -> None:
     tune.add_argument(
         "--workers", type=int, default=None, help="worker processes (default: every core)"
     )
+    tune.add_argument(
+        "--latency",
+        default=None,
+        metavar="S:C[,S:C...]",
+        help="sensor:command delays in periods to tune over at once (default: each "
+        "experiment's own)",
+    )
+    tune.add_argument(
+        "--loop",
+        choices=("compiled", "python"),
+        default=None,
+        help="default: the compiled loop where the plant has one (arm6)",
+    )
+    tune.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="ADDRESS",
+        help="dask.distributed scheduler (tcp://host:8786): price the candidates on its workers",
+    )
     tune.add_argument("--out", required=True, metavar="GAINS.yaml", help="gains file to write")
     tune.add_argument(
         "--replace",
@@ -146,12 +165,14 @@ def parse_stiffness(text: str) -> tuple[float, ...]:
 
 
 def _tune(args: argparse.Namespace) -> int:
+    from fuzzkit.cli.sweep import parse_latencies
     from fuzzkit.control.gains import read_gains_file, write_gains
     from fuzzkit.progress import progress_bar
     from fuzzkit.studies.tuning import progress_callback, tune
     from fuzzkit.studies.tuning_check import compare_cases
 
     ks = parse_stiffness(args.stiffness)
+    latencies = parse_latencies(args.latency) if args.latency else None
     out = Path(args.out)
     check_output_path(out, "gains file")
     if out.is_file() and not args.replace:
@@ -170,6 +191,9 @@ def _tune(args: argparse.Namespace) -> int:
             workers=args.workers,
             callback=progress_callback(bar),
             admit=args.admit,
+            latencies=latencies,
+            loop=args.loop or "auto",
+            scheduler=args.scheduler,
         )
     _, kept = write_gains(out, result.to_entry(), merge=not args.replace)
     print(

@@ -559,27 +559,8 @@ class _GridGeometry:
         self.y = np.linspace(lo, hi, n)
         self.dy = self.y[1] - self.y[0]
         mus = np.stack([membership.evaluate_term(t, self.y) for t in out.terms], axis=1)
-        self.piece_mu = mus[:, pieces.piece_term]  # (N, K)
-        self.chunk = max(1, 4_000_000 // (n * max(1, n_pieces)))
-
-    def values(self, levels: FloatArray) -> FloatArray:
-        """Aggregated membership on the grid (B, N), in chunks to bound memory."""
-        out = np.empty((levels.shape[0], len(self.y)))
-        for s in range(0, levels.shape[0], self.chunk):
-            lv = levels[s : s + self.chunk, None, :]
-            imp = (
-                np.minimum(lv, self.piece_mu[None])
-                if self.implication == "min"
-                else lv * self.piece_mu[None]
-            )
-            if self.aggregation == "max":
-                f = imp.max(axis=-1)
-            elif self.aggregation == "bounded_sum":
-                f = np.minimum(imp.sum(axis=-1), 1.0)
-            else:
-                f = _probabilistic_sum(imp)
-            out[s : s + self.chunk] = f
-        return out
+        # piece-major (K, N): the compiled integration reads only the firing pieces' rows
+        self.piece_mu_t = np.ascontiguousarray(mus[:, pieces.piece_term].T)
 
 
 class _Output:
@@ -639,33 +620,24 @@ class _Output:
         return np.where(height > 0, val, self.default)
 
     def _grid(self, geo: _GridGeometry, levels: FloatArray) -> FloatArray:
-        f = geo.values(levels)
-        y, dy = geo.y, geo.dy
-        cell = 0.5 * dy * (f[:, :-1] + f[:, 1:])
-        total = cell.sum(axis=1)
-        ok = total > 1e-300
-        d = self.defuzzifier
-        with np.errstate(invalid="ignore", divide="ignore"):
-            if d == "centroid":
-                moment = (
-                    dy
-                    / 6
-                    * (y[:-1] * (2 * f[:, :-1] + f[:, 1:]) + y[1:] * (f[:, :-1] + 2 * f[:, 1:]))
-                ).sum(axis=1)
-                return np.where(ok, moment / total, self.default)
-            if d == "bisector":
-                cum = np.cumsum(cell, axis=1)
-                idx = np.argmax(cum >= 0.5 * total[:, None], axis=1)
-                rows = np.arange(f.shape[0])
-                before = cum[rows, idx] - cell[rows, idx]
-                frac = (0.5 * total - before) / cell[rows, idx]
-                return np.where(ok, y[idx] + np.nan_to_num(frac) * dy, self.default)
-        height = f.max(axis=1)
-        at_max = f >= height[:, None] - 1e-12
-        som = np.where(at_max, y, np.inf).min(axis=1)
-        lom = np.where(at_max, y, -np.inf).max(axis=1)
-        val = {"smallest_of_maximum": som, "largest_of_maximum": lom}.get(d, 0.5 * (som + lom))
-        return np.where(height > 0, val, self.default)
+        # compiled single pass per point: no (points x grid) array, see fuzzy.grid_kernel
+        from fuzzkit.fuzzy.grid_kernel import (
+            AGGREGATIONS,
+            DEFUZZIFIERS,
+            IMPLICATIONS,
+            grid_defuzzify,
+        )
+
+        return grid_defuzzify(
+            np.ascontiguousarray(levels, dtype=np.float64),
+            geo.piece_mu_t,
+            geo.y,
+            float(geo.dy),
+            IMPLICATIONS[geo.implication],
+            AGGREGATIONS[geo.aggregation],
+            DEFUZZIFIERS.get(self.defuzzifier, DEFUZZIFIERS["mean_of_maximum"]),
+            self.default,
+        )
 
 
 # --------------------------------------------------------------------------- public API
@@ -739,12 +711,30 @@ class Engine:
             )
             raise EvaluationError(f"input shapes do not broadcast together: {shapes}") from exc
 
+    #: Points evaluated together: the intermediate arrays scale with it (firing strengths,
+    #: levels, geometry per point), so memory stays bounded whatever the batch size.
+    chunk_points = 8192
+
     def evaluate(self, inputs: Mapping[str, npt.ArrayLike]) -> dict[str, FloatArray]:
-        """Evaluate at every point of the broadcast inputs; each output has their shape."""
+        """Evaluate at every point of the broadcast inputs; each output has their shape.
+
+        Large batches are evaluated :attr:`chunk_points` at a time into the result arrays, so
+        the working memory does not grow with the batch.
+        """
         arrays = self._coerce(inputs)
         shape = arrays[0].shape
-        result = self._evaluate_flat([a.reshape(-1) for a in arrays])
-        return {k: v.reshape(shape) for k, v in result.items()}
+        flat = [a.reshape(-1) for a in arrays]
+        size = flat[0].size
+        step = self.chunk_points
+        if size <= step:
+            result = self._evaluate_flat(flat)
+            return {k: v.reshape(shape) for k, v in result.items()}
+        out = {name: np.empty(size) for name in self.output_names}
+        for s in range(0, size, step):
+            part = self._evaluate_flat([a[s : s + step] for a in flat])
+            for name, v in part.items():
+                out[name][s : s + step] = v
+        return {k: v.reshape(shape) for k, v in out.items()}
 
     def _evaluate_flat(self, flat: list[FloatArray]) -> dict[str, FloatArray]:
         bad = np.isnan(flat[0])

@@ -92,3 +92,18 @@ class FaultInjector:
         if f.dropout is not None and f.dropout[0] <= t_s < f.dropout[0] + f.dropout[1]:
             out = np.full(3, np.nan)
         return out
+
+
+def fault_schedule(faults: Faults, periods: int) -> tuple[Vec, npt.NDArray[np.bool_]]:
+    """The random part of ``periods`` samples of :class:`FaultInjector`, drawn up front in its
+    order: per period the spike sign (0: none) and whether the sample is NaN. The compiled loop
+    (:mod:`fuzzkit.studies.compiled`) injects from it; the injector's draws are the same."""
+    rng = np.random.default_rng(faults.seed)
+    spike = np.zeros(periods)
+    nan = np.zeros(periods, dtype=bool)
+    for k in range(periods):
+        if faults.spike_probability > 0.0 and rng.random() < faults.spike_probability:
+            spike[k] = rng.choice([-1.0, 1.0])
+        if faults.nan_probability > 0.0 and rng.random() < faults.nan_probability:
+            nan[k] = True
+    return spike, nan

@@ -230,5 +230,12 @@ def summary(result: RunResult) -> dict[str, Any]:
         "tripped": result.tripped,
         "sim_time_s": round(result.sim_time_s, 6),
         "wall_time_s": round(result.wall_time_s, 4),
+        "loop": result.loop,
+        "controller_impl": result.controller_impl,
+        "cpu_time_s": round(result.cpu_time_s, 6),
+        # simulated seconds per CPU second of the loop alone (start-up excluded)
+        "real_time_factor": (
+            round(result.real_time_factor, 1) if math.isfinite(result.real_time_factor) else None
+        ),
         "axes": axes,
     }

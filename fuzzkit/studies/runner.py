@@ -7,6 +7,7 @@ and signs). One :class:`RunResult` holds every series of a run, one sample per p
 
 from __future__ import annotations
 
+import math
 import time
 from collections import deque
 from collections.abc import Mapping
@@ -70,6 +71,17 @@ class RunResult:
     engaged_time_s: float | None
     wall_time_s: float
     messages: dict[str, int] = field(default_factory=dict)
+    #: which loop ran: "python" (this module) or "compiled" (fuzzkit.studies.compiled)
+    loop: str = "python"
+    #: CPU time of the loop alone (s, time.process_time), start-up excluded
+    cpu_time_s: float = 0.0
+    #: which controller implementation ran (exact engine, lookup table, generated C ...)
+    controller_impl: str = ""
+
+    @property
+    def real_time_factor(self) -> float:
+        """Simulated seconds per CPU second of the loop."""
+        return self.sim_time_s / self.cpu_time_s if self.cpu_time_s > 0.0 else math.inf
 
     @property
     def sim_time_s(self) -> float:
@@ -120,6 +132,7 @@ def run(
     faults: Faults | None = None,
     duration_s: float | None = None,
     latency: tuple[int, int] | None = None,
+    controller_impl: str = "",
 ) -> RunResult:
     """Run ``exp`` in closed loop on ``plant`` and record every period.
 
@@ -132,18 +145,14 @@ def run(
     passes the fault injection into the sensor queue, the controller consumes the sample of
     ``sensor`` periods ago (the queue starts filled with the reset sample's force), and its
     correction enters the command queue, whose output (``command`` periods old; zeros at the
-    start) the plant receives in period k + 1.
+    start) the plant receives in period k + 1. ``controller_impl`` is only a label for the
+    result.
     """
     if isinstance(plant, str):
         plant = make_plant(plant)
     ctrl = hybrid or build_controller(exp, controller, gains, surface)
     scn = exp.scenario
-    if faults is None:
-        faults = fault(exp.fault, seed)
-    sensor_delay, command_delay = exp.latency_periods if latency is None else latency
-    if min(sensor_delay, command_delay) < 0:
-        raise ConfigError(f"latency must be >= 0 periods (got {sensor_delay}, {command_delay})")
-    sensor_delay += faults.delay_steps
+    faults, sensor_delay, command_delay = run_faults_and_latency(exp, seed, faults, latency)
     inject = FaultInjector(faults)
     n = round((duration_s or scn.duration_s) / scn.period_s)
     period = scn.period_s
@@ -156,10 +165,11 @@ def run(
     path_t = 0.0
     correction_task = np.zeros(3)
     applied = np.zeros(3)
-    wall0 = time.perf_counter()
     sample: PlantSample = plant.reset(scn, seed=seed)
     sensor_queue: deque[Vec] = deque(sample.force.copy() for _ in range(sensor_delay))
     command_queue: deque[Vec] = deque(np.zeros(3) for _ in range(command_delay))
+    wall0 = time.perf_counter()
+    cpu0 = time.process_time()
     for _ in range(n):
         held = ctrl.tripped or (
             exp.hold_path_on_contact and ctrl.engaged and engaged_at is not None
@@ -203,6 +213,7 @@ def run(
         arm_points.append(sample.arm_points)
         contact_points.append(sample.contact_points)
     wall = time.perf_counter() - wall0
+    cpu = time.process_time() - cpu0
     columns = list(zip(*records, strict=True)) if records else [() for _ in _SERIES]
     arr = {k: np.asarray(v) for k, v in zip(_SERIES, columns, strict=True)}
     return RunResult(
@@ -237,7 +248,41 @@ def run(
         engaged_time_s=engaged_at,
         wall_time_s=wall,
         messages=messages,
+        loop="python",
+        cpu_time_s=cpu,
+        controller_impl=controller_impl or _impl_label(controller, hybrid, surface),
     )
+
+
+def run_faults_and_latency(
+    exp: Experiment, seed: int, faults: Faults | None, latency: tuple[int, int] | None
+) -> tuple[Faults, int, int]:
+    """The faults and ``(sensor, command)`` delays a run uses: the experiment's where None (its
+    fault kind seeded by ``seed``), the fault's delay added to the sensor delay. Both loops (this
+    module and :mod:`fuzzkit.studies.compiled`) take them from here."""
+    if faults is None:
+        faults = fault(exp.fault, seed)
+    sensor_delay, command_delay = check_latency(exp.latency_periods if latency is None else latency)
+    return faults, sensor_delay + faults.delay_steps, command_delay
+
+
+def check_latency(latency: tuple[int, int]) -> tuple[int, int]:
+    """``(sensor_delay, command_delay)`` as non-negative integers, or a ConfigError."""
+    if len(latency) != 2 or any(isinstance(v, bool) or int(v) != v or v < 0 for v in latency):
+        raise ConfigError(
+            f"latency must be (sensor_delay, command_delay), integers >= 0 (got {latency!r})"
+        )
+    return int(latency[0]), int(latency[1])
+
+
+def _impl_label(
+    controller: str, hybrid: HybridForceController | None, surface: Surface | None
+) -> str:
+    if hybrid is not None:
+        return "custom"
+    if controller == "pi":
+        return "pi (python)"
+    return f"fuzzy-pi surface {getattr(surface, '__name__', 'callable')} (python)"
 
 
 _SERIES = (

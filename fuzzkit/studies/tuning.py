@@ -50,9 +50,6 @@ simulations are deterministic, the pool preserves order, the optimiser is seeded
 from __future__ import annotations
 
 import math
-import multiprocessing
-import os
-import signal
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -64,6 +61,7 @@ import numpy.typing as npt
 from fuzzkit.control.controllers import Surface, engine_table_surface, tabulated_surface
 from fuzzkit.errors import ConfigError
 from fuzzkit.plants.contract import ContactPlant
+from fuzzkit.studies.batch import default_workers
 from fuzzkit.studies.experiments import DEFAULT_GAINS, Experiment, experiment, with_stiffness
 from fuzzkit.studies.plants import make_plant
 from fuzzkit.studies.runner import RunResult, run
@@ -215,6 +213,16 @@ class TuningProblem:
     weights: CostWeights
     noise_seed: int
     stiffnesses_n_per_mm: tuple[float, ...] | None
+    #: ``(sensor, command)`` delay of each case, in periods (parallel to ``cases``; None: the
+    #: experiment's own)
+    case_latencies: tuple[tuple[int, int] | None, ...] = ()
+    latencies: tuple[tuple[int, int], ...] | None = None
+    #: ``auto`` (the compiled loop where the plant has one), ``compiled`` or ``python``
+    loop: str = "auto"
+
+    def latency_of(self, case: int) -> tuple[int, int] | None:
+        """The latency of case ``case`` (None: its experiment's own)."""
+        return self.case_latencies[case] if self.case_latencies else None
 
     @classmethod
     def build(
@@ -229,6 +237,8 @@ class TuningProblem:
         weights: CostWeights = CostWeights(),
         horizon_s: float | None = None,
         noise_seed: int = 0,
+        latencies: Sequence[tuple[int, int]] | None = None,
+        loop: str = "auto",
     ) -> TuningProblem:
         """Check the arguments and assemble the problem (arguments as for :func:`tune`).
 
@@ -282,6 +292,25 @@ class TuningProblem:
                 labels.append(f"{exp.name}@{k_mm:g}N/mm")
                 groups.append(gi)
                 horizons.append(h)
+        lats = None if latencies is None else tuple((int(a), int(b)) for a, b in latencies)
+        if lats is not None and (not lats or any(min(pair) < 0 for pair in lats)):
+            raise ConfigError(f"latencies must be (sensor, command) pairs >= 0 (got {lats})")
+        if loop not in ("auto", "compiled", "python"):
+            raise ConfigError(f"unknown loop {loop!r} (expected auto, compiled or python)")
+        case_lats: tuple[tuple[int, int] | None, ...]
+        if lats is not None:
+            n_cases = len(cases)
+            cases = [c for c in cases for _ in lats]
+            labels = (
+                [f"{lab}@lat{a}:{b}" for lab in labels for a, b in lats]
+                if len(lats) > 1
+                else labels
+            )
+            groups = [g for g in groups for _ in lats]
+            horizons = [h for h in horizons for _ in lats]
+            case_lats = tuple(pair for _ in range(n_cases) for pair in lats)
+        else:
+            case_lats = tuple(None for _ in cases)  # each experiment's own latency
         sp = space or SPACES[controller]
         fixed = {k: v for k, v in DEFAULT_GAINS[controller].items() if k not in sp.names}
         return cls(
@@ -298,6 +327,9 @@ class TuningProblem:
             weights=weights,
             noise_seed=noise_seed,
             stiffnesses_n_per_mm=ks,
+            case_latencies=case_lats,
+            latencies=lats,
+            loop=loop,
         )
 
     def full_gains(self, gains: Mapping[str, float]) -> dict[str, float]:
@@ -334,12 +366,34 @@ class TuningProblem:
 
 
 class _Runner:
-    """Prices gain sets for one problem in this process (the surface table is built once)."""
+    """Prices gain sets for one problem in this process (the surface table is built once).
+
+    Runs the compiled loop (:mod:`fuzzkit.studies.compiled`) where the plant has one, with the
+    rule base's double lookup table as the fuzzy surface; the Python loop otherwise, with a
+    201 x 201 bilinear table.
+    """
 
     def __init__(self, problem: TuningProblem) -> None:
+        from fuzzkit.studies.compiled.loop import compiled_supports, compiled_table
+
         self.problem = problem
         self.surface: Surface | None = None
-        if isinstance(problem.surface, str):
+        self.table: Any = None
+        self.compiled = (
+            problem.loop != "python"
+            and isinstance(problem.plant, str)
+            and compiled_supports(problem.plant)
+            and (problem.surface is None or isinstance(problem.surface, str))
+        )
+        if problem.loop == "compiled" and not self.compiled:
+            raise ConfigError(
+                f"the compiled loop does not run plant {problem.plant_name} "
+                "(or a surface given as a function); use loop='python'"
+            )
+        if self.compiled:
+            if isinstance(problem.surface, str):
+                self.table = compiled_table(problem.surface)
+        elif isinstance(problem.surface, str):
             from fuzzkit.formats.registry import load
             from fuzzkit.fuzzy.inference import Engine
 
@@ -349,21 +403,36 @@ class _Runner:
 
     def case_costs(self, gains: Mapping[str, float]) -> tuple[float, ...]:
         """The cost of ``gains`` (searched names only, or complete) on every case."""
+        from fuzzkit.studies.compiled.loop import run_compiled
+
         p = self.problem
         full = p.full_gains(gains)
         out = []
-        for exp, horizon in zip(p.cases, p.horizons, strict=True):
-            plant = make_plant(p.plant) if isinstance(p.plant, str) else p.plant()
+        for i, (exp, horizon) in enumerate(zip(p.cases, p.horizons, strict=True)):
             try:
-                result = run(
-                    exp,
-                    plant,
-                    p.controller,
-                    gains=full,
-                    surface=self.surface,
-                    seed=p.noise_seed,
-                    duration_s=horizon,
-                )
+                if self.compiled:
+                    result = run_compiled(
+                        exp,
+                        str(p.plant),
+                        p.controller,
+                        gains=full,
+                        table=self.table,
+                        seed=p.noise_seed,
+                        duration_s=horizon,
+                        latency=p.latency_of(i),
+                    )
+                else:
+                    plant = make_plant(p.plant) if isinstance(p.plant, str) else p.plant()
+                    result = run(
+                        exp,
+                        plant,
+                        p.controller,
+                        gains=full,
+                        surface=self.surface,
+                        seed=p.noise_seed,
+                        duration_s=horizon,
+                        latency=p.latency_of(i),
+                    )
             except (ArithmeticError, ValueError):
                 # Gains that break the simulation (overflow, unreachable targets) are merely
                 # bad candidates: price them like a run that failed.
@@ -382,22 +451,25 @@ def evaluate_gains(problem: TuningProblem, gains: Mapping[str, float]) -> tuple[
     return _Runner(problem).case_costs(gains)
 
 
-# Worker-process state: one runner per process, built by the pool initializer.
-_WORKER: _Runner | None = None
+# Worker-side state: one runner per problem and process, built on the first task that needs it.
+_RUNNERS: dict[str, _Runner] = {}
 
 
-def _init_worker(problem: TuningProblem) -> None:
-    global _WORKER
-    # Ctrl-C is the parent's business: it stops the search and keeps the best so far; workers
-    # that died of KeyboardInterrupt mid-task would hang the pool instead.
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    _WORKER = _Runner(problem)
+def _problem_key(problem: TuningProblem) -> str:
+    import hashlib
+    import pickle
+
+    return hashlib.sha256(pickle.dumps(problem)).hexdigest()
 
 
-def _worker_costs(gains: dict[str, float]) -> tuple[float, ...]:
-    if _WORKER is None:  # pragma: no cover - the initializer always ran
-        raise RuntimeError("tuning worker used before initialisation")
-    return _WORKER.case_costs(gains)
+def _worker_costs(task: tuple[str, TuningProblem, dict[str, float]]) -> tuple[float, ...]:
+    """Price one gain set in a worker (local process or Dask worker)."""
+    key, problem, gains = task
+    runner = _RUNNERS.get(key)
+    if runner is None:
+        _RUNNERS.clear()  # one problem at a time: keep the memory of one table
+        runner = _RUNNERS[key] = _Runner(problem)
+    return runner.case_costs(gains)
 
 
 # --------------------------------------------------------------------------------------------
@@ -533,14 +605,6 @@ def _means_by_experiment(case_costs: Mapping[str, float]) -> dict[str, float]:
     return {k: sum(v) / len(v) for k, v in groups.items()}
 
 
-def default_workers() -> int:
-    """The number of cores this process may use."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # pragma: no cover - not Linux
-        return max(1, os.cpu_count() or 1)
-
-
 class _Pricer:
     """Prices batches of log10 points (in a process pool or in-process), remembers every
     result, enforces the budget and reports progress."""
@@ -552,7 +616,10 @@ class _Pricer:
         budget: int,
         callback: Callable[[Progress], None] | None,
         admit: str = "case",
+        scheduler: str | None = None,
     ) -> None:
+        from fuzzkit.studies.batch import BatchExecutor
+
         self.problem = problem
         self.budget = budget
         self.admit = admit
@@ -566,13 +633,12 @@ class _Pricer:
         self.best: Evaluation | None = None
         self.history: list[float] = []
         self.t0 = time.perf_counter()
-        self.pool: Any = None
         self.runner: _Runner | None = None
-        if workers > 1:
-            methods = multiprocessing.get_all_start_methods()
-            # fork shares the already imported modules (fast start); spawn elsewhere.
-            ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
-            self.pool = ctx.Pool(workers, initializer=_init_worker, initargs=(problem,))
+        self.key = _problem_key(problem)
+        # candidates run on the sweep's executor: local processes or a Dask cluster
+        self.executor: BatchExecutor | None = None
+        if workers > 1 or scheduler is not None:
+            self.executor = BatchExecutor(workers, scheduler)
         else:
             self.runner = _Runner(problem)
 
@@ -583,13 +649,9 @@ class _Pricer:
 
     def close(self, abort: bool = False) -> None:
         """Stop the workers (``abort``: without waiting for running tasks)."""
-        if self.pool is not None:
-            if abort:
-                self.pool.terminate()
-            else:
-                self.pool.close()
-            self.pool.join()
-            self.pool = None
+        if self.executor is not None:
+            self.executor.close(abort)
+            self.executor = None
 
     def price(self, gains_list: Sequence[Mapping[str, float]]) -> list[Evaluation]:
         """Price ``gains_list`` (memoised; new points beyond the budget are priced inf)."""
@@ -603,8 +665,10 @@ class _Pricer:
         todo = todo[: max(0, self.remaining)]
         fresh = [dict(gains_list[i]) for i in todo]
         if fresh:
-            if self.pool is not None:
-                results = self.pool.map(_worker_costs, fresh, chunksize=1)
+            if self.executor is not None:
+                results = self.executor.map(
+                    _worker_costs, [(self.key, self.problem, g) for g in fresh]
+                )
             else:
                 if self.runner is None:  # pragma: no cover - set in __init__ without a pool
                     raise RuntimeError("no runner for in-process pricing")
@@ -692,6 +756,7 @@ def optimise(
     callback: Callable[[Progress], None] | None = None,
     baseline: Mapping[str, float] | None = None,
     admit: str = "case",
+    scheduler: str | None = None,
 ) -> TuneResult:
     """Search ``problem.space`` for the gain set of least cost (see the module docstring).
 
@@ -706,6 +771,7 @@ def optimise(
     baseline : the reference gains (default: ``fuzzkit.studies.experiments.DEFAULT_GAINS``).
     admit : ``case`` (no worse than the baseline on every experiment x stiffness case) or
         ``experiment`` (no worse on each experiment's mean over the stiffnesses).
+    scheduler : a ``dask.distributed`` scheduler address: price the candidates on its workers.
 
     Returns
     -------
@@ -735,6 +801,7 @@ def optimise(
     lo, hi = space.log_bounds
     ndim = len(space.names)
     pricer = _Pricer(problem, nworkers, budget, callback, admit)
+    pricer = _Pricer(problem, nworkers, budget, callback, admit, scheduler)
     interrupted = False
     try:
         pricer.baseline = pricer.price([{n: base_gains[n] for n in space.names}])[0]
@@ -853,6 +920,9 @@ def tune(
     baseline: Mapping[str, float] | None = None,
     noise_seed: int = 0,
     admit: str = "case",
+    latencies: Sequence[tuple[int, int]] | None = None,
+    loop: str = "auto",
+    scheduler: str | None = None,
 ) -> TuneResult:
     """Find the gains of least cost for ``controller`` over experiments and stiffnesses.
 
@@ -874,6 +944,10 @@ def tune(
     baseline : reference gains (default ``DEFAULT_GAINS``).
     noise_seed : sensor-noise seed of every run.
     admit : admission rule, ``case`` (default) or ``experiment`` (see :func:`optimise`).
+    latencies : ``(sensor, command)`` delays (periods) to tune over at once (default: each
+        experiment's own).
+    loop : ``auto`` (compiled where the plant has a compiled loop), ``compiled`` or ``python``.
+    scheduler : a ``dask.distributed`` scheduler address to price the candidates on.
 
     Returns
     -------
@@ -901,8 +975,10 @@ def tune(
         weights=weights,
         horizon_s=horizon_s,
         noise_seed=noise_seed,
+        latencies=latencies,
+        loop=loop,
     )
-    return optimise(problem, budget, seed, workers, callback, baseline, admit)
+    return optimise(problem, budget, seed, workers, callback, baseline, admit, scheduler)
 
 
 def progress_callback(bar: Any) -> Callable[[Progress], None]:

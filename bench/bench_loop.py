@@ -1,0 +1,276 @@
+"""Benchmark of the closed loop at the speed limit (issue 11): Python loop vs compiled loop.
+
+Run: ``.venv/bin/python bench/bench_loop.py [--budget N] [--skip-tune]`` (prints four tables;
+a few minutes on a 2-core machine, most of it the Python-loop tuning runs).
+
+Tables
+------
+1. Real-time factors, CPU time (``time.process_time`` of the loop alone, start-up excluded;
+   best of 3): E1-E3 on ``arm6`` with PI and fuzzy-PI, the Python reference loop (fuzzy-PI on
+   the exact engine, as ``simulate --loop python`` runs it) next to the compiled loop (fuzzy-PI
+   as the rule base's double lookup table); the planar plant, whose loop stays in Python.
+2. Where the planar period's time goes: pymunk's step through its Python wrapper and through
+   the bare C call, the other pymunk calls of a substep, and the cap they put on the real-time
+   factor with 4 substeps per 4 ms period.
+3. Sweep throughput: runs per wall second of ``fuzzkit sweep`` (all local cores), compiled
+   loop (60 runs) vs Python loop (12 runs).
+5. The engine at scale: ``Engine.evaluate`` on 1e6 MacVicar-Whelan points, traced peak memory
+   and CPU time, chunked (now) vs one pass (``chunk_points`` set huge: the old behaviour); and
+   an output with gaussian terms (compiled grid integration), ms per point.
+4. Tuning time: ``tune E1 --budget N`` over 5/10/20 N/mm, and a robust tune over 3 stiffnesses x
+   3 latencies, on arm6 with the Python loop (before) and the compiled loop (after); the planar
+   tune (whose plant has no compiled loop) for reference.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from collections.abc import Callable, Sequence
+
+ARM6_CASES = ("E1", "E2", "E3")
+CONTROLLERS = ("pi", "fuzzy-pi")
+
+
+def _best_rtf(fn: Callable[[], float], repeat: int = 3) -> float:
+    """Best real-time factor of ``repeat`` runs (CPU time): the least disturbed."""
+    return max(fn() for _ in range(repeat))
+
+
+def real_time_factors() -> list[tuple[str, float, float | None]]:
+    """``(case, python rtf, compiled rtf)`` rows, CPU time."""
+    from fuzzkit.studies.batch import RunSpec, run_spec
+
+    rows: list[tuple[str, float, float | None]] = []
+    for name in ARM6_CASES:
+        for ctrl in CONTROLLERS:
+            spec = RunSpec(name, ctrl, plant="arm6")
+            # build tables, load caches: start-up is not what is measured
+            compiled = run_spec(spec).loop == "compiled"
+            py = _best_rtf(
+                lambda s=spec: (
+                    run_spec(
+                        RunSpec(s.experiment, s.controller, "arm6", loop="python")
+                    ).real_time_factor
+                ),
+                repeat=2,
+            )
+            if not compiled:  # E3 on arm6: the 3-D floor runs in the Python loop (fallback)
+                rows.append((f"{name} arm6 {ctrl} fallback", py, None))
+                continue
+            co = _best_rtf(lambda s=spec: run_spec(s).real_time_factor, repeat=5)
+            rows.append((f"{name} arm6 {ctrl}", py, co))
+    for ctrl in CONTROLLERS:
+        spec = RunSpec("E1", ctrl, plant="planar", loop="python")
+        run_spec(spec)
+        rows.append(
+            (f"E1 planar {ctrl}", _best_rtf(lambda s=spec: run_spec(s).real_time_factor), None)
+        )
+    return rows
+
+
+def planar_breakdown() -> list[tuple[str, float]]:
+    """CPU microseconds of the pymunk calls one planar substep makes, and the resulting caps."""
+    import numpy as np
+    from pymunk._chipmunk import lib
+
+    from fuzzkit.planar_sim import PlanarArmPlant
+    from fuzzkit.studies.experiments import experiment
+
+    exp = experiment("E1")
+    plant = PlanarArmPlant()
+    plant.reset(exp.scenario)
+    space, tool, motor = plant._space, plant._tool, plant._motor1
+    dt = plant._dt
+    n = 20000
+
+    def per_call(fn: Callable[[], object]) -> float:
+        t0 = time.process_time()
+        for _ in range(n):
+            fn()
+        return 1e6 * (time.process_time() - t0) / n
+
+    ptr = space._space
+    step_py = per_call(lambda: space.step(dt))
+    step_c = per_call(lambda: lib.cpSpaceStep(ptr, dt))
+    reads = per_call(lambda: (tool.position, tool.velocity))
+
+    def set_rate() -> None:
+        motor.rate = 0.1
+
+    rate = per_call(set_rate)
+    impulse = per_call(lambda: motor.impulse)
+    force = per_call(lambda: tool.apply_force_at_world_point((0.0, 0.0), (0.0, 0.0)))
+    sub = plant.params.substeps
+    pymunk_min = step_py + reads + 2 * rate + 2 * impulse + force
+    zero = np.zeros(3)
+    plant.reset(exp.scenario)
+    t0 = time.process_time()
+    periods = 1000
+    for k in range(periods):
+        plant.step(zero, (k + 1) * exp.scenario.period_s)
+    plant_us = 1e6 * (time.process_time() - t0) / periods
+    period_us = 1e6 * exp.scenario.period_s
+    return [
+        ("pymunk Space.step (Python wrapper), per substep", step_py),
+        ("cpSpaceStep (the C step alone), per substep", step_c),
+        ("tool position + velocity read, per substep", reads),
+        ("motor rate set (x2 per substep), each", rate),
+        ("motor impulse read (x2 per substep), each", impulse),
+        ("apply_force_at_world_point, per substep", force),
+        (f"pymunk calls of one period ({sub} substeps)", sub * pymunk_min),
+        ("whole planar plant step (Python), per period", plant_us),
+        ("cap: real-time factor if only the pymunk calls ran", period_us / (sub * pymunk_min)),
+        ("cap: real-time factor if only cpSpaceStep ran", period_us / (sub * step_c)),
+        ("planar plant alone, real-time factor", period_us / plant_us),
+    ]
+
+
+def sweep_throughput(workers: int) -> list[tuple[str, float, int]]:
+    """Runs per wall second of a sweep of whole arm6 runs: 60 compiled, 12 Python (the pool's
+    start-up is included, so small sweeps understate the compiled rate)."""
+    from fuzzkit.studies.sweep import run_sweep, sweep_specs
+
+    out = []
+    for loop, seeds in (("compiled", 5), ("python", 1)):
+        specs = sweep_specs(
+            ["E1", "E2", "E3"],
+            list(CONTROLLERS),
+            stiffnesses_n_per_mm=[5.0, 20.0],
+            seeds=seeds,
+            plant="arm6",
+            loop=loop,
+        )
+        t0 = time.perf_counter()
+        run_sweep(specs, workers=workers)
+        out.append(
+            (
+                f"sweep, {len(specs)} arm6 runs, {loop} loop",
+                len(specs) / (time.perf_counter() - t0),
+                len(specs),
+            )
+        )
+    return out
+
+
+def tune_times(budget: int, workers: int) -> list[tuple[str, float, int, float, float]]:
+    """``(case, wall s, evaluations, cost, default cost)`` of the tuning runs."""
+    from fuzzkit.studies.tuning import tune
+
+    cases: list[tuple[str, dict[str, object]]] = [
+        ("E1 pi planar (python loop)", {"plant": "planar"}),
+        ("E1 pi arm6, python loop (before)", {"plant": "arm6", "loop": "python"}),
+        ("E1 pi arm6, compiled loop (after)", {"plant": "arm6", "loop": "compiled"}),
+        (
+            "E1 pi arm6 robust 3k x 3 lat, python (before)",
+            {"plant": "arm6", "loop": "python", "latencies": [(0, 0), (1, 1), (2, 2)]},
+        ),
+        (
+            "E1 pi arm6 robust 3k x 3 lat, compiled (after)",
+            {"plant": "arm6", "loop": "compiled", "latencies": [(0, 0), (1, 1), (2, 2)]},
+        ),
+    ]
+    rows = []
+    for label, kw in cases:
+        r = tune(["E1"], "pi", budget=budget, seed=0, workers=workers, **kw)  # type: ignore[arg-type]
+        rows.append((label, r.wall_time_s, r.evaluations, r.cost, r.baseline_cost))
+    return rows
+
+
+def engine_scale() -> list[tuple[str, float, float]]:
+    """``(case, peak MB, CPU s)`` of large batches, and ms per point of a gaussian output."""
+    import dataclasses
+    import tracemalloc
+
+    import numpy as np
+
+    from fuzzkit.formats.registry import load
+    from fuzzkit.fuzzy.inference import Engine
+    from fuzzkit.fuzzy.model import Term
+
+    rb = load("macvicar_whelan")
+    eng = Engine(rb)
+    rng = np.random.default_rng(0)
+    e, de = rng.uniform(-1, 1, 1_000_000), rng.uniform(-1, 1, 1_000_000)
+    rows = []
+    for label, chunk in (
+        ("1e6 points, chunked (now)", eng.chunk_points),
+        ("1e6 points, one pass", 10**9),
+    ):
+        eng.chunk_points = chunk
+        tracemalloc.start()
+        t0 = time.process_time()
+        eng.evaluate({"e": e, "de": de})
+        cpu = time.process_time() - t0
+        peak = tracemalloc.get_traced_memory()[1] / 1e6
+        tracemalloc.stop()
+        rows.append((label, peak, cpu))
+    out = rb.outputs[0]
+    terms = tuple(Term(t.name, "gaussian", (float(t.params[1]), 0.15)) for t in out.terms)
+    for d in ("centroid", "bisector", "mean_of_maximum"):
+        g = Engine(
+            dataclasses.replace(rb, outputs=(dataclasses.replace(out, terms=terms),), defuzzifier=d)
+        )
+        g.evaluate({"e": e[:2], "de": de[:2]})  # load the compiled kernel
+        tracemalloc.start()
+        t0 = time.process_time()
+        g.evaluate({"e": e[:200], "de": de[:200]})
+        cpu = time.process_time() - t0
+        peak = tracemalloc.get_traced_memory()[1] / 1e6
+        tracemalloc.stop()
+        rows.append((f"gaussian output, {d}, ms per point", peak, 1e3 * cpu / 200))
+    return rows
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the benchmark and print its tables; returns 0."""
+    from fuzzkit.studies.batch import default_workers
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
+    parser.add_argument("--budget", type=int, default=60)
+    parser.add_argument("--workers", type=int, default=None)
+    parser.add_argument("--skip-tune", action="store_true")
+    args, _ = parser.parse_known_args(argv)  # `make bench` passes options for other benches
+    workers = args.workers or default_workers()
+
+    print("1. real-time factor, simulated s per CPU s of the loop (best of runs)")
+    head = f"{'case':<22}{'python loop':>13}{'compiled':>11}{'speed-up':>10}   target"
+    print(head)
+    print("-" * (len(head) + 12))
+    for name, py, co in real_time_factors():
+        if co is None:
+            print(
+                f"{name:<22}{py:>12.0f}x{'-':>11}{'-':>10}   >= 100x "
+                f"{'ok' if py >= 100 else 'MISS'}"
+            )
+        else:
+            print(
+                f"{name:<22}{py:>12.0f}x{co:>10.0f}x{co / py:>9.0f}x   >= 500x "
+                f"{'ok' if co >= 500 else 'MISS'}"
+            )
+
+    print("\n2. planar plant: where a period's CPU time goes (us, or x real time for caps)")
+    for name, value in planar_breakdown():
+        print(f"  {name:<54}{value:>9.2f}")
+
+    print("\n5. the engine at scale (traced peak MB, CPU s or ms per point)")
+    for name, peak, cpu in engine_scale():
+        print(f"  {name:<44}{peak:>10.1f} MB{cpu:>10.3f}")
+
+    print(f"\n3. sweep throughput on {workers} local processes")
+    for name, rate, _ in sweep_throughput(workers):
+        print(f"  {name:<40}{rate:>8.2f} runs/s")
+
+    if not args.skip_tune:
+        print(f"\n4. tune E1, budget {args.budget}, {workers} workers, 5/10/20 N/mm")
+        head = f"{'case':<48}{'wall s':>8}{'evals':>7}{'cost':>10}{'default':>10}"
+        print(head)
+        print("-" * len(head))
+        for label, wall, evals, cost, base in tune_times(args.budget, workers):
+            print(f"{label:<48}{wall:>8.1f}{evals:>7}{cost:>10.4f}{base:>10.4f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

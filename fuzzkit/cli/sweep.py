@@ -1,0 +1,166 @@
+"""``fuzzkit sweep``: the cartesian product of experiments, controllers, stiffnesses, latencies,
+gains and noise seeds, run in batch (all local cores, or a Dask cluster) into one tidy table."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from fuzzkit.errors import ConfigError
+
+CONTROLLERS = ("pi", "fuzzy-pi")
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``sweep`` subcommand."""
+    from fuzzkit.studies.plants import PLANTS
+
+    p = subparsers.add_parser(
+        "sweep",
+        help="run the cartesian product of experiments and parameters into one table",
+        description=(
+            "Run every combination of experiment x controller x stiffness x latency x gains x "
+            "seed and write one row per run (every parameter, every metric of simulate --json) "
+            "as CSV or Parquet, plus a summary figure. Uses all local cores, or the Dask "
+            "cluster at --scheduler."
+        ),
+        epilog="examples:\n"
+        "  fuzzkit sweep E1 E2 --stiffness 5,10,20 --latency 0:0,2:1 --seeds 3 --out runs.csv\n"
+        "  fuzzkit sweep E2 --controller pi --scheduler tcp://127.0.0.1:8786 --out runs.parquet",
+    )
+    p.add_argument("experiments", nargs="+", metavar="SCENARIO", help="E1, E2, E3")
+    p.add_argument("--controller", default="pi,fuzzy-pi", help="comma list (default pi,fuzzy-pi)")
+    p.add_argument(
+        "--stiffness",
+        default=None,
+        metavar="K[,K...]",
+        help="environment stiffnesses in N/mm (default: each experiment's own)",
+    )
+    p.add_argument(
+        "--latency",
+        default=None,
+        metavar="S:C[,S:C...]",
+        help="sensor:command delays in periods (default: each experiment's own)",
+    )
+    p.add_argument("--seeds", type=int, default=1, metavar="N", help="noise seeds 0..N-1")
+    p.add_argument(
+        "--gains",
+        default=None,
+        metavar="FILE[,FILE...]",
+        help="gains files to compare (each one a value of the sweep); default gains otherwise",
+    )
+    p.add_argument(
+        "--plant",
+        choices=sorted(PLANTS),
+        default="arm6",
+        help="simulated robot (arm6 runs on the compiled loop)",
+    )
+    p.add_argument(
+        "--rulebase",
+        default="macvicar_whelan",
+        metavar="RB",
+        help="rule base for fuzzy-pi: shipped name or YAML path",
+    )
+    p.add_argument(
+        "--loop",
+        choices=("compiled", "python"),
+        default=None,
+        help="default: compiled where the plant supports it",
+    )
+    p.add_argument("--duration", type=float, default=None, metavar="S", help="simulated time")
+    p.add_argument(
+        "--out",
+        required=True,
+        metavar="RUNS.csv|RUNS.parquet",
+        help="the table of runs, one row per run (CSV or Parquet by the suffix)",
+    )
+    p.add_argument(
+        "--figure", default=None, metavar="PNG", help="summary figure (default: OUT with .png)"
+    )
+    p.add_argument("--workers", type=int, default=None, help="local processes (default: cores)")
+    p.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="ADDRESS",
+        help="dask.distributed scheduler address (tcp://host:8786): run there instead",
+    )
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(handler=_sweep)
+
+
+def _floats(text: str, what: str) -> list[float]:
+    try:
+        return [float(v) for v in text.split(",")]
+    except ValueError as exc:
+        raise ConfigError(f"{what}: expected comma-separated numbers (got {text!r})") from exc
+
+
+def parse_latencies(text: str) -> list[tuple[int, int]]:
+    """``"0:0,2:1"`` -> ``[(0, 0), (2, 1)]`` (sensor, command delays in periods)."""
+    out = []
+    for item in text.split(","):
+        parts = item.split(":")
+        try:
+            pair = tuple(int(v) for v in parts)
+        except ValueError:
+            pair = ()
+        if len(pair) != 2 or min(pair) < 0:
+            raise ConfigError(
+                f"--latency: expected SENSOR:COMMAND pairs of integers >= 0, comma-separated "
+                f"(got {item!r} in {text!r})"
+            )
+        out.append((pair[0], pair[1]))
+    return out
+
+
+def _sweep(args: argparse.Namespace) -> int:
+    from fuzzkit.control.gains import read_gains
+    from fuzzkit.studies.experiments import experiment
+    from fuzzkit.studies.sweep import check_table_path, run_sweep, sweep_specs, write_table
+    from fuzzkit.viz.sweep_figure import write_sweep_figure
+
+    names = [experiment(e).name for e in args.experiments]
+    controllers = [c.strip() for c in args.controller.split(",")]
+    for c in controllers:
+        if c not in CONTROLLERS:
+            raise ConfigError(f"--controller: unknown {c!r} (expected pi, fuzzy-pi)")
+    out = check_table_path(args.out)
+    figure = Path(args.figure) if args.figure else out.with_suffix(".png")
+    from fuzzkit.fileio import check_output_path
+
+    check_output_path(figure, "figure")
+    ks: list[float | None] = (
+        [None] if args.stiffness is None else list(_floats(args.stiffness, "--stiffness"))
+    )
+    gains = None
+    if args.gains:
+        gains = {
+            f: {c: read_gains(f, c, required=False) for c in controllers}
+            for f in args.gains.split(",")
+        }
+    specs = sweep_specs(
+        names,
+        controllers,
+        stiffnesses_n_per_mm=ks,
+        latencies=parse_latencies(args.latency) if args.latency else [None],
+        seeds=args.seeds,
+        gains=gains,
+        plant=args.plant,
+        rulebase=args.rulebase,
+        loop=args.loop or "auto",
+        duration_s=args.duration,
+    )
+    from fuzzkit.progress import progress_bar
+
+    with progress_bar(len(specs), "sweep", quiet=args.no_progress, unit="run") as bar:
+
+        def progress(done: int) -> None:
+            bar.update(done - bar.n)
+
+        rows = run_sweep(specs, workers=args.workers, scheduler=args.scheduler, progress=progress)
+    write_table(rows, out)
+    write_sweep_figure(rows, figure)
+    where = args.scheduler or f"{args.workers or 'all'} local cores"
+    print(f"{len(rows)} runs ({where}) -> {out}, {figure}")
+    return 0

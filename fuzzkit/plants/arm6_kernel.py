@@ -1,0 +1,792 @@
+"""The 6-DOF plant's period as compiled code: the twin of :class:`fuzzkit.plants.arm6.Arm6Plant`.
+
+:func:`pack` reads a reset :class:`~fuzzkit.plants.arm6.Arm6Plant` (its start pose, joint limits,
+path and 3-D objects) into flat arrays; :func:`plant_step` then advances one period exactly as
+``Arm6Plant.step`` does (path interpolation, damped-least-squares IK warm-started from the
+previous solution, joint speed limit and servo lag, forward kinematics, penalty contact with
+Coulomb friction, the F/T sensor's filter, noise and bias) without leaving compiled code. The
+closed loop that calls it every period, with the controller, lives in
+:mod:`fuzzkit.studies.compiled` (plants know no controller).
+
+The formulas are the Python plant's, line for line and in the same order of operations; the only
+differences are the 6x6 linear solve of the IK step (LU with partial pivoting here, LAPACK in
+numpy) and the summation order of small matrix products, which differ in the last bits. The
+equivalence test (``tests/test_compiled_loop.py``) bounds what that does to a closed-loop force
+trace. Sensor noise is drawn beforehand from the same ``numpy.random.Generator`` stream as the
+Python sensor (:func:`sensor_noise`), so both loops see the same noise.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from fuzzkit.errors import ConfigError
+from fuzzkit.jit import jit
+from fuzzkit.plants.arm6 import Arm6Plant, Box3, ExtrudedProfile, Plane
+from fuzzkit.plants.environment import _roughness_terms
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
+#: IK status codes of the compiled plant, indexed like :data:`IK_STATUS_NAMES`.
+IK_CONVERGED, IK_MAX_ITERATIONS, IK_UNREACHABLE, IK_LIMIT = 0, 1, 2, 3
+IK_STATUS_NAMES = ("converged", "max_iterations", "unreachable", "limit")
+
+#: Object kinds of the compiled contact solver.
+KIND_PLANE, KIND_BOX, KIND_PROFILE = 0, 1, 2
+
+# Indices into the float parameter vector of the plant (``Arm6Arrays.params``).
+P_DT, P_LAG, P_RADIUS, P_K, P_C, P_MU, P_KT = 0, 1, 2, 3, 4, 5, 6
+P_TOL_P, P_TOL_O, P_IK_ITER, P_CUTOFF, P_RATE, P_NOISE = 7, 8, 9, 10, 11, 12
+P_BIAS = 13  # 3 values
+N_PARAMS = 16
+
+# Indices into the plant's mutable state vector (``Arm6Arrays.state``).
+S_T, S_NEXT_SAMPLE, S_FRESH, S_NOISE_INDEX = 0, 1, 2, 3
+S_FILTERED = 4  # 3 values
+S_LATEST = 7  # 3 values
+S_P_PREV = 10  # 3 values
+N_STATE = 13
+
+
+class UnsupportedPlant(ConfigError):
+    """The plant uses something the compiled twin does not model (the Python loop still runs)."""
+
+
+@dataclass(slots=True)
+class Arm6Arrays:
+    """Everything :func:`plant_step` reads and updates, as arrays (one run's plant)."""
+
+    links: FloatArray  # (dof, 5): d, a, cos(alpha), sin(alpha), offset
+    tool_r: FloatArray  # (3, 3)
+    tool_p: FloatArray  # (3,)
+    lower: FloatArray
+    upper: FloatArray
+    dq_max: FloatArray  # joint speed limit per period (rad)
+    path_t: FloatArray  # (m,) pose times
+    path_pos: FloatArray  # (m, 3) positions, robot base frame
+    path_quat: FloatArray  # (m, 4) unit quaternions, consecutive ones on the same hemisphere
+    obj_kind: IntArray  # (k,)
+    obj_p: FloatArray  # (k, 12) per-kind parameters (see pack)
+    obj_terms: FloatArray  # (k, w, 3) roughness sines: wavenumber, amplitude, phase
+    obj_nterms: IntArray  # (k,)
+    rot_task: FloatArray  # (3, 3) base-from-task
+    offset: FloatArray  # (3,) scenario origin in the robot frame
+    params: FloatArray  # (N_PARAMS,)
+    q: FloatArray  # actual joints
+    q_ref: FloatArray  # joint reference after the speed limit
+    q_ik: FloatArray  # last IK solution (the warm start)
+    stick: FloatArray  # (k, 3) tangential stick springs
+    state: FloatArray  # (N_STATE,)
+
+
+def pack(plant: Arm6Plant) -> Arm6Arrays:
+    """Read a freshly reset ``plant`` into the arrays of its compiled twin.
+
+    Raises
+    ------
+    UnsupportedPlant
+        For what the twin does not model: an object other than a plane, a box or an extruded
+        rough profile (a height field), or ``strict`` mode (which raises mid-run).
+    """
+    p = plant.params
+    if p.strict:
+        raise UnsupportedPlant("the compiled arm6 loop does not model strict mode")
+    scn = plant.scenario
+    chain = plant.chain
+    links = np.array(chain._links, dtype=np.float64)
+    objs = plant.objects
+    k = len(objs)
+    kinds = np.zeros(k, dtype=np.int64)
+    obj_p = np.zeros((k, 12))
+    term_lists: list[tuple[tuple[float, float, float], ...]] = []
+    for i, obj in enumerate(objs):
+        terms: tuple[tuple[float, float, float], ...] = ()
+        if isinstance(obj, Plane):
+            kinds[i] = KIND_PLANE
+            obj_p[i, :10] = (*obj.point, *obj.normal, obj.x_min, obj.x_max, obj.y_min, obj.y_max)
+        elif isinstance(obj, Box3):
+            kinds[i] = KIND_BOX
+            obj_p[i, :6] = (*obj.center, *obj.half_size)
+        elif isinstance(obj, ExtrudedProfile):
+            s = obj.surface
+            kinds[i] = KIND_PROFILE
+            obj_p[i, :10] = (
+                s.x_min,
+                s.x_max,
+                s.height_m,
+                s.offset_m,
+                s.tilt_rad,
+                obj.y_min,
+                obj.y_max,
+                *obj.offset,
+            )
+            terms = _roughness_terms(
+                s.seed, s.roughness_rms_m, s.wavelength_min_m, s.wavelength_max_m, s.n_waves
+            )
+        else:
+            raise UnsupportedPlant(
+                f"the compiled arm6 loop does not model {type(obj).__name__} objects"
+            )
+        term_lists.append(terms)
+    width = max([1, *(len(t) for t in term_lists)])
+    obj_terms = np.zeros((k, width, 3))
+    nterms = np.zeros(k, dtype=np.int64)
+    for i, terms in enumerate(term_lists):
+        nterms[i] = len(terms)
+        if terms:
+            obj_terms[i, : len(terms)] = terms
+    poses = plant.path.poses
+    sensor = scn.sensor
+    contact = scn.contact
+    params = np.zeros(N_PARAMS)
+    params[P_DT] = plant._dt
+    params[P_LAG] = plant._lag
+    params[P_RADIUS] = scn.tool.radius_m
+    params[P_K] = contact.stiffness_n_per_m
+    params[P_C] = contact.damping_n_s_per_m
+    params[P_MU] = contact.friction
+    params[P_KT] = contact.tangential_stiffness_n_per_m
+    params[P_TOL_P] = p.ik_position_tolerance
+    params[P_TOL_O] = p.ik_orientation_tolerance
+    params[P_IK_ITER] = p.ik_iterations
+    params[P_CUTOFF] = sensor.cutoff_hz
+    params[P_RATE] = sensor.rate_hz
+    params[P_NOISE] = sensor.noise_std_n
+    params[P_BIAS : P_BIAS + 3] = sensor.bias_n
+    state = np.zeros(N_STATE)
+    state[S_T] = plant._t
+    state[S_NEXT_SAMPLE] = 1.0 / sensor.rate_hz
+    state[S_LATEST : S_LATEST + 3] = np.nan
+    state[S_P_PREV : S_P_PREV + 3] = plant._p_prev
+    return Arm6Arrays(
+        links=links,
+        tool_r=np.array(chain._tool_r, dtype=np.float64),
+        tool_p=np.array(chain._tool_p, dtype=np.float64),
+        lower=np.array(chain._lo, dtype=np.float64),
+        upper=np.array(chain._hi, dtype=np.float64),
+        dq_max=np.array(plant._dq_max, dtype=np.float64),
+        path_t=np.array([q.t_s for q in poses], dtype=np.float64),
+        path_pos=np.array([q.position for q in poses], dtype=np.float64),
+        path_quat=np.array([q.orientation for q in poses], dtype=np.float64),
+        obj_kind=kinds,
+        obj_p=obj_p,
+        obj_terms=obj_terms,
+        obj_nterms=nterms,
+        rot_task=np.array(scn.rotation, dtype=np.float64),
+        offset=np.array(plant._offset, dtype=np.float64),
+        params=params,
+        q=np.array(plant._q, dtype=np.float64),
+        q_ref=np.array(plant._q_ref, dtype=np.float64),
+        q_ik=np.array(plant._q_ik, dtype=np.float64),
+        stick=np.zeros((k, 3)),
+        state=state,
+    )
+
+
+def sensor_noise(noise_std_n: float, seed: int, samples: int) -> FloatArray:
+    """The sensor noise of ``samples`` samples: the stream :class:`ForceSensor` draws, in order."""
+    if noise_std_n <= 0.0:
+        return np.zeros((samples, 3))
+    rng = np.random.default_rng(seed)
+    return rng.normal(0.0, noise_std_n, (samples, 3))
+
+
+# --------------------------------------------------------------------------------------------
+# Kinematics (SerialChain._evaluate, _jacobian_rows, _solve)
+# --------------------------------------------------------------------------------------------
+
+
+@jit
+def fk(
+    q: FloatArray,
+    links: FloatArray,
+    tool_r: FloatArray,
+    tool_p: FloatArray,
+    rot: FloatArray,
+    p: FloatArray,
+    axes: FloatArray,
+    origins: FloatArray,
+) -> None:
+    """TCP rotation ``rot`` and position ``p``, joint axes and origins (base frame), in place."""
+    r00, r01, r02 = 1.0, 0.0, 0.0
+    r10, r11, r12 = 0.0, 1.0, 0.0
+    r20, r21, r22 = 0.0, 0.0, 1.0
+    px = py = pz = 0.0
+    for i in range(q.shape[0]):
+        axes[i, 0], axes[i, 1], axes[i, 2] = r02, r12, r22
+        origins[i, 0], origins[i, 1], origins[i, 2] = px, py, pz
+        d, a, ca, sa, off = links[i, 0], links[i, 1], links[i, 2], links[i, 3], links[i, 4]
+        th = q[i] + off
+        ct, st = math.cos(th), math.sin(th)
+        px += r00 * a * ct + r01 * a * st + r02 * d
+        py += r10 * a * ct + r11 * a * st + r12 * d
+        pz += r20 * a * ct + r21 * a * st + r22 * d
+        n00 = r00 * ct + r01 * st
+        n01 = -r00 * st * ca + r01 * ct * ca + r02 * sa
+        n02 = r00 * st * sa - r01 * ct * sa + r02 * ca
+        n10 = r10 * ct + r11 * st
+        n11 = -r10 * st * ca + r11 * ct * ca + r12 * sa
+        n12 = r10 * st * sa - r11 * ct * sa + r12 * ca
+        n20 = r20 * ct + r21 * st
+        n21 = -r20 * st * ca + r21 * ct * ca + r22 * sa
+        n22 = r20 * st * sa - r21 * ct * sa + r22 * ca
+        r00, r01, r02 = n00, n01, n02
+        r10, r11, r12 = n10, n11, n12
+        r20, r21, r22 = n20, n21, n22
+    tx, ty, tz = tool_p[0], tool_p[1], tool_p[2]
+    p[0] = px + r00 * tx + r01 * ty + r02 * tz
+    p[1] = py + r10 * tx + r11 * ty + r12 * tz
+    p[2] = pz + r20 * tx + r21 * ty + r22 * tz
+    t = tool_r
+    rot[0, 0] = r00 * t[0, 0] + r01 * t[1, 0] + r02 * t[2, 0]
+    rot[0, 1] = r00 * t[0, 1] + r01 * t[1, 1] + r02 * t[2, 1]
+    rot[0, 2] = r00 * t[0, 2] + r01 * t[1, 2] + r02 * t[2, 2]
+    rot[1, 0] = r10 * t[0, 0] + r11 * t[1, 0] + r12 * t[2, 0]
+    rot[1, 1] = r10 * t[0, 1] + r11 * t[1, 1] + r12 * t[2, 1]
+    rot[1, 2] = r10 * t[0, 2] + r11 * t[1, 2] + r12 * t[2, 2]
+    rot[2, 0] = r20 * t[0, 0] + r21 * t[1, 0] + r22 * t[2, 0]
+    rot[2, 1] = r20 * t[0, 1] + r21 * t[1, 1] + r22 * t[2, 1]
+    rot[2, 2] = r20 * t[0, 2] + r21 * t[1, 2] + r22 * t[2, 2]
+
+
+@jit
+def jacobian(p: FloatArray, axes: FloatArray, origins: FloatArray, jac: FloatArray) -> None:
+    """Geometric Jacobian (6 x dof) of the TCP at ``p``, in place."""
+    for i in range(axes.shape[0]):
+        zx, zy, zz = axes[i, 0], axes[i, 1], axes[i, 2]
+        dx, dy, dz = p[0] - origins[i, 0], p[1] - origins[i, 1], p[2] - origins[i, 2]
+        jac[0, i] = zy * dz - zz * dy
+        jac[1, i] = zz * dx - zx * dz
+        jac[2, i] = zx * dy - zy * dx
+        jac[3, i] = zx
+        jac[4, i] = zy
+        jac[5, i] = zz
+
+
+@jit
+def rotation_error(rt: FloatArray, r: FloatArray, out: FloatArray) -> None:
+    """``log(Rt R^T)`` as a rotation vector (fuzzkit.plants.rotations.rotation_error)."""
+    e = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            e[i, j] = rt[i, 0] * r[j, 0] + rt[i, 1] * r[j, 1] + rt[i, 2] * r[j, 2]
+    # quat_from_matrix (Shepperd)
+    r00, r01, r02 = e[0, 0], e[0, 1], e[0, 2]
+    r10, r11, r12 = e[1, 0], e[1, 1], e[1, 2]
+    r20, r21, r22 = e[2, 0], e[2, 1], e[2, 2]
+    tr = r00 + r11 + r22
+    if tr >= r00 and tr >= r11 and tr >= r22:
+        s = math.sqrt(max(tr + 1.0, 0.0)) * 2.0
+        w, x, y, z = 0.25 * s, (r21 - r12) / s, (r02 - r20) / s, (r10 - r01) / s
+    elif r00 >= r11 and r00 >= r22:
+        s = math.sqrt(max(1.0 + r00 - r11 - r22, 0.0)) * 2.0
+        w, x, y, z = (r21 - r12) / s, 0.25 * s, (r01 + r10) / s, (r02 + r20) / s
+    elif r11 >= r22:
+        s = math.sqrt(max(1.0 + r11 - r00 - r22, 0.0)) * 2.0
+        w, x, y, z = (r02 - r20) / s, (r01 + r10) / s, 0.25 * s, (r12 + r21) / s
+    else:
+        s = math.sqrt(max(1.0 + r22 - r00 - r11, 0.0)) * 2.0
+        w, x, y, z = (r10 - r01) / s, (r02 + r20) / s, (r12 + r21) / s, 0.25 * s
+    n = math.sqrt(w * w + x * x + y * y + z * z)
+    if w < 0.0:
+        n = -n
+    w, x, y, z = w / n, x / n, y / n, z / n
+    # rotvec_from_quat
+    if w < 0.0:
+        w, x, y, z = -w, -x, -y, -z
+    sn = math.sqrt(x * x + y * y + z * z)
+    # small angle: angle ~ 2*s/w, exact to machine precision there
+    k = (2.0 / w if w > 0.0 else 2.0) if sn < 1e-12 else 2.0 * math.atan2(sn, w) / sn
+    out[0], out[1], out[2] = k * x, k * y, k * z
+
+
+@jit
+def _solve6(a: FloatArray, b: FloatArray, x: FloatArray) -> None:
+    """Solve ``a x = b`` (small, symmetric positive definite here) by LU with partial pivoting."""
+    n = a.shape[0]
+    m = a.copy()
+    v = b.copy()
+    for c in range(n):
+        piv = c
+        big = abs(m[c, c])
+        for r in range(c + 1, n):
+            if abs(m[r, c]) > big:
+                big, piv = abs(m[r, c]), r
+        if piv != c:
+            for j in range(n):
+                m[c, j], m[piv, j] = m[piv, j], m[c, j]
+            v[c], v[piv] = v[piv], v[c]
+        for r in range(c + 1, n):
+            f = m[r, c] / m[c, c]
+            for j in range(c, n):
+                m[r, j] -= f * m[c, j]
+            v[r] -= f * v[c]
+    for r in range(n - 1, -1, -1):
+        acc = v[r]
+        for j in range(r + 1, n):
+            acc -= m[r, j] * x[j]
+        x[r] = acc / m[r, r]
+
+
+@jit
+def _dls(jac: FloatArray, err: FloatArray, lam2: float, dq: FloatArray) -> None:
+    """Damped least squares step ``J^T (J J^T + lam2 I)^-1 err``."""
+    rows, n = jac.shape
+    a = np.empty((rows, rows))
+    for i in range(rows):
+        for j in range(rows):
+            acc = 0.0
+            for c in range(n):
+                acc += jac[i, c] * jac[j, c]
+            a[i, j] = acc
+        a[i, i] += lam2
+    y = np.empty(rows)
+    _solve6(a, err, y)
+    for c in range(n):
+        acc = 0.0
+        for i in range(rows):
+            acc += jac[i, c] * y[i]
+        dq[c] = acc
+
+
+@jit
+def _ik_error(
+    rt: FloatArray, pt: FloatArray, rot: FloatArray, p: FloatArray, e: FloatArray
+) -> tuple[float, float]:
+    eo = np.empty(3)
+    rotation_error(rt, rot, eo)
+    e[0], e[1], e[2] = pt[0] - p[0], pt[1] - p[1], pt[2] - p[2]
+    e[3], e[4], e[5] = eo[0], eo[1], eo[2]
+    return (
+        math.sqrt(e[0] ** 2 + e[1] ** 2 + e[2] ** 2),
+        math.sqrt(eo[0] ** 2 + eo[1] ** 2 + eo[2] ** 2),
+    )
+
+
+@jit
+def _at_limit(q: FloatArray, lo: FloatArray, hi: FloatArray) -> bool:
+    for i in range(q.shape[0]):  # noqa: SIM110 - a plain loop compiles in nopython mode
+        if q[i] <= lo[i] + 1e-12 or q[i] >= hi[i] - 1e-12:
+            return True
+    return False
+
+
+@jit
+def ik(
+    rt: FloatArray,
+    pt: FloatArray,
+    q: FloatArray,
+    links: FloatArray,
+    tool_r: FloatArray,
+    tool_p: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    tol_p: float,
+    tol_o: float,
+    max_iterations: int,
+) -> int:
+    """Damped-least-squares IK from the seed ``q`` (updated in place); returns the status code.
+
+    ``SerialChain.ik_fast`` step for step: the seed clamped to the limits, Levenberg-Marquardt
+    damping, the active set of joints at a limit, the stationary-point tests.
+    """
+    max_step = 0.5
+    n = q.shape[0]
+    for i in range(n):
+        q[i] = min(max(q[i], lo[i]), hi[i])
+    rot = np.empty((3, 3))
+    p = np.empty(3)
+    axes = np.empty((n, 3))
+    origins = np.empty((n, 3))
+    fk(q, links, tool_r, tool_p, rot, p, axes, origins)
+    e = np.empty(6)
+    ep, eo = _ik_error(rt, pt, rot, p, e)
+    cost = ep * ep + eo * eo
+    mu = 1e-9
+    slow = 0
+    suspect = False
+    iterations = 0
+    status = IK_MAX_ITERATIONS
+    jac = np.empty((6, n))
+    dq = np.empty(n)
+    q_new = np.empty(n)
+    e_new = np.empty(6)
+    rot_n = np.empty((3, 3))
+    p_n = np.empty(3)
+    axes_n = np.empty((n, 3))
+    origins_n = np.empty((n, 3))
+    while True:
+        if ep <= tol_p and eo <= tol_o:
+            status = IK_CONVERGED
+            break
+        if iterations >= max_iterations:
+            break
+        iterations += 1
+        jacobian(p, axes, origins, jac)
+        lam2 = 0.5 * cost + mu
+        _dls(jac, e, lam2, dq)
+        blocked = False
+        for i in range(n):
+            if (q[i] <= lo[i] and dq[i] < 0.0) or (q[i] >= hi[i] and dq[i] > 0.0):
+                blocked = True
+                for r in range(6):
+                    jac[r, i] = 0.0
+        if blocked:
+            _dls(jac, e, lam2, dq)
+        if suspect:
+            gg = 0.0
+            jj = 0.0
+            for c in range(n):
+                g = 0.0
+                for r in range(6):
+                    g += jac[r, c] * e[r]
+                    jj += jac[r, c] * jac[r, c]
+                gg += g * g
+            if gg <= 1e-12 * jj * cost:
+                status = IK_LIMIT if blocked else IK_UNREACHABLE
+                break
+        big = 0.0
+        for i in range(n):
+            big = max(big, abs(dq[i]))
+        scale = max_step / big if big > max_step else 1.0
+        for i in range(n):
+            q_new[i] = min(max(q[i] + scale * dq[i], lo[i]), hi[i])
+        fk(q_new, links, tool_r, tool_p, rot_n, p_n, axes_n, origins_n)
+        ep_new, eo_new = _ik_error(rt, pt, rot_n, p_n, e_new)
+        cost_new = ep_new * ep_new + eo_new * eo_new
+        if cost_new < cost:
+            slow = slow + 1 if cost_new > cost * (1.0 - 1e-6) else 0
+            suspect = slow > 0
+            q[:] = q_new
+            rot[:] = rot_n
+            p[:] = p_n
+            axes[:] = axes_n
+            origins[:] = origins_n
+            e[:] = e_new
+            ep, eo, cost = ep_new, eo_new, cost_new
+            mu = max(mu * 0.1, 1e-12)
+            if slow >= 5:
+                status = IK_LIMIT if _at_limit(q, lo, hi) else IK_UNREACHABLE
+                break
+        else:
+            mu *= 10.0
+            suspect = True
+            if mu > 1e4:
+                status = IK_LIMIT if _at_limit(q, lo, hi) else IK_UNREACHABLE
+                break
+    return status
+
+
+# --------------------------------------------------------------------------------------------
+# Path, contact, sensor
+# --------------------------------------------------------------------------------------------
+
+
+@jit
+def pose_at(
+    path_t: FloatArray,
+    path_pos: FloatArray,
+    path_quat: FloatArray,
+    t_s: float,
+    pos: FloatArray,
+    quat: FloatArray,
+) -> None:
+    """Position and orientation of the nominal path at ``t_s`` (CartesianPath.pose_at)."""
+    m = path_t.shape[0]
+    if t_s <= path_t[0]:
+        pos[:] = path_pos[0]
+        quat[:] = path_quat[0]
+        return
+    if t_s >= path_t[m - 1]:
+        pos[:] = path_pos[m - 1]
+        quat[:] = path_quat[m - 1]
+        return
+    i = 1
+    while path_t[i] < t_s:
+        i += 1
+    span = path_t[i] - path_t[i - 1]
+    s = (t_s - path_t[i - 1]) / span if span > 0.0 else 1.0
+    for j in range(3):
+        pos[j] = path_pos[i - 1, j] + s * (path_pos[i, j] - path_pos[i - 1, j])
+    qa = path_quat[i - 1]
+    qb = path_quat[i]
+    if qa[0] == qb[0] and qa[1] == qb[1] and qa[2] == qb[2] and qa[3] == qb[3]:
+        quat[:] = qa
+        return
+    dot = qa[0] * qb[0] + qa[1] * qb[1] + qa[2] * qb[2] + qa[3] * qb[3]
+    b = qb.copy()
+    if dot < 0.0:
+        dot = -dot
+        b = -b
+    out = np.empty(4)
+    if dot > 0.9995:
+        for j in range(4):
+            out[j] = qa[j] + s * (b[j] - qa[j])
+    else:
+        theta = math.acos(dot)
+        sin_t = math.sin(theta)
+        w0 = math.sin((1.0 - s) * theta) / sin_t
+        w1 = math.sin(s * theta) / sin_t
+        for j in range(4):
+            out[j] = w0 * qa[j] + w1 * b[j]
+    nn = math.sqrt(out[0] * out[0] + out[1] * out[1] + out[2] * out[2] + out[3] * out[3])
+    for j in range(4):
+        quat[j] = out[j] / nn
+
+
+@jit
+def matrix_from_quat(q: FloatArray, r: FloatArray) -> None:
+    """Rotation matrix of a quaternion ``(w, x, y, z)`` (normalised here), in place."""
+    n = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    w, x, y, z = q[0] / n, q[1] / n, q[2] / n, q[3] / n
+    r[0, 0], r[0, 1], r[0, 2] = 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)
+    r[1, 0], r[1, 1], r[1, 2] = 2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)
+    r[2, 0], r[2, 1], r[2, 2] = 2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)
+
+
+@jit
+def _object_contact(
+    kind: int,
+    op: FloatArray,
+    terms: FloatArray,
+    nterms: int,
+    c: FloatArray,
+    radius: float,
+    nrm: FloatArray,
+    pt: FloatArray,
+) -> float:
+    """Penetration depth (> 0 when touching, else <= 0) of the tool sphere; normal and point out.
+
+    Plane.contact, Box3.contact and ExtrudedProfile.contact of :mod:`fuzzkit.plants.arm6`.
+    """
+    if kind == KIND_PLANE:
+        if not (op[6] <= c[0] <= op[7] and op[8] <= c[1] <= op[9]):
+            return -1.0
+        nx, ny, nz = op[3], op[4], op[5]
+        n = math.sqrt(nx * nx + ny * ny + nz * nz)
+        nx, ny, nz = nx / n, ny / n, nz / n
+        dist = (c[0] - op[0]) * nx + (c[1] - op[1]) * ny + (c[2] - op[2]) * nz
+        depth = radius - dist
+        if depth <= 0.0:
+            return -1.0
+        nrm[0], nrm[1], nrm[2] = nx, ny, nz
+        pt[0], pt[1], pt[2] = c[0] - dist * nx, c[1] - dist * ny, c[2] - dist * nz
+        return float(depth)
+    if kind == KIND_BOX:
+        d = np.empty(3)
+        qq = np.empty(3)
+        o = np.empty(3)
+        for i in range(3):
+            d[i] = c[i] - op[i]
+            qq[i] = min(max(d[i], -op[3 + i]), op[3 + i])
+            o[i] = d[i] - qq[i]
+        dist = math.sqrt(o[0] * o[0] + o[1] * o[1] + o[2] * o[2])
+        if dist > 1e-12:
+            depth = radius - dist
+            if depth <= 0.0:
+                return -1.0
+            for i in range(3):
+                nrm[i] = o[i] / dist
+                pt[i] = op[i] + qq[i]
+            return depth
+        best_gap = math.inf
+        axis = 0
+        best_sign = 1.0
+        for i in range(3):
+            for sign in (1.0, -1.0):
+                gap = op[3 + i] - sign * d[i]
+                if gap < best_gap:
+                    best_gap, axis, best_sign = gap, i, sign
+        nrm[0] = nrm[1] = nrm[2] = 0.0
+        nrm[axis] = best_sign
+        for i in range(3):
+            pt[i] = c[i] + nrm[i] * best_gap
+        return radius + best_gap
+    # extruded rough profile
+    x = c[0] - op[7]
+    if not (op[0] <= x <= op[1] and op[5] <= c[1] - op[8] <= op[6]):
+        return -1.0
+    tan_tilt = math.tan(op[4])
+    h = op[2] + op[3] + tan_tilt * (x - op[0])
+    for j in range(nterms):
+        h += terms[j, 1] * math.sin(terms[j, 0] * x + terms[j, 2])
+    slope = tan_tilt
+    for j in range(nterms):
+        slope += terms[j, 1] * terms[j, 0] * math.cos(terms[j, 0] * x + terms[j, 2])
+    h = h + op[9]
+    inv = 1.0 / math.sqrt(1.0 + slope * slope + 0.0 * 0.0)
+    depth = (h - c[2]) * inv + radius
+    if depth <= 0.0:
+        return -1.0
+    nrm[0], nrm[1], nrm[2] = -slope * inv, -0.0 * inv, inv
+    pt[0], pt[1], pt[2] = c[0], c[1], h
+    return float(depth)
+
+
+@jit
+def contact_step(
+    a_kind: IntArray,
+    a_p: FloatArray,
+    a_terms: FloatArray,
+    a_nterms: IntArray,
+    stick: FloatArray,
+    params: FloatArray,
+    c: FloatArray,
+    v: FloatArray,
+    force: FloatArray,
+    points: FloatArray,
+    normals: FloatArray,
+) -> int:
+    """Contact3Solver.step: force the tool exerts (base, into ``force``), contact points and
+    per-contact normal forces (rows of ``points`` / ``normals``); returns the contact count."""
+    k_n, c_n, mu, kt = params[P_K], params[P_C], params[P_MU], params[P_KT]
+    dt = params[P_DT]
+    radius = params[P_RADIUS]
+    fx = fy = fz = 0.0
+    count = 0
+    nrm = np.empty(3)
+    pt = np.empty(3)
+    for i in range(a_kind.shape[0]):
+        depth = _object_contact(a_kind[i], a_p[i], a_terms[i], a_nterms[i], c, radius, nrm, pt)
+        if depth <= 0.0:
+            stick[i, 0] = stick[i, 1] = stick[i, 2] = 0.0
+            continue
+        nx, ny, nz = nrm[0], nrm[1], nrm[2]
+        vn = v[0] * nx + v[1] * ny + v[2] * nz
+        fn = k_n * depth - c_n * vn
+        if fn <= 0.0:
+            stick[i, 0] = stick[i, 1] = stick[i, 2] = 0.0
+            continue
+        s0x, s0y, s0z = stick[i, 0], stick[i, 1], stick[i, 2]
+        s0n = s0x * nx + s0y * ny + s0z * nz
+        px_, py_, pz_ = s0x - s0n * nx, s0y - s0n * ny, s0z - s0n * nz
+        old = math.sqrt(s0x * s0x + s0y * s0y + s0z * s0z)
+        proj = math.sqrt(px_ * px_ + py_ * py_ + pz_ * pz_)
+        k_turn = old / proj if proj > 1e-15 else 0.0
+        sx = px_ * k_turn + (v[0] - vn * nx) * dt
+        sy = py_ * k_turn + (v[1] - vn * ny) * dt
+        sz = pz_ * k_turn + (v[2] - vn * nz) * dt
+        ft_mag = kt * math.sqrt(sx * sx + sy * sy + sz * sz)
+        cap = mu * fn
+        if ft_mag > cap and ft_mag > 0.0:
+            scale = cap / ft_mag
+            sx, sy, sz = sx * scale, sy * scale, sz * scale
+        stick[i, 0], stick[i, 1], stick[i, 2] = sx, sy, sz
+        fx += fn * nx - kt * sx
+        fy += fn * ny - kt * sy
+        fz += fn * nz - kt * sz
+        points[count, 0], points[count, 1], points[count, 2] = pt[0], pt[1], pt[2]
+        normals[count, 0], normals[count, 1], normals[count, 2] = -fn * nx, -fn * ny, -fn * nz
+        count += 1
+    force[0], force[1], force[2] = -fx, -fy, -fz
+    return count
+
+
+@jit
+def plant_step(
+    a_links: FloatArray,
+    a_tool_r: FloatArray,
+    a_tool_p: FloatArray,
+    a_lower: FloatArray,
+    a_upper: FloatArray,
+    a_dq_max: FloatArray,
+    a_path_t: FloatArray,
+    a_path_pos: FloatArray,
+    a_path_quat: FloatArray,
+    a_kind: IntArray,
+    a_p: FloatArray,
+    a_terms: FloatArray,
+    a_nterms: IntArray,
+    a_rot_task: FloatArray,
+    params: FloatArray,
+    q: FloatArray,
+    q_ref: FloatArray,
+    q_ik: FloatArray,
+    stick: FloatArray,
+    state: FloatArray,
+    noise: FloatArray,
+    correction_base: FloatArray,
+    path_time_s: float,
+    # outputs
+    nominal: FloatArray,
+    tcp: FloatArray,
+    rot: FloatArray,
+    origins: FloatArray,
+    force_true: FloatArray,
+    force_measured: FloatArray,
+    points: FloatArray,
+    normals: FloatArray,
+) -> tuple[int, int, bool]:
+    """One period of ``Arm6Plant.step``; returns ``(ik status, contact count, speed limited)``.
+
+    ``nominal`` and ``tcp`` come out in the robot base frame; forces in the task frame.
+    """
+    n = q.shape[0]
+    quat = np.empty(4)
+    pose_at(a_path_t, a_path_pos, a_path_quat, path_time_s, nominal, quat)
+    rt = np.empty((3, 3))
+    matrix_from_quat(quat, rt)
+    target = np.empty(3)
+    for j in range(3):
+        target[j] = nominal[j] + correction_base[j]
+    status = ik(
+        rt,
+        target,
+        q_ik,
+        a_links,
+        a_tool_r,
+        a_tool_p,
+        a_lower,
+        a_upper,
+        params[P_TOL_P],
+        params[P_TOL_O],
+        int(params[P_IK_ITER]),
+    )
+    lag = params[P_LAG]
+    scale = 1.0
+    limited = False
+    d = np.empty(n)
+    for i in range(n):
+        d[i] = q_ik[i] - q_ref[i]
+        if abs(d[i]) > a_dq_max[i]:
+            scale = min(scale, a_dq_max[i] / abs(d[i]))
+            limited = True
+    for i in range(n):
+        q_ref[i] += d[i] * scale
+        q[i] += lag * (q_ref[i] - q[i])
+    dt = params[P_DT]
+    state[S_T] += dt
+    axes = np.empty((n, 3))
+    fk(q, a_links, a_tool_r, a_tool_p, rot, tcp, axes, origins)
+    v = np.empty(3)
+    for j in range(3):
+        v[j] = (tcp[j] - state[S_P_PREV + j]) / dt
+        state[S_P_PREV + j] = tcp[j]
+    f = np.empty(3)
+    count = contact_step(a_kind, a_p, a_terms, a_nterms, stick, params, tcp, v, f, points, normals)
+    r = a_rot_task
+    for j in range(3):
+        force_true[j] = r[0, j] * f[0] + r[1, j] * f[1] + r[2, j] * f[2]
+    # ForceSensor.update then read
+    alpha = 1.0 - math.exp(-2.0 * math.pi * params[P_CUTOFF] * dt)
+    for j in range(3):
+        state[S_FILTERED + j] += alpha * (force_true[j] - state[S_FILTERED + j])
+    if state[S_T] + 1e-9 >= state[S_NEXT_SAMPLE]:
+        k = int(state[S_NOISE_INDEX])
+        for j in range(3):
+            state[S_LATEST + j] = state[S_FILTERED + j] + params[P_BIAS + j] + noise[k, j]
+        state[S_NOISE_INDEX] += 1.0
+        state[S_FRESH] = 1.0
+        state[S_NEXT_SAMPLE] += 1.0 / params[P_RATE]
+    if state[S_FRESH] > 0.0:
+        state[S_FRESH] = 0.0
+        for j in range(3):
+            force_measured[j] = state[S_LATEST + j]
+    else:
+        force_measured[0] = force_measured[1] = force_measured[2] = np.nan
+    return status, count, limited

@@ -1,0 +1,354 @@
+"""Batch runs: one closed-loop run described as data, and an executor that maps many of them.
+
+A :class:`RunSpec` is everything that defines a run (experiment, controller, plant, stiffness,
+latency, noise seed, gains, loop); :func:`execute` turns one into a flat row (every parameter and
+every metric of ``fuzzkit simulate --json``). :func:`map_runs` executes many, in order, in this
+process, in a local process pool (all cores by default), or on a ``dask.distributed`` cluster
+(``scheduler="tcp://host:8786"``). Specs and rows are plain picklable data, so a worker needs
+only fuzzkit installed; the runs are deterministic, so every executor gives the same rows.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any, TypeVar
+
+from fuzzkit.errors import ConfigError
+from fuzzkit.studies.compiled.table import table_arrays
+from fuzzkit.studies.runner import RunResult
+from fuzzkit.studies.task import Experiment
+
+T = TypeVar("T")
+R = TypeVar("R")
+
+LOOPS = ("auto", "compiled", "python")
+#: How a fuzzy-PI's surface is evaluated: ``exact`` engine (Python loop), the generated
+#: double lookup ``table`` (both loops), the generated ``c`` through ctypes (Python loop);
+#: ``auto``: the table in the compiled loop, the exact engine in the Python loop.
+FUZZY_IMPLS = ("auto", "exact", "table", "c")
+
+
+@dataclass(frozen=True, slots=True)
+class RunSpec:
+    """One closed-loop run, as data.
+
+    ``stiffness_n_per_mm``: None keeps the experiment's own. ``latency``: ``(sensor, command)``
+    delays in periods (None: the experiment's). ``fault``: a fault kind of
+    :data:`fuzzkit.studies.faults.FAULTS`, seeded by ``seed`` (None: the experiment's).
+    ``gains``: overrides of the default gains, as sorted ``(name, value)`` pairs;
+    ``gains_label`` names where they came from (a file) for the table. ``loop``:
+    ``compiled`` (arm6 only), ``python``, or ``auto`` (compiled where supported).
+    ``duration_s``: None runs the experiment's whole duration.
+    """
+
+    experiment: str
+    controller: str = "fuzzy-pi"
+    plant: str = "arm6"
+    stiffness_n_per_mm: float | None = None
+    latency: tuple[int, int] | None = None
+    seed: int = 0
+    gains: tuple[tuple[str, float], ...] = ()
+    gains_label: str = "default"
+    rulebase: str = "macvicar_whelan"
+    loop: str = "auto"
+    duration_s: float | None = None
+    fuzzy_impl: str = "auto"
+    fault: str | None = None
+
+    def resolved_loop(self) -> str:
+        """``compiled`` or ``python``: what ``auto`` means for this plant."""
+        from fuzzkit.studies.compiled.loop import compiled_supports
+
+        if self.loop not in LOOPS:
+            raise ConfigError(f"unknown loop {self.loop!r} (expected {', '.join(LOOPS)})")
+        if self.loop == "auto":
+            return "compiled" if compiled_supports(self.plant) else "python"
+        if self.loop == "compiled" and not compiled_supports(self.plant):
+            raise ConfigError(
+                f"the compiled loop does not model the {self.plant} plant (it runs on arm6); "
+                "use --loop python"
+            )
+        return self.loop
+
+
+@lru_cache(maxsize=8)
+def _exact_surface(rulebase: str) -> Any:
+    from fuzzkit.studies.runner import load_surface
+
+    return load_surface(rulebase)
+
+
+def run_spec(spec: RunSpec) -> RunResult:
+    """Run ``spec`` and return the whole :class:`RunResult` (traces included).
+
+    The compiled loop runs the fuzzy-PI as the rule base's double lookup table (the generated
+    code's arithmetic); the Python loop runs it on the exact engine. A plant the compiled loop
+    does not model (E3 on arm6: its 3-D ``HeightField`` floor) runs in the Python loop, and the
+    result's ``loop`` says so: ``python (fallback: ...)``.
+    """
+    from fuzzkit.studies.experiments import with_stiffness
+    from fuzzkit.studies.faults import fault
+
+    exp, plant = experiment_and_plant(spec)
+    if spec.stiffness_n_per_mm is not None:
+        k = spec.stiffness_n_per_mm
+        if not (math.isfinite(k) and k > 0.0):
+            raise ConfigError(f"stiffness must be a positive number of N/mm (got {k})")
+        exp = with_stiffness(exp, k * 1e3)
+    faults = fault(spec.fault or exp.fault, spec.seed)
+    gains = dict(spec.gains)
+    impl = spec.fuzzy_impl
+    if impl not in FUZZY_IMPLS:
+        raise ConfigError(f"unknown fuzzy implementation {impl!r} (expected {FUZZY_IMPLS})")
+    loop = spec.resolved_loop()
+    fallback = ""
+    if loop == "compiled":
+        if impl not in ("auto", "table"):
+            raise ConfigError(
+                f"the compiled loop runs the fuzzy-PI as the lookup table, not {impl!r}; "
+                "use --loop python"
+            )
+        from fuzzkit.plants.arm6_kernel import UnsupportedPlant
+        from fuzzkit.studies.compiled.loop import compiled_table, run_compiled
+
+        table = compiled_table(spec.rulebase) if spec.controller == "fuzzy-pi" else None
+        try:
+            return run_compiled(
+                exp,
+                plant,
+                spec.controller,
+                gains=gains,
+                table=table,
+                seed=spec.seed,
+                faults=faults,
+                latency=spec.latency,
+                duration_s=spec.duration_s,
+            )
+        except UnsupportedPlant as exc:
+            # e.g. E3 on arm6 (its 3-D HeightField floor): the Python loop runs it, and says so
+            fallback = f" (fallback: {exc})"
+    from fuzzkit.studies.runner import run
+
+    surface: Any = None
+    label = "pi (python)"
+    if spec.controller == "fuzzy-pi":
+        if impl in ("auto", "exact"):
+            surface = _exact_surface(spec.rulebase)
+            label = f"exact engine {spec.rulebase} (python)"
+        elif impl == "table":
+            from fuzzkit.control.controllers import lookup_table_surface
+            from fuzzkit.studies.compiled.loop import load_table
+
+            table = load_table(spec.rulebase)
+            surface = lookup_table_surface(table)
+            label = table_arrays(table).label + " (python)"
+        else:
+            from fuzzkit.studies.compiled.generated_c import c_surface
+
+            surface = c_surface(spec.rulebase)
+            label = f"{surface.__name__} (python loop)"
+    result = run(
+        exp,
+        plant,
+        spec.controller,
+        gains=gains,
+        surface=surface,
+        seed=spec.seed,
+        faults=faults,
+        latency=spec.latency,
+        duration_s=spec.duration_s,
+        controller_impl=label,
+    )
+    result.loop += fallback
+    return result
+
+
+def experiment_and_plant(spec: RunSpec) -> tuple[Experiment, Any]:
+    """The experiment and the plant to run it on (:func:`fuzzkit.studies.e3_arm6.resolve`): a
+    plant object where the pair needs its own (E3 on arm6), else the plant's name, so that the
+    compiled loop can reuse its per-process plant."""
+    from fuzzkit.studies.e3_arm6 import resolve
+    from fuzzkit.studies.experiments import experiment
+
+    if spec.experiment.upper() == "E3" and spec.plant == "arm6":
+        return resolve(spec.experiment, spec.plant)
+    return experiment(spec.experiment), spec.plant
+
+
+def execute(spec: RunSpec) -> dict[str, Any]:
+    """Run ``spec`` and return its tidy row: every parameter, then every metric.
+
+    Per-axis metrics are flattened as ``<axis>_<metric>`` (``z_overshoot_pct`` ...); axes that
+    are not force-controlled are absent (the table fills them with empty cells).
+    """
+    from fuzzkit.studies.metrics import summary
+
+    data = summary(run_spec(spec))
+    row: dict[str, Any] = {
+        "experiment": spec.experiment,
+        "controller": spec.controller,
+        "plant": spec.plant,
+        "stiffness_n_per_mm": spec.stiffness_n_per_mm,
+        "sensor_delay": data["latency_periods"][0],
+        "command_delay": data["latency_periods"][1],
+        "seed": spec.seed,
+        "gains": spec.gains_label,
+        **{f"gain_{k}": v for k, v in spec.gains},
+        "rulebase": spec.rulebase if spec.controller == "fuzzy-pi" else None,
+    }
+    for key, value in data.items():
+        if key == "axes":
+            for axis, metrics in value.items():
+                for name, v in metrics.items():
+                    row[f"{axis}_{name}"] = v
+        elif key not in ("experiment", "controller", "plant"):
+            row[key] = value
+    return row
+
+
+def default_workers() -> int:
+    """The number of cores this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+class BatchExecutor:
+    """Maps a function over items, in order, on a pool that lives as long as the executor.
+
+    ``scheduler``: address of a ``dask.distributed`` scheduler (``tcp://host:8786``); the items
+    run on its workers (each needs fuzzkit installed, e.g. ``dask worker`` started from the
+    project's environment). Otherwise ``workers`` local processes (None: every core; 1: in this
+    process). Local workers ignore Ctrl-C: stopping is the parent's business.
+
+    Raises
+    ------
+    ConfigError
+        If the scheduler cannot be reached, or ``workers < 1``.
+    """
+
+    def __init__(self, workers: int | None = None, scheduler: str | None = None) -> None:
+        self.scheduler = scheduler
+        self.workers = default_workers() if workers is None else workers
+        if self.workers < 1:
+            raise ConfigError(f"workers must be >= 1 (got {self.workers})")
+        self._pool: ProcessPoolExecutor | None = None
+        self._client: Any = None
+        if scheduler is not None:
+            import distributed
+
+            client_class: Any = distributed.Client  # untyped library
+            try:
+                self._client = client_class(scheduler, timeout="10s")
+            except (OSError, TimeoutError) as exc:
+                raise ConfigError(
+                    f"cannot reach the dask scheduler at {scheduler} ({exc})"
+                ) from exc
+        elif self.workers > 1:
+            import multiprocessing
+
+            methods = multiprocessing.get_all_start_methods()
+            # fork shares the already imported modules (fast start); spawn elsewhere
+            ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+            self._pool = ProcessPoolExecutor(
+                self.workers, mp_context=ctx, initializer=_ignore_sigint
+            )
+
+    @property
+    def where(self) -> str:
+        """Where the items run, for messages."""
+        if self._client is not None:
+            return f"dask cluster {self.scheduler}"
+        return "this process" if self._pool is None else f"{self.workers} local processes"
+
+    def map(
+        self,
+        fn: Callable[[T], R],
+        items: Sequence[T],
+        progress: Callable[[int], None] | None = None,
+    ) -> list[R]:
+        """``[fn(x) for x in items]``; ``progress`` gets the count finished after each item.
+
+        ``fn`` must be a module-level function and the items picklable.
+        """
+        items = list(items)
+        if not items:
+            return []
+        if self._client is not None:
+            import distributed
+
+            dask_completed: Any = distributed.as_completed  # untyped library
+
+            # pure=False: equal items are still separate runs (each counted in the progress)
+            futures = self._client.map(fn, items, pure=False)
+            for done, _ in enumerate(dask_completed(futures), start=1):
+                if progress:
+                    progress(done)
+            results: list[R] = self._client.gather(futures)
+            return results
+        if self._pool is None or len(items) == 1:
+            out: list[R] = []
+            for x in items:
+                out.append(fn(x))
+                if progress:
+                    progress(len(out))
+            return out
+        pending = [self._pool.submit(fn, x) for x in items]
+        for done, _ in enumerate(_as_completed(pending), start=1):
+            if progress:
+                progress(done)
+        return [f.result() for f in pending]
+
+    def close(self, abort: bool = False) -> None:
+        """Stop the workers (``abort``: drop queued items instead of finishing them)."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=not abort, cancel_futures=abort)
+            self._pool = None
+        if self._client is not None:
+            self._client.close()
+            self._client = None
+
+    def __enter__(self) -> BatchExecutor:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close(abort=exc[0] is not None)
+
+
+def _ignore_sigint() -> None:
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def map_runs(
+    fn: Callable[[T], R],
+    items: Sequence[T],
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: Callable[[int], None] | None = None,
+) -> list[R]:
+    """``[fn(x) for x in items]`` in order, on a one-off :class:`BatchExecutor`."""
+    if not items:
+        return []
+    n = default_workers() if workers is None else workers
+    with BatchExecutor(min(n, len(items)), scheduler) as ex:
+        return ex.map(fn, items, progress)
+
+
+def _as_completed(futures: Iterable[Any]) -> Iterator[Any]:
+    from concurrent.futures import as_completed
+
+    yield from as_completed(list(futures))
+
+
+def gains_items(gains: Mapping[str, float]) -> tuple[tuple[str, float], ...]:
+    """Gain overrides as the sorted pairs a :class:`RunSpec` holds."""
+    return tuple(sorted((str(k), float(v)) for k, v in gains.items()))

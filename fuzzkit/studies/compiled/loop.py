@@ -1,0 +1,261 @@
+"""Run an experiment through the compiled loop and return the runner's :class:`RunResult`.
+
+:func:`run_compiled` takes the arguments of :func:`fuzzkit.studies.runner.run` that the compiled
+loop models; :func:`compiled_supports` says when it applies (the ``arm6`` plant, PI or fuzzy-PI
+with a double lookup table). The plant is reset in Python (the start pose's IK with its seeds),
+then one compiled call runs every period.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Mapping
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from fuzzkit.errors import ConfigError
+from fuzzkit.plants.arm6 import Arm6Plant
+from fuzzkit.plants.arm6_kernel import IK_STATUS_NAMES, pack, sensor_noise
+from fuzzkit.studies.compiled import kernel as K
+from fuzzkit.studies.compiled.table import TableArrays, cached_table, table_arrays
+from fuzzkit.studies.experiments import DEFAULT_GAINS, Experiment
+from fuzzkit.studies.faults import Faults, fault_name, fault_schedule
+from fuzzkit.studies.runner import RunResult, build_controller, run_faults_and_latency
+
+#: Plants the compiled loop runs.
+COMPILED_PLANTS = ("arm6",)
+
+_IK_MESSAGES = {
+    "max_iterations": "IK not converged this period",
+    "unreachable": "target unreachable: going to the closest pose",
+    "limit": "target needs motion past a joint limit",
+}
+
+
+def compiled_supports(plant: str) -> bool:
+    """True when the compiled loop models ``plant``."""
+    return plant in COMPILED_PLANTS
+
+
+@lru_cache(maxsize=1)
+def _shared_plant() -> Arm6Plant:
+    """One default arm6 plant per process: ``reset`` rebuilds its whole state for every run,
+    and building it (parsing the robot description) cost two thirds of a short run."""
+    return Arm6Plant()
+
+
+@lru_cache(maxsize=8)
+def load_table(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3) -> Any:
+    """The double lookup table of a rule base (shipped name or YAML path), as ``fuzzkit compile
+    --target c --type double --tolerance`` builds it: what the compiled fuzzy-PI evaluates."""
+    from fuzzkit.codegen.table_search import make_table
+    from fuzzkit.formats.registry import load
+
+    return make_table(load(rulebase), number_type="double", tolerance=tolerance)
+
+
+def compiled_table(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3) -> TableArrays:
+    """:func:`load_table`'s arrays, from the on-disk cache after the first build."""
+    from fuzzkit.formats.registry import load
+
+    return cached_table(load(rulebase), tolerance, lambda: load_table(rulebase, tolerance))
+
+
+def run_compiled(
+    exp: Experiment,
+    plant: str | Arm6Plant = "arm6",
+    controller: str = "pi",
+    *,
+    gains: Mapping[str, float] | None = None,
+    table: Any = None,
+    seed: int = 0,
+    faults: Faults | None = None,
+    duration_s: float | None = None,
+    latency: tuple[int, int] | None = None,
+) -> RunResult:
+    """Run ``exp`` on the arm6 plant with the compiled loop; same semantics as ``runner.run``.
+
+    ``table`` is the fuzzy-PI's lookup table (``fuzzkit.codegen`` double table, see
+    :func:`load_table`, or its :class:`TableArrays`, see :func:`compiled_table`); required for
+    ``fuzzy-pi``. ``faults`` and ``latency`` default to the experiment's, as in ``runner.run``.
+
+    Raises
+    ------
+    ConfigError
+        For a plant the compiled loop does not model, an unknown controller, or fuzzy-PI
+        without a table. :class:`~fuzzkit.plants.arm6_kernel.UnsupportedPlant` (a ConfigError)
+        for an arm6 plant with objects or modes the kernel lacks (the Python loop runs it).
+    """
+    if isinstance(plant, str):
+        if not compiled_supports(plant):
+            raise ConfigError(
+                f"the compiled loop runs on {', '.join(COMPILED_PLANTS)} (got {plant!r}); "
+                "use --loop python"
+            )
+        plant = _shared_plant()
+    if controller not in DEFAULT_GAINS:
+        raise ConfigError(f"unknown controller {controller!r} (expected pi or fuzzy-pi)")
+    if controller == "fuzzy-pi" and table is None:
+        raise ConfigError("the compiled fuzzy-pi needs a lookup table (load_table)")
+    faults, sensor_delay, command_delay = run_faults_and_latency(exp, seed, faults, latency)
+    # The Python controller object validates the gains and holds the safeguard settings.
+    hybrid = build_controller(exp, controller, gains, lambda e, de: 0.0)
+    g = dict(DEFAULT_GAINS[controller])
+    g.update(gains or {})
+    scn = exp.scenario
+    n = round((duration_s or scn.duration_s) / scn.period_s)
+    reset = plant.reset(scn, seed=seed)
+    arrays = pack(plant)  # UnsupportedPlant (a ConfigError) for what the kernel lacks
+    noise = sensor_noise(scn.sensor.noise_std_n, seed, n + 1)
+    spike, nan = fault_schedule(faults, n)
+    rate_limit = g.get("rate_limit")
+    cp = np.zeros(K.N_CP)
+    cp[K.C_KIND] = K.KIND_PI if controller == "pi" else K.KIND_FUZZY
+    cp[K.C_KP] = g["kp"]
+    cp[K.C_KI] = g["ki"]
+    cp[K.C_KX] = g.get("kx", 0.0)
+    cp[K.C_UMIN] = g.get("u_min", -math.inf)
+    cp[K.C_UMAX] = g.get("u_max", math.inf)
+    cp[K.C_RATE] = math.nan if rate_limit is None else rate_limit
+    cp[K.C_FORCE_LIMIT] = hybrid.force_limit_n
+    thr = hybrid.engage_threshold_n
+    cp[K.C_ENGAGE_THR] = math.nan if thr is None else thr
+    cp[K.C_TRIP_SAMPLES] = hybrid.trip_samples
+    cp[K.C_BACKOFF] = hybrid.backoff_m
+    cp[K.C_BACKOFF_SPEED] = hybrid.backoff_speed_m_s
+    cp[K.C_ENGAGE_SAMPLES] = hybrid.engage_samples
+    cp[K.C_HOLD] = 1.0 if exp.hold_path_on_contact else 0.0
+    cp[K.C_PERIOD] = scn.period_s
+    cp[K.C_SENSOR_DELAY] = sensor_delay
+    cp[K.C_COMMAND_DELAY] = command_delay
+    cp[K.C_SPIKE_GATE] = hybrid.spike_gate_n
+    cp[K.C_SPIKE_CONFIRM] = hybrid.spike_confirm
+    cp[K.C_DROPOUT_START] = math.nan if faults.dropout is None else faults.dropout[0]
+    cp[K.C_DROPOUT_LENGTH] = 0.0 if faults.dropout is None else faults.dropout[1]
+    cp[K.C_SPIKE_N] = faults.spike_n
+    impl = "pi (compiled)"
+    if table is not None:
+        ta = table_arrays(table)
+        bp0, bp1, tab, splits = ta.bp0, ta.bp1, ta.values, ta.splits
+        impl = ta.label + " (compiled)"
+    else:
+        bp0 = bp1 = np.array([-1.0, 1.0])
+        tab = np.zeros((2, 2))
+        splits = np.zeros((1, 1), dtype=np.int64)
+    dof = arrays.q.shape[0]
+    n_obj = max(arrays.obj_kind.shape[0], 1)
+    rec = {
+        "t": np.empty(n),
+        "force": np.empty((n, 3)),
+        "force_sensor": np.empty((n, 3)),
+        "force_true": np.empty((n, 3)),
+        "e": np.empty((n, 3)),
+        "de": np.empty((n, 3)),
+        "du": np.empty((n, 3)),
+        "u": np.empty((n, 3)),
+        "tool": np.empty((n, 3)),
+        "nominal": np.empty((n, 3)),
+        "target": np.empty((n, 3)),
+        "joints": np.empty((n, dof)),
+        "contact": np.empty(n, dtype=np.bool_),
+        "force_normal": np.empty((n, 3)),
+        "moving": np.empty(n, dtype=np.bool_),
+        "ik": np.empty(n, dtype=np.int64),
+        "limited": np.empty(n, dtype=np.bool_),
+        "arm": np.empty((n, dof + 2, 3)),
+        "points": np.zeros((n, n_obj, 3)),
+        "npoints": np.empty(n, dtype=np.int64),
+    }
+    scalars = np.zeros(K.N_RESULTS)
+    selection = np.array([1.0 if s else 0.0 for s in exp.selection])
+    setpoints = np.asarray(exp.setpoints, dtype=np.float64)
+    reset_force = np.asarray(reset.force, dtype=np.float64).copy()
+    a = arrays
+    args = (
+        a.links, a.tool_r, a.tool_p, a.lower, a.upper, a.dq_max, a.path_t, a.path_pos,
+        a.path_quat, a.obj_kind, a.obj_p, a.obj_terms, a.obj_nterms, a.rot_task, a.offset,
+        a.params, a.q, a.q_ref, a.q_ik, a.stick, a.state, noise, reset_force,
+        cp, selection, setpoints, bp0, bp1, tab, splits,
+        spike, nan,
+    )  # fmt: skip
+    _warm_up(args, rec, scalars)
+    wall0 = time.perf_counter()
+    cpu0 = time.process_time()
+    K.run_arm6(
+        *args,
+        rec["t"], rec["force"], rec["force_sensor"], rec["force_true"], rec["e"], rec["de"],
+        rec["du"], rec["u"], rec["tool"], rec["nominal"], rec["target"], rec["joints"],
+        rec["contact"], rec["force_normal"], rec["moving"], rec["ik"], rec["limited"], rec["arm"],
+        rec["points"], rec["npoints"],
+        scalars,
+    )  # fmt: skip
+    cpu = time.process_time() - cpu0
+    wall = time.perf_counter() - wall0
+    messages: dict[str, int] = {}
+    for code, count in zip(*np.unique(rec["ik"], return_counts=True), strict=True):
+        name = IK_STATUS_NAMES[int(code)]
+        if name in _IK_MESSAGES:
+            messages[_IK_MESSAGES[name]] = int(count)
+    limited = int(np.count_nonzero(rec["limited"]))
+    if limited:
+        messages["joint speed limit"] = limited
+    trip_time = float(scalars[K.R_TRIP_TIME])
+    engaged_time = float(scalars[K.R_ENGAGED_TIME])
+    return RunResult(
+        experiment=exp,
+        controller=controller,
+        plant="arm6",
+        t=rec["t"],
+        force=rec["force"],
+        force_sensor=rec["force_sensor"],
+        force_true=rec["force_true"],
+        setpoint=np.tile(setpoints, (n, 1)),
+        e=rec["e"],
+        de=rec["de"],
+        du=rec["du"],
+        u=rec["u"],
+        tool_position=rec["tool"],
+        nominal_position=rec["nominal"],
+        target_position=rec["target"],
+        joint_angles=rec["joints"],
+        in_contact=rec["contact"],
+        force_normal=rec["force_normal"],
+        moving=rec["moving"],
+        arm_points=list(rec["arm"]),
+        contact_points=[rec["points"][k, : rec["npoints"][k]] for k in range(n)],
+        faults=int(scalars[K.R_FAULTS]),
+        tripped=bool(scalars[K.R_TRIPPED]),
+        seed=seed,
+        latency_periods=(sensor_delay, command_delay),
+        fault=fault_name(faults),
+        fault_seed=faults.seed,
+        trip_time_s=None if math.isnan(trip_time) else trip_time,
+        engaged_time_s=None if math.isnan(engaged_time) else engaged_time,
+        wall_time_s=wall,
+        messages=messages,
+        loop="compiled",
+        cpu_time_s=cpu,
+        controller_impl=impl,
+    )
+
+
+_WARM = False
+
+
+def _warm_up(args: tuple[Any, ...], rec: dict[str, Any], scalars: Any) -> None:
+    """Run the kernel over zero periods once per process, with the run's argument types.
+
+    The first call loads the machine code from numba's on-disk cache (or compiles it after an
+    install); done here, that start-up cost stays out of the loop's CPU time.
+    """
+    global _WARM
+    if _WARM:
+        return
+    state = [np.array(x, copy=True) if isinstance(x, np.ndarray) else x for x in args]
+    empty = [v[:0] for v in rec.values()]
+    kernel: Callable[..., None] = K.run_arm6  # called with the argument list built above
+    kernel(*state, *empty, scalars.copy())
+    _WARM = True
