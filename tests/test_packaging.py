@@ -83,6 +83,14 @@ def test_wheel_installs_one_top_level_package(dists: tuple[Path, Path]) -> None:
     ):
         assert expected in names
     assert any(n.endswith(".dist-info/licenses/LICENSE") for n in names)
+    # every package of the source tree is in the wheel, at its installed name
+    for init in sorted(ROOT.glob("fuzzkit/**/__init__.py")):
+        assert init.relative_to(ROOT).as_posix() in names
+    for top in ("codegen", "planar_sim", "rulebases"):
+        for init in sorted((ROOT / top).glob("**/__init__.py")):
+            assert f"fuzzkit/{init.relative_to(ROOT).as_posix()}" in names
+    for data in ("studies/scenarios/E1.yaml", "codegen/backends/c/exact.c.jinja"):
+        assert f"fuzzkit/{data}" in names
 
 
 @pytest.mark.slow

@@ -10,7 +10,14 @@ import pytest
 
 from fuzzkit.control.gains import GainsEntry, write_gains
 from fuzzkit.errors import ConfigError
-from fuzzkit.report.build import Key, assess_claims, build_report, claims_summary
+from fuzzkit.report.build import (
+    ClaimResult,
+    Key,
+    assess_claims,
+    build_report,
+    claims_conclusion,
+    claims_summary,
+)
 
 
 def _axis(
@@ -155,3 +162,25 @@ def test_cli_report_bad_budget(capsys: pytest.CaptureFixture[str], tmp_path: Pat
 
     assert main(["report", "--out", str(tmp_path / "r"), "--budget", "2"]) == 2
     assert "--budget must be >= 10" in capsys.readouterr().err
+
+
+def test_the_conclusion_follows_from_the_verdicts() -> None:
+    def c(claim: str, plant: str, gains: str, holds: bool) -> ClaimResult:
+        return ClaimResult(claim, plant, gains, holds, "holds" if holds else "no", "")
+
+    results = [
+        c("A", "planar", "default", True),
+        c("A", "planar", "matched", True),
+        c("B", "planar", "default", False),
+        c("B", "planar", "matched", False),
+        c("C", "planar", "default", True),
+        c("C", "planar", "matched", False),
+    ]
+    text = claims_conclusion(results)
+    assert "Of the paper's 3 claims checked here, 1 hold in every setting (A)" in text
+    assert "and 1 in none (B)." in text
+    assert '"C" depends on the setting: it holds only with planar/default.' in text
+    assert "With matched small-signal gains (the like-for-like comparison) it does not hold" in text
+    # flipping C's matched verdict flips the sentence: the paragraph is computed, not canned
+    results[-1] = c("C", "planar", "matched", True)
+    assert "(A; C)" in claims_conclusion(results)

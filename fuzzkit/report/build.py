@@ -248,6 +248,49 @@ def claims_summary(results: Sequence[ClaimResult]) -> str:
     return "\n".join(lines)
 
 
+def claims_conclusion(results: Sequence[ClaimResult]) -> str:
+    """One paragraph that follows from the verdict table: which claims hold everywhere, which
+    nowhere, and on which settings the rest depend (matched gains being the like-for-like one).
+    """
+    by_claim: dict[str, list[ClaimResult]] = {}
+    for c in results:
+        by_claim.setdefault(c.claim, []).append(c)
+    always = [k for k, rs in by_claim.items() if all(r.holds for r in rs)]
+    never = [k for k, rs in by_claim.items() if not any(r.holds for r in rs)]
+    mixed = [k for k in by_claim if k not in always and k not in never]
+    parts = [f"Of the paper's {len(by_claim)} claims checked here,"]
+    parts.append(
+        f"{len(always)} hold in every setting ({'; '.join(always)})"
+        if always
+        else "none holds in every setting"
+    )
+    parts.append(
+        f"and {len(never)} in none ({'; '.join(never)})." if never else "and none fails in all."
+    )
+    sentences = [" ".join(parts)]
+    for claim in mixed:
+        rs = by_claim[claim]
+        held = [f"{r.plant}/{r.gains}" for r in rs if r.holds]
+        matched = [r for r in rs if r.gains == "matched"]
+        like = (
+            " With matched small-signal gains (the like-for-like comparison) it "
+            + ("holds" if all(r.holds for r in matched) else "does not hold")
+            + (" on every plant." if all(r.holds for r in matched) or not any(
+                r.holds for r in matched) else " on some plants.")
+            if matched
+            else ""
+        )
+        sentences.append(
+            f"\"{claim}\" depends on the setting: it holds only with {', '.join(held)}.{like}"
+        )
+    sentences.append(
+        "A verdict that changes with the gains is a property of the tuning, not of fuzzy versus "
+        "linear control; the latency and stiffness sections below show where each controller "
+        "stops being usable."
+    )
+    return " ".join(sentences)
+
+
 # --------------------------------------------------------------------------------------------
 # The report
 # --------------------------------------------------------------------------------------------
@@ -518,6 +561,8 @@ def _markdown(
         "## Verdicts at a glance",
         "",
         claims_summary(claims),
+        "",
+        claims_conclusion(claims),
         "",
         "## Gains",
         "",
