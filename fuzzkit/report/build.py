@@ -260,7 +260,8 @@ def claims_conclusion(results: Sequence[ClaimResult]) -> str:
     mixed = [k for k in by_claim if k not in always and k not in never]
     parts = [f"Of the paper's {len(by_claim)} claims checked here,"]
     parts.append(
-        f"{len(always)} hold in every setting ({'; '.join(always)})"
+        f"{len(always)} {'holds' if len(always) == 1 else 'hold'} in every setting "
+        f"({'; '.join(always)})"
         if always
         else "none holds in every setting"
     )
@@ -272,14 +273,17 @@ def claims_conclusion(results: Sequence[ClaimResult]) -> str:
         rs = by_claim[claim]
         held = [f"{r.plant}/{r.gains}" for r in rs if r.holds]
         matched = [r for r in rs if r.gains == "matched"]
-        like = (
-            " With matched small-signal gains (the like-for-like comparison) it "
-            + ("holds" if all(r.holds for r in matched) else "does not hold")
-            + (" on every plant." if all(r.holds for r in matched) or not any(
-                r.holds for r in matched) else " on some plants.")
-            if matched
-            else ""
-        )
+        like = ""
+        if matched:
+            n_held = sum(r.holds for r in matched)
+            where = (
+                "holds on every plant"
+                if n_held == len(matched)
+                else "holds on no plant"
+                if n_held == 0
+                else f"holds on {n_held} of {len(matched)} plants"
+            )
+            like = f" With matched small-signal gains (the like-for-like comparison) it {where}."
         sentences.append(
             f"\"{claim}\" depends on the setting: it holds only with {', '.join(held)}.{like}"
         )
