@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from fuzzkit.cli import RULEBASE_SPEC_HELP
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
 
@@ -67,7 +68,7 @@ def register(subparsers: Any) -> None:
         "--rulebase",
         default="macvicar_whelan",
         metavar="RB",
-        help="rule base for fuzzy-pi: shipped name or YAML path",
+        help="rule base for fuzzy-pi: " + RULEBASE_SPEC_HELP,
     )
     sim.add_argument(
         "--plant",
@@ -146,7 +147,7 @@ def register(subparsers: Any) -> None:
         "--rulebase",
         default="macvicar_whelan",
         metavar="RB",
-        help="rule base for fuzzy-pi: shipped name or YAML path",
+        help="rule base for fuzzy-pi: " + RULEBASE_SPEC_HELP,
     )
     cmp_.add_argument(
         "--plant",
