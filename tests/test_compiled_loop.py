@@ -12,6 +12,7 @@ exactly: where the measured force is NaN (no sample, injected fault), engagement
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -19,8 +20,12 @@ import pytest
 
 from fuzzkit.control.controllers import lookup_table_surface
 from fuzzkit.errors import ConfigError
+from fuzzkit.plants.arm6 import Arm6Parameters, Arm6Plant, HeightField
+from fuzzkit.plants.arm6_heightfield import height_field_contact, pack_height_field
+from fuzzkit.plants.arm6_kernel import UnsupportedPlant, pack
 from fuzzkit.studies.compiled.loop import load_table, run_compiled
 from fuzzkit.studies.compiled.table import table2, table_arrays
+from fuzzkit.studies.e3_arm6 import e3_arm6_experiment, make_e3_arm6_plant
 from fuzzkit.studies.experiments import experiment, with_stiffness
 from fuzzkit.studies.faults import FAULTS, FaultInjector, Faults, fault, fault_schedule
 from fuzzkit.studies.runner import RunResult, run
@@ -31,12 +36,21 @@ U_TOL = 1e-9  # m: corrections are ~1e-3 m, rounding ~1e-16 m
 CONTROLLERS = ("pi", "fuzzy-pi")
 
 
-def _both(name: str, controller: str, **kw: object) -> tuple[RunResult, RunResult]:
+def _both(
+    name: str,
+    controller: str,
+    plant: Callable[[], Arm6Plant] | None = None,
+    **kw: object,
+) -> tuple[RunResult, RunResult]:
+    """The Python and the compiled loop on the same run; ``plant`` builds a fresh plant for
+    each (default: the shared arm6 plant of both loops)."""
     exp = kw.pop("exp", None) or experiment(name)
     table = load_table() if controller == "fuzzy-pi" else None
     surface = lookup_table_surface(table) if table is not None else None
-    py = run(exp, "arm6", controller, surface=surface, **kw)  # type: ignore[arg-type]
-    co = run_compiled(exp, "arm6", controller, table=table, **kw)  # type: ignore[arg-type]
+    py_plant = "arm6" if plant is None else plant()
+    co_plant = "arm6" if plant is None else plant()
+    py = run(exp, py_plant, controller, surface=surface, **kw)  # type: ignore[arg-type]
+    co = run_compiled(exp, co_plant, controller, table=table, **kw)  # type: ignore[arg-type]
     return py, co
 
 
@@ -100,6 +114,68 @@ def test_compiled_loop_equals_python_loop_under_faults(controller: str, kind: st
         assert co.latency_periods == (1 + 2, 1)  # the scenario's (1, 1) plus 2 sensor periods
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("controller", CONTROLLERS)
+def test_compiled_loop_equals_python_loop_on_e3_arm6(controller: str) -> None:
+    # the paper's E3: a rough 3-D height-field floor (30 N on z) and a side wall (6 N on x)
+    py, co = _both("E3", controller, plant=make_e3_arm6_plant, exp=e3_arm6_experiment(), seed=1)
+    _assert_same(py, co)
+    touching = co.in_contact & ~np.isnan(co.force[:, 0])
+    assert np.count_nonzero(touching) > 1000  # the whole slide is in contact
+    # both surfaces push: floor on z, wall on x
+    assert np.max(np.abs(co.force_normal[:, 2])) > 20.0
+    assert np.max(np.abs(co.force_normal[:, 0])) > 3.0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", sorted(set(FAULTS) - {"none"}))
+def test_compiled_loop_equals_python_loop_on_e3_arm6_under_faults(kind: str) -> None:
+    py, co = _both(
+        "E3",
+        "fuzzy-pi",
+        plant=make_e3_arm6_plant,
+        exp=e3_arm6_experiment(),
+        seed=5,
+        faults=fault(kind, 5),
+        duration_s=3.0,
+    )
+    _assert_same(py, co)
+    assert co.fault == kind
+    if kind in ("nan", "dropout", "spike"):
+        assert co.faults > 0
+
+
+def test_height_field_contact_is_the_python_contact() -> None:
+    """The compiled height field touches exactly where ``HeightField.contact`` does, with
+    the same depth, normal and point (same operations in the same order: bit for bit)."""
+    field = HeightField.rough((0.40, 0.56), (-0.13, 0.13), -0.299, 0.0002, seed=3)
+    field = HeightField(field.x0, field.y0, field.dx, field.dy, field.heights, z0=0.25)
+    row, heights = pack_height_field(field)
+    op = np.zeros(12)
+    op[: len(row)] = row
+    radius = 0.01
+    rng = np.random.default_rng(0)
+    nx, ny = len(field.heights), len(field.heights[0])
+    corners = [
+        (field.x0 + i * field.dx, field.y0 + j * field.dy) for i in (0, nx - 1) for j in (0, ny - 1)
+    ]
+    xy = np.concatenate([rng.uniform((0.39, -0.14), (0.57, 0.14), (3000, 2)), corners])
+    z = rng.uniform(-0.05, -0.03, len(xy))  # around the surface (0.25 - 0.299 + radius)
+    nrm, pt = np.empty(3), np.empty(3)
+    touching = 0
+    for (x, y), zc in zip(xy, z, strict=True):
+        c = np.array([x, y, zc])
+        ref = field.contact((float(x), float(y), float(zc)), radius)
+        depth = height_field_contact(op, heights, c, radius, nrm, pt)
+        if ref is None:
+            assert depth <= 0.0
+            continue
+        touching += 1
+        assert depth == ref[0]
+        assert tuple(nrm) == ref[1] and tuple(pt) == ref[2]
+    assert 500 < touching < len(xy) - 500  # both touching and clear points were checked
+
+
 def test_fault_schedule_draws_what_the_injector_draws() -> None:
     faults = Faults(spike_probability=0.3, spike_n=5.0, nan_probability=0.2, seed=7)
     spike, nan = fault_schedule(faults, 400)
@@ -156,11 +232,18 @@ def test_compiled_loop_rejects_what_it_does_not_model() -> None:
         run_compiled(exp, "arm6", "pi", latency=(-1, 0))
 
 
-def test_e3_on_arm6_falls_back_to_the_python_loop_and_says_so() -> None:
+def test_e3_on_arm6_runs_compiled() -> None:
     from fuzzkit.studies.batch import RunSpec, run_spec
 
     result = run_spec(RunSpec("E3", "pi", "arm6", duration_s=0.05))
-    assert result.loop.startswith("python") and "HeightField" in result.loop
+    assert result.loop == "compiled"
+
+
+def test_what_the_kernel_does_not_model_is_refused_by_name() -> None:
+    plant = Arm6Plant(Arm6Parameters(strict=True))
+    plant.reset(experiment("E1").scenario)
+    with pytest.raises(UnsupportedPlant, match="strict mode"):
+        pack(plant)
 
 
 @pytest.mark.slow

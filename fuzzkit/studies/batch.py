@@ -88,8 +88,8 @@ def run_spec(spec: RunSpec) -> RunResult:
 
     The compiled loop runs the fuzzy-PI as the rule base's double lookup table (the generated
     code's arithmetic); the Python loop runs it on the exact engine. A plant the compiled loop
-    does not model (E3 on arm6: its 3-D ``HeightField`` floor) runs in the Python loop, and the
-    result's ``loop`` says so: ``python (fallback: ...)``.
+    does not model (:class:`~fuzzkit.plants.arm6_kernel.UnsupportedPlant`) runs in the Python
+    loop, and the result's ``loop`` says so: ``python (fallback: ...)``.
     """
     from fuzzkit.studies.experiments import with_stiffness
     from fuzzkit.studies.faults import fault
@@ -130,7 +130,7 @@ def run_spec(spec: RunSpec) -> RunResult:
                 duration_s=spec.duration_s,
             )
         except UnsupportedPlant as exc:
-            # e.g. E3 on arm6 (its 3-D HeightField floor): the Python loop runs it, and says so
+            # an object or mode the kernel lacks: the Python loop runs it, and says so
             fallback = f" (fallback: {exc})"
     from fuzzkit.studies.runner import run
 

@@ -176,7 +176,8 @@ def run_compiled(
     a = arrays
     args = (
         a.links, a.tool_r, a.tool_p, a.lower, a.upper, a.dq_max, a.path_t, a.path_pos,
-        a.path_quat, a.obj_kind, a.obj_p, a.obj_terms, a.obj_nterms, a.rot_task, a.offset,
+        a.path_quat, a.obj_kind, a.obj_p, a.obj_terms, a.obj_nterms, a.obj_grid, a.rot_task,
+        a.offset,
         a.params, a.q, a.q_ref, a.q_ik, a.stick, a.state, noise, reset_force,
         cp, selection, setpoints, bp0, bp1, tab, splits,
         spike, nan,
