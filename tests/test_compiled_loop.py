@@ -23,8 +23,9 @@ from fuzzkit.errors import ConfigError
 from fuzzkit.plants.arm6 import Arm6Parameters, Arm6Plant, HeightField
 from fuzzkit.plants.arm6_heightfield import height_field_contact, pack_height_field
 from fuzzkit.plants.arm6_kernel import UnsupportedPlant, pack
-from fuzzkit.studies.compiled.loop import load_table, run_compiled
-from fuzzkit.studies.compiled.table import table2, table_arrays
+from fuzzkit.studies.compiled.generated_c import GeneratedC
+from fuzzkit.studies.compiled.loop import run_compiled
+from fuzzkit.studies.compiled.table import load_table, table2, table_arrays
 from fuzzkit.studies.e3_arm6 import e3_arm6_experiment, make_e3_arm6_plant
 from fuzzkit.studies.experiments import experiment, with_stiffness
 from fuzzkit.studies.faults import FAULTS, FaultInjector, Faults, fault, fault_schedule
@@ -54,8 +55,9 @@ def _both(
     return py, co
 
 
-def _assert_same(py: RunResult, co: RunResult) -> None:
-    assert co.loop == "compiled" and py.loop == "python"
+def _assert_same(py: RunResult, co: RunResult, reference_loop: str = "python") -> None:
+    """``co`` (a compiled-loop run) repeats ``py`` (a run of ``reference_loop``)."""
+    assert co.loop == "compiled" and py.loop == reference_loop
     assert py.t.shape == co.t.shape
     np.testing.assert_allclose(co.t, py.t, rtol=0, atol=1e-12)
     # same samples missing (sensor rate, faults, latency), exactly
@@ -226,7 +228,7 @@ def test_compiled_loop_rejects_what_it_does_not_model() -> None:
     exp = experiment("E1")
     with pytest.raises(ConfigError, match="compiled loop runs on arm6"):
         run_compiled(exp, "planar", "pi")
-    with pytest.raises(ConfigError, match="needs a lookup table"):
+    with pytest.raises(ConfigError, match=r"needs a lookup table .* or the generated C"):
         run_compiled(exp, "arm6", "fuzzy-pi")
     with pytest.raises(ConfigError, match="latency"):
         run_compiled(exp, "arm6", "pi", latency=(-1, 0))
@@ -246,31 +248,111 @@ def test_what_the_kernel_does_not_model_is_refused_by_name() -> None:
         pack(plant)
 
 
-@pytest.mark.slow
-def test_compiled_table_loop_equals_a_loop_running_the_generated_c() -> None:
-    """The compiled fuzzy-PI's arithmetic is the generated C's: a Python loop that calls the
-    compiled generated C (ctypes) for every sample gives the compiled loop's force traces."""
+def _needs_a_c_compiler() -> None:
     from fuzzkit.codegen.toolchain import find_compiler
 
     if find_compiler() is None:
         pytest.skip("no C compiler found")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["E2", "E3"])
+def test_compiled_loop_runs_the_generated_c(name: str) -> None:
+    """``--fuzzy-impl c`` in the compiled loop calls the generated C (ctypes) for every sample
+    and gives the force traces of the compiled table and of the Python loop calling the same C.
+
+    Not bit for bit against the table: the generated C finds a cell's fraction by multiplying
+    by the stored reciprocal of the cell's width, the table model (and the compiled table)
+    divides, so a surface value can differ in its last bit (see the next test); the loop is
+    stable, so that stays ~1e-11 N in the force, well inside ``FORCE_TOL``.
+    """
+    _needs_a_c_compiler()
     from fuzzkit.studies.batch import RunSpec, run_spec
 
-    spec = RunSpec("E2", "fuzzy-pi", "arm6", seed=4, duration_s=4.0)
-    co = run_spec(spec)
-    py = run_spec(RunSpec("E2", "fuzzy-pi", "arm6", seed=4, duration_s=4.0, loop="python",
-                          fuzzy_impl="c"))  # fmt: skip
-    assert "generated C" in py.controller_impl and "lookup table" in co.controller_impl
-    _assert_same(py, co)
+    def spec(**kw: str) -> RunSpec:
+        return RunSpec(name, "fuzzy-pi", "arm6", seed=4, duration_s=4.0, **kw)  # type: ignore[arg-type]
+
+    c = run_spec(spec(fuzzy_impl="c"))
+    table = run_spec(spec(fuzzy_impl="table"))
+    py_c = run_spec(spec(loop="python", fuzzy_impl="c"))
+    assert c.controller_impl == "generated C macvicar_whelan_eval (double, ctypes) (compiled loop)"
+    assert table.controller_impl.startswith("lookup table macvicar_whelan")
+    assert py_c.controller_impl.endswith("(python loop)") and "generated C" in py_c.controller_impl
+    assert np.count_nonzero(c.in_contact) > 100
+    _assert_same(table, c, reference_loop="compiled")
+    _assert_same(py_c, c)
+
+
+def test_generated_c_and_the_compiled_table_agree_to_the_last_bit() -> None:
+    """The generated C's ``NAME_eval`` against the compiled table's arithmetic on random and
+    knot points: equal within the generated header's stated double allowance (2^-48 of the
+    output's full scale), and mostly bit for bit."""
+    _needs_a_c_compiler()
+    from fuzzkit.studies.compiled.generated_c import c_surface
+
+    surface = c_surface()
+    ta = table_arrays(load_table())
+    rng = np.random.default_rng(1)
+    pts = np.concatenate(
+        [
+            rng.uniform(-1.2, 1.2, (4000, 2)),
+            np.stack(np.meshgrid(ta.bp0[::3], ta.bp1[::4]), axis=-1).reshape(-1, 2),
+        ]
+    )
+    got = np.array([surface(float(a), float(b)) for a, b in pts])
+    ref = np.array([table2(ta.bp0, ta.bp1, ta.values, ta.splits, a, b) for a, b in pts])
+    assert np.max(np.abs(got - ref)) <= 2.0**-48 * 1.0  # full scale of du: 1
+    assert np.count_nonzero(got == ref) > 0.8 * len(pts)
+
+
+@pytest.mark.slow
+def test_compiled_loop_calls_the_c_it_is_given() -> None:
+    """Two rule bases' generated C through the same compiled kernel in one process: each run
+    follows its own rule base (the kernel reads the function's address at every call, it is not
+    frozen into the cached machine code)."""
+    _needs_a_c_compiler()
+    from fuzzkit.studies.batch import RunSpec, run_spec
+
+    runs = {}
+    for rb in ("macvicar_whelan", "paper_table1"):
+        c = run_spec(RunSpec("E2", "fuzzy-pi", "arm6", rulebase=rb, duration_s=2.5, fuzzy_impl="c"))
+        table = run_spec(RunSpec("E2", "fuzzy-pi", "arm6", rulebase=rb, duration_s=2.5))
+        assert f"{rb}_eval" in c.controller_impl
+        _assert_same(table, c, reference_loop="compiled")
+        runs[rb] = c
+    diff = np.nanmax(np.abs(runs["macvicar_whelan"].force - runs["paper_table1"].force))
+    assert diff > 0.1  # N: the two rule bases really drive the arm differently
+
+
+def test_simulate_json_names_the_generated_c(capsys: pytest.CaptureFixture[str]) -> None:
+    _needs_a_c_compiler()
+    import json
+
+    from fuzzkit.cli import main
+
+    argv = ["simulate", "E1", "--plant", "arm6", "--controller", "fuzzy-pi", "--json"]
+    assert main([*argv, "--fuzzy-impl", "c"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["loop"] == "compiled"
+    assert data["controller_impl"].startswith("generated C macvicar_whelan_eval")
+    assert data["controller_impl"].endswith("(compiled loop)")
 
 
 def test_fuzzy_implementation_must_fit_the_loop() -> None:
     from fuzzkit.studies.batch import RunSpec, run_spec
 
     with pytest.raises(ConfigError, match="compiled loop runs the fuzzy-PI as the lookup table"):
-        run_spec(RunSpec("E1", "fuzzy-pi", "arm6", fuzzy_impl="c", duration_s=0.1))
+        run_spec(RunSpec("E1", "fuzzy-pi", "arm6", fuzzy_impl="exact", duration_s=0.1))
     with pytest.raises(ConfigError, match="unknown fuzzy implementation"):
         run_spec(RunSpec("E1", "fuzzy-pi", "arm6", fuzzy_impl="fast", duration_s=0.1))
+    with pytest.raises(ConfigError, match="not both"):
+        run_compiled(
+            experiment("E1"),
+            "arm6",
+            "fuzzy-pi",
+            table=load_table(),
+            generated_c=GeneratedC(None, "-"),
+        )
 
 
 def test_table_cache_builds_once_and_rebuilds_a_damaged_file(

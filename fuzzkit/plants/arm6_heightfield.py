@@ -27,7 +27,7 @@ H_X0, H_Y0, H_DX, H_DY, H_NX, H_NY, H_Z0 = 0, 1, 2, 3, 4, 5, 6
 
 def pack_height_field(field: HeightField) -> tuple[tuple[float, ...], FloatArray]:
     """The parameter row (see the ``H_*`` indices) and the heights (``nx * ny``, row-major:
-    ``heights[i][j]`` at ``i * ny + j``) of ``field``, as :func:`height_field_contact` reads them."""
+    ``heights[i][j]`` at ``i * ny + j``) of ``field``: what :func:`height_field_contact` reads."""
     heights = np.asarray(field.heights, dtype=np.float64)
     nx, ny = heights.shape
     row = (field.x0, field.y0, field.dx, field.dy, float(nx), float(ny), field.z0)
