@@ -338,6 +338,17 @@ def test_simulate_json_names_the_generated_c(capsys: pytest.CaptureFixture[str])
     assert data["controller_impl"].endswith("(compiled loop)")
 
 
+def test_generated_c_without_a_compiler_is_a_clear_error(monkeypatch: pytest.MonkeyPatch) -> None:
+    from fuzzkit.errors import ToolchainError
+    from fuzzkit.studies.batch import RunSpec, run_spec
+
+    monkeypatch.setenv("CC", "/nonexistent/cc")
+    # a rule base no other test compiles, so no library is cached in this process
+    spec = RunSpec("E1", "fuzzy-pi", "arm6", rulebase="paper_table1_transposed", fuzzy_impl="c")
+    with pytest.raises(ToolchainError, match="no C compiler found"):
+        run_spec(spec)
+
+
 def test_fuzzy_implementation_must_fit_the_loop() -> None:
     from fuzzkit.studies.batch import RunSpec, run_spec
 
