@@ -1,8 +1,10 @@
 """The generated lookup table's arithmetic in compiled code (double-precision 2-D tables).
 
 The same operations, in the same order, as ``fuzzkit.codegen.lut.LookupTable.interpolate`` for
-``number_type="double"`` and hence as the generated C: clamp to the breakpoint range, locate the
-cell, then linear interpolation on the cell's triangle (the diagonal each cell's ``splits`` names).
+``number_type="double"`` (bit for bit) and as the generated C: clamp to the breakpoint range,
+locate the cell, then linear interpolation on the cell's triangle (the diagonal each cell's
+``splits`` names). One difference from the C: it multiplies by a stored reciprocal of the cell
+width where this divides, so a value can differ in its last bit (docs/compiled_loop.md).
 """
 
 from __future__ import annotations
