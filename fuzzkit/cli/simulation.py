@@ -103,16 +103,15 @@ def register(subparsers: Any) -> None:
         choices=("compiled", "python"),
         default=None,
         help="compiled (numba, arm6 only; fuzzy-pi runs as the rule base's double lookup "
-        "table) or python (the reference loop; fuzzy-pi on the exact engine). Default: "
-        "compiled where the plant supports it (not E3 on arm6, whose 3-D floor the compiled "
-        "loop does not model: it runs in Python and says so)",
+        "table, or as its generated C with --fuzzy-impl c) or python (the reference loop; "
+        "fuzzy-pi on the exact engine). Default: compiled where the plant supports it",
     )
     sim.add_argument(
         "--fuzzy-impl",
         choices=("auto", "exact", "table", "c"),
         default="auto",
         help="how fuzzy-pi evaluates its surface: exact engine (python loop), the generated "
-        "double lookup table (both loops), or the generated C through ctypes (python loop; "
+        "double lookup table (both loops), or the generated C through ctypes (both loops; "
         "needs a C compiler). Default: table when compiled, exact in python",
     )
     sim.add_argument("--rrd", metavar="OUT.rrd", help="write a Rerun recording of the run")

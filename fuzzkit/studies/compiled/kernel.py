@@ -10,18 +10,21 @@ ago; the queue starts with zeros) -> recording.
 The controller is :class:`fuzzkit.control.controllers.HybridForceController` (spike gate,
 debounced engagement, trip rule, back-off, sensor faults) over PI or fuzzy-PI
 axis controllers, the fuzzy surface being a double lookup table
-(:mod:`fuzzkit.studies.compiled.table`).
+(:mod:`fuzzkit.studies.compiled.table`) or, when ``c_eval`` is a ctypes function, the generated
+C itself (:mod:`fuzzkit.studies.compiled.generated_c`).
 """
 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.jit import jit
 from fuzzkit.plants.arm6_kernel import plant_step, pose_at
+from fuzzkit.studies.compiled.generated_c import call_c_surface
 from fuzzkit.studies.compiled.table import table2
 
 FloatArray = npt.NDArray[np.float64]
@@ -51,6 +54,8 @@ def _axis_increment(
     bp1: FloatArray,
     tab: FloatArray,
     splits: IntArray,
+    c_eval: Any,
+    c_io: FloatArray,
     e: float,
     de: float,
 ) -> float:
@@ -58,7 +63,9 @@ def _axis_increment(
         return float(cp[C_KP] * de + cp[C_KI] * e)
     en = min(max(cp[C_KI] * e, -1.0), 1.0)
     den = min(max(cp[C_KP] * de, -1.0), 1.0)
-    return float(cp[C_KX] * table2(bp0, bp1, tab, splits, en, den))
+    if c_eval is None:  # a compile-time branch: c_eval is typed None or a C function
+        return float(cp[C_KX] * table2(bp0, bp1, tab, splits, en, den))
+    return float(cp[C_KX] * call_c_surface(c_eval, c_io, en, den))
 
 
 @jit
@@ -77,6 +84,7 @@ def run_arm6(
     a_p: FloatArray,
     a_terms: FloatArray,
     a_nterms: IntArray,
+    a_grid: FloatArray,
     a_rot_task: FloatArray,
     a_offset: FloatArray,
     params: FloatArray,
@@ -95,6 +103,7 @@ def run_arm6(
     bp1: FloatArray,
     tab: FloatArray,
     splits: IntArray,
+    c_eval: Any,  # None: the table above; a generated C's NAME_eval (ctypes): that instead
     # faults, one entry per period: spike sign (0: none), NaN sample
     spike_sign: FloatArray,
     nan_flag: BoolArray,
@@ -162,6 +171,7 @@ def run_arm6(
         sensor_q[k, :] = reset_force
     command_q = np.zeros((cd + 1, 3))
     applied = np.zeros(3)
+    c_io = np.empty(3)
     correction = np.zeros(3)
     corr_base = np.zeros(3)
     # plant outputs
@@ -203,6 +213,7 @@ def run_arm6(
             a_p,
             a_terms,
             a_nterms,
+            a_grid,
             a_rot_task,
             params,
             q,
@@ -306,7 +317,7 @@ def run_arm6(
                         dei = ei - ax_prev[i] if ax_has_prev[i] else 0.0
                         ax_prev[i] = ei
                         ax_has_prev[i] = True
-                        inc = _axis_increment(cp, bp0, bp1, tab, splits, ei, dei)
+                        inc = _axis_increment(cp, bp0, bp1, tab, splits, c_eval, c_io, ei, dei)
                         if not math.isfinite(inc):
                             inc = 0.0
                         if not math.isnan(rate):

@@ -2,8 +2,8 @@
 
 :func:`run_compiled` takes the arguments of :func:`fuzzkit.studies.runner.run` that the compiled
 loop models; :func:`compiled_supports` says when it applies (the ``arm6`` plant, PI or fuzzy-PI
-with a double lookup table). The plant is reset in Python (the start pose's IK with its seeds),
-then one compiled call runs every period.
+with a double lookup table, or with the generated C through ctypes). The plant is reset in
+Python (the start pose's IK with its seeds), then one compiled call runs every period.
 """
 
 from __future__ import annotations
@@ -20,7 +20,8 @@ from fuzzkit.errors import ConfigError
 from fuzzkit.plants.arm6 import Arm6Plant
 from fuzzkit.plants.arm6_kernel import IK_STATUS_NAMES, pack, sensor_noise
 from fuzzkit.studies.compiled import kernel as K
-from fuzzkit.studies.compiled.table import TableArrays, cached_table, table_arrays
+from fuzzkit.studies.compiled.generated_c import GeneratedC
+from fuzzkit.studies.compiled.table import TableArrays, cached_table, load_table, table_arrays
 from fuzzkit.studies.experiments import DEFAULT_GAINS, Experiment
 from fuzzkit.studies.faults import Faults, fault_name, fault_schedule
 from fuzzkit.studies.runner import RunResult, build_controller, run_faults_and_latency
@@ -47,16 +48,6 @@ def _shared_plant() -> Arm6Plant:
     return Arm6Plant()
 
 
-@lru_cache(maxsize=8)
-def load_table(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3) -> Any:
-    """The double lookup table of a rule base (shipped name or YAML path), as ``fuzzkit compile
-    --target c --type double --tolerance`` builds it: what the compiled fuzzy-PI evaluates."""
-    from fuzzkit.codegen.table_search import make_table
-    from fuzzkit.formats.registry import load
-
-    return make_table(load(rulebase), number_type="double", tolerance=tolerance)
-
-
 def compiled_table(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3) -> TableArrays:
     """:func:`load_table`'s arrays, from the on-disk cache after the first build."""
     from fuzzkit.formats.registry import load
@@ -75,19 +66,24 @@ def run_compiled(
     faults: Faults | None = None,
     duration_s: float | None = None,
     latency: tuple[int, int] | None = None,
+    generated_c: GeneratedC | None = None,
 ) -> RunResult:
     """Run ``exp`` on the arm6 plant with the compiled loop; same semantics as ``runner.run``.
 
     ``table`` is the fuzzy-PI's lookup table (``fuzzkit.codegen`` double table, see
-    :func:`load_table`, or its :class:`TableArrays`, see :func:`compiled_table`); required for
-    ``fuzzy-pi``. ``faults`` and ``latency`` default to the experiment's, as in ``runner.run``.
+    :func:`load_table`, or its :class:`TableArrays`, see :func:`compiled_table`).
+    ``generated_c`` (:func:`fuzzkit.studies.compiled.generated_c.load_generated_c`) makes the
+    fuzzy-PI call the rule base's generated C instead of the table's arithmetic. One of the two
+    is required for ``fuzzy-pi``. ``faults`` and ``latency`` default to the experiment's, as in
+    ``runner.run``.
 
     Raises
     ------
     ConfigError
-        For a plant the compiled loop does not model, an unknown controller, or fuzzy-PI
-        without a table. :class:`~fuzzkit.plants.arm6_kernel.UnsupportedPlant` (a ConfigError)
-        for an arm6 plant with objects or modes the kernel lacks (the Python loop runs it).
+        For a plant the compiled loop does not model, an unknown controller, fuzzy-PI without
+        a table or generated C, or both. :class:`~fuzzkit.plants.arm6_kernel.UnsupportedPlant`
+        (a ConfigError) for an arm6 plant with a mode the kernel lacks (the Python loop runs
+        it).
     """
     if isinstance(plant, str):
         if not compiled_supports(plant):
@@ -98,8 +94,13 @@ def run_compiled(
         plant = _shared_plant()
     if controller not in DEFAULT_GAINS:
         raise ConfigError(f"unknown controller {controller!r} (expected pi or fuzzy-pi)")
-    if controller == "fuzzy-pi" and table is None:
-        raise ConfigError("the compiled fuzzy-pi needs a lookup table (load_table)")
+    if controller == "fuzzy-pi" and table is None and generated_c is None:
+        raise ConfigError(
+            "the compiled fuzzy-pi needs a lookup table (load_table) or the generated C "
+            "(load_generated_c)"
+        )
+    if table is not None and generated_c is not None:
+        raise ConfigError("give the compiled fuzzy-pi a lookup table or the generated C, not both")
     faults, sensor_delay, command_delay = run_faults_and_latency(exp, seed, faults, latency)
     # The Python controller object validates the gains and holds the safeguard settings.
     hybrid = build_controller(exp, controller, gains, lambda e, de: 0.0)
@@ -137,6 +138,10 @@ def run_compiled(
     cp[K.C_DROPOUT_LENGTH] = 0.0 if faults.dropout is None else faults.dropout[1]
     cp[K.C_SPIKE_N] = faults.spike_n
     impl = "pi (compiled)"
+    c_eval = None
+    if generated_c is not None and controller == "fuzzy-pi":
+        c_eval = generated_c.function
+        impl = generated_c.label + " (compiled loop)"
     if table is not None:
         ta = table_arrays(table)
         bp0, bp1, tab, splits = ta.bp0, ta.bp1, ta.values, ta.splits
@@ -176,12 +181,13 @@ def run_compiled(
     a = arrays
     args = (
         a.links, a.tool_r, a.tool_p, a.lower, a.upper, a.dq_max, a.path_t, a.path_pos,
-        a.path_quat, a.obj_kind, a.obj_p, a.obj_terms, a.obj_nterms, a.rot_task, a.offset,
+        a.path_quat, a.obj_kind, a.obj_p, a.obj_terms, a.obj_nterms, a.obj_grid, a.rot_task,
+        a.offset,
         a.params, a.q, a.q_ref, a.q_ik, a.stick, a.state, noise, reset_force,
-        cp, selection, setpoints, bp0, bp1, tab, splits,
+        cp, selection, setpoints, bp0, bp1, tab, splits, c_eval,
         spike, nan,
     )  # fmt: skip
-    _warm_up(args, rec, scalars)
+    _warm_up(args, rec, scalars, c_eval is not None)
     wall0 = time.perf_counter()
     cpu0 = time.process_time()
     K.run_arm6(
@@ -242,20 +248,23 @@ def run_compiled(
     )
 
 
-_WARM = False
+#: Kernel variants already loaded in this process: False for the table, True for the C.
+_WARM: set[bool] = set()
 
 
-def _warm_up(args: tuple[Any, ...], rec: dict[str, Any], scalars: Any) -> None:
-    """Run the kernel over zero periods once per process, with the run's argument types.
+def _warm_up(args: tuple[Any, ...], rec: dict[str, Any], scalars: Any, variant: bool) -> None:
+    """Run the kernel over zero periods once per process and variant, with the run's argument
+    types.
 
     The first call loads the machine code from numba's on-disk cache (or compiles it after an
-    install); done here, that start-up cost stays out of the loop's CPU time.
+    install); done here, that start-up cost stays out of the loop's CPU time. The table and the
+    generated-C variants are separate specialisations (``c_eval`` is typed ``None`` or by the
+    C function's signature), each compiled and cached once.
     """
-    global _WARM
-    if _WARM:
+    if variant in _WARM:
         return
     state = [np.array(x, copy=True) if isinstance(x, np.ndarray) else x for x in args]
     empty = [v[:0] for v in rec.values()]
     kernel: Callable[..., None] = K.run_arm6  # called with the argument list built above
     kernel(*state, *empty, scalars.copy())
-    _WARM = True
+    _WARM.add(variant)
