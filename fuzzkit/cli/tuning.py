@@ -32,6 +32,8 @@ def register(subparsers: Any) -> None:
         epilog="examples:\n"
         "  fuzzkit tune E1 E2 E3 --controller fuzzy-pi --out gains.yaml\n"
         "  fuzzkit tune E2 --controller pi --stiffness 10 --budget 60 --out gains.yaml\n"
+        "  fuzzkit tune E1 E2 E3 --plant arm6 --stiffness 5,10,20 --latency 0:0,1:1,3:3 "
+        "--out gains.yaml\n"
         "  fuzzkit simulate E2 --gains gains.yaml      (use the tuned gains)",
     )
     tune.add_argument("experiments", nargs="+", metavar="EXPERIMENT", help="E1, E2, E3")
@@ -198,7 +200,9 @@ def _tune(args: argparse.Namespace) -> int:
     _, kept = write_gains(out, result.to_entry(), merge=not args.replace)
     print(
         f"tuned {result.controller} on {' '.join(result.experiments)} ({result.plant}, "
-        f"{'/'.join(f'{k:g}' for k in ks)} N/mm): {result.evaluations} evaluations in "
+        f"{'/'.join(f'{k:g}' for k in ks)} N/mm"
+        + (f", latency {_latencies(latencies)} periods" if latencies else "")
+        + f"): {result.evaluations} evaluations in "
         f"{result.wall_time_s:.1f} s"
         + (" (interrupted: best so far)" if result.interrupted else "")
     )
@@ -209,11 +213,13 @@ def _tune(args: argparse.Namespace) -> int:
         print(line)
     print(f"wrote {out}" + (f" (kept the {', '.join(kept)} entry)" if kept else ""))
     if result.interrupted:
-        print(
-            f"fuzzkit: interrupted (Ctrl-C); {out} holds the best gains so far", file=sys.stderr
-        )
+        print(f"fuzzkit: interrupted (Ctrl-C); {out} holds the best gains so far", file=sys.stderr)
         return EXIT_INTERRUPTED
     return 0
+
+
+def _latencies(pairs: Any) -> str:
+    return "/".join(f"{a}:{b}" for a, b in pairs)
 
 
 def _pct(new: float, old: float) -> str:
@@ -230,8 +236,9 @@ def tune_report_lines(result: Any, cases: Any) -> list[str]:
     ``result`` is a ``fuzzkit.studies.tuning.TuneResult``, ``cases`` the
     ``fuzzkit.studies.tuning_check.compare_cases`` of it.
     """
+    what = "experiment x stiffness x latency" if result.latencies else "experiment x stiffness"
     rule = (
-        "no worse than the default gains on every case (experiment x stiffness)"
+        f"no worse than the default gains on every case ({what})"
         if result.admit == "case"
         else "no worse than the default gains on each experiment's mean over the stiffnesses"
     )
