@@ -100,18 +100,22 @@ def register(subparsers: Any) -> None:
 
     rep = subparsers.add_parser(
         "report",
-        help="run E1-E3 x {PI, fuzzy-PI} x {default, tuned gains}; write report.md + figures",
+        help="run E1-E3 x {PI, fuzzy-PI} x {default, matched, tuned gains} and judge the "
+        "paper's claims per setting; write report.md + figures",
         description=(
             "Write DIR/report.md with force plots, the control surface, the stiffness study, "
-            "the comparison table and the paper's claims checked against the numbers, plus "
-            "one .rrd per run. Tunes both controllers with a small budget unless --gains-dir "
-            "holds pi.yaml and fuzzy-pi.yaml. The folder appears complete or not at all: "
+            "the latency map, the comparison table and the paper's claims judged per setting "
+            "(default, matched, tuned gains; matched and tuned at every latency and stiffness "
+            "of the sweeps), plus one .rrd per run. Tunes both controllers on the same problem "
+            "(E1-E3 on arm6, 5/10/20 N/mm x latency 0+0, 1+1, 3+3) unless --gains-dir holds "
+            "pi.yaml and fuzzy-pi.yaml. The folder appears complete or not at all: "
             "Ctrl-C stops with exit status 130 and leaves no partial report."
         ),
         epilog="examples:\n"
         "  fuzzkit report --out report\n"
         "  fuzzkit report --out report --plant both --budget 80 --workers 2\n"
-        "  fuzzkit report --out report --gains-dir tuned/ --no-rrd",
+        "  fuzzkit report --out report --gains-dir tuned/ --no-rrd\n"
+        "  fuzzkit report --out /tmp/smoke --quick --budget 10 --no-rrd",
     )
     rep.add_argument(
         "--out", required=True, metavar="DIR", help="output folder (its parent must exist)"
@@ -137,6 +141,12 @@ def register(subparsers: Any) -> None:
         "--workers", type=int, default=None, help="tuning worker processes (default: every core)"
     )
     rep.add_argument("--no-rrd", action="store_true", help="skip the .rrd recordings")
+    rep.add_argument(
+        "--quick",
+        action="store_true",
+        help="small report for a smoke test: shorter tuning, stiffness and latency sweeps "
+        "(fuzzkit.report.build.quick_options)",
+    )
     rep.add_argument("--quiet", action="store_true", help="no progress bars")
     rep.set_defaults(handler=_report)
 
@@ -288,7 +298,7 @@ def tune_report_lines(result: Any, cases: Any) -> list[str]:
 
 
 def _report(args: argparse.Namespace) -> int:
-    from fuzzkit.report.build import build_report
+    from fuzzkit.report.build import build_report, quick_options
 
     if args.budget < 10:
         raise ConfigError(f"--budget must be >= 10 (got {args.budget})")
@@ -303,6 +313,7 @@ def _report(args: argparse.Namespace) -> int:
         workers=args.workers,
         rrd=not args.no_rrd,
         log=None if args.quiet else sys.stderr,
+        **(quick_options() if args.quick else {}),
     )
     print(f"wrote {path}")
     return 0

@@ -11,12 +11,13 @@ defaults, and by how much they are a compromise where they do not.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 from fuzzkit.errors import ConfigError
 from fuzzkit.studies.metrics import summary
-from fuzzkit.studies.tuning import CaseRunner, TuneResult
+from fuzzkit.studies.tuning import CaseRunner, TuneResult, TuningProblem
 
 
 @dataclass(frozen=True, slots=True)
@@ -68,17 +69,42 @@ def compare_cases(result: TuneResult, seed: int | None = None) -> list[CaseCompa
         raise ConfigError("compare_cases needs a tuning result that carries its problem")
     if seed is not None and seed != problem.noise_seed:
         problem = dataclasses.replace(problem, noise_seed=seed)
+    return compare_gains(
+        problem,
+        result.baseline_gains,
+        result.gains,
+        [result.baseline_case_costs.get(c.label, float("nan")) for c in problem.case_keys],
+        [result.case_costs[c.label] for c in problem.case_keys],
+    )
+
+
+def compare_gains(
+    problem: TuningProblem,
+    default_gains: Mapping[str, float],
+    tuned_gains: Mapping[str, float],
+    default_costs: Sequence[float] | None = None,
+    tuned_costs: Sequence[float] | None = None,
+) -> list[CaseComparison]:
+    """Every case of ``problem`` run in full with ``default_gains`` and ``tuned_gains``.
+
+    ``default_costs`` / ``tuned_costs``: the tuning costs per case when known (None: priced
+    here, as the tuning prices them).
+    """
     runner = CaseRunner(problem)
+    if default_costs is None:
+        default_costs = runner.case_costs(default_gains)
+    if tuned_costs is None:
+        tuned_costs = runner.case_costs(tuned_gains)
     out: list[CaseComparison] = []
     for i, case in enumerate(problem.case_keys):
-        runs = [runner.run_case(i, g, None) for g in (result.baseline_gains, result.gains)]
+        runs = [runner.run_case(i, g, None) for g in (default_gains, tuned_gains)]
         out.append(
             CaseComparison(
                 label=case.label,
                 experiment=case.experiment,
                 stiffness_n_per_mm=case.stiffness_n_per_mm,
-                default_cost=result.baseline_case_costs.get(case.label, float("nan")),
-                tuned_cost=result.case_costs[case.label],
+                default_cost=default_costs[i],
+                tuned_cost=tuned_costs[i],
                 default_axes=summary(runs[0])["axes"],
                 tuned_axes=summary(runs[1])["axes"],
                 default_tripped=runs[0].tripped,
