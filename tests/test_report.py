@@ -258,7 +258,7 @@ def test_tripped_runs_are_not_judged_and_the_matrix_says_so() -> None:
     assert all(c.condition == "1000 N/mm" for c in rs)
     matrix = verdict_matrix_markdown(rs, "planar")
     assert "| claim | gains | 1000 N/mm |" in matrix
-    assert "| E2: PI overshoots more at the start | default | trip |" in matrix
+    assert "| E2: PI overshoots more at the start | default | trip (PI) |" in matrix
     assert "| E1: fuzzy-PI overshoots less than PI | default | **yes** |" in matrix
 
 
@@ -281,10 +281,50 @@ def test_tuning_setup_is_read_back_from_a_gains_file() -> None:
         "stiffness_n_per_mm": [5.0, 20.0],
         "latency_periods": [[0, 0], [3, 3]],
     }
-    assert setup_from_provenance(prov, fallback) == TuningSetup(
-        ("E1", "E2"), "planar", (5.0, 20.0), ((0, 0), (3, 3))
+    assert setup_from_provenance({**prov, "admit": "experiment"}, fallback) == TuningSetup(
+        ("E1", "E2"), "planar", (5.0, 20.0), ((0, 0), (3, 3)), "experiment"
     )
+    assert setup_from_provenance(prov, fallback).admit == "case"  # before the rule was saved
     # written before latencies were recorded: tuned at the experiments' own, 1 + 1
     old = {**prov, "latency_periods": "as defined"}
     assert setup_from_provenance(old, fallback).latencies == ((1, 1),)
     assert setup_from_provenance({"seed": 1}, fallback) is fallback
+
+
+def test_the_report_tunes_both_controllers_on_one_problem(tmp_path: Path) -> None:
+    """Protocol (b): PI and fuzzy-PI tuned for the same cost on the same cases (stiffness x
+    latency), said in each gains file; the per-case prices of the report agree with the
+    Python loop's (an independent implementation of the closed loop)."""
+    from fuzzkit.control.gains import read_gains_file
+    from fuzzkit.report.build import CONTROLLERS
+    from fuzzkit.report.tuned import gains_for, tuned_vs_default
+    from fuzzkit.studies.experiments import DEFAULT_GAINS, experiment, with_stiffness
+    from fuzzkit.studies.runner import run
+    from fuzzkit.studies.tuning import TUNING_HORIZON_S, run_cost
+
+    setup = TuningSetup(("E1",), "arm6", (20.0,), ((0, 0), (3, 3)))
+    got = {
+        c: gains_for(c, None, tmp_path, setup, 10, "macvicar_whelan", 0, 1, None)
+        for c in CONTROLLERS
+    }
+    provs = [got[c][1] for c in CONTROLLERS]
+    for key in ("experiments", "plant", "stiffness_n_per_mm", "latency_periods", "admit"):
+        assert provs[0][key] == provs[1][key], key
+    assert provs[0]["latency_periods"] == [[0, 0], [3, 3]]
+    for c in CONTROLLERS:
+        entry = read_gains_file(tmp_path / "gains" / f"{c}.yaml")[c]
+        assert setup_from_provenance(entry.provenance, TuningSetup()) == setup
+    cases = tuned_vs_default(setup, "pi", "macvicar_whelan", got["pi"][0])
+    assert [c.latency for c in cases] == [(0, 0), (3, 3)]
+    exp = with_stiffness(experiment("E1"), 20e3)
+    for c in cases:
+        assert c.latency is not None
+        reference = run(
+            exp,
+            "arm6",
+            "pi",
+            gains=DEFAULT_GAINS["pi"],
+            latency=c.latency,
+            duration_s=TUNING_HORIZON_S["E1"],
+        )
+        assert c.default_cost == pytest.approx(run_cost(reference), rel=1e-6)

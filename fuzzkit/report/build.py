@@ -434,7 +434,7 @@ def _markdown(
             else "the problems listed below (not the same for both controllers: not a fair "
             "comparison)"
         )
-        + "; a tuned gain set is kept only if it is no worse than the defaults on every case.",
+        + ".",
         "",
         "| controller | gains | kp | ki | kx | tuning cost | source |",
         "|---|---|---|---|---|---|---|",
@@ -494,8 +494,9 @@ def _markdown(
         "",
         "The paper's claims with matched and with tuned gains at each latency (at 10 N/mm) and "
         "each stiffness of the stiffness study (at latency 1 + 1): **yes** holds, no does not "
-        "hold, no (=) no clear difference, trip not judged (a controller tripped the safety "
-        "limit, so neither does the task). The numbers behind every cell follow the tables.",
+        "hold, no (=) no clear difference, trip not judged because that controller (PI, "
+        "fuzzy-PI or both) tripped the safety limit and stopped. The numbers behind every cell "
+        "follow the tables.",
         "",
     ]
     for plant in plants:

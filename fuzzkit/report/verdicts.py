@@ -230,7 +230,10 @@ def claims_markdown(results: Sequence[ClaimResult]) -> str:
 
 def _cell(c: ClaimResult) -> str:
     if not c.judged:
-        return "trip"
+        both = "PI and fuzzy-PI" in c.verdict
+        return (
+            "trip (both)" if both else "trip (fuzzy-PI)" if "fuzzy-PI" in c.verdict else "trip (PI)"
+        )
     if c.holds:
         return "**yes**"
     return "no (=)" if "no clear difference" in c.verdict else "no"
@@ -239,7 +242,8 @@ def _cell(c: ClaimResult) -> str:
 def verdict_matrix_markdown(results: Sequence[ClaimResult], plant: str) -> str:
     """The verdicts of one plant at a glance: a row per claim and gains set, a column per
     condition; ``yes`` (holds), ``no`` (the opposite or a difference the claim does not
-    predict), ``no (=)`` (no clear difference), ``trip`` (not judged: a run tripped)."""
+    predict), ``no (=)`` (no clear difference), ``trip (PI|fuzzy-PI|both)`` (not judged: that
+    controller's run tripped the safety limit)."""
     rs = [c for c in results if c.plant == plant]
     conditions = list(dict.fromkeys(c.condition for c in rs))
     cells: dict[tuple[str, str, str], ClaimResult] = {
@@ -369,7 +373,8 @@ def claims_conclusion(results: Sequence[ClaimResult]) -> str:
         conds = list(dict.fromkeys(r.condition for r in skipped))
         sentences.append(
             f"{len(skipped)} verdicts are not judged because a controller tripped the safety "
-            f"limit ({', '.join(conds)}): there neither controller does the task."
+            f"limit ({', '.join(conds)}): a tripped run stops the task, so its overshoot and "
+            "settling say nothing about the claim."
         )
     sentences.append(
         "A verdict that changes with the gains, the latency or the stiffness is a property of "
