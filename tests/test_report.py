@@ -234,6 +234,20 @@ def test_the_conclusion_covers_latency_and_stiffness() -> None:
         "4 verdicts are not judged because a controller tripped the safety limit (1000 N/mm)"
         in text
     )
+    assert "Only PI tripped" not in text  # _cr's verdicts name nobody
+    one = ClaimResult(
+        "E2: x",
+        "planar",
+        "matched",
+        False,
+        "not judged (PI tripped the safety limit)",
+        "",
+        "50 N/mm",
+        False,
+    )
+    assert "Only PI tripped, and fuzzy-PI held the force, in E2 planar/matched at 50 N/mm." in (
+        claims_conclusion([*results, one])
+    )
     summary = claims_summary(results)
     assert "- A: **holds** in every setting judged (6; 2 not judged (a run tripped))." in summary
     # flip B at 3+3 with tuned gains: the paragraph follows

@@ -376,8 +376,26 @@ def claims_conclusion(results: Sequence[ClaimResult]) -> str:
             f"limit ({', '.join(conds)}): a tripped run stops the task, so its overshoot and "
             "settling say nothing about the claim."
         )
+        sentences += _one_sided_trips(skipped)
     sentences.append(
         "A verdict that changes with the gains, the latency or the stiffness is a property of "
         "that setting, not of fuzzy versus linear control."
     )
     return " ".join(sentences)
+
+
+def _one_sided_trips(skipped: Sequence[ClaimResult]) -> list[str]:
+    """Sentences naming the experiments and settings where only one controller tripped: there
+    the other one did the task, a difference the claims do not cover."""
+    out = []
+    for name in ("PI", "fuzzy-PI"):
+        only = f"({name} tripped the safety limit)"
+        where = list(
+            dict.fromkeys(
+                f"{r.claim.split(':')[0]} {r.setting}" for r in skipped if only in r.verdict
+            )
+        )
+        if where:
+            other = "fuzzy-PI" if name == "PI" else "PI"
+            out.append(f"Only {name} tripped, and {other} held the force, in {'; '.join(where)}.")
+    return out
