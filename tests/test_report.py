@@ -10,13 +10,17 @@ import pytest
 
 from fuzzkit.control.gains import GainsEntry, write_gains
 from fuzzkit.errors import ConfigError
-from fuzzkit.report.build import (
+from fuzzkit.report.build import build_report, quick_options
+from fuzzkit.report.grid import Condition, conditions
+from fuzzkit.report.tuned import TuningSetup, setup_from_provenance
+from fuzzkit.report.verdicts import (
+    NOMINAL,
     ClaimResult,
     Key,
     assess_claims,
-    build_report,
     claims_conclusion,
     claims_summary,
+    verdict_matrix_markdown,
 )
 
 
@@ -61,7 +65,7 @@ def test_paper_like_numbers_make_every_claim_hold() -> None:
     assert len(v) == 5
     assert all(holds for holds, _ in v.values()), v
     text = claims_summary(assess_claims(_paper_like(), "planar", "default"))
-    assert text.count("**holds** in every setting") == 5
+    assert text.count("**holds** in every setting judged") == 5
 
 
 def test_reversed_numbers_make_the_claims_fail_and_say_so() -> None:
@@ -101,7 +105,8 @@ def test_a_missing_run_is_a_clear_error() -> None:
 
 
 def test_report_writes_markdown_figures_and_recordings(tmp_path: Path) -> None:
-    """With given gains (no tuning): every file, and a claims section that matches the table."""
+    """With given gains (no tuning), in the quick mode: every file, verdict tables that are the
+    ones assess_claims derives, in every setting, and the tuned-vs-default table per case."""
     gains_dir = tmp_path / "gains"
     gains_dir.mkdir()
     write_gains(gains_dir / "pi.yaml", GainsEntry("pi", {"kp": 2e-5, "ki": 1.5e-5}, {"seed": 1}))
@@ -109,7 +114,7 @@ def test_report_writes_markdown_figures_and_recordings(tmp_path: Path) -> None:
         gains_dir / "fuzzy-pi.yaml", GainsEntry("fuzzy-pi", {"kp": 0.3, "ki": 0.05, "kx": 2e-4})
     )
     out = tmp_path / "report"
-    path = build_report(out, gains_dir=gains_dir, stiffnesses_n_per_mm=(10.0, 100.0))
+    path = build_report(out, gains_dir=gains_dir, **quick_options())
     assert path == out / "report.md"
     names = {p.name for p in out.iterdir()}
     for png in (
@@ -131,19 +136,33 @@ def test_report_writes_markdown_figures_and_recordings(tmp_path: Path) -> None:
         "## Verdicts at a glance",
         "## Comparison table",
         "## The paper's claims",
+        "## Verdicts per setting",
+        "### Tuned against the defaults, per stiffness and latency",
         "![E1 on the planar plant](force_planar_E1.png)",
         "stiffness.png",
         "## Latency",
         "![largest stable delay against the gain factor](latency.png)",
-        # the default gains are stable through the whole sweep, 8x them not even without delay
-        "| 1 | >= 6 | >= 6 |",
+        # the default gains are stable through the whole (quick) sweep, 8x them not even
+        # without delay
+        "| 1 | >= 3 | >= 3 |",
         "| 8 | 0 | 0 |",
+        "| claim | gains | nominal | latency 0+0 | latency 3+3 | 1000 N/mm |",
     ):
-        assert section in text
+        assert section in text, section
     assert "| pi | tuned | 2e-05 | 1.5e-05 | - |" in text
-    # The verdict rows are the ones assess_claims derives (the text is not canned).
-    assert text.count("| E1: fuzzy-PI overshoots less than PI | planar |") == 3
+    # The nominal verdict rows are the ones assess_claims derives (the text is not canned):
+    # 3 gains sets in the nominal table, matched and tuned in each of 4 conditions below.
+    assert text.count("| E1: fuzzy-PI overshoots less than PI | planar |") == 3 + 2 * 4
     assert "| fuzzy-pi | matched | 0.2 | 0.05 | 0.0001333 | - | fuzzkit.studies.matching" in text
+    # At 1000 N/mm both controllers trip (the stiffness study says so too): not judged.
+    assert (
+        "| E1: fuzzy-PI settles faster than PI | planar | matched | 1000 N/mm | not judged" in text
+    )
+    # Hand-written gains: compared with the defaults on the report's own tuning cases, each
+    # case run at its latency.
+    assert "carry no tuning provenance" in text
+    for label in ("E1@10N/mm@lat1:1", "E3@10N/mm@lat3:3"):
+        assert f"| pi | {label} |" in text and f"| fuzzy-pi | {label} |" in text
 
 
 def test_report_rejects_bad_inputs(tmp_path: Path) -> None:
@@ -177,10 +196,149 @@ def test_the_conclusion_follows_from_the_verdicts() -> None:
         c("C", "planar", "matched", False),
     ]
     text = claims_conclusion(results)
-    assert "Of the paper's 3 claims checked here, 1 holds in every setting (A)" in text
+    assert "Of the paper's 3 claims checked here in 2 settings, 1 holds in every setting " in text
+    assert "judged (A)" in text
     assert "and 1 in none (B)." in text
-    assert '"C" depends on the setting: it holds only with planar/default.' in text
+    assert '"C" depends on the setting: it holds in 1 of 2 (planar/default).' in text
     assert "(the like-for-like comparison) it holds on no plant" in text
     # flipping C's matched verdict flips the sentence: the paragraph is computed, not canned
     results[-1] = c("C", "planar", "matched", True)
     assert "(A; C)" in claims_conclusion(results)
+
+
+def _cr(claim: str, gains: str, condition: str, holds: bool, judged: bool = True) -> ClaimResult:
+    return ClaimResult(
+        claim, "arm6", gains, holds and judged, "holds" if holds else "no", "", condition, judged
+    )
+
+
+def test_the_conclusion_covers_latency_and_stiffness() -> None:
+    """Verdicts per condition: a claim that fails only at one latency 'depends on the setting'
+    and the paragraph says where; tripped settings are left out and counted."""
+    conds = (NOMINAL, "latency 0+0", "latency 3+3", "1000 N/mm")
+    results = []
+    for gains in ("matched", "tuned"):
+        for cond in conds:
+            trip = cond == "1000 N/mm"
+            results.append(_cr("A", gains, cond, True, judged=not trip))
+            results.append(_cr("B", gains, cond, cond != "latency 3+3", judged=not trip))
+    text = claims_conclusion(results)
+    assert "in 8 settings" in text
+    assert "1 holds in every setting judged (A)" in text
+    assert (
+        '"B" depends on the setting: it holds in 4 of 6 (arm6/matched except at latency 3+3;'
+        in text
+    )
+    assert "it holds in 2 of its 3 settings" in text  # matched: nominal, 0+0 yes; 3+3 no
+    assert (
+        "4 verdicts are not judged because a controller tripped the safety limit (1000 N/mm)"
+        in text
+    )
+    assert "Only PI tripped" not in text  # _cr's verdicts name nobody
+    one = ClaimResult(
+        "E2: x",
+        "planar",
+        "matched",
+        False,
+        "not judged (PI tripped the safety limit)",
+        "",
+        "50 N/mm",
+        False,
+    )
+    assert "Only PI tripped, and fuzzy-PI held the force, in E2 planar/matched at 50 N/mm." in (
+        claims_conclusion([*results, one])
+    )
+    summary = claims_summary(results)
+    assert "- A: **holds** in every setting judged (6; 2 not judged (a run tripped))." in summary
+    # flip B at 3+3 with tuned gains: the paragraph follows
+    results = [
+        _cr("B", "tuned", "latency 3+3", True)
+        if (r.claim, r.gains, r.condition) == ("B", "tuned", "latency 3+3")
+        else r
+        for r in results
+    ]
+    assert "arm6/tuned in every condition" in claims_conclusion(results)
+
+
+def test_tripped_runs_are_not_judged_and_the_matrix_says_so() -> None:
+    s = _paper_like()
+    s[("planar", "E2", "pi", "default")]["tripped"] = True
+    rs = assess_claims(s, "planar", "default", "1000 N/mm")
+    by = {c.claim: c for c in rs}
+    e2 = by["E2: PI overshoots more at the start"]
+    assert not e2.judged and not e2.holds
+    assert e2.verdict == "not judged (PI tripped the safety limit)"
+    assert by["E1: fuzzy-PI overshoots less than PI"].judged  # E1 did not trip
+    assert all(c.condition == "1000 N/mm" for c in rs)
+    matrix = verdict_matrix_markdown(rs, "planar")
+    assert "| claim | gains | 1000 N/mm |" in matrix
+    assert "| E2: PI overshoots more at the start | default | trip (PI) |" in matrix
+    assert "| E1: fuzzy-PI overshoots less than PI | default | **yes** |" in matrix
+
+
+def test_conditions_list_the_nominal_once() -> None:
+    conds = conditions([(0, 0), (1, 1), (3, 3)], [5.0, 10.0, 1000.0])
+    assert conds == [
+        Condition(NOMINAL),
+        Condition("latency 0+0", latency=(0, 0)),
+        Condition("latency 3+3", latency=(3, 3)),
+        Condition("5 N/mm", stiffness_n_per_mm=5.0),
+        Condition("1000 N/mm", stiffness_n_per_mm=1000.0),
+    ]
+
+
+def test_tuning_setup_is_read_back_from_a_gains_file() -> None:
+    fallback = TuningSetup()
+    prov = {
+        "experiments": ["E1", "E2"],
+        "plant": "planar",
+        "stiffness_n_per_mm": [5.0, 20.0],
+        "latency_periods": [[0, 0], [3, 3]],
+    }
+    assert setup_from_provenance({**prov, "admit": "experiment"}, fallback) == TuningSetup(
+        ("E1", "E2"), "planar", (5.0, 20.0), ((0, 0), (3, 3)), "experiment"
+    )
+    assert setup_from_provenance(prov, fallback).admit == "case"  # before the rule was saved
+    # written before latencies were recorded: tuned at the experiments' own, 1 + 1
+    old = {**prov, "latency_periods": "as defined"}
+    assert setup_from_provenance(old, fallback).latencies == ((1, 1),)
+    assert setup_from_provenance({"seed": 1}, fallback) is fallback
+
+
+def test_the_report_tunes_both_controllers_on_one_problem(tmp_path: Path) -> None:
+    """Protocol (b): PI and fuzzy-PI tuned for the same cost on the same cases (stiffness x
+    latency), said in each gains file; the per-case prices of the report agree with the
+    Python loop's (an independent implementation of the closed loop)."""
+    from fuzzkit.control.gains import read_gains_file
+    from fuzzkit.report.build import CONTROLLERS
+    from fuzzkit.report.tuned import gains_for, tuned_vs_default
+    from fuzzkit.studies.experiments import DEFAULT_GAINS, experiment, with_stiffness
+    from fuzzkit.studies.runner import run
+    from fuzzkit.studies.tuning import TUNING_HORIZON_S, run_cost
+
+    setup = TuningSetup(("E1",), "arm6", (20.0,), ((0, 0), (3, 3)))
+    got = {
+        c: gains_for(c, None, tmp_path, setup, 10, "macvicar_whelan", 0, 1, None)
+        for c in CONTROLLERS
+    }
+    provs = [got[c][1] for c in CONTROLLERS]
+    for key in ("experiments", "plant", "stiffness_n_per_mm", "latency_periods", "admit"):
+        assert provs[0][key] == provs[1][key], key
+    assert provs[0]["latency_periods"] == [[0, 0], [3, 3]]
+    for c in CONTROLLERS:
+        entry = read_gains_file(tmp_path / "gains" / f"{c}.yaml")[c]
+        assert setup_from_provenance(entry.provenance, TuningSetup()) == setup
+    cases = tuned_vs_default(setup, "pi", "macvicar_whelan", got["pi"][0])
+    assert [c.latency for c in cases] == [(0, 0), (3, 3)]
+    exp = with_stiffness(experiment("E1"), 20e3)
+    for c in cases:
+        assert c.latency is not None
+        reference = run(
+            exp,
+            "arm6",
+            "pi",
+            gains=DEFAULT_GAINS["pi"],
+            latency=c.latency,
+            duration_s=TUNING_HORIZON_S["E1"],
+        )
+        assert c.default_cost == pytest.approx(run_cost(reference), rel=1e-6)

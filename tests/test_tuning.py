@@ -495,3 +495,48 @@ def test_tuning_runs_keep_each_experiments_latency_unless_told() -> None:
     )
     assert price(own) == price(explicit)
     assert price(own) != price(zero)
+
+
+def test_tune_compares_tuned_with_defaults_per_stiffness_and_latency() -> None:
+    """Tuned over one stiffness x two latencies on the compiled arm6 loop: the full-run check
+    has one case per latency, each run at its own latency (the same run as ``simulate`` with
+    ``--latency`` gives), and the printed table names the latency of each case."""
+    from fuzzkit.cli.tuning import tune_report_lines
+    from fuzzkit.studies.batch import RunSpec, execute, gains_items
+    from fuzzkit.studies.tuning_check import compare_cases
+
+    lats = [(0, 0), (3, 3)]
+    result = tune(
+        ["E1"],
+        "pi",
+        plant="arm6",
+        stiffnesses_n_per_mm=(20.0,),
+        latencies=lats,
+        budget=10,
+        seed=0,
+        workers=1,
+    )
+    assert result.latencies == tuple(lats)
+    assert result.to_entry().provenance["latency_periods"] == [[0, 0], [3, 3]]
+    cases = compare_cases(result)
+    assert [c.latency for c in cases] == lats
+    assert [c.label for c in cases] == ["E1@20N/mm@lat0:0", "E1@20N/mm@lat3:3"]
+    for c in cases:
+        row = execute(
+            RunSpec(
+                "E1",
+                "pi",
+                "arm6",
+                stiffness_n_per_mm=20.0,
+                latency=c.latency,
+                gains=gains_items(result.baseline_gains),
+            )
+        )
+        assert (row["sensor_delay"], row["command_delay"]) == c.latency
+        assert c.default_axes["z"]["overshoot_pct"] == row["z_overshoot_pct"]
+        assert c.default_axes["z"]["settling_time_s"] == row["z_settling_time_s"]
+    # the delay changes the transient: the two cases are not one run printed twice
+    assert cases[0].default_axes["z"] != cases[1].default_axes["z"]
+    text = "\n".join(tune_report_lines(result, cases))
+    assert "every case (experiment x stiffness x latency)" in text
+    assert "E1@20N/mm@lat3:3 (" in text and "E1@20N/mm@lat0:0 (" in text

@@ -192,6 +192,21 @@ PlantSpec = str | Callable[[], ContactPlant]
 SurfaceSpec = str | Surface
 
 
+@dataclass(frozen=True, slots=True)
+class TuningCase:
+    """One case a gain set is priced on: an experiment at a stiffness and a latency.
+
+    ``label`` is the key of :attr:`TuneResult.case_costs` (``E1@10N/mm``, with ``@lat1:1``
+    appended when several latencies are tuned over); ``latency`` is None for the experiment's
+    own.
+    """
+
+    label: str
+    experiment: str
+    stiffness_n_per_mm: float
+    latency: tuple[int, int] | None
+
+
 @dataclass(frozen=True)
 class TuningProblem:
     """Everything needed to price a gain set; picklable, so worker processes get a copy.
@@ -219,6 +234,8 @@ class TuningProblem:
     latencies: tuple[tuple[int, int], ...] | None = None
     #: ``auto`` (the compiled loop where the plant has one), ``compiled`` or ``python``
     loop: str = "auto"
+    #: what each case is (parallel to ``cases``)
+    case_keys: tuple[TuningCase, ...] = ()
 
     def latency_of(self, case: int) -> tuple[int, int] | None:
         """The latency of case ``case`` (None: its experiment's own)."""
@@ -279,6 +296,7 @@ class TuningProblem:
         labels: list[str] = []
         groups: list[int] = []
         horizons: list[float] = []
+        stiffness_of: list[float] = []
         for gi, exp in enumerate(exps):
             h = horizon_s or TUNING_HORIZON_S.get(exp.name, exp.scenario.duration_s)
             h = min(h, exp.scenario.duration_s)
@@ -290,6 +308,7 @@ class TuningProblem:
                     cases.append(with_stiffness(exp, k * 1e3))
                     k_mm = k
                 labels.append(f"{exp.name}@{k_mm:g}N/mm")
+                stiffness_of.append(k_mm)
                 groups.append(gi)
                 horizons.append(h)
         lats = None if latencies is None else tuple((int(a), int(b)) for a, b in latencies)
@@ -308,9 +327,14 @@ class TuningProblem:
             )
             groups = [g for g in groups for _ in lats]
             horizons = [h for h in horizons for _ in lats]
+            stiffness_of = [k for k in stiffness_of for _ in lats]
             case_lats = tuple(pair for _ in range(n_cases) for pair in lats)
         else:
             case_lats = tuple(None for _ in cases)  # each experiment's own latency
+        keys = tuple(
+            TuningCase(lab, names[g], k, lat)
+            for lab, g, k, lat in zip(labels, groups, stiffness_of, case_lats, strict=True)
+        )
         sp = space or SPACES[controller]
         fixed = {k: v for k, v in DEFAULT_GAINS[controller].items() if k not in sp.names}
         return cls(
@@ -330,6 +354,7 @@ class TuningProblem:
             case_latencies=case_lats,
             latencies=lats,
             loop=loop,
+            case_keys=keys,
         )
 
     def full_gains(self, gains: Mapping[str, float]) -> dict[str, float]:
@@ -365,7 +390,7 @@ class TuningProblem:
         return self.surface if isinstance(self.surface, str) else None
 
 
-class _Runner:
+class CaseRunner:
     """Prices gain sets for one problem in this process (the surface table is built once).
 
     Runs the compiled loop (:mod:`fuzzkit.studies.compiled`) where the plant has one, with the
@@ -401,38 +426,46 @@ class _Runner:
         elif problem.surface is not None:
             self.surface = tabulated_surface(problem.surface, n=TABLE_SIZE)
 
-    def case_costs(self, gains: Mapping[str, float]) -> tuple[float, ...]:
-        """The cost of ``gains`` (searched names only, or complete) on every case."""
+    def run_case(
+        self, case: int, gains: Mapping[str, float], duration_s: float | None
+    ) -> RunResult:
+        """Run case ``case`` with ``gains`` (searched names only, or complete) for
+        ``duration_s`` (None: the experiment's whole duration)."""
         from fuzzkit.studies.compiled.loop import run_compiled
 
         p = self.problem
         full = p.full_gains(gains)
+        exp = p.cases[case]
+        if self.compiled:
+            return run_compiled(
+                exp,
+                str(p.plant),
+                p.controller,
+                gains=full,
+                table=self.table,
+                seed=p.noise_seed,
+                duration_s=duration_s,
+                latency=p.latency_of(case),
+            )
+        plant = make_plant(p.plant) if isinstance(p.plant, str) else p.plant()
+        return run(
+            exp,
+            plant,
+            p.controller,
+            gains=full,
+            surface=self.surface,
+            seed=p.noise_seed,
+            duration_s=duration_s,
+            latency=p.latency_of(case),
+        )
+
+    def case_costs(self, gains: Mapping[str, float]) -> tuple[float, ...]:
+        """The cost of ``gains`` (searched names only, or complete) on every case."""
+        p = self.problem
         out = []
-        for i, (exp, horizon) in enumerate(zip(p.cases, p.horizons, strict=True)):
+        for i, horizon in enumerate(p.horizons):
             try:
-                if self.compiled:
-                    result = run_compiled(
-                        exp,
-                        str(p.plant),
-                        p.controller,
-                        gains=full,
-                        table=self.table,
-                        seed=p.noise_seed,
-                        duration_s=horizon,
-                        latency=p.latency_of(i),
-                    )
-                else:
-                    plant = make_plant(p.plant) if isinstance(p.plant, str) else p.plant()
-                    result = run(
-                        exp,
-                        plant,
-                        p.controller,
-                        gains=full,
-                        surface=self.surface,
-                        seed=p.noise_seed,
-                        duration_s=horizon,
-                        latency=p.latency_of(i),
-                    )
+                result = self.run_case(i, gains, horizon)
             except (ArithmeticError, ValueError):
                 # Gains that break the simulation (overflow, unreachable targets) are merely
                 # bad candidates: price them like a run that failed.
@@ -448,11 +481,11 @@ def evaluate_gains(problem: TuningProblem, gains: Mapping[str, float]) -> tuple[
     The independent way to price a gain set (tests, benchmarks, the report); :func:`optimise`
     prices candidates the same way in worker processes.
     """
-    return _Runner(problem).case_costs(gains)
+    return CaseRunner(problem).case_costs(gains)
 
 
 # Worker-side state: one runner per problem and process, built on the first task that needs it.
-_RUNNERS: dict[str, _Runner] = {}
+_RUNNERS: dict[str, CaseRunner] = {}
 
 
 def _problem_key(problem: TuningProblem) -> str:
@@ -468,7 +501,7 @@ def _worker_costs(task: tuple[str, TuningProblem, dict[str, float]]) -> tuple[fl
     runner = _RUNNERS.get(key)
     if runner is None:
         _RUNNERS.clear()  # one problem at a time: keep the memory of one table
-        runner = _RUNNERS[key] = _Runner(problem)
+        runner = _RUNNERS[key] = CaseRunner(problem)
     return runner.case_costs(gains)
 
 
@@ -537,6 +570,13 @@ class TuneResult:
     cheapest_gains: dict[str, float] = field(default_factory=dict)
     cheapest_cost: float = math.inf
     cheapest_case_costs: dict[str, float] = field(default_factory=dict)
+    #: the problem solved (its cases: :attr:`TuningProblem.case_keys`); None when unknown
+    problem: TuningProblem | None = None
+
+    @property
+    def latencies(self) -> tuple[tuple[int, int], ...] | None:
+        """The ``(sensor, command)`` latencies tuned over (None: each experiment's own)."""
+        return None if self.problem is None else self.problem.latencies
 
     @property
     def kept_defaults(self) -> bool:
@@ -577,6 +617,9 @@ class TuneResult:
             "plant": self.plant,
             "stiffness_n_per_mm": (
                 list(self.stiffnesses_n_per_mm) if self.stiffnesses_n_per_mm else "as defined"
+            ),
+            "latency_periods": (
+                [list(pair) for pair in self.latencies] if self.latencies else "as defined"
             ),
             "rulebase": self.rulebase,
             "cost": round(self.cost, 6),
@@ -633,14 +676,14 @@ class _Pricer:
         self.best: Evaluation | None = None
         self.history: list[float] = []
         self.t0 = time.perf_counter()
-        self.runner: _Runner | None = None
+        self.runner: CaseRunner | None = None
         self.key = _problem_key(problem)
         # candidates run on the sweep's executor: local processes or a Dask cluster
         self.executor: BatchExecutor | None = None
         if workers > 1 or scheduler is not None:
             self.executor = BatchExecutor(workers, scheduler)
         else:
-            self.runner = _Runner(problem)
+            self.runner = CaseRunner(problem)
 
     @property
     def remaining(self) -> int:
@@ -800,7 +843,6 @@ def optimise(
         raise ConfigError(f"baseline gains lack {', '.join(missing)}")
     lo, hi = space.log_bounds
     ndim = len(space.names)
-    pricer = _Pricer(problem, nworkers, budget, callback, admit)
     pricer = _Pricer(problem, nworkers, budget, callback, admit, scheduler)
     interrupted = False
     try:
@@ -867,6 +909,7 @@ def optimise(
         cheapest_gains=problem.full_gains(cheapest.gains),
         cheapest_cost=cheapest.cost,
         cheapest_case_costs=dict(zip(problem.labels, cheapest.case_costs, strict=True)),
+        problem=problem,
     )
 
 
