@@ -310,7 +310,7 @@ def claims_summary(results: Sequence[ClaimResult]) -> str:
             )
         else:
             lines.append(
-                f"- {claim}: holds in {n} of {len(judged)} settings judged{tail}: {_where(judged)}."
+                f"- {claim}: holds in {n} of {len(judged)} settings judged ({_where(judged)}){tail}."
             )
     return "\n".join(lines)
 
