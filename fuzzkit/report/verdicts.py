@@ -309,9 +309,8 @@ def claims_summary(results: Sequence[ClaimResult]) -> str:
                 f"- {claim}: **does not hold** in any setting judged ({len(judged)}{tail})."
             )
         else:
-            lines.append(
-                f"- {claim}: holds in {n} of {len(judged)} settings judged ({_where(judged)}){tail}."
-            )
+            where = _where(judged)
+            lines.append(f"- {claim}: holds in {n} of {len(judged)} settings judged ({where}){tail}.")
     return "\n".join(lines)
 
 
