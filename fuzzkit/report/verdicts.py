@@ -310,7 +310,8 @@ def claims_summary(results: Sequence[ClaimResult]) -> str:
             )
         else:
             where = _where(judged)
-            lines.append(f"- {claim}: holds in {n} of {len(judged)} settings judged ({where}){tail}.")
+            count = f"{n} of {len(judged)} settings judged"
+            lines.append(f"- {claim}: holds in {count} ({where}){tail}.")
     return "\n".join(lines)
 
 
