@@ -1,9 +1,10 @@
 """Run an experiment through the compiled loop and return the runner's :class:`RunResult`.
 
 :func:`run_compiled` takes the arguments of :func:`fuzzkit.studies.runner.run` that the compiled
-loop models; :func:`compiled_supports` says when it applies (the ``arm6`` plant, PI or fuzzy-PI
-with a double lookup table). The plant is reset in Python (the start pose's IK with its seeds),
-then one compiled call runs every period.
+loop models; :func:`compiled_supports` says when it applies (the ``arm6`` and ``planar``
+plants, PI or fuzzy-PI with a double lookup table). The plant is reset in Python (arm6: the
+start pose's IK with its seeds; planar: the pymunk space), then one compiled call runs every
+period (the planar one in :mod:`fuzzkit.studies.compiled.planar_loop`).
 """
 
 from __future__ import annotations
@@ -11,22 +12,33 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from functools import lru_cache
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from fuzzkit.errors import ConfigError
 from fuzzkit.plants.arm6 import Arm6Plant
-from fuzzkit.plants.arm6_kernel import IK_STATUS_NAMES, pack, sensor_noise
+from fuzzkit.plants.arm6_kernel import IK_STATUS_NAMES, pack
+from fuzzkit.plants.contact import sensor_noise
 from fuzzkit.studies.compiled import kernel as K
+from fuzzkit.studies.compiled import period as P
 from fuzzkit.studies.compiled.table import TableArrays, cached_table, table_arrays
 from fuzzkit.studies.experiments import DEFAULT_GAINS, Experiment
 from fuzzkit.studies.faults import Faults, fault_name, fault_schedule
 from fuzzkit.studies.runner import RunResult, build_controller, run_faults_and_latency
 
+if TYPE_CHECKING:
+    from fuzzkit.planar_sim import PlanarArmPlant
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+BoolArray = npt.NDArray[np.bool_]
+
 #: Plants the compiled loop runs.
-COMPILED_PLANTS = ("arm6",)
+COMPILED_PLANTS = ("arm6", "planar")
 
 _IK_MESSAGES = {
     "max_iterations": "IK not converged this period",
@@ -64,38 +76,32 @@ def compiled_table(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3) -
     return cached_table(load(rulebase), tolerance, lambda: load_table(rulebase, tolerance))
 
 
-def run_compiled(
+@dataclass(slots=True)
+class ControllerArgs:
+    """The controller half of a compiled run's arguments (plant-independent)."""
+
+    cp: FloatArray
+    selection: FloatArray
+    setpoints: FloatArray
+    table: tuple[FloatArray, FloatArray, FloatArray, IntArray]
+    spike: FloatArray
+    nan: BoolArray
+    impl: str
+    faults: Faults
+    latency: tuple[int, int]
+    periods: int
+
+
+def _controller(
     exp: Experiment,
-    plant: str | Arm6Plant = "arm6",
-    controller: str = "pi",
-    *,
-    gains: Mapping[str, float] | None = None,
-    table: Any = None,
-    seed: int = 0,
-    faults: Faults | None = None,
-    duration_s: float | None = None,
-    latency: tuple[int, int] | None = None,
-) -> RunResult:
-    """Run ``exp`` on the arm6 plant with the compiled loop; same semantics as ``runner.run``.
-
-    ``table`` is the fuzzy-PI's lookup table (``fuzzkit.codegen`` double table, see
-    :func:`load_table`, or its :class:`TableArrays`, see :func:`compiled_table`); required for
-    ``fuzzy-pi``. ``faults`` and ``latency`` default to the experiment's, as in ``runner.run``.
-
-    Raises
-    ------
-    ConfigError
-        For a plant the compiled loop does not model, an unknown controller, or fuzzy-PI
-        without a table. :class:`~fuzzkit.plants.arm6_kernel.UnsupportedPlant` (a ConfigError)
-        for an arm6 plant with objects or modes the kernel lacks (the Python loop runs it).
-    """
-    if isinstance(plant, str):
-        if not compiled_supports(plant):
-            raise ConfigError(
-                f"the compiled loop runs on {', '.join(COMPILED_PLANTS)} (got {plant!r}); "
-                "use --loop python"
-            )
-        plant = _shared_plant()
+    controller: str,
+    gains: Mapping[str, float] | None,
+    table: Any,
+    seed: int,
+    faults: Faults | None,
+    duration_s: float | None,
+    latency: tuple[int, int] | None,
+) -> ControllerArgs:
     if controller not in DEFAULT_GAINS:
         raise ConfigError(f"unknown controller {controller!r} (expected pi or fuzzy-pi)")
     if controller == "fuzzy-pi" and table is None:
@@ -107,44 +113,115 @@ def run_compiled(
     g.update(gains or {})
     scn = exp.scenario
     n = round((duration_s or scn.duration_s) / scn.period_s)
-    reset = plant.reset(scn, seed=seed)
-    arrays = pack(plant)  # UnsupportedPlant (a ConfigError) for what the kernel lacks
-    noise = sensor_noise(scn.sensor.noise_std_n, seed, n + 1)
     spike, nan = fault_schedule(faults, n)
     rate_limit = g.get("rate_limit")
-    cp = np.zeros(K.N_CP)
-    cp[K.C_KIND] = K.KIND_PI if controller == "pi" else K.KIND_FUZZY
-    cp[K.C_KP] = g["kp"]
-    cp[K.C_KI] = g["ki"]
-    cp[K.C_KX] = g.get("kx", 0.0)
-    cp[K.C_UMIN] = g.get("u_min", -math.inf)
-    cp[K.C_UMAX] = g.get("u_max", math.inf)
-    cp[K.C_RATE] = math.nan if rate_limit is None else rate_limit
-    cp[K.C_FORCE_LIMIT] = hybrid.force_limit_n
+    cp = np.zeros(P.N_CP)
+    cp[P.C_KIND] = P.KIND_PI if controller == "pi" else P.KIND_FUZZY
+    cp[P.C_KP] = g["kp"]
+    cp[P.C_KI] = g["ki"]
+    cp[P.C_KX] = g.get("kx", 0.0)
+    cp[P.C_UMIN] = g.get("u_min", -math.inf)
+    cp[P.C_UMAX] = g.get("u_max", math.inf)
+    cp[P.C_RATE] = math.nan if rate_limit is None else rate_limit
+    cp[P.C_FORCE_LIMIT] = hybrid.force_limit_n
     thr = hybrid.engage_threshold_n
-    cp[K.C_ENGAGE_THR] = math.nan if thr is None else thr
-    cp[K.C_TRIP_SAMPLES] = hybrid.trip_samples
-    cp[K.C_BACKOFF] = hybrid.backoff_m
-    cp[K.C_BACKOFF_SPEED] = hybrid.backoff_speed_m_s
-    cp[K.C_ENGAGE_SAMPLES] = hybrid.engage_samples
-    cp[K.C_HOLD] = 1.0 if exp.hold_path_on_contact else 0.0
-    cp[K.C_PERIOD] = scn.period_s
-    cp[K.C_SENSOR_DELAY] = sensor_delay
-    cp[K.C_COMMAND_DELAY] = command_delay
-    cp[K.C_SPIKE_GATE] = hybrid.spike_gate_n
-    cp[K.C_SPIKE_CONFIRM] = hybrid.spike_confirm
-    cp[K.C_DROPOUT_START] = math.nan if faults.dropout is None else faults.dropout[0]
-    cp[K.C_DROPOUT_LENGTH] = 0.0 if faults.dropout is None else faults.dropout[1]
-    cp[K.C_SPIKE_N] = faults.spike_n
+    cp[P.C_ENGAGE_THR] = math.nan if thr is None else thr
+    cp[P.C_TRIP_SAMPLES] = hybrid.trip_samples
+    cp[P.C_BACKOFF] = hybrid.backoff_m
+    cp[P.C_BACKOFF_SPEED] = hybrid.backoff_speed_m_s
+    cp[P.C_ENGAGE_SAMPLES] = hybrid.engage_samples
+    cp[P.C_HOLD] = 1.0 if exp.hold_path_on_contact else 0.0
+    cp[P.C_PERIOD] = scn.period_s
+    cp[P.C_SENSOR_DELAY] = sensor_delay
+    cp[P.C_COMMAND_DELAY] = command_delay
+    cp[P.C_SPIKE_GATE] = hybrid.spike_gate_n
+    cp[P.C_SPIKE_CONFIRM] = hybrid.spike_confirm
+    cp[P.C_DROPOUT_START] = math.nan if faults.dropout is None else faults.dropout[0]
+    cp[P.C_DROPOUT_LENGTH] = 0.0 if faults.dropout is None else faults.dropout[1]
+    cp[P.C_SPIKE_N] = faults.spike_n
     impl = "pi (compiled)"
     if table is not None:
         ta = table_arrays(table)
-        bp0, bp1, tab, splits = ta.bp0, ta.bp1, ta.values, ta.splits
+        arrays = (ta.bp0, ta.bp1, ta.values, ta.splits)
         impl = ta.label + " (compiled)"
     else:
-        bp0 = bp1 = np.array([-1.0, 1.0])
-        tab = np.zeros((2, 2))
-        splits = np.zeros((1, 1), dtype=np.int64)
+        arrays = (
+            np.array([-1.0, 1.0]),
+            np.array([-1.0, 1.0]),
+            np.zeros((2, 2)),
+            np.zeros((1, 1), dtype=np.int64),
+        )
+    return ControllerArgs(
+        cp=cp,
+        selection=np.array([1.0 if s else 0.0 for s in exp.selection]),
+        setpoints=np.asarray(exp.setpoints, dtype=np.float64),
+        table=arrays,
+        spike=spike,
+        nan=nan,
+        impl=impl,
+        faults=faults,
+        latency=(sensor_delay, command_delay),
+        periods=n,
+    )
+
+
+def run_compiled(
+    exp: Experiment,
+    plant: str | Arm6Plant | PlanarArmPlant = "arm6",
+    controller: str = "pi",
+    *,
+    gains: Mapping[str, float] | None = None,
+    table: Any = None,
+    seed: int = 0,
+    faults: Faults | None = None,
+    duration_s: float | None = None,
+    latency: tuple[int, int] | None = None,
+) -> RunResult:
+    """Run ``exp`` on the arm6 or the planar plant with the compiled loop; same semantics as
+    ``runner.run``.
+
+    ``table`` is the fuzzy-PI's lookup table (``fuzzkit.codegen`` double table, see
+    :func:`load_table`, or its :class:`TableArrays`, see :func:`compiled_table`); required for
+    ``fuzzy-pi``. ``faults`` and ``latency`` default to the experiment's, as in ``runner.run``.
+
+    Raises
+    ------
+    ConfigError
+        For a plant the compiled loop does not model, an unknown controller, or fuzzy-PI
+        without a table. :class:`~fuzzkit.plants.contract.UnsupportedPlant` (a ConfigError)
+        for a plant with objects or modes the kernel lacks (the Python loop runs it).
+    SimulationError
+        When the planar arm's state becomes non-finite, as the Python plant raises it.
+    """
+    if isinstance(plant, str):
+        if not compiled_supports(plant):
+            raise ConfigError(
+                f"the compiled loop runs on {', '.join(COMPILED_PLANTS)} (got {plant!r}); "
+                "use --loop python"
+            )
+        plant = _shared_plant() if plant == "arm6" else _planar_plant()
+    ctrl = _controller(exp, controller, gains, table, seed, faults, duration_s, latency)
+    if isinstance(plant, Arm6Plant):
+        return _run_arm6(exp, plant, controller, ctrl, seed)
+    from fuzzkit.studies.compiled.planar_loop import run_planar_compiled
+
+    return run_planar_compiled(exp, plant, controller, ctrl, seed)
+
+
+def _planar_plant() -> PlanarArmPlant:
+    from fuzzkit.planar_sim import PlanarArmPlant
+
+    return PlanarArmPlant()
+
+
+def _run_arm6(
+    exp: Experiment, plant: Arm6Plant, controller: str, ctrl: ControllerArgs, seed: int
+) -> RunResult:
+    scn = exp.scenario
+    n = ctrl.periods
+    reset = plant.reset(scn, seed=seed)
+    arrays = pack(plant)  # UnsupportedPlant (a ConfigError) for what the kernel lacks
+    noise = sensor_noise(scn.sensor.noise_std_n, seed, n + 1)
     dof = arrays.q.shape[0]
     n_obj = max(arrays.obj_kind.shape[0], 1)
     rec = {
@@ -169,19 +246,17 @@ def run_compiled(
         "points": np.zeros((n, n_obj, 3)),
         "npoints": np.empty(n, dtype=np.int64),
     }
-    scalars = np.zeros(K.N_RESULTS)
-    selection = np.array([1.0 if s else 0.0 for s in exp.selection])
-    setpoints = np.asarray(exp.setpoints, dtype=np.float64)
+    scalars = np.zeros(P.N_RESULTS)
     reset_force = np.asarray(reset.force, dtype=np.float64).copy()
     a = arrays
     args = (
         a.links, a.tool_r, a.tool_p, a.lower, a.upper, a.dq_max, a.path_t, a.path_pos,
         a.path_quat, a.obj_kind, a.obj_p, a.obj_terms, a.obj_nterms, a.rot_task, a.offset,
         a.params, a.q, a.q_ref, a.q_ik, a.stick, a.state, noise, reset_force,
-        cp, selection, setpoints, bp0, bp1, tab, splits,
-        spike, nan,
+        ctrl.cp, ctrl.selection, ctrl.setpoints, *ctrl.table,
+        ctrl.spike, ctrl.nan,
     )  # fmt: skip
-    _warm_up(args, rec, scalars)
+    warm_up(K.run_arm6, args, rec, scalars)
     wall0 = time.perf_counter()
     cpu0 = time.process_time()
     K.run_arm6(
@@ -202,17 +277,36 @@ def run_compiled(
     limited = int(np.count_nonzero(rec["limited"]))
     if limited:
         messages["joint speed limit"] = limited
-    trip_time = float(scalars[K.R_TRIP_TIME])
-    engaged_time = float(scalars[K.R_ENGAGED_TIME])
+    return result_from_recording(
+        exp, "arm6", controller, ctrl, seed, rec, scalars, messages, cpu, wall
+    )
+
+
+def result_from_recording(
+    exp: Experiment,
+    plant: str,
+    controller: str,
+    ctrl: ControllerArgs,
+    seed: int,
+    rec: dict[str, Any],
+    scalars: FloatArray,
+    messages: dict[str, int],
+    cpu: float,
+    wall: float,
+) -> RunResult:
+    """The :class:`RunResult` of a compiled run's recording arrays (any plant)."""
+    n = rec["t"].shape[0]
+    trip_time = float(scalars[P.R_TRIP_TIME])
+    engaged_time = float(scalars[P.R_ENGAGED_TIME])
     return RunResult(
         experiment=exp,
         controller=controller,
-        plant="arm6",
+        plant=plant,
         t=rec["t"],
         force=rec["force"],
         force_sensor=rec["force_sensor"],
         force_true=rec["force_true"],
-        setpoint=np.tile(setpoints, (n, 1)),
+        setpoint=np.tile(ctrl.setpoints, (n, 1)),
         e=rec["e"],
         de=rec["de"],
         du=rec["du"],
@@ -226,36 +320,35 @@ def run_compiled(
         moving=rec["moving"],
         arm_points=list(rec["arm"]),
         contact_points=[rec["points"][k, : rec["npoints"][k]] for k in range(n)],
-        faults=int(scalars[K.R_FAULTS]),
-        tripped=bool(scalars[K.R_TRIPPED]),
+        faults=int(scalars[P.R_FAULTS]),
+        tripped=bool(scalars[P.R_TRIPPED]),
         seed=seed,
-        latency_periods=(sensor_delay, command_delay),
-        fault=fault_name(faults),
-        fault_seed=faults.seed,
+        latency_periods=ctrl.latency,
+        fault=fault_name(ctrl.faults),
+        fault_seed=ctrl.faults.seed,
         trip_time_s=None if math.isnan(trip_time) else trip_time,
         engaged_time_s=None if math.isnan(engaged_time) else engaged_time,
         wall_time_s=wall,
         messages=messages,
         loop="compiled",
         cpu_time_s=cpu,
-        controller_impl=impl,
+        controller_impl=ctrl.impl,
     )
 
 
-_WARM = False
+_WARMED: set[str] = set()
 
 
-def _warm_up(args: tuple[Any, ...], rec: dict[str, Any], scalars: Any) -> None:
-    """Run the kernel over zero periods once per process, with the run's argument types.
+def warm_up(kernel: Callable[..., Any], args: tuple[Any, ...], rec: dict[str, Any], scalars: Any) -> None:
+    """Run ``kernel`` over zero periods once per process, with the run's argument types.
 
     The first call loads the machine code from numba's on-disk cache (or compiles it after an
     install); done here, that start-up cost stays out of the loop's CPU time.
     """
-    global _WARM
-    if _WARM:
+    name = getattr(kernel, "__name__", repr(kernel))
+    if name in _WARMED:
         return
     state = [np.array(x, copy=True) if isinstance(x, np.ndarray) else x for x in args]
     empty = [v[:0] for v in rec.values()]
-    kernel: Callable[..., None] = K.run_arm6  # called with the argument list built above
     kernel(*state, *empty, scalars.copy())
-    _WARM = True
+    _WARMED.add(name)
