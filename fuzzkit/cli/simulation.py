@@ -101,7 +101,7 @@ def register(subparsers: Any) -> None:
         "--loop",
         choices=("compiled", "python"),
         default=None,
-        help="compiled (numba, arm6 only; fuzzy-pi runs as the rule base's double lookup "
+        help="compiled (numba, arm6 and planar; fuzzy-pi runs as the rule base's double lookup "
         "table) or python (the reference loop; fuzzy-pi on the exact engine). Default: "
         "compiled where the plant supports it (not E3 on arm6, whose 3-D floor the compiled "
         "loop does not model: it runs in Python and says so)",

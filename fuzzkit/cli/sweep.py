@@ -54,7 +54,7 @@ def register(subparsers: Any) -> None:
         "--plant",
         choices=sorted(PLANTS),
         default="arm6",
-        help="simulated robot (arm6 runs on the compiled loop)",
+        help="simulated robot (both run on the compiled loop)",
     )
     p.add_argument(
         "--rulebase",

@@ -70,7 +70,8 @@ class RunSpec:
             return "compiled" if compiled_supports(self.plant) else "python"
         if self.loop == "compiled" and not compiled_supports(self.plant):
             raise ConfigError(
-                f"the compiled loop does not model the {self.plant} plant (it runs on arm6); "
+                f"the compiled loop does not model the {self.plant} plant (it runs on arm6 and "
+                "planar); "
                 "use --loop python"
             )
         return self.loop
@@ -88,8 +89,9 @@ def run_spec(spec: RunSpec) -> RunResult:
 
     The compiled loop runs the fuzzy-PI as the rule base's double lookup table (the generated
     code's arithmetic); the Python loop runs it on the exact engine. A plant the compiled loop
-    does not model (E3 on arm6: its 3-D ``HeightField`` floor) runs in the Python loop, and the
-    result's ``loop`` says so: ``python (fallback: ...)``.
+    does not model (E3 on arm6: its 3-D ``HeightField`` floor; the planar plant on a machine
+    other than x86-64 or AArch64) runs in the Python loop, and the result's ``loop`` says so:
+    ``python (fallback: ...)``.
     """
     from fuzzkit.studies.experiments import with_stiffness
     from fuzzkit.studies.faults import fault
@@ -113,7 +115,7 @@ def run_spec(spec: RunSpec) -> RunResult:
                 f"the compiled loop runs the fuzzy-PI as the lookup table, not {impl!r}; "
                 "use --loop python"
             )
-        from fuzzkit.plants.arm6_kernel import UnsupportedPlant
+        from fuzzkit.plants.contract import UnsupportedPlant
         from fuzzkit.studies.compiled.loop import compiled_table, run_compiled
 
         table = compiled_table(spec.rulebase) if spec.controller == "fuzzy-pi" else None
