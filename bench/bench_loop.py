@@ -138,8 +138,15 @@ def _compiled_planar_split() -> tuple[float, float]:
 
     from fuzzkit.planar_sim import PlanarArmPlant
     from fuzzkit.planar_sim import chipmunk_calls as cc
-    from fuzzkit.planar_sim.kernel import X_LINK1, X_LINK2, X_MOTOR1, X_MOTOR2, X_SPACE, X_TOOL
-    from fuzzkit.planar_sim.kernel import pack
+    from fuzzkit.planar_sim.kernel import (
+        X_LINK1,
+        X_LINK2,
+        X_MOTOR1,
+        X_MOTOR2,
+        X_SPACE,
+        X_TOOL,
+        pack,
+    )
     from fuzzkit.studies.batch import RunSpec, run_spec
     from fuzzkit.studies.experiments import experiment
 

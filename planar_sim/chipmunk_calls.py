@@ -15,7 +15,8 @@ back as an LLVM ``{double, double}`` (two floating-point registers on both ABIs)
 from __future__ import annotations
 
 import platform
-from typing import Any
+from collections.abc import Callable
+from typing import Any, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -74,8 +75,7 @@ def _call(builder: ir.IRBuilder, fnty: ir.FunctionType, addr: ir.Value, *args: i
     return builder.call(fn, args)
 
 
-@intrinsic
-def call_v_pd(typingctx: Any, addr: Any, obj: Any, x: Any) -> Any:
+def _call_v_pd(typingctx: Any, addr: Any, obj: Any, x: Any) -> Any:
     """``void f(void *obj, double x)`` at ``addr``."""
     sig = types.none(types.int64, types.int64, types.float64)
 
@@ -87,8 +87,7 @@ def call_v_pd(typingctx: Any, addr: Any, obj: Any, x: Any) -> Any:
     return sig, codegen
 
 
-@intrinsic
-def call_d_p(typingctx: Any, addr: Any, obj: Any) -> Any:
+def _call_d_p(typingctx: Any, addr: Any, obj: Any) -> Any:
     """``double f(void *obj)`` at ``addr``."""
     sig = types.float64(types.int64, types.int64)
 
@@ -99,10 +98,9 @@ def call_d_p(typingctx: Any, addr: Any, obj: Any) -> Any:
     return sig, codegen
 
 
-@intrinsic
-def call_vec_p(typingctx: Any, addr: Any, obj: Any) -> Any:
+def _call_vec_p(typingctx: Any, addr: Any, obj: Any) -> Any:
     """``cpVect f(void *obj)`` at ``addr``, returned as ``(x, y)``."""
-    sig = types.UniTuple(types.float64, 2)(types.int64, types.int64)
+    sig = cast(Any, types.UniTuple)(types.float64, 2)(types.int64, types.int64)
 
     def codegen(context: Any, builder: ir.IRBuilder, signature: Any, args: Any) -> Any:
         fnty = ir.FunctionType(_vec, [_ptr])
@@ -114,8 +112,7 @@ def call_vec_p(typingctx: Any, addr: Any, obj: Any) -> Any:
     return sig, codegen
 
 
-@intrinsic
-def call_v_pvv(
+def _call_v_pvv(
     typingctx: Any, addr: Any, obj: Any, ax: Any, ay: Any, bx: Any, by: Any
 ) -> Any:
     """``void f(void *obj, cpVect a, cpVect b)`` at ``addr``."""
@@ -129,3 +126,12 @@ def call_v_pvv(
         return context.get_dummy_value()
 
     return sig, codegen
+
+
+# Typed for mypy as what they are to numba code: functions of integers and floats.
+call_v_pd = cast(Callable[[int, int, float], None], intrinsic(_call_v_pd))
+call_d_p = cast(Callable[[int, int], float], intrinsic(_call_d_p))
+call_vec_p = cast(Callable[[int, int], tuple[float, float]], intrinsic(_call_vec_p))
+call_v_pvv = cast(
+    Callable[[int, int, float, float, float, float], None], intrinsic(_call_v_pvv)
+)

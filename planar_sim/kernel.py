@@ -330,7 +330,8 @@ def plant_step(
     c2 = min(max(c2, -1.0), 1.0)
     q2t = -math.acos(c2)
     q1t = math.atan2(wz, wx) - math.atan2(l2 * math.sin(q2t), l1 + l2 * math.cos(q2t))
-    sp, link1, link2, tool = pointers[X_SPACE], pointers[X_LINK1], pointers[X_LINK2], pointers[X_TOOL]
+    sp, link1, link2 = pointers[X_SPACE], pointers[X_LINK1], pointers[X_LINK2]
+    tool = pointers[X_TOOL]
     motor1, motor2 = pointers[X_MOTOR1], pointers[X_MOTOR2]
     sat1 = sat2 = False
     lim1, lim2 = 0.99 * params[P_TORQUE1] * dt, 0.99 * params[P_TORQUE2] * dt

@@ -24,7 +24,6 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from fuzzkit.errors import ConfigError
 from fuzzkit.jit import jit
 from fuzzkit.plants.arm6 import Arm6Plant, Box3, ExtrudedProfile, Plane
 from fuzzkit.plants.contract import UnsupportedPlant

@@ -7,7 +7,6 @@ fault injection, latency queues, the hybrid controller), then recording.
 
 from __future__ import annotations
 
-
 import numpy as np
 import numpy.typing as npt
 
@@ -202,7 +201,9 @@ def run_arm6(
         for c in range(count):
             for j in range(3):
                 r_points[k, c, j] = points[c, j] - a_offset[j]
-            credit_normal(a_rot_task, normals[c, 0], normals[c, 1], normals[c, 2], r_force_normal[k])
+            credit_normal(
+                a_rot_task, normals[c, 0], normals[c, 1], normals[c, 2], r_force_normal[k]
+            )
         for i in range(dof):
             r_joints[k, i] = q[i]
             for j in range(3):

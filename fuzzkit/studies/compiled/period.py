@@ -109,7 +109,8 @@ def sensor_latency(
         return measured
     if k + 1 <= sd:
         return reset_force
-    return sensor_q[(k + 1) % (sd + 1)]
+    oldest: FloatArray = sensor_q[(k + 1) % (sd + 1)]
+    return oldest
 
 
 @jit
@@ -165,7 +166,7 @@ def controller_step(
     engage_thr = cp[C_ENGAGE_THR]  # NaN: engaged from the start
     rate = cp[C_RATE]  # NaN: no rate limit
     spike_confirm = int(cp[C_SPIKE_CONFIRM])
-    u, e, de, du = cv[V_U], cv[V_E], cv[V_DE], cv[V_DU]
+    u, du = cv[V_U], cv[V_DU]
     accepted, backoff, backoff_dir = cv[V_ACCEPTED], cv[V_BACKOFF], cv[V_BACKOFF_DIR]
     f = np.empty(3)
     cs[CS_CTRL_T] += period

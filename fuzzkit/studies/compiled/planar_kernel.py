@@ -86,7 +86,7 @@ def run_planar(
     """Run up to ``r_t.shape[0]`` periods, filling the recording arrays and ``out_scalars``;
     returns the periods done (fewer when the arm's state became non-finite: ``r_flags[k, 0]``
     of the last one says so)."""
-    n_periods = r_t.shape[0]
+    n_periods: int = r_t.shape[0]
     n_obj = a_kind.shape[0]
     period = cp[C_PERIOD]
     sd = int(cp[C_SENSOR_DELAY])
@@ -114,7 +114,9 @@ def run_planar(
         if not path_held(cp, cs):
             path_t += period
         for j in range(3):
-            corr_base[j] = a_rot[j, 0] * applied[0] + a_rot[j, 1] * applied[1] + a_rot[j, 2] * applied[2]
+            corr_base[j] = (
+                a_rot[j, 0] * applied[0] + a_rot[j, 1] * applied[1] + a_rot[j, 2] * applied[2]
+            )
         count = plant_step(
             a_path, a_kind, a_p, a_terms, a_nterms, a_rot, params, functions, pointers, stick,
             state, noise, corr_base, path_t,
@@ -155,7 +157,9 @@ def run_planar(
             r_target[k, j] = target[j]
             r_force_normal[k, j] = 0.0
         for c in range(count):
-            r_points[k, c, 0], r_points[k, c, 1], r_points[k, c, 2] = points[c, 0], 0.0, points[c, 1]
+            r_points[k, c, 0] = points[c, 0]
+            r_points[k, c, 1] = 0.0
+            r_points[k, c, 2] = points[c, 1]
             # what the tool exerts on the object: minus the normal reaction on the tool
             credit_normal(a_rot, -normals[c, 0], 0.0, -normals[c, 1], r_force_normal[k])
     store_results(cs, out_scalars)

@@ -9,6 +9,7 @@ directly on that space.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -18,7 +19,7 @@ from fuzzkit.planar_sim import PlanarArmPlant
 from fuzzkit.planar_sim.kernel import STEP_NON_FINITE, pack, sensor_samples
 from fuzzkit.plants.contact import sensor_noise
 from fuzzkit.studies.compiled import period as P
-from fuzzkit.studies.compiled.loop import ControllerArgs, result_from_recording, warm_up
+from fuzzkit.studies.compiled.common import ControllerArgs, result_from_recording, warm_up
 from fuzzkit.studies.compiled.planar_kernel import run_planar
 from fuzzkit.studies.experiments import Experiment
 from fuzzkit.studies.runner import RunResult
@@ -74,7 +75,8 @@ def run_planar_compiled(
     warm_up(run_planar, args, rec, scalars)
     wall0 = time.perf_counter()
     cpu0 = time.process_time()
-    done = run_planar(*args, *rec.values(), scalars)
+    kernel: Callable[..., int] = run_planar  # called with the argument list built above
+    done = kernel(*args, *rec.values(), scalars)
     cpu = time.process_time() - cpu0
     wall = time.perf_counter() - wall0
     flags = rec["flags"]
