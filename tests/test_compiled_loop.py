@@ -186,6 +186,29 @@ def test_e3_on_arm6_falls_back_to_the_python_loop_and_says_so() -> None:
     assert result.loop.startswith("python") and "HeightField" in result.loop
 
 
+@pytest.mark.slow
+def test_planar_compiled_loop_reports_torque_limits_as_the_python_loop() -> None:
+    # 1000 N/mm: the servos saturate pressing in, every period's messages are counted
+    exp = with_stiffness(experiment("E2"), 1.0e9)
+    py, co = _both("E2", "pi", "planar", exp=exp, duration_s=1.5)
+    assert any("torque limit" in m for m in py.messages)
+    _assert_same(py, co)
+
+
+def test_planar_compiled_loop_raises_the_python_loops_error_on_a_non_finite_state() -> None:
+    from fuzzkit.errors import SimulationError
+    from fuzzkit.planar_sim import PlanarArmPlant
+    from fuzzkit.planar_sim.arm import ArmParameters
+
+    exp = experiment("E2")
+    broken = ArmParameters(gravity=float("inf"))
+    with pytest.raises(SimulationError, match=r"non-finite at t=0\.004 s") as py:
+        run(exp, PlanarArmPlant(broken), "pi", duration_s=0.5)
+    with pytest.raises(SimulationError, match=r"non-finite at t=0\.004 s") as co:
+        run_compiled(exp, PlanarArmPlant(broken), "pi", duration_s=0.5)
+    assert str(co.value) == str(py.value)
+
+
 def test_planar_runs_compiled_by_default_and_falls_back_where_it_cannot(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
