@@ -85,3 +85,17 @@ def test_the_defaults_the_issue_names_are_in_the_help(name: str, option: str, sh
     options = text[text.index("options:") :]
     block = options[options.index(option + " ") :]
     assert shown in block[:200]
+
+
+def test_rule_base_help_names_every_readable_file_kind() -> None:
+    from fuzzkit.cli import RULEBASE_SPEC_HELP
+    from fuzzkit.formats import registry
+
+    listed = set(re.findall(r"\.\w+", RULEBASE_SPEC_HELP))
+    assert listed == set(registry._SUFFIXES) | set(registry.READERS)
+
+
+@pytest.mark.parametrize("name", COMMANDS)
+def test_no_help_text_says_rule_bases_are_yaml_only(name: str) -> None:
+    text = _commands()[name].format_help()
+    assert ".yaml path" not in text and "YAML path" not in text

@@ -19,6 +19,7 @@ exactly: where the measured force is NaN (no sample, injected fault), engagement
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -26,8 +27,14 @@ import pytest
 
 from fuzzkit.control.controllers import lookup_table_surface
 from fuzzkit.errors import ConfigError
-from fuzzkit.studies.compiled.loop import load_table, run_compiled
-from fuzzkit.studies.compiled.table import table2, table_arrays
+from fuzzkit.plants.arm6 import Arm6Parameters, Arm6Plant, HeightField
+from fuzzkit.plants.arm6_heightfield import height_field_contact, pack_height_field
+from fuzzkit.plants.arm6_kernel import pack
+from fuzzkit.plants.contract import ContactPlant, UnsupportedPlant
+from fuzzkit.studies.compiled.generated_c import GeneratedC
+from fuzzkit.studies.compiled.loop import run_compiled
+from fuzzkit.studies.compiled.table import load_table, table2, table_arrays
+from fuzzkit.studies.e3_arm6 import e3_arm6_experiment, make_e3_arm6_plant
 from fuzzkit.studies.experiments import experiment, with_stiffness
 from fuzzkit.studies.faults import FAULTS, FaultInjector, Faults, fault, fault_schedule
 from fuzzkit.studies.runner import RunResult, run
@@ -41,18 +48,27 @@ PLANTS = ("arm6", "planar")
 
 
 def _both(
-    name: str, controller: str, plant: str = "arm6", **kw: object
+    name: str,
+    controller: str,
+    plant: str | Callable[[], ContactPlant] = "arm6",
+    **kw: object,
 ) -> tuple[RunResult, RunResult]:
+    """The Python and the compiled loop on the same run; ``plant``: a plant name (arm6: the
+    shared plant of both loops; planar: a fresh one each), or a factory building a fresh plant
+    for each loop."""
     exp = kw.pop("exp", None) or experiment(name)
     table = load_table() if controller == "fuzzy-pi" else None
     surface = lookup_table_surface(table) if table is not None else None
-    py = run(exp, plant, controller, surface=surface, **kw)  # type: ignore[arg-type]
-    co = run_compiled(exp, plant, controller, table=table, **kw)  # type: ignore[arg-type]
+    py_plant = plant if isinstance(plant, str) else plant()
+    co_plant = plant if isinstance(plant, str) else plant()
+    py = run(exp, py_plant, controller, surface=surface, **kw)  # type: ignore[arg-type]
+    co = run_compiled(exp, co_plant, controller, table=table, **kw)  # type: ignore[arg-type]
     return py, co
 
 
-def _assert_same(py: RunResult, co: RunResult) -> None:
-    assert co.loop == "compiled" and py.loop == "python"
+def _assert_same(py: RunResult, co: RunResult, reference_loop: str = "python") -> None:
+    """``co`` (a compiled-loop run) repeats ``py`` (a run of ``reference_loop``)."""
+    assert co.loop == "compiled" and py.loop == reference_loop
     assert co.plant == py.plant
     force_tol = PLANAR_FORCE_TOL if co.plant == "planar" else FORCE_TOL
     if co.plant == "planar":
@@ -119,6 +135,68 @@ def test_compiled_loop_equals_python_loop_under_faults(
         assert co.latency_periods == (1 + 2, 1)  # the scenario's (1, 1) plus 2 sensor periods
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("controller", CONTROLLERS)
+def test_compiled_loop_equals_python_loop_on_e3_arm6(controller: str) -> None:
+    # the paper's E3: a rough 3-D height-field floor (30 N on z) and a side wall (6 N on x)
+    py, co = _both("E3", controller, plant=make_e3_arm6_plant, exp=e3_arm6_experiment(), seed=1)
+    _assert_same(py, co)
+    touching = co.in_contact & ~np.isnan(co.force[:, 0])
+    assert np.count_nonzero(touching) > 1000  # the whole slide is in contact
+    # both surfaces push: floor on z, wall on x
+    assert np.max(np.abs(co.force_normal[:, 2])) > 20.0
+    assert np.max(np.abs(co.force_normal[:, 0])) > 3.0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", sorted(set(FAULTS) - {"none"}))
+def test_compiled_loop_equals_python_loop_on_e3_arm6_under_faults(kind: str) -> None:
+    py, co = _both(
+        "E3",
+        "fuzzy-pi",
+        plant=make_e3_arm6_plant,
+        exp=e3_arm6_experiment(),
+        seed=5,
+        faults=fault(kind, 5),
+        duration_s=3.0,
+    )
+    _assert_same(py, co)
+    assert co.fault == kind
+    if kind in ("nan", "dropout", "spike"):
+        assert co.faults > 0
+
+
+def test_height_field_contact_is_the_python_contact() -> None:
+    """The compiled height field touches exactly where ``HeightField.contact`` does, with
+    the same depth, normal and point (same operations in the same order: bit for bit)."""
+    field = HeightField.rough((0.40, 0.56), (-0.13, 0.13), -0.299, 0.0002, seed=3)
+    field = HeightField(field.x0, field.y0, field.dx, field.dy, field.heights, z0=0.25)
+    row, heights = pack_height_field(field)
+    op = np.zeros(12)
+    op[: len(row)] = row
+    radius = 0.01
+    rng = np.random.default_rng(0)
+    nx, ny = len(field.heights), len(field.heights[0])
+    corners = [
+        (field.x0 + i * field.dx, field.y0 + j * field.dy) for i in (0, nx - 1) for j in (0, ny - 1)
+    ]
+    xy = np.concatenate([rng.uniform((0.39, -0.14), (0.57, 0.14), (3000, 2)), corners])
+    z = rng.uniform(-0.05, -0.03, len(xy))  # around the surface (0.25 - 0.299 + radius)
+    nrm, pt = np.empty(3), np.empty(3)
+    touching = 0
+    for (x, y), zc in zip(xy, z, strict=True):
+        c = np.array([x, y, zc])
+        ref = field.contact((float(x), float(y), float(zc)), radius)
+        depth = height_field_contact(op, heights, c, radius, nrm, pt)
+        if ref is None:
+            assert depth <= 0.0
+            continue
+        touching += 1
+        assert depth == ref[0]
+        assert tuple(nrm) == ref[1] and tuple(pt) == ref[2]
+    assert 500 < touching < len(xy) - 500  # both touching and clear points were checked
+
+
 def test_fault_schedule_draws_what_the_injector_draws() -> None:
     faults = Faults(spike_probability=0.3, spike_n=5.0, nan_probability=0.2, seed=7)
     spike, nan = fault_schedule(faults, 400)
@@ -173,17 +251,17 @@ def test_compiled_loop_rejects_what_it_does_not_model() -> None:
     exp = experiment("E1")
     with pytest.raises(ConfigError, match="compiled loop runs on arm6, planar"):
         run_compiled(exp, "moon", "pi")
-    with pytest.raises(ConfigError, match="needs a lookup table"):
+    with pytest.raises(ConfigError, match=r"needs a lookup table .* or the generated C"):
         run_compiled(exp, "arm6", "fuzzy-pi")
     with pytest.raises(ConfigError, match="latency"):
         run_compiled(exp, "arm6", "pi", latency=(-1, 0))
 
 
-def test_e3_on_arm6_falls_back_to_the_python_loop_and_says_so() -> None:
+def test_e3_on_arm6_runs_compiled() -> None:
     from fuzzkit.studies.batch import RunSpec, run_spec
 
     result = run_spec(RunSpec("E3", "pi", "arm6", duration_s=0.05))
-    assert result.loop.startswith("python") and "HeightField" in result.loop
+    assert result.loop == "compiled"
 
 
 @pytest.mark.slow
@@ -224,31 +302,130 @@ def test_planar_runs_compiled_by_default_and_falls_back_where_it_cannot(
     assert result.plant == "planar" and len(result.t) == 50
 
 
-@pytest.mark.slow
-def test_compiled_table_loop_equals_a_loop_running_the_generated_c() -> None:
-    """The compiled fuzzy-PI's arithmetic is the generated C's: a Python loop that calls the
-    compiled generated C (ctypes) for every sample gives the compiled loop's force traces."""
+def test_what_the_kernel_does_not_model_is_refused_by_name() -> None:
+    plant = Arm6Plant(Arm6Parameters(strict=True))
+    plant.reset(experiment("E1").scenario)
+    with pytest.raises(UnsupportedPlant, match="strict mode"):
+        pack(plant)
+
+
+def _needs_a_c_compiler() -> None:
     from fuzzkit.codegen.toolchain import find_compiler
 
     if find_compiler() is None:
         pytest.skip("no C compiler found")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("plant", PLANTS)
+@pytest.mark.parametrize("name", ["E2", "E3"])
+def test_compiled_loop_runs_the_generated_c(name: str, plant: str) -> None:
+    """``--fuzzy-impl c`` in the compiled loop calls the generated C (ctypes) for every sample
+    and gives the force traces of the compiled table and of the Python loop calling the same C.
+
+    Not bit for bit against the table: the generated C finds a cell's fraction by multiplying
+    by the stored reciprocal of the cell's width, the table model (and the compiled table)
+    divides, so a surface value can differ in its last bit (see the next test); the loop is
+    stable, so that stays ~1e-11 N in the force, well inside ``FORCE_TOL``.
+    """
+    _needs_a_c_compiler()
     from fuzzkit.studies.batch import RunSpec, run_spec
 
-    spec = RunSpec("E2", "fuzzy-pi", "arm6", seed=4, duration_s=4.0)
-    co = run_spec(spec)
-    py = run_spec(RunSpec("E2", "fuzzy-pi", "arm6", seed=4, duration_s=4.0, loop="python",
-                          fuzzy_impl="c"))  # fmt: skip
-    assert "generated C" in py.controller_impl and "lookup table" in co.controller_impl
-    _assert_same(py, co)
+    def spec(**kw: str) -> RunSpec:
+        return RunSpec(name, "fuzzy-pi", plant, seed=4, duration_s=4.0, **kw)  # type: ignore[arg-type]
+
+    c = run_spec(spec(fuzzy_impl="c"))
+    table = run_spec(spec(fuzzy_impl="table"))
+    py_c = run_spec(spec(loop="python", fuzzy_impl="c"))
+    assert c.controller_impl == "generated C macvicar_whelan_eval (double, ctypes) (compiled loop)"
+    assert table.controller_impl.startswith("lookup table macvicar_whelan")
+    assert py_c.controller_impl.endswith("(python loop)") and "generated C" in py_c.controller_impl
+    assert np.count_nonzero(c.in_contact) > 100
+    _assert_same(table, c, reference_loop="compiled")
+    _assert_same(py_c, c)
+
+
+def test_generated_c_and_the_compiled_table_agree_to_the_last_bit() -> None:
+    """The generated C's ``NAME_eval`` against the compiled table's arithmetic on random and
+    knot points: equal within the generated header's stated double allowance (2^-48 of the
+    output's full scale), and mostly bit for bit."""
+    _needs_a_c_compiler()
+    from fuzzkit.studies.compiled.generated_c import c_surface
+
+    surface = c_surface()
+    ta = table_arrays(load_table())
+    rng = np.random.default_rng(1)
+    pts = np.concatenate(
+        [
+            rng.uniform(-1.2, 1.2, (4000, 2)),
+            np.stack(np.meshgrid(ta.bp0[::3], ta.bp1[::4]), axis=-1).reshape(-1, 2),
+        ]
+    )
+    got = np.array([surface(float(a), float(b)) for a, b in pts])
+    ref = np.array([table2(ta.bp0, ta.bp1, ta.values, ta.splits, a, b) for a, b in pts])
+    assert np.max(np.abs(got - ref)) <= 2.0**-48 * 1.0  # full scale of du: 1
+    assert np.count_nonzero(got == ref) > 0.8 * len(pts)
+
+
+@pytest.mark.slow
+def test_compiled_loop_calls_the_c_it_is_given() -> None:
+    """Two rule bases' generated C through the same compiled kernel in one process: each run
+    follows its own rule base (the kernel reads the function's address at every call, it is not
+    frozen into the cached machine code)."""
+    _needs_a_c_compiler()
+    from fuzzkit.studies.batch import RunSpec, run_spec
+
+    runs = {}
+    for rb in ("macvicar_whelan", "paper_table1"):
+        c = run_spec(RunSpec("E2", "fuzzy-pi", "arm6", rulebase=rb, duration_s=2.5, fuzzy_impl="c"))
+        table = run_spec(RunSpec("E2", "fuzzy-pi", "arm6", rulebase=rb, duration_s=2.5))
+        assert f"{rb}_eval" in c.controller_impl
+        _assert_same(table, c, reference_loop="compiled")
+        runs[rb] = c
+    diff = np.nanmax(np.abs(runs["macvicar_whelan"].force - runs["paper_table1"].force))
+    assert diff > 0.1  # N: the two rule bases really drive the arm differently
+
+
+def test_simulate_json_names_the_generated_c(capsys: pytest.CaptureFixture[str]) -> None:
+    _needs_a_c_compiler()
+    import json
+
+    from fuzzkit.cli import main
+
+    argv = ["simulate", "E1", "--plant", "arm6", "--controller", "fuzzy-pi", "--json"]
+    assert main([*argv, "--fuzzy-impl", "c"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["loop"] == "compiled"
+    assert data["controller_impl"].startswith("generated C macvicar_whelan_eval")
+    assert data["controller_impl"].endswith("(compiled loop)")
+
+
+def test_generated_c_without_a_compiler_is_a_clear_error(monkeypatch: pytest.MonkeyPatch) -> None:
+    from fuzzkit.errors import ToolchainError
+    from fuzzkit.studies.batch import RunSpec, run_spec
+
+    monkeypatch.setenv("CC", "/nonexistent/cc")
+    # a rule base no other test compiles, so no library is cached in this process
+    spec = RunSpec("E1", "fuzzy-pi", "arm6", rulebase="paper_table1_transposed", fuzzy_impl="c")
+    with pytest.raises(ToolchainError, match="no C compiler found"):
+        run_spec(spec)
 
 
 def test_fuzzy_implementation_must_fit_the_loop() -> None:
     from fuzzkit.studies.batch import RunSpec, run_spec
 
     with pytest.raises(ConfigError, match="compiled loop runs the fuzzy-PI as the lookup table"):
-        run_spec(RunSpec("E1", "fuzzy-pi", "arm6", fuzzy_impl="c", duration_s=0.1))
+        run_spec(RunSpec("E1", "fuzzy-pi", "arm6", fuzzy_impl="exact", duration_s=0.1))
     with pytest.raises(ConfigError, match="unknown fuzzy implementation"):
         run_spec(RunSpec("E1", "fuzzy-pi", "arm6", fuzzy_impl="fast", duration_s=0.1))
+    with pytest.raises(ConfigError, match="not both"):
+        run_compiled(
+            experiment("E1"),
+            "arm6",
+            "fuzzy-pi",
+            table=load_table(),
+            generated_c=GeneratedC(None, "-"),
+        )
 
 
 def test_table_cache_builds_once_and_rebuilds_a_damaged_file(

@@ -579,3 +579,14 @@ def test_python_object_tags_are_refused_not_read_as_data() -> None:
     (problem,) = info.value.problems
     assert str(problem.location) == "tag.yaml:2:14"
     assert "unsupported YAML tag" in problem.message and "python/object/apply" in problem.message
+
+
+@pytest.mark.parametrize("word", ["OFF", "on", "Yes", "no", "true"])
+def test_an_unquoted_boolean_word_as_a_term_name_says_why(word: str) -> None:
+    found = problems(doc(e=e_terms(word + ": {shape: triangle, points: [-2, -1, 0]}")))
+    messages = [p.message for p in found]
+    assert any(
+        m.startswith(f"expected a name as key, got {word}")
+        and "reads an unquoted yes/no/on/off/true/false as a boolean; quote it" in m
+        for m in messages
+    ), messages

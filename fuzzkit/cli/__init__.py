@@ -34,6 +34,8 @@ EXIT_BAD_INPUT = 2
 #: 128 + SIGINT / SIGPIPE, as a shell reports a command ended by that signal.
 EXIT_INTERRUPTED = 130
 EXIT_BROKEN_PIPE = 141
+#: What a rule-base argument accepts (kept light: the CLI imports no format code to print help).
+RULEBASE_SPEC_HELP = "a shipped name, or a rule-base file (.yaml, .yml, .fis, .fcl, .fll)"
 
 
 class HelpFormatter(argparse.RawDescriptionHelpFormatter):

@@ -10,6 +10,8 @@ import argparse
 import math
 from typing import Any
 
+from fuzzkit.cli import RULEBASE_SPEC_HELP
+
 EXIT_OK = 0
 EXIT_FAILURE = 1
 
@@ -36,7 +38,7 @@ def register(sub: Any) -> None:
         "  fuzzkit compile macvicar_whelan --target c --type q15 --tolerance 2e-3 --out gen_q15\n"
         "  fuzzkit compile my_controller.yaml --target python --resolution 65 --out gen_py",
     )
-    p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
+    p.add_argument("rulebase", metavar="RULEBASE", help=RULEBASE_SPEC_HELP)
     p.add_argument("--target", required=True, help="c or python (required)")
     p.add_argument(
         "--type",

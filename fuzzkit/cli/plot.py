@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from fuzzkit.cli import RULEBASE_SPEC_HELP
+
 EXIT_OK = 0
 
 
@@ -20,7 +22,7 @@ def register(sub: Any) -> None:
         "  fuzzkit plot macvicar_whelan --out macvicar_whelan.svg\n"
         "  fuzzkit plot my_controller.yaml -o my_controller.png",
     )
-    p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
+    p.add_argument("rulebase", metavar="RULEBASE", help=RULEBASE_SPEC_HELP)
     p.add_argument(
         "--out",
         "-o",

@@ -16,6 +16,7 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any, TextIO
 
+from fuzzkit.cli import RULEBASE_SPEC_HELP
 from fuzzkit.errors import EvaluationError, Location, Problem, ProblemsError, RuleBaseError
 from fuzzkit.fileio import check_output_path
 from fuzzkit.fuzzy.describe import num as _num
@@ -57,7 +58,7 @@ def register(sub: Any) -> None:
         "shapes and parameters, and its rules (as a grid for tables).",
         epilog="examples:\n  fuzzkit info macvicar_whelan\n  fuzzkit info my_controller.yaml",
     )
-    p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
+    p.add_argument("rulebase", metavar="RULEBASE", help=RULEBASE_SPEC_HELP)
     p.set_defaults(handler=cmd_info)
 
     p = sub.add_parser(
@@ -71,7 +72,7 @@ def register(sub: Any) -> None:
         "  fuzzkit eval macvicar_whelan -i e=0.25 -i de=-0.1\n"
         "  fuzzkit eval macvicar_whelan --points points.csv > out.csv",
     )
-    p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
+    p.add_argument("rulebase", metavar="RULEBASE", help=RULEBASE_SPEC_HELP)
     group = p.add_mutually_exclusive_group(required=True)
     group.add_argument(
         "--input",
@@ -103,7 +104,7 @@ def register(sub: Any) -> None:
         "  fuzzkit surface three_input --inputs e,de --fix r=0.5 --png slice.png\n"
         "  rerun surface.rrd     (open the recording in the Rerun viewer)",
     )
-    p.add_argument("rulebase", metavar="RULEBASE", help="a .yaml path or a shipped name")
+    p.add_argument("rulebase", metavar="RULEBASE", help=RULEBASE_SPEC_HELP)
     p.add_argument("--rrd", metavar="OUT.rrd", help="Rerun recording to write")
     p.add_argument("--png", metavar="OUT.png", help="PNG image to write")
     p.add_argument(

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from fuzzkit.cli import RULEBASE_SPEC_HELP
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
 
@@ -67,7 +68,7 @@ def register(subparsers: Any) -> None:
         "--rulebase",
         default="macvicar_whelan",
         metavar="RB",
-        help="rule base for fuzzy-pi: shipped name or YAML path",
+        help="rule base for fuzzy-pi: " + RULEBASE_SPEC_HELP,
     )
     sim.add_argument(
         "--plant",
@@ -102,16 +103,15 @@ def register(subparsers: Any) -> None:
         choices=("compiled", "python"),
         default=None,
         help="compiled (numba, arm6 and planar; fuzzy-pi runs as the rule base's double lookup "
-        "table) or python (the reference loop; fuzzy-pi on the exact engine). Default: "
-        "compiled where the plant supports it (not E3 on arm6, whose 3-D floor the compiled "
-        "loop does not model: it runs in Python and says so)",
+        "table, or as its generated C with --fuzzy-impl c) or python (the reference loop; "
+        "fuzzy-pi on the exact engine). Default: compiled where the plant supports it",
     )
     sim.add_argument(
         "--fuzzy-impl",
         choices=("auto", "exact", "table", "c"),
         default="auto",
         help="how fuzzy-pi evaluates its surface: exact engine (python loop), the generated "
-        "double lookup table (both loops), or the generated C through ctypes (python loop; "
+        "double lookup table (both loops), or the generated C through ctypes (both loops; "
         "needs a C compiler). Default: table when compiled, exact in python",
     )
     sim.add_argument("--rrd", metavar="OUT.rrd", help="write a Rerun recording of the run")
@@ -146,7 +146,7 @@ def register(subparsers: Any) -> None:
         "--rulebase",
         default="macvicar_whelan",
         metavar="RB",
-        help="rule base for fuzzy-pi: shipped name or YAML path",
+        help="rule base for fuzzy-pi: " + RULEBASE_SPEC_HELP,
     )
     cmp_.add_argument(
         "--plant",

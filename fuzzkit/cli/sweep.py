@@ -7,6 +7,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from fuzzkit.cli import RULEBASE_SPEC_HELP
 from fuzzkit.errors import ConfigError
 
 CONTROLLERS = ("pi", "fuzzy-pi")
@@ -60,7 +61,7 @@ def register(subparsers: Any) -> None:
         "--rulebase",
         default="macvicar_whelan",
         metavar="RB",
-        help="rule base for fuzzy-pi: shipped name or YAML path",
+        help="rule base for fuzzy-pi: " + RULEBASE_SPEC_HELP,
     )
     p.add_argument(
         "--loop",

@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from fuzzkit.cli import EXIT_INTERRUPTED
+from fuzzkit.cli import EXIT_INTERRUPTED, RULEBASE_SPEC_HELP
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
 
@@ -42,7 +42,7 @@ def register(subparsers: Any) -> None:
         "--rulebase",
         default="macvicar_whelan",
         metavar="RB",
-        help="rule base for fuzzy-pi: shipped name or YAML path",
+        help="rule base for fuzzy-pi: " + RULEBASE_SPEC_HELP,
     )
     tune.add_argument(
         "--plant", choices=sorted(PLANTS), default="planar", help="simulated robot to tune on"
@@ -128,7 +128,7 @@ def register(subparsers: Any) -> None:
         "--rulebase",
         default="macvicar_whelan",
         metavar="RB",
-        help="rule base for fuzzy-pi: shipped name or YAML path",
+        help="rule base for fuzzy-pi: " + RULEBASE_SPEC_HELP,
     )
     rep.add_argument("--seed", type=int, default=0, help="optimiser seed")
     rep.add_argument(

@@ -75,6 +75,7 @@ STR_TAG = "tag:yaml.org,2002:str"
 _INT = "tag:yaml.org,2002:int"
 _FLOAT = "tag:yaml.org,2002:float"
 _BOOL = "tag:yaml.org,2002:bool"
+_BOOL_HINT = " (YAML reads an unquoted yes/no/on/off/true/false as a boolean; quote it)"
 _NULL = "tag:yaml.org,2002:null"
 _MERGE = "tag:yaml.org,2002:merge"
 # YAML 1.1 (PyYAML) reads ``1e-3`` as a string; accept the YAML 1.2 number syntax when unquoted.
@@ -143,7 +144,9 @@ class _Reader:
                 self.error(key, "merge keys (<<) are not supported; write the entries out")
                 continue
             if not isinstance(key, ScalarNode) or key.tag != STR_TAG:
-                hint = "; quote it" if isinstance(key, ScalarNode) else ""
+                hint = ""
+                if isinstance(key, ScalarNode):
+                    hint = _BOOL_HINT if key.tag == _BOOL else "; quote it"
                 self.error(key, f"expected a name as key, got {describe(key)}{hint}")
                 continue
             if key.value in entries:
@@ -191,7 +194,7 @@ class _Reader:
             return str(node.value)
         hint = ""
         if isinstance(node, ScalarNode) and node.tag == _BOOL:
-            hint = " (YAML reads an unquoted yes/no/on/off/true/false as a boolean; quote it)"
+            hint = _BOOL_HINT
         self.error(node, f"expected {what}, got {describe(node)}{hint}")
         return None
 

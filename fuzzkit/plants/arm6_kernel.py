@@ -25,7 +25,12 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.jit import jit
-from fuzzkit.plants.arm6 import Arm6Plant, Box3, ExtrudedProfile, Plane
+from fuzzkit.plants.arm6 import Arm6Plant, Box3, ExtrudedProfile, HeightField, Plane
+from fuzzkit.plants.arm6_heightfield import (
+    height_field_contact,
+    pack_height_field,
+    tangent_plane_contact,
+)
 from fuzzkit.plants.contract import UnsupportedPlant
 from fuzzkit.plants.environment import _roughness_terms
 
@@ -37,7 +42,7 @@ IK_CONVERGED, IK_MAX_ITERATIONS, IK_UNREACHABLE, IK_LIMIT = 0, 1, 2, 3
 IK_STATUS_NAMES = ("converged", "max_iterations", "unreachable", "limit")
 
 #: Object kinds of the compiled contact solver.
-KIND_PLANE, KIND_BOX, KIND_PROFILE = 0, 1, 2
+KIND_PLANE, KIND_BOX, KIND_PROFILE, KIND_HEIGHT_FIELD = 0, 1, 2, 3
 
 # Indices into the float parameter vector of the plant (``Arm6Arrays.params``).
 P_DT, P_LAG, P_RADIUS, P_K, P_C, P_MU, P_KT = 0, 1, 2, 3, 4, 5, 6
@@ -70,6 +75,7 @@ class Arm6Arrays:
     obj_p: FloatArray  # (k, 12) per-kind parameters (see pack)
     obj_terms: FloatArray  # (k, w, 3) roughness sines: wavenumber, amplitude, phase
     obj_nterms: IntArray  # (k,)
+    obj_grid: FloatArray  # (k, g) a height field's heights, row-major (arm6_heightfield)
     rot_task: FloatArray  # (3, 3) base-from-task
     offset: FloatArray  # (3,) scenario origin in the robot frame
     params: FloatArray  # (N_PARAMS,)
@@ -86,8 +92,8 @@ def pack(plant: Arm6Plant) -> Arm6Arrays:
     Raises
     ------
     UnsupportedPlant
-        For what the twin does not model: an object other than a plane, a box or an extruded
-        rough profile (a height field), or ``strict`` mode (which raises mid-run).
+        For what the twin does not model: an object other than a plane, a box, an extruded
+        rough profile or a height field, or ``strict`` mode (which raises mid-run).
     """
     p = plant.params
     if p.strict:
@@ -100,8 +106,10 @@ def pack(plant: Arm6Plant) -> Arm6Arrays:
     kinds = np.zeros(k, dtype=np.int64)
     obj_p = np.zeros((k, 12))
     term_lists: list[tuple[tuple[float, float, float], ...]] = []
+    grids: list[FloatArray] = []
     for i, obj in enumerate(objs):
         terms: tuple[tuple[float, float, float], ...] = ()
+        grid = np.zeros(0)
         if isinstance(obj, Plane):
             kinds[i] = KIND_PLANE
             obj_p[i, :10] = (*obj.point, *obj.normal, obj.x_min, obj.x_max, obj.y_min, obj.y_max)
@@ -124,11 +132,16 @@ def pack(plant: Arm6Plant) -> Arm6Arrays:
             terms = _roughness_terms(
                 s.seed, s.roughness_rms_m, s.wavelength_min_m, s.wavelength_max_m, s.n_waves
             )
+        elif isinstance(obj, HeightField):
+            kinds[i] = KIND_HEIGHT_FIELD
+            row, grid = pack_height_field(obj)
+            obj_p[i, : len(row)] = row
         else:
             raise UnsupportedPlant(
                 f"the compiled arm6 loop does not model {type(obj).__name__} objects"
             )
         term_lists.append(terms)
+        grids.append(grid)
     width = max([1, *(len(t) for t in term_lists)])
     obj_terms = np.zeros((k, width, 3))
     nterms = np.zeros(k, dtype=np.int64)
@@ -136,6 +149,9 @@ def pack(plant: Arm6Plant) -> Arm6Arrays:
         nterms[i] = len(terms)
         if terms:
             obj_terms[i, : len(terms)] = terms
+    obj_grid = np.zeros((k, max([1, *(g.shape[0] for g in grids)])))
+    for i, grid in enumerate(grids):
+        obj_grid[i, : grid.shape[0]] = grid
     poses = plant.path.poses
     sensor = scn.sensor
     contact = scn.contact
@@ -173,6 +189,7 @@ def pack(plant: Arm6Plant) -> Arm6Arrays:
         obj_p=obj_p,
         obj_terms=obj_terms,
         obj_nterms=nterms,
+        obj_grid=obj_grid,
         rot_task=np.array(scn.rotation, dtype=np.float64),
         offset=np.array(plant._offset, dtype=np.float64),
         params=params,
@@ -543,6 +560,7 @@ def _object_contact(
     op: FloatArray,
     terms: FloatArray,
     nterms: int,
+    grid: FloatArray,
     c: FloatArray,
     radius: float,
     nrm: FloatArray,
@@ -550,7 +568,8 @@ def _object_contact(
 ) -> float:
     """Penetration depth (> 0 when touching, else <= 0) of the tool sphere; normal and point out.
 
-    Plane.contact, Box3.contact and ExtrudedProfile.contact of :mod:`fuzzkit.plants.arm6`.
+    Plane.contact, Box3.contact, ExtrudedProfile.contact and HeightField.contact of
+    :mod:`fuzzkit.plants.arm6`.
     """
     if kind == KIND_PLANE:
         if not (op[6] <= c[0] <= op[7] and op[8] <= c[1] <= op[9]):
@@ -595,6 +614,8 @@ def _object_contact(
         for i in range(3):
             pt[i] = c[i] + nrm[i] * best_gap
         return radius + best_gap
+    if kind == KIND_HEIGHT_FIELD:
+        return height_field_contact(op, grid, c, radius, nrm, pt)
     # extruded rough profile
     x = c[0] - op[7]
     if not (op[0] <= x <= op[1] and op[5] <= c[1] - op[8] <= op[6]):
@@ -606,14 +627,7 @@ def _object_contact(
     slope = tan_tilt
     for j in range(nterms):
         slope += terms[j, 1] * terms[j, 0] * math.cos(terms[j, 0] * x + terms[j, 2])
-    h = h + op[9]
-    inv = 1.0 / math.sqrt(1.0 + slope * slope + 0.0 * 0.0)
-    depth = (h - c[2]) * inv + radius
-    if depth <= 0.0:
-        return -1.0
-    nrm[0], nrm[1], nrm[2] = -slope * inv, -0.0 * inv, inv
-    pt[0], pt[1], pt[2] = c[0], c[1], h
-    return float(depth)
+    return tangent_plane_contact(c, radius, h + op[9], slope, 0.0, nrm, pt)
 
 
 @jit
@@ -622,6 +636,7 @@ def contact_step(
     a_p: FloatArray,
     a_terms: FloatArray,
     a_nterms: IntArray,
+    a_grid: FloatArray,
     stick: FloatArray,
     params: FloatArray,
     c: FloatArray,
@@ -640,7 +655,9 @@ def contact_step(
     nrm = np.empty(3)
     pt = np.empty(3)
     for i in range(a_kind.shape[0]):
-        depth = _object_contact(a_kind[i], a_p[i], a_terms[i], a_nterms[i], c, radius, nrm, pt)
+        depth = _object_contact(
+            a_kind[i], a_p[i], a_terms[i], a_nterms[i], a_grid[i], c, radius, nrm, pt
+        )
         if depth <= 0.0:
             stick[i, 0] = stick[i, 1] = stick[i, 2] = 0.0
             continue
@@ -690,6 +707,7 @@ def plant_step(
     a_p: FloatArray,
     a_terms: FloatArray,
     a_nterms: IntArray,
+    a_grid: FloatArray,
     a_rot_task: FloatArray,
     params: FloatArray,
     q: FloatArray,
@@ -756,7 +774,9 @@ def plant_step(
         v[j] = (tcp[j] - state[S_P_PREV + j]) / dt
         state[S_P_PREV + j] = tcp[j]
     f = np.empty(3)
-    count = contact_step(a_kind, a_p, a_terms, a_nterms, stick, params, tcp, v, f, points, normals)
+    count = contact_step(
+        a_kind, a_p, a_terms, a_nterms, a_grid, stick, params, tcp, v, f, points, normals
+    )
     r = a_rot_task
     for j in range(3):
         force_true[j] = r[0, j] * f[0] + r[1, j] * f[1] + r[2, j] * f[2]

@@ -28,7 +28,7 @@ R = TypeVar("R")
 
 LOOPS = ("auto", "compiled", "python")
 #: How a fuzzy-PI's surface is evaluated: ``exact`` engine (Python loop), the generated
-#: double lookup ``table`` (both loops), the generated ``c`` through ctypes (Python loop);
+#: double lookup ``table`` (both loops), the generated ``c`` through ctypes (both loops);
 #: ``auto``: the table in the compiled loop, the exact engine in the Python loop.
 FUZZY_IMPLS = ("auto", "exact", "table", "c")
 
@@ -88,10 +88,11 @@ def run_spec(spec: RunSpec) -> RunResult:
     """Run ``spec`` and return the whole :class:`RunResult` (traces included).
 
     The compiled loop runs the fuzzy-PI as the rule base's double lookup table (the generated
-    code's arithmetic); the Python loop runs it on the exact engine. A plant the compiled loop
-    does not model (E3 on arm6: its 3-D ``HeightField`` floor; the planar plant on a machine
-    other than x86-64 or AArch64) runs in the Python loop, and the result's ``loop`` says so:
-    ``python (fallback: ...)``.
+    code's arithmetic), or with ``fuzzy_impl="c"`` calls the generated C itself; the Python
+    loop runs it on the exact engine (or the table, or the C). A plant the compiled loop
+    does not model (:class:`~fuzzkit.plants.contract.UnsupportedPlant`: the planar plant on a
+    machine other than x86-64 or AArch64) runs in the Python loop, and the result's ``loop``
+    says so: ``python (fallback: ...)``.
     """
     from fuzzkit.studies.experiments import with_stiffness
     from fuzzkit.studies.faults import fault
@@ -110,15 +111,20 @@ def run_spec(spec: RunSpec) -> RunResult:
     loop = spec.resolved_loop()
     fallback = ""
     if loop == "compiled":
-        if impl not in ("auto", "table"):
+        if impl == "exact":
             raise ConfigError(
-                f"the compiled loop runs the fuzzy-PI as the lookup table, not {impl!r}; "
-                "use --loop python"
+                "the compiled loop runs the fuzzy-PI as the lookup table or the generated C, "
+                f"not {impl!r}; use --loop python"
             )
         from fuzzkit.plants.contract import UnsupportedPlant
+        from fuzzkit.studies.compiled.generated_c import load_generated_c
         from fuzzkit.studies.compiled.loop import compiled_table, run_compiled
 
-        table = compiled_table(spec.rulebase) if spec.controller == "fuzzy-pi" else None
+        table = generated = None
+        if spec.controller == "fuzzy-pi" and impl == "c":
+            generated = load_generated_c(spec.rulebase)
+        elif spec.controller == "fuzzy-pi":
+            table = compiled_table(spec.rulebase)
         try:
             return run_compiled(
                 exp,
@@ -130,9 +136,10 @@ def run_spec(spec: RunSpec) -> RunResult:
                 faults=faults,
                 latency=spec.latency,
                 duration_s=spec.duration_s,
+                generated_c=generated,
             )
         except UnsupportedPlant as exc:
-            # e.g. E3 on arm6 (its 3-D HeightField floor): the Python loop runs it, and says so
+            # an object or mode the kernel lacks: the Python loop runs it, and says so
             fallback = f" (fallback: {exc})"
     from fuzzkit.studies.runner import run
 
@@ -144,7 +151,7 @@ def run_spec(spec: RunSpec) -> RunResult:
             label = f"exact engine {spec.rulebase} (python)"
         elif impl == "table":
             from fuzzkit.control.controllers import lookup_table_surface
-            from fuzzkit.studies.compiled.loop import load_table
+            from fuzzkit.studies.compiled.table import load_table
 
             table = load_table(spec.rulebase)
             surface = lookup_table_surface(table)

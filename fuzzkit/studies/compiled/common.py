@@ -13,6 +13,7 @@ import numpy.typing as npt
 
 from fuzzkit.errors import ConfigError
 from fuzzkit.studies.compiled import period as P
+from fuzzkit.studies.compiled.generated_c import GeneratedC
 from fuzzkit.studies.compiled.table import table_arrays
 from fuzzkit.studies.experiments import DEFAULT_GAINS, Experiment
 from fuzzkit.studies.faults import Faults, fault_name, fault_schedule
@@ -31,6 +32,7 @@ class ControllerArgs:
     selection: FloatArray
     setpoints: FloatArray
     table: tuple[FloatArray, FloatArray, FloatArray, IntArray]
+    c_eval: Any  # None, or the generated C's NAME_eval (ctypes) that replaces the table
     spike: FloatArray
     nan: BoolArray
     impl: str
@@ -48,13 +50,19 @@ def controller_args(
     faults: Faults | None,
     duration_s: float | None,
     latency: tuple[int, int] | None,
+    generated_c: GeneratedC | None = None,
 ) -> ControllerArgs:
     """The controller arguments of a compiled run: gains, safeguards, latency, fault schedule
     and the fuzzy-PI's table, as ``runner.run`` would set them up."""
     if controller not in DEFAULT_GAINS:
         raise ConfigError(f"unknown controller {controller!r} (expected pi or fuzzy-pi)")
-    if controller == "fuzzy-pi" and table is None:
-        raise ConfigError("the compiled fuzzy-pi needs a lookup table (load_table)")
+    if controller == "fuzzy-pi" and table is None and generated_c is None:
+        raise ConfigError(
+            "the compiled fuzzy-pi needs a lookup table (load_table) or the generated C "
+            "(load_generated_c)"
+        )
+    if table is not None and generated_c is not None:
+        raise ConfigError("give the compiled fuzzy-pi a lookup table or the generated C, not both")
     faults, sensor_delay, command_delay = run_faults_and_latency(exp, seed, faults, latency)
     # The Python controller object validates the gains and holds the safeguard settings.
     hybrid = build_controller(exp, controller, gains, lambda e, de: 0.0)
@@ -89,6 +97,10 @@ def controller_args(
     cp[P.C_DROPOUT_LENGTH] = 0.0 if faults.dropout is None else faults.dropout[1]
     cp[P.C_SPIKE_N] = faults.spike_n
     impl = "pi (compiled)"
+    c_eval = None
+    if generated_c is not None and controller == "fuzzy-pi":
+        c_eval = generated_c.function
+        impl = generated_c.label + " (compiled loop)"
     if table is not None:
         ta = table_arrays(table)
         arrays = (ta.bp0, ta.bp1, ta.values, ta.splits)
@@ -105,6 +117,7 @@ def controller_args(
         selection=np.array([1.0 if s else 0.0 for s in exp.selection]),
         setpoints=np.asarray(exp.setpoints, dtype=np.float64),
         table=arrays,
+        c_eval=c_eval,
         spike=spike,
         nan=nan,
         impl=impl,
@@ -168,21 +181,29 @@ def result_from_recording(
     )
 
 
-_WARMED: set[str] = set()
+#: Kernel variants already loaded in this process: (kernel name, runs the generated C).
+_WARMED: set[tuple[str, bool]] = set()
 
 
 def warm_up(
-    kernel: Callable[..., Any], args: tuple[Any, ...], rec: dict[str, Any], scalars: Any
+    kernel: Callable[..., Any],
+    args: tuple[Any, ...],
+    rec: dict[str, Any],
+    scalars: Any,
+    generated_c: bool,
 ) -> None:
-    """Run ``kernel`` over zero periods once per process, with the run's argument types.
+    """Run ``kernel`` over zero periods once per process and variant, with the run's argument
+    types.
 
     The first call loads the machine code from numba's on-disk cache (or compiles it after an
-    install); done here, that start-up cost stays out of the loop's CPU time.
+    install); done here, that start-up cost stays out of the loop's CPU time. The table and the
+    generated-C variants are separate specialisations (``c_eval`` is typed ``None`` or by the
+    C function's signature), each compiled and cached once.
     """
-    name = getattr(kernel, "__name__", repr(kernel))
-    if name in _WARMED:
+    key = (getattr(kernel, "__name__", repr(kernel)), generated_c)
+    if key in _WARMED:
         return
     state = [np.array(x, copy=True) if isinstance(x, np.ndarray) else x for x in args]
     empty = [v[:0] for v in rec.values()]
     kernel(*state, *empty, scalars.copy())
-    _WARMED.add(name)
+    _WARMED.add(key)

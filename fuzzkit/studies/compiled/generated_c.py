@@ -2,20 +2,65 @@
 
 Lets a closed-loop run exercise the very code that goes on the robot: ``fuzzkit compile
 --target c --type double`` output (``fuzzkit.codegen.emit``), compiled with the system compiler
-(``fuzzkit.codegen.toolchain``), called once per axis and period as ``NAME_eval``.
+(``fuzzkit.codegen.toolchain``), called once per axis and period as ``NAME_eval``: from the
+Python loop through :func:`c_surface`, from the compiled loop through the ctypes function
+itself (:class:`GeneratedC`, which numba calls from nopython code by its address, read when the
+kernel is called: see :func:`call_c_surface`).
 """
 
 from __future__ import annotations
 
 import ctypes
 from collections.abc import Callable
+from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
 
-from fuzzkit.studies.compiled.loop import load_table
+import numpy as np
+import numpy.typing as npt
+
+from fuzzkit.jit import jit
+
+FloatArray = npt.NDArray[np.float64]
 
 #: Compiled libraries stay loaded for the life of the process (one per rule base).
 _LIBRARIES: list[Any] = []
+
+
+@dataclass(frozen=True, slots=True)
+class GeneratedC:
+    """A rule base's generated double C, compiled and loaded: ``function`` is its ``NAME_eval``
+    as a ctypes function (``argtypes`` two ``double *``, no result); ``label`` names it for a
+    run's ``controller_impl``."""
+
+    function: Any
+    label: str
+
+
+@lru_cache(maxsize=4)
+def load_generated_c(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3) -> GeneratedC:
+    """Generate, compile and load the double C of ``rulebase`` at ``tolerance`` (the table of
+    :func:`fuzzkit.studies.compiled.table.load_table`), once per process.
+
+    Raises
+    ------
+    ToolchainError
+        If no C compiler is found or the generated code does not compile.
+    """
+    from fuzzkit.codegen.emit import emit
+    from fuzzkit.codegen.toolchain import CompiledTable
+    from fuzzkit.formats.registry import load
+    from fuzzkit.studies.compiled.table import load_table
+
+    rb = load(rulebase)
+    table = load_table(rulebase, tolerance)
+    files = emit(rb, table, "c")
+    lib = CompiledTable(files, rb.name, "double", 2, 1, fpi=False)
+    _LIBRARIES.append(lib)
+    fn = getattr(lib.library, f"{rb.name}_eval")
+    fn.argtypes = [ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_double)]
+    fn.restype = None
+    return GeneratedC(fn, f"generated C {rb.name}_eval (double, ctypes)")
 
 
 @lru_cache(maxsize=4)
@@ -29,18 +74,8 @@ def c_surface(
     ToolchainError
         If no C compiler is found or the generated code does not compile.
     """
-    from fuzzkit.codegen.emit import emit
-    from fuzzkit.codegen.toolchain import CompiledTable
-    from fuzzkit.formats.registry import load
-
-    rb = load(rulebase)
-    table = load_table(rulebase, tolerance)
-    files = emit(rb, table, "c")
-    lib = CompiledTable(files, rb.name, "double", 2, 1, fpi=False)
-    _LIBRARIES.append(lib)
-    fn = getattr(lib.library, f"{rb.name}_eval")
-    fn.argtypes = [ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_double)]
-    fn.restype = None
+    gen = load_generated_c(rulebase, tolerance)
+    fn = gen.function
     inp = (ctypes.c_double * 2)()
     out = (ctypes.c_double * 1)()
 
@@ -50,5 +85,20 @@ def c_surface(
         fn(inp, out)
         return float(out[0])
 
-    surface.__name__ = f"generated C {rb.name}_eval (double, ctypes)"
+    surface.__name__ = gen.label
     return surface
+
+
+@jit
+def call_c_surface(fn: Any, io: FloatArray, x0: float, x1: float) -> float:
+    """``NAME_eval`` of a generated C at ``(x0, x1)``, from compiled code.
+
+    ``fn`` is the ctypes function (:attr:`GeneratedC.function`); passed as an argument, numba
+    types it by its signature alone and reads its address on every call of the kernel, so the
+    cached machine code never holds a stale pointer. ``io`` is a scratch array of 3 (the two
+    inputs, the output), allocated once per run.
+    """
+    io[0] = x0
+    io[1] = x1
+    fn(io[:2].ctypes, io[2:].ctypes)
+    return float(io[2])

@@ -7,6 +7,8 @@ fault injection, latency queues, the hybrid controller), then recording.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import numpy.typing as npt
 
@@ -50,6 +52,7 @@ def run_arm6(
     a_p: FloatArray,
     a_terms: FloatArray,
     a_nterms: IntArray,
+    a_grid: FloatArray,
     a_rot_task: FloatArray,
     a_offset: FloatArray,
     params: FloatArray,
@@ -68,6 +71,7 @@ def run_arm6(
     bp1: FloatArray,
     tab: FloatArray,
     splits: IntArray,
+    c_eval: Any,  # None: the table above; a generated C's NAME_eval (ctypes): that instead
     # faults, one entry per period: spike sign (0: none), NaN sample
     spike_sign: FloatArray,
     nan_flag: BoolArray,
@@ -108,6 +112,7 @@ def run_arm6(
         sensor_q[k, :] = reset_force
     command_q = np.zeros((cd + 1, 3))
     applied = np.zeros(3)
+    c_io = np.empty(3)
     correction = np.zeros(3)
     corr_base = np.zeros(3)
     # plant outputs
@@ -147,6 +152,7 @@ def run_arm6(
             a_p,
             a_terms,
             a_nterms,
+            a_grid,
             a_rot_task,
             params,
             q,
@@ -170,7 +176,8 @@ def run_arm6(
         inject_faults(cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured)
         consumed = sensor_latency(k, sd, sensor_q, measured, reset_force)
         controller_step(
-            cp, selection, setpoints, bp0, bp1, tab, splits, consumed, t_s, cs, cv, correction
+            cp, selection, setpoints, bp0, bp1, tab, splits, c_eval, c_io, consumed, t_s, cs, cv,
+            correction,
         )
         command_latency(k, cd, command_q, correction, applied)
         # ---- recording ----

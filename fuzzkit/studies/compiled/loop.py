@@ -2,9 +2,10 @@
 
 :func:`run_compiled` takes the arguments of :func:`fuzzkit.studies.runner.run` that the compiled
 loop models; :func:`compiled_supports` says when it applies (the ``arm6`` and ``planar``
-plants, PI or fuzzy-PI with a double lookup table). The plant is reset in Python (arm6: the
-start pose's IK with its seeds; planar: the pymunk space), then one compiled call runs every
-period (the planar one in :mod:`fuzzkit.studies.compiled.planar_loop`).
+plants, PI or fuzzy-PI with a double lookup table, or with the generated C through ctypes). The
+plant is reset in Python (arm6: the start pose's IK with its seeds; planar: the pymunk space),
+then one compiled call runs every period (the planar one in
+:mod:`fuzzkit.studies.compiled.planar_loop`).
 """
 
 from __future__ import annotations
@@ -28,7 +29,8 @@ from fuzzkit.studies.compiled.common import (
     result_from_recording,
     warm_up,
 )
-from fuzzkit.studies.compiled.table import TableArrays, cached_table
+from fuzzkit.studies.compiled.generated_c import GeneratedC
+from fuzzkit.studies.compiled.table import TableArrays, cached_table, load_table
 from fuzzkit.studies.experiments import Experiment
 from fuzzkit.studies.faults import Faults
 from fuzzkit.studies.runner import RunResult
@@ -59,16 +61,6 @@ def _shared_plant() -> Arm6Plant:
     return Arm6Plant()
 
 
-@lru_cache(maxsize=8)
-def load_table(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3) -> Any:
-    """The double lookup table of a rule base (shipped name or YAML path), as ``fuzzkit compile
-    --target c --type double --tolerance`` builds it: what the compiled fuzzy-PI evaluates."""
-    from fuzzkit.codegen.table_search import make_table
-    from fuzzkit.formats.registry import load
-
-    return make_table(load(rulebase), number_type="double", tolerance=tolerance)
-
-
 def compiled_table(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3) -> TableArrays:
     """:func:`load_table`'s arrays, from the on-disk cache after the first build."""
     from fuzzkit.formats.registry import load
@@ -87,20 +79,25 @@ def run_compiled(
     faults: Faults | None = None,
     duration_s: float | None = None,
     latency: tuple[int, int] | None = None,
+    generated_c: GeneratedC | None = None,
 ) -> RunResult:
     """Run ``exp`` on the arm6 or the planar plant with the compiled loop; same semantics as
     ``runner.run``.
 
     ``table`` is the fuzzy-PI's lookup table (``fuzzkit.codegen`` double table, see
-    :func:`load_table`, or its :class:`TableArrays`, see :func:`compiled_table`); required for
-    ``fuzzy-pi``. ``faults`` and ``latency`` default to the experiment's, as in ``runner.run``.
+    :func:`load_table`, or its :class:`TableArrays`, see :func:`compiled_table`).
+    ``generated_c`` (:func:`fuzzkit.studies.compiled.generated_c.load_generated_c`) makes the
+    fuzzy-PI call the rule base's generated C instead of the table's arithmetic. One of the two
+    is required for ``fuzzy-pi``. ``faults`` and ``latency`` default to the experiment's, as in
+    ``runner.run``.
 
     Raises
     ------
     ConfigError
-        For a plant the compiled loop does not model, an unknown controller, or fuzzy-PI
-        without a table. :class:`~fuzzkit.plants.contract.UnsupportedPlant` (a ConfigError)
-        for a plant with objects or modes the kernel lacks (the Python loop runs it).
+        For a plant the compiled loop does not model, an unknown controller, fuzzy-PI without
+        a table or generated C, or both. :class:`~fuzzkit.plants.contract.UnsupportedPlant`
+        (a ConfigError) for a plant with objects or modes the kernel lacks (the Python loop
+        runs it).
     SimulationError
         When the planar arm's state becomes non-finite, as the Python plant raises it.
     """
@@ -111,7 +108,9 @@ def run_compiled(
                 "use --loop python"
             )
         plant = _shared_plant() if plant == "arm6" else _planar_plant()
-    ctrl = controller_args(exp, controller, gains, table, seed, faults, duration_s, latency)
+    ctrl = controller_args(
+        exp, controller, gains, table, seed, faults, duration_s, latency, generated_c
+    )
     if isinstance(plant, Arm6Plant):
         return _run_arm6(exp, plant, controller, ctrl, seed)
     from fuzzkit.studies.compiled.planar_loop import run_planar_compiled
@@ -162,12 +161,13 @@ def _run_arm6(
     a = arrays
     args = (
         a.links, a.tool_r, a.tool_p, a.lower, a.upper, a.dq_max, a.path_t, a.path_pos,
-        a.path_quat, a.obj_kind, a.obj_p, a.obj_terms, a.obj_nterms, a.rot_task, a.offset,
+        a.path_quat, a.obj_kind, a.obj_p, a.obj_terms, a.obj_nterms, a.obj_grid, a.rot_task,
+        a.offset,
         a.params, a.q, a.q_ref, a.q_ik, a.stick, a.state, noise, reset_force,
-        ctrl.cp, ctrl.selection, ctrl.setpoints, *ctrl.table,
+        ctrl.cp, ctrl.selection, ctrl.setpoints, *ctrl.table, ctrl.c_eval,
         ctrl.spike, ctrl.nan,
     )  # fmt: skip
-    warm_up(K.run_arm6, args, rec, scalars)
+    warm_up(K.run_arm6, args, rec, scalars, ctrl.c_eval is not None)
     wall0 = time.perf_counter()
     cpu0 = time.process_time()
     K.run_arm6(

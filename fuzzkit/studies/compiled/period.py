@@ -12,18 +12,21 @@ these.
 The controller is :class:`fuzzkit.control.controllers.HybridForceController` (spike gate,
 debounced engagement, trip rule, back-off, sensor faults) over PI or fuzzy-PI axis
 controllers, the fuzzy surface being a double lookup table
-(:mod:`fuzzkit.studies.compiled.table`). Its state lives in two arrays made by
+(:mod:`fuzzkit.studies.compiled.table`) or, when ``c_eval`` is a ctypes function, the generated
+C itself (:mod:`fuzzkit.studies.compiled.generated_c`). Its state lives in two arrays made by
 :func:`controller_state`: scalars ``cs`` (``CS_*``) and 3-vectors ``cv`` (rows ``V_*``).
 """
 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.jit import jit
+from fuzzkit.studies.compiled.generated_c import call_c_surface
 from fuzzkit.studies.compiled.table import table2
 
 FloatArray = npt.NDArray[np.float64]
@@ -135,6 +138,8 @@ def _axis_increment(
     bp1: FloatArray,
     tab: FloatArray,
     splits: IntArray,
+    c_eval: Any,
+    c_io: FloatArray,
     e: float,
     de: float,
 ) -> float:
@@ -142,7 +147,9 @@ def _axis_increment(
         return float(cp[C_KP] * de + cp[C_KI] * e)
     en = min(max(cp[C_KI] * e, -1.0), 1.0)
     den = min(max(cp[C_KP] * de, -1.0), 1.0)
-    return float(cp[C_KX] * table2(bp0, bp1, tab, splits, en, den))
+    if c_eval is None:  # a compile-time branch: c_eval is typed None or a C function
+        return float(cp[C_KX] * table2(bp0, bp1, tab, splits, en, den))
+    return float(cp[C_KX] * call_c_surface(c_eval, c_io, en, den))
 
 
 @jit
@@ -154,6 +161,8 @@ def controller_step(
     bp1: FloatArray,
     tab: FloatArray,
     splits: IntArray,
+    c_eval: Any,
+    c_io: FloatArray,
     consumed: FloatArray,
     t_s: float,
     cs: FloatArray,
@@ -161,7 +170,9 @@ def controller_step(
     correction: FloatArray,
 ) -> None:
     """``HybridForceController.step`` on the consumed sample: updates ``cs``/``cv`` and writes
-    the task-frame correction ``S*u + back-off``; records the plant time ``t_s`` at engagement."""
+    the task-frame correction ``S*u + back-off``; records the plant time ``t_s`` at engagement.
+    ``c_eval``: None (the table ``bp0 .. splits``) or the generated C's ``NAME_eval`` (ctypes),
+    ``c_io`` its 3-double scratch buffer."""
     period = cp[C_PERIOD]
     engage_thr = cp[C_ENGAGE_THR]  # NaN: engaged from the start
     rate = cp[C_RATE]  # NaN: no rate limit
@@ -226,7 +237,9 @@ def controller_step(
                 else:
                     cs[CS_ENGAGED] = 1.0
             if go:
-                _axes_step(cp, selection, setpoints, bp0, bp1, tab, splits, f, rate, cs, cv)
+                _axes_step(
+                    cp, selection, setpoints, bp0, bp1, tab, splits, c_eval, c_io, f, rate, cs, cv
+                )
     for i in range(3):
         correction[i] = selection[i] * u[i] + backoff[i]
     if cs[CS_ENGAGED] > 0.0 and math.isnan(cs[CS_ENGAGED_AT]):
@@ -242,6 +255,8 @@ def _axes_step(
     bp1: FloatArray,
     tab: FloatArray,
     splits: IntArray,
+    c_eval: Any,
+    c_io: FloatArray,
     f: FloatArray,
     rate: float,
     cs: FloatArray,
@@ -258,7 +273,7 @@ def _axes_step(
         dei = ei - ax_prev[i] if ax_has_prev[i] > 0.0 else 0.0
         ax_prev[i] = ei
         ax_has_prev[i] = 1.0
-        inc = _axis_increment(cp, bp0, bp1, tab, splits, ei, dei)
+        inc = _axis_increment(cp, bp0, bp1, tab, splits, c_eval, c_io, ei, dei)
         if not math.isfinite(inc):
             inc = 0.0
         if not math.isnan(rate):

@@ -7,6 +7,8 @@ with the arm6 loop (:mod:`fuzzkit.studies.compiled.period`), then recording.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import numpy.typing as npt
 
@@ -58,6 +60,7 @@ def run_planar(
     bp1: FloatArray,
     tab: FloatArray,
     splits: IntArray,
+    c_eval: Any,  # None: the table above; a generated C's NAME_eval (ctypes): that instead
     # faults, one entry per period: spike sign (0: none), NaN sample
     spike_sign: FloatArray,
     nan_flag: BoolArray,
@@ -98,6 +101,7 @@ def run_planar(
         sensor_q[k, :] = reset_force
     command_q = np.zeros((cd + 1, 3))
     applied = np.zeros(3)
+    c_io = np.empty(3)
     correction = np.zeros(3)
     corr_base = np.zeros(3)
     nominal = np.empty(3)
@@ -129,7 +133,8 @@ def run_planar(
         inject_faults(cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured)
         consumed = sensor_latency(k, sd, sensor_q, measured, reset_force)
         controller_step(
-            cp, selection, setpoints, bp0, bp1, tab, splits, consumed, t_s, cs, cv, correction
+            cp, selection, setpoints, bp0, bp1, tab, splits, c_eval, c_io, consumed, t_s, cs, cv,
+            correction,
         )
         command_latency(k, cd, command_q, correction, applied)
         # ---- recording (PlanarArmPlant._sample and the runner's row) ----

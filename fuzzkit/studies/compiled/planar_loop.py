@@ -70,9 +70,9 @@ def run_planar_compiled(
     args = (
         a.path, a.obj_kind, a.obj_p, a.obj_terms, a.obj_nterms, a.rot, a.params, a.functions,
         a.pointers, a.stick, a.state, noise, reset_force,
-        ctrl.cp, ctrl.selection, ctrl.setpoints, *ctrl.table, ctrl.spike, ctrl.nan,
+        ctrl.cp, ctrl.selection, ctrl.setpoints, *ctrl.table, ctrl.c_eval, ctrl.spike, ctrl.nan,
     )  # fmt: skip
-    warm_up(run_planar, args, rec, scalars)
+    warm_up(run_planar, args, rec, scalars, ctrl.c_eval is not None)
     wall0 = time.perf_counter()
     cpu0 = time.process_time()
     kernel: Callable[..., int] = run_planar  # called with the argument list built above

@@ -1,8 +1,10 @@
 """The generated lookup table's arithmetic in compiled code (double-precision 2-D tables).
 
 The same operations, in the same order, as ``fuzzkit.codegen.lut.LookupTable.interpolate`` for
-``number_type="double"`` and hence as the generated C: clamp to the breakpoint range, locate the
-cell, then linear interpolation on the cell's triangle (the diagonal each cell's ``splits`` names).
+``number_type="double"`` (bit for bit) and as the generated C: clamp to the breakpoint range,
+locate the cell, then linear interpolation on the cell's triangle (the diagonal each cell's
+``splits`` names). One difference from the C: it multiplies by a stored reciprocal of the cell
+width where this divides, so a value can differ in its last bit (docs/compiled_loop.md).
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ import math
 import os
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -106,6 +109,17 @@ def table_arrays(table: Any) -> TableArrays:
         splits=splits,
         label=f"lookup table {table.rule_base_name} {shape} double, bound {table.bound[0]:.2e}",
     )
+
+
+@lru_cache(maxsize=8)
+def load_table(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3) -> Any:
+    """The double lookup table of a rule base (shipped name or YAML path), as ``fuzzkit compile
+    --target c --type double --tolerance`` builds it: what the compiled fuzzy-PI evaluates and
+    the generated C (:mod:`fuzzkit.studies.compiled.generated_c`) is emitted from."""
+    from fuzzkit.codegen.table_search import make_table
+    from fuzzkit.formats.registry import load
+
+    return make_table(load(rulebase), number_type="double", tolerance=tolerance)
 
 
 def cache_dir() -> Path:
