@@ -42,7 +42,7 @@ class RunSpec:
     :data:`fuzzkit.studies.faults.FAULTS`, seeded by ``seed`` (None: the experiment's).
     ``gains``: overrides of the default gains, as sorted ``(name, value)`` pairs;
     ``gains_label`` names where they came from (a file) for the table. ``loop``:
-    ``compiled`` (arm6 only), ``python``, or ``auto`` (compiled where supported).
+    ``compiled`` (arm6, planar), ``python``, or ``auto`` (compiled where supported).
     ``duration_s``: None runs the experiment's whole duration.
     """
 
