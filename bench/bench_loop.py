@@ -18,7 +18,7 @@ Tables
    put on the real-time factor with 4 substeps per 4 ms period; in the compiled loop, the
    whole period, the same Chipmunk calls made alone from numba, and their share.
 3. Sweep throughput: runs per wall second of ``fuzzkit sweep`` (all local cores), compiled
-   loop (60 runs) vs Python loop (12 runs).
+   loop (60 runs) vs Python loop (12 runs), on each plant.
 5. The engine at scale: ``Engine.evaluate`` on 1e6 MacVicar-Whelan points, traced peak memory
    and CPU time, chunked (now) vs one pass (``chunk_points`` set huge: the old behaviour); and
    an output with gaussian terms (compiled grid integration), ms per point.
@@ -243,25 +243,30 @@ def _compiled_planar_split() -> tuple[float, float]:
 
 
 def sweep_throughput(workers: int) -> list[tuple[str, float, int]]:
-    """Runs per wall second of a sweep of whole arm6 runs: 60 compiled, 12 Python (the pool's
-    start-up is included, so small sweeps understate the compiled rate)."""
+    """Runs per wall second of a sweep of whole runs on each plant: 60 compiled, 12 Python (the
+    pool's start-up is included, so small sweeps understate the compiled rate)."""
     from fuzzkit.studies.sweep import run_sweep, sweep_specs
 
     out = []
-    for loop, seeds in (("compiled", 5), ("python", 1)):
+    for plant, loop, seeds in (
+        ("arm6", "compiled", 5),
+        ("arm6", "python", 1),
+        ("planar", "compiled", 5),
+        ("planar", "python", 1),
+    ):
         specs = sweep_specs(
             ["E1", "E2", "E3"],
             list(CONTROLLERS),
             stiffnesses_n_per_mm=[5.0, 20.0],
             seeds=seeds,
-            plant="arm6",
+            plant=plant,
             loop=loop,
         )
         t0 = time.perf_counter()
         run_sweep(specs, workers=workers)
         out.append(
             (
-                f"sweep, {len(specs)} arm6 runs, {loop} loop",
+                f"sweep, {len(specs)} {plant} runs, {loop} loop",
                 len(specs) / (time.perf_counter() - t0),
                 len(specs),
             )
