@@ -152,7 +152,8 @@ def test_sigint_on_tune_exits_130_and_keeps_the_best_so_far(tmp_path: Path) -> N
 
     out = tmp_path / "gains.yaml"
     args = ["tune", "E1", "--controller", "pi", "--stiffness", "10", "--budget", "400"]
-    proc = _start([*args, "--workers", "2", "--out", str(out)], tmp_path)
+    # the Python loop: the compiled one would finish 400 evaluations before the interrupt
+    proc = _start([*args, "--loop", "python", "--workers", "2", "--out", str(out)], tmp_path)
     time.sleep(8.0)  # start-up plus the baseline evaluation, then well into the search
     assert proc.poll() is None, "tune ended before the interrupt; raise the budget"
     code, stdout, err = _interrupt(proc)

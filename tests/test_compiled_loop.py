@@ -1,6 +1,13 @@
-"""The compiled closed loop (fuzzkit.studies.compiled) against the Python reference runner.
+"""The compiled closed loops (fuzzkit.studies.compiled) against the Python reference runner.
 
-Tolerance: the compiled period repeats the Python plant's and controller's arithmetic operation
+Planar plant: the compiled period makes the same Chipmunk calls in the same order and repeats
+the Python plant's, sensor's and controller's arithmetic operation for operation in double
+precision, so the traces come out bit for bit equal on this machine. The test allows
+``PLANAR_FORCE_TOL = 1e-9 N`` (a libm or compiler that rounds a sine differently in the last
+place), seven orders below the sensor noise; messages (torque limits, unreachable targets)
+must agree exactly.
+
+arm6 plant: the compiled period repeats the Python plant's and controller's arithmetic operation
 for operation; what differs is the IK's 6x6 linear solve (LU here, LAPACK in numpy) and the
 summation order of small matrix products, a few units in the last place of joint angles. The
 force loop is stable, so such rounding does not grow: observed differences are about 1e-11 N.
@@ -22,7 +29,8 @@ from fuzzkit.control.controllers import lookup_table_surface
 from fuzzkit.errors import ConfigError
 from fuzzkit.plants.arm6 import Arm6Parameters, Arm6Plant, HeightField
 from fuzzkit.plants.arm6_heightfield import height_field_contact, pack_height_field
-from fuzzkit.plants.arm6_kernel import UnsupportedPlant, pack
+from fuzzkit.plants.arm6_kernel import pack
+from fuzzkit.plants.contract import ContactPlant, UnsupportedPlant
 from fuzzkit.studies.compiled.generated_c import GeneratedC
 from fuzzkit.studies.compiled.loop import run_compiled
 from fuzzkit.studies.compiled.table import load_table, table2, table_arrays
@@ -31,25 +39,28 @@ from fuzzkit.studies.experiments import experiment, with_stiffness
 from fuzzkit.studies.faults import FAULTS, FaultInjector, Faults, fault, fault_schedule
 from fuzzkit.studies.runner import RunResult, run
 
-FORCE_TOL = 1e-6  # N
+FORCE_TOL = 1e-6  # N (arm6)
+PLANAR_FORCE_TOL = 1e-9  # N
 U_TOL = 1e-9  # m: corrections are ~1e-3 m, rounding ~1e-16 m
 
 CONTROLLERS = ("pi", "fuzzy-pi")
+PLANTS = ("arm6", "planar")
 
 
 def _both(
     name: str,
     controller: str,
-    plant: Callable[[], Arm6Plant] | None = None,
+    plant: str | Callable[[], ContactPlant] = "arm6",
     **kw: object,
 ) -> tuple[RunResult, RunResult]:
-    """The Python and the compiled loop on the same run; ``plant`` builds a fresh plant for
-    each (default: the shared arm6 plant of both loops)."""
+    """The Python and the compiled loop on the same run; ``plant``: a plant name (arm6: the
+    shared plant of both loops; planar: a fresh one each), or a factory building a fresh plant
+    for each loop."""
     exp = kw.pop("exp", None) or experiment(name)
     table = load_table() if controller == "fuzzy-pi" else None
     surface = lookup_table_surface(table) if table is not None else None
-    py_plant = "arm6" if plant is None else plant()
-    co_plant = "arm6" if plant is None else plant()
+    py_plant = plant if isinstance(plant, str) else plant()
+    co_plant = plant if isinstance(plant, str) else plant()
     py = run(exp, py_plant, controller, surface=surface, **kw)  # type: ignore[arg-type]
     co = run_compiled(exp, co_plant, controller, table=table, **kw)  # type: ignore[arg-type]
     return py, co
@@ -58,21 +69,25 @@ def _both(
 def _assert_same(py: RunResult, co: RunResult, reference_loop: str = "python") -> None:
     """``co`` (a compiled-loop run) repeats ``py`` (a run of ``reference_loop``)."""
     assert co.loop == "compiled" and py.loop == reference_loop
+    assert co.plant == py.plant
+    force_tol = PLANAR_FORCE_TOL if co.plant == "planar" else FORCE_TOL
+    if co.plant == "planar":
+        assert co.messages == py.messages
     assert py.t.shape == co.t.shape
     np.testing.assert_allclose(co.t, py.t, rtol=0, atol=1e-12)
     # same samples missing (sensor rate, faults, latency), exactly
     np.testing.assert_array_equal(np.isnan(co.force), np.isnan(py.force))
-    np.testing.assert_allclose(co.force, py.force, rtol=0, atol=FORCE_TOL, equal_nan=True)
+    np.testing.assert_allclose(co.force, py.force, rtol=0, atol=force_tol, equal_nan=True)
     np.testing.assert_array_equal(np.isnan(co.force_sensor), np.isnan(py.force_sensor))
     np.testing.assert_allclose(
-        co.force_sensor, py.force_sensor, rtol=0, atol=FORCE_TOL, equal_nan=True
+        co.force_sensor, py.force_sensor, rtol=0, atol=force_tol, equal_nan=True
     )
-    np.testing.assert_allclose(co.force_true, py.force_true, rtol=0, atol=FORCE_TOL)
-    np.testing.assert_allclose(co.force_normal, py.force_normal, rtol=0, atol=FORCE_TOL)
+    np.testing.assert_allclose(co.force_true, py.force_true, rtol=0, atol=force_tol)
+    np.testing.assert_allclose(co.force_normal, py.force_normal, rtol=0, atol=force_tol)
     np.testing.assert_allclose(co.u, py.u, rtol=0, atol=U_TOL)
     np.testing.assert_allclose(co.du, py.du, rtol=0, atol=U_TOL)
-    np.testing.assert_allclose(co.e, py.e, rtol=0, atol=FORCE_TOL)
-    np.testing.assert_allclose(co.de, py.de, rtol=0, atol=FORCE_TOL)
+    np.testing.assert_allclose(co.e, py.e, rtol=0, atol=force_tol)
+    np.testing.assert_allclose(co.de, py.de, rtol=0, atol=force_tol)
     np.testing.assert_allclose(co.tool_position, py.tool_position, rtol=0, atol=1e-9)
     np.testing.assert_allclose(co.nominal_position, py.nominal_position, rtol=0, atol=1e-12)
     np.testing.assert_allclose(co.target_position, py.target_position, rtol=0, atol=1e-9)
@@ -94,20 +109,24 @@ def _assert_same(py: RunResult, co: RunResult, reference_loop: str = "python") -
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("plant", PLANTS)
 @pytest.mark.parametrize("controller", CONTROLLERS)
 @pytest.mark.parametrize("name", ["E1", "E2", "E3"])
-def test_compiled_loop_equals_python_loop(name: str, controller: str) -> None:
-    py, co = _both(name, controller, seed=1)
+def test_compiled_loop_equals_python_loop(name: str, controller: str, plant: str) -> None:
+    py, co = _both(name, controller, plant, seed=1)
     assert np.any(co.in_contact)  # a run that never touches would prove little
     _assert_same(py, co)
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("plant", PLANTS)
 @pytest.mark.parametrize("controller", CONTROLLERS)
 @pytest.mark.parametrize("kind", sorted(set(FAULTS) - {"none"}))
-def test_compiled_loop_equals_python_loop_under_faults(controller: str, kind: str) -> None:
+def test_compiled_loop_equals_python_loop_under_faults(
+    controller: str, kind: str, plant: str
+) -> None:
     # every fault kind at the safety matrix's strength (spikes of 40 N > E2's gate of 30 N)
-    py, co = _both("E2", controller, seed=2, faults=fault(kind, 3), duration_s=2.5)
+    py, co = _both("E2", controller, plant, seed=2, faults=fault(kind, 3), duration_s=2.5)
     _assert_same(py, co)
     assert co.fault == kind
     if kind in ("nan", "dropout", "spike"):
@@ -192,17 +211,21 @@ def test_fault_schedule_draws_what_the_injector_draws() -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("plant", PLANTS)
 @pytest.mark.parametrize("latency", [(1, 0), (0, 3), (2, 2)])
-def test_compiled_loop_equals_python_loop_with_latency(latency: tuple[int, int]) -> None:
-    py, co = _both("E1", "fuzzy-pi", latency=latency, duration_s=3.0)
+def test_compiled_loop_equals_python_loop_with_latency(
+    latency: tuple[int, int], plant: str
+) -> None:
+    py, co = _both("E1", "fuzzy-pi", plant, latency=latency, duration_s=3.0)
     _assert_same(py, co)
 
 
 @pytest.mark.slow
-def test_compiled_loop_equals_python_loop_through_a_safety_trip() -> None:
+@pytest.mark.parametrize("plant", PLANTS)
+def test_compiled_loop_equals_python_loop_through_a_safety_trip(plant: str) -> None:
     # 1000 N/mm with the default gains is unstable: the force limit trips and the arm backs off
     exp = with_stiffness(experiment("E2"), 1.0e6)
-    py, co = _both("E2", "pi", exp=exp, duration_s=3.0)
+    py, co = _both("E2", "pi", plant, exp=exp, duration_s=3.0)
     assert py.tripped
     _assert_same(py, co)
 
@@ -226,8 +249,8 @@ def test_table_kernel_reproduces_the_lookup_table_arithmetic() -> None:
 
 def test_compiled_loop_rejects_what_it_does_not_model() -> None:
     exp = experiment("E1")
-    with pytest.raises(ConfigError, match="compiled loop runs on arm6"):
-        run_compiled(exp, "planar", "pi")
+    with pytest.raises(ConfigError, match="compiled loop runs on arm6, planar"):
+        run_compiled(exp, "moon", "pi")
     with pytest.raises(ConfigError, match=r"needs a lookup table .* or the generated C"):
         run_compiled(exp, "arm6", "fuzzy-pi")
     with pytest.raises(ConfigError, match="latency"):
@@ -239,6 +262,44 @@ def test_e3_on_arm6_runs_compiled() -> None:
 
     result = run_spec(RunSpec("E3", "pi", "arm6", duration_s=0.05))
     assert result.loop == "compiled"
+
+
+@pytest.mark.slow
+def test_planar_compiled_loop_reports_torque_limits_as_the_python_loop() -> None:
+    # 1000 N/mm: the servos saturate pressing in, every period's messages are counted
+    exp = with_stiffness(experiment("E2"), 1.0e9)
+    py, co = _both("E2", "pi", "planar", exp=exp, duration_s=1.5)
+    assert any("torque limit" in m for m in py.messages)
+    _assert_same(py, co)
+
+
+def test_planar_compiled_loop_raises_the_python_loops_error_on_a_non_finite_state() -> None:
+    from fuzzkit.errors import SimulationError
+    from fuzzkit.planar_sim import PlanarArmPlant
+    from fuzzkit.planar_sim.arm import ArmParameters
+
+    exp = experiment("E2")
+    broken = ArmParameters(gravity=float("inf"))
+    with pytest.raises(SimulationError, match=r"non-finite at t=0\.004 s") as py:
+        run(exp, PlanarArmPlant(broken), "pi", duration_s=0.5)
+    with pytest.raises(SimulationError, match=r"non-finite at t=0\.004 s") as co:
+        run_compiled(exp, PlanarArmPlant(broken), "pi", duration_s=0.5)
+    assert str(co.value) == str(py.value)
+
+
+def test_planar_runs_compiled_by_default_and_falls_back_where_it_cannot(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from fuzzkit.planar_sim import kernel
+    from fuzzkit.studies.batch import RunSpec, run_spec
+
+    spec = RunSpec("E2", "pi", "planar", duration_s=0.2)
+    assert run_spec(spec).loop == "compiled"
+    # a machine whose calling convention the Chipmunk calls are not lowered for
+    monkeypatch.setattr(kernel, "calls_supported", lambda: False)
+    result = run_spec(spec)
+    assert result.loop.startswith("python (fallback:") and "x86-64 and AArch64" in result.loop
+    assert result.plant == "planar" and len(result.t) == 50
 
 
 def test_what_the_kernel_does_not_model_is_refused_by_name() -> None:
@@ -256,8 +317,9 @@ def _needs_a_c_compiler() -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("plant", PLANTS)
 @pytest.mark.parametrize("name", ["E2", "E3"])
-def test_compiled_loop_runs_the_generated_c(name: str) -> None:
+def test_compiled_loop_runs_the_generated_c(name: str, plant: str) -> None:
     """``--fuzzy-impl c`` in the compiled loop calls the generated C (ctypes) for every sample
     and gives the force traces of the compiled table and of the Python loop calling the same C.
 
@@ -270,7 +332,7 @@ def test_compiled_loop_runs_the_generated_c(name: str) -> None:
     from fuzzkit.studies.batch import RunSpec, run_spec
 
     def spec(**kw: str) -> RunSpec:
-        return RunSpec(name, "fuzzy-pi", "arm6", seed=4, duration_s=4.0, **kw)  # type: ignore[arg-type]
+        return RunSpec(name, "fuzzy-pi", plant, seed=4, duration_s=4.0, **kw)  # type: ignore[arg-type]
 
     c = run_spec(spec(fuzzy_impl="c"))
     table = run_spec(spec(fuzzy_impl="table"))

@@ -102,7 +102,7 @@ def register(subparsers: Any) -> None:
         "--loop",
         choices=("compiled", "python"),
         default=None,
-        help="compiled (numba, arm6 only; fuzzy-pi runs as the rule base's double lookup "
+        help="compiled (numba, arm6 and planar; fuzzy-pi runs as the rule base's double lookup "
         "table, or as its generated C with --fuzzy-impl c) or python (the reference loop; "
         "fuzzy-pi on the exact engine). Default: compiled where the plant supports it",
     )

@@ -55,7 +55,7 @@ def register(subparsers: Any) -> None:
         "--plant",
         choices=sorted(PLANTS),
         default="arm6",
-        help="simulated robot (arm6 runs on the compiled loop)",
+        help="simulated robot (both run on the compiled loop)",
     )
     p.add_argument(
         "--rulebase",

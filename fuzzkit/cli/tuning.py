@@ -73,7 +73,7 @@ def register(subparsers: Any) -> None:
         "--loop",
         choices=("compiled", "python"),
         default=None,
-        help="default: the compiled loop where the plant has one (arm6)",
+        help="default: the compiled loop where the plant has one (arm6, planar)",
     )
     tune.add_argument(
         "--scheduler",

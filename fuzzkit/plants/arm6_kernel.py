@@ -13,7 +13,7 @@ differences are the 6x6 linear solve of the IK step (LU with partial pivoting he
 numpy) and the summation order of small matrix products, which differ in the last bits. The
 equivalence test (``tests/test_compiled_loop.py``) bounds what that does to a closed-loop force
 trace. Sensor noise is drawn beforehand from the same ``numpy.random.Generator`` stream as the
-Python sensor (:func:`sensor_noise`), so both loops see the same noise.
+Python sensor (:func:`fuzzkit.plants.contact.sensor_noise`), so both loops see the same noise.
 """
 
 from __future__ import annotations
@@ -24,7 +24,6 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from fuzzkit.errors import ConfigError
 from fuzzkit.jit import jit
 from fuzzkit.plants.arm6 import Arm6Plant, Box3, ExtrudedProfile, HeightField, Plane
 from fuzzkit.plants.arm6_heightfield import (
@@ -32,6 +31,7 @@ from fuzzkit.plants.arm6_heightfield import (
     pack_height_field,
     tangent_plane_contact,
 )
+from fuzzkit.plants.contract import UnsupportedPlant
 from fuzzkit.plants.environment import _roughness_terms
 
 FloatArray = npt.NDArray[np.float64]
@@ -56,10 +56,6 @@ S_FILTERED = 4  # 3 values
 S_LATEST = 7  # 3 values
 S_P_PREV = 10  # 3 values
 N_STATE = 13
-
-
-class UnsupportedPlant(ConfigError):
-    """The plant uses something the compiled twin does not model (the Python loop still runs)."""
 
 
 @dataclass(slots=True)
@@ -203,14 +199,6 @@ def pack(plant: Arm6Plant) -> Arm6Arrays:
         stick=np.zeros((k, 3)),
         state=state,
     )
-
-
-def sensor_noise(noise_std_n: float, seed: int, samples: int) -> FloatArray:
-    """The sensor noise of ``samples`` samples: the stream :class:`ForceSensor` draws, in order."""
-    if noise_std_n <= 0.0:
-        return np.zeros((samples, 3))
-    rng = np.random.default_rng(seed)
-    return rng.normal(0.0, noise_std_n, (samples, 3))
 
 
 # --------------------------------------------------------------------------------------------

@@ -149,3 +149,12 @@ class ForceSensor:
             return np.full(3, np.nan)
         self._fresh = False
         return self._latest.copy()
+
+
+def sensor_noise(noise_std_n: float, seed: int, samples: int) -> Vec:
+    """The noise of ``samples`` sensor samples, ``(samples, 3)``: the stream :class:`ForceSensor`
+    seeded with ``seed`` draws, in its order (the compiled loops draw it up front)."""
+    if noise_std_n <= 0.0:
+        return np.zeros((samples, 3))
+    rng = np.random.default_rng(seed)
+    return rng.normal(0.0, noise_std_n, (samples, 3))

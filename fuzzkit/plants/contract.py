@@ -188,3 +188,11 @@ class ContactPlant(Protocol):
     def reset(self, scenario: Scenario, seed: int = 0) -> PlantSample: ...
 
     def step(self, correction_xyz: Vec, path_time_s: float) -> PlantSample: ...
+
+
+class UnsupportedPlant(ConfigError):
+    """The plant uses something its compiled twin does not model (the Python loop still runs).
+
+    Raised by the compiled loops' ``pack`` functions (:mod:`fuzzkit.plants.arm6_kernel`,
+    :mod:`fuzzkit.planar_sim.kernel`); callers fall back to the Python loop and say why.
+    """

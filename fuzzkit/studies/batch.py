@@ -42,7 +42,7 @@ class RunSpec:
     :data:`fuzzkit.studies.faults.FAULTS`, seeded by ``seed`` (None: the experiment's).
     ``gains``: overrides of the default gains, as sorted ``(name, value)`` pairs;
     ``gains_label`` names where they came from (a file) for the table. ``loop``:
-    ``compiled`` (arm6 only), ``python``, or ``auto`` (compiled where supported).
+    ``compiled`` (arm6, planar), ``python``, or ``auto`` (compiled where supported).
     ``duration_s``: None runs the experiment's whole duration.
     """
 
@@ -70,7 +70,8 @@ class RunSpec:
             return "compiled" if compiled_supports(self.plant) else "python"
         if self.loop == "compiled" and not compiled_supports(self.plant):
             raise ConfigError(
-                f"the compiled loop does not model the {self.plant} plant (it runs on arm6); "
+                f"the compiled loop does not model the {self.plant} plant (it runs on arm6 and "
+                "planar); "
                 "use --loop python"
             )
         return self.loop
@@ -89,8 +90,9 @@ def run_spec(spec: RunSpec) -> RunResult:
     The compiled loop runs the fuzzy-PI as the rule base's double lookup table (the generated
     code's arithmetic), or with ``fuzzy_impl="c"`` calls the generated C itself; the Python
     loop runs it on the exact engine (or the table, or the C). A plant the compiled loop
-    does not model (:class:`~fuzzkit.plants.arm6_kernel.UnsupportedPlant`) runs in the Python
-    loop, and the result's ``loop`` says so: ``python (fallback: ...)``.
+    does not model (:class:`~fuzzkit.plants.contract.UnsupportedPlant`: the planar plant on a
+    machine other than x86-64 or AArch64) runs in the Python loop, and the result's ``loop``
+    says so: ``python (fallback: ...)``.
     """
     from fuzzkit.studies.experiments import with_stiffness
     from fuzzkit.studies.faults import fault
@@ -114,7 +116,7 @@ def run_spec(spec: RunSpec) -> RunResult:
                 "the compiled loop runs the fuzzy-PI as the lookup table or the generated C, "
                 f"not {impl!r}; use --loop python"
             )
-        from fuzzkit.plants.arm6_kernel import UnsupportedPlant
+        from fuzzkit.plants.contract import UnsupportedPlant
         from fuzzkit.studies.compiled.generated_c import load_generated_c
         from fuzzkit.studies.compiled.loop import compiled_table, run_compiled
 

@@ -1,22 +1,12 @@
-"""The whole closed-loop run as one compiled loop over periods (arm6 plant).
+"""The whole closed-loop run on the arm6 plant as one compiled loop over periods.
 
-Per period, as :func:`fuzzkit.studies.runner.run` does it (the cross-branch timing agreement):
-``plant.step(applied correction)`` -> measured force -> fault injection -> sensor-latency queue
-(the controller consumes the sample of ``sensor_delay`` periods ago, a delay fault's periods
-included; the queue starts filled with the reset sample's force) -> hybrid controller ->
-command-latency queue (the plant receives the correction computed ``command_delay`` periods
-ago; the queue starts with zeros) -> recording.
-
-The controller is :class:`fuzzkit.control.controllers.HybridForceController` (spike gate,
-debounced engagement, trip rule, back-off, sensor faults) over PI or fuzzy-PI
-axis controllers, the fuzzy surface being a double lookup table
-(:mod:`fuzzkit.studies.compiled.table`) or, when ``c_eval`` is a ctypes function, the generated
-C itself (:mod:`fuzzkit.studies.compiled.generated_c`).
+Per period: the compiled plant step (:func:`fuzzkit.plants.arm6_kernel.plant_step`), then the
+plant-independent part shared with the planar loop (:mod:`fuzzkit.studies.compiled.period`:
+fault injection, latency queues, the hybrid controller), then recording.
 """
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -24,48 +14,26 @@ import numpy.typing as npt
 
 from fuzzkit.jit import jit
 from fuzzkit.plants.arm6_kernel import plant_step, pose_at
-from fuzzkit.studies.compiled.generated_c import call_c_surface
-from fuzzkit.studies.compiled.table import table2
+from fuzzkit.studies.compiled.period import (
+    C_COMMAND_DELAY,
+    C_PERIOD,
+    C_SENSOR_DELAY,
+    V_DE,
+    V_DU,
+    V_E,
+    command_latency,
+    controller_state,
+    controller_step,
+    credit_normal,
+    inject_faults,
+    path_held,
+    sensor_latency,
+    store_results,
+)
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 BoolArray = npt.NDArray[np.bool_]
-
-KIND_PI, KIND_FUZZY = 0, 1
-
-# Controller parameter vector (``cp``)
-C_KIND, C_KP, C_KI, C_KX, C_UMIN, C_UMAX, C_RATE = 0, 1, 2, 3, 4, 5, 6
-C_FORCE_LIMIT, C_ENGAGE_THR, C_TRIP_SAMPLES, C_BACKOFF, C_BACKOFF_SPEED = 7, 8, 9, 10, 11
-C_ENGAGE_SAMPLES, C_HOLD, C_PERIOD = 12, 13, 14
-C_SENSOR_DELAY, C_COMMAND_DELAY = 15, 16  # the fault's delay included in the sensor delay
-C_DROPOUT_START, C_DROPOUT_LENGTH, C_SPIKE_N = 17, 18, 19
-C_SPIKE_GATE, C_SPIKE_CONFIRM = 20, 21
-N_CP = 22
-
-# Scalar results (``out_scalars``)
-R_FAULTS, R_TRIPPED, R_TRIP_TIME, R_ENGAGED_TIME = 0, 1, 2, 3
-N_RESULTS = 4
-
-
-@jit
-def _axis_increment(
-    cp: FloatArray,
-    bp0: FloatArray,
-    bp1: FloatArray,
-    tab: FloatArray,
-    splits: IntArray,
-    c_eval: Any,
-    c_io: FloatArray,
-    e: float,
-    de: float,
-) -> float:
-    if int(cp[C_KIND]) == KIND_PI:
-        return float(cp[C_KP] * de + cp[C_KI] * e)
-    en = min(max(cp[C_KI] * e, -1.0), 1.0)
-    den = min(max(cp[C_KP] * de, -1.0), 1.0)
-    if c_eval is None:  # a compile-time branch: c_eval is typed None or a C function
-        return float(cp[C_KX] * table2(bp0, bp1, tab, splits, en, den))
-    return float(cp[C_KX] * call_c_surface(c_eval, c_io, en, den))
 
 
 @jit
@@ -137,35 +105,8 @@ def run_arm6(
     period = cp[C_PERIOD]
     sd = int(cp[C_SENSOR_DELAY])
     cd = int(cp[C_COMMAND_DELAY])
-    hold = cp[C_HOLD] > 0.0
-    engage_thr = cp[C_ENGAGE_THR]  # NaN: engaged from the start
-    rate = cp[C_RATE]  # NaN: no rate limit
-    # controller state
-    u = np.zeros(3)
-    e = np.zeros(3)
-    de = np.zeros(3)
-    du = np.zeros(3)
-    e_last = np.zeros(3)
-    has_e_last = False
-    ax_u = np.zeros(3)
-    ax_prev = np.zeros(3)
-    ax_has_prev = np.zeros(3, dtype=np.bool_)
-    backoff = np.zeros(3)
-    backoff_dir = np.zeros(3)
-    faults = 0
-    engaged = math.isnan(engage_thr)
-    engage_count = 0
-    spike_gate = cp[C_SPIKE_GATE]
-    spike_confirm = int(cp[C_SPIKE_CONFIRM])
-    accepted = np.zeros(3)
-    has_accepted = False
-    rejected_run = 0
-    tripped = False
-    trip_time = math.nan
-    over = 0
-    ctrl_t = 0.0
-    engaged_at = math.nan
-    # queues
+    cs, cv = controller_state(cp)
+    e, de, du = cv[V_E], cv[V_DE], cv[V_DU]
     sensor_q = np.empty((sd + 1, 3))
     for k in range(sd + 1):
         sensor_q[k, :] = reset_force
@@ -186,12 +127,10 @@ def run_arm6(
     points = np.empty((max(n_obj, 1), 3))
     normals = np.empty((max(n_obj, 1), 3))
     measured = np.empty(3)
-    f = np.empty(3)
     path_t = 0.0
     for k in range(n_periods):
-        held = tripped or (hold and engaged and not math.isnan(engaged_at))
         path_before = path_t
-        if not held:
+        if not path_held(cp, cs):
             path_t += period
         for j in range(3):
             corr_base[j] = (
@@ -234,114 +173,13 @@ def run_arm6(
             normals,
         )
         t_s = state[0]
-        # ---- fault injection (fuzzkit.studies.faults.FaultInjector) ----
-        for j in range(3):
-            measured[j] = f_meas[j]
-        if spike_sign[k] != 0.0:
-            s = spike_sign[k] * cp[C_SPIKE_N]
-            measured[0] += s * 1.0
-            measured[1] += s * 0.0
-            measured[2] += s * 1.0
-        if nan_flag[k]:
-            measured[:] = np.nan
-        start = cp[C_DROPOUT_START]
-        if not math.isnan(start) and start <= t_s < start + cp[C_DROPOUT_LENGTH]:
-            measured[:] = np.nan
-        # ---- sensor latency ----
-        sensor_q[k % (sd + 1), :] = measured
-        consumed = sensor_q[(k + 1) % (sd + 1)] if sd > 0 else measured
-        if sd > 0 and k + 1 <= sd:
-            consumed = reset_force
-        # ---- hybrid controller (HybridForceController.step) ----
-        ctrl_t += period
-        du[:] = 0.0
-        valid = True
-        for i in range(3):
-            if selection[i] > 0.0 and not math.isfinite(consumed[i]):
-                valid = False
-        if not valid:
-            faults += 1
-            engage_count = 0
-        else:
-            fmax = 0.0
-            for i in range(3):
-                f[i] = consumed[i] if math.isfinite(consumed[i]) else 0.0
-                fmax = max(fmax, abs(f[i]))
-            # spike gate (HybridForceController._plausible)
-            plausible = True
-            if has_accepted and rejected_run < spike_confirm:
-                jump = 0.0
-                for i in range(3):
-                    jump = max(jump, abs(f[i] - accepted[i]))
-                if jump > spike_gate:
-                    rejected_run += 1
-                    plausible = False
-            if plausible:
-                for i in range(3):
-                    accepted[i] = f[i]
-                has_accepted = True
-                rejected_run = 0
-            if not tripped:
-                # the trip sees every finite sample, gated or not
-                over = over + 1 if fmax > cp[C_FORCE_LIMIT] else 0
-                if over >= (int(cp[C_TRIP_SAMPLES]) if plausible else spike_confirm):
-                    tripped = True
-                    trip_time = ctrl_t
-                    nf = math.sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2])
-                    for i in range(3):
-                        backoff_dir[i] = -f[i] / nf if nf > 0.0 else 0.0
-            if not plausible and not tripped:
-                faults += 1
-                engage_count = 0
-            elif tripped:
-                step = cp[C_BACKOFF_SPEED] * period
-                nb = math.sqrt(backoff[0] ** 2 + backoff[1] ** 2 + backoff[2] ** 2)
-                if nb < cp[C_BACKOFF]:
-                    for i in range(3):
-                        backoff[i] = backoff[i] + step * backoff_dir[i]
-            else:
-                go = True
-                if not engaged:
-                    engage_count = engage_count + 1 if fmax > engage_thr else 0
-                    if engage_count < int(cp[C_ENGAGE_SAMPLES]):
-                        go = False
-                    else:
-                        engaged = True
-                if go:
-                    for i in range(3):
-                        if selection[i] <= 0.0:
-                            continue
-                        before = u[i]
-                        # _Incremental.step of the axis controller
-                        ei = setpoints[i] - f[i]
-                        dei = ei - ax_prev[i] if ax_has_prev[i] else 0.0
-                        ax_prev[i] = ei
-                        ax_has_prev[i] = True
-                        inc = _axis_increment(cp, bp0, bp1, tab, splits, c_eval, c_io, ei, dei)
-                        if not math.isfinite(inc):
-                            inc = 0.0
-                        if not math.isnan(rate):
-                            inc = min(max(inc, -rate), rate)
-                        ax_u[i] = min(max(ax_u[i] + inc, cp[C_UMIN]), cp[C_UMAX])
-                        u[i] = ax_u[i]
-                        du[i] = u[i] - before
-                        e[i] = setpoints[i] - f[i]
-                    for i in range(3):
-                        de[i] = e[i] - e_last[i] if has_e_last else 0.0
-                        e_last[i] = e[i]
-                    has_e_last = True
-        for i in range(3):
-            correction[i] = selection[i] * u[i] + backoff[i]
-        if engaged and math.isnan(engaged_at):
-            engaged_at = t_s
-        # ---- command latency ----
-        command_q[k % (cd + 1), :] = correction
-        if cd == 0:
-            applied[:] = correction
-        elif k + 1 <= cd:
-            applied[:] = 0.0
-        else:
-            applied[:] = command_q[(k + 1) % (cd + 1)]
+        inject_faults(cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured)
+        consumed = sensor_latency(k, sd, sensor_q, measured, reset_force)
+        controller_step(
+            cp, selection, setpoints, bp0, bp1, tab, splits, c_eval, c_io, consumed, t_s, cs, cv,
+            correction,
+        )
+        command_latency(k, cd, command_q, correction, applied)
         # ---- recording ----
         moving = False
         if path_t > path_before:
@@ -370,19 +208,9 @@ def run_arm6(
         for c in range(count):
             for j in range(3):
                 r_points[k, c, j] = points[c, j] - a_offset[j]
-            # normal_force_by_axis: credit each contact's normal force to its closest task axis
-            best = 0
-            best_abs = -1.0
-            tv = np.empty(3)
-            for j in range(3):
-                tv[j] = (
-                    a_rot_task[0, j] * normals[c, 0]
-                    + a_rot_task[1, j] * normals[c, 1]
-                    + a_rot_task[2, j] * normals[c, 2]
-                )
-                if abs(tv[j]) > best_abs:
-                    best, best_abs = j, abs(tv[j])
-            r_force_normal[k, best] += tv[best]
+            credit_normal(
+                a_rot_task, normals[c, 0], normals[c, 1], normals[c, 2], r_force_normal[k]
+            )
         for i in range(dof):
             r_joints[k, i] = q[i]
             for j in range(3):
@@ -400,7 +228,4 @@ def run_arm6(
                 acc += rot[j, m] * back_j
             r_arm[k, dof, j] = tcp[j] - acc - a_offset[j]
             r_arm[k, dof + 1, j] = tcp[j] - a_offset[j]
-    out_scalars[R_FAULTS] = faults
-    out_scalars[R_TRIPPED] = 1.0 if tripped else 0.0
-    out_scalars[R_TRIP_TIME] = trip_time
-    out_scalars[R_ENGAGED_TIME] = engaged_at
+    store_results(cs, out_scalars)

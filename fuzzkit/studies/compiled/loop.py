@@ -1,33 +1,46 @@
 """Run an experiment through the compiled loop and return the runner's :class:`RunResult`.
 
 :func:`run_compiled` takes the arguments of :func:`fuzzkit.studies.runner.run` that the compiled
-loop models; :func:`compiled_supports` says when it applies (the ``arm6`` plant, PI or fuzzy-PI
-with a double lookup table, or with the generated C through ctypes). The plant is reset in
-Python (the start pose's IK with its seeds), then one compiled call runs every period.
+loop models; :func:`compiled_supports` says when it applies (the ``arm6`` and ``planar``
+plants, PI or fuzzy-PI with a double lookup table, or with the generated C through ctypes). The
+plant is reset in Python (arm6: the start pose's IK with its seeds; planar: the pymunk space),
+then one compiled call runs every period (the planar one in
+:mod:`fuzzkit.studies.compiled.planar_loop`).
 """
 
 from __future__ import annotations
 
-import math
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from functools import lru_cache
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from fuzzkit.errors import ConfigError
 from fuzzkit.plants.arm6 import Arm6Plant
-from fuzzkit.plants.arm6_kernel import IK_STATUS_NAMES, pack, sensor_noise
+from fuzzkit.plants.arm6_kernel import IK_STATUS_NAMES, pack
+from fuzzkit.plants.contact import sensor_noise
 from fuzzkit.studies.compiled import kernel as K
+from fuzzkit.studies.compiled import period as P
+from fuzzkit.studies.compiled.common import (
+    ControllerArgs,
+    controller_args,
+    result_from_recording,
+    warm_up,
+)
 from fuzzkit.studies.compiled.generated_c import GeneratedC
-from fuzzkit.studies.compiled.table import TableArrays, cached_table, load_table, table_arrays
-from fuzzkit.studies.experiments import DEFAULT_GAINS, Experiment
-from fuzzkit.studies.faults import Faults, fault_name, fault_schedule
-from fuzzkit.studies.runner import RunResult, build_controller, run_faults_and_latency
+from fuzzkit.studies.compiled.table import TableArrays, cached_table, load_table
+from fuzzkit.studies.experiments import Experiment
+from fuzzkit.studies.faults import Faults
+from fuzzkit.studies.runner import RunResult
+
+if TYPE_CHECKING:
+    from fuzzkit.planar_sim import PlanarArmPlant
+
 
 #: Plants the compiled loop runs.
-COMPILED_PLANTS = ("arm6",)
+COMPILED_PLANTS = ("arm6", "planar")
 
 _IK_MESSAGES = {
     "max_iterations": "IK not converged this period",
@@ -57,7 +70,7 @@ def compiled_table(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3) -
 
 def run_compiled(
     exp: Experiment,
-    plant: str | Arm6Plant = "arm6",
+    plant: str | Arm6Plant | PlanarArmPlant = "arm6",
     controller: str = "pi",
     *,
     gains: Mapping[str, float] | None = None,
@@ -68,7 +81,8 @@ def run_compiled(
     latency: tuple[int, int] | None = None,
     generated_c: GeneratedC | None = None,
 ) -> RunResult:
-    """Run ``exp`` on the arm6 plant with the compiled loop; same semantics as ``runner.run``.
+    """Run ``exp`` on the arm6 or the planar plant with the compiled loop; same semantics as
+    ``runner.run``.
 
     ``table`` is the fuzzy-PI's lookup table (``fuzzkit.codegen`` double table, see
     :func:`load_table`, or its :class:`TableArrays`, see :func:`compiled_table`).
@@ -81,9 +95,11 @@ def run_compiled(
     ------
     ConfigError
         For a plant the compiled loop does not model, an unknown controller, fuzzy-PI without
-        a table or generated C, or both. :class:`~fuzzkit.plants.arm6_kernel.UnsupportedPlant`
-        (a ConfigError) for an arm6 plant with a mode the kernel lacks (the Python loop runs
-        it).
+        a table or generated C, or both. :class:`~fuzzkit.plants.contract.UnsupportedPlant`
+        (a ConfigError) for a plant with objects or modes the kernel lacks (the Python loop
+        runs it).
+    SimulationError
+        When the planar arm's state becomes non-finite, as the Python plant raises it.
     """
     if isinstance(plant, str):
         if not compiled_supports(plant):
@@ -91,65 +107,31 @@ def run_compiled(
                 f"the compiled loop runs on {', '.join(COMPILED_PLANTS)} (got {plant!r}); "
                 "use --loop python"
             )
-        plant = _shared_plant()
-    if controller not in DEFAULT_GAINS:
-        raise ConfigError(f"unknown controller {controller!r} (expected pi or fuzzy-pi)")
-    if controller == "fuzzy-pi" and table is None and generated_c is None:
-        raise ConfigError(
-            "the compiled fuzzy-pi needs a lookup table (load_table) or the generated C "
-            "(load_generated_c)"
-        )
-    if table is not None and generated_c is not None:
-        raise ConfigError("give the compiled fuzzy-pi a lookup table or the generated C, not both")
-    faults, sensor_delay, command_delay = run_faults_and_latency(exp, seed, faults, latency)
-    # The Python controller object validates the gains and holds the safeguard settings.
-    hybrid = build_controller(exp, controller, gains, lambda e, de: 0.0)
-    g = dict(DEFAULT_GAINS[controller])
-    g.update(gains or {})
+        plant = _shared_plant() if plant == "arm6" else _planar_plant()
+    ctrl = controller_args(
+        exp, controller, gains, table, seed, faults, duration_s, latency, generated_c
+    )
+    if isinstance(plant, Arm6Plant):
+        return _run_arm6(exp, plant, controller, ctrl, seed)
+    from fuzzkit.studies.compiled.planar_loop import run_planar_compiled
+
+    return run_planar_compiled(exp, plant, controller, ctrl, seed)
+
+
+def _planar_plant() -> PlanarArmPlant:
+    from fuzzkit.planar_sim import PlanarArmPlant
+
+    return PlanarArmPlant()
+
+
+def _run_arm6(
+    exp: Experiment, plant: Arm6Plant, controller: str, ctrl: ControllerArgs, seed: int
+) -> RunResult:
     scn = exp.scenario
-    n = round((duration_s or scn.duration_s) / scn.period_s)
+    n = ctrl.periods
     reset = plant.reset(scn, seed=seed)
     arrays = pack(plant)  # UnsupportedPlant (a ConfigError) for what the kernel lacks
     noise = sensor_noise(scn.sensor.noise_std_n, seed, n + 1)
-    spike, nan = fault_schedule(faults, n)
-    rate_limit = g.get("rate_limit")
-    cp = np.zeros(K.N_CP)
-    cp[K.C_KIND] = K.KIND_PI if controller == "pi" else K.KIND_FUZZY
-    cp[K.C_KP] = g["kp"]
-    cp[K.C_KI] = g["ki"]
-    cp[K.C_KX] = g.get("kx", 0.0)
-    cp[K.C_UMIN] = g.get("u_min", -math.inf)
-    cp[K.C_UMAX] = g.get("u_max", math.inf)
-    cp[K.C_RATE] = math.nan if rate_limit is None else rate_limit
-    cp[K.C_FORCE_LIMIT] = hybrid.force_limit_n
-    thr = hybrid.engage_threshold_n
-    cp[K.C_ENGAGE_THR] = math.nan if thr is None else thr
-    cp[K.C_TRIP_SAMPLES] = hybrid.trip_samples
-    cp[K.C_BACKOFF] = hybrid.backoff_m
-    cp[K.C_BACKOFF_SPEED] = hybrid.backoff_speed_m_s
-    cp[K.C_ENGAGE_SAMPLES] = hybrid.engage_samples
-    cp[K.C_HOLD] = 1.0 if exp.hold_path_on_contact else 0.0
-    cp[K.C_PERIOD] = scn.period_s
-    cp[K.C_SENSOR_DELAY] = sensor_delay
-    cp[K.C_COMMAND_DELAY] = command_delay
-    cp[K.C_SPIKE_GATE] = hybrid.spike_gate_n
-    cp[K.C_SPIKE_CONFIRM] = hybrid.spike_confirm
-    cp[K.C_DROPOUT_START] = math.nan if faults.dropout is None else faults.dropout[0]
-    cp[K.C_DROPOUT_LENGTH] = 0.0 if faults.dropout is None else faults.dropout[1]
-    cp[K.C_SPIKE_N] = faults.spike_n
-    impl = "pi (compiled)"
-    c_eval = None
-    if generated_c is not None and controller == "fuzzy-pi":
-        c_eval = generated_c.function
-        impl = generated_c.label + " (compiled loop)"
-    if table is not None:
-        ta = table_arrays(table)
-        bp0, bp1, tab, splits = ta.bp0, ta.bp1, ta.values, ta.splits
-        impl = ta.label + " (compiled)"
-    else:
-        bp0 = bp1 = np.array([-1.0, 1.0])
-        tab = np.zeros((2, 2))
-        splits = np.zeros((1, 1), dtype=np.int64)
     dof = arrays.q.shape[0]
     n_obj = max(arrays.obj_kind.shape[0], 1)
     rec = {
@@ -174,9 +156,7 @@ def run_compiled(
         "points": np.zeros((n, n_obj, 3)),
         "npoints": np.empty(n, dtype=np.int64),
     }
-    scalars = np.zeros(K.N_RESULTS)
-    selection = np.array([1.0 if s else 0.0 for s in exp.selection])
-    setpoints = np.asarray(exp.setpoints, dtype=np.float64)
+    scalars = np.zeros(P.N_RESULTS)
     reset_force = np.asarray(reset.force, dtype=np.float64).copy()
     a = arrays
     args = (
@@ -184,10 +164,10 @@ def run_compiled(
         a.path_quat, a.obj_kind, a.obj_p, a.obj_terms, a.obj_nterms, a.obj_grid, a.rot_task,
         a.offset,
         a.params, a.q, a.q_ref, a.q_ik, a.stick, a.state, noise, reset_force,
-        cp, selection, setpoints, bp0, bp1, tab, splits, c_eval,
-        spike, nan,
+        ctrl.cp, ctrl.selection, ctrl.setpoints, *ctrl.table, ctrl.c_eval,
+        ctrl.spike, ctrl.nan,
     )  # fmt: skip
-    _warm_up(args, rec, scalars, c_eval is not None)
+    warm_up(K.run_arm6, args, rec, scalars, ctrl.c_eval is not None)
     wall0 = time.perf_counter()
     cpu0 = time.process_time()
     K.run_arm6(
@@ -208,63 +188,6 @@ def run_compiled(
     limited = int(np.count_nonzero(rec["limited"]))
     if limited:
         messages["joint speed limit"] = limited
-    trip_time = float(scalars[K.R_TRIP_TIME])
-    engaged_time = float(scalars[K.R_ENGAGED_TIME])
-    return RunResult(
-        experiment=exp,
-        controller=controller,
-        plant="arm6",
-        t=rec["t"],
-        force=rec["force"],
-        force_sensor=rec["force_sensor"],
-        force_true=rec["force_true"],
-        setpoint=np.tile(setpoints, (n, 1)),
-        e=rec["e"],
-        de=rec["de"],
-        du=rec["du"],
-        u=rec["u"],
-        tool_position=rec["tool"],
-        nominal_position=rec["nominal"],
-        target_position=rec["target"],
-        joint_angles=rec["joints"],
-        in_contact=rec["contact"],
-        force_normal=rec["force_normal"],
-        moving=rec["moving"],
-        arm_points=list(rec["arm"]),
-        contact_points=[rec["points"][k, : rec["npoints"][k]] for k in range(n)],
-        faults=int(scalars[K.R_FAULTS]),
-        tripped=bool(scalars[K.R_TRIPPED]),
-        seed=seed,
-        latency_periods=(sensor_delay, command_delay),
-        fault=fault_name(faults),
-        fault_seed=faults.seed,
-        trip_time_s=None if math.isnan(trip_time) else trip_time,
-        engaged_time_s=None if math.isnan(engaged_time) else engaged_time,
-        wall_time_s=wall,
-        messages=messages,
-        loop="compiled",
-        cpu_time_s=cpu,
-        controller_impl=impl,
+    return result_from_recording(
+        exp, "arm6", controller, ctrl, seed, rec, scalars, messages, cpu, wall
     )
-
-
-#: Kernel variants already loaded in this process: False for the table, True for the C.
-_WARM: set[bool] = set()
-
-
-def _warm_up(args: tuple[Any, ...], rec: dict[str, Any], scalars: Any, variant: bool) -> None:
-    """Run the kernel over zero periods once per process and variant, with the run's argument
-    types.
-
-    The first call loads the machine code from numba's on-disk cache (or compiles it after an
-    install); done here, that start-up cost stays out of the loop's CPU time. The table and the
-    generated-C variants are separate specialisations (``c_eval`` is typed ``None`` or by the
-    C function's signature), each compiled and cached once.
-    """
-    if variant in _WARM:
-        return
-    state = [np.array(x, copy=True) if isinstance(x, np.ndarray) else x for x in args]
-    empty = [v[:0] for v in rec.values()]
-    kernel: Callable[..., None] = K.run_arm6  # called with the argument list built above
-    kernel(*state, *empty, scalars.copy())
-    _WARM.add(variant)

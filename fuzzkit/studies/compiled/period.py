@@ -1,0 +1,314 @@
+"""The plant-independent part of one compiled period, shared by every compiled loop.
+
+Per period, as :func:`fuzzkit.studies.runner.run` does it (the cross-branch timing agreement):
+the plant's measured force -> :func:`inject_faults` -> :func:`sensor_latency` (the controller
+consumes the sample of ``sensor_delay`` periods ago, a delay fault's periods included; the queue
+starts filled with the reset sample's force) -> :func:`controller_step` -> :func:`command_latency`
+(the plant receives the correction computed ``command_delay`` periods ago; the queue starts with
+zeros). The plant kernels (:mod:`fuzzkit.studies.compiled.kernel` for arm6,
+:mod:`fuzzkit.studies.compiled.planar_kernel` for the pymunk arm) wrap their plant step with
+these.
+
+The controller is :class:`fuzzkit.control.controllers.HybridForceController` (spike gate,
+debounced engagement, trip rule, back-off, sensor faults) over PI or fuzzy-PI axis
+controllers, the fuzzy surface being a double lookup table
+(:mod:`fuzzkit.studies.compiled.table`) or, when ``c_eval`` is a ctypes function, the generated
+C itself (:mod:`fuzzkit.studies.compiled.generated_c`). Its state lives in two arrays made by
+:func:`controller_state`: scalars ``cs`` (``CS_*``) and 3-vectors ``cv`` (rows ``V_*``).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from fuzzkit.jit import jit
+from fuzzkit.studies.compiled.generated_c import call_c_surface
+from fuzzkit.studies.compiled.table import table2
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+BoolArray = npt.NDArray[np.bool_]
+
+KIND_PI, KIND_FUZZY = 0, 1
+
+# Controller parameter vector (``cp``)
+C_KIND, C_KP, C_KI, C_KX, C_UMIN, C_UMAX, C_RATE = 0, 1, 2, 3, 4, 5, 6
+C_FORCE_LIMIT, C_ENGAGE_THR, C_TRIP_SAMPLES, C_BACKOFF, C_BACKOFF_SPEED = 7, 8, 9, 10, 11
+C_ENGAGE_SAMPLES, C_HOLD, C_PERIOD = 12, 13, 14
+C_SENSOR_DELAY, C_COMMAND_DELAY = 15, 16  # the fault's delay included in the sensor delay
+C_DROPOUT_START, C_DROPOUT_LENGTH, C_SPIKE_N = 17, 18, 19
+C_SPIKE_GATE, C_SPIKE_CONFIRM = 20, 21
+N_CP = 22
+
+# Scalar results (``out_scalars``)
+R_FAULTS, R_TRIPPED, R_TRIP_TIME, R_ENGAGED_TIME = 0, 1, 2, 3
+N_RESULTS = 4
+
+# Controller scalar state (``cs``); flags are 0.0 / 1.0, times NaN until they happen
+CS_FAULTS, CS_ENGAGED, CS_ENGAGE_COUNT, CS_HAS_ACCEPTED, CS_REJECTED_RUN = 0, 1, 2, 3, 4
+CS_TRIPPED, CS_TRIP_TIME, CS_OVER, CS_CTRL_T, CS_ENGAGED_AT, CS_HAS_E_LAST = 5, 6, 7, 8, 9, 10
+N_CS = 11
+
+# Controller vector state (rows of ``cv``)
+V_U, V_E, V_DE, V_DU, V_E_LAST, V_AX_U, V_AX_PREV, V_AX_HAS_PREV = 0, 1, 2, 3, 4, 5, 6, 7
+V_BACKOFF, V_BACKOFF_DIR, V_ACCEPTED = 8, 9, 10
+N_CV = 11
+
+
+@jit
+def controller_state(cp: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """A fresh controller state ``(cs, cv)``: nothing seen, engaged at once without threshold."""
+    cs = np.zeros(N_CS)
+    cs[CS_ENGAGED] = 1.0 if math.isnan(cp[C_ENGAGE_THR]) else 0.0
+    cs[CS_TRIP_TIME] = math.nan
+    cs[CS_ENGAGED_AT] = math.nan
+    return cs, np.zeros((N_CV, 3))
+
+
+@jit
+def path_held(cp: FloatArray, cs: FloatArray) -> bool:
+    """The runner's rule: the path stops after a trip, or once engaged in a hold experiment."""
+    return cs[CS_TRIPPED] > 0.0 or (
+        cp[C_HOLD] > 0.0 and cs[CS_ENGAGED] > 0.0 and not math.isnan(cs[CS_ENGAGED_AT])
+    )
+
+
+@jit
+def inject_faults(
+    cp: FloatArray,
+    spike_sign: float,
+    nan_sample: bool,
+    t_s: float,
+    f_meas: FloatArray,
+    measured: FloatArray,
+) -> None:
+    """``FaultInjector``: ``measured`` = ``f_meas`` with this period's spike, NaN or dropout."""
+    for j in range(3):
+        measured[j] = f_meas[j]
+    if spike_sign != 0.0:
+        s = spike_sign * cp[C_SPIKE_N]
+        measured[0] += s * 1.0
+        measured[1] += s * 0.0
+        measured[2] += s * 1.0
+    if nan_sample:
+        measured[:] = np.nan
+    start = cp[C_DROPOUT_START]
+    if not math.isnan(start) and start <= t_s < start + cp[C_DROPOUT_LENGTH]:
+        measured[:] = np.nan
+
+
+@jit
+def sensor_latency(
+    k: int, sd: int, sensor_q: FloatArray, measured: FloatArray, reset_force: FloatArray
+) -> FloatArray:
+    """Push period ``k``'s sample into the ring ``sensor_q`` (``sd + 1`` rows); the one the
+    controller consumes: ``sd`` periods old, the reset sample's force before that."""
+    sensor_q[k % (sd + 1), :] = measured
+    if sd == 0:
+        return measured
+    if k + 1 <= sd:
+        return reset_force
+    oldest: FloatArray = sensor_q[(k + 1) % (sd + 1)]
+    return oldest
+
+
+@jit
+def command_latency(
+    k: int, cd: int, command_q: FloatArray, correction: FloatArray, applied: FloatArray
+) -> None:
+    """Push period ``k``'s correction into the ring ``command_q``; ``applied`` = the one
+    computed ``cd`` periods ago (zeros before that)."""
+    command_q[k % (cd + 1), :] = correction
+    if cd == 0:
+        applied[:] = correction
+    elif k + 1 <= cd:
+        applied[:] = 0.0
+    else:
+        applied[:] = command_q[(k + 1) % (cd + 1)]
+
+
+@jit
+def _axis_increment(
+    cp: FloatArray,
+    bp0: FloatArray,
+    bp1: FloatArray,
+    tab: FloatArray,
+    splits: IntArray,
+    c_eval: Any,
+    c_io: FloatArray,
+    e: float,
+    de: float,
+) -> float:
+    if int(cp[C_KIND]) == KIND_PI:
+        return float(cp[C_KP] * de + cp[C_KI] * e)
+    en = min(max(cp[C_KI] * e, -1.0), 1.0)
+    den = min(max(cp[C_KP] * de, -1.0), 1.0)
+    if c_eval is None:  # a compile-time branch: c_eval is typed None or a C function
+        return float(cp[C_KX] * table2(bp0, bp1, tab, splits, en, den))
+    return float(cp[C_KX] * call_c_surface(c_eval, c_io, en, den))
+
+
+@jit
+def controller_step(
+    cp: FloatArray,
+    selection: FloatArray,
+    setpoints: FloatArray,
+    bp0: FloatArray,
+    bp1: FloatArray,
+    tab: FloatArray,
+    splits: IntArray,
+    c_eval: Any,
+    c_io: FloatArray,
+    consumed: FloatArray,
+    t_s: float,
+    cs: FloatArray,
+    cv: FloatArray,
+    correction: FloatArray,
+) -> None:
+    """``HybridForceController.step`` on the consumed sample: updates ``cs``/``cv`` and writes
+    the task-frame correction ``S*u + back-off``; records the plant time ``t_s`` at engagement.
+    ``c_eval``: None (the table ``bp0 .. splits``) or the generated C's ``NAME_eval`` (ctypes),
+    ``c_io`` its 3-double scratch buffer."""
+    period = cp[C_PERIOD]
+    engage_thr = cp[C_ENGAGE_THR]  # NaN: engaged from the start
+    rate = cp[C_RATE]  # NaN: no rate limit
+    spike_confirm = int(cp[C_SPIKE_CONFIRM])
+    u, du = cv[V_U], cv[V_DU]
+    accepted, backoff, backoff_dir = cv[V_ACCEPTED], cv[V_BACKOFF], cv[V_BACKOFF_DIR]
+    f = np.empty(3)
+    cs[CS_CTRL_T] += period
+    du[:] = 0.0
+    valid = True
+    for i in range(3):
+        if selection[i] > 0.0 and not math.isfinite(consumed[i]):
+            valid = False
+    if not valid:
+        cs[CS_FAULTS] += 1.0
+        cs[CS_ENGAGE_COUNT] = 0.0
+    else:
+        fmax = 0.0
+        for i in range(3):
+            f[i] = consumed[i] if math.isfinite(consumed[i]) else 0.0
+            fmax = max(fmax, abs(f[i]))
+        # spike gate (HybridForceController._plausible)
+        plausible = True
+        if cs[CS_HAS_ACCEPTED] > 0.0 and cs[CS_REJECTED_RUN] < spike_confirm:
+            jump = 0.0
+            for i in range(3):
+                jump = max(jump, abs(f[i] - accepted[i]))
+            if jump > cp[C_SPIKE_GATE]:
+                cs[CS_REJECTED_RUN] += 1.0
+                plausible = False
+        if plausible:
+            for i in range(3):
+                accepted[i] = f[i]
+            cs[CS_HAS_ACCEPTED] = 1.0
+            cs[CS_REJECTED_RUN] = 0.0
+        tripped = cs[CS_TRIPPED] > 0.0
+        if not tripped:
+            # the trip sees every finite sample, gated or not
+            cs[CS_OVER] = cs[CS_OVER] + 1.0 if fmax > cp[C_FORCE_LIMIT] else 0.0
+            if cs[CS_OVER] >= (int(cp[C_TRIP_SAMPLES]) if plausible else spike_confirm):
+                tripped = True
+                cs[CS_TRIPPED] = 1.0
+                cs[CS_TRIP_TIME] = cs[CS_CTRL_T]
+                nf = math.sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2])
+                for i in range(3):
+                    backoff_dir[i] = -f[i] / nf if nf > 0.0 else 0.0
+        if not plausible and not tripped:
+            cs[CS_FAULTS] += 1.0
+            cs[CS_ENGAGE_COUNT] = 0.0
+        elif tripped:
+            step = cp[C_BACKOFF_SPEED] * period
+            nb = math.sqrt(backoff[0] ** 2 + backoff[1] ** 2 + backoff[2] ** 2)
+            if nb < cp[C_BACKOFF]:
+                for i in range(3):
+                    backoff[i] = backoff[i] + step * backoff_dir[i]
+        else:
+            go = True
+            if cs[CS_ENGAGED] == 0.0:
+                cs[CS_ENGAGE_COUNT] = cs[CS_ENGAGE_COUNT] + 1.0 if fmax > engage_thr else 0.0
+                if cs[CS_ENGAGE_COUNT] < int(cp[C_ENGAGE_SAMPLES]):
+                    go = False
+                else:
+                    cs[CS_ENGAGED] = 1.0
+            if go:
+                _axes_step(
+                    cp, selection, setpoints, bp0, bp1, tab, splits, c_eval, c_io, f, rate, cs, cv
+                )
+    for i in range(3):
+        correction[i] = selection[i] * u[i] + backoff[i]
+    if cs[CS_ENGAGED] > 0.0 and math.isnan(cs[CS_ENGAGED_AT]):
+        cs[CS_ENGAGED_AT] = t_s
+
+
+@jit
+def _axes_step(
+    cp: FloatArray,
+    selection: FloatArray,
+    setpoints: FloatArray,
+    bp0: FloatArray,
+    bp1: FloatArray,
+    tab: FloatArray,
+    splits: IntArray,
+    c_eval: Any,
+    c_io: FloatArray,
+    f: FloatArray,
+    rate: float,
+    cs: FloatArray,
+    cv: FloatArray,
+) -> None:
+    """The axis controllers' incremental steps (``_Incremental.step``) and e, de, du."""
+    u, e, de, du, e_last = cv[V_U], cv[V_E], cv[V_DE], cv[V_DU], cv[V_E_LAST]
+    ax_u, ax_prev, ax_has_prev = cv[V_AX_U], cv[V_AX_PREV], cv[V_AX_HAS_PREV]
+    for i in range(3):
+        if selection[i] <= 0.0:
+            continue
+        before = u[i]
+        ei = setpoints[i] - f[i]
+        dei = ei - ax_prev[i] if ax_has_prev[i] > 0.0 else 0.0
+        ax_prev[i] = ei
+        ax_has_prev[i] = 1.0
+        inc = _axis_increment(cp, bp0, bp1, tab, splits, c_eval, c_io, ei, dei)
+        if not math.isfinite(inc):
+            inc = 0.0
+        if not math.isnan(rate):
+            inc = min(max(inc, -rate), rate)
+        ax_u[i] = min(max(ax_u[i] + inc, cp[C_UMIN]), cp[C_UMAX])
+        u[i] = ax_u[i]
+        du[i] = u[i] - before
+        e[i] = setpoints[i] - f[i]
+    has_e_last = cs[CS_HAS_E_LAST] > 0.0
+    for i in range(3):
+        de[i] = e[i] - e_last[i] if has_e_last else 0.0
+        e_last[i] = e[i]
+    cs[CS_HAS_E_LAST] = 1.0
+
+
+@jit
+def credit_normal(
+    rot: FloatArray, nx: float, ny: float, nz: float, out: FloatArray
+) -> None:
+    """``normal_force_by_axis`` for one contact: add its base-frame normal force ``(nx, ny,
+    nz)``, in the task frame (``rot`` base-from-task), to the task axis it lies closest to."""
+    best = 0
+    best_abs = -1.0
+    tv = np.empty(3)
+    for j in range(3):
+        tv[j] = rot[0, j] * nx + rot[1, j] * ny + rot[2, j] * nz
+        if abs(tv[j]) > best_abs:
+            best, best_abs = j, abs(tv[j])
+    out[best] += tv[best]
+
+
+@jit
+def store_results(cs: FloatArray, out_scalars: FloatArray) -> None:
+    """The run's scalar results (``R_*``) from the final controller state."""
+    out_scalars[R_FAULTS] = cs[CS_FAULTS]
+    out_scalars[R_TRIPPED] = cs[CS_TRIPPED]
+    out_scalars[R_TRIP_TIME] = cs[CS_TRIP_TIME]
+    out_scalars[R_ENGAGED_TIME] = cs[CS_ENGAGED_AT]

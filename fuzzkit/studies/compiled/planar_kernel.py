@@ -1,0 +1,171 @@
+"""The whole closed-loop run on the pymunk planar arm as one compiled loop over periods.
+
+Per period: the planar plant step (:func:`fuzzkit.planar_sim.kernel.plant_step`: numba code
+around the same Chipmunk calls the Python plant makes), then the plant-independent part shared
+with the arm6 loop (:mod:`fuzzkit.studies.compiled.period`), then recording.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from fuzzkit.jit import jit
+from fuzzkit.planar_sim.kernel import STEP_OK, arm_pose, nominal_at, plant_step
+from fuzzkit.studies.compiled.period import (
+    C_COMMAND_DELAY,
+    C_PERIOD,
+    C_SENSOR_DELAY,
+    V_DE,
+    V_DU,
+    V_E,
+    command_latency,
+    controller_state,
+    controller_step,
+    credit_normal,
+    inject_faults,
+    path_held,
+    sensor_latency,
+    store_results,
+)
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+BoolArray = npt.NDArray[np.bool_]
+
+
+@jit
+def run_planar(
+    # plant (see fuzzkit.planar_sim.kernel.PlanarArrays)
+    a_path: FloatArray,
+    a_kind: IntArray,
+    a_p: FloatArray,
+    a_terms: FloatArray,
+    a_nterms: IntArray,
+    a_rot: FloatArray,
+    params: FloatArray,
+    functions: IntArray,
+    pointers: IntArray,
+    stick: FloatArray,
+    state: FloatArray,
+    noise: FloatArray,
+    reset_force: FloatArray,
+    # controller
+    cp: FloatArray,
+    selection: FloatArray,
+    setpoints: FloatArray,
+    bp0: FloatArray,
+    bp1: FloatArray,
+    tab: FloatArray,
+    splits: IntArray,
+    c_eval: Any,  # None: the table above; a generated C's NAME_eval (ctypes): that instead
+    # faults, one entry per period: spike sign (0: none), NaN sample
+    spike_sign: FloatArray,
+    nan_flag: BoolArray,
+    # recording, one row per period
+    r_t: FloatArray,
+    r_force: FloatArray,
+    r_force_sensor: FloatArray,
+    r_force_true: FloatArray,
+    r_e: FloatArray,
+    r_de: FloatArray,
+    r_du: FloatArray,
+    r_u: FloatArray,
+    r_tool: FloatArray,
+    r_nominal: FloatArray,
+    r_target: FloatArray,
+    r_joints: FloatArray,
+    r_contact: BoolArray,
+    r_force_normal: FloatArray,
+    r_moving: BoolArray,
+    r_flags: IntArray,
+    r_arm: FloatArray,
+    r_points: FloatArray,
+    r_npoints: IntArray,
+    out_scalars: FloatArray,
+) -> int:
+    """Run up to ``r_t.shape[0]`` periods, filling the recording arrays and ``out_scalars``;
+    returns the periods done (fewer when the arm's state became non-finite: ``r_flags[k, 0]``
+    of the last one says so)."""
+    n_periods: int = r_t.shape[0]
+    n_obj = a_kind.shape[0]
+    period = cp[C_PERIOD]
+    sd = int(cp[C_SENSOR_DELAY])
+    cd = int(cp[C_COMMAND_DELAY])
+    cs, cv = controller_state(cp)
+    e, de, du = cv[V_E], cv[V_DE], cv[V_DU]
+    sensor_q = np.empty((sd + 1, 3))
+    for k in range(sd + 1):
+        sensor_q[k, :] = reset_force
+    command_q = np.zeros((cd + 1, 3))
+    applied = np.zeros(3)
+    c_io = np.empty(3)
+    correction = np.zeros(3)
+    corr_base = np.zeros(3)
+    nominal = np.empty(3)
+    nominal_before = np.empty(3)
+    target = np.empty(3)
+    f_true = np.empty(3)
+    f_meas = np.empty(3)
+    points = np.empty((max(n_obj, 1), 2))
+    normals = np.empty((max(n_obj, 1), 2))
+    measured = np.empty(3)
+    path_t = 0.0
+    for k in range(n_periods):
+        path_before = path_t
+        if not path_held(cp, cs):
+            path_t += period
+        for j in range(3):
+            corr_base[j] = (
+                a_rot[j, 0] * applied[0] + a_rot[j, 1] * applied[1] + a_rot[j, 2] * applied[2]
+            )
+        count = plant_step(
+            a_path, a_kind, a_p, a_terms, a_nterms, a_rot, params, functions, pointers, stick,
+            state, noise, corr_base, path_t,
+            nominal, target, f_true, f_meas, points, normals, r_flags[k],
+        )  # fmt: skip
+        if r_flags[k, 0] != STEP_OK:
+            store_results(cs, out_scalars)
+            return k
+        t_s = state[0]
+        inject_faults(cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured)
+        consumed = sensor_latency(k, sd, sensor_q, measured, reset_force)
+        controller_step(
+            cp, selection, setpoints, bp0, bp1, tab, splits, c_eval, c_io, consumed, t_s, cs, cv,
+            correction,
+        )
+        command_latency(k, cd, command_q, correction, applied)
+        # ---- recording (PlanarArmPlant._sample and the runner's row) ----
+        moving = False
+        if path_t > path_before:
+            nominal_at(a_path, path_before, nominal_before)
+            for j in range(3):
+                if abs(nominal[j] - nominal_before[j]) > 1e-9:
+                    moving = True
+        arm_pose(params, functions, pointers, r_joints[k], r_arm[k])
+        r_t[k] = t_s
+        r_moving[k] = moving
+        r_contact[k] = count > 0
+        r_npoints[k] = count
+        for j in range(3):
+            r_force[k, j] = consumed[j]
+            r_force_sensor[k, j] = measured[j]
+            r_force_true[k, j] = f_true[j]
+            r_e[k, j] = e[j]
+            r_de[k, j] = de[j]
+            r_du[k, j] = du[j]
+            r_u[k, j] = correction[j]
+            r_tool[k, j] = r_arm[k, 3, j]
+            r_nominal[k, j] = nominal[j]
+            r_target[k, j] = target[j]
+            r_force_normal[k, j] = 0.0
+        for c in range(count):
+            r_points[k, c, 0] = points[c, 0]
+            r_points[k, c, 1] = 0.0
+            r_points[k, c, 2] = points[c, 1]
+            # what the tool exerts on the object: minus the normal reaction on the tool
+            credit_normal(a_rot, -normals[c, 0], 0.0, -normals[c, 1], r_force_normal[k])
+    store_results(cs, out_scalars)
+    return n_periods

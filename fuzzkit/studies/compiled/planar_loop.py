@@ -1,0 +1,94 @@
+"""Run an experiment on the pymunk planar arm through the compiled loop.
+
+The plant is reset in Python (:meth:`PlanarArmPlant.reset` builds the pymunk space), read into
+arrays (:func:`fuzzkit.planar_sim.kernel.pack`), then one compiled call
+(:func:`fuzzkit.studies.compiled.planar_kernel.run_planar`) runs every period, calling Chipmunk
+directly on that space.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from fuzzkit.errors import SimulationError
+from fuzzkit.planar_sim import PlanarArmPlant
+from fuzzkit.planar_sim.kernel import STEP_NON_FINITE, pack, sensor_samples
+from fuzzkit.plants.contact import sensor_noise
+from fuzzkit.studies.compiled import period as P
+from fuzzkit.studies.compiled.common import ControllerArgs, result_from_recording, warm_up
+from fuzzkit.studies.compiled.planar_kernel import run_planar
+from fuzzkit.studies.experiments import Experiment
+from fuzzkit.studies.runner import RunResult
+
+#: What ``PlanarArmPlant.step`` says, per flag of ``plant_step`` (index 1, 2, 3).
+_MESSAGES = (
+    "target out of reach: joint targets clamped to the workspace boundary",
+    "joint 1 at its torque limit ({:g} N m)",
+    "joint 2 at its torque limit ({:g} N m)",
+)
+
+
+def run_planar_compiled(
+    exp: Experiment, plant: PlanarArmPlant, controller: str, ctrl: ControllerArgs, seed: int
+) -> RunResult:
+    """One compiled run on ``plant`` (see :func:`fuzzkit.studies.compiled.loop.run_compiled`)."""
+    scn = exp.scenario
+    n = ctrl.periods
+    reset = plant.reset(scn, seed=seed)
+    a = pack(plant)  # UnsupportedPlant (a ConfigError) for what the kernel lacks
+    noise = sensor_noise(
+        scn.sensor.noise_std_n, seed, sensor_samples(scn.period_s, scn.sensor.rate_hz, n)
+    )
+    n_obj = max(a.obj_kind.shape[0], 1)
+    rec: dict[str, Any] = {
+        "t": np.empty(n),
+        "force": np.empty((n, 3)),
+        "force_sensor": np.empty((n, 3)),
+        "force_true": np.empty((n, 3)),
+        "e": np.empty((n, 3)),
+        "de": np.empty((n, 3)),
+        "du": np.empty((n, 3)),
+        "u": np.empty((n, 3)),
+        "tool": np.empty((n, 3)),
+        "nominal": np.empty((n, 3)),
+        "target": np.empty((n, 3)),
+        "joints": np.empty((n, 2)),
+        "contact": np.empty(n, dtype=np.bool_),
+        "force_normal": np.empty((n, 3)),
+        "moving": np.empty(n, dtype=np.bool_),
+        "flags": np.zeros((n, 4), dtype=np.int64),
+        "arm": np.empty((n, 4, 3)),
+        "points": np.zeros((n, n_obj, 3)),
+        "npoints": np.empty(n, dtype=np.int64),
+    }
+    scalars = np.zeros(P.N_RESULTS)
+    reset_force = np.asarray(reset.force, dtype=np.float64).copy()
+    args = (
+        a.path, a.obj_kind, a.obj_p, a.obj_terms, a.obj_nterms, a.rot, a.params, a.functions,
+        a.pointers, a.stick, a.state, noise, reset_force,
+        ctrl.cp, ctrl.selection, ctrl.setpoints, *ctrl.table, ctrl.c_eval, ctrl.spike, ctrl.nan,
+    )  # fmt: skip
+    warm_up(run_planar, args, rec, scalars, ctrl.c_eval is not None)
+    wall0 = time.perf_counter()
+    cpu0 = time.process_time()
+    kernel: Callable[..., int] = run_planar  # called with the argument list built above
+    done = kernel(*args, *rec.values(), scalars)
+    cpu = time.process_time() - cpu0
+    wall = time.perf_counter() - wall0
+    flags = rec["flags"]
+    if done < n and flags[done, 0] == STEP_NON_FINITE:
+        t = float(a.state[0])
+        raise SimulationError(f"planar arm state became non-finite at t={t:.3f} s")
+    messages: dict[str, int] = {}
+    limits = (0.0, *plant.params.torque_limit_nm)
+    for i in (1, 2, 3):
+        count = int(np.count_nonzero(flags[:, i]))
+        if count:
+            messages[_MESSAGES[i - 1].format(limits[i - 1])] = count
+    return result_from_recording(
+        exp, "planar", controller, ctrl, seed, rec, scalars, messages, cpu, wall
+    )
