@@ -540,3 +540,27 @@ def test_tune_compares_tuned_with_defaults_per_stiffness_and_latency() -> None:
     text = "\n".join(tune_report_lines(result, cases))
     assert "every case (experiment x stiffness x latency)" in text
     assert "E1@20N/mm@lat3:3 (" in text and "E1@20N/mm@lat0:0 (" in text
+
+
+@pytest.mark.slow
+def test_tuning_e3_on_arm6_prices_the_papers_3d_e3() -> None:
+    """E3 on arm6 is the paper's geometry in ``tune`` as in ``simulate``: the compiled price
+    of a case equals the Python loop's run on the 3-D world (floor and side wall), and
+    differs from the shared E3 (sliding into the wall)."""
+    from fuzzkit.studies.e3_arm6 import e3_arm6_experiment, make_e3_arm6_plant
+    from fuzzkit.studies.experiments import DEFAULT_GAINS
+    from fuzzkit.studies.tuning import TUNING_HORIZON_S, CaseRunner, TuningProblem
+
+    pi = DEFAULT_GAINS["pi"]
+    problem = TuningProblem.build(["E3"], "pi", plant="arm6", stiffnesses_n_per_mm=(10.0,))
+    assert problem.paper_e3_cases == (True,)
+    assert problem.cases[0].scenario.path == e3_arm6_experiment().scenario.path
+    runner = CaseRunner(problem)
+    assert runner.compiled
+    cost = runner.case_costs(pi)[0]
+    h = min(TUNING_HORIZON_S["E3"], problem.cases[0].scenario.duration_s)
+    exp3d = with_stiffness(e3_arm6_experiment(), 10e3)
+    reference = run(exp3d, make_e3_arm6_plant(), "pi", gains=pi, duration_s=h)
+    assert cost == pytest.approx(run_cost(reference), rel=1e-6)
+    shared = run(with_stiffness(experiment("E3"), 10e3), "arm6", "pi", duration_s=h)
+    assert abs(run_cost(shared) - cost) > 1e-3 * cost

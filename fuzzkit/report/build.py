@@ -429,9 +429,9 @@ def _markdown(
         "(ITAE of the force error plus penalties for overshoot, force above the safety limit "
         "and contact loss) over every case of "
         + (
-            f"the same problem for both controllers: {setups['pi'].describe()}. Tuning runs "
-            "each experiment's shared definition (on arm6, E3 is then the planar variant, the "
-            "path sliding into the wall: the compiled loop does not model the 3-D E3's floor)"
+            f"the same problem for both controllers: {setups['pi'].describe()}. E3 on arm6 is "
+            "the paper's 3-D E3 (path along y over a rough floor beside a side wall), as in "
+            "the verdicts"
             if same_setup
             else "the problems listed below (not the same for both controllers: not a fair "
             "comparison)"

@@ -60,8 +60,10 @@ import numpy.typing as npt
 
 from fuzzkit.control.controllers import Surface, engine_table_surface, tabulated_surface
 from fuzzkit.errors import ConfigError
+from fuzzkit.plants.arm6 import Arm6Plant
 from fuzzkit.plants.contract import ContactPlant
 from fuzzkit.studies.batch import default_workers
+from fuzzkit.studies.e3_arm6 import make_e3_arm6_plant, resolve
 from fuzzkit.studies.experiments import DEFAULT_GAINS, Experiment, experiment, with_stiffness
 from fuzzkit.studies.plants import make_plant
 from fuzzkit.studies.runner import RunResult, run
@@ -236,6 +238,8 @@ class TuningProblem:
     loop: str = "auto"
     #: what each case is (parallel to ``cases``)
     case_keys: tuple[TuningCase, ...] = ()
+    #: cases that run the paper's 3-D E3 on its own arm6 world (:mod:`fuzzkit.studies.e3_arm6`)
+    paper_e3_cases: tuple[bool, ...] = ()
 
     def latency_of(self, case: int) -> tuple[int, int] | None:
         """The latency of case ``case`` (None: its experiment's own)."""
@@ -269,7 +273,14 @@ class TuningProblem:
             raise ConfigError(f"unknown controller {controller!r} (expected pi or fuzzy-pi)")
         if not experiments:
             raise ConfigError("tuning needs at least one experiment")
-        exps = [experiment(e) if isinstance(e, str) else e for e in experiments]
+        # A name resolves as ``simulate`` resolves it: E3 on arm6 is the paper's 3-D E3.
+        paper_e3 = [
+            isinstance(e, str) and plant == "arm6" and e.upper() == "E3" for e in experiments
+        ]
+        exps = [
+            (resolve(e, str(plant))[0] if paper else experiment(e)) if isinstance(e, str) else e
+            for e, paper in zip(experiments, paper_e3, strict=True)
+        ]
         names = tuple(e.name for e in exps)
         if len(set(names)) != len(names):
             raise ConfigError(f"experiments listed twice: {', '.join(names)}")
@@ -331,6 +342,7 @@ class TuningProblem:
             case_lats = tuple(pair for _ in range(n_cases) for pair in lats)
         else:
             case_lats = tuple(None for _ in cases)  # each experiment's own latency
+        paper_cases = tuple(paper_e3[g] for g in groups)
         keys = tuple(
             TuningCase(lab, names[g], k, lat)
             for lab, g, k, lat in zip(labels, groups, stiffness_of, case_lats, strict=True)
@@ -355,7 +367,15 @@ class TuningProblem:
             latencies=lats,
             loop=loop,
             case_keys=keys,
+            paper_e3_cases=paper_cases,
         )
+
+    def plant_of(self, case: int) -> Arm6Plant | None:
+        """A fresh plant for case ``case`` when it needs its own world (the paper's E3 on
+        arm6), else None: the problem's ``plant``."""
+        if self.paper_e3_cases and self.paper_e3_cases[case]:
+            return make_e3_arm6_plant()
+        return None
 
     def full_gains(self, gains: Mapping[str, float]) -> dict[str, float]:
         """``gains`` completed with the fixed entries (output limits) of the defaults."""
@@ -436,10 +456,11 @@ class CaseRunner:
         p = self.problem
         full = p.full_gains(gains)
         exp = p.cases[case]
+        own = p.plant_of(case)
         if self.compiled:
             return run_compiled(
                 exp,
-                str(p.plant),
+                own if own is not None else str(p.plant),
                 p.controller,
                 gains=full,
                 table=self.table,
@@ -447,7 +468,7 @@ class CaseRunner:
                 duration_s=duration_s,
                 latency=p.latency_of(case),
             )
-        plant = make_plant(p.plant) if isinstance(p.plant, str) else p.plant()
+        plant = own or (make_plant(p.plant) if isinstance(p.plant, str) else p.plant())
         return run(
             exp,
             plant,
