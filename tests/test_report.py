@@ -249,7 +249,7 @@ def test_the_conclusion_covers_latency_and_stiffness() -> None:
         claims_conclusion([*results, one])
     )
     summary = claims_summary(results)
-    assert "- A: **holds** in every setting judged (6; 2 not judged (a run tripped))." in summary
+    assert "- A: **holds** in every setting judged (6; 2 not judged, as a run tripped)." in summary
     # flip B at 3+3 with tuned gains: the paragraph follows
     results = [
         _cr("B", "tuned", "latency 3+3", True)

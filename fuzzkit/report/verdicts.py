@@ -301,7 +301,7 @@ def claims_summary(results: Sequence[ClaimResult]) -> str:
         judged = [r for r in rs if r.judged]
         n = sum(r.holds for r in judged)
         skipped = len(rs) - len(judged)
-        tail = f"; {skipped} not judged (a run tripped)" if skipped else ""
+        tail = f"; {skipped} not judged, as a run tripped" if skipped else ""
         if judged and n == len(judged):
             lines.append(f"- {claim}: **holds** in every setting judged ({len(judged)}{tail}).")
         elif n == 0:
