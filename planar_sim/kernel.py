@@ -38,6 +38,7 @@ from fuzzkit.planar_sim.chipmunk_calls import (
     function_addresses,
     pointer,
 )
+from fuzzkit.plants.contact import padded_terms
 from fuzzkit.plants.contract import UnsupportedPlant
 from fuzzkit.plants.environment import Box, RoughSurface, Table, _roughness_terms
 
@@ -128,13 +129,7 @@ def pack(plant: PlanarArmPlant) -> PlanarArrays:
                 f"the compiled planar loop does not model {type(obj).__name__} objects"
             )
         term_lists.append(terms)
-    width = max([1, *(len(t) for t in term_lists)])
-    obj_terms = np.zeros((k, width, 3))
-    nterms = np.zeros(k, dtype=np.int64)
-    for i, terms in enumerate(term_lists):
-        nterms[i] = len(terms)
-        if terms:
-            obj_terms[i, : len(terms)] = terms
+    obj_terms, nterms = padded_terms(term_lists)
     sensor, contact = scn.sensor, scn.contact
     dt = plant._dt
     params = np.zeros(N_PARAMS)

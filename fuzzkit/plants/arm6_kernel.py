@@ -31,6 +31,7 @@ from fuzzkit.plants.arm6_heightfield import (
     pack_height_field,
     tangent_plane_contact,
 )
+from fuzzkit.plants.contact import padded_terms
 from fuzzkit.plants.contract import UnsupportedPlant
 from fuzzkit.plants.environment import _roughness_terms
 
@@ -142,13 +143,7 @@ def pack(plant: Arm6Plant) -> Arm6Arrays:
             )
         term_lists.append(terms)
         grids.append(grid)
-    width = max([1, *(len(t) for t in term_lists)])
-    obj_terms = np.zeros((k, width, 3))
-    nterms = np.zeros(k, dtype=np.int64)
-    for i, terms in enumerate(term_lists):
-        nterms[i] = len(terms)
-        if terms:
-            obj_terms[i, : len(terms)] = terms
+    obj_terms, nterms = padded_terms(term_lists)
     obj_grid = np.zeros((k, max([1, *(g.shape[0] for g in grids)])))
     for i, grid in enumerate(grids):
         obj_grid[i, : grid.shape[0]] = grid

@@ -7,6 +7,7 @@ the same code runs in the planar and the 6-DOF plants so their force readings co
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -158,3 +159,18 @@ def sensor_noise(noise_std_n: float, seed: int, samples: int) -> Vec:
         return np.zeros((samples, 3))
     rng = np.random.default_rng(seed)
     return rng.normal(0.0, noise_std_n, (samples, 3))
+
+
+def padded_terms(
+    term_lists: Sequence[Sequence[tuple[float, float, float]]],
+) -> tuple[Vec, npt.NDArray[np.int64]]:
+    """Objects' roughness terms as the compiled loops read them: ``(k, w, 3)`` rows padded with
+    zeros to the longest list (``w`` at least 1), and each object's count, ``(k,)``."""
+    width = max([1, *(len(t) for t in term_lists)])
+    terms = np.zeros((len(term_lists), width, 3))
+    counts = np.zeros(len(term_lists), dtype=np.int64)
+    for i, rows in enumerate(term_lists):
+        counts[i] = len(rows)
+        if rows:
+            terms[i, : len(rows)] = rows
+    return terms, counts
