@@ -75,6 +75,7 @@ package-tree:
 
 lint: $(STAMP)
 	$(BIN)/ruff check fuzzkit codegen planar_sim tests bench
+	$(BIN)/ruff format --check fuzzkit codegen planar_sim tests bench
 
 typecheck: $(STAMP) package-tree
 	cd $(PACKAGE_TREE) && $(CURDIR)/$(BIN)/mypy --config-file $(CURDIR)/pyproject.toml fuzzkit

@@ -80,7 +80,7 @@ def real_time_factors() -> list[tuple[str, float, float | None, int]]:
     return rows
 
 
-_FIRST_CALLS = '''
+_FIRST_CALLS = """
 import json, time
 from fuzzkit.studies.batch import RunSpec, run_spec
 from fuzzkit.studies.compiled.generated_c import load_generated_c
@@ -96,7 +96,7 @@ for label, plant, impl in (
     run_spec(RunSpec("E1", "fuzzy-pi", plant, fuzzy_impl=impl, duration_s=0.1))
     out[label] = (time.process_time() - c0, time.perf_counter() - w0)
 print(json.dumps(out))
-'''
+"""
 
 
 def first_call_costs() -> list[tuple[str, float, float]]:

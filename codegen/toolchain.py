@@ -146,9 +146,7 @@ class CompiledTable:
         )
         sources = [rel for rel in files if rel.endswith(".c")] + ["fuzzkit_harness.c"]
         lib = folder / f"lib{name}.so"
-        run_compiler(
-            [*cc, *flags, "-shared", "-fPIC", "-o", str(lib), *sources, *libs], folder
-        )
+        run_compiler([*cc, *flags, "-shared", "-fPIC", "-o", str(lib), *sources, *libs], folder)
         self.library = ctypes.CDLL(str(lib))
         ptr = ctypes.POINTER(_CTYPES[number_type])
         self._batch = self.library.fuzzkit_batch_eval

@@ -53,8 +53,13 @@ class Verification:
     @property
     def ok(self) -> bool:
         """True when every error is within bound + allowance and NaN matched everywhere."""
-        return self.nan_mismatches == 0 and 100 * self.tie_jumps <= self.n_points and all(
-            e <= b + a for e, b, a in zip(self.max_error, self.bound, self.allowance, strict=True)
+        return (
+            self.nan_mismatches == 0
+            and 100 * self.tie_jumps <= self.n_points
+            and all(
+                e <= b + a
+                for e, b, a in zip(self.max_error, self.bound, self.allowance, strict=True)
+            )
         )
 
     def describe(self) -> str:

@@ -57,9 +57,7 @@ class ProblemsError(FuzzkitError, ValueError):
         if not self.problems:
             raise RuntimeError("ProblemsError needs at least one problem")
         lines = [str(p) for p in self.problems]
-        head = summary or (
-            f"{len(lines)} problem{'s' if len(lines) != 1 else ''} found"
-        )
+        head = summary or (f"{len(lines)} problem{'s' if len(lines) != 1 else ''} found")
         super().__init__(head + ":\n" + "\n".join(lines) if len(lines) > 1 else lines[0])
 
 

@@ -112,9 +112,7 @@ def _call_vec_p(typingctx: Any, addr: Any, obj: Any) -> Any:
     return sig, codegen
 
 
-def _call_v_pvv(
-    typingctx: Any, addr: Any, obj: Any, ax: Any, ay: Any, bx: Any, by: Any
-) -> Any:
+def _call_v_pvv(typingctx: Any, addr: Any, obj: Any, ax: Any, ay: Any, bx: Any, by: Any) -> Any:
     """``void f(void *obj, cpVect a, cpVect b)`` at ``addr``."""
     sig = types.none(
         types.int64, types.int64, types.float64, types.float64, types.float64, types.float64
@@ -132,6 +130,4 @@ def _call_v_pvv(
 call_v_pd = cast(Callable[[int, int, float], None], intrinsic(_call_v_pd))
 call_d_p = cast(Callable[[int, int], float], intrinsic(_call_d_p))
 call_vec_p = cast(Callable[[int, int], tuple[float, float]], intrinsic(_call_vec_p))
-call_v_pvv = cast(
-    Callable[[int, int, float, float, float, float], None], intrinsic(_call_v_pvv)
-)
+call_v_pvv = cast(Callable[[int, int, float, float, float, float], None], intrinsic(_call_v_pvv))

@@ -52,8 +52,10 @@ def test_delay_fault_adds_to_the_sensor_latency(capsys: pytest.CaptureFixture[st
 def test_human_output_prints_the_conditions(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["simulate", "E1", "--controller", "pi", "--fault", "nan", "--seed", "4"]) == 0
     out = capsys.readouterr().out
-    assert "stiffness 10 N/mm, latency 1 + 1 periods (sensor + command), fault nan, seed 4, " \
+    assert (
+        "stiffness 10 N/mm, latency 1 + 1 periods (sensor + command), fault nan, seed 4, "
         "safety limit 25 N" in out
+    )
     assert " N true (" in out and " N measured)" in out
 
 
@@ -62,9 +64,9 @@ def test_a_users_scenario_file_runs_on_either_plant(
 ) -> None:
     task = tmp_path / "my_task.yaml"
     task.write_text(
-        shipped_scenario_text("E1").replace("name: E1", "name: my_task").replace(
-            "duration_s: 5.0", "duration_s: 2.5"
-        )
+        shipped_scenario_text("E1")
+        .replace("name: E1", "name: my_task")
+        .replace("duration_s: 5.0", "duration_s: 2.5")
     )
     for plant in ("planar", "arm6"):
         data = _json(capsys, str(task), "--controller", "pi", "--plant", plant)

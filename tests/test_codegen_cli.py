@@ -70,9 +70,10 @@ def test_c_target_with_verify_and_baked_gains(
     )
     assert code == 0, err
     assert "verify c (q15): ok" in text
-    assert "macvicar_whelan_fpi_step(macvicar_whelan_fpi_t *c, int16_t setpoint" in (
-        out / "macvicar_whelan.h"
-    ).read_text()
+    assert (
+        "macvicar_whelan_fpi_step(macvicar_whelan_fpi_t *c, int16_t setpoint"
+        in (out / "macvicar_whelan.h").read_text()
+    )
     code, text, err = _run(
         capsys,
         "compile",

@@ -58,8 +58,10 @@ def test_the_comparison_catches_a_changed_quantity() -> None:
 
 
 def test_experiment_accepts_a_users_scenario_file(tmp_path: Path) -> None:
-    text = shipped_scenario_text("E2").replace("name: E2", "name: my_task").replace(
-        "z: 30.0", "z: 20.0"
+    text = (
+        shipped_scenario_text("E2")
+        .replace("name: E2", "name: my_task")
+        .replace("z: 30.0", "z: 20.0")
     )
     path = tmp_path / "my_task.yaml"
     path.write_text(text)

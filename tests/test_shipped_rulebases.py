@@ -144,9 +144,7 @@ def test_paper_table1_transposed_is_the_printed_surface_with_inputs_swapped() ->
     # (no integral action), the transposed one ignores de when e = 0 (no proportional action).
     for x in (0.1, 0.3, 0.6):
         assert evaluate_point(printed, {"e": x, "de": 0.0})["du"] == pytest.approx(0, abs=1e-12)
-        assert evaluate_point(transposed, {"e": 0.0, "de": x})["du"] == pytest.approx(
-            0, abs=1e-12
-        )
+        assert evaluate_point(transposed, {"e": 0.0, "de": x})["du"] == pytest.approx(0, abs=1e-12)
         assert evaluate_point(transposed, {"e": x, "de": 0.0})["du"] > 0.05
 
 

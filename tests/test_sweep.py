@@ -36,9 +36,7 @@ def test_sweep_expands_the_cartesian_product_in_order() -> None:
     specs = _specs()
     assert len(specs) == 2 * 2 * 2 * 2 * 2
     assert len(set(specs)) == len(specs)
-    assert specs[0] == RunSpec(
-        "E1", "pi", stiffness_n_per_mm=10.0, latency=(0, 0), duration_s=2.0
-    )
+    assert specs[0] == RunSpec("E1", "pi", stiffness_n_per_mm=10.0, latency=(0, 0), duration_s=2.0)
     # without latencies, every run keeps its experiment's own (None)
     assert {s.latency for s in sweep_specs(["E1"], ["pi"])} == {None}
     assert [s.seed for s in specs[:4]] == [0, 1, 0, 1]

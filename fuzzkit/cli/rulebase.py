@@ -46,9 +46,7 @@ def register(sub: Any) -> None:
         metavar="FILE",
         help="rule-base YAML file or shipped rule-base name (any number)",
     )
-    p.add_argument(
-        "--strict", action="store_true", help="treat warnings (coverage gaps) as errors"
-    )
+    p.add_argument("--strict", action="store_true", help="treat warnings (coverage gaps) as errors")
     p.set_defaults(handler=cmd_validate)
 
     p = sub.add_parser(

@@ -38,6 +38,7 @@ def _latency(text: str) -> tuple[int, int | None]:
         )
     return values[0], values[1] if len(values) == 2 else None
 
+
 #: ``fuzzkit compare --protocol`` choices (fuzzkit.studies.protocol.PROTOCOLS).
 PROTOCOL_CHOICES = ("matched", "tuned", "default")
 

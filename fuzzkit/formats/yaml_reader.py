@@ -1195,9 +1195,7 @@ def read_document(path: str | FsPath, kind: DocumentKind) -> str:
             [Problem(Location(name), "is a directory (expected a .yaml file)")]
         ) from None
     except OSError as exc:
-        raise kind.error(
-            [Problem(Location(name), f"cannot read: {exc.strerror or exc}")]
-        ) from None
+        raise kind.error([Problem(Location(name), f"cannot read: {exc.strerror or exc}")]) from None
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:

@@ -47,9 +47,7 @@ SHAPE_PARAMS: dict[str, tuple[str, ...]] = {
 SUGENO_SHAPES = frozenset({"constant", "linear"})
 
 #: Shapes that are piecewise linear (the exact engine integrates these in closed form).
-PIECEWISE_LINEAR_SHAPES = frozenset(
-    {"triangle", "trapezoid", "left_shoulder", "right_shoulder"}
-)
+PIECEWISE_LINEAR_SHAPES = frozenset({"triangle", "trapezoid", "left_shoulder", "right_shoulder"})
 
 AND_OPERATORS = ("min", "product")
 OR_OPERATORS = ("max", "probabilistic_sum")

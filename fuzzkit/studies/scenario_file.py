@@ -313,9 +313,7 @@ class _ScenarioReader(NodeReader):
             elif key == "fault":
                 name = self.name(node, "a fault kind")
                 if name is not None and name not in FAULTS:
-                    self.error(
-                        node, f"unknown fault {name!r}; expected one of {', '.join(FAULTS)}"
-                    )
+                    self.error(node, f"unknown fault {name!r}; expected one of {', '.join(FAULTS)}")
                 fault = name or fault
         if path is None or objects is None or fc is None or engage is None:
             return None
@@ -494,4 +492,3 @@ def json_schema() -> dict[str, Any]:
             "fault": {"enum": list(FAULTS)},
         },
     }
-

@@ -39,8 +39,11 @@ def write_stability_png(
     ax.set_ylim(-1.5, top + 0.5)
     ax.axhline(top, color="0.8", lw=0.8)
     ax.text(
-        factors[-1], top - 0.35, f"top of the sweep ({top}): stable at every delay tried ",
-        fontsize=8, ha="right",
+        factors[-1],
+        top - 0.35,
+        f"top of the sweep ({top}): stable at every delay tried ",
+        fontsize=8,
+        ha="right",
     )
     ax.set_title("press 10 N at 10 N/mm: stable below each line")
     ax.grid(True, which="both", alpha=0.3)

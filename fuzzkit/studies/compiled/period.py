@@ -290,9 +290,7 @@ def _axes_step(
 
 
 @jit
-def credit_normal(
-    rot: FloatArray, nx: float, ny: float, nz: float, out: FloatArray
-) -> None:
+def credit_normal(rot: FloatArray, nx: float, ny: float, nz: float, out: FloatArray) -> None:
     """``normal_force_by_axis`` for one contact: add its base-frame normal force ``(nx, ny,
     nz)``, in the task frame (``rot`` base-from-task), to the task axis it lies closest to."""
     best = 0

@@ -133,7 +133,19 @@ def run_planar(
         inject_faults(cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured)
         consumed = sensor_latency(k, sd, sensor_q, measured, reset_force)
         controller_step(
-            cp, selection, setpoints, bp0, bp1, tab, splits, c_eval, c_io, consumed, t_s, cs, cv,
+            cp,
+            selection,
+            setpoints,
+            bp0,
+            bp1,
+            tab,
+            splits,
+            c_eval,
+            c_io,
+            consumed,
+            t_s,
+            cs,
+            cv,
             correction,
         )
         command_latency(k, cd, command_q, correction, applied)
