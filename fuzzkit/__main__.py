@@ -1,5 +1,5 @@
 """``python -m fuzzkit``: the same as the ``fuzzkit`` command."""
 
-from fuzzkit.cli import main
+from fuzzkit.cli import console_main
 
-raise SystemExit(main())
+console_main()

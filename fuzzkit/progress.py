@@ -1,14 +1,57 @@
-"""Progress bars for long commands (tune, report, compile), drawn by tqdm.
+"""Progress bars for long commands (tune, report, compile), drawn by tqdm, and the Ctrl-C latch
+they check.
 
 A bar is drawn only on a terminal and when the user did not ask for ``--quiet``: piped or
 logged stderr stays free of carriage returns. Library code never draws one itself; it takes a
 callback, and the command line passes one made here.
+
+Ctrl-C: Python turns SIGINT into a KeyboardInterrupt wherever the interpreter happens to be,
+and one raised inside a finaliser (``__del__``, a weakref callback: numba and llvmlite run many
+while they load or compile a kernel) is printed and dropped, so the command would carry on as
+if nothing happened. :func:`interrupt_latch` remembers the signal as well, and every progress
+update (bars drawn or silent) raises it again: a long command stops at its next step.
 """
 
 from __future__ import annotations
 
+import signal
 import sys
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+from types import FrameType
 from typing import IO, Any
+
+_interrupted = threading.Event()
+
+
+def _on_sigint(signum: int, frame: FrameType | None) -> None:
+    _interrupted.set()
+    raise KeyboardInterrupt
+
+
+@contextmanager
+def interrupt_latch() -> Iterator[None]:
+    """Within the block, SIGINT raises KeyboardInterrupt *and* is remembered for
+    :func:`raise_if_interrupted`; the previous handler comes back afterwards. Outside the main
+    thread (where no handler can be installed) it does nothing."""
+    _interrupted.clear()
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, _on_sigint)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        _interrupted.clear()
+
+
+def raise_if_interrupted() -> None:
+    """Raise KeyboardInterrupt if Ctrl-C came during the current :func:`interrupt_latch`, even
+    when the first KeyboardInterrupt was lost in a finaliser."""
+    if _interrupted.is_set():
+        raise KeyboardInterrupt
 
 
 def progress_wanted(stream: IO[str] | None, quiet: bool = False) -> bool:
@@ -38,10 +81,8 @@ def progress_bar(
     way either way. ``unit_scale`` writes large counts as 36.1k. Use it as a context manager
     so the line is ended (or the bar closed) on an error or Ctrl-C too.
     """
-    from tqdm import tqdm
-
     out = sys.stderr if stream is None else stream
-    return tqdm(
+    return _latched_tqdm()(
         total=total,
         desc=desc,
         unit=unit,
@@ -100,3 +141,21 @@ class TaskBars:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _latched_tqdm() -> Any:
+    """tqdm whose every update first checks the Ctrl-C latch (tqdm is imported on first use)."""
+    global _LATCHED
+    if _LATCHED is None:
+        from tqdm import tqdm
+
+        class LatchedTqdm(tqdm):  # type: ignore[misc]
+            def update(self, n: float | None = 1) -> bool | None:
+                raise_if_interrupted()
+                return super().update(n)  # type: ignore[no-any-return]
+
+        _LATCHED = LatchedTqdm
+    return _LATCHED
+
+
+_LATCHED: Any = None

@@ -106,3 +106,46 @@ def test_table_search_reports_every_evaluated_point_and_the_same_table(
         last[task] = done
     assert sum(last.values()) == counted["points"]
     assert all(re.fullmatch(r"\d+(x\d+)* table", t) for t in last)
+
+
+class _SignalsCtrlCWhenCollected:
+    """Sends SIGINT to this process from its finaliser: the KeyboardInterrupt the handler raises
+    there is printed and dropped by Python, as one landing in numba's finalisers would be."""
+
+    def __del__(self) -> None:
+        import os
+        import signal
+
+        os.kill(os.getpid(), signal.SIGINT)
+        for _ in range(1000):  # give the handler bytecode to run on, inside the finaliser
+            pass
+
+
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+def test_a_ctrl_c_lost_in_a_finaliser_stops_the_next_progress_update() -> None:
+    import gc
+    import signal
+
+    from fuzzkit.progress import interrupt_latch, raise_if_interrupted
+
+    before = signal.getsignal(signal.SIGINT)
+    with interrupt_latch():
+        obj = _SignalsCtrlCWhenCollected()
+        del obj  # the KeyboardInterrupt is lost in __del__: nothing is raised here
+        gc.collect()
+        bar = progress_bar(10, "work", quiet=True)  # silent bars check the latch too
+        with pytest.raises(KeyboardInterrupt):
+            bar.update(1)
+        with pytest.raises(KeyboardInterrupt):
+            raise_if_interrupted()
+    assert signal.getsignal(signal.SIGINT) is before
+    raise_if_interrupted()  # the latch is cleared with the block
+    progress_bar(10, "later", quiet=True).update(1)
+
+
+def test_without_ctrl_c_the_latch_lets_progress_through() -> None:
+    from fuzzkit.progress import interrupt_latch, raise_if_interrupted
+
+    with interrupt_latch():
+        progress_bar(3, "work", quiet=True).update(3)  # raises nothing
+        raise_if_interrupted()

@@ -11,10 +11,12 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import signal
 import sys
 from collections.abc import Sequence
 
 from fuzzkit.errors import FuzzkitError
+from fuzzkit.progress import interrupt_latch
 
 #: Modules under fuzzkit.cli that contribute subcommands, in help order.
 COMMAND_MODULES = (
@@ -101,7 +103,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        code = args.handler(args)
+        with interrupt_latch():
+            code = args.handler(args)
         sys.stdout.flush()  # a closed pipe shows here, not in the interpreter's exit
     except BrokenPipeError:
         # The reader went away (`fuzzkit validate ... | head`): stop quietly, as a command
@@ -133,5 +136,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     return int(code or 0)
 
 
+def console_main() -> None:
+    """The ``fuzzkit`` console script and ``python -m fuzzkit``: :func:`main`, then exit.
+
+    Once the command has finished, a late Ctrl-C has nothing left to stop: it is ignored
+    rather than killing the interpreter while it shuts down (which would report a finished,
+    fully written run as killed by SIGINT).
+    """
+    code = main()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    sys.exit(code)
+
+
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    console_main()

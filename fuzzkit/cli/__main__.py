@@ -1,5 +1,3 @@
-import sys
+from fuzzkit.cli import console_main
 
-from fuzzkit.cli import main
-
-sys.exit(main())
+console_main()
