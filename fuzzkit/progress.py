@@ -6,10 +6,12 @@ logged stderr stays free of carriage returns. Library code never draws one itsel
 callback, and the command line passes one made here.
 
 Ctrl-C: Python turns SIGINT into a KeyboardInterrupt wherever the interpreter happens to be,
-and one raised inside a finaliser (``__del__``, a weakref callback: numba and llvmlite run many
-while they load or compile a kernel) is printed and dropped, so the command would carry on as
-if nothing happened. :func:`interrupt_latch` remembers the signal as well, and every progress
-update (bars drawn or silent) raises it again: a long command stops at its next step.
+and one raised inside a finaliser or a C callback (``__del__``, a weakref callback, a ctypes
+callback: numba and llvmlite run many while they load or compile a kernel) is printed as
+"Exception ignored ..." with a traceback and dropped, so the command would carry on as if
+nothing happened. :func:`interrupt_latch` remembers the signal as well, keeps such a dropped
+KeyboardInterrupt off stderr (the latch has it), and every progress update (bars drawn or
+silent) raises it again: a long command stops at its next step.
 """
 
 from __future__ import annotations
@@ -40,11 +42,26 @@ def interrupt_latch() -> Iterator[None]:
         yield
         return
     previous = signal.signal(signal.SIGINT, _on_sigint)
+    previous_hook = sys.unraisablehook
+    sys.unraisablehook = _quiet_dropped_interrupt(previous_hook)
     try:
         yield
     finally:
+        sys.unraisablehook = previous_hook
         signal.signal(signal.SIGINT, previous)
         _interrupted.clear()
+
+
+def _quiet_dropped_interrupt(hook: Any) -> Any:
+    """An ``sys.unraisablehook`` that passes everything to ``hook`` except a KeyboardInterrupt
+    raised by the latch's own handler, which the latch re-raises at the next progress update."""
+
+    def unraisable(info: Any) -> None:
+        if isinstance(info.exc_value, KeyboardInterrupt) and _interrupted.is_set():
+            return
+        hook(info)
+
+    return unraisable
 
 
 def raise_if_interrupted() -> None:

@@ -149,3 +149,42 @@ def test_without_ctrl_c_the_latch_lets_progress_through() -> None:
     with interrupt_latch():
         progress_bar(3, "work", quiet=True).update(3)  # raises nothing
         raise_if_interrupted()
+
+
+class _FailsWhenCollected:
+    def __del__(self) -> None:
+        raise ValueError("a finaliser's own error")
+
+
+def test_the_latch_keeps_a_dropped_ctrl_c_off_stderr_and_passes_other_errors_on(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import gc
+    import sys
+
+    from fuzzkit.progress import interrupt_latch, raise_if_interrupted
+
+    seen: list[type[BaseException]] = []
+    recorder = lambda info: seen.append(info.exc_type)  # noqa: E731
+    monkeypatch.setattr(sys, "unraisablehook", recorder)
+    with interrupt_latch():
+        obj = _SignalsCtrlCWhenCollected()
+        del obj
+        gc.collect()
+        failing = _FailsWhenCollected()
+        del failing
+        gc.collect()
+        with pytest.raises(KeyboardInterrupt):
+            raise_if_interrupted()  # the Ctrl-C was remembered ...
+    assert seen == [ValueError]  # ... and only the other finaliser's error was reported
+    assert sys.unraisablehook is recorder  # the previous hook comes back with the block
+    import signal
+
+    obj = _SignalsCtrlCWhenCollected()  # outside the latch nothing is swallowed
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        del obj
+        gc.collect()
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert seen == [ValueError, KeyboardInterrupt]
