@@ -3,6 +3,10 @@
 Compiled code is cached on disk next to the module (numba ``cache=True``), so only the very first
 call after an install (or a change of the source) pays the compilation; later processes load it.
 Kept typed here so that ``mypy --strict`` sees through the decorator.
+
+Ctrl-C is held while numba compiles or loads a kernel (numba's compiler and LLVM locks are
+held): a KeyboardInterrupt raised inside the compiler corrupts LLVM's memory. See
+:func:`fuzzkit.progress.interrupt_shield`; the listener below is numba's documented event API.
 """
 
 from __future__ import annotations
@@ -11,8 +15,28 @@ from collections.abc import Callable
 from typing import Any, TypeVar, cast
 
 import numba
+from numba.core import event
+
+from fuzzkit.progress import enter_interrupt_shield, leave_interrupt_shield
 
 F = TypeVar("F", bound=Callable[..., Any])
+#: numba's events for "the compiler is running": its compiler lock and its LLVM lock.
+COMPILER_EVENTS = ("numba:compiler_lock", "numba:llvm_lock")
+
+
+class _ShieldWhileCompiling(event.Listener):
+    """Holds Ctrl-C from the start of a compiler event to its end (nested events count)."""
+
+    def on_start(self, ev: event.Event) -> None:
+        enter_interrupt_shield()
+
+    def on_end(self, ev: event.Event) -> None:
+        leave_interrupt_shield()
+
+
+_SHIELD = _ShieldWhileCompiling()
+for _kind in COMPILER_EVENTS:
+    event.register(_kind, _SHIELD)  # type: ignore[no-untyped-call]
 
 
 def jit(fn: F) -> F:

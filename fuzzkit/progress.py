@@ -12,10 +12,17 @@ callback: numba and llvmlite run many while they load or compile a kernel) is pr
 nothing happened. :func:`interrupt_latch` remembers the signal as well, keeps such a dropped
 KeyboardInterrupt off stderr (the latch has it), and every progress update (bars drawn or
 silent) raises it again: a long command stops at its next step.
+
+Some work must not be cut in the middle: a KeyboardInterrupt raised inside numba's compiler
+(LLVM objects half handed over from one owner to another) corrupts memory, and the process dies
+later with a double free. Inside :func:`interrupt_shield` (``fuzzkit.jit`` enters one for
+every numba compile and cache load) the first Ctrl-C is held, with a note on stderr, and
+delivered as soon as the shielded work ends; a second Ctrl-C is delivered at once.
 """
 
 from __future__ import annotations
 
+import contextlib
 import signal
 import sys
 import threading
@@ -25,11 +32,51 @@ from types import FrameType
 from typing import IO, Any
 
 _interrupted = threading.Event()
+#: Depth of :func:`interrupt_shield` blocks entered by the main thread, and whether a Ctrl-C
+#: is being held until the outermost one ends.
+_shield = {"depth": 0, "held": False}
+HELD_NOTE = "fuzzkit: Ctrl-C: stopping when the compile in progress ends (Ctrl-C again: now)"
 
 
 def _on_sigint(signum: int, frame: FrameType | None) -> None:
     _interrupted.set()
+    if _shield["depth"] > 0 and not _shield["held"]:
+        _shield["held"] = True
+        with contextlib.suppress(OSError, ValueError):  # stderr closed: hold it all the same
+            print(HELD_NOTE, file=sys.stderr, flush=True)
+        return
+    _shield["held"] = False
     raise KeyboardInterrupt
+
+
+def enter_interrupt_shield() -> None:
+    """Start work that a KeyboardInterrupt must not cut (see :func:`interrupt_shield`).
+
+    Other threads' calls count for nothing: only the main thread receives Ctrl-C."""
+    if threading.current_thread() is threading.main_thread():
+        _shield["depth"] += 1
+
+
+def leave_interrupt_shield() -> None:
+    """End the work of the matching :func:`enter_interrupt_shield`; leaving the outermost
+    one delivers a held Ctrl-C (SIGINT is raised again, so the handler of the moment runs)."""
+    if threading.current_thread() is not threading.main_thread() or _shield["depth"] == 0:
+        return
+    _shield["depth"] -= 1
+    if _shield["depth"] == 0 and _shield["held"]:
+        _shield["held"] = False
+        signal.raise_signal(signal.SIGINT)
+
+
+@contextmanager
+def interrupt_shield() -> Iterator[None]:
+    """Within the block the first Ctrl-C is held until the block ends (a second one is
+    delivered at once); nested blocks hold it until the outermost ends."""
+    enter_interrupt_shield()
+    try:
+        yield
+    finally:
+        leave_interrupt_shield()
 
 
 @contextmanager
@@ -50,6 +97,7 @@ def interrupt_latch() -> Iterator[None]:
         sys.unraisablehook = previous_hook
         signal.signal(signal.SIGINT, previous)
         _interrupted.clear()
+        _shield["held"] = False
 
 
 def _quiet_dropped_interrupt(hook: Any) -> Any:

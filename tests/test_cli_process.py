@@ -11,6 +11,8 @@ from pathlib import Path
 
 import pytest
 
+from fuzzkit.progress import HELD_NOTE
+
 FUZZKIT = [sys.executable, "-m", "fuzzkit"]
 
 
@@ -48,6 +50,13 @@ def _interrupt(proc: subprocess.Popen[str]) -> tuple[int, str, str]:
     return proc.returncode, out, err
 
 
+def _said_on_interrupt(err: str) -> list[str]:
+    """stderr's lines after a Ctrl-C, without the note of a Ctrl-C held through a numba compile
+    (whether one is in progress when the signal lands depends on the cache and the timing)."""
+    lines = err.strip().splitlines()
+    return lines[1:] if lines[:1] == [HELD_NOTE] else lines
+
+
 @pytest.mark.slow
 def test_sigint_on_report_exits_130_and_leaves_no_report(tmp_path: Path) -> None:
     out = tmp_path / "report"
@@ -57,7 +66,7 @@ def test_sigint_on_report_exits_130_and_leaves_no_report(tmp_path: Path) -> None
     time.sleep(1.0)
     code, stdout, err = _interrupt(proc)
     assert code == 130
-    assert err.strip().splitlines() == ["fuzzkit: interrupted (Ctrl-C); nothing half-written"]
+    assert _said_on_interrupt(err) == ["fuzzkit: interrupted (Ctrl-C); nothing half-written"]
     assert "Traceback" not in err and "wrote" not in stdout
     assert list(tmp_path.iterdir()) == []  # no report folder, no staging folder
 
@@ -97,7 +106,7 @@ def test_sigint_on_compile_exits_130_and_writes_nothing(tmp_path: Path) -> None:
     assert proc.poll() is None, "compile ended before the interrupt; make the job larger"
     code, _, err = _interrupt(proc)
     assert code == 130
-    assert err.strip().splitlines() == ["fuzzkit: interrupted (Ctrl-C); nothing half-written"]
+    assert _said_on_interrupt(err) == ["fuzzkit: interrupted (Ctrl-C); nothing half-written"]
     assert not out.exists() and list(tmp_path.iterdir()) == []
 
 
@@ -158,10 +167,42 @@ def test_sigint_on_tune_exits_130_and_keeps_the_best_so_far(tmp_path: Path) -> N
     assert proc.poll() is None, "tune ended before the interrupt; raise the budget"
     code, stdout, err = _interrupt(proc)
     assert code == 130
-    assert err.strip().splitlines() == [
+    assert _said_on_interrupt(err) == [
         f"fuzzkit: interrupted (Ctrl-C); {out} holds the best gains so far"
     ]
     assert "(interrupted: best so far)" in stdout
     entry = read_gains_file(out)["pi"]
     assert entry.provenance["interrupted"] is True and entry.provenance["evaluations"] < 400
     assert sorted(p.name for p in tmp_path.iterdir()) == ["gains.yaml"]  # no temporary left
+
+
+def test_a_ctrl_c_that_left_c_api_code_still_exits_130(tmp_path: Path) -> None:
+    """Under ``python -m``, CPython 3.11 kills itself with SIGINT at shutdown, whatever exit
+    code was asked for, once a KeyboardInterrupt has left code run through ``PyRun_String``
+    (as seen with a Ctrl-C landing while scipy imports, inside a Cython module's init). The
+    command must still end with 130 and its one line."""
+    (tmp_path / "interrupted_in_c_api.py").write_text(
+        "import ctypes\n"
+        "import sys\n"
+        "import fuzzkit.cli.rulebase as rb\n"
+        "run = ctypes.pythonapi.PyRun_String\n"
+        "run.restype = ctypes.py_object\n"
+        "run.argtypes = [ctypes.c_char_p, ctypes.c_int, ctypes.py_object, ctypes.py_object]\n"
+        "def interrupted(args):\n"
+        "    run(b'raise KeyboardInterrupt', 257, {}, {})  # 257: Py_file_input\n"
+        "rb.cmd_validate = interrupted\n"
+        "from fuzzkit.cli import console_main\n"
+        "sys.argv = ['fuzzkit', 'validate', 'macvicar_whelan']\n"
+        "console_main()\n"
+    )
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(tmp_path), *sys.path]))
+    res = subprocess.run(
+        [sys.executable, "-m", "interrupted_in_c_api"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+        cwd=tmp_path,
+    )
+    assert res.returncode == 130, res.stderr
+    assert res.stderr.splitlines() == ["fuzzkit: interrupted (Ctrl-C); nothing half-written"]

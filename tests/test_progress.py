@@ -188,3 +188,77 @@ def test_the_latch_keeps_a_dropped_ctrl_c_off_stderr_and_passes_other_errors_on(
     finally:
         signal.signal(signal.SIGINT, previous)
     assert seen == [ValueError, KeyboardInterrupt]
+
+
+def test_the_shield_holds_the_first_ctrl_c_until_the_work_ends(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    import os
+    import signal
+
+    from fuzzkit.progress import HELD_NOTE, interrupt_latch, interrupt_shield
+
+    reached_the_end = False
+    with interrupt_latch(), pytest.raises(KeyboardInterrupt), interrupt_shield():
+        with interrupt_shield():  # nested: held until the outermost ends
+            os.kill(os.getpid(), signal.SIGINT)
+            for _ in range(1000):  # bytecode for the handler to run on
+                pass
+        reached_the_end = True
+    assert reached_the_end
+    assert capsys.readouterr().err.splitlines() == [HELD_NOTE]
+
+
+def test_a_second_ctrl_c_in_the_shield_is_delivered_at_once() -> None:
+    import os
+    import signal
+
+    from fuzzkit.progress import interrupt_latch, interrupt_shield
+
+    steps = []
+    with interrupt_latch(), pytest.raises(KeyboardInterrupt), interrupt_shield():
+        for n in range(2):
+            os.kill(os.getpid(), signal.SIGINT)
+            for _ in range(1000):
+                pass
+            steps.append(n)
+    assert steps == [0]  # the first was held, the second stopped the work
+
+
+def test_a_numba_compile_holds_ctrl_c_until_the_kernel_is_compiled() -> None:
+    """A Ctrl-C that lands inside numba's compiler (here sent from its first compiler event)
+    is delivered after the compile, which completes: LLVM is never cut half-way."""
+    import os
+    import signal
+
+    import numba
+    from numba.core import event
+
+    import fuzzkit.jit  # noqa: F401  (registers the shield with numba's compiler events)
+    from fuzzkit.progress import interrupt_latch
+
+    class CtrlCFromTheCompiler(event.Listener):
+        sent = False
+
+        def on_start(self, ev: event.Event) -> None:
+            if not self.sent:
+                self.sent = True
+                os.kill(os.getpid(), signal.SIGINT)
+
+        def on_end(self, ev: event.Event) -> None:
+            pass
+
+    def add_one(x: int) -> int:
+        return x + 1
+
+    kernel = numba.njit(add_one)  # uncached: this call compiles
+    probe = CtrlCFromTheCompiler()
+    with (
+        interrupt_latch(),
+        event.install_listener("numba:compiler_lock", probe),
+        pytest.raises(KeyboardInterrupt),
+    ):
+        kernel(1)
+    assert probe.sent
+    assert len(kernel.signatures) == 1  # the compile ran to its end before the interrupt
+    assert kernel(41) == 42

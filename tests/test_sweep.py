@@ -57,6 +57,29 @@ def test_map_runs_keeps_order_with_a_process_pool() -> None:
     assert seen[-1] == 7
 
 
+def _slow_square(x: int) -> int:
+    import time
+
+    time.sleep(0.2)
+    return x * x
+
+
+def test_a_stopped_map_leaves_no_worker_process_behind() -> None:
+    """Ctrl-C (here raised from the progress callback) drops the queued items, and the worker
+    processes have ended when the executor closes: none outlives the command."""
+    import multiprocessing
+
+    from fuzzkit.studies.batch import BatchExecutor
+
+    def stop(done: int) -> None:
+        raise KeyboardInterrupt
+
+    before = set(multiprocessing.active_children())
+    with pytest.raises(KeyboardInterrupt), BatchExecutor(workers=2) as pool:
+        pool.map(_slow_square, list(range(50)), progress=stop)
+    assert set(multiprocessing.active_children()) <= before
+
+
 @pytest.mark.slow
 def test_process_pool_rows_equal_in_process_rows(tmp_path: Path) -> None:
     specs = _specs()[:8]

@@ -9,6 +9,7 @@ non-zero exit code; no traceback reaches the user for bad input.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import os
 import signal
@@ -142,9 +143,23 @@ def console_main() -> None:
     Once the command has finished, a late Ctrl-C has nothing left to stop: it is ignored
     rather than killing the interpreter while it shuts down (which would report a finished,
     fully written run as killed by SIGINT).
+
+    An interrupted command has cleaned up on its way out (staging folders removed, worker
+    pools shut down, every file written atomically or not at all), so the process ends there
+    with :data:`EXIT_INTERRUPTED`, skipping the interpreter's shutdown. Under ``python -m``,
+    CPython 3.11 turns any exit into a kill by SIGINT once a KeyboardInterrupt has left code
+    run through its C API (``PyRun_String``), whatever exit code was asked for (seen with a
+    Ctrl-C landing while scipy imports, inside a Cython module's init); and a Ctrl-C delivered
+    at once inside numba's compiler (the second one) can leave LLVM memory that the shutdown's
+    garbage collection would free twice.
     """
     code = main()
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if code == EXIT_INTERRUPTED:
+        for stream in (sys.stdout, sys.stderr):
+            with contextlib.suppress(OSError, ValueError):  # a closed pipe: nothing to say
+                stream.flush()
+        os._exit(EXIT_INTERRUPTED)
     sys.exit(code)
 
 

@@ -315,9 +315,14 @@ class BatchExecutor:
         return [f.result() for f in pending]
 
     def close(self, abort: bool = False) -> None:
-        """Stop the workers (``abort``: drop queued items instead of finishing them)."""
+        """Stop the workers (``abort``: drop queued items instead of finishing them).
+
+        Either way the local worker processes have ended when this returns (an abort waits
+        for the items already running, one per worker): none is left behind to outlive the
+        command, which may end without the interpreter's own shutdown (``fuzzkit.cli``).
+        """
         if self._pool is not None:
-            self._pool.shutdown(wait=not abort, cancel_futures=abort)
+            self._pool.shutdown(wait=True, cancel_futures=abort)
             self._pool = None
         if self._client is not None:
             self._client.close()
