@@ -4,7 +4,7 @@ Compiled code is cached on disk next to the module (numba ``cache=True``), so on
 call after an install (or a change of the source) pays the compilation; later processes load it.
 Kept typed here so that ``mypy --strict`` sees through the decorator.
 
-Ctrl-C is held while numba compiles or loads a kernel (numba's compiler and LLVM locks are
+Ctrl-C is held while numba compiles or loads a kernel (numba's compiler lock is
 held): a KeyboardInterrupt raised inside the compiler corrupts LLVM's memory. See
 :func:`fuzzkit.progress.interrupt_shield`; the listener below is numba's documented event API.
 """
@@ -20,8 +20,11 @@ from numba.core import event
 from fuzzkit.progress import enter_interrupt_shield, leave_interrupt_shield
 
 F = TypeVar("F", bound=Callable[..., Any])
-#: numba's events for "the compiler is running": its compiler lock and its LLVM lock.
-COMPILER_EVENTS = ("numba:compiler_lock", "numba:llvm_lock")
+#: numba's event for "the compiler is running": its compiler lock, taken around every compile
+#: and cache load. Its end is broadcast after the lock is released, so a held Ctrl-C delivered
+#: there cuts nothing. (Not ``numba:llvm_lock``: llvmlite broadcasts that one's end *before*
+#: releasing its lock, which a KeyboardInterrupt there would leave held.)
+COMPILER_EVENTS = ("numba:compiler_lock",)
 
 
 class _ShieldWhileCompiling(event.Listener):
