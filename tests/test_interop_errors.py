@@ -328,9 +328,15 @@ def test_the_valid_bases_load() -> None:
         ("fcl", "METHOD : COG;", "METHOD : COGF;", r"t:17:\d+: METHOD : COGF cannot be expressed"),
         (
             "fcl",
-            "  RANGE := (0 .. 1);\n  TERM low",
-            "  TERM low",
-            r"t:3:3: input 'level': missing RANGE := \(low \.\. high\)",
+            "  RANGE := (0 .. 1);\n  TERM low := (0.2, 1) (0.8, 0);\n  TERM high := (0.2, 0) (0.8, 1);",
+            "",
+            r"t:8:1: input 'level' has no RANGE := \(low \.\. high\) and no terms to derive it",
+        ),
+        (
+            "fcl",
+            "  RANGE := (0 .. 1);\n  TERM low := (0.2, 1) (0.8, 0);\n  TERM high := (0.2, 0) (0.8, 1);",
+            "  TERM low := 0.5;\n  TERM high := 0.5;",
+            r"t:8:1: input 'level' has no RANGE := \(low \.\. high\), and its terms all sit at 0\.5",
         ),
         (
             "fcl",
