@@ -245,6 +245,11 @@ def test_or_is_the_de_morgan_partner_of_and(ops: str, and_: str, or_: str) -> No
             "  TERM hi := Triangle 0 x 1;\nEND_FUZZIFY\nFUZZIFY b",
             r"t:11:14: TERM hi: Triangle: expected numbers",
         ),
+        (  # NC (keep the previous output) alone, as IEC allows it: not in fuzzkit's model
+            "  METHOD : COG;\n",
+            "  METHOD : COG;\n  DEFAULT := NC;\n",
+            r"t:21:14: DEFAULT \.\.\. \| NC \(keep the previous value",
+        ),
         (  # RANGE in a VAR section before any declaration
             "VAR_INPUT\n  a : REAL;",
             "VAR_INPUT\n  RANGE := (0 .. 1);\n  a : REAL;",

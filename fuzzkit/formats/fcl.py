@@ -381,13 +381,14 @@ def loads_with_notes(
                 if got is None:
                     continue
                 value_text, _, nc = got[0].partition("|")
-                if nc.strip():
+                if nc.strip() or value_text.strip().upper() == "NC":
                     found.add(
                         s.line,
                         got[1],
                         "DEFAULT ... | NC (keep the previous value when no "
                         "rule fires) cannot be expressed in fuzzkit",
                     )
+                    continue
                 value = parse_number(value_text.strip())
                 if value is None:
                     found.add(
