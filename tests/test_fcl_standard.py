@@ -21,7 +21,7 @@ from fuzzkit.cli import main
 from fuzzkit.errors import RuleBaseError
 from fuzzkit.formats import fcl
 from fuzzkit.formats.registry import load
-from fuzzkit.fuzzy.model import RuleBase
+from fuzzkit.fuzzy.model import RuleBase, Term
 
 DATA = Path(__file__).resolve().parent / "data" / "fcl"
 
@@ -64,6 +64,23 @@ def test_a_variable_without_range_spans_its_terms(
     assert got.keys() == ranges.keys()
     for var, (low, high) in ranges.items():
         assert got[var] == pytest.approx((low, high), rel=1e-15, abs=1e-15), var
+
+
+@pytest.mark.parametrize(
+    "term, span",
+    [
+        (Term("t", "s_shape", (2.0, 5.0)), (2.0, 5.0)),
+        (Term("t", "z_shape", (2.0, 5.0)), (2.0, 5.0)),
+        (Term("t", "pi_shape", (1.0, 2.0, 3.0, 4.0)), (1.0, 4.0)),
+        # each gaussian half 4 sigma beyond its mean
+        (Term("t", "gaussian_product", (3.0, 0.5, 6.0, 2.0)), (1.0, 14.0)),
+        (Term("t", "sigmoid", (-0.5, 30.0)), (12.0, 48.0)),
+        (Term("t", "sigmoid_difference", (2.0, 3.0, 2.0, 6.0)), None),
+        (Term("t", "linear", (1.0, 0.0)), None),
+    ],
+)
+def test_the_span_of_each_shape(term: Term, span: tuple[float, float] | None) -> None:
+    assert fcl.term_span("named", term) == span
 
 
 def test_only_the_variables_without_range_get_a_note() -> None:

@@ -69,6 +69,8 @@ _METHOD = {
 #: jFuzzyLogic's shape names, as the fuzzylite class they mean (parameters in the same order
 #: except gbell, whose (a, b, mean) becomes Bell's (centre, width, slope)).
 _JFL = {"TRIAN": "Triangle", "TRAPE": "Trapezoid", "GAUSS": "Gaussian", "SIGM": None, "GBELL": None}
+#: Shapes whose parameters are all positions on the axis (their span is the term's).
+_POSITIONAL = frozenset({"singleton", "constant", "s_shape", "z_shape", "pi_shape"})
 #: De Morgan partners: the OR an AND implies when only the AND is declared, and back.
 _DE_MORGAN = {"min": "max", "product": "probabilistic_sum"}
 _PAIR = re.compile(r"\(\s*([^,()]+?)\s*,\s*([^,()]+?)\s*\)")
@@ -174,18 +176,22 @@ def term_span(body: str, term: Term) -> tuple[float, float] | None:
     """Where a term lies on its axis, for a variable without ``RANGE``; None if unknown.
 
     A point list spans its first to its last point (held constant beyond them, so these are
-    where its shape is); a singleton or constant is its value; a named piecewise-linear shape
-    spans its parameters. Smooth shapes have no ends: jFuzzyLogic's estimates are used, where
-    the membership is negligible (gaussian: mean +- 4 sigma; bell: where it falls to 0.001;
-    sigmoid: centre +- 9/|slope|). A Sugeno ``linear`` term has no place on the axis.
+    where its shape is); a singleton or constant is its value; a named shape whose parameters
+    are all positions (triangle, trapezoid, ramp, S/Z/Pi splines) spans its parameters. Smooth
+    shapes have no ends: jFuzzyLogic's estimates are used, where the membership is negligible
+    (gaussian: mean +- 4 sigma, both halves of a two-sided one; bell: where it falls to 0.001;
+    sigmoid: centre +- 9/|slope|). A Sugeno ``linear`` term, a difference or product of
+    sigmoids have no such place on the axis (None).
     """
     p = term.params
     if body.startswith("("):
         xs = [parse_number(x) for x, _ in _PAIR.findall(body)]
         pts = [x for x in xs if x is not None]
         return (min(pts), max(pts)) if pts else None
-    if term.is_piecewise_linear or term.shape in ("singleton", "constant"):
+    if term.is_piecewise_linear or term.shape in _POSITIONAL:
         return min(p), max(p)
+    if term.shape == "gaussian_product":  # mean1, sigma1, mean2, sigma2
+        return min(p[0] - 4.0 * abs(p[1]), p[2]), max(p[0], p[2] + 4.0 * abs(p[3]))
     half: float | None = None
     if term.shape == "gaussian":  # mean, sigma
         centre, half = p[0], 4.0 * abs(p[1])
