@@ -27,10 +27,11 @@ import pytest
 
 from fuzzkit.control.controllers import lookup_table_surface
 from fuzzkit.errors import ConfigError
-from fuzzkit.plants.arm6 import Arm6Parameters, Arm6Plant, HeightField
+from fuzzkit.plants.arm6 import Arm6Parameters, Arm6Plant
 from fuzzkit.plants.arm6_heightfield import height_field_contact, pack_height_field
 from fuzzkit.plants.arm6_kernel import pack
 from fuzzkit.plants.contract import ContactPlant, UnsupportedPlant
+from fuzzkit.plants.environment3d import HeightField
 from fuzzkit.studies.compiled.generated_c import GeneratedC
 from fuzzkit.studies.compiled.loop import run_compiled
 from fuzzkit.studies.compiled.table import load_table, table2, table_arrays

@@ -25,7 +25,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.jit import jit
-from fuzzkit.plants.arm6 import Arm6Plant, Box3, ExtrudedProfile, HeightField, Plane
+from fuzzkit.plants.arm6 import Arm6Plant
 from fuzzkit.plants.arm6_heightfield import (
     height_field_contact,
     pack_height_field,
@@ -34,6 +34,7 @@ from fuzzkit.plants.arm6_heightfield import (
 from fuzzkit.plants.contact import padded_terms
 from fuzzkit.plants.contract import UnsupportedPlant
 from fuzzkit.plants.environment import _roughness_terms
+from fuzzkit.plants.environment3d import Box3, ExtrudedProfile, HeightField, Plane
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
