@@ -7,7 +7,7 @@ parameter row and its heights (row-major); :func:`height_field_contact` is
 operations in the same order, so a compiled run over E3's 3-D floor touches where and as hard as
 the Python plant does.
 :func:`tangent_plane_contact` is the tangent-plane step shared with the extruded profiles of
-:mod:`fuzzkit.plants.arm6_kernel`.
+:mod:`fuzzkit.plants.arm6_period`.
 """
 
 from __future__ import annotations
