@@ -7,6 +7,12 @@ period as numba code around the same Chipmunk calls (:mod:`fuzzkit.planar_sim.ch
 for the compiled closed loop.
 """
 
+if __name__ != "fuzzkit.planar_sim":  # this repository folder imported as a top-level package
+    raise ImportError(
+        f"{__name__!r} is the source folder of fuzzkit.planar_sim; import fuzzkit.planar_sim "
+        "(pip install -e . maps this folder into fuzzkit)"
+    )
+
 from fuzzkit.planar_sim.arm import (
     ArmParameters,
     PlanarArmPlant,
