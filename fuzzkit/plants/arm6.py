@@ -33,6 +33,10 @@ shoulder axis is at x = 0.070, z = 0.352, and lowering by the flange length d6 =
 IRB's wrist centre exactly where the planar arm's wrist is when the tool points down, so both arms
 take the same posture). Every position in a :class:`PlantSample` is in the scenario frame, like the
 planar plant's; the tool points down along the scenario's task z axis.
+
+Twins: this is the **reference** copy of the 6-DOF plant step; the compiled loop's
+copy (:mod:`fuzzkit.plants.arm6_period`) is tested against it (``tests/test_compiled_loop.py``),
+so it is kept as a separate implementation on purpose.
 """
 
 from __future__ import annotations

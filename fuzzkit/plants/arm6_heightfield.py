@@ -8,6 +8,9 @@ operations in the same order, so a compiled run over E3's 3-D floor touches wher
 the Python plant does.
 :func:`tangent_plane_contact` is the tangent-plane step shared with the extruded profiles of
 :mod:`fuzzkit.plants.arm6_period`.
+
+Twins: compiled copy; :class:`fuzzkit.plants.environment3d.HeightField` is the independent
+reference it is tested against.
 """
 
 from __future__ import annotations

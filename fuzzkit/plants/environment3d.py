@@ -6,6 +6,10 @@ builds them from a planar :class:`~fuzzkit.plants.contract.Scenario` (extruded a
 :class:`Contact3Solver` turns the touches of one period into the force and moment the tool
 exerts (penalty normal force, Coulomb friction with a stick spring). The plant that moves the
 tool through this world: :mod:`fuzzkit.plants.arm6`.
+
+Twins: this is the **reference** copy of the 6-DOF 3-D contact with friction; the compiled loop's
+copy (:mod:`fuzzkit.plants.arm6_period`) is tested against it (``tests/test_compiled_loop.py``),
+so it is kept as a separate implementation on purpose.
 """
 
 from __future__ import annotations

@@ -20,6 +20,10 @@ The scalar paths (:meth:`SerialChain.fk`, :meth:`SerialChain.jacobian`, :meth:`S
 use plain Python floats because the plant calls them every 4 ms step and numpy's per-call
 overhead dominates for 6 joints; the batch paths (:meth:`SerialChain.fk_batch`,
 :meth:`SerialChain.jacobian_batch`) are vectorised over many configurations.
+
+Twins: this is the **reference** copy of the 6-DOF forward kinematics, Jacobian, damped least
+squares and IK; the compiled loop's copy (:mod:`fuzzkit.plants.arm6_period`) is tested against
+it (``tests/test_compiled_loop.py``), so it is kept as a separate implementation on purpose.
 """
 
 from __future__ import annotations
