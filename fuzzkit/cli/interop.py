@@ -70,6 +70,7 @@ def cmd_import(args: argparse.Namespace) -> int:
     """Read FILE by extension, write it as YAML to --out."""
     from fuzzkit.errors import ConfigError
     from fuzzkit.fileio import check_output_path, write_atomic
+    from fuzzkit.formats import fcl
     from fuzzkit.formats.registry import READERS, load
     from fuzzkit.formats.yaml_writer import dump
 
@@ -79,8 +80,12 @@ def cmd_import(args: argparse.Namespace) -> int:
             f"{args.file}: expected a .fis, .fcl or .fll file, got {suffix or 'no extension'!r}"
         )
     check_output_path(args.out, "YAML file")
-    rb = load(args.file)
-    write_atomic(args.out, dump(rb))
+    notes: dict[str, str] = {}
+    if suffix == fcl.SUFFIX:  # FCL may leave ranges to be derived: say so in the YAML
+        rb, _, notes = fcl.load_with_notes(args.file)
+    else:
+        rb = load(args.file)
+    write_atomic(args.out, dump(rb, range_notes=notes))
     print(f"{args.file} -> {args.out} ({rb.name}: {len(rb.rules)} rules)")
     return EXIT_OK
 
