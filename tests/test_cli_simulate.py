@@ -101,3 +101,16 @@ def test_bad_scenario_file_gives_a_located_error(
     assert main(["simulate", str(task)]) == 2
     err = capsys.readouterr().err
     assert f"{task}:" in err and "unknown fault 'spikes'" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize(
+    "old, new", [("z: 10.0", "z: .nan"), ("x: 0.4, z: -0.19", "x: .inf, z: 0")]
+)
+def test_a_nan_scenario_is_refused_and_json_prints_nothing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], old: str, new: str
+) -> None:
+    task = tmp_path / "task.yaml"
+    task.write_text(shipped_scenario_text("E1").replace(old, new, 1))
+    assert main(["simulate", str(task), "--json"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and f"{task}:" in err and "must be a finite number" in err

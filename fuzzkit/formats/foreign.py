@@ -25,9 +25,7 @@ from fuzzkit.errors import FuzzkitError, Location, Problem, RuleBaseError
 from fuzzkit.fuzzy import validation
 from fuzzkit.fuzzy.model import Compound, Expression, Proposition, RuleBase, Source, Term
 from fuzzkit.fuzzy.validation import Path
-
-#: Foreign rule-base files are text of at most this many bytes (as for YAML).
-MAX_FILE_BYTES = 1 << 20
+from fuzzkit.located_yaml import MAX_FILE_BYTES
 
 #: Sugeno (Takagi-Sugeno-Kang) output shapes: ``constant (value,)`` and ``linear
 #: (c_1, ..., c_n, c_0)`` with one coefficient per input in the rule base's input order.

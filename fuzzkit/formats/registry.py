@@ -15,11 +15,10 @@ import os
 from importlib import resources
 from pathlib import Path
 
-from fuzzkit.errors import Location, Problem, RuleBaseError
+from fuzzkit.errors import Location, Problem, RuleBaseError, did_you_mean
 from fuzzkit.formats import fcl, fis, fll
 from fuzzkit.formats.yaml_reader import load_file_with_warnings, loads_rulebase_with_warnings
 from fuzzkit.fuzzy.model import RuleBase
-from fuzzkit.fuzzy.validation import did_you_mean
 
 _PACKAGE = "fuzzkit.rulebases"
 _SUFFIXES = (".yaml", ".yml")

@@ -12,7 +12,7 @@ from typing import Any
 
 import yaml
 
-from fuzzkit.formats.yaml_reader import EMPTY_CELL, STR_TAG
+from fuzzkit.formats.yaml_reader import EMPTY_CELL
 from fuzzkit.fuzzy.model import (
     PIECEWISE_LINEAR_SHAPES,
     SHAPE_PARAMS,
@@ -26,6 +26,7 @@ from fuzzkit.fuzzy.model import (
     Variable,
 )
 from fuzzkit.fuzzy.partition import PARTITION_ENDS, partition_terms
+from fuzzkit.located_yaml import STR_TAG
 
 
 class _Flow(list[Any]):

@@ -28,7 +28,6 @@ models with ``coverage="allow_gaps"``.
 
 from __future__ import annotations
 
-import difflib
 import keyword
 import math
 import re
@@ -36,7 +35,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import TypeAlias
 
-from fuzzkit.errors import Location, Problem, RuleBaseError
+from fuzzkit.errors import Location, Problem, RuleBaseError, did_you_mean
 from fuzzkit.fuzzy.model import (
     AGGREGATIONS,
     AND_OPERATORS,
@@ -111,18 +110,6 @@ def units_problem(units: str) -> str | None:
     if not units.isprintable():
         return f"expected printable characters on one line, got {units!r}"
     return None
-
-
-def did_you_mean(word: str, candidates: Iterable[str]) -> str:
-    """`` (did you mean 'X'?)`` for the closest candidate, or an empty string."""
-    pool = list(candidates)
-    close = difflib.get_close_matches(word, pool, n=1, cutoff=0.5)
-    if not close:
-        # Labels differ in case often enough ('pl' for 'PL') to try a case-insensitive match.
-        lowered = {c.lower(): c for c in pool}
-        if word.lower() in lowered:
-            close = [lowered[word.lower()]]
-    return f" (did you mean {close[0]!r}?)" if close else ""
 
 
 def _fmt(x: float) -> str:
