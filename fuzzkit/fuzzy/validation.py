@@ -36,6 +36,7 @@ from dataclasses import dataclass
 from typing import TypeAlias
 
 from fuzzkit.errors import Location, Problem, RuleBaseError, did_you_mean
+from fuzzkit.fuzzy import resolution
 from fuzzkit.fuzzy.model import (
     AGGREGATIONS,
     AND_OPERATORS,
@@ -320,6 +321,9 @@ def _check_variable(var: Variable, kind: str, base: Path, rb: RuleBase) -> list[
                 f"got [{_fmt(var.low)}, {_fmt(var.high)}]",
             )
         )
+    elif (why := resolution.range_problem(var)) is not None:
+        out.append(((*base, "range"), why))
+        range_ok = False
     if not var.terms and not (kind == "input" and _used_in_linear(rb, var.name)):
         hint = (
             " (an input may have none only when a linear output term uses it)"
@@ -345,7 +349,11 @@ def _check_variable(var: Variable, kind: str, base: Path, rb: RuleBase) -> list[
                 )
             )
             continue
-        out.extend(_check_term(term, tpath, len(rb.inputs)))
+        term_issues = _check_term(term, tpath, len(rb.inputs))
+        out.extend(term_issues)
+        fine = resolution.term_problem(term, var) if range_ok and not term_issues else None
+        if fine is not None:
+            out.append(((*tpath, term_param_path(term)), fine))
     if kind == "output":
         families = {t.is_sugeno for t in var.terms}
         if len(families) > 1:
