@@ -12,7 +12,9 @@ from typing import Any
 
 import yaml
 
+from fuzzkit.errors import RuleBaseError
 from fuzzkit.formats.yaml_reader import EMPTY_CELL
+from fuzzkit.fuzzy import validation
 from fuzzkit.fuzzy.model import (
     PIECEWISE_LINEAR_SHAPES,
     SHAPE_PARAMS,
@@ -178,7 +180,16 @@ def dump(rb: RuleBase) -> str:
 
     Partitions are written back as the ``partition`` shorthand when the terms are exactly one,
     and the rules as a table when ``rb.table`` is set and the rules are exactly that table.
+
+    Raises
+    ------
+    RuleBaseError
+        A condition nests deeper than the readers accept
+        (:data:`~fuzzkit.fuzzy.validation.MAX_CONDITION_DEPTH`).
     """
+    too_deep = validation.depth_problems(rb)
+    if too_deep:
+        raise RuleBaseError(validation.as_problems(rb, too_deep))
     doc: dict[str, Any] = {"name": rb.name}
     if rb.description:
         doc["description"] = rb.description
