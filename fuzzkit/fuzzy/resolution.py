@@ -14,6 +14,7 @@ file that ``eval`` then cannot handle:
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Iterator
 
 from fuzzkit.fuzzy.model import PIECEWISE_LINEAR_SHAPES, Term, Variable
@@ -60,7 +61,7 @@ def _features(term: Term) -> Iterator[tuple[str, float]]:
     """(how to say it, size) of each feature of a valid term."""
     p = term.params
     if term.shape in PIECEWISE_LINEAR_SHAPES:
-        for a, b in zip(p, p[1:], strict=False):
+        for a, b in itertools.pairwise(p):
             if b > a:
                 yield f"points {_fmt(a)} and {_fmt(b)} are {{}} apart", b - a
     for i in _WIDTHS.get(term.shape, ()):
