@@ -323,7 +323,8 @@ def compose_document(text: str, source: str, kind: DocumentKind) -> Node:
         raise kind.error(controls)
     root = _compose(text, source, kind)
     if root is None:
-        raise kind.error([Problem(Location(source), f"file is empty; {kind.empty_hint}")])
+        # nothing but comments or blank lines: point at the start, where the content belongs
+        raise kind.error([Problem(Location(source, 1, 1), f"file is empty; {kind.empty_hint}")])
     try:
         nodes = _expanded_size(root, MAX_NODES)
     except _Refused as exc:

@@ -267,7 +267,7 @@ def test_gains_file_round_trip_and_merge(tmp_path: Path) -> None:
         ("pi:\n  gains: [1, 2]\n", "gains must be a mapping"),
         ("kp: .nan\n", "g.yaml:1:1: gain kp must be a finite number"),
         ("pi: {u_min: 0.1}\n", "u_min must be <= 0"),
-        ("", "g.yaml: file is empty"),
+        ("", "g.yaml:1:1: file is empty"),
         ("pi: {kp: [1\n", "g.yaml:2:1: invalid YAML"),
         ("pid: {kp: 1}\npi: {kp: 1e-5}\n", "g.yaml:1:1: unknown controller keys ['pid']"),
         ("pi: {kp: 1e-5, kp: 2e-5}\n", "g.yaml:1:16: duplicate key 'kp' (first defined on line 1)"),
