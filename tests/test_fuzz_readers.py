@@ -72,7 +72,7 @@ def _peaks(rb: RuleBase) -> dict[str, np.ndarray]:
 
 
 #: A reader that takes longer than this on a mutant of a few kilobytes is taken as hung.
-HUNG_S = 10.0
+HUNG_S = 30.0
 
 
 class _Hung(Exception):
@@ -129,6 +129,9 @@ def _rule_base_failure(fmt: str, m: Mutant) -> str | None:
 def test_mutated_rule_bases_give_located_errors_or_finite_outputs(fmt: str) -> None:
     sources = _sources(fmt)
     assert len(sources) >= 2
+    for origin, text in sources.items():  # compile the engine's kernels outside the timer
+        rb = READERS[fmt](text, origin)
+        evaluate(rb, _peaks(rb))
     failures = []
     for m in mutants(sources, MUTANTS, SEED):
         why = _rule_base_failure(fmt, m)
