@@ -426,19 +426,19 @@ class NodeReader:
                 self.error(node, f"missing required key {key!r} in {what}")
 
     def _int_value(self, node: ScalarNode, what: str) -> int | None:
+        """An integer scalar's value, refused (located) when a float cannot hold it."""
         digits = sum(c.isdigit() for c in node.value)
-        if digits > _MAX_INT_DIGITS and not node.value.lstrip("+-").startswith("0x"):
-            self.error(
-                node,
-                f"integer of {digits} digits for {what} is too large for a float "
-                f"(at most {_MAX_INT_DIGITS - 1} digits)",
-            )
+        too_large = f"integer of {digits} digits for {what} is too large for a float"
+        if digits > _MAX_INT_DIGITS:  # checked first: int() of 4300+ digits raises
+            self.error(node, f"{too_large} (at most {_MAX_INT_DIGITS - 1} digits)")
             return None
         try:
-            return int(_CONSTRUCTOR.construct_yaml_int(node))
-        except ValueError:  # a hexadecimal past Python's integer-string limit
-            self.error(node, f"integer for {what} is too large for a float")
+            value = int(_CONSTRUCTOR.construct_yaml_int(node))
+            float(value)
+        except (ValueError, OverflowError):  # a long hexadecimal or binary spelling
+            self.error(node, too_large)
             return None
+        return value
 
     def number(self, node: Node, what: str) -> float | None:
         """A float from a YAML number (1.1 or 1.2 spelling); ``inf``/``nan`` pass as such."""
@@ -447,13 +447,7 @@ class NodeReader:
                 return float(_CONSTRUCTOR.construct_yaml_float(node))
             if node.tag == INT_TAG:
                 value = self._int_value(node, what)
-                if value is None:
-                    return None
-                try:
-                    return float(value)
-                except OverflowError:
-                    self.error(node, f"integer for {what} is too large for a float")
-                    return None
+                return None if value is None else float(value)
             if node.tag == STR_TAG and node.style is None and _NUMBER_12.match(node.value):
                 return float(node.value)
         self.error(node, f"expected a number for {what}, got {describe(node)}")

@@ -59,7 +59,13 @@ def _line_col(text: str, needle: str) -> tuple[int, int]:
     ],
 )
 def test_hostile_rule_bases_are_refused_at_their_place(
-    tmp_path: Path, name: str, old: str, new: str, needle: str, match: str
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    name: str,
+    old: str,
+    new: str,
+    needle: str,
+    match: str,
 ) -> None:
     base = MW if name.endswith(".yaml") else HEATER
     assert old in base
@@ -73,6 +79,11 @@ def test_hostile_rule_bases_are_refused_at_their_place(
     assert hit.location.line == line, str(hit)
     if name.endswith(".yaml"):
         assert hit.location.col == col, str(hit)
+    # the command line: exit 2, the located message, no traceback or internal error
+    assert main(["validate", str(tmp_path / name)]) == 2
+    err = capsys.readouterr().err
+    assert f"{tmp_path / name}:{line}:" in err and match in err
+    assert "Traceback" not in err and "internal error" not in err
 
 
 def test_truncated_fcl_term_is_located(tmp_path: Path) -> None:

@@ -274,6 +274,7 @@ def test_gains_file_round_trip_and_merge(tmp_path: Path) -> None:
         ("pi: {yes: 1e-5}\n", "g.yaml:1:6: expected a name as key, got yes (YAML reads"),
         ("pi: {kp: 1" + "0" * 400 + "}\n", "g.yaml:1:10: integer of 401 digits for a number"),
         ("pi: {kp: 1e-5}\x07\n", "g.yaml:1:15: control character U+0007"),
+        ("pi: {kp: 0x1" + "0" * 300 + "}\n", "g.yaml:1:10: integer of 302 digits for a number"),
     ],
 )
 def test_bad_gains_files(tmp_path: Path, text: str, match: str) -> None:
