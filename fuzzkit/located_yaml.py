@@ -136,8 +136,12 @@ class _Refused(Exception):
 # ---------------------------------------------------------------------------- reading
 
 
-def read_document(path: str | Path, kind: DocumentKind) -> str:
-    """The text of a strict YAML file, refusing (with ``kind.error``) what is not one."""
+def read_text_file(
+    path: str | Path, kind: DocumentKind, expected: str = "a YAML file", encoding: str = "utf-8"
+) -> str:
+    """The text of the file ``path`` (``expected``, e.g. ``a .fis file``), refusing with
+    ``kind.error`` one over :data:`MAX_FILE_BYTES` before reading it, a folder, an unreadable
+    file and one that is not text in ``encoding``."""
     p = Path(path)
     name = str(path)
 
@@ -152,13 +156,18 @@ def read_document(path: str | Path, kind: DocumentKind) -> str:
             )
         data = p.read_bytes()
     except IsADirectoryError:
-        refuse("is a directory (expected a .yaml file)")
+        refuse(f"is a directory (expected {expected})")
     except OSError as exc:
         refuse(f"cannot read: {exc.strerror or exc}")
     try:
-        return data.decode("utf-8")
+        return data.decode(encoding)
     except UnicodeDecodeError as exc:
-        refuse(f"not UTF-8 text (byte {exc.start}); expected a YAML file")
+        refuse(f"not UTF-8 text (byte {exc.start}); expected {expected}")
+
+
+def read_document(path: str | Path, kind: DocumentKind) -> str:
+    """The text of a strict YAML file (see :func:`read_text_file`)."""
+    return read_text_file(path, kind)
 
 
 def _control_characters(text: str, source: str) -> list[Problem]:
@@ -594,5 +603,6 @@ __all__ = [
     "locations",
     "raise_problems",
     "read_document",
+    "read_text_file",
     "to_python",
 ]
