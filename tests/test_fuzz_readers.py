@@ -22,12 +22,14 @@ import numpy as np
 import pytest
 from _mutate import Mutant, mutants
 
-from fuzzkit.errors import ProblemsError
+from fuzzkit.control.gains import read_gains_file
+from fuzzkit.errors import ConfigError, ProblemsError
 from fuzzkit.formats import fcl, fis, fll, registry, yaml_reader
 from fuzzkit.formats.foreign import ExportError
 from fuzzkit.fuzzy import membership
 from fuzzkit.fuzzy.inference import evaluate
 from fuzzkit.fuzzy.model import RuleBase
+from fuzzkit.plants.robot_description import load_robot
 from fuzzkit.studies.scenario_file import SHIPPED, loads_scenario, shipped_scenario_text
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -166,3 +168,40 @@ def test_mutated_scenarios_give_located_errors_or_finite_experiments() -> None:
         if why is not None:
             failures.append(f"{m.origin} ({m.what}): {why}")
     assert not failures, f"{len(failures)} of {MUTANTS} mutants:\n" + "\n".join(failures[:15])
+
+
+def _config_failure(load: Callable[[Path], Any], path: Path) -> str | None:
+    """Why loading the config file ``path`` breaks the property (located error or finite)."""
+    try:
+        with _strict():
+            loaded = load(path)
+    except ConfigError as exc:
+        first = str(exc).split("\n")[-1] if "problems found" in str(exc) else str(exc)
+        located = first.startswith(f"{path}:") and first[len(str(path)) + 1 :][:1].isdigit()
+        return None if located else f"error without file:line: {first[:200]}"
+    except Exception as exc:
+        return f"{type(exc).__name__}: {str(exc)[:300]}"
+    return None if _finite_fields(loaded) else "a non-finite number was accepted"
+
+
+@pytest.mark.parametrize("kind", ["gains", "robot"])
+def test_mutated_gains_files_and_robot_descriptions_give_located_errors(
+    tmp_path: Path, kind: str
+) -> None:
+    if kind == "gains":
+        folder = ROOT / "docs" / "report" / "gains"
+        sources = {p.name: p.read_text() for p in sorted(folder.glob("*.yaml"))}
+
+        def load(path: Path) -> Any:
+            return [dataclasses.astuple(e) for e in read_gains_file(path).values()]
+    else:
+        sources = {"irb140.yaml": (ROOT / "fuzzkit" / "data" / "irb140.yaml").read_text()}
+        load = load_robot
+    failures = []
+    path = tmp_path / "mutant.yaml"
+    for m in mutants(sources, MUTANTS // 2, SEED):
+        path.write_text(m.text, encoding="utf-8", errors="surrogatepass")
+        why = _config_failure(load, path)
+        if why is not None:
+            failures.append(f"{m.origin} ({m.what}): {why}")
+    assert not failures, f"{len(failures)} of {MUTANTS // 2}:\n" + "\n".join(failures[:15])

@@ -154,10 +154,11 @@ def robot_from_mapping(
     ConfigError
         Listing every problem as ``file:line: what is wrong (expected X, got Y)``.
     """
-    _, key_lines, joint_lines = _node_lines(text) if text is not None else (0, {}, [])
+    doc_line, key_lines, joint_lines = _node_lines(text) if text is not None else (0, {}, [])
     problems: list[str] = []
 
     def where(line: int) -> str:
+        line = line or doc_line  # a missing key: the document's start
         return f"{source}:{line}" if line > 0 else source
 
     if not isinstance(data, Mapping):
