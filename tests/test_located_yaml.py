@@ -51,7 +51,7 @@ def test_a_reader_walks_located_nodes_and_raises_every_problem_at_once(tmp_path:
         f"{path}:1:1: missing required key 'safety' in the spec",
         f"{path}:4:19: expected an integer >= 1 for samples (at most 100), got 10.0",
         f"{path}:5:1: unknown key 'limits' in the spec; expected one of name, period_s, axes",
-        f"{path}:5:17: the step limit must be a finite number (got nan)",
+        f"{path}:5:16: the step limit must be a finite number (got nan)",
     ]
 
 
@@ -63,7 +63,7 @@ def test_plain_data_with_the_places_of_its_keys(tmp_path: Path) -> None:
     assert data["period_s"] == 0.004 and data["axes"]["z"]["samples"] == 16
     where = locations(root, str(path))
     assert where[("axes", "z", "samples")] == Location(str(path), 4, 25)
-    assert where[("limits", 1)] == Location(str(path), 5, 17)
+    assert where[("limits", 1)] == Location(str(path), 5, 16)
 
 
 @pytest.mark.parametrize(
