@@ -234,6 +234,8 @@ def _term_def(body: str, name: str, output: bool, sugeno: bool, n_inputs: int) -
             return "a Sugeno output takes Constant or Linear terms, not a point list"
         return points_to_term(name, points)
     words = body.split()
+    if not words:  # a truncated file: "TERM x :=" and nothing after it
+        return "expected a term after ':=' (a point list, a number or a shape), got nothing"
     value = parse_number(body)
     if value is not None:  # IEC singleton
         if output:

@@ -12,7 +12,9 @@ from typing import Any
 
 import yaml
 
-from fuzzkit.formats.yaml_reader import EMPTY_CELL, STR_TAG
+from fuzzkit.errors import RuleBaseError
+from fuzzkit.formats.yaml_reader import EMPTY_CELL
+from fuzzkit.fuzzy import validation
 from fuzzkit.fuzzy.model import (
     PIECEWISE_LINEAR_SHAPES,
     SHAPE_PARAMS,
@@ -26,6 +28,7 @@ from fuzzkit.fuzzy.model import (
     Variable,
 )
 from fuzzkit.fuzzy.partition import PARTITION_ENDS, partition_terms
+from fuzzkit.located_yaml import STR_TAG
 
 
 class _Flow(list[Any]):
@@ -183,7 +186,16 @@ def dump(rb: RuleBase, range_notes: Mapping[str, str] | None = None) -> str:
     and the rules as a table when ``rb.table`` is set and the rules are exactly that table.
     ``range_notes`` maps variable names to a comment written after their range (an importer
     saying where a range came from).
+
+    Raises
+    ------
+    RuleBaseError
+        A condition nests deeper than the readers accept
+        (:data:`~fuzzkit.fuzzy.validation.MAX_CONDITION_DEPTH`).
     """
+    too_deep = validation.depth_problems(rb)
+    if too_deep:
+        raise RuleBaseError(validation.as_problems(rb, too_deep))
     notes = {name: " ".join(note.split()) for name, note in (range_notes or {}).items()}
     noted: dict[str, str] = {}
     doc: dict[str, Any] = {"name": rb.name}
