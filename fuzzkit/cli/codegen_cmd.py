@@ -123,31 +123,26 @@ def cmd_compile(args: argparse.Namespace) -> int:
     """Handler of ``fuzzkit compile``."""
     from pathlib import Path
 
-    from fuzzkit.codegen.emit import TARGETS
     from fuzzkit.codegen.lut import NUMBER_TYPES
     from fuzzkit.codegen.method import DEFAULT_MAX_BYTES, compile_rulebase
-    from fuzzkit.codegen.verify import (
-        verify_c,
-        verify_exact_c,
-        verify_exact_python,
-        verify_python,
-    )
+    from fuzzkit.codegen.target import all_targets, load_target
     from fuzzkit.errors import CodegenError, ConfigError
     from fuzzkit.fileio import write_tree_atomic
     from fuzzkit.formats.registry import load
     from fuzzkit.progress import TaskBars
 
     # Cheap checks first, so a typo costs nothing and nothing is written.
-    if args.target not in TARGETS:
-        raise CodegenError(f"unknown target {args.target!r} (expected one of {', '.join(TARGETS)})")
-    number_type = args.number_type or ("double" if args.target == "python" else "float")
+    target = load_target(args.target)
+    number_type = args.number_type or target.default_number_type
     if number_type not in NUMBER_TYPES:
         raise CodegenError(
             f"unknown --type {number_type!r} (expected one of {', '.join(NUMBER_TYPES)})"
         )
-    if args.target == "python" and number_type != "double":
+    if number_type not in target.number_types:
+        others = [t.label for t in all_targets() if number_type in t.number_types]
         raise CodegenError(
-            f"--type {number_type} applies to the C target; the python target computes in double"
+            f"--type {number_type} applies to the {' and '.join(others)} target; the "
+            f"{target.name} target computes in {' or '.join(target.number_types)}"
         )
     out = Path(args.out)
     if out.exists() and not out.is_dir():
@@ -186,14 +181,9 @@ def cmd_compile(args: argparse.Namespace) -> int:
         print("note: --gains ignored (no fuzzy-PI API)")
     if args.verify:
         if table is None:
-            if args.target == "c":
-                result_v = verify_exact_c(rb, number_type, files)
-            else:
-                result_v = verify_exact_python(rb, files)
-        elif args.target == "c":
-            result_v = verify_c(rb, table, files)
+            result_v = target.verify_exact(rb, number_type, files)
         else:
-            result_v = verify_python(rb, table, files)
+            result_v = target.verify_table(rb, table, files)
         print(result_v.describe())
         if not result_v.ok:
             print("nothing written: the generated code does not match the exact engine")
