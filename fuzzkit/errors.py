@@ -91,3 +91,7 @@ class ConfigError(FuzzkitError, ValueError):
 
 class ScenarioError(ProblemsError):
     """A scenario file is malformed; every problem is listed as ``file:line:col``."""
+
+
+class ControllerSpecError(ProblemsError):
+    """A controller spec file is malformed; every problem is listed as ``file:line:col``."""
