@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fuzzkit.codegen.backends.c.run import open_controller
 from fuzzkit.codegen.target import Target
 from fuzzkit.codegen.verify import verify_c, verify_exact_c
 from fuzzkit.errors import CodegenError
@@ -71,9 +72,13 @@ TARGET = Target(
     files={
         "table": {"{name}.h": "header.h.jinja", "{name}.c": "source.c.jinja"},
         "exact": {"{name}.h": "exact.h.jinja", "{name}.c": "exact.c.jinja"},
+        "controller": {"{name}.h": "controller.h.jinja", "{name}.c": "controller.c.jinja"},
+        # a fuzzy-PI controller's surface: the exact method as a sibling unit NAME_surface
+        "surface": {"{name}.h": "exact.h.jinja", "{name}.c": "exact.c.jinja"},
     },
     visits_firing_cells=True,
     fast_centroid=True,
     verify_table=verify_c,
     verify_exact=verify_exact_c,
+    open_controller=open_controller,
 )

@@ -12,6 +12,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from fuzzkit.codegen.lut import LookupTable
+from fuzzkit.codegen.backends.python.run import open_controller
 from fuzzkit.codegen.target import Target
 from fuzzkit.codegen.verify import Verification, verify_exact_python, verify_python
 from fuzzkit.errors import CodegenError
@@ -60,9 +61,12 @@ TARGET = Target(
     files={
         "table": {"{name}.py": "module.py.jinja"},
         "exact": {"{name}.py": "exact.py.jinja"},
+        # the fuzzy-PI surface is embedded (exact_body.py.jinja): one module, no import path
+        "controller": {"{name}.py": "controller.py.jinja"},
     },
     visits_firing_cells=False,
     fast_centroid=False,
     verify_table=_verify_table,
     verify_exact=_verify_exact,
+    open_controller=open_controller,
 )
