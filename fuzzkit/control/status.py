@@ -9,9 +9,9 @@ from __future__ import annotations
 
 #: The force loop has taken over (the engagement debounce passed); stays set until reset.
 ENGAGED = 1 << 0
-#: This sample did not reach the axis controllers (missing: NaN/inf on a force-controlled
-#: axis, no or non-finite tool rotation while gravity compensation is on; rejected by the
-#: spike gate; used for the tare); the correction is held.
+#: This sample was not usable: missing (NaN/inf on a force-controlled axis; no or a non-finite
+#: tool rotation while gravity compensation is on), rejected by the spike gate, or consumed by
+#: the tare. The correction is held.
 HELD = 1 << 1
 #: The force safety limit tripped; latched until reset. The correction is frozen.
 TRIPPED = 1 << 2
