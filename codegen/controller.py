@@ -99,6 +99,7 @@ class ControllerAxis:
     name: str
     selected: bool
     setpoint: str
+    setpoint_text: str  # for comments: 6 significant digits
     kp: str
     ki: str
     kx: str
@@ -138,6 +139,11 @@ class ControllerCodeSpec:
     correction: str
     step: str
     limit: str
+    #: the same for comments: 6 significant digits
+    period_text: str
+    correction_text: str
+    step_text: str
+    limit_text: str
     engage_at_start: bool
     engage_threshold: str
     engage_samples: int
@@ -310,6 +316,7 @@ def build_controller_spec(
             name=axis,
             selected=design.selection[i],
             setpoint=lit(design.setpoints_n[i]),
+            setpoint_text=f"{design.setpoints_n[i]:.6g}",
             kp=lit(design.kp[i]),
             ki=lit(design.ki[i]),
             kx=lit(design.kx[i]),
@@ -354,6 +361,10 @@ def build_controller_spec(
         correction=lit(design.correction_m),
         step=lit(design.step_m),
         limit=lit(design.limit_n),
+        period_text=f"{design.period_s:.6g}",
+        correction_text=f"{design.correction_m:.6g}",
+        step_text=f"{design.step_m:.6g}",
+        limit_text=f"{design.limit_n:.6g}",
         engage_at_start=design.engage_threshold_n is None,
         engage_threshold=lit(design.engage_threshold_n or 0.0),
         engage_samples=design.engage_samples,
