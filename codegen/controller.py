@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import itertools
 import math
 import textwrap
 from dataclasses import dataclass
@@ -211,7 +212,7 @@ def slope_bound(rb: RuleBase) -> float:
     span = out.high - out.low
     for var in rb.inputs[:2]:
         points = sorted({float(p) for t in var.terms for p in t.params} | {var.low, var.high})
-        gaps = [b - a for a, b in zip(points, points[1:], strict=False) if b - a > 0.0]
+        gaps = [b - a for a, b in itertools.pairwise(points) if b - a > 0.0]
         total += span / min(gaps)
     return total
 

@@ -33,6 +33,7 @@ from fuzzkit.control.spec import AxisSpec, ControllerSpec, Limits, SensorSpec
 from fuzzkit.control.spec_reader import load_spec
 from fuzzkit.errors import ToolchainError
 from fuzzkit.studies.controller_code import design_of, generate, open_generated
+from fuzzkit.studies.replay import SensorLog, replay
 from fuzzkit.studies.sensor_logs import SEGMENTS, hostile_segments
 
 REPO = Path(__file__).parent.parent
@@ -72,13 +73,11 @@ def spec(variant: str) -> ControllerSpec:
 VARIANTS = ("fuzzy", "pi", "bare_fuzzy", "hot_pi")
 
 
-def reference_run(s: ControllerSpec, forces: FloatArray, rotations: FloatArray) -> tuple[FloatArray, npt.NDArray[np.int64]]:
-    ref = Controller(s)
-    out = np.empty((len(forces), 3))
-    status = np.zeros(len(forces), dtype=np.int64)
-    for k, (f, r) in enumerate(zip(forces.tolist(), rotations.tolist(), strict=True)):
-        out[k], status[k] = ref.step(f, r)
-    return out, status
+def reference_run(
+    s: ControllerSpec, forces: FloatArray, rotations: FloatArray
+) -> tuple[FloatArray, npt.NDArray[np.int64]]:
+    """The reference controller (``replay --impl python``) over a log, from reset."""
+    return replay(s, SensorLog(forces, rotations, None), "python")
 
 
 @functools.cache
@@ -112,7 +111,9 @@ def _open(variant: str, impl: str, number_type: str = "double") -> Any:
 # ------------------------------------------------------------------- equality with the reference
 
 
-@pytest.mark.parametrize("impl", ["python", pytest.param("cc", marks=needs_cc), pytest.param("clang", marks=needs_cc)])
+@pytest.mark.parametrize(
+    "impl", ["python", pytest.param("cc", marks=needs_cc), pytest.param("clang", marks=needs_cc)]
+)
 @pytest.mark.parametrize("variant", VARIANTS)
 def test_double_controller_equals_the_reference_on_every_hostile_segment(
     variant: str, impl: str
@@ -190,7 +191,9 @@ def test_float_build_stays_within_the_bound_its_header_states(variant: str) -> N
 @needs_cc
 @pytest.mark.parametrize("compiler", ["cc", "clang"])
 @pytest.mark.parametrize("variant", ["fuzzy", "hot_pi"])
-def test_controller_runs_clean_under_sanitizers(tmp_path: Path, compiler: str, variant: str) -> None:
+def test_controller_runs_clean_under_sanitizers(
+    tmp_path: Path, compiler: str, variant: str
+) -> None:
     s = spec(variant)
     cc = _compiler(compiler)
     module = f"{s.name}_controller"
@@ -223,7 +226,9 @@ int main(void)
         raise
     forces = np.vstack([segments(variant)[n][0] for n in SEGMENTS])
     rotations = np.vstack([segments(variant)[n][1] for n in SEGMENTS])
-    lines = (" ".join(repr(float(v)) for v in (*f, *r)) for f, r in zip(forces, rotations, strict=True))
+    lines = (
+        " ".join(repr(float(v)) for v in (*f, *r)) for f, r in zip(forces, rotations, strict=True)
+    )
     proc = subprocess.run(
         [str(tmp_path / "h")], input="\n".join(lines) + "\n", capture_output=True, text=True,
         timeout=300, check=False,
@@ -259,10 +264,16 @@ def test_objects_use_only_the_libm_symbols_the_header_lists_and_hold_no_writable
         if not rel.endswith(".c"):
             continue
         run_compiler([*cc, *STRICT_FLAGS, "-O2", "-c", rel, "-o", rel + ".o"], tmp_path)
-        nm = subprocess.run(["nm", rel + ".o"], cwd=tmp_path, capture_output=True, text=True, check=True)
+        nm = subprocess.run(
+            ["nm", rel + ".o"], cwd=tmp_path, capture_output=True, text=True, check=True
+        )
         undefined = {line.split()[-1] for line in nm.stdout.splitlines() if " U " in line}
         assert undefined <= listed | own, (rel, undefined - listed - own)
-        writable = [line for line in nm.stdout.splitlines() if line.split()[-2:-1] in (["D"], ["d"], ["B"], ["b"])]
+        writable = [
+            line
+            for line in nm.stdout.splitlines()
+            if line.split()[-2:-1] in (["D"], ["d"], ["B"], ["b"])
+        ]
         assert writable == [], (rel, writable)
 
 

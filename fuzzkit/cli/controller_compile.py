@@ -46,11 +46,11 @@ def compile_spec(args: argparse.Namespace) -> int:
 
     from fuzzkit.codegen.controller import float_step_bound
     from fuzzkit.codegen.target import load_target
-    from fuzzkit.control.reference import Controller
     from fuzzkit.control.spec_reader import load_spec
     from fuzzkit.errors import ConfigError
     from fuzzkit.fileio import write_tree_atomic
     from fuzzkit.studies.controller_code import design_of, generate
+    from fuzzkit.studies.replay import SensorLog, replay
     from fuzzkit.studies.sensor_logs import hostile_log
 
     _refuse_rulebase_options(args)
@@ -68,10 +68,7 @@ def compile_spec(args: argparse.Namespace) -> int:
         forces, rotations = hostile_log(spec)
         ctl = target.open_controller(files, f"{spec.name}_controller", number_type)
         got, status = ctl.run(forces, rotations)
-        ref = Controller(spec)
-        want = np.array([ref.step(list(f), list(r))[0] for f, r in zip(forces, rotations)])
-        ref.reset()
-        want_status = np.array([ref.step(list(f), list(r))[1] for f, r in zip(forces, rotations)])
+        want, want_status = replay(spec, SensorLog(forces, rotations, None), "python")
         err = np.abs(got - want).max(axis=1)
         if number_type == "double":
             allowed = np.full(len(err), DOUBLE_TOLERANCE_M)

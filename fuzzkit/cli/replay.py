@@ -27,7 +27,9 @@ def register(sub: Any) -> None:
     )
     p.add_argument("spec", metavar="SPEC", help="controller spec (YAML)")
     p.add_argument("--forces", required=True, metavar="LOG.csv", help="the sensor log")
-    p.add_argument("--out", required=True, metavar="OUT.csv", help="output CSV (written atomically)")
+    p.add_argument(
+        "--out", required=True, metavar="OUT.csv", help="output CSV (written atomically)"
+    )
     p.add_argument(
         "--impl",
         default="python",

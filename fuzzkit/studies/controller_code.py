@@ -87,9 +87,7 @@ def generate(spec: ControllerSpec, target: str, number_type: str | None = None) 
     return emit_controller(design_of(spec), target, number_type)
 
 
-def open_generated(
-    spec: ControllerSpec, target: str, number_type: str | None = None
-) -> Any:
+def open_generated(spec: ControllerSpec, target: str, number_type: str | None = None) -> Any:
     """Generate the controller, then compile (C) or import (Python) it, ready to ``step``.
 
     Raises

@@ -77,8 +77,8 @@ def read_sensor_log(path: str | Path) -> SensorLog:
     try:
         text = data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        line = data[: exc.start].count(b"\n") + 1
-        raise ProblemsError([Problem(Location(name, line), "not UTF-8 text")]) from None
+        where = data[: exc.start].count(b"\n") + 1
+        raise ProblemsError([Problem(Location(name, where), "not UTF-8 text")]) from None
     lines = text.splitlines()
     if not lines or not lines[0].strip():
         raise ProblemsError(
@@ -137,7 +137,11 @@ def read_sensor_log(path: str | Path) -> SensorLog:
             if not math.isfinite(times[k]):
                 bad(k + 2, header[index["t"]][1], "t must be a finite time (s)")
             elif k and math.isfinite(times[k - 1]) and times[k] <= times[k - 1]:
-                bad(k + 2, header[index["t"]][1], f"t must increase (got {times[k]!r} after {times[k - 1]!r})")
+                bad(
+                    k + 2,
+                    header[index["t"]][1],
+                    f"t must increase (got {times[k]!r} after {times[k - 1]!r})",
+                )
     if problems:
         raise ProblemsError(problems[:MAX_PROBLEMS])
     forces = values[:, [index[c] for c in FORCE_COLUMNS]]

@@ -36,10 +36,13 @@ def _rotation_x(theta: float) -> FloatArray:
     c, s = math.cos(theta), math.sin(theta)
     down = np.diag([1.0, -1.0, -1.0])
     rx = np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
-    return down @ rx
+    turned: FloatArray = down @ rx
+    return turned
 
 
-def _raw(spec: ControllerSpec, contact: FloatArray, rotations: FloatArray, bias: FloatArray) -> FloatArray:
+def _raw(
+    spec: ControllerSpec, contact: FloatArray, rotations: FloatArray, bias: FloatArray
+) -> FloatArray:
     tool = spec.sensor.tool
     mass = 0.0 if tool is None else tool.mass_kg
     weight = mass * STANDARD_GRAVITY_M_S2 * rotations[:, 6:9]
@@ -99,10 +102,10 @@ def hostile_segments(spec: ControllerSpec, n: int = 400, seed: int = 0) -> dict[
                 contact[k:, :] += rng.uniform(-0.8, 0.8, 3) * limit * 0.5
             contact = np.clip(contact, -0.8 * limit, 0.8 * limit)
         elif name == "sustained_over_limit":
-            k = start + 40
-            rise = np.linspace(0.0, 1.6 * limit, 30)
-            contact[k : k + 30, 2] = rise
-            contact[k + 30 :, 2] = 1.6 * limit
+            k = min(start + 40, n)
+            rise = np.linspace(0.0, 1.6 * limit, 30)[: n - k]
+            contact[k : k + rise.size, 2] = rise
+            contact[k + rise.size :, 2] = 1.6 * limit
         raw = _raw(spec, contact, rot.copy(), bias)
         if name == "random":
             raw[rng.random(raw.shape) < 0.03] = math.nan

@@ -108,7 +108,14 @@ class CompiledController:
         self.step_function.argtypes = [ctypes.c_void_p, ptr, ptr, ptr]
         self.step_function.restype = ctypes.c_uint32
         self._run = self.library.fuzzkit_controller_run
-        self._run.argtypes = [ctypes.c_void_p, ptr, ptr, ptr, ctypes.POINTER(ctypes.c_uint), ctypes.c_long]
+        self._run.argtypes = [
+            ctypes.c_void_p,
+            ptr,
+            ptr,
+            ptr,
+            ctypes.POINTER(ctypes.c_uint),
+            ctypes.c_long,
+        ]
         self._run.restype = None
         self._in = (ctype * 3)()
         self._rot = (ctype * 9)()

@@ -42,8 +42,6 @@ class ImportedController:
         return out, status
 
 
-def open_controller(
-    files: Mapping[str, str], module: str, number_type: str
-) -> ImportedController:
+def open_controller(files: Mapping[str, str], module: str, number_type: str) -> ImportedController:
     """The Python target's way to run a generated controller (``Target.open_controller``)."""
     return ImportedController(files, module)
