@@ -91,7 +91,8 @@ def toy_target(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[targ
     It is the Python target with every number written as ``float.fromhex(...)`` and its own
     reserved word, registered as the folder scan would register it.
     """
-    shutil.copy(CODEGEN / "backends" / "python" / "exact.py.jinja", tmp_path)
+    for template in ("exact.py.jinja", "exact_body.py.jinja"):
+        shutil.copy(CODEGEN / "backends" / "python" / template, tmp_path)
 
     def hex_literal(value: float, number_type: str) -> str:
         return f"float.fromhex({float(value).hex()!r})"
