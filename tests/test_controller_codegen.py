@@ -333,3 +333,31 @@ def test_controller_matches_golden_files(variant: str, target: str, number_type:
     for rel, text in files.items():
         problem = golden_difference(text, expected[rel], ULPS[number_type], number_type)
         assert problem is None, f"{folder / rel}: {problem}; FUZZKIT_REFRESH_GOLDEN=1 rewrites it"
+
+
+@needs_cc
+def test_compiled_code_calls_the_c_controller_by_address() -> None:
+    # what a compiled closed loop does: numba calls NAME_controller_step through the ctypes
+    # function (typed by its argtypes, address read at call time) on a numpy-held state
+    from numba import njit
+
+    s = spec("fuzzy")
+    ctl = _open("fuzzy", "cc")
+    state = np.zeros(len(ctl.state))
+    ctl.init_function(state.ctypes.data)
+
+    @njit(cache=False)
+    def run(fn: Any, state: Any, forces: Any, rots: Any, out: Any, status: Any) -> None:
+        for k in range(forces.shape[0]):
+            status[k] = fn(state.ctypes, forces[k].ctypes, rots[k].ctypes, out[k].ctypes)
+
+    forces, rotations = segments("fuzzy")["tilted_tool"]
+    forces = np.ascontiguousarray(forces)
+    rotations = np.ascontiguousarray(rotations)
+    out = np.zeros((len(forces), 3))
+    status = np.zeros(len(forces), dtype=np.int64)
+    run(ctl.step_function, state, forces, rotations, out, status)
+    want, want_status = reference("fuzzy", "tilted_tool")
+    assert float(np.max(np.abs(out - want))) <= TOLERANCE_M
+    np.testing.assert_array_equal(status, want_status)
+    assert s.name == "e1_fuzzy"
