@@ -43,17 +43,7 @@ GOLDEN_CASES = [
 def test_output_matches_golden_files(name: str, target: str, number_type: str) -> None:
     files = sources(name, target, number_type)  # type: ignore[arg-type]
     folder = GOLDEN / name / f"{target}-{number_type}"
-    if REFRESH:
-        folder.mkdir(parents=True, exist_ok=True)
-        for old in folder.iterdir():
-            old.unlink()
-        for rel, text in files.items():
-            (folder / rel).write_text(text, encoding="utf-8")
-    expected = {p.name: p.read_text(encoding="utf-8") for p in sorted(folder.iterdir())}
-    assert sorted(expected) == sorted(files), "set FUZZKIT_REFRESH_GOLDEN=1 to rewrite"
-    for rel, text in files.items():
-        problem = golden_difference(text, expected[rel], ULPS[number_type], number_type)
-        assert problem is None, f"{folder / rel}: {problem}; FUZZKIT_REFRESH_GOLDEN=1 rewrites it"
+    check_golden(folder, files, number_type)
 
 
 #: Floating-point literals in generated tables come from numpy/scipy sums whose rounding changes
@@ -71,6 +61,22 @@ def _split_literals(text: str) -> tuple[list[str], list[float]]:
     parts = _FLOAT_LITERAL.split(text)
     values = [float(m.rstrip("f")) for m in _FLOAT_LITERAL.findall(text)]
     return parts, values
+
+
+def check_golden(folder: Path, files: dict[str, str], number_type: str) -> None:
+    """``files`` equal the golden files in ``folder`` (``FUZZKIT_REFRESH_GOLDEN=1`` rewrites
+    them): the same names, text equal but for float literals within ``ULPS``."""
+    if REFRESH:
+        folder.mkdir(parents=True, exist_ok=True)
+        for old in folder.iterdir():
+            old.unlink()
+        for rel, text in files.items():
+            (folder / rel).write_text(text, encoding="utf-8")
+    expected = {p.name: p.read_text(encoding="utf-8") for p in sorted(folder.iterdir())}
+    assert sorted(expected) == sorted(files), "set FUZZKIT_REFRESH_GOLDEN=1 to rewrite"
+    for rel, text in files.items():
+        problem = golden_difference(text, expected[rel], ULPS[number_type], number_type)
+        assert problem is None, f"{folder / rel}: {problem}; FUZZKIT_REFRESH_GOLDEN=1 rewrites it"
 
 
 def golden_difference(got: str, want: str, ulps: int, number_type: str) -> str | None:

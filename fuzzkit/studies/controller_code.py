@@ -76,7 +76,7 @@ def design_of(spec: ControllerSpec) -> ControllerDesign:
         lowpass_alpha=spec.sensor.lowpass_alpha(spec.period_s),
         rulebase=spec.rulebase,
         status_bits=status_bits(),
-        description=getattr(spec, "description", "") or "",
+        description=spec.description,
         source_file=source_file,
         source_sha256=sha,
     )

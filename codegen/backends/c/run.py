@@ -21,8 +21,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from fuzzkit.codegen.toolchain import STRICT_FLAGS, find_compiler, run_compiler
-from fuzzkit.errors import ToolchainError
+from fuzzkit.codegen.toolchain import STRICT_FLAGS, build_library
 
 _CTYPE = {"float": ctypes.c_float, "double": ctypes.c_double}
 _NUMPY = {"float": np.float32, "double": np.float64}
@@ -69,28 +68,13 @@ class CompiledController:
         compiler: Sequence[str] | None = None,
         flags: Sequence[str] = (*STRICT_FLAGS, "-O2"),
     ) -> None:
-        cc = list(compiler) if compiler else find_compiler()
-        if cc is None:
-            raise ToolchainError(
-                "no C compiler found (set $CC or install cc, gcc or clang) to compile generated C"
-            )
         self.number_type = number_type
         ctype = _CTYPE[number_type]
+        harness = {"fuzzkit_controller_harness.c": harness_source(module, number_type)}
         with tempfile.TemporaryDirectory(prefix="fuzzkit-ctl-") as tmp:
-            folder = Path(tmp)
-            for rel, text in files.items():
-                (folder / rel).write_text(text, encoding="utf-8")
-            (folder / "fuzzkit_controller_harness.c").write_text(
-                harness_source(module, number_type), encoding="utf-8"
+            self.library: Any = build_library(
+                Path(tmp), {**files, **harness}, module, compiler=compiler, flags=flags
             )
-            sources = sorted(rel for rel in files if rel.endswith(".c"))
-            lib = folder / f"lib{module}.so"
-            run_compiler(
-                [*cc, *flags, "-shared", "-fPIC", "-o", str(lib), *sources,
-                 "fuzzkit_controller_harness.c", "-lm"],
-                folder,
-            )  # fmt: skip
-            self.library: Any = ctypes.CDLL(str(lib))
         ptr = ctypes.POINTER(ctype)
         size = self.library.fuzzkit_controller_size
         size.restype = ctypes.c_size_t
