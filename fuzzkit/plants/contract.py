@@ -151,6 +151,9 @@ class PlantSample:
         not report it (metrics then take any contact as every axis's contact).
     arm_points : (m, 3) base-frame polyline from the base through the joints to the tool tip.
     messages : status and limit messages of this period (torque limit, unreachable target ...).
+    tool_rotation : world-from-sensor rotation (3, 3) of the frame ``force`` is in, when the
+        tool turns away from the task frame (a tilted tool); None: ``force`` is in the
+        scenario's fixed task frame (``Scenario.rotation``).
     """
 
     t_s: float
@@ -165,6 +168,7 @@ class PlantSample:
     arm_points: Vec
     messages: tuple[str, ...] = ()
     force_normal: Vec | None = None
+    tool_rotation: Vec | None = None
 
 
 @runtime_checkable

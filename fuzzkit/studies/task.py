@@ -3,8 +3,10 @@ force-control task in it. Scenario files (:mod:`fuzzkit.studies.scenario_file`) 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
+from fuzzkit.control.spec import ControllerSpec
+from fuzzkit.errors import ConfigError
 from fuzzkit.plants.contract import Scenario
 
 AXES = ("x", "y", "z")
@@ -25,6 +27,10 @@ class Experiment:
     ``latency_periods``: (sensor-to-controller, controller-to-motion) delays in periods.
     ``engage_samples``: consecutive samples above the threshold needed to engage. ``fault``:
     the sensor fault kind injected by default (a name of ``fuzzkit.studies.faults.FAULTS``).
+    ``controller_spec``: the controller the experiment runs (a scenario's ``controller:``, or
+    ``--spec``; :func:`fuzzkit.studies.experiments.with_spec`); its axes, set points, safety
+    limit and engagement are the fields above. None: the controller named on the command line,
+    with the default or given gains.
     """
 
     name: str
@@ -39,3 +45,30 @@ class Experiment:
     latency_periods: tuple[int, int] = DEFAULT_LATENCY
     engage_samples: int = 3
     fault: str = "none"
+    controller_spec: ControllerSpec | None = None
+
+
+def with_spec(exp: Experiment, spec: ControllerSpec) -> Experiment:
+    """``exp`` run by the controller of ``spec``: the spec's axes, set points, safety limit and
+    engagement replace the experiment's (the path hold stays the scenario's).
+
+    Raises
+    ------
+    ConfigError
+        The spec's sample period is not the scenario's.
+    """
+    period = exp.scenario.period_s
+    if spec.period_s != period:
+        raise ConfigError(
+            f"controller spec {spec.name!r} runs every {spec.period_s:g} s, scenario "
+            f"{exp.name} every {period:g} s; the periods must agree"
+        )
+    return replace(
+        exp,
+        setpoints=spec.setpoints,
+        selection=spec.selection,
+        force_limit_n=spec.safety.limit_n,
+        engage_threshold_n=spec.safety.engage_threshold_n,
+        engage_samples=spec.safety.engage_samples,
+        controller_spec=spec,
+    )
