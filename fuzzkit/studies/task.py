@@ -5,8 +5,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-from fuzzkit.control.spec import ControllerSpec
+from fuzzkit.control.spec import AxisSpec, ControllerSpec, Limits, Safety
 from fuzzkit.errors import ConfigError
+from fuzzkit.fuzzy.model import RuleBase
 from fuzzkit.plants.contract import Scenario
 
 AXES = ("x", "y", "z")
@@ -71,4 +72,49 @@ def with_spec(exp: Experiment, spec: ControllerSpec) -> Experiment:
         engage_threshold_n=spec.safety.engage_threshold_n,
         engage_samples=spec.safety.engage_samples,
         controller_spec=spec,
+    )
+
+
+#: Correction limits a spec gets when its gains name none (m; m per period): the examples'.
+DEFAULT_CORRECTION_M = 0.05
+DEFAULT_STEP_M = 0.001
+
+
+def spec_for(
+    exp: Experiment,
+    kind: str,
+    gains: dict[str, float],
+    name: str,
+    rulebase: RuleBase | None = None,
+    rulebase_ref: str | None = None,
+) -> ControllerSpec:
+    """A controller spec running ``exp``'s task (axes, set points, safety limit, engagement)
+    with ``gains`` on every force-controlled axis: what ``fuzzkit tune --spec-out`` writes.
+
+    ``correction_m`` is the smaller of ``-u_min`` and ``u_max`` of the gains, ``step_m`` their
+    ``rate_limit`` (defaults :data:`DEFAULT_CORRECTION_M`, :data:`DEFAULT_STEP_M`). No sensor
+    front end: the simulated loop that found the gains had none.
+    """
+    bound = min(
+        -gains.get("u_min", -DEFAULT_CORRECTION_M), gains.get("u_max", DEFAULT_CORRECTION_M)
+    )
+    axes = tuple(
+        AxisSpec(axis, exp.setpoints[i], gains["kp"], gains["ki"], gains.get("kx"))
+        for i, axis in enumerate(AXES)
+        if exp.selection[i]
+    )
+    return ControllerSpec(
+        name=name,
+        kind=kind,
+        period_s=exp.scenario.period_s,
+        axes=axes,
+        limits=Limits(bound, gains.get("rate_limit", DEFAULT_STEP_M)),
+        safety=Safety(
+            limit_n=exp.force_limit_n,
+            engage_threshold_n=exp.engage_threshold_n,
+            engage_samples=exp.engage_samples,
+        ),
+        rulebase=rulebase if kind == "fuzzy-pi" else None,
+        rulebase_ref=rulebase_ref if kind == "fuzzy-pi" else None,
+        description=f"{kind} for {exp.name}, gains tuned by fuzzkit tune",
     )
