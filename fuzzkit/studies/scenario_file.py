@@ -470,6 +470,7 @@ def json_schema() -> dict[str, Any]:
         embedded = spec_schema()
         embedded.pop("$schema")
         return embedded
+
     number = {"type": "number"}
 
     def record(cls: type[Any], extra: dict[str, Any] | None = None) -> dict[str, Any]:
