@@ -193,6 +193,19 @@ class ContactPlant(Protocol):
     def step(self, correction_xyz: Vec, path_time_s: float) -> PlantSample: ...
 
 
+def wrist_sensor_extras(scenario: Scenario) -> list[str]:
+    """What of ``scenario``'s wrist-sensor model goes beyond filter, noise and a constant bias:
+    a tool weight, a drifting bias, a tilting tool (the compiled loops model none of them)."""
+    out = []
+    if scenario.tool.mass_kg != 0.0:
+        out.append("a tool weight (tool mass_kg)")
+    if any(v != 0.0 for v in scenario.sensor.bias_drift_n_per_s):
+        out.append("a drifting sensor bias (sensor bias_drift_n_per_s)")
+    if any(w.tilt_rad != 0.0 for w in scenario.path):
+        out.append("a tilting tool (path tilt_deg)")
+    return out
+
+
 class UnsupportedPlant(ConfigError):
     """The plant uses something its compiled twin does not model (the Python loop still runs).
 

@@ -64,7 +64,7 @@ REQUIRED_KEYS = ("name", "duration_s", "path", "objects", "force_control", "safe
 #: What a scenario with a controller spec leaves to the spec (the spec holds them).
 SPEC_KEYS = ("force_control", "safety_limit_n")
 SPEC_ENGAGE_KEYS = ("threshold_n", "samples")
-WAYPOINT_KEYS = ("t_s", "x", "y", "z")
+WAYPOINT_KEYS = ("t_s", "x", "y", "z", "tilt_deg")
 ENGAGE_KEYS = ("threshold_n", "samples", "hold_path")
 LATENCY_KEYS = ("sensor", "command")
 #: Environment objects by their key in ``objects``; RoughSurface also takes ``tilt_deg``.
@@ -223,7 +223,8 @@ class _ScenarioReader(NodeReader):
                     f"path[{k}]: time {t:g} s is before the previous {before:g} s",
                 )
                 continue
-            out.append(Waypoint(t, vals["x"], vals.get("y") or 0.0, vals["z"]))  # type: ignore[arg-type]
+            tilt = math.radians(vals.get("tilt_deg") or 0.0)
+            out.append(Waypoint(t, vals["x"], vals.get("y") or 0.0, vals["z"], tilt))  # type: ignore[arg-type]
         return tuple(out) if len(out) == len(items) else None
 
     def objects(self, node: Node) -> tuple[EnvObject, ...] | None:
