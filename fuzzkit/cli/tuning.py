@@ -153,6 +153,13 @@ def register(subparsers: Any) -> None:
         help="small report for a smoke test: shorter tuning, stiffness and latency sweeps "
         "(fuzzkit.report.build.quick_options)",
     )
+    rep.add_argument(
+        "--spec",
+        default=None,
+        metavar="SPEC[,SPEC...]",
+        help="controller specs (docs/controller.md) to run on E1-E3 as they ship, in a "
+        "section of their own",
+    )
     rep.add_argument("--quiet", action="store_true", help="no progress bars")
     rep.set_defaults(handler=_report)
 
@@ -356,6 +363,7 @@ def _report(args: argparse.Namespace) -> int:
         workers=args.workers,
         rrd=not args.no_rrd,
         log=None if args.quiet else sys.stderr,
+        specs=[Path(p) for p in args.spec.split(",")] if args.spec else (),
         **(quick_options() if args.quick else {}),
     )
     print(f"wrote {path}")
