@@ -83,6 +83,12 @@ def register(subparsers: Any) -> None:
     )
     tune.add_argument("--out", required=True, metavar="GAINS.yaml", help="gains file to write")
     tune.add_argument(
+        "--spec-out",
+        metavar="SPEC.yaml",
+        help="also write a controller spec (docs/controller.md): the first experiment's task "
+        "(axes, set points, safety) with the tuned gains on every axis, no sensor front end",
+    )
+    tune.add_argument(
         "--replace",
         action="store_true",
         help="overwrite --out (default: keep the other controller's entry if the file has one)",
@@ -147,6 +153,13 @@ def register(subparsers: Any) -> None:
         help="small report for a smoke test: shorter tuning, stiffness and latency sweeps "
         "(fuzzkit.report.build.quick_options)",
     )
+    rep.add_argument(
+        "--spec",
+        default=None,
+        metavar="SPEC[,SPEC...]",
+        help="controller specs (docs/controller.md) to run on E1-E3 as they ship, in a "
+        "section of their own",
+    )
     rep.add_argument("--quiet", action="store_true", help="no progress bars")
     rep.set_defaults(handler=_report)
 
@@ -187,6 +200,8 @@ def _tune(args: argparse.Namespace) -> int:
     latencies = parse_latencies(args.latency) if args.latency else None
     out = Path(args.out)
     check_output_path(out, "gains file")
+    if args.spec_out:
+        check_output_path(args.spec_out, "controller spec")
     if out.is_file() and not args.replace:
         read_gains_file(out)  # an unreadable existing file is reported now, not after tuning
     with progress_bar(
@@ -222,10 +237,45 @@ def _tune(args: argparse.Namespace) -> int:
     for line in tune_report_lines(result, cases):
         print(line)
     print(f"wrote {out}" + (f" (kept the {', '.join(kept)} entry)" if kept else ""))
+    if args.spec_out:
+        _write_spec(args, result)
+        print(f"wrote {args.spec_out}")
     if result.interrupted:
         print(f"fuzzkit: interrupted (Ctrl-C); {out} holds the best gains so far", file=sys.stderr)
         return EXIT_INTERRUPTED
     return 0
+
+
+def _write_spec(args: argparse.Namespace, result: Any) -> None:
+    """The tuned gains as a controller spec of the first experiment's task (atomically)."""
+    import re
+
+    from fuzzkit.control.spec import require_valid
+    from fuzzkit.control.spec_writer import dump_spec
+    from fuzzkit.fileio import write_atomic
+    from fuzzkit.formats.registry import load
+    from fuzzkit.studies.experiments import experiment
+    from fuzzkit.studies.task import spec_for
+
+    exp = experiment(args.experiments[0])
+    name = re.sub(r"\W", "_", Path(args.spec_out).stem) or "tuned"
+    if not re.match(r"[A-Za-z_]", name):
+        name = "c_" + name
+    fuzzy = result.controller == "fuzzy-pi"
+    spec = spec_for(
+        exp,
+        result.controller,
+        dict(result.to_entry().gains),
+        name,
+        load(args.rulebase) if fuzzy else None,
+        args.rulebase if fuzzy else None,
+    )
+    require_valid(spec)
+    header = (
+        f"# written by fuzzkit tune {' '.join(args.experiments)} --controller "
+        f"{result.controller} ({result.plant}); format: docs/controller.md\n"
+    )
+    write_atomic(Path(args.spec_out), dump_spec(spec, header))
 
 
 def _latencies(pairs: Any) -> str:
@@ -313,6 +363,7 @@ def _report(args: argparse.Namespace) -> int:
         workers=args.workers,
         rrd=not args.no_rrd,
         log=None if args.quiet else sys.stderr,
+        specs=[Path(p) for p in args.spec.split(",")] if args.spec else (),
         **(quick_options() if args.quick else {}),
     )
     print(f"wrote {path}")

@@ -386,13 +386,7 @@ class HybridForceController:
         if force is None or not valid:
             return self._missing()
         if fe is not None and fe.taring:
-            if not bool(np.all(np.isfinite(force))):
-                return self._missing()
-            if fe.tare(force, rotation):
-                self._accepted = None  # the bias moved: the gate starts afresh
-                self._rejected_run = 0
-            self.status |= st.TARING | st.HELD
-            return self._output()
+            return self._tare(fe, force, rotation)
         if fe is not None:
             f = fe.compensate(force, rotation)
         else:
@@ -435,6 +429,26 @@ class HybridForceController:
                 self.status |= st.SATURATED
         self.de = self.e - self._e_last if self._e_last is not None else np.zeros(3)
         self._e_last = self.e.copy()
+        return self._output()
+
+    def _tare(self, fe: FrontEnd, force: Vec, rotation: Vec | None) -> Vec:
+        """One tare sample: the spike gate keeps spikes out of the bias (a level confirmed
+        after ``spike_confirm`` rejections restarts the tare: what came before was the
+        outlier), the correction is held."""
+        if not bool(np.all(np.isfinite(force))):
+            return self._missing()
+        confirmed = self._accepted is not None and self._rejected_run >= self.spike_confirm
+        if not self._plausible(force - fe.weight(rotation)):
+            self.faults += 1
+            self.rejected += 1
+            self.status |= st.TARING | st.HELD | st.REJECTED
+            return self._output()
+        if confirmed:
+            fe.request_tare()
+        if fe.tare(force, rotation):
+            self._accepted = None  # the bias moved: the gate starts afresh
+            self._rejected_run = 0
+        self.status |= st.TARING | st.HELD
         return self._output()
 
     def _missing(self) -> Vec:

@@ -139,8 +139,9 @@ class ControllerSpec:
 
     ``axes`` lists the force-controlled task axes (the selection matrix S) in x, y, z order;
     the others follow the nominal path. ``rulebase`` is the loaded rule base of a fuzzy-PI
-    (``rulebase_ref``: the name or path as written; None for PI). ``source``: the spec file and
-    the sha256 of its text (None when built in code).
+    (``rulebase_ref``: the name or path as written; ``rulebase_source``: the shipped name or
+    the resolved path, what ``fuzzkit.formats.registry.load`` takes; None for PI). ``source``:
+    the spec file and the sha256 of its text (None when built in code).
     """
 
     name: str
@@ -152,6 +153,7 @@ class ControllerSpec:
     sensor: SensorSpec = field(default_factory=SensorSpec)
     rulebase: RuleBase | None = None
     rulebase_ref: str | None = None
+    rulebase_source: str | None = None
     adaptation: str = "none"
     description: str = ""
     source: Source | None = None

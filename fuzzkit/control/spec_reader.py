@@ -189,7 +189,7 @@ class _SpecReader(NodeReader):
                     top["controller"], f"unknown controller {kind!r}; expected pi or fuzzy-pi"
                 )
             self.quiet.update({("controller",), ("rulebase",)})
-        rulebase, ref = self.rulebase(top.get("rulebase"), kind)
+        rulebase, ref, target = self.rulebase(top.get("rulebase"), kind)
         axes = self.axes(top["axes"], kind) if "axes" in top else ()
         if kind not in KINDS:  # a placeholder the gains read fit, so their checks still run
             kind = "fuzzy-pi" if any(a.kx is not None for a in axes) else "pi"
@@ -203,23 +203,27 @@ class _SpecReader(NodeReader):
             sensor=self.sensor(top["sensor"]) if "sensor" in top else SensorSpec(),
             rulebase=rulebase,
             rulebase_ref=ref,
+            rulebase_source=target,
             adaptation=self.word(top, "adaptation", "an adaptation mode (none)", "none"),
             description=self.text(top["description"], "") or "" if "description" in top else "",
             source=source,
         )
 
-    def rulebase(self, node: Node | None, kind: str) -> tuple[RuleBase | None, str | None]:
+    def rulebase(
+        self, node: Node | None, kind: str
+    ) -> tuple[RuleBase | None, str | None, str | None]:
+        """The rule base, the reference as written, and what ``registry.load`` takes for it."""
         if node is None:
             if kind == "fuzzy-pi":
                 self.error(self.where[()], "missing required key 'rulebase' (fuzzy-pi needs one)")
             self.quiet.add(("rulebase",))
-            return None, None
+            return None, None, None
         ref = self.name(node, "a rule base (a shipped name or a path)")
         if ref is None or kind != "fuzzy-pi":
             if ref is not None and kind == "pi":
                 self.error(node, "a pi controller takes no rule base; remove 'rulebase'")
             self.quiet.add(("rulebase",))
-            return None, ref
+            return None, ref, None
         from fuzzkit.formats.registry import load
 
         target: str | Path = ref
@@ -227,12 +231,12 @@ class _SpecReader(NodeReader):
             path = Path(ref)
             target = path if path.is_absolute() or self.base_dir is None else self.base_dir / path
         try:
-            return load(target), ref
+            return load(target), ref, str(target)
         except RuleBaseError as exc:
             for problem in exc.problems:
                 self.error(node, f"cannot load rule base {ref!r}: {problem}")
             self.quiet.add(("rulebase",))
-            return None, ref
+            return None, ref, None
 
     def axes(self, node: Node, kind: str) -> tuple[AxisSpec, ...]:
         entries = self.section(node, ("axes",), AXES)
@@ -338,6 +342,22 @@ class _SpecReader(NodeReader):
         return path in self.quiet_at or any(path[: len(h)] == h for h in self.quiet)
 
 
+def read_spec_node(
+    root: Node, source: Source, text: str, base_dir: str | Path | None = None
+) -> tuple[ControllerSpec | None, list[Problem]]:
+    """A spec from a composed node (a whole document, or a scenario's embedded ``controller``
+    mapping) and every problem found, located in ``source.path``; the spec is None when there
+    is a problem."""
+    reader = _SpecReader(source.path, text, None if base_dir is None else Path(base_dir))
+    spec = reader.spec(root, source)
+    for path, message in spec_problems(spec):
+        if not reader.is_hidden(path):
+            reader.error(reader.locate(path), message)
+    problems = list(dict.fromkeys(reader.problems))
+    problems.sort(key=lambda p: (p.location.line, p.location.col))
+    return (None if problems else spec), problems
+
+
 def loads_spec(
     text: str, source: str = "<string>", base_dir: str | Path | None = None
 ) -> ControllerSpec:
@@ -352,18 +372,10 @@ def loads_spec(
         Listing every problem as ``source:line:col: message``, sorted by position.
     """
     root = compose_document(text, source, SPEC_DOCUMENT)
-    reader = _SpecReader(source, text, None if base_dir is None else Path(base_dir))
     digest = hashlib.sha256(text.encode("utf-8")).hexdigest()
-    spec = reader.spec(root, Source(source, digest))
-    for path, message in spec_problems(spec):
-        if not reader.is_hidden(path):
-            reader.error(reader.locate(path), message)
-    if reader.problems:
-        problems = list(dict.fromkeys(reader.problems)) or [
-            Problem(Location(source), "not a valid controller spec")
-        ]
-        problems.sort(key=lambda p: (p.location.line, p.location.col))
-        raise ControllerSpecError(problems)
+    spec, problems = read_spec_node(root, Source(source, digest), text, base_dir)
+    if spec is None:
+        raise ControllerSpecError(problems or [Problem(Location(source), "not a valid spec")])
     return spec
 
 
