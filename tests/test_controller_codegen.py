@@ -135,6 +135,9 @@ def test_the_hostile_segments_reach_every_status_bit() -> None:
         for name in SEGMENTS:
             seen |= int(np.bitwise_or.reduce(reference(variant, name)[1]))
     assert seen == sum(st.BITS.values()), st.describe(seen)
+    tare = reference("fuzzy", "spike_trains")[1]
+    gated_tare = st.TARING | st.REJECTED
+    assert np.count_nonzero(tare & gated_tare == gated_tare) >= 2  # the tare's spike gate
     tripped = reference("fuzzy", "sustained_over_limit")[1] & st.TRIPPED
     assert tripped.any() and not reference("fuzzy", "random")[1][-1] & st.TRIPPED
     engaged = reference("fuzzy", "random")[1] & st.ENGAGED

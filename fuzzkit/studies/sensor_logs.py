@@ -69,7 +69,8 @@ def hostile_segments(spec: ControllerSpec, n: int = 400, seed: int = 0) -> dict[
 
     * random: noise around the set points, 3 % of the cells NaN;
     * spike_trains: isolated spikes and trains of 2-6 consecutive spikes of +-(1.5-4) x the
-      spike gate on random axes (shorter trains are rejected, longer ones accepted);
+      spike gate on random axes (shorter trains are rejected, longer ones accepted), and in
+      free air during the tare a lone spike and a train the gate confirms;
     * nan_bursts: runs of 1-12 samples with NaN on one or all axes, and +-inf;
     * dropouts: whole samples missing (every axis NaN), rotation NaN for some samples;
     * setpoint_steps: the contact force stepping by up to +-0.8 x the safety limit;
@@ -90,6 +91,10 @@ def hostile_segments(spec: ControllerSpec, n: int = 400, seed: int = 0) -> dict[
         if name == "random":
             pass
         elif name == "spike_trains":
+            # in free air too: a lone spike the tare must not average in, and a train long
+            # enough for the gate to confirm it (which restarts the tare)
+            contact[3, 2] += 2.0 * gate
+            contact[8 : 8 + spec.safety.spike_confirm + 3, 0] -= 1.5 * gate
             k = start
             while k < n - 10:
                 length = int(rng.integers(1, 7))

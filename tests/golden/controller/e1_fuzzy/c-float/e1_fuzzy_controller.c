@@ -110,6 +110,24 @@ static void e1_fuzzy_controller_count(uint32_t *n)
     }
 }
 
+/* Spike gate: 1 (and f becomes the accepted sample) unless f jumps past the gate from the last
+ * accepted sample; 4 rejections in a row mean the level is real: then it is accepted. */
+static int e1_fuzzy_controller_gate(e1_fuzzy_controller_t *c, const float f[3])
+{
+    int i;
+    if (c->has_accepted && c->rejected_run < 4u
+        && e1_fuzzy_controller_max_abs(f, c->accepted) > e1_fuzzy_controller_spike_gate) {
+        c->rejected_run += 1u;
+        return 0;
+    }
+    for (i = 0; i < 3; i++) {
+        c->accepted[i] = f[i];
+    }
+    c->has_accepted = 1;
+    c->rejected_run = 0;
+    return 1;
+}
+
 /* One axis of the incremental controller; returns 1 when a limit acted. */
 static int e1_fuzzy_controller_axis(e1_fuzzy_controller_t *c, int i, float measured)
 {
@@ -181,13 +199,28 @@ uint32_t e1_fuzzy_controller_step(e1_fuzzy_controller_t *c, const float force_n[
         goto missing;
     }
     if (c->taring) {
+        /* the gate keeps spikes out of the bias; a level it confirms restarts the tare */
+        int confirmed = c->has_accepted && c->rejected_run >= 4u;
         for (i = 0; i < 3; i++) {
             if (!isfinite(force_n[i])) {
                 goto missing;
             }
+            f[i] = force_n[i] - w[i];
+        }
+        if (!e1_fuzzy_controller_gate(c, f)) {
+            e1_fuzzy_controller_count(&c->faults);
+            e1_fuzzy_controller_count(&c->rejected);
+            status |= E1_FUZZY_CONTROLLER_TARING | E1_FUZZY_CONTROLLER_HELD | E1_FUZZY_CONTROLLER_REJECTED;
+            goto done;
+        }
+        if (confirmed) {
+            for (i = 0; i < 3; i++) {
+                c->tare_sum[i] = 0.0f;
+            }
+            c->tare_count = 0;
         }
         for (i = 0; i < 3; i++) {
-            c->tare_sum[i] = c->tare_sum[i] + (force_n[i] - w[i]);
+            c->tare_sum[i] = c->tare_sum[i] + f[i];
         }
         c->tare_count += 1u;
         if (c->tare_count >= 25u) {
@@ -209,19 +242,7 @@ uint32_t e1_fuzzy_controller_step(e1_fuzzy_controller_t *c, const float force_n[
             f[i] = 0.0f;
         }
     }
-    /* spike gate: reject a jump past the gate unless 4 in a row were rejected */
-    if (c->has_accepted && c->rejected_run < 4u
-        && e1_fuzzy_controller_max_abs(f, c->accepted) > e1_fuzzy_controller_spike_gate) {
-        c->rejected_run += 1u;
-        plausible = 0;
-    } else {
-        for (i = 0; i < 3; i++) {
-            c->accepted[i] = f[i];
-        }
-        c->has_accepted = 1;
-        c->rejected_run = 0;
-        plausible = 1;
-    }
+    plausible = e1_fuzzy_controller_gate(c, f);
     if (!c->tripped) {
         /* the trip sees every finite sample, gated or not */
         if (e1_fuzzy_controller_max_abs(f, NULL) > e1_fuzzy_controller_limit) {

@@ -360,6 +360,21 @@ class Controller:
         out = [(self.u[i] if _SELECTED[i] else 0.0) + self.backoff[i] for i in range(3)]
         return out, status
 
+    def _gate(self, f: list[float]) -> bool:
+        """Spike gate: True (f becomes the accepted sample) unless f jumps past the gate from
+        the last accepted one; 4 rejections in a row mean the level is real."""
+        acc = self.accepted
+        if (
+            acc is not None
+            and self.rejected_run < 4
+            and _max_abs([f[i] - acc[i] for i in range(3)]) > _SPIKE_GATE
+        ):
+            self.rejected_run += 1
+            return False
+        self.accepted = list(f)
+        self.rejected_run = 0
+        return True
+
     def _missing(self) -> int:
         self.faults += 1
         self.above = 0
@@ -378,9 +393,19 @@ class Controller:
         if any(_SELECTED[i] and not math.isfinite(raw[i]) for i in range(3)):
             return self._missing()
         if self.taring:
+            # the gate keeps spikes out of the bias; a level it confirms restarts the tare
             if not all(math.isfinite(v) for v in raw):
                 return self._missing()
-            self.tare_sum = [self.tare_sum[i] + (raw[i] - w[i]) for i in range(3)]
+            g = [raw[i] - w[i] for i in range(3)]
+            confirmed = self.accepted is not None and self.rejected_run >= 4
+            if not self._gate(g):
+                self.faults += 1
+                self.rejected += 1
+                return STATUS_TARING | STATUS_HELD | STATUS_REJECTED
+            if confirmed:
+                self.tare_sum = [0.0, 0.0, 0.0]
+                self.tare_count = 0
+            self.tare_sum = [self.tare_sum[i] + g[i] for i in range(3)]
             self.tare_count += 1
             if self.tare_count >= 25:
                 self.bias = [self.tare_sum[i] / self.tare_count for i in range(3)]
@@ -391,18 +416,7 @@ class Controller:
             return STATUS_TARING | STATUS_HELD
         f = [raw[i] - w[i] - self.bias[i] for i in range(3)]
         f = [v if math.isfinite(v) else 0.0 for v in f]
-        acc = self.accepted
-        if (
-            acc is not None
-            and self.rejected_run < 4
-            and _max_abs([f[i] - acc[i] for i in range(3)]) > _SPIKE_GATE
-        ):
-            self.rejected_run += 1
-            plausible = False
-        else:
-            self.accepted = list(f)
-            self.rejected_run = 0
-            plausible = True
+        plausible = self._gate(f)
         if not self.tripped:
             self.over = self.over + 1 if _max_abs(f) > _LIMIT else 0
             if self.over >= (2 if plausible else 4):
