@@ -33,7 +33,7 @@ from fuzzkit.control.spec_reader import load_spec
 from fuzzkit.errors import ToolchainError
 from fuzzkit.studies.controller_code import design_of, generate, open_generated
 from fuzzkit.studies.replay import SensorLog, replay
-from fuzzkit.studies.sensor_logs import SEGMENTS, hostile_segments
+from fuzzkit.studies.sensor_logs import SEGMENTS, hostile_log, hostile_segments
 
 REPO = Path(__file__).parent.parent
 EXAMPLES = REPO / "docs" / "examples"
@@ -352,3 +352,22 @@ def test_compiled_code_calls_the_c_controller_by_address() -> None:
     assert float(np.max(np.abs(out - want))) <= TOLERANCE_M
     np.testing.assert_array_equal(status, want_status)
     assert s.name == "e1_fuzzy"
+
+
+@pytest.mark.parametrize(
+    "path", sorted(EXAMPLES.glob("controller*.yaml")), ids=lambda p: Path(p).stem
+)
+@pytest.mark.parametrize("impl", ["python", pytest.param("cc", marks=needs_cc)])
+def test_every_shipped_spec_generates_a_controller_equal_to_its_reference(
+    path: Path, impl: str
+) -> None:
+    s = load_spec(path)
+    forces, rotations = hostile_log(s, n=150, seed=11)
+    if impl == "python":
+        ctl = open_generated(s, "python")
+    else:
+        ctl = open_generated(s, "c", "double")
+    got, status = ctl.run(forces, rotations)
+    want, want_status = reference_run(s, forces, rotations)
+    assert float(np.max(np.abs(got - want))) <= TOLERANCE_M
+    np.testing.assert_array_equal(status, want_status)
