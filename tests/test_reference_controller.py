@@ -259,3 +259,31 @@ def test_spec_controller_is_the_closed_loops_controller(base: ControllerSpec) ->
         if k % 37 == 0:
             f[2] = math.nan
         assert ours.step(f).tolist() == theirs.step(f).tolist()
+
+
+def test_the_spike_gate_keeps_spikes_out_of_the_tare() -> None:
+    ctrl = Controller(_spec(tare=6, engage_threshold_n=None))
+    level = [0.5, 0.0, -2.0]
+    samples = [level, level, [40.5, 0.0, 38.0], level, level, level, level]
+    bits = [ctrl.step(s)[1] for s in samples]
+    assert bits[2] & st.REJECTED and bits[2] & st.TARING and bits[2] & st.HELD
+    assert all(b & st.TARING for b in bits)
+    assert ctrl.hybrid.front_end is not None
+    assert ctrl.hybrid.front_end.bias.tolist() == level  # the mean of the six good samples
+    assert not ctrl.hybrid.front_end.taring
+
+
+def test_a_spike_first_restarts_the_tare_once_the_gate_confirms_the_level() -> None:
+    """A first sample that is a spike is accepted (nothing to compare it with); the real level
+    is rejected ``confirm`` times, then confirmed, and the tare starts again from it."""
+    spec = _spec(tare=3, engage_threshold_n=None)
+    ctrl = Controller(spec)
+    level = [0.0, 0.0, 1.0]
+    confirm = spec.safety.spike_confirm
+    ctrl.step([30.0, 0.0, 30.0])
+    for _ in range(confirm):
+        assert ctrl.step(level)[1] & st.REJECTED
+    for _ in range(3):
+        ctrl.step(level)
+    assert ctrl.hybrid.front_end is not None
+    assert ctrl.hybrid.front_end.bias.tolist() == level

@@ -201,3 +201,35 @@ def test_the_spec_tune_writes_reads_back_with_the_tuned_gains() -> None:
     assert dataclasses.replace(back, source=None, rulebase_source=None) == dataclasses.replace(
         spec, rulebase_source=None
     )
+
+
+def test_tune_a_spec_writes_it_back_with_the_tuned_gains(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from fuzzkit.control.gains import read_gains
+
+    out, spec_out = tmp_path / "gains.yaml", tmp_path / "tuned.yaml"
+    argv = ["tune", "E1", "--spec", str(PI), "--stiffness", "10", "--budget", "10"]
+    argv += ["--workers", "1", "--quiet", "--out", str(out), "--spec-out", str(spec_out)]
+    assert main(argv) == 0
+    assert f"wrote {spec_out}" in capsys.readouterr().out
+    gains = read_gains(out, "pi")
+    tuned, original = load_spec(spec_out), load_spec(PI)
+    assert all((a.kp, a.ki) == (gains["kp"], gains["ki"]) for a in tuned.axes)
+    # everything but the gains is the spec's: task, limits, safety, front end
+    assert dataclasses.replace(tuned, axes=original.axes, source=None) == dataclasses.replace(
+        original, source=None
+    )
+
+
+def test_tune_a_spec_refuses_what_it_cannot_run(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    never = str(tmp_path / "never.yaml")
+    argv = ["tune", "E3", "--spec", str(PI), "--plant", "arm6", "--out", never]
+    assert main(argv) == 2
+    assert "E3 on arm6" in capsys.readouterr().err
+    argv = ["tune", "E1", "--spec", str(PI), "--loop", "compiled", "--out", never]
+    assert main(argv) == 2
+    assert "only the Python loop runs" in capsys.readouterr().err
+    assert not (tmp_path / "never.yaml").exists()

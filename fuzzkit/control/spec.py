@@ -19,7 +19,8 @@ point ...). The reader reports them at the YAML position of the value; programma
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
 
 from fuzzkit.errors import ConfigError
 from fuzzkit.fuzzy.model import RuleBase, Source
@@ -338,6 +339,22 @@ def rulebase_problems(rb: RuleBase) -> list[str]:
     if not rb.outputs:
         out.append(f"rule base {rb.name!r} has no output")
     return out
+
+
+def with_gains(spec: ControllerSpec, gains: Mapping[str, float]) -> ControllerSpec:
+    """``spec`` with ``gains``' ``kp``, ``ki`` (and ``kx``) on every axis (what tuning a spec
+    tries); other keys (the gains files' ``u_min``, ``rate_limit`` ...) do not change the
+    spec's limits, which are deployment settings."""
+    axes = tuple(
+        replace(
+            a,
+            kp=gains.get("kp", a.kp),
+            ki=gains.get("ki", a.ki),
+            kx=gains.get("kx", a.kx) if spec.kind == "fuzzy-pi" else a.kx,
+        )
+        for a in spec.axes
+    )
+    return replace(spec, axes=axes)
 
 
 def require_valid(spec: ControllerSpec) -> ControllerSpec:

@@ -57,7 +57,9 @@ class ToolModel:
 
     ``mass_kg``: what the wrist sensor carries; its weight enters every reading
     (:func:`tool_weight`; 0: a sensor reading the contact force alone). ``com_m``: its centre of
-    mass in the sensor frame (m), the lever arm of the weight's torque.
+    mass in the sensor frame (m), the lever arm of the weight's torque; the simulated wrist
+    sensor reports forces only (a weight is the same force wherever it acts), so no reading
+    depends on it.
     """
 
     length_m: float = 0.12

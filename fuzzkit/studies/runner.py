@@ -107,13 +107,15 @@ def build_controller(
     """The hybrid force controller of ``exp`` with ``kind`` (pi | fuzzy-pi) axis controllers.
 
     An experiment with a controller spec runs the spec's controller
-    (:func:`fuzzkit.control.reference.hybrid_from_spec`); ``kind`` and ``gains`` are then not
-    used (``surface`` replaces the fuzzy-PI's exact engine when given).
+    (:func:`fuzzkit.control.reference.hybrid_from_spec`; ``kind`` is not used), with the
+    ``kp``, ``ki``, ``kx`` of ``gains`` on every axis when given (tuning a spec); ``surface``
+    replaces the fuzzy-PI's exact engine when given.
     """
     if exp.controller_spec is not None:
         from fuzzkit.control.reference import hybrid_from_spec
+        from fuzzkit.control.spec import with_gains
 
-        return hybrid_from_spec(exp.controller_spec, surface)
+        return hybrid_from_spec(with_gains(exp.controller_spec, gains or {}), surface)
     if kind not in DEFAULT_GAINS:
         raise ConfigError(f"unknown controller {kind!r} (expected pi or fuzzy-pi)")
     g = dict(DEFAULT_GAINS[kind])

@@ -66,7 +66,9 @@ def controller_args(
     if table is not None and generated_c is not None:
         raise ConfigError("give the compiled fuzzy-pi a lookup table or the generated C, not both")
     if exp.controller_spec is not None:
-        controller, gains = spec_gains(exp.controller_spec)
+        from fuzzkit.control.spec import with_gains
+
+        controller, gains = spec_gains(with_gains(exp.controller_spec, gains or {}))
     faults, sensor_delay, command_delay = run_faults_and_latency(exp, seed, faults, latency)
     # The Python controller object validates the gains and holds the safeguard settings.
     hybrid = build_controller(exp, controller, gains, lambda e, de: 0.0)
