@@ -363,10 +363,7 @@ def test_every_shipped_spec_generates_a_controller_equal_to_its_reference(
 ) -> None:
     s = load_spec(path)
     forces, rotations = hostile_log(s, n=150, seed=11)
-    if impl == "python":
-        ctl = open_generated(s, "python")
-    else:
-        ctl = open_generated(s, "c", "double")
+    ctl = open_generated(s, "python" if impl == "python" else "c", "double")
     got, status = ctl.run(forces, rotations)
     want, want_status = reference_run(s, forces, rotations)
     assert float(np.max(np.abs(got - want))) <= TOLERANCE_M
