@@ -20,6 +20,7 @@ from yaml.nodes import MappingNode, Node, ScalarNode
 
 from fuzzkit.control.spec import ControllerSpec
 from fuzzkit.errors import ConfigError, ControllerSpecError, Location, Problem, ScenarioError
+from fuzzkit.fuzzy.model import Source
 from fuzzkit.located_yaml import (
     NULL_TAG,
     DocumentKind,
@@ -27,7 +28,6 @@ from fuzzkit.located_yaml import (
     compose_document,
     read_document,
 )
-from fuzzkit.fuzzy.model import Source
 from fuzzkit.plants.contact import ContactModel, SensorModel, ToolModel
 from fuzzkit.plants.contract import Scenario
 from fuzzkit.plants.environment import Box, EnvObject, RoughSurface, Table, Waypoint
