@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import fcntl
 import os
 import pty
 import re
 import signal
+import struct
 import subprocess
 import sys
+import termios
 import threading
 import time
 from pathlib import Path
@@ -51,6 +54,8 @@ class Terminal:
 
     def __init__(self) -> None:
         self.fd, self.child_fd = pty.openpty()
+        # 24 rows of 200 columns: a terminal of no width gets bars of no text
+        fcntl.ioctl(self.child_fd, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 200, 0, 0))
         self._text = bytearray()
         self._lock = threading.Lock()
         self._reader = threading.Thread(target=self._read, daemon=True)

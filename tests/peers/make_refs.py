@@ -107,37 +107,20 @@ class Writer:
         path.write_text(text, encoding="utf-8")
         return path
 
-    def fuzzylite(
-        self,
-        path: Path,
-        written_by: str,
-        points: dict[str, FloatArray],
-        stands_for: Path | None = None,
-    ) -> None:
-        fmt = path.suffix[1:]
-        outputs = fuzzylite_eval(path, fmt, points, self.tmp)
-        self._store("fuzzylite", path, fmt, written_by, stands_for, points, outputs)
-
-    def pyfuzzylite(
-        self,
-        path: Path,
-        written_by: str,
-        points: dict[str, FloatArray],
-        stands_for: Path | None = None,
-    ) -> None:
-        outputs = pyfuzzylite_eval(path, points, self.tmp)
-        self._store("pyfuzzylite", path, "fll", written_by, stands_for, points, outputs)
-
-    def _store(
+    def evaluate(
         self,
         peer: str,
         path: Path,
-        fmt: str,
         written_by: str,
-        stands_for: Path | None,
         points: dict[str, FloatArray],
-        outputs: dict[str, FloatArray],
+        stands_for: Path | None = None,
     ) -> None:
+        """``peer``'s outputs for the input ``path`` at ``points``, stored as a reference."""
+        fmt = path.suffix[1:]
+        if peer == "fuzzylite":
+            outputs = fuzzylite_eval(path, fmt, points, self.tmp)
+        else:
+            outputs = pyfuzzylite_eval(path, points, self.tmp)
         write_reference(
             REFS / peer / f"{path.stem}_{fmt}.json",
             peer=peer,
@@ -173,7 +156,7 @@ def _fuzzylite_cases(w: Writer) -> None:
         if example.name == "gripper_iec.fcl":
             source = _iec_in_fuzzylites_spelling(w, example)
             written_by = f"{by_fuzzkit} (IEC dialect in fuzzylite's spelling)"
-        w.fuzzylite(source, written_by, _points(rb, example.name), example)
+        w.evaluate("fuzzylite", source, written_by, _points(rb, example.name), example)
         for fmt in FORMATS:
             if not _expressible(rb, fmt) or _is_sugeno(rb):
                 # fuzzylite writes a Sugeno engine's aggregation as UnboundedSum, which
@@ -187,26 +170,33 @@ def _fuzzylite_cases(w: Writer) -> None:
                 print(f"skipped: fuzzylite writes {example.name}'s point lists as discretemf")
                 converted.unlink()
                 continue
-            w.fuzzylite(converted, by_fuzzylite, _points(rb, converted.name), example)
+            w.evaluate("fuzzylite", converted, by_fuzzylite, _points(rb, converted.name), example)
     for fmt in FORMATS:
         seeds = [s for s in range(4 * N_RANDOM) if _expressible(random_rulebase(s), fmt)]
         for seed in seeds[:N_RANDOM]:
             rb = random_rulebase(seed)
             path = w.input_file(f"random{seed}.{fmt}", dumps(rb, fmt))
-            w.fuzzylite(path, by_fuzzkit, _points(rb, path.name, RANDOM_POINTS))
+            w.evaluate("fuzzylite", path, by_fuzzkit, _points(rb, path.name, RANDOM_POINTS))
         for seed in seeds[:N_RANDOM_CONVERTED]:
             rb = random_rulebase(seed)
             src = w.tmp / "src.fll"
             src.write_text(fll.dumps(rb))
             converted = INPUTS / f"fuzzylite_random{seed}.{fmt}"
             fuzzylite_convert(src, "fll", converted)
-            w.fuzzylite(converted, by_fuzzylite, _points(rb, converted.name, RANDOM_POINTS))
+            w.evaluate(
+                "fuzzylite", converted, by_fuzzylite, _points(rb, converted.name, RANDOM_POINTS)
+            )
     for defuzz, and_, _or, fl_defuzz, fl_and, fl_or in HAND_FLL_CASES:
         path = w.input_file(
             f"{hand_case_name(defuzz, and_)}.fll", hand_fll(fl_defuzz, fl_and, fl_or)
         )
         xy = np.array(hand_points())
-        w.fuzzylite(path, "by hand (tests/_sugeno_reference.py)", {"x": xy[:, 0], "y": xy[:, 1]})
+        w.evaluate(
+            "fuzzylite",
+            path,
+            "by hand (tests/_sugeno_reference.py)",
+            {"x": xy[:, 0], "y": xy[:, 1]},
+        )
 
 
 def _pyfuzzylite_cases(w: Writer) -> None:
@@ -215,14 +205,14 @@ def _pyfuzzylite_cases(w: Writer) -> None:
     for example in sorted(EXAMPLES.iterdir()):
         rb = load(example)
         ours = w.input_file(f"fuzzkit_{example.stem}.fll", _fll_for_peers(rb))
-        w.pyfuzzylite(ours, by_fuzzkit, _points(rb, ours.name), example)
+        w.evaluate("pyfuzzylite", ours, by_fuzzkit, _points(rb, ours.name), example)
         theirs = w.input_file(f"pyfuzzylite_{example.stem}.fll", pyfuzzylite_export(ours))
-        w.pyfuzzylite(theirs, by_pyfuzzylite, _points(rb, theirs.name), example)
+        w.evaluate("pyfuzzylite", theirs, by_pyfuzzylite, _points(rb, theirs.name), example)
     for seed in range(N_RANDOM):
         policy = "clamp" if seed % 2 else "extend"
         rb = random_rulebase(seed, out_of_range=policy)
         path = w.input_file(f"random{seed}_{policy}.fll", _fll_for_peers(rb))
-        w.pyfuzzylite(path, by_fuzzkit, _points(rb, path.name, RANDOM_POINTS))
+        w.evaluate("pyfuzzylite", path, by_fuzzkit, _points(rb, path.name, RANDOM_POINTS))
 
 
 def main() -> int:
