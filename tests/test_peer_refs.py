@@ -23,9 +23,13 @@ from fuzzkit.fuzzy.inference import evaluate
 
 EXAMPLES = sorted((ROOT / "docs" / "examples").iterdir())
 REFERENCES = [read_reference(p) for p in reference_files()]
-#: Random rule bases per peer and format the references must hold at least.
-MIN_RANDOM = {("fuzzylite", "fis"): 24, ("fuzzylite", "fcl"): 24, ("fuzzylite", "fll"): 24}
-MIN_RANDOM[("pyfuzzylite", "fll")] = 24
+#: Random rule bases the references must hold at least, per peer and format.
+MIN_RANDOM = {
+    ("fuzzylite", "fis"): 24,
+    ("fuzzylite", "fcl"): 24,
+    ("fuzzylite", "fll"): 24,
+    ("pyfuzzylite", "fll"): 24,
+}
 
 
 def _id(ref: Reference) -> str:
