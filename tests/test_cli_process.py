@@ -118,14 +118,18 @@ def _said_on_interrupt(err: str) -> list[str]:
 @pytest.mark.slow
 def test_sigint_on_report_exits_130_and_leaves_no_report(tmp_path: Path) -> None:
     out = tmp_path / "report"
-    proc = _start(["report", "--out", str(out), "--budget", "10", "--workers", "1"], tmp_path)
-    # The staging folder appears once the work has begun (tuning the first controller).
-    _wait_for(lambda: any(p.name.endswith(".partial") for p in tmp_path.iterdir()), proc)
-    time.sleep(1.0)
-    code, stdout, err = _interrupt(proc)
+    args = ["report", "--out", str(out), "--budget", "10", "--workers", "1"]
+    proc, terminal = _start_on_terminal(args, tmp_path)
+    # The staging folder exists and the first controller's tuning has evaluated a gain set.
+    _wait_for(lambda: terminal.shows(r"tuning pi: .*\b[1-9]/10"), proc, 300.0)
+    assert any(p.name.endswith(".partial") for p in tmp_path.iterdir())
+    code, stdout, _ = _interrupt(proc)
     assert code == 130
-    assert _said_on_interrupt(err) == ["fuzzkit: interrupted (Ctrl-C); nothing half-written"]
-    assert "Traceback" not in err and "wrote" not in stdout
+    said = [ln for ln in terminal.lines() if not ln.startswith("tuning pi: ")]
+    assert _said_on_interrupt("\n".join(said)) == [
+        "fuzzkit: interrupted (Ctrl-C); nothing half-written"
+    ]
+    assert "wrote" not in stdout
     assert list(tmp_path.iterdir()) == []  # no report folder, no staging folder
 
 
@@ -135,10 +139,11 @@ def test_sigint_on_report_keeps_an_existing_report_as_it_was(tmp_path: Path) -> 
     (out / "rrd").mkdir(parents=True)
     (out / "report.md").write_text("the previous report\n")
     (out / "rrd" / "old.rrd").write_text("x")
-    proc = _start(["report", "--out", str(out), "--budget", "10", "--workers", "1"], tmp_path)
-    _wait_for(lambda: any(p.name.endswith(".partial") for p in tmp_path.iterdir()), proc)
-    time.sleep(1.0)
+    args = ["report", "--out", str(out), "--budget", "10", "--workers", "1"]
+    proc, terminal = _start_on_terminal(args, tmp_path)
+    _wait_for(lambda: terminal.shows(r"tuning pi: .*\b[1-9]/10"), proc, 300.0)
     code, _, _ = _interrupt(proc)
+    terminal.lines()  # the terminal closed
     assert code == 130
     assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]
     assert sorted(str(p.relative_to(out)) for p in out.rglob("*")) == [
