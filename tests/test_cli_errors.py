@@ -31,9 +31,10 @@ def _raising(exc: Exception) -> object:
 
 
 def _instance(cls: type[errors.FuzzkitError]) -> errors.FuzzkitError:
-    if issubclass(cls, errors.ProblemsError):
-        return cls([errors.Problem(errors.Location("rb.yaml", 3, 7), "bad thing")])
-    return cls("bad thing")
+    # whatever the class's own constructor wants (problems, a format and items, ...)
+    exc = cls.__new__(cls)
+    Exception.__init__(exc, "bad thing")
+    return exc
 
 
 @pytest.mark.parametrize("cls", _fuzzkit_errors(), ids=lambda c: c.__name__)
