@@ -114,7 +114,7 @@ class StiffnessSchedule:
         est = self.ad.estimator
         self.f_hist = [math.nan] * self.size
         self.u_hist = [0.0] * self.size
-        self.count = 0  # periods observed (the ring's write position is count % size)
+        self.pos = 0  # where this period is written in the ring (periods observed, mod size)
         self.s_uu = 0.0
         self.s_uf = 0.0
         self.k = est.initial_n_mm
@@ -141,13 +141,13 @@ class StiffnessSchedule:
         excited, then move to the estimate's band if the dwell time has passed."""
         est = self.ad.estimator
         n = self.size
-        k = self.count
-        self.f_hist[k % n] = f
-        self.u_hist[k % n] = u
-        self.count = k + 1
-        # f_{k-W}; u_{k-D} is stored with period k-D+1, u_{k-D-W} with period k-D-W+1
-        df = f - self.f_hist[(k + n - self.window) % n]
-        du = self.u_hist[(k + n + 1 - self.delay) % n] - self.u_hist[(k + 1) % n]
+        p = self.pos
+        self.f_hist[p] = f
+        self.u_hist[p] = u
+        self.pos = (p + 1) % n
+        # f_{k-W}; u_{k-D} is stored with period k-D+1, u_{k-D-W} with period k-D-W+1 = k-n+1
+        df = f - self.f_hist[(p + n - self.window) % n]
+        du = self.u_hist[(p + n + 1 - self.delay) % n] - self.u_hist[(p + 1) % n]
         if math.isfinite(df) and abs(du) >= est.min_step_m and abs(df) >= est.min_force_n:
             du_mm = 1000.0 * du
             lam = est.forgetting
