@@ -62,7 +62,8 @@ class AdaptationDesign:
     ``mode``: ``stiffness-scheduled`` or ``self-tuning``. Schedule: the estimator's ``window``
     and ``delay`` (periods), ``forgetting``, the excitation thresholds ``min_step_m`` and
     ``min_force_n``, the initial estimate and its bounds (N/mm), the bands as ``(up_to_n_mm or
-    None, scale)`` and the dwell time in periods. Self-tuning: ``alpha_min``, ``alpha_max``,
+    None, scale)``, the dwell time in periods, the sudden-stiffening factor ``jump`` and the
+    least ``spread`` of the increments the slope needs. Self-tuning: ``alpha_min``, ``alpha_max``,
     the rule table of alpha (7x7, rows e, columns de) and the input gains per axis.
     """
 
@@ -82,6 +83,8 @@ class AdaptationDesign:
     alpha_table: tuple[tuple[float, ...], ...] = ()
     ge: tuple[float, float, float] = (0.0, 0.0, 0.0)
     gde: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    jump: float = 4.0
+    spread: float = 0.05
 
     def initial_band(self) -> int:
         """The band of the initial estimate."""
@@ -117,6 +120,8 @@ class AdaptationCode:
     gde: tuple[str, str, str]
     thousand: str
     three: str
+    jump: str
+    spread: str
 
 
 @dataclass(frozen=True)
@@ -505,6 +510,8 @@ def _adaptation_code(design: ControllerDesign, lit: Callable[[float], str]) -> A
         gde=(lit(ad.gde[0]), lit(ad.gde[1]), lit(ad.gde[2])),
         thousand=lit(1000.0),
         three=lit(3.0),
+        jump=lit(ad.jump),
+        spread=lit(ad.spread),
     )
 
 

@@ -23,6 +23,14 @@ import math
 
 from fuzzkit.control.adaptation_spec import Adaptation
 
+#: The least spread of the window increments ``du`` the slope needs: the normalised determinant
+#: ``(S_uu*S_1 - S_u^2) / (S_uu*S_1)`` (0: all equal, 1: symmetric about 0) must exceed it.
+SPREAD = 0.05
+#: A window whose own ratio ``df/du`` exceeds ``JUMP`` times the estimate, with ``|df|`` at least
+#: ``JUMP`` times the excitation threshold, is a sudden stiffening: the estimate restarts from
+#: that window alone (the gain can only drop by it).
+JUMP = 4.0
+
 #: Singleton values of alpha's labels ZE, VS, S, SB, M, B, VB on [0, 1].
 ALPHA_LEVELS = {"ZE": 0.0, "VS": 1.0 / 6.0, "S": 2.0 / 6.0, "SB": 3.0 / 6.0, "M": 4.0 / 6.0,
                 "B": 5.0 / 6.0, "VB": 1.0}  # fmt: skip
@@ -116,9 +124,13 @@ class StiffnessSchedule:
         self.u_hist = [0.0] * self.size
         self.pos = 0  # where this period is written in the ring (periods observed, mod size)
         self.s_uu = 0.0
+        self.s_u = 0.0
+        self.s_1 = 0.0
         self.s_uf = 0.0
+        self.s_f = 0.0
         self.k = est.initial_n_mm
         self.updates = 0
+        self.jumps = 0
         self.band = self.ad.band_of(self.k)
         self.since = self.dwell
 
@@ -138,7 +150,8 @@ class StiffnessSchedule:
 
     def observe(self, f: float, u: float) -> None:
         """One period: record ``(f_k, u_{k-1})``, update the estimate when the window is
-        excited, then move to the estimate's band if the dwell time has passed."""
+        excited, then move to the estimate's band: at once when that lowers the gain, after
+        the dwell time since the last change when it raises it."""
         est = self.ad.estimator
         n = self.size
         p = self.pos
@@ -150,14 +163,28 @@ class StiffnessSchedule:
         du = self.u_hist[(p + n + 1 - self.delay) % n] - self.u_hist[(p + 1) % n]
         if math.isfinite(df) and abs(du) >= est.min_step_m and abs(df) >= est.min_force_n:
             du_mm = 1000.0 * du
-            lam = est.forgetting
+            bound = JUMP * self.k * du_mm
+            jump = (df > bound if du_mm > 0.0 else df < bound) and abs(df) >= JUMP * est.min_force_n
+            # a sudden stiffening (a harder layer): the past says nothing, start afresh
+            lam = 0.0 if jump else est.forgetting
             self.s_uu = lam * self.s_uu + du_mm * du_mm
+            self.s_u = lam * self.s_u + du_mm
+            self.s_1 = lam * self.s_1 + 1.0
             self.s_uf = lam * self.s_uf + du_mm * df
-            self.k = min(max(self.s_uf / self.s_uu, est.k_min_n_mm), est.k_max_n_mm)
-            self.updates += 1
+            self.s_f = lam * self.s_f + df
+            det = self.s_uu * self.s_1 - self.s_u * self.s_u
+            if jump:
+                self.k = min(max(df / du_mm, est.k_min_n_mm), est.k_max_n_mm)
+                self.jumps += 1
+            elif det > SPREAD * self.s_uu * self.s_1:
+                slope = (self.s_1 * self.s_uf - self.s_u * self.s_f) / det
+                self.k = min(max(slope, est.k_min_n_mm), est.k_max_n_mm)
+                self.updates += 1
         if self.since < self.dwell:
             self.since += 1
         target = self.ad.band_of(self.k)
-        if target != self.band and self.since >= self.dwell:
+        scales = self.ad.bands
+        lower = scales[target].scale < scales[self.band].scale
+        if target != self.band and (lower or self.since >= self.dwell):
             self.band = target
             self.since = 0

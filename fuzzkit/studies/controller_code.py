@@ -21,7 +21,7 @@ from fuzzkit.codegen.controller import (
 )
 from fuzzkit.codegen.target import load_target
 from fuzzkit.control import status as st
-from fuzzkit.control.adaptation import ALPHA_TABLE
+from fuzzkit.control.adaptation import ALPHA_TABLE, JUMP, SPREAD
 from fuzzkit.control.reference import input_gains
 from fuzzkit.control.spec import AXES, STANDARD_GRAVITY_M_S2, ControllerSpec
 
@@ -117,6 +117,8 @@ def adaptation_design(spec: ControllerSpec) -> AdaptationDesign | None:
         alpha_table=ALPHA_TABLE,
         ge=(ge[0], ge[1], ge[2]),
         gde=(gde[0], gde[1], gde[2]),
+        jump=JUMP,
+        spread=SPREAD,
     )
 
 
