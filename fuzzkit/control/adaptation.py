@@ -26,9 +26,9 @@ from fuzzkit.control.adaptation_spec import Adaptation
 #: The least spread of the window increments ``du`` the slope needs: the normalised determinant
 #: ``(S_uu*S_1 - S_u^2) / (S_uu*S_1)`` (0: all equal, 1: symmetric about 0) must exceed it.
 SPREAD = 0.05
-#: A window whose own ratio ``df/du`` exceeds ``JUMP`` times the estimate, with ``|df|`` at least
+#: A period whose own ratio ``df/du`` exceeds ``JUMP`` times the estimate, with ``|df|`` at least
 #: ``JUMP`` times the excitation threshold, is a sudden stiffening: the estimate restarts from
-#: that window alone (the gain can only drop by it).
+#: that ratio and the least squares from nothing (the gain can only drop by it).
 JUMP = 4.0
 
 #: Singleton values of alpha's labels ZE, VS, S, SB, M, B, VB on [0, 1].
@@ -161,22 +161,29 @@ class StiffnessSchedule:
         # f_{k-W}; u_{k-D} is stored with period k-D+1, u_{k-D-W} with period k-D-W+1 = k-n+1
         df = f - self.f_hist[(p + n - self.window) % n]
         du = self.u_hist[(p + n + 1 - self.delay) % n] - self.u_hist[(p + 1) % n]
+        # the same over one period, for a sudden stiffening (an oscillation's increments
+        # cancel over a window, not over a period)
+        df1 = f - self.f_hist[(p + n - 1) % n]
+        du1 = self.u_hist[(p + n + 1 - self.delay) % n] - self.u_hist[(p + n - self.delay) % n]
+        if math.isfinite(df1) and abs(du1) >= est.min_step_m and abs(df1) >= JUMP * est.min_force_n:
+            du1_mm = 1000.0 * du1
+            bound = JUMP * self.k * du1_mm
+            if df1 > bound if du1_mm > 0.0 else df1 < bound:
+                # a harder layer: the past says nothing about it, start afresh from here
+                self.k = min(max(df1 / du1_mm, est.k_min_n_mm), est.k_max_n_mm)
+                self.s_uu = self.s_u = self.s_1 = self.s_uf = self.s_f = 0.0
+                self.jumps += 1
+                df = math.nan  # this period is used up
         if math.isfinite(df) and abs(du) >= est.min_step_m and abs(df) >= est.min_force_n:
             du_mm = 1000.0 * du
-            bound = JUMP * self.k * du_mm
-            jump = (df > bound if du_mm > 0.0 else df < bound) and abs(df) >= JUMP * est.min_force_n
-            # a sudden stiffening (a harder layer): the past says nothing, start afresh
-            lam = 0.0 if jump else est.forgetting
+            lam = est.forgetting
             self.s_uu = lam * self.s_uu + du_mm * du_mm
             self.s_u = lam * self.s_u + du_mm
             self.s_1 = lam * self.s_1 + 1.0
             self.s_uf = lam * self.s_uf + du_mm * df
             self.s_f = lam * self.s_f + df
             det = self.s_uu * self.s_1 - self.s_u * self.s_u
-            if jump:
-                self.k = min(max(df / du_mm, est.k_min_n_mm), est.k_max_n_mm)
-                self.jumps += 1
-            elif det > SPREAD * self.s_uu * self.s_1:
+            if det > SPREAD * self.s_uu * self.s_1:
                 slope = (self.s_1 * self.s_uf - self.s_u * self.s_f) / det
                 self.k = min(max(slope, est.k_min_n_mm), est.k_max_n_mm)
                 self.updates += 1
