@@ -68,7 +68,11 @@ BASE = ADAPTIVE.read_text(encoding="utf-8").split("adaptation:")[0]
     ("section", "line", "match"),
     [
         ("adaptation: gain_schedule\n", 1, "unknown adaptation 'gain_schedule'"),
-        ("adaptation:\n  mode: self-tuning\n  bands: []\n", 3, "does not apply to mode self-tuning"),
+        (
+            "adaptation:\n  mode: self-tuning\n  bands: []\n",
+            3,
+            "does not apply to mode self-tuning",
+        ),
         ("adaptation:\n  mode: stiffness-scheduled\n", 2, "needs at least one band"),
         (
             "adaptation:\n  mode: stiffness-scheduled\n  bands: [{up_to_n_mm: 10, scale: 1}]\n",

@@ -11,6 +11,7 @@ from fuzzkit.cli import RULEBASE_SPEC_HELP
 from fuzzkit.errors import ConfigError
 
 CONTROLLERS = ("pi", "fuzzy-pi")
+RUN_CONTROLLERS = (*CONTROLLERS, "adaptive-pi", "adaptive-fuzzy-pi")
 
 
 def register(subparsers: Any) -> None:
@@ -31,7 +32,11 @@ def register(subparsers: Any) -> None:
         "  fuzzkit sweep E2 --controller pi --scheduler tcp://127.0.0.1:8786 --out runs.parquet",
     )
     p.add_argument("experiments", nargs="+", metavar="SCENARIO", help="E1, E2, E3")
-    p.add_argument("--controller", default="pi,fuzzy-pi", help="comma list (default pi,fuzzy-pi)")
+    p.add_argument(
+        "--controller",
+        default="pi,fuzzy-pi",
+        help="comma list of pi, fuzzy-pi, adaptive-pi, adaptive-fuzzy-pi (default pi,fuzzy-pi)",
+    )
     p.add_argument(
         "--stiffness",
         default=None,
@@ -131,8 +136,10 @@ def _sweep(args: argparse.Namespace) -> int:
     names = [experiment(e).name for e in args.experiments]
     controllers = [c.strip() for c in args.controller.split(",")]
     for c in controllers:
-        if c not in CONTROLLERS:
-            raise ConfigError(f"--controller: unknown {c!r} (expected pi, fuzzy-pi)")
+        if c not in RUN_CONTROLLERS:
+            raise ConfigError(
+                f"--controller: unknown {c!r} (expected {', '.join(RUN_CONTROLLERS)})"
+            )
     out = check_table_path(args.out)
     figure = Path(args.figure) if args.figure else out.with_suffix(".png")
     from fuzzkit.fileio import check_output_path
@@ -144,7 +151,7 @@ def _sweep(args: argparse.Namespace) -> int:
     gains = None
     if args.gains:
         gains = {
-            f: {c: read_gains(f, c, required=False) for c in controllers}
+            f: {c: read_gains(f, c.removeprefix("adaptive-"), required=False) for c in controllers}
             for f in args.gains.split(",")
         }
     specs = sweep_specs(

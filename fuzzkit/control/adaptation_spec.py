@@ -108,13 +108,17 @@ def adaptation_problems(ad: Adaptation, kind: str, period_s: float) -> list[tupl
     out: list[tuple[SpecPath, str]] = []
     base: SpecPath = ("adaptation",)
     if ad.mode not in MODES:
-        out.append(((*base, "mode"), f"unknown adaptation {ad.mode!r}; expected {', '.join(MODES)}"))
+        out.append(
+            ((*base, "mode"), f"unknown adaptation {ad.mode!r}; expected {', '.join(MODES)}")
+        )
         return out
     if ad.mode == "stiffness-scheduled":
         out += _estimator_problems(ad.estimator)
         out += _band_problems(ad)
         if _bad(ad.dwell_s, 0.0, open_low=False):
-            out.append(((*base, "dwell_s"), f"dwell_s must be a finite number >= 0 (got {ad.dwell_s!r})"))
+            out.append(
+                ((*base, "dwell_s"), f"dwell_s must be a finite number >= 0 (got {ad.dwell_s!r})")
+            )
     if ad.mode == "self-tuning":
         if _bad(ad.alpha_min, 0.0, 1.0, open_low=False) or _bad(ad.alpha_max, 0.0, 1.0):
             out.append(
@@ -125,12 +129,17 @@ def adaptation_problems(ad: Adaptation, kind: str, period_s: float) -> list[tupl
                 )
             )
         elif ad.alpha_min > ad.alpha_max:
-            out.append(((*base, "alpha"), f"alpha min {ad.alpha_min:g} is above max {ad.alpha_max:g}"))
+            out.append(
+                ((*base, "alpha"), f"alpha min {ad.alpha_min:g} is above max {ad.alpha_max:g}")
+            )
         for key, value in (("error_n", ad.error_n), ("change_n", ad.change_n)):
             if value is None:
                 if kind == "pi":
                     out.append(
-                        ((*base, key), f"a pi needs adaptation.{key} (N): the normaliser of the rule base's input")
+                        (
+                            (*base, key),
+                            f"a pi needs adaptation.{key} (N): the normaliser of the rule base's input",
+                        )
                     )
             elif _bad(value, 0.0):
                 out.append(((*base, key), f"{key} must be a finite number > 0 (got {value!r})"))
@@ -151,7 +160,9 @@ def _estimator_problems(est: Estimator) -> list[tuple[SpecPath, str]]:
             )
         )
     if _bad(est.forgetting, 0.0, 1.0):
-        out.append(((*base, "forgetting"), f"forgetting must be in (0, 1] (got {est.forgetting!r})"))
+        out.append(
+            ((*base, "forgetting"), f"forgetting must be in (0, 1] (got {est.forgetting!r})")
+        )
     for key in ("min_step_m", "min_force_n"):
         value = getattr(est, key)
         if _bad(value, 0.0):
@@ -184,18 +195,58 @@ def _band_problems(ad: Adaptation) -> list[tuple[SpecPath, str]]:
     for i, band in enumerate(ad.bands):
         path = (*base, str(i))
         if _bad(band.scale, 0.0):
-            out.append(((*path, "scale"), f"scale must be a finite number > 0 (got {band.scale!r})"))
+            out.append(
+                ((*path, "scale"), f"scale must be a finite number > 0 (got {band.scale!r})")
+            )
         final = i == len(ad.bands) - 1
         if band.up_to_n_mm is None:
             if not final:
                 out.append((path, "only the last band may leave out up_to_n_mm"))
             continue
         if final:
-            out.append(((*path, "up_to_n_mm"), "the last band takes every stiffness above: leave out up_to_n_mm"))
+            out.append(
+                (
+                    (*path, "up_to_n_mm"),
+                    "the last band takes every stiffness above: leave out up_to_n_mm",
+                )
+            )
         elif _bad(band.up_to_n_mm, 0.0) or band.up_to_n_mm <= last:
             out.append(
-                ((*path, "up_to_n_mm"), f"up_to_n_mm must be finite, > 0 and increasing (got {band.up_to_n_mm!r})")
+                (
+                    (*path, "up_to_n_mm"),
+                    f"up_to_n_mm must be finite, > 0 and increasing (got {band.up_to_n_mm!r})",
+                )
             )
         else:
             last = band.up_to_n_mm
     return out
+
+
+#: The kit's default stiffness schedule on the shipped gains (``--controller adaptive-pi`` and
+#: ``adaptive-fuzzy-pi``; ``docs/examples/controller_adaptive.yaml`` spells it out): the band
+#: scale keeps ``k * scale`` of the shipped gains, tuned near 10 N/mm, within a factor of about
+#: 3 of its value there, from 1 to 2000 N/mm.
+DEFAULT_BANDS = (Band(0.5, 30.0), Band(0.2, 150.0), Band(0.05, 600.0), Band(0.02))
+DEFAULT_ESTIMATOR = Estimator(
+    window_periods=4,
+    delay_periods=1,
+    forgetting=0.9,
+    min_step_m=2.0e-6,
+    min_force_n=0.2,
+    initial_n_mm=300.0,
+    k_min_n_mm=1.0,
+    k_max_n_mm=2000.0,
+)
+#: Prefix of the adaptive controller names: ``adaptive-pi``, ``adaptive-fuzzy-pi``.
+ADAPTIVE_PREFIX = "adaptive-"
+
+
+def default_schedule(latency_periods: int = 0) -> Adaptation:
+    """The default stiffness schedule for a loop with ``latency_periods`` (sensor + command):
+    the estimator's delay is ``1 + latency_periods``."""
+    est = Estimator(**{**_fields(DEFAULT_ESTIMATOR), "delay_periods": 1 + latency_periods})
+    return Adaptation("stiffness-scheduled", est, DEFAULT_BANDS, dwell_s=0.1)
+
+
+def _fields(est: Estimator) -> dict[str, float]:
+    return {name: getattr(est, name) for name in Estimator.__slots__}

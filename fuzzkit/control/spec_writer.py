@@ -73,7 +73,9 @@ def adaptation_document(ad: Adaptation) -> Any:
             "range_n_mm": [est.k_min_n_mm, est.k_max_n_mm],
         },
         "bands": [
-            {"scale": b.scale} if b.up_to_n_mm is None else {"up_to_n_mm": b.up_to_n_mm, "scale": b.scale}
+            {"scale": b.scale}
+            if b.up_to_n_mm is None
+            else {"up_to_n_mm": b.up_to_n_mm, "scale": b.scale}
             for b in ad.bands
         ],
         "dwell_s": ad.dwell_s,

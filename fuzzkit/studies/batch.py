@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any, TypeVar
 
+from fuzzkit.control.adaptation_spec import ADAPTIVE_PREFIX
 from fuzzkit.errors import ConfigError
 from fuzzkit.studies.compiled.table import table_arrays
 from fuzzkit.studies.runner import RunResult
@@ -113,6 +114,14 @@ def run_spec(spec: RunSpec) -> RunResult:
         raise ConfigError(f"unknown fuzzy implementation {impl!r} (expected {FUZZY_IMPLS})")
     loop = spec.resolved_loop()
     fallback = ""
+    cs = exp.controller_spec
+    if cs is not None and cs.adaptation.mode != "none" and loop == "compiled":
+        if spec.loop == "compiled":
+            raise ConfigError(
+                f"the compiled loop does not run adaptation ({cs.adaptation.mode}); "
+                "use --loop python"
+            )
+        loop, fallback = "python", " (adaptation runs in the python loop)"
     if loop == "compiled":
         if impl == "exact":
             raise ConfigError(
@@ -206,6 +215,9 @@ def resolve(spec: RunSpec) -> tuple[RunSpec, Experiment, Any]:
     exp, plant = experiment_and_plant(spec)
     if spec.controller_spec is not None:
         exp = with_spec(exp, _load_controller_spec(spec.controller_spec))
+    elif spec.controller.startswith(ADAPTIVE_PREFIX):
+        exp = with_spec(exp, adaptive_spec(spec, exp))
+        spec = replace(spec, gains=())
     cs = exp.controller_spec
     if cs is None:
         return spec, exp, plant
@@ -215,6 +227,36 @@ def resolve(spec: RunSpec) -> tuple[RunSpec, Experiment, Any]:
         )
     rulebase = cs.rulebase_source or spec.rulebase
     return replace(spec, controller=cs.kind, rulebase=rulebase), exp, plant
+
+
+def adaptive_spec(spec: RunSpec, exp: Experiment) -> Any:
+    """The spec ``--controller adaptive-pi | adaptive-fuzzy-pi`` runs: the experiment's task on
+    the shipped gains (with the run's overrides) under the kit's default stiffness schedule,
+    its estimator's delay matched to the run's latency."""
+    from dataclasses import replace
+
+    from fuzzkit.control.adaptation_spec import default_schedule
+    from fuzzkit.formats.registry import load
+    from fuzzkit.studies.experiments import DEFAULT_GAINS
+    from fuzzkit.studies.runner import check_latency
+    from fuzzkit.studies.task import spec_for
+
+    kind = spec.controller[len(ADAPTIVE_PREFIX) :]
+    if kind not in DEFAULT_GAINS:
+        raise ConfigError(
+            f"unknown controller {spec.controller!r} (expected adaptive-pi or adaptive-fuzzy-pi)"
+        )
+    gains = dict(DEFAULT_GAINS[kind]) | dict(spec.gains)
+    name = spec.controller.replace("-", "_")
+    rulebase = load(spec.rulebase) if kind == "fuzzy-pi" else None
+    cs = spec_for(exp, kind, gains, name, rulebase, spec.rulebase)
+    latency = sum(check_latency(exp.latency_periods if spec.latency is None else spec.latency))
+    return replace(
+        cs,
+        adaptation=default_schedule(latency),
+        rulebase_source=spec.rulebase if kind == "fuzzy-pi" else None,
+        description=f"{kind} on the shipped gains, kit's default stiffness schedule",
+    )
 
 
 def experiment_and_plant(spec: RunSpec) -> tuple[Experiment, Any]:

@@ -16,6 +16,7 @@ from typing import Any
 FORCES = "forces"
 ERROR = "control/error"
 CORRECTION = "control/correction"
+ADAPTATION = "adaptation"
 JOINTS = "joints"
 WORLD = "world"
 
@@ -28,8 +29,9 @@ def scene_view(origin: str, name: str) -> Any:
     return rrb.Spatial3DView(origin=origin, name=name, line_grid=rrb.LineGrid3D(visible=True))
 
 
-def run_blueprint(controlled_axes: Sequence[str], title: str) -> Any:
-    """The layout of a closed-loop run's recording (``controlled_axes``: "x", "z", ...)."""
+def run_blueprint(controlled_axes: Sequence[str], title: str, adaptive: bool = False) -> Any:
+    """The layout of a closed-loop run's recording (``controlled_axes``: "x", "z", ...); an
+    ``adaptive`` run's adds its scheduled gain factor and stiffness estimate."""
     import rerun.blueprint as rrb
 
     force_views = [
@@ -40,6 +42,11 @@ def run_blueprint(controlled_axes: Sequence[str], title: str) -> Any:
         rrb.TimeSeriesView(origin=ERROR, name="force error e, de (N)"),
         rrb.TimeSeriesView(origin=CORRECTION, name="position correction du, u (mm)"),
     ]
+    if adaptive:
+        control_views += [
+            rrb.TimeSeriesView(origin=f"{ADAPTATION}/gain_scale", name="output gain factor"),
+            rrb.TimeSeriesView(origin=f"{ADAPTATION}/stiffness", name="stiffness estimate (N/mm)"),
+        ]
     scene = rrb.Tabs(
         scene_view(WORLD, f"3-D scene: {title} (m)"),
         rrb.TimeSeriesView(origin=JOINTS, name="joint angles"),
