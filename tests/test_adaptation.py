@@ -128,7 +128,7 @@ def test_bad_adaptation_sections_give_located_errors(section: str, line: int, ma
 
 def test_a_pi_needs_the_self_tuning_normalisers() -> None:
     text = SELFTUNING.read_text(encoding="utf-8").replace("  error_n: 12.0", "")
-    with pytest.raises(ControllerSpecError, match="a pi needs adaptation.error_n"):
+    with pytest.raises(ControllerSpecError, match=r"a pi needs adaptation\.error_n"):
         loads_spec(text, "st.yaml")
     spec = dataclasses.replace(adaptive(), adaptation=Adaptation("stiffness-scheduled"))
     with pytest.raises(ConfigError, match="at least one band"):

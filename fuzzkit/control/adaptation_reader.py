@@ -8,14 +8,39 @@ short form of ``{mode: none}``; the keys a mode takes are listed in ``docs/contr
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from yaml.nodes import Node, ScalarNode
 
-from fuzzkit.control.adaptation_spec import MODES, Adaptation, Band, Estimator
+from fuzzkit.control.adaptation_spec import MODES, Adaptation, Band, Estimator, SpecPath
 
-if TYPE_CHECKING:
-    from fuzzkit.control.spec_reader import _SpecReader
+
+class _SpecReader(Protocol):
+    """What this module uses of ``fuzzkit.control.spec_reader``'s reader (which calls it)."""
+
+    where: dict[SpecPath, Node]
+    quiet: set[SpecPath]
+
+    def name(self, node: Node, what: str) -> str | None: ...
+    def error(self, node: Node, message: str) -> None: ...
+    def number(self, node: Node, what: str) -> float | None: ...
+    def sequence(self, node: Node, what: str) -> list[Node] | None: ...
+    def section(
+        self,
+        node: Node,
+        path: SpecPath,
+        allowed: tuple[str, ...],
+        required: tuple[str, ...] = (),
+    ) -> dict[str, Node]: ...
+    def word(self, entries: dict[str, Node], key: str, what: str, default: str) -> str: ...
+    def real(
+        self, entries: dict[str, Node], path: SpecPath, default: float = math.nan
+    ) -> float: ...
+    def optional_real(
+        self, entries: dict[str, Node], path: SpecPath, default: float | None
+    ) -> float | None: ...
+    def integer_at(self, entries: dict[str, Node], path: SpecPath, default: int) -> int: ...
+
 
 #: The keys each mode takes (``mode`` always).
 MODE_KEYS = {

@@ -18,7 +18,7 @@ Stiffness is in N/mm (``_n_mm``), the unit the environments are quoted in.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 #: Adaptation modes.
 MODES = ("none", "stiffness-scheduled", "self-tuning")
@@ -138,7 +138,8 @@ def adaptation_problems(ad: Adaptation, kind: str, period_s: float) -> list[tupl
                     out.append(
                         (
                             (*base, key),
-                            f"a pi needs adaptation.{key} (N): the normaliser of the rule base's input",
+                            f"a pi needs adaptation.{key} (N): the normaliser of the rule "
+                            "base's input",
                         )
                     )
             elif _bad(value, 0.0):
@@ -244,9 +245,5 @@ ADAPTIVE_PREFIX = "adaptive-"
 def default_schedule(latency_periods: int = 0) -> Adaptation:
     """The default stiffness schedule for a loop with ``latency_periods`` (sensor + command):
     the estimator's delay is ``1 + latency_periods``."""
-    est = Estimator(**{**_fields(DEFAULT_ESTIMATOR), "delay_periods": 1 + latency_periods})
+    est = replace(DEFAULT_ESTIMATOR, delay_periods=1 + latency_periods)
     return Adaptation("stiffness-scheduled", est, DEFAULT_BANDS, dwell_s=0.1)
-
-
-def _fields(est: Estimator) -> dict[str, float]:
-    return {name: getattr(est, name) for name in Estimator.__slots__}

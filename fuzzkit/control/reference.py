@@ -20,6 +20,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from fuzzkit.control.adaptation import SelfTuning, StiffnessSchedule
 from fuzzkit.control.controllers import (
     PI,
     AxisController,
@@ -28,7 +29,6 @@ from fuzzkit.control.controllers import (
     Surface,
     engine_surface,
 )
-from fuzzkit.control.adaptation import SelfTuning, StiffnessSchedule
 from fuzzkit.control.frontend import FrontEnd
 from fuzzkit.control.spec import AXES, AxisSpec, ControllerSpec, require_valid
 from fuzzkit.errors import ConfigError

@@ -47,7 +47,7 @@ def adaptation_schema() -> dict[str, Any]:
             "delay_periods": {
                 **_count("1 + the loop's latency (periods)", 1),
                 "maximum": MAX_HISTORY - 1,
-            },  # fmt: skip
+            },
             "forgetting": {**_number("weight of the past per update", 0, True), "maximum": 1},
             "min_step_m": _number("excitation threshold on |du| over the window (m)", 0, True),
             "min_force_n": _number("excitation threshold on |df| over the window (N)", 0, True),

@@ -67,7 +67,7 @@ def stiffness_at(bench: SpringBench, t: float) -> float:
 
 def run_spring(bench: SpringBench, step: Step) -> SpringRun:
     """Close the loop for ``bench.duration_s``; every period one controller ``step``."""
-    n = int(round(bench.duration_s / bench.period_s))
+    n = round(bench.duration_s / bench.period_s)
     rng = np.random.default_rng(bench.seed)
     noise = rng.normal(0.0, bench.noise_std_n, n)
     force = np.zeros(n)
