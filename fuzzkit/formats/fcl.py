@@ -3,8 +3,12 @@
 Both dialects are read: IEC point lists (``TERM warm := (10, 0) (20, 1) (30, 0);``, the
 membership held constant beyond the first and last points, exact when they draw a triangle,
 trapezoid or shoulder) and the named shapes fuzzylite and jFuzzyLogic write
-(``TERM warm := Triangle 10 20 30;``; jFuzzyLogic's ``trian``, ``trape``, ``gauss``, ``gbell``
-and ``sigm`` too). A bare number is a singleton (an input) or a Sugeno constant (an output).
+(``TERM warm := Triangle 10 20 30;``, every shape fuzzylite names, the smooth ``SShape``,
+``ZShape``, ``PiShape``, ``GaussianProduct``, ``SigmoidDifference`` and ``SigmoidProduct``
+among them; jFuzzyLogic's ``trian``, ``trape``, ``gauss``, ``gauss2``, ``gbell`` and ``sigm``
+too, as the shape registry spells them). A bare number is a singleton (an input) or a Sugeno
+constant (an output). The IEC dialect's point lists hold piecewise-linear terms only: writing a
+smooth shape in it is refused (the named dialect writes it).
 
 Semantics kept: FCL has no input clamping (``out_of_range: extend``); ``DEFAULT := v`` applies
 where no rule fires (``NC``, keep the previous value, is refused); ``ACCU`` may sit in the
@@ -32,10 +36,12 @@ from fuzzkit.formats.foreign import (
     is_sugeno,
     parse_number,
     points_to_term,
+    read_named,
     read_text,
     term_to_points,
 )
 from fuzzkit.formats.rule_text import parse_rule, rule_text
+from fuzzkit.fuzzy import shapes
 from fuzzkit.fuzzy.model import Operators, Rule, RuleBase, Term, Variable
 
 SUFFIX = ".fcl"
@@ -59,9 +65,12 @@ _METHOD = {
     "COGS": "weighted_average",
     "COGSS": "weighted_sum",
 }
-#: jFuzzyLogic's shape names, as the fuzzylite class they mean (parameters in the same order
-#: except gbell, whose (a, b, mean) becomes Bell's (centre, width, slope)).
-_JFL = {"TRIAN": "Triangle", "TRAPE": "Trapezoid", "GAUSS": "Gaussian", "SIGM": None, "GBELL": None}
+#: jFuzzyLogic's shapes that are not fuzzkit's (those that are, TRIAN, TRAPE, GAUSS, GAUSS2,
+#: GBELL and SIGM, are the shape registry's ``fcl`` spellings).
+_JFL_REFUSED = {
+    "DSIGM": "DSIGM is jFuzzyLogic's max(s1 - s2, 0), not MATLAB's |s1 - s2| "
+    "(sigmoid_difference; write SigmoidDifference): refused, not approximated",
+}
 _PAIR = re.compile(r"\(\s*([^,()]+?)\s*,\s*([^,()]+?)\s*\)")
 # an unterminated comment runs to the end of the file (one match, so scanning stays linear)
 _COMMENTS = re.compile(r"\(\*.*?(?:\*\)|\Z)|/\*.*?(?:\*/|\Z)|//[^\n]*", re.DOTALL)
@@ -191,15 +200,16 @@ def _term_def(body: str, name: str, output: bool, sugeno: bool, n_inputs: int) -
         return f"{cls}: expected numbers after it, got {' '.join(args_text)!r}"
     nums = [a for a in args if a is not None]
     upper = cls.upper()
-    if upper in _JFL:
-        if upper == "SIGM" and len(nums) == 2:  # gain, centre
-            return Term(name, "sigmoid", (nums[0], nums[1]))
-        if upper == "GBELL" and len(nums) == 3:  # a, b, mean
-            return Term(name, "bell", (nums[0], nums[1], nums[2]))
-        mapped = _JFL[upper]
-        if mapped is None:
-            return f"{cls} needs {2 if upper == 'SIGM' else 3} parameters, got {len(nums)}"
-        cls = mapped
+    if upper in _JFL_REFUSED:
+        return _JFL_REFUSED[upper]
+    jfl = {k.upper(): k for k in shapes.spellings("fcl")}
+    if upper in jfl:  # jFuzzyLogic's names, case-insensitive as its keywords
+        spelling = shapes.spellings("fcl")[jfl[upper]][0][1]
+        if len(nums) != spelling.arity:
+            return f"{cls} needs {spelling.arity} parameters, got {len(nums)}"
+        if output and sugeno:
+            return f"{cls}: a Sugeno output takes Constant or Linear terms"
+        return read_named("fcl", name, jfl[upper], nums)
     return named_term(name, cls, nums, output and sugeno, n_inputs)
 
 

@@ -29,6 +29,7 @@ import yaml
 from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 
 from fuzzkit.errors import Location, Problem, ProblemsError, RuleBaseError
+from fuzzkit.fileio import MAX_FILE_BYTES
 from fuzzkit.fuzzy import validation
 from fuzzkit.fuzzy.model import (
     PIECEWISE_LINEAR_SHAPES,
@@ -48,8 +49,6 @@ from fuzzkit.fuzzy.model import (
 from fuzzkit.fuzzy.partition import PARTITION_ENDS, PARTITION_KINDS, partition_terms
 from fuzzkit.fuzzy.validation import Path, did_you_mean
 
-#: Larger files are refused before parsing: a rule base is a few kilobytes.
-MAX_FILE_BYTES = 1 << 20
 #: Documents whose node tree, with every alias expanded, is larger are refused (alias bombs).
 MAX_NODES = 100_000
 
