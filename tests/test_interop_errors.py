@@ -191,7 +191,7 @@ def test_the_valid_bases_load() -> None:
             "fis",
             "'trimf',[0 0 0.6]",
             "'cosinemf',[0 0.6]",
-            r"t:31:5: \[Output1\] MF1 \('shut'\): membership function 'cosinemf' is not in fuzzkit's",
+            r"t:31:5: \[Output1\] MF1 \('shut'\): membership function 'cosinemf' is not in",
         ),
         (
             "fis",
