@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 from _mamdani_reference import mu as reference_mu
-from _mamdani_reference import reference
+from _mamdani_reference import reference, smf, zmf
 
 from fuzzkit.codegen.exact import unsupported_reason
 from fuzzkit.codegen.method import compile_rulebase
@@ -140,15 +140,6 @@ def _sig(x: np.ndarray, a: float, c: float) -> np.ndarray:
     return 1.0 / (1.0 + np.exp(-a * (x - c)))
 
 
-def _matlab_smf(x: np.ndarray, a: float, b: float) -> np.ndarray:
-    m = (a + b) / 2
-    return np.select(
-        [x <= a, x <= m, x <= b],
-        [0.0, 2 * ((x - a) / (b - a)) ** 2, 1 - 2 * ((x - b) / (b - a)) ** 2],
-        1.0,
-    )
-
-
 def _matlab_gauss2mf(x: np.ndarray, s1: float, c1: float, s2: float, c2: float) -> np.ndarray:
     left = np.where(x <= c1, np.exp(-((x - c1) ** 2) / (2 * s1**2)), 1.0)
     right = np.where(x >= c2, np.exp(-((x - c2) ** 2) / (2 * s2**2)), 1.0)
@@ -158,12 +149,12 @@ def _matlab_gauss2mf(x: np.ndarray, s1: float, c1: float, s2: float, c2: float) 
 #: (MATLAB name and parameters, MATLAB's formula over those parameters as written in the file)
 MATLAB_FILE_TERMS = {
     "gaussian_product": ("gauss2mf", (0.5, 2.0, 1.5, 5.0), _matlab_gauss2mf),
-    "s_shape": ("smf", (1.0, 8.0), _matlab_smf),
-    "z_shape": ("zmf", (1.0, 8.0), lambda x, a, b: 1.0 - _matlab_smf(x, a, b)),
+    "s_shape": ("smf", (1.0, 8.0), smf),
+    "z_shape": ("zmf", (1.0, 8.0), zmf),
     "pi_shape": (
         "pimf",
         (1.0, 4.0, 5.0, 9.0),
-        lambda x, a, b, c, d: _matlab_smf(x, a, b) * (1.0 - _matlab_smf(x, c, d)),
+        lambda x, a, b, c, d: smf(x, a, b) * zmf(x, c, d),
     ),
     "sigmoid_difference": (
         "dsigmf",
