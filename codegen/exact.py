@@ -385,7 +385,9 @@ class WindowSpec:
 def _window(var: Variable, index: int, lit: _Lit, vertical: float) -> WindowSpec | None:
     if not all(t.is_piecewise_linear for t in var.terms):
         return None
-    cuts = sorted({float(p) for t in var.terms for p in t.params if var.low < p < var.high})
+    cuts = sorted(
+        {float(p) for t in var.terms for p in membership.breakpoints(t) if var.low < p < var.high}
+    )
     edges = [var.low, *cuts, var.high]
     n = len(var.terms)
     first = []

@@ -70,9 +70,10 @@ def trapezoid_form(term: Term) -> tuple[float, float, float, float]:
 
 def breakpoints(term: Term) -> tuple[float, ...]:
     """The x positions where a piecewise-linear term changes slope (its vertices)."""
-    if not shape(term.shape).piecewise_linear:
+    points = shape(term.shape).points
+    if points is None:
         raise ValueError(f"term {term.name!r}: shape {term.shape!r} is not piecewise linear")
-    return tuple(term.params)
+    return tuple(x for x, _ in points(term.params))
 
 
 def centre(term: Term, low: float, high: float) -> float:

@@ -9,7 +9,7 @@ The model, the engine, the validation, the readers and writers of every format, 
 the code generators all read this table; a shape that is not in it raises
 :class:`UnknownShapeError` wherever it turns up (validation reports it as a problem instead).
 
-Adding a shape is one new record in :data:`REGISTRY` (and its tests): see
+Adding a shape is one new record in ``_ENTRIES`` below (and its tests): see
 ``docs/rulebase-format.md``, "Adding a membership shape".
 
 Membership functions take an array ``x`` and the shape's parameters and return ``mu(x)`` in
@@ -716,7 +716,7 @@ def spellings(fmt: Format) -> dict[str, list[tuple[Shape, Spelling]]]:
     so a shoulder written as a trapezoid with infinite feet reads back as the shoulder.
     """
     out: dict[str, list[tuple[Shape, Spelling]]] = {}
-    for s in _ENTRIES:
+    for s in REGISTRY.values():
         for sp in getattr(s, fmt):
             out.setdefault(sp.name, []).append((s, sp))
     for pairs in out.values():
