@@ -89,12 +89,7 @@ _OTHER_MFS = frozenset(
         "discretemf",
         "binarymf",
         "rectanglemf",
-        "sshapemf",
-        "zshapemf",
-        "pishapemf",
-        "gaussprodmf",
-        "sigdiffmf",
-        "sigprodmf",
+        "rectmf",
     ]
 )
 _SYSTEM_KEYS = (
