@@ -80,6 +80,14 @@ def test_support_is_exactly_where_the_membership_is_positive(name: str) -> None:
         assert float(s.evaluate(np.array([p[0]]), p)[0]) == 1.0
 
 
+@pytest.mark.parametrize("name", MEMBERSHIP)
+def test_nan_gives_nan_as_every_docstring_says(name: str) -> None:
+    s = REGISTRY[name]
+    assert s.mu is not None and "NaN gives NaN" in (s.mu.__doc__ or "")
+    got = s.evaluate(np.array([math.nan, 0.5]), EXAMPLES[name])
+    assert math.isnan(got[0]) and not math.isnan(got[1])
+
+
 @pytest.mark.parametrize("name", [n for n in MEMBERSHIP if not REGISTRY[n].impulse])
 def test_centre_is_the_middle_of_where_the_membership_is_largest(name: str) -> None:
     p = EXAMPLES[name]

@@ -235,7 +235,7 @@ def sigmoid(x: FloatArray, slope: float, centre: float) -> FloatArray:
 
 
 def singleton(x: FloatArray, value: float) -> FloatArray:
-    """Singleton: ``mu = 1`` where ``x == value``, else 0 (NaN stays NaN)."""
+    """Singleton: ``mu = 1`` where ``x == value``, else 0. NaN gives NaN."""
     out = np.where(np.isnan(x), np.nan, (x == value).astype(np.float64))
     return cast(FloatArray, out)
 
