@@ -1,7 +1,4 @@
-"""Atomic file output: a reader never sees a half-written file, and a failure leaves none.
-
-Also the one size limit of the files fuzzkit reads (:data:`MAX_FILE_BYTES`).
-"""
+"""Atomic file output: a reader never sees a half-written file, and a failure leaves none."""
 
 from __future__ import annotations
 
@@ -14,10 +11,6 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from fuzzkit.errors import ConfigError
-
-#: Larger input files (rule bases in every format, and the YAML files read with locations)
-#: are refused before parsing: a rule base is a few kilobytes.
-MAX_FILE_BYTES = 1 << 20
 
 
 def _umask() -> int:

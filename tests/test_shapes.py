@@ -231,7 +231,7 @@ def _assignments(name: str) -> list[str]:
         ("SUGENO_SHAPES", "fuzzkit/fuzzy/shapes.py"),
         ("SHAPE_PARAMS", "fuzzkit/fuzzy/shapes.py"),
         ("PIECEWISE_LINEAR_SHAPES", "fuzzkit/fuzzy/shapes.py"),
-        ("MAX_FILE_BYTES", "fuzzkit/fileio.py"),
+        ("MAX_FILE_BYTES", "fuzzkit/located_yaml.py"),
     ],
 )
 def test_shared_constants_are_defined_once(name: str, home: str) -> None:

@@ -127,7 +127,8 @@ class Shape:
     format reads, the first being the one written (``fcl`` holds jFuzzyLogic's names, read
     only: fuzzkit's FCL writes fuzzylite's names, ``fll``). ``exact`` is None when the exact
     code generator cannot fuzzify the shape (``--method table`` can). ``impulse`` marks a
-    shape without area (a singleton).
+    shape without area (a singleton). ``span`` says where a term lies on its axis, for an FCL
+    variable without ``RANGE`` (None: no such place, as for a difference of sigmoids).
     """
 
     name: str
@@ -144,6 +145,7 @@ class Shape:
     exact: ExactForm | None = None
     sugeno: bool = False
     impulse: bool = False
+    span: Callable[[Params], tuple[float, float] | None] | None = None
 
     @property
     def piecewise_linear(self) -> bool:
@@ -160,7 +162,23 @@ class Shape:
 
 
 def _ramp_slope(lo: float, hi: float) -> float:
-    return _VERTICAL if hi <= lo else 1.0 / (hi - lo)
+    """The slope of an edge from ``lo`` to ``hi``: ``1/(hi - lo)``, rounded so the foot is 0.
+
+    A piecewise-linear membership is ``clip(1 + (x - peak) * slope, 0, 1)`` (and its mirror):
+    exactly 1 at the peak. At the foot the product is ``-(hi - lo) * slope``, and the nearest
+    double to ``1/(hi - lo)`` can round it to ``-(1 - 2**-53)``: a membership of 1e-16 where
+    the term ends, so at a partition's label peak (its neighbours' foot) a rule fires that
+    should not. There the next double up is taken (the product then rounds to at least 1,
+    as the exact one is): the foot is exactly 0 in the engine and in the generated code that
+    embeds the slope. Slopes whose foot was already exact are left as they are.
+    """
+    if hi <= lo:
+        return _VERTICAL
+    width = hi - lo  # the rounded difference that x - peak also gives at x = foot
+    slope = 1.0 / width
+    if width * slope < 1.0:
+        slope = math.nextafter(slope, math.inf)
+    return slope
 
 
 def _trapezoid_core(x: FloatArray, b: float, c: float, s_rise: float, s_fall: float) -> FloatArray:
@@ -442,6 +460,33 @@ def _centre_on_grid(shape: str) -> Callable[[Params, float, float], float]:
     return centre
 
 
+# ---------------------------------------------------------------------------- spans
+#
+# Where a term lies on its axis (an FCL variable without RANGE spans its terms). Smooth shapes
+# have no ends: jFuzzyLogic's estimates of where the membership is negligible are used.
+
+
+def _param_span(p: Params) -> tuple[float, float]:
+    """Parameters that are all positions on the axis span themselves."""
+    return min(p), max(p)
+
+
+def _around(centre: float, half: float | None) -> tuple[float, float] | None:
+    if half is None or not math.isfinite(half):
+        return None
+    return centre - half, centre + half
+
+
+def _span_gaussian_product(p: Params) -> tuple[float, float]:
+    # both halves of the two-sided gaussian, mean -+ 4 sigma beyond each
+    return min(p[0] - 4.0 * abs(p[1]), p[2]), max(p[0], p[2] + 4.0 * abs(p[3]))
+
+
+def _span_bell(p: Params) -> tuple[float, float] | None:
+    # 1/(1 + |d/width|^(2 slope)) falls to 0.001 at |d| = width * 999^(1/(2 slope))
+    return _around(p[2], abs(p[0]) * 999.0 ** (1.0 / (2.0 * p[1])) if p[1] > 0 else None)
+
+
 # ---------------------------------------------------------------------------- exact forms
 
 
@@ -490,6 +535,7 @@ _ENTRIES = (
         fll=(_sp("Triangle", "a b c"),),
         fcl=(_sp("TRIAN", "a b c"),),
         exact=_linear(_triangle_form),
+        span=_param_span,
     ),
     Shape(
         "trapezoid",
@@ -504,6 +550,7 @@ _ENTRIES = (
         fll=(_sp("Trapezoid", "a b c d"),),
         fcl=(_sp("TRAPE", "a b c d"),),
         exact=_linear(_trapezoid_form),
+        span=_param_span,
     ),
     Shape(
         "left_shoulder",
@@ -519,6 +566,7 @@ _ENTRIES = (
         fll=(_sp("Ramp", "b a"), _sp("Trapezoid", "-inf -inf a b")),
         fcl=(_sp("TRAPE", "-inf -inf a b"),),
         exact=_linear(_left_form),
+        span=_param_span,
     ),
     Shape(
         "right_shoulder",
@@ -533,6 +581,7 @@ _ENTRIES = (
         fll=(_sp("Ramp", "a b"), _sp("Trapezoid", "a b inf inf")),
         fcl=(_sp("TRAPE", "a b inf inf"),),
         exact=_linear(_right_form),
+        span=_param_span,
     ),
     Shape(
         "gaussian",
@@ -545,6 +594,7 @@ _ENTRIES = (
         fll=(_sp("Gaussian", "mean sigma"),),
         fcl=(_sp("GAUSS", "mean sigma"),),
         exact=ExactForm("gaussian", _same, ("exp",)),
+        span=lambda p: _around(p[0], 4.0 * abs(p[1])),
     ),
     Shape(
         "bell",
@@ -557,6 +607,7 @@ _ENTRIES = (
         fll=(_sp("Bell", "centre width slope"),),
         fcl=(_sp("GBELL", "width slope centre"),),
         exact=ExactForm("bell", lambda p: (p[2], p[0], 2.0 * p[1]), ("pow", "fabs")),
+        span=_span_bell,
     ),
     Shape(
         "sigmoid",
@@ -569,6 +620,7 @@ _ENTRIES = (
         fll=(_sp("Sigmoid", "centre slope"),),
         fcl=(_sp("SIGM", "slope centre"),),
         exact=ExactForm("sigmoid", _same, ("exp",)),
+        span=lambda p: _around(p[1], 9.0 / abs(p[0]) if p[0] != 0 else None),
     ),
     Shape(
         "singleton",
@@ -579,6 +631,7 @@ _ENTRIES = (
         lambda p, lo, hi: p[0],
         exact=ExactForm("singleton", _same),
         impulse=True,
+        span=_param_span,
     ),
     # Smooth shapes as in MATLAB's Fuzzy Logic Toolbox and fuzzylite.
     Shape(
@@ -599,6 +652,7 @@ _ENTRIES = (
                 condition_text="GAUSS2 needs mean1 <= mean2 (jFuzzyLogic)",
             ),
         ),
+        span=_span_gaussian_product,
     ),
     Shape(
         "s_shape",
@@ -609,6 +663,7 @@ _ENTRIES = (
         lambda p, lo, hi: (_clip(p[1], lo, hi) + hi) / 2,
         fis=(_sp("smf", "start end"),),
         fll=(_sp("SShape", "start end"),),
+        span=_param_span,
     ),
     Shape(
         "z_shape",
@@ -619,6 +674,7 @@ _ENTRIES = (
         lambda p, lo, hi: (lo + _clip(p[0], lo, hi)) / 2,
         fis=(_sp("zmf", "start end"),),
         fll=(_sp("ZShape", "start end"),),
+        span=_param_span,
     ),
     Shape(
         "pi_shape",
@@ -629,6 +685,7 @@ _ENTRIES = (
         lambda p, lo, hi: _core_middle(p[1], p[2], lo, hi),
         fis=(_sp("pimf", "a b c d"),),
         fll=(_sp("PiShape", "a b c d"),),
+        span=_param_span,
     ),
     Shape(
         "sigmoid_difference",
@@ -664,6 +721,7 @@ _ENTRIES = (
         fis=(_sp("constant", "value"),),
         fll=(_sp("Constant", "value"),),
         sugeno=True,
+        span=_param_span,
     ),
     Shape(
         "linear",
