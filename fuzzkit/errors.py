@@ -108,3 +108,7 @@ class ConfigFileError(ProblemsError, ConfigError):
 
 class ScenarioError(ProblemsError):
     """A scenario file is malformed; every problem is listed as ``file:line:col``."""
+
+
+class ControllerSpecError(ProblemsError):
+    """A controller spec file is malformed; every problem is listed as ``file:line:col``."""

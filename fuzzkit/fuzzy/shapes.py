@@ -24,6 +24,7 @@ import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from itertools import pairwise
 from typing import TypeAlias, cast
 
 import numpy as np
@@ -35,6 +36,8 @@ Params: TypeAlias = tuple[float, ...]
 Piece: TypeAlias = tuple[float, bool, float, bool]
 #: A parameter problem: (the document key it belongs to, the message).
 ParamIssue: TypeAlias = tuple[str, str]
+#: A feature of a term: (how to say it, with ``{}`` for its size; its size).
+Feature: TypeAlias = tuple[str, float]
 
 #: Slope standing in for a vertical edge (a == b); with inputs bounded by _XMAX no product
 #: overflows, and the edge point itself has membership 1.
@@ -129,6 +132,8 @@ class Shape:
     code generator cannot fuzzify the shape (``--method table`` can). ``impulse`` marks a
     shape without area (a singleton). ``span`` says where a term lies on its axis, for an FCL
     variable without ``RANGE`` (None: no such place, as for a difference of sigmoids).
+    ``features`` lists the sizes the engines must resolve (distances between points, widths,
+    inverse slopes) with how to say each, for :mod:`fuzzkit.fuzzy.resolution`.
     """
 
     name: str
@@ -146,6 +151,7 @@ class Shape:
     sugeno: bool = False
     impulse: bool = False
     span: Callable[[Params], tuple[float, float] | None] | None = None
+    features: Callable[[Params], list[Feature]] = lambda p: []
 
     @property
     def piecewise_linear(self) -> bool:
@@ -487,6 +493,31 @@ def _span_bell(p: Params) -> tuple[float, float] | None:
     return _around(p[2], abs(p[0]) * 999.0 ** (1.0 / (2.0 * p[1])) if p[1] > 0 else None)
 
 
+# ---------------------------------------------------------------------------- features
+#
+# The sizes the engines must resolve beside the range width (fuzzkit.fuzzy.resolution).
+
+
+def _g(x: float) -> str:
+    return f"{x:.6g}"
+
+
+def _point_gaps(p: Params) -> list[Feature]:
+    return [(f"points {_g(a)} and {_g(b)} are {{}} apart", b - a) for a, b in pairwise(p) if b > a]
+
+
+def _widths(*index: int) -> Callable[[Params], list[Feature]]:
+    return lambda p: [("its width is {}", p[i]) for i in index]
+
+
+def _slopes(*index: int) -> Callable[[Params], list[Feature]]:
+    return lambda p: [(f"its slope {_g(p[i])} makes it {{}} wide", 1.0 / abs(p[i])) for i in index]
+
+
+def _spans(*pairs: tuple[int, int]) -> Callable[[Params], list[Feature]]:
+    return lambda p: [(f"its span {_g(p[i])} .. {_g(p[j])} is {{}}", p[j] - p[i]) for i, j in pairs]
+
+
 # ---------------------------------------------------------------------------- exact forms
 
 
@@ -536,6 +567,7 @@ _ENTRIES = (
         fcl=(_sp("TRIAN", "a b c"),),
         exact=_linear(_triangle_form),
         span=_param_span,
+        features=_point_gaps,
     ),
     Shape(
         "trapezoid",
@@ -551,6 +583,7 @@ _ENTRIES = (
         fcl=(_sp("TRAPE", "a b c d"),),
         exact=_linear(_trapezoid_form),
         span=_param_span,
+        features=_point_gaps,
     ),
     Shape(
         "left_shoulder",
@@ -567,6 +600,7 @@ _ENTRIES = (
         fcl=(_sp("TRAPE", "-inf -inf a b"),),
         exact=_linear(_left_form),
         span=_param_span,
+        features=_point_gaps,
     ),
     Shape(
         "right_shoulder",
@@ -582,6 +616,7 @@ _ENTRIES = (
         fcl=(_sp("TRAPE", "a b inf inf"),),
         exact=_linear(_right_form),
         span=_param_span,
+        features=_point_gaps,
     ),
     Shape(
         "gaussian",
@@ -595,6 +630,7 @@ _ENTRIES = (
         fcl=(_sp("GAUSS", "mean sigma"),),
         exact=ExactForm("gaussian", _same, ("exp",)),
         span=lambda p: _around(p[0], 4.0 * abs(p[1])),
+        features=_widths(1),
     ),
     Shape(
         "bell",
@@ -608,6 +644,7 @@ _ENTRIES = (
         fcl=(_sp("GBELL", "width slope centre"),),
         exact=ExactForm("bell", lambda p: (p[2], p[0], 2.0 * p[1]), ("pow", "fabs")),
         span=_span_bell,
+        features=_widths(0),
     ),
     Shape(
         "sigmoid",
@@ -621,6 +658,7 @@ _ENTRIES = (
         fcl=(_sp("SIGM", "slope centre"),),
         exact=ExactForm("sigmoid", _same, ("exp",)),
         span=lambda p: _around(p[1], 9.0 / abs(p[0]) if p[0] != 0 else None),
+        features=_slopes(0),
     ),
     Shape(
         "singleton",
@@ -653,6 +691,7 @@ _ENTRIES = (
             ),
         ),
         span=_span_gaussian_product,
+        features=_widths(1, 3),
     ),
     Shape(
         "s_shape",
@@ -664,6 +703,7 @@ _ENTRIES = (
         fis=(_sp("smf", "start end"),),
         fll=(_sp("SShape", "start end"),),
         span=_param_span,
+        features=_spans((0, 1)),
     ),
     Shape(
         "z_shape",
@@ -675,6 +715,7 @@ _ENTRIES = (
         fis=(_sp("zmf", "start end"),),
         fll=(_sp("ZShape", "start end"),),
         span=_param_span,
+        features=_spans((0, 1)),
     ),
     Shape(
         "pi_shape",
@@ -686,6 +727,7 @@ _ENTRIES = (
         fis=(_sp("pimf", "a b c d"),),
         fll=(_sp("PiShape", "a b c d"),),
         span=_param_span,
+        features=_spans((0, 1), (2, 3)),
     ),
     Shape(
         "sigmoid_difference",
@@ -696,6 +738,7 @@ _ENTRIES = (
         _centre_on_grid("sigmoid_difference"),
         fis=(_sp("dsigmf", "slope1 centre1 slope2 centre2"),),
         fll=(_sp("SigmoidDifference", "centre1 slope1 slope2 centre2"),),
+        features=_slopes(0, 2),
     ),
     Shape(
         "sigmoid_product",
@@ -706,6 +749,7 @@ _ENTRIES = (
         _centre_on_grid("sigmoid_product"),
         fis=(_sp("psigmf", "slope1 centre1 slope2 centre2"),),
         fll=(_sp("SigmoidProduct", "centre1 slope1 slope2 centre2"),),
+        features=_slopes(0, 2),
     ),
     # Sugeno (Takagi-Sugeno-Kang) output terms: not membership functions but the rule's output
     # value. ``linear`` has one coefficient per input, in the rule base's input order, then the

@@ -10,14 +10,17 @@ JSON Schema.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import math
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from yaml.nodes import Node, ScalarNode
+from yaml.nodes import MappingNode, Node, ScalarNode
 
-from fuzzkit.errors import ConfigError, Location, Problem, ScenarioError
+from fuzzkit.control.spec import ControllerSpec
+from fuzzkit.errors import ConfigError, ControllerSpecError, Location, Problem, ScenarioError
+from fuzzkit.fuzzy.model import Source
 from fuzzkit.located_yaml import (
     NULL_TAG,
     DocumentKind,
@@ -29,7 +32,7 @@ from fuzzkit.plants.contact import ContactModel, SensorModel, ToolModel
 from fuzzkit.plants.contract import Scenario
 from fuzzkit.plants.environment import Box, EnvObject, RoughSurface, Table, Waypoint
 from fuzzkit.studies.faults import FAULTS
-from fuzzkit.studies.task import AXES, Experiment
+from fuzzkit.studies.task import AXES, Experiment, with_spec
 
 SCENARIO_DOCUMENT = DocumentKind(
     "scenario",
@@ -55,9 +58,13 @@ TOP_KEYS = (
     "steady_window_s",
     "latency_periods",
     "fault",
+    "controller",
 )
 REQUIRED_KEYS = ("name", "duration_s", "path", "objects", "force_control", "safety_limit_n")
-WAYPOINT_KEYS = ("t_s", "x", "y", "z")
+#: What a scenario with a controller spec leaves to the spec (the spec holds them).
+SPEC_KEYS = ("force_control", "safety_limit_n")
+SPEC_ENGAGE_KEYS = ("threshold_n", "samples")
+WAYPOINT_KEYS = ("t_s", "x", "y", "z", "tilt_deg")
 ENGAGE_KEYS = ("threshold_n", "samples", "hold_path")
 LATENCY_KEYS = ("sensor", "command")
 #: Environment objects by their key in ``objects``; RoughSurface also takes ``tilt_deg``.
@@ -77,6 +84,36 @@ MAX_LATENCY_PERIODS = 1000
 
 class _ScenarioReader(NodeReader):
     """Converts a composed scenario document into an :class:`Experiment`."""
+
+    def __init__(self, file: str, text: str, base_dir: Path | None) -> None:
+        super().__init__(file, text.split("\n"))
+        self.source_text = text
+        self.base_dir = base_dir
+
+    def controller(self, node: Node) -> ControllerSpec | None:
+        """The scenario's controller: a spec file's path (relative to the scenario) or an
+        embedded spec mapping; its problems join the scenario's."""
+        from fuzzkit.control.spec_reader import load_spec, read_spec_node
+
+        if isinstance(node, MappingNode):
+            digest = hashlib.sha256(self.source_text.encode("utf-8")).hexdigest()
+            spec, problems = read_spec_node(
+                node, Source(self.file, digest), self.source_text, self.base_dir
+            )
+            self.problems.extend(problems)
+            return spec
+        ref = self.name(node, "a controller spec (a path, or the spec as a mapping)")
+        if ref is None:
+            return None
+        path = Path(ref)
+        if not path.is_absolute() and self.base_dir is not None:
+            path = self.base_dir / path
+        try:
+            return load_spec(path)
+        except ControllerSpecError as exc:
+            self.error(node, f"controller spec {ref!r} is not valid (its problems follow)")
+            self.problems.extend(exc.problems)
+            return None
 
     def positive(
         self, node: Node, what: str, allow_zero: bool = False, high: float = math.inf
@@ -176,7 +213,8 @@ class _ScenarioReader(NodeReader):
                     f"path[{k}]: time {t:g} s is before the previous {before:g} s",
                 )
                 continue
-            out.append(Waypoint(t, vals["x"], vals.get("y") or 0.0, vals["z"]))  # type: ignore[arg-type]
+            tilt = math.radians(vals.get("tilt_deg") or 0.0)
+            out.append(Waypoint(t, vals["x"], vals.get("y") or 0.0, vals["z"], tilt))  # type: ignore[arg-type]
         return tuple(out) if len(out) == len(items) else None
 
     def objects(self, node: Node) -> tuple[EnvObject, ...] | None:
@@ -288,7 +326,12 @@ class _ScenarioReader(NodeReader):
         top = self.mapping(root, "a scenario (a mapping)")
         if top is None:
             return None
-        self.keys(top, root, TOP_KEYS, REQUIRED_KEYS, "the scenario")
+        with_spec_keys = "controller" in top
+        required = tuple(k for k in REQUIRED_KEYS if not (with_spec_keys and k in SPEC_KEYS))
+        self.keys(top, root, TOP_KEYS, required, "the scenario")
+        spec = self.controller(top["controller"][1]) if with_spec_keys else None
+        if with_spec_keys:
+            self.spec_owned(top)
 
         def get(key: str) -> Node | None:
             return top[key][1] if key in top else None
@@ -331,6 +374,17 @@ class _ScenarioReader(NodeReader):
                 if name is not None and name not in FAULTS:
                     self.error(node, f"unknown fault {name!r}; expected one of {', '.join(FAULTS)}")
                 fault = name or fault
+        if spec is not None:
+            fc = (spec.setpoints, spec.selection)
+            values["safety_limit_n"] = spec.safety.limit_n
+            if "period_s" not in values:
+                values["period_s"] = spec.period_s
+            elif values["period_s"] != spec.period_s:
+                self.error(
+                    top["period_s"][1],
+                    f"period_s {values['period_s']:g} differs from the controller spec's "
+                    f"{spec.period_s:g}; give one period (or leave it to the spec)",
+                )
         if path is None or objects is None or fc is None or engage is None:
             return None
         if self.problems or any(v is None for v in (*values.values(), *sections.values())):
@@ -355,7 +409,7 @@ class _ScenarioReader(NodeReader):
             extra["latency_periods"] = latency
         if "steady_window_s" in values:
             extra["steady_window_s"] = values["steady_window_s"]
-        return Experiment(
+        exp = Experiment(
             name=values["name"],
             title=values.get("title", values.get("description", values["name"])),
             scenario=scn,
@@ -368,10 +422,32 @@ class _ScenarioReader(NodeReader):
             fault=fault,
             **extra,
         )
+        return exp if spec is None else with_spec(exp, spec)
+
+    def spec_owned(self, top: dict[str, tuple[Node, Node]]) -> None:
+        """With a controller spec, the task's axes, set points, safety limit and engagement are
+        the spec's: giving them in the scenario too is an error (one source of truth)."""
+        for key in SPEC_KEYS:
+            if key in top:
+                self.error(
+                    top[key][0],
+                    f"{key} is the controller spec's (its axes and safety); remove it here",
+                )
+        if "engage" in top and isinstance(top["engage"][1], MappingNode):
+            for knode, _ in top["engage"][1].value:
+                if isinstance(knode, ScalarNode) and knode.value in SPEC_ENGAGE_KEYS:
+                    self.error(
+                        knode,
+                        f"engage {knode.value} is the controller spec's (safety.engage); "
+                        "remove it here (hold_path stays)",
+                    )
 
 
-def loads_scenario(text: str, source: str = "<string>") -> Experiment:
-    """Parse scenario YAML ``text``; ``source`` names it in messages.
+def loads_scenario(
+    text: str, source: str = "<string>", base_dir: str | Path | None = None
+) -> Experiment:
+    """Parse scenario YAML ``text``; ``source`` names it in messages. A controller spec given
+    by a relative path is read relative to ``base_dir`` (the working directory when None).
 
     Raises
     ------
@@ -379,7 +455,7 @@ def loads_scenario(text: str, source: str = "<string>") -> Experiment:
         Listing every problem as ``source:line:col: message``, sorted by position.
     """
     root = compose_document(text, source, SCENARIO_DOCUMENT)
-    reader = _ScenarioReader(source, text.split("\n"))
+    reader = _ScenarioReader(source, text, None if base_dir is None else Path(base_dir))
     exp = reader.experiment(root)
     if reader.problems or exp is None:
         problems = list(dict.fromkeys(reader.problems)) or [
@@ -392,7 +468,7 @@ def loads_scenario(text: str, source: str = "<string>") -> Experiment:
 
 def load_scenario(path: str | Path) -> Experiment:
     """Read and parse a scenario YAML file (see :func:`loads_scenario`)."""
-    return loads_scenario(read_document(path, SCENARIO_DOCUMENT), str(path))
+    return loads_scenario(read_document(path, SCENARIO_DOCUMENT), str(path), Path(path).parent)
 
 
 def shipped_scenario_text(name: str) -> str:
@@ -405,6 +481,13 @@ def json_schema() -> dict[str, Any]:
 
     Structural only; the loader also checks values (positive durations, waypoint order ...).
     """
+    from fuzzkit.control.spec_schema import json_schema as spec_schema
+
+    def controller_schema() -> dict[str, Any]:
+        embedded = spec_schema()
+        embedded.pop("$schema")
+        return embedded
+
     number = {"type": "number"}
 
     def record(cls: type[Any], extra: dict[str, Any] | None = None) -> dict[str, Any]:
@@ -436,9 +519,19 @@ def json_schema() -> dict[str, Any]:
         "$schema": "https://json-schema.org/draft/2020-12/schema",
         "title": "fuzzkit scenario",
         "type": "object",
-        "required": list(REQUIRED_KEYS),
+        "required": [k for k in REQUIRED_KEYS if k not in SPEC_KEYS],
         "additionalProperties": False,
+        # without a controller spec, the scenario names its axes and safety limit itself
+        "if": {"not": {"required": ["controller"]}},
+        "then": {"required": list(SPEC_KEYS)},
+        "else": {"not": {"anyOf": [{"required": [k]} for k in SPEC_KEYS]}},
         "properties": {
+            "controller": {
+                "oneOf": [
+                    {"type": "string", "description": "a controller spec file (relative path)"},
+                    controller_schema(),
+                ]
+            },
             "name": {"type": "string"},
             "title": {"type": "string"},
             "description": {"type": "string"},
