@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from _mamdani_reference import mu as reference_mu
 from _mamdani_reference import reference, smf, zmf
+from test_interop_formats import _fis_with_input_mf
 
 from fuzzkit.codegen.exact import unsupported_reason
 from fuzzkit.codegen.method import compile_rulebase
@@ -183,43 +184,11 @@ def _num(v: float) -> str:
     return str(int(v)) if float(v).is_integer() else repr(v)
 
 
-FIS_TEXT = """\
-[System]
-Name='t'
-Type='mamdani'
-NumInputs=1
-NumOutputs=1
-NumRules=2
-AndMethod='min'
-OrMethod='max'
-ImpMethod='min'
-AggMethod='max'
-DefuzzMethod='centroid'
-
-[Input1]
-Name='x'
-Range=[0 10]
-NumMFs=2
-MF1='M':$TERM
-MF2='all':'trapmf',[-1 0 10 11]
-
-[Output1]
-Name='y'
-Range=[0 1]
-NumMFs=2
-MF1='lo':'trimf',[0 0.25 0.5]
-MF2='hi':'trimf',[0.5 0.75 1]
-
-[Rules]
-1, 2 (1) : 1
-2, 1 (1) : 1
-"""
-
 FLL_TEXT = """\
 Engine: t
 InputVariable: x
   range: 0 10
-  term: M $TERM
+  term: probe $TERM
   term: all Trapezoid -1 0 10 11
 OutputVariable: y
   range: 0 1
@@ -233,7 +202,7 @@ RuleBlock: rules
   disjunction: Maximum
   implication: Minimum
   activation: General
-  rule: if x is M then y is hi
+  rule: if x is probe then y is hi
   rule: if x is all then y is lo
 """
 
@@ -247,7 +216,7 @@ VAR_OUTPUT
 END_VAR
 FUZZIFY x
   RANGE := (0 .. 10);
-  TERM M := $TERM;
+  TERM probe := $TERM;
   TERM all := Trapezoid -1 0 10 11;
 END_FUZZIFY
 DEFUZZIFY y
@@ -262,7 +231,7 @@ RULEBLOCK rules
   AND : MIN;
   OR : MAX;
   ACT : MIN;
-  RULE 1 : IF x IS M THEN y IS hi;
+  RULE 1 : IF x IS probe THEN y IS hi;
   RULE 2 : IF x IS all THEN y IS lo;
 END_RULEBLOCK
 END_FUNCTION_BLOCK
@@ -281,9 +250,13 @@ def _file_terms(shape: str) -> dict[str, str]:
 
 
 def _file_texts(shape: str) -> dict[str, str]:
-    """The test file of every format with the shape in it (input term ``M`` of ``x``)."""
-    templates = {"fis": FIS_TEXT, "fll": FLL_TEXT, "fcl": FCL_TEXT}
-    return {f: templates[f].replace("$TERM", t) for f, t in _file_terms(shape).items()}
+    """The test file of every format with the shape in it (input term ``probe`` of ``x``)."""
+    terms = _file_terms(shape)
+    return {
+        "fis": _fis_with_input_mf(terms["fis"]),
+        "fll": FLL_TEXT.replace("$TERM", terms["fll"]),
+        "fcl": FCL_TEXT.replace("$TERM", terms["fcl"]),
+    }
 
 
 @pytest.mark.parametrize("fmt", ["fis", "fll", "fcl"])
@@ -291,7 +264,7 @@ def _file_texts(shape: str) -> dict[str, str]:
 def test_smooth_shapes_read_from_every_format_match_matlabs_formula(fmt: str, shape: str) -> None:
     _, p, formula = MATLAB_FILE_TERMS[shape]
     rb = READ[fmt](_file_texts(shape)[fmt], f"t.{fmt}")
-    term = rb.inputs[0].term("M")
+    term = rb.inputs[0].term("probe")
     assert term.shape == shape
     x = np.linspace(-2.0, 12.0, 2801)
     np.testing.assert_allclose(
@@ -313,7 +286,7 @@ def test_smooth_shapes_are_written_in_each_formats_order_and_read_back(
 def test_jfuzzylogic_gauss2_is_the_gaussian_product_in_fcl() -> None:
     # jFuzzyLogic: GAUSS2 mean1 stdev1 mean2 stdev2, left gaussian below mean1, right above mean2
     rb = fcl.loads(FCL_TEXT.replace("$TERM", "gauss2 2 0.5 5 1.5"), "t.fcl")
-    term = rb.inputs[0].term("M")
+    term = rb.inputs[0].term("probe")
     x = np.linspace(-2.0, 12.0, 1401)
     np.testing.assert_allclose(
         membership.evaluate_term(term, x), _matlab_gauss2mf(x, 0.5, 2.0, 1.5, 5.0), rtol=1e-12
@@ -336,7 +309,7 @@ def test_fcl_refuses_what_is_not_the_shape(term: str, match: str) -> None:
 @pytest.mark.parametrize("shape", list(MATLAB_FILE_TERMS))
 def test_fcl_iec_dialect_refuses_smooth_shapes_by_name(shape: str) -> None:
     rb = fll.loads(_file_texts(shape)["fll"], "t.fll")
-    with pytest.raises(ExportError, match=rf"term x\.M: shape '{shape}' \(IEC point lists"):
+    with pytest.raises(ExportError, match=rf"term x\.probe: shape '{shape}' \(IEC point lists"):
         fcl.dumps(rb, dialect="iec", allow_loss=True)
 
 
