@@ -456,11 +456,11 @@ def _centre_gaussian_product(p: Params, low: float, high: float) -> float:
     return _clip((m1 * s2**2 + m2 * s1**2) / (s1**2 + s2**2), low, high)
 
 
-def _centre_on_grid(shape: str) -> Callable[[Params, float, float], float]:
+def _centre_on_grid(mu_of: Callable[..., FloatArray]) -> Callable[[Params, float, float], float]:
     def centre(p: Params, low: float, high: float) -> float:
         # no closed form for the maximum in general: a grid of 2^16 + 1 points
         grid = np.linspace(low, high, 65537)
-        mu = REGISTRY[shape].evaluate(grid, p)
+        mu = mu_of(grid, *p)
         at_max = grid[mu >= mu.max() - 1e-12]
         return float(0.5 * (at_max[0] + at_max[-1]))
 
@@ -736,7 +736,7 @@ _ENTRIES = (
         sigmoid_difference,
         _check_nonzero("sigmoid_difference", "slope1", "slope2"),
         _support_sigmoid_difference,
-        _centre_on_grid("sigmoid_difference"),
+        _centre_on_grid(sigmoid_difference),
         fis=(_sp("dsigmf", "slope1 centre1 slope2 centre2"),),
         fll=(_sp("SigmoidDifference", "centre1 slope1 slope2 centre2"),),
         features=_slopes(0, 2),
@@ -747,7 +747,7 @@ _ENTRIES = (
         sigmoid_product,
         _check_nonzero("sigmoid_product", "slope1", "slope2"),
         _everywhere,
-        _centre_on_grid("sigmoid_product"),
+        _centre_on_grid(sigmoid_product),
         fis=(_sp("psigmf", "slope1 centre1 slope2 centre2"),),
         fll=(_sp("SigmoidProduct", "centre1 slope1 slope2 centre2"),),
         features=_slopes(0, 2),
