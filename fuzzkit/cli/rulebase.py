@@ -326,7 +326,7 @@ def _parse_inputs(
     rb: RuleBase, items: Sequence[str], option: str = "--input", every: bool = True
 ) -> dict[str, float]:
     """``NAME=VALUE`` items of ``option`` as input values; all inputs needed when ``every``."""
-    from fuzzkit.fuzzy.validation import did_you_mean
+    from fuzzkit.errors import did_you_mean
 
     values: dict[str, float] = {}
     problems: list[str] = []

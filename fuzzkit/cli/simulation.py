@@ -264,7 +264,7 @@ def _simulate(args: argparse.Namespace) -> int:
         write_run_rrd(result, args.rrd, None if isinstance(plant, str) else plant)
     data = summary(result)
     if args.json:
-        print(json.dumps(data, indent=2))
+        print(json.dumps(data, indent=2, allow_nan=False))  # never invalid JSON
         return 0
     print(
         f"{data['experiment']} {data['controller']} on {data['plant']}: "
@@ -371,7 +371,7 @@ def _compare(args: argparse.Namespace) -> int:
             row["gains_source"] = chosen[controller].source
             rows.append(row)
     if args.json:
-        print(json.dumps(rows, indent=2))
+        print(json.dumps(rows, indent=2, allow_nan=False))
     else:
         print(f"protocol: {args.protocol} (rule base {args.rulebase})")
         for controller in CONTROLLERS:

@@ -2,7 +2,7 @@
 
 The shipped experiments E1-E3 are such files (``fuzzkit/studies/scenarios/*.yaml``); a user's
 own task is one more. Loading is as strict as for rule bases (the same composing, limits and
-``file:line:col`` problems, all reported together, :mod:`fuzzkit.formats.yaml_reader`). The
+``file:line:col`` problems, all reported together, :mod:`fuzzkit.located_yaml`). The
 format is documented in ``docs/simulation.md`` (Scenario files); :func:`json_schema` is its
 JSON Schema.
 """
@@ -20,14 +20,14 @@ from yaml.nodes import MappingNode, Node, ScalarNode
 
 from fuzzkit.control.spec import ControllerSpec
 from fuzzkit.errors import ConfigError, ControllerSpecError, Location, Problem, ScenarioError
-from fuzzkit.formats.yaml_reader import (
+from fuzzkit.fuzzy.model import Source
+from fuzzkit.located_yaml import (
+    NULL_TAG,
     DocumentKind,
     NodeReader,
     compose_document,
-    describe,
     read_document,
 )
-from fuzzkit.fuzzy.model import Source
 from fuzzkit.plants.contact import ContactModel, SensorModel, ToolModel
 from fuzzkit.plants.contract import Scenario
 from fuzzkit.plants.environment import Box, EnvObject, RoughSurface, Table, Waypoint
@@ -73,8 +73,13 @@ OBJECT_KINDS: dict[str, type[Any]] = {"table": Table, "box": Box, "rough_surface
 SECTIONS: dict[str, type[Any]] = {"tool": ToolModel, "contact": ContactModel, "sensor": SensorModel}
 SHIPPED = ("E1", "E2", "E3")
 
-_NULL = "tag:yaml.org,2002:null"
-_BOOL = "tag:yaml.org,2002:bool"
+#: Limits that keep a scenario a simulation this machine can run (documented in
+#: docs/simulation.md): simulated time, control period, periods in one run, delays.
+MAX_DURATION_S = 600.0
+MIN_PERIOD_S = 1e-4
+MAX_PERIOD_S = 0.1
+MAX_STEPS = 1_000_000
+MAX_LATENCY_PERIODS = 1000
 
 
 class _ScenarioReader(NodeReader):
@@ -110,29 +115,18 @@ class _ScenarioReader(NodeReader):
             self.problems.extend(exc.problems)
             return None
 
-    def positive(self, node: Node, what: str, allow_zero: bool = False) -> float | None:
+    def positive(
+        self, node: Node, what: str, allow_zero: bool = False, high: float = math.inf
+    ) -> float | None:
         v = self.number(node, what)
         if v is None:
             return None
-        if not math.isfinite(v) or v < 0.0 or (v == 0.0 and not allow_zero):
+        if not math.isfinite(v) or v < 0.0 or (v == 0.0 and not allow_zero) or v > high:
             bound = ">= 0" if allow_zero else "> 0"
-            self.error(node, f"{what} must be a finite number {bound} (got {v:g})")
+            upper = f" and <= {high:g}" if math.isfinite(high) else ""
+            self.error(node, f"{what} must be a finite number {bound}{upper} (got {v:g})")
             return None
         return v
-
-    def integer(self, node: Node, what: str, minimum: int = 0) -> int | None:
-        if isinstance(node, ScalarNode) and node.tag == "tag:yaml.org,2002:int":
-            value = int(node.value)
-            if value >= minimum:
-                return value
-        self.error(node, f"expected an integer >= {minimum} for {what}, got {describe(node)}")
-        return None
-
-    def boolean(self, node: Node, what: str) -> bool | None:
-        if isinstance(node, ScalarNode) and node.tag == _BOOL:
-            return bool(node.value.lower() in ("true", "yes", "on"))
-        self.error(node, f"expected true or false for {what}, got {describe(node)}")
-        return None
 
     def record(self, cls: type[Any], node: Node, what: str, extra: tuple[str, ...] = ()) -> Any:
         """A dataclass of ``cls`` from a mapping keyed by its field names (defaults apply)."""
@@ -151,12 +145,12 @@ class _ScenarioReader(NodeReader):
         values: dict[str, Any] = {}
         ok = True
         for key, (_, vnode) in entries.items():
-            if key == "tilt_deg":
+            if key == "tilt_deg" and key in extra:
                 if "tilt_rad" in entries:
                     self.error(vnode, f"{what}: give tilt_deg or tilt_rad, not both")
                     ok = False
                     continue
-                deg = self.number(vnode, f"{what} tilt_deg")
+                deg = self.finite(vnode, f"{what} tilt_deg")
                 ok &= deg is not None
                 if deg is not None:
                     values["tilt_rad"] = math.radians(deg)
@@ -189,13 +183,9 @@ class _ScenarioReader(NodeReader):
             if len(items) != 3:
                 self.error(node, f"expected 3 numbers (x, y, z) for {what}, got {len(items)}")
                 return None
-            nums = [self.number(n, what) for n in items]
+            nums = [self.finite(n, what) for n in items]
             return None if any(v is None for v in nums) else tuple(nums)
-        value = self.number(node, what)
-        if value is not None and not math.isfinite(value):
-            self.error(node, f"{what} must be finite (got {value})")
-            return None
-        return value
+        return self.finite(node, what)
 
     def path(self, node: Node) -> tuple[Waypoint, ...] | None:
         items = self.sequence(node, "path")
@@ -210,7 +200,7 @@ class _ScenarioReader(NodeReader):
             if entries is None:
                 continue
             self.keys(entries, item, WAYPOINT_KEYS, ("t_s", "x", "z"), f"path[{k}]")
-            vals = {key: self.number(v, f"path[{k}] {key}") for key, (_, v) in entries.items()}
+            vals = {key: self.finite(v, f"path[{k}] {key}") for key, (_, v) in entries.items()}
             if any(vals.get(key) is None for key in ("t_s", "x", "z")) or len(vals) != len(
                 [key for key in vals if key in WAYPOINT_KEYS]
             ):
@@ -265,7 +255,7 @@ class _ScenarioReader(NodeReader):
         for axis, (_, vnode) in entries.items():
             if axis not in AXES:
                 return None
-            value = self.number(vnode, f"the {axis} set point")
+            value = self.finite(vnode, f"the {axis} set point")
             if value is None:
                 return None
             i = AXES.index(axis)
@@ -284,13 +274,13 @@ class _ScenarioReader(NodeReader):
         ok = True
         if "threshold_n" in entries:
             tnode = entries["threshold_n"][1]
-            if isinstance(tnode, ScalarNode) and tnode.tag == _NULL:
+            if isinstance(tnode, ScalarNode) and tnode.tag == NULL_TAG:
                 threshold = None  # active from the start
             else:
                 threshold = self.positive(tnode, "engage threshold_n", allow_zero=True)
                 ok &= threshold is not None
         if "samples" in entries:
-            s = self.integer(entries["samples"][1], "engage samples", minimum=1)
+            s = self.integer(entries["samples"][1], "engage samples", 1, MAX_STEPS)
             ok &= s is not None
             samples = s or samples
         if "hold_path" in entries:
@@ -305,12 +295,32 @@ class _ScenarioReader(NodeReader):
             return None
         self.keys(entries, node, LATENCY_KEYS, LATENCY_KEYS, "latency_periods")
         vals = [
-            self.integer(entries[k][1], f"latency_periods {k}") if k in entries else None
+            self.integer(entries[k][1], f"latency_periods {k}", maximum=MAX_LATENCY_PERIODS)
+            if k in entries
+            else None
             for k in LATENCY_KEYS
         ]
         if vals[0] is None or vals[1] is None:
             return None
         return vals[0], vals[1]
+
+    def time_limits(self, values: dict[str, Any], top: dict[str, tuple[Node, Node]]) -> None:
+        """Refuse a period below :data:`MIN_PERIOD_S` or more than :data:`MAX_STEPS` periods."""
+        period, duration = values.get("period_s", 0.004), values.get("duration_s")
+        if period is None or duration is None:
+            return
+        if period < MIN_PERIOD_S:
+            self.error(
+                top["period_s"][1], f"period_s must be >= {MIN_PERIOD_S:g} s (got {period:g})"
+            )
+            values["period_s"] = None
+        elif duration / period > MAX_STEPS:
+            self.error(
+                top["duration_s"][1],
+                f"duration_s / period_s is {duration / period:.3g} periods; a run is limited "
+                f"to {MAX_STEPS} periods (shorten duration_s or lengthen period_s)",
+            )
+            values["duration_s"] = None
 
     def experiment(self, root: Node) -> Experiment | None:
         top = self.mapping(root, "a scenario (a mapping)")
@@ -331,10 +341,16 @@ class _ScenarioReader(NodeReader):
             node = get(key)
             if node is not None:
                 values[key] = self.text(node, key)
-        for key in ("duration_s", "period_s", "safety_limit_n", "steady_window_s"):
+        for key, high in (
+            ("duration_s", MAX_DURATION_S),
+            ("period_s", MAX_PERIOD_S),
+            ("safety_limit_n", math.inf),
+            ("steady_window_s", MAX_DURATION_S),
+        ):
             node = get(key)
             if node is not None:
-                values[key] = self.positive(node, key)
+                values[key] = self.positive(node, key, high=high)
+        self.time_limits(values, top)
         sections = {}
         for key, cls in SECTIONS.items():
             node = get(key)
