@@ -169,7 +169,7 @@ def _count(n: int, noun: str) -> str:
 def _controller_spec_text(arg: str) -> bool:
     """True when ``arg`` names a readable YAML file whose content is a controller spec."""
     from fuzzkit.control.spec_reader import looks_like_spec
-    from fuzzkit.formats.yaml_reader import MAX_FILE_BYTES
+    from fuzzkit.located_yaml import MAX_FILE_BYTES
 
     path = Path(arg)
     try:
