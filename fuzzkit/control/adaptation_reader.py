@@ -39,7 +39,7 @@ class _SpecReader(Protocol):
     def optional_real(
         self, entries: dict[str, Node], path: SpecPath, default: float | None
     ) -> float | None: ...
-    def integer_at(self, entries: dict[str, Node], path: SpecPath, default: int) -> int: ...
+    def count(self, entries: dict[str, Node], path: SpecPath, default: int) -> int: ...
 
 
 #: The keys each mode takes (``mode`` always).
@@ -117,8 +117,8 @@ def _estimator(r: _SpecReader, node: Node | None) -> Estimator:
                 r.error(e["range_n_mm"], f"expected 2 numbers [k_min, k_max], got {len(items)}")
             r.quiet.add((*path, "range_n_mm"))
     return Estimator(
-        window_periods=r.integer_at(e, (*path, "window_periods"), d.window_periods),
-        delay_periods=r.integer_at(e, (*path, "delay_periods"), d.delay_periods),
+        window_periods=r.count(e, (*path, "window_periods"), d.window_periods),
+        delay_periods=r.count(e, (*path, "delay_periods"), d.delay_periods),
         forgetting=r.real(e, (*path, "forgetting"), d.forgetting),
         min_step_m=r.real(e, (*path, "min_step_m"), d.min_step_m),
         min_force_n=r.real(e, (*path, "min_force_n"), d.min_force_n),
