@@ -341,3 +341,54 @@ def test_generated_controller_replays_the_closed_loop_log_equal(impl: str) -> No
     got, status = open_generated(adaptive(), impl, "double").run(forces, rotations)
     assert float(np.max(np.abs(got - want))) <= 1e-9
     np.testing.assert_array_equal(status, want_status)
+
+
+# ------------------------------------------------------------- runs, sweeps, recordings, CLI
+
+
+def test_adaptive_controller_runs_and_reports_its_estimate(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import json
+    import subprocess
+
+    from fuzzkit.cli import main
+
+    rrd = tmp_path / "run.rrd"
+    args = ["simulate", "E1", "--controller", "adaptive-fuzzy-pi", "--stiffness", "20"]
+    assert main([*args, "--json", "--rrd", str(rrd)]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["loop"].startswith("python (adaptation")
+    assert data["controller_impl"].startswith("spec adaptive_fuzzy_pi")
+    k = data["stiffness_estimate_n_mm"]["z"]
+    assert 1.0 <= k <= 2000.0 and k != 300.0  # it moved off the initial estimate
+    assert data["gain_scale_final"]["z"] in (0.5, 0.2, 0.05, 0.02)
+    # the recording carries the factor and the estimate over time
+    from test_recording_layout import _rerun_cli
+
+    dump = subprocess.run(
+        [_rerun_cli(), "rrd", "print", "-vvv", str(rrd)], capture_output=True, text=True
+    ).stdout
+    assert "/adaptation/gain_scale/z" in dump and "/adaptation/stiffness/z" in dump
+    # the compiled loop does not model adaptation: asked for, it is refused (exit 2)
+    assert main([*args, "--loop", "compiled"]) == 2
+    assert "does not run adaptation" in capsys.readouterr().err
+
+
+def test_sweep_rows_name_the_adaptive_controller_and_its_estimate() -> None:
+    from fuzzkit.studies.batch import RunSpec, execute
+
+    row = execute(
+        RunSpec("E1", controller="adaptive-pi", plant="planar", stiffness_n_per_mm=20.0,
+                duration_s=2.0)
+    )  # fmt: skip
+    assert row["controller"] == "adaptive-pi"
+    assert math.isfinite(row["z_stiffness_estimate_n_mm"])
+    assert row["z_gain_scale_final"] in (0.5, 0.2, 0.05, 0.02)
+
+
+def test_the_example_is_the_kits_default_schedule() -> None:
+    from fuzzkit.control.adaptation_spec import default_schedule
+
+    assert adaptive().adaptation == default_schedule(0)
+    assert default_schedule(2).estimator.delay_periods == 3

@@ -280,10 +280,11 @@ def execute(spec: RunSpec) -> dict[str, Any]:
     from fuzzkit.studies.metrics import summary
 
     data = summary(run_spec(spec))
+    asked = spec.controller  # adaptive-*: the name, not the kind its spec resolves to
     spec = resolve(spec)[0]  # the controller and rule base a controller spec chose
     row: dict[str, Any] = {
         "experiment": spec.experiment,
-        "controller": spec.controller,
+        "controller": asked if asked.startswith(ADAPTIVE_PREFIX) else spec.controller,
         "plant": spec.plant,
         "stiffness_n_per_mm": spec.stiffness_n_per_mm,
         "sensor_delay": data["latency_periods"][0],
@@ -299,6 +300,9 @@ def execute(spec: RunSpec) -> dict[str, Any]:
             for axis, metrics in value.items():
                 for name, v in metrics.items():
                     row[f"{axis}_{name}"] = v
+        elif key in ("stiffness_estimate_n_mm", "gain_scale_final"):  # per axis too
+            for axis, v in value.items():
+                row[f"{axis}_{key}"] = v
         elif key not in ("experiment", "controller", "plant"):
             row[key] = value
     return row
