@@ -69,8 +69,7 @@ def register(subparsers: Any) -> None:
         "--controller",
         choices=RUN_CONTROLLERS,
         default="fuzzy-pi",
-        help="force controller (adaptive-*: the shipped gains under the default stiffness "
-        "schedule)",
+        help="force controller (adaptive-*: the shipped gains under the kit's stiffness schedule)",
     )
     sim.add_argument(
         "--rulebase",
