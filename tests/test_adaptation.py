@@ -392,3 +392,22 @@ def test_the_example_is_the_kits_default_schedule() -> None:
 
     assert adaptive().adaptation == default_schedule(0)
     assert default_schedule(2).estimator.delay_periods == 3
+
+
+def test_tune_tunes_the_base_gains_under_the_schedule(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from fuzzkit.cli import main
+    from fuzzkit.plants.contract import UnsupportedPlant
+    from fuzzkit.studies.batch import adaptive_spec_for
+    from fuzzkit.studies.compiled.common import spec_gains
+    from fuzzkit.studies.experiments import experiment
+
+    out = tmp_path / "gains.yaml"
+    args = ["tune", "E1", "--controller", "adaptive-pi", "--plant", "planar", "--stiffness", "20"]
+    assert main([*args, "--budget", "10", "--out", str(out), "--workers", "1", "--quiet"]) == 0
+    assert "tuned pi on E1" in capsys.readouterr().out and out.is_file()
+    # the compiled loop runs fixed gains: an adaptive spec is never handed to it silently
+    spec = adaptive_spec_for(experiment("E1"), "adaptive-pi", "macvicar_whelan", 2)
+    with pytest.raises(UnsupportedPlant, match="adapts its gains"):
+        spec_gains(spec)

@@ -230,31 +230,44 @@ def resolve(spec: RunSpec) -> tuple[RunSpec, Experiment, Any]:
 
 
 def adaptive_spec(spec: RunSpec, exp: Experiment) -> Any:
-    """The spec ``--controller adaptive-pi | adaptive-fuzzy-pi`` runs: the experiment's task on
-    the shipped gains (with the run's overrides) under the kit's default stiffness schedule,
-    its estimator's delay matched to the run's latency."""
+    """The spec ``--controller adaptive-pi | adaptive-fuzzy-pi`` runs (:func:`adaptive_spec_for`
+    with the run's gain overrides, rule base and latency)."""
+    from fuzzkit.studies.runner import check_latency
+
+    latency = sum(check_latency(exp.latency_periods if spec.latency is None else spec.latency))
+    return adaptive_spec_for(exp, spec.controller, spec.rulebase, latency, dict(spec.gains))
+
+
+def adaptive_spec_for(
+    exp: Experiment,
+    controller: str,
+    rulebase: str,
+    latency_periods: int,
+    gains: Mapping[str, float] | None = None,
+) -> Any:
+    """The experiment's task on the shipped gains (``gains`` override them) under the kit's
+    default stiffness schedule, its estimator's delay matched to ``latency_periods`` (sensor +
+    command): what ``adaptive-pi`` and ``adaptive-fuzzy-pi`` mean."""
     from dataclasses import replace
 
     from fuzzkit.control.adaptation_spec import default_schedule
     from fuzzkit.formats.registry import load
     from fuzzkit.studies.experiments import DEFAULT_GAINS
-    from fuzzkit.studies.runner import check_latency
     from fuzzkit.studies.task import spec_for
 
-    kind = spec.controller[len(ADAPTIVE_PREFIX) :]
-    if kind not in DEFAULT_GAINS:
+    kind = controller.removeprefix(ADAPTIVE_PREFIX)
+    if not controller.startswith(ADAPTIVE_PREFIX) or kind not in DEFAULT_GAINS:
         raise ConfigError(
-            f"unknown controller {spec.controller!r} (expected adaptive-pi or adaptive-fuzzy-pi)"
+            f"unknown controller {controller!r} (expected adaptive-pi or adaptive-fuzzy-pi)"
         )
-    gains = dict(DEFAULT_GAINS[kind]) | dict(spec.gains)
-    name = spec.controller.replace("-", "_")
-    rulebase = load(spec.rulebase) if kind == "fuzzy-pi" else None
-    cs = spec_for(exp, kind, gains, name, rulebase, spec.rulebase)
-    latency = sum(check_latency(exp.latency_periods if spec.latency is None else spec.latency))
+    merged = dict(DEFAULT_GAINS[kind]) | dict(gains or {})
+    name = controller.replace("-", "_")
+    fuzzy = kind == "fuzzy-pi"
+    cs = spec_for(exp, kind, merged, name, load(rulebase) if fuzzy else None, rulebase)
     return replace(
         cs,
-        adaptation=default_schedule(latency),
-        rulebase_source=spec.rulebase if kind == "fuzzy-pi" else None,
+        adaptation=default_schedule(latency_periods),
+        rulebase_source=rulebase if fuzzy else None,
         description=f"{kind} on the shipped gains, kit's default stiffness schedule",
     )
 
