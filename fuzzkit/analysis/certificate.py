@@ -1,0 +1,106 @@
+"""The stability certificate: a quadratic Lyapunov function common to every vertex of the loop's
+parameter box, found by an LMI (cvxpy with the Clarabel solver) and verified in numpy.
+
+For vertex matrices ``A_i``, the semidefinite program
+
+    maximise t  subject to  P <= I,  [[P - t I, A_i' P], [P A_i, P]] >= 0  for every i
+
+(the Schur complement of ``P - A_i' P A_i >= t I`` with ``P > 0``) looks for ``V(x) = x' P x``
+decreasing along every trajectory of the polytopic system. The solver's answer is never taken
+on trust: the returned ``P`` is symmetrised and checked with numpy's symmetric eigenvalues,
+
+    margin = min_i lambda_min(P - A_i' P A_i) / lambda_max(P),    lambda_min(P) > 0,
+
+and the cell is certified only when ``margin >= MIN_MARGIN``. ``margin`` is the guaranteed decay
+of ``V`` per period (``V[k+1] <= (1 - margin) V[k]``); the threshold is far above the
+eigenvalue routine's rounding (about ``n * eps * ||P|| * ||A||^2``, below 1e-12 here), so a
+solver tolerance cannot turn a failed certificate into a pass.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+FloatArray = npt.NDArray[np.float64]
+
+#: The smallest verified decay of V per period that counts as a certificate.
+MIN_MARGIN = 1e-6
+#: Lower bound on lambda_min(P) / lambda_max(P) checked in numpy (P must be positive definite,
+#: not merely semidefinite to rounding).
+MIN_CONDITION = 1e-10
+
+
+@dataclass(frozen=True, slots=True)
+class Certificate:
+    """The outcome for one set of vertex matrices.
+
+    ``certified``: the numpy check passed. ``margin``: the verified decay per period (negative
+    or NaN when no certificate was found). ``solver_status``: cvxpy's status. ``p``: the
+    Lyapunov matrix (None when the solver returned none).
+    """
+
+    certified: bool
+    margin: float
+    solver_status: str
+    p: FloatArray | None = None
+
+
+def verify(p: FloatArray, matrices: list[FloatArray]) -> float:
+    """The verified margin of ``V = x' P x`` for ``matrices`` (NaN if ``P`` is not definite)."""
+    p = 0.5 * (p + p.T)
+    eig_p = np.linalg.eigvalsh(p)
+    if not (np.all(np.isfinite(eig_p)) and eig_p[0] > MIN_CONDITION * eig_p[-1] > 0.0):
+        return math.nan
+    worst = math.inf
+    for a in matrices:
+        q = p - a.T @ p @ a
+        worst = min(worst, float(np.linalg.eigvalsh(0.5 * (q + q.T))[0]))
+    return worst / float(eig_p[-1])
+
+
+@lru_cache(maxsize=32)
+def _problem(n: int, count: int) -> tuple[Any, Any, list[Any]]:
+    """The parametrised SDP for ``count`` vertex matrices of size ``n`` (built once, DPP)."""
+    import cvxpy as cp
+
+    p = cp.Variable((n, n), symmetric=True)
+    t = cp.Variable()
+    mats = [cp.Parameter((n, n)) for _ in range(count)]
+    eye = np.eye(n)
+    cons = [p << eye]
+    for a in mats:
+        pa = p @ a
+        cons.append(cp.bmat([[p - t * eye, pa.T], [pa, p]]) >> 0)
+    problem = cp.Problem(cp.Maximize(t), cons)
+    return problem, p, mats
+
+
+def certify(matrices: list[FloatArray]) -> Certificate:
+    """Search for a common quadratic Lyapunov function of ``matrices`` and verify it."""
+    import cvxpy as cp
+
+    n = matrices[0].shape[0]
+    problem, p, params = _problem(n, len(matrices))
+    for param, a in zip(params, matrices, strict=True):
+        param.value = a
+    try:
+        with warnings.catch_warnings():
+            # "solution may be inaccurate": the numpy check below decides, not the status
+            warnings.simplefilter("ignore", UserWarning)
+            problem.solve(solver=cp.CLARABEL)
+    except cp.error.SolverError as exc:
+        return Certificate(False, math.nan, f"solver error: {exc}")
+    status = str(problem.status)
+    if p.value is None:
+        return Certificate(False, math.nan, status)
+    p_val = np.array(p.value, dtype=np.float64)
+    margin = verify(p_val, matrices)
+    ok = bool(math.isfinite(margin) and margin >= MIN_MARGIN)
+    return Certificate(ok, margin, status, p_val)

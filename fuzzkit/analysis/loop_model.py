@@ -1,0 +1,142 @@
+"""The force loop of one task axis, in contact, around its set point, as a linear system with
+bounded time-varying gains (docs/stability.md states and justifies it).
+
+Per controller period ``T``, in deviations from the equilibrium (force at the set point), with
+every state in newtons (positions and corrections times the contact stiffness ``k``):
+
+* inner motion loop: ``p[k+1] = a p[k] + (1 - a) g r[k+1]`` (identified,
+  :mod:`fuzzkit.analysis.inner_loop`; ``a``, ``g`` uncertain in intervals);
+* contact: ``f = sigma * (k p + c (p[k+1] - p[k]) / T)``; ``sigma`` in ``[sigma_min, 1]`` is
+  the sector of the clamp ``max(0, .)`` that lets the tool leave the surface (loss of contact);
+* F/T sensor: first-order filter sampled once per period, ``w[k+1] = beta w[k] + (1 - beta)
+  f[k+1]``, ``beta = exp(-2 pi f_c T)``;
+* sensor delay ``S`` periods: the controller sees ``y[k] = w[k - S]``;
+* controller: ``u[k] = u[k-1] + phi (Kp (e[k] - e[k-1]) + Ki e[k])``, ``e = -y``; PI:
+  ``phi = 1``; fuzzy-PI: ``Kp = Kx*Kp_fuzzy``, ``Ki = Kx*Ki_fuzzy`` and ``phi`` in the bounds of
+  :mod:`fuzzkit.analysis.fuzzy_bounds`;
+* command delay ``C`` periods plus the one period every correction waits for the next plant
+  step: ``r[k+1] = u[k - C]``.
+
+The state is ``(p[k], w[k], ..., w[k-S], u[k], ..., u[k-C])``, of size ``S + C + 3``. The
+closed-loop matrix is multi-affine in ``(sigma, phi, a, g)`` (no parameter appears squared), so
+for any values in the box it is a convex combination of its values at the box's 16 vertices
+(:func:`vertex_matrices`): a Lyapunov function common to the vertices holds for every
+combination, varying from one period to the next.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from fuzzkit.errors import ConfigError
+
+FloatArray = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True, slots=True)
+class AxisLoop:
+    """Everything the linear model of one force axis needs (SI units).
+
+    ``kp``, ``ki``: the incremental law's gains in m/N (the fuzzy-PI's ``Kx*Kp``, ``Kx*Ki``);
+    ``phi``: the interval multiplying them (``(1, 1)`` for PI). ``inner_a``, ``inner_g``: the
+    inner loop's pole and gain intervals. ``sigma_min``: the lower end of the contact sector.
+    """
+
+    period_s: float
+    stiffness_n_per_m: float
+    damping_n_s_per_m: float
+    sensor_delay: int
+    command_delay: int
+    filter_cutoff_hz: float
+    kp: float
+    ki: float
+    phi: tuple[float, float] = (1.0, 1.0)
+    inner_a: tuple[float, float] = (0.0, 0.0)
+    inner_g: tuple[float, float] = (1.0, 1.0)
+    sigma_min: float = 0.1
+
+    def __post_init__(self) -> None:
+        problems = []
+        for name in ("period_s", "stiffness_n_per_m", "filter_cutoff_hz"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0.0):
+                problems.append(f"{name} must be > 0 (got {v})")
+        if not (math.isfinite(self.damping_n_s_per_m) and self.damping_n_s_per_m >= 0.0):
+            problems.append(f"damping must be >= 0 (got {self.damping_n_s_per_m})")
+        if self.sensor_delay < 0 or self.command_delay < 0:
+            problems.append("delays must be whole periods >= 0")
+        for name in ("phi", "inner_a", "inner_g"):
+            lo, hi = getattr(self, name)
+            if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
+                problems.append(f"{name} must be an interval lo <= hi (got {lo}, {hi})")
+        if not 0.0 < self.sigma_min <= 1.0:
+            problems.append(f"sigma_min must be in (0, 1] (got {self.sigma_min})")
+        if problems:
+            raise ConfigError("; ".join(problems))
+
+    @property
+    def order(self) -> int:
+        """The number of states."""
+        return self.sensor_delay + self.command_delay + 3
+
+    @property
+    def filter_pole(self) -> float:
+        """``beta``: the sensor filter's pole per period."""
+        return math.exp(-2.0 * math.pi * self.filter_cutoff_hz * self.period_s)
+
+    def as_dict(self) -> dict[str, object]:
+        """JSON form."""
+        out: dict[str, object] = asdict(self)
+        out["filter_pole"] = self.filter_pole
+        out["states"] = self.order
+        return out
+
+
+def closed_loop_matrix(
+    loop: AxisLoop, sigma: float, phi: float, a: float, g: float
+) -> FloatArray:
+    """``A`` with ``x[k+1] = A x[k]`` for fixed values of the four uncertain parameters."""
+    s, c = loop.sensor_delay, loop.command_delay
+    n = loop.order
+    k = loop.stiffness_n_per_m
+    damp = loop.damping_n_s_per_m / (k * loop.period_s)
+    beta = loop.filter_pole
+    ip, iw, iu = 0, 1, 2 + s  # first index of p, of the w queue, of the u queue
+    a_mat = np.zeros((n, n))
+
+    def unit(i: int) -> FloatArray:
+        e = np.zeros(n)
+        e[i] = 1.0
+        return e
+
+    p_next = a * unit(ip) + (1.0 - a) * g * unit(iu + c)
+    f_next = sigma * ((1.0 + damp) * p_next - damp * unit(ip))
+    w_next = beta * unit(iw) + (1.0 - beta) * f_next
+    y_next = w_next if s == 0 else unit(iw + s - 1)
+    y_now = unit(iw + s)
+    kp, ki = loop.kp * k, loop.ki * k  # per newton of force deviation, in newtons of correction
+    u_next = unit(iu) - phi * (kp + ki) * y_next + phi * kp * y_now
+    a_mat[ip] = p_next
+    a_mat[iw] = w_next
+    for i in range(1, s + 1):
+        a_mat[iw + i] = unit(iw + i - 1)
+    a_mat[iu] = u_next
+    for i in range(1, c + 1):
+        a_mat[iu + i] = unit(iu + i - 1)
+    return a_mat
+
+
+def vertex_matrices(loop: AxisLoop) -> list[FloatArray]:
+    """``A`` at every vertex of the parameter box (duplicates of degenerate intervals dropped)."""
+    axes = [
+        sorted({loop.sigma_min, 1.0}),
+        sorted(set(loop.phi)),
+        sorted(set(loop.inner_a)),
+        sorted(set(loop.inner_g)),
+    ]
+    return [closed_loop_matrix(loop, *v) for v in itertools.product(*axes)]
