@@ -69,8 +69,12 @@ class InnerLoop:
             "g": list(self.g_range),
             "fit_error_nrmse": self.fit_error,
             "fits": [
-                {"stiffness_n_per_mm": f.stiffness_n_per_m / 1e3, "a": f.a, "g": f.g,
-                 "nrmse": f.nrmse}
+                {
+                    "stiffness_n_per_mm": f.stiffness_n_per_m / 1e3,
+                    "a": f.a,
+                    "g": f.g,
+                    "nrmse": f.nrmse,
+                }
                 for f in self.fits
             ],
         }

@@ -43,8 +43,10 @@ class AxisLoop:
     """Everything the linear model of one force axis needs (SI units).
 
     ``kp``, ``ki``: the incremental law's gains in m/N (the fuzzy-PI's ``Kx*Kp``, ``Kx*Ki``);
-    ``phi``: the interval multiplying them (``(1, 1)`` for PI). ``inner_a``, ``inner_g``: the
-    inner loop's pole and gain intervals. ``sigma_min``: the lower end of the contact sector.
+    ``phi``: the interval multiplying both (``(1, 1)`` for PI); ``phi_de``: when given, the
+    ``kp`` term has its own interval and ``phi`` multiplies the ``ki`` term only (the gradient
+    bounds of a surface without the PI-like structure). ``inner_a``, ``inner_g``: the inner
+    loop's pole and gain intervals. ``sigma_min``: the lower end of the contact sector.
     """
 
     period_s: float
@@ -56,6 +58,7 @@ class AxisLoop:
     kp: float
     ki: float
     phi: tuple[float, float] = (1.0, 1.0)
+    phi_de: tuple[float, float] | None = None
     inner_a: tuple[float, float] = (0.0, 0.0)
     inner_g: tuple[float, float] = (1.0, 1.0)
     sigma_min: float = 0.1
@@ -70,7 +73,9 @@ class AxisLoop:
             problems.append(f"damping must be >= 0 (got {self.damping_n_s_per_m})")
         if self.sensor_delay < 0 or self.command_delay < 0:
             problems.append("delays must be whole periods >= 0")
-        for name in ("phi", "inner_a", "inner_g"):
+        for name in ("phi", "phi_de", "inner_a", "inner_g"):
+            if getattr(self, name) is None:
+                continue
             lo, hi = getattr(self, name)
             if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
                 problems.append(f"{name} must be an interval lo <= hi (got {lo}, {hi})")
@@ -98,9 +103,10 @@ class AxisLoop:
 
 
 def closed_loop_matrix(
-    loop: AxisLoop, sigma: float, phi: float, a: float, g: float
+    loop: AxisLoop, sigma: float, phi: float, a: float, g: float, phi_de: float | None = None
 ) -> FloatArray:
-    """``A`` with ``x[k+1] = A x[k]`` for fixed values of the four uncertain parameters."""
+    """``A`` with ``x[k+1] = A x[k]`` for fixed values of the uncertain parameters
+    (``phi_de`` None: the same ``phi`` on both terms)."""
     s, c = loop.sensor_delay, loop.command_delay
     n = loop.order
     k = loop.stiffness_n_per_m
@@ -120,7 +126,8 @@ def closed_loop_matrix(
     y_next = w_next if s == 0 else unit(iw + s - 1)
     y_now = unit(iw + s)
     kp, ki = loop.kp * k, loop.ki * k  # per newton of force deviation, in newtons of correction
-    u_next = unit(iu) - phi * (kp + ki) * y_next + phi * kp * y_now
+    pd = phi if phi_de is None else phi_de
+    u_next = unit(iu) - (pd * kp + phi * ki) * y_next + pd * kp * y_now
     a_mat[ip] = p_next
     a_mat[iw] = w_next
     for i in range(1, s + 1):
@@ -138,5 +145,42 @@ def vertex_matrices(loop: AxisLoop) -> list[FloatArray]:
         sorted(set(loop.phi)),
         sorted(set(loop.inner_a)),
         sorted(set(loop.inner_g)),
+        [None] if loop.phi_de is None else sorted(set(loop.phi_de)),
     ]
     return [closed_loop_matrix(loop, *v) for v in itertools.product(*axes)]
+
+
+def noise_std(loop: AxisLoop, noise_std_n: float) -> float:
+    """The force's standard deviation (N) that white sensor noise of ``noise_std_n`` causes in
+    the nominal loop (contact held, ``phi`` and the inner loop at their interval mid-points).
+
+    The noise enters the sample the controller reads (the sensor adds it after its filter), so
+    the state is augmented by the last sample's noise; the stationary covariance solves a
+    discrete Lyapunov equation. Infinite when the nominal loop is unstable.
+    """
+    from scipy.linalg import solve_discrete_lyapunov
+
+    mid = [0.5 * (lo + hi) for lo, hi in (loop.phi, loop.inner_a, loop.inner_g)]
+    phi_de = None if loop.phi_de is None else 0.5 * sum(loop.phi_de)
+    a_mat = closed_loop_matrix(loop, 1.0, mid[0], mid[1], mid[2], phi_de)
+    if max(abs(np.linalg.eigvals(a_mat))) >= 1.0:
+        return math.inf
+    n = loop.order
+    k = loop.stiffness_n_per_m
+    pd = mid[0] if phi_de is None else phi_de
+    iu = 2 + loop.sensor_delay
+    aug = np.zeros((n + 1, n + 1))
+    aug[:n, :n] = a_mat
+    aug[iu, n] = pd * loop.kp * k  # + phi Kp n[k]: the previous sample's noise
+    b = np.zeros(n + 1)
+    b[iu] = -(pd * loop.kp + mid[0] * loop.ki) * k  # - phi (Kp + Ki) n[k+1]
+    b[n] = 1.0
+    # u[k+1] reads the new noise: propagate it into the state the same period
+    cov = solve_discrete_lyapunov(aug, np.outer(b, b) * noise_std_n**2)
+    # the true force at the next plant step, from the state (contact held)
+    damp = loop.damping_n_s_per_m / (k * loop.period_s)
+    a, g = mid[1], mid[2]
+    c = np.zeros(n + 1)
+    c[0] = (1.0 + damp) * a - damp
+    c[iu + loop.command_delay] += (1.0 + damp) * (1.0 - a) * g
+    return float(math.sqrt(max(float(c @ cov @ c), 0.0)))
