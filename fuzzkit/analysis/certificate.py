@@ -83,9 +83,16 @@ def _problem(n: int, count: int) -> tuple[Any, Any, list[Any]]:
 
 
 def certify(matrices: list[FloatArray]) -> Certificate:
-    """Search for a common quadratic Lyapunov function of ``matrices`` and verify it."""
+    """Search for a common quadratic Lyapunov function of ``matrices`` and verify it.
+
+    A vertex with a spectral radius of 1 or more has no decreasing quadratic function at all:
+    such a set is refused without calling the solver.
+    """
     import cvxpy as cp
 
+    radius = max(float(np.max(np.abs(np.linalg.eigvals(a)))) for a in matrices)
+    if radius >= 1.0:
+        return Certificate(False, 1.0 - radius, "refused: a vertex has spectral radius >= 1")
     n = matrices[0].shape[0]
     problem, p, params = _problem(n, len(matrices))
     for param, a in zip(params, matrices, strict=True):

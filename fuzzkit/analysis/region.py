@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from typing import Any
 
@@ -100,6 +100,7 @@ class Cell:
     solver_status: str
     stable: bool = False
     noise_std_n: float = math.nan
+    contact_sector: tuple[float, float] | None = None
 
     def as_dict(self) -> dict[str, Any]:
         """JSON form (a NaN or infinite number becomes null)."""
@@ -110,6 +111,7 @@ class Cell:
             "margin": _finite(self.margin),
             "lyapunov_certificate": self.stable,
             "noise_std_n": _finite(self.noise_std_n),
+            "contact_sector": None if self.contact_sector is None else list(self.contact_sector),
             "solver_status": self.solver_status,
         }
 
@@ -184,6 +186,46 @@ def axis_loop(
     )
 
 
+def certify_cell(
+    exp: Experiment,
+    controller: str,
+    gains: Mapping[str, float] | None,
+    inner: InnerLoop,
+    fuzzy: FuzzyPart | None,
+    stiffness_n_per_mm: float,
+    latency: tuple[int, int],
+    sigma_min: float,
+    noise_n: float,
+) -> Cell:
+    """Certify one cell: with the contact sector ``[sigma_min, 1]`` (contact may be lost), else
+    with contact held (``[1, 1]``); ``Cell.contact_sector`` says which one holds.
+
+    Contact held is tried first: its vertices are a subset of the wider sector's, so when it
+    fails the wider one fails too and is not tried.
+    """
+    loop = axis_loop(
+        exp, controller, gains, inner, fuzzy, stiffness_n_per_mm * 1e3, latency, sigma_min
+    )
+    cert = certify(vertex_matrices(replace(loop, sigma_min=1.0)))
+    sector = (1.0, 1.0)
+    if cert.certified and sigma_min < 1.0:
+        wide = certify(vertex_matrices(loop))
+        if wide.certified:
+            cert, sector = wide, (sigma_min, 1.0)
+    noise = noise_std(loop, noise_n)
+    quiet = noise <= NOISE_SHARE * BAND_N
+    return Cell(
+        float(stiffness_n_per_mm),
+        (int(latency[0]), int(latency[1])),
+        cert.certified and quiet,
+        cert.margin,
+        cert.solver_status,
+        cert.certified,
+        noise,
+        sector if cert.certified else None,
+    )
+
+
 def certify_region(
     exp: Experiment,
     controller: str,
@@ -204,20 +246,8 @@ def certify_region(
     cells = []
     for k in stiffnesses_n_per_mm:
         for lat in latencies:
-            loop = axis_loop(exp, controller, gains, inner, fuzzy, k * 1e3, lat, sigma_min)
-            cert = certify(vertex_matrices(loop))
-            noise = noise_std(loop, noise_n)
-            quiet = noise <= NOISE_SHARE * BAND_N
             cells.append(
-                Cell(
-                    float(k),
-                    (int(lat[0]), int(lat[1])),
-                    cert.certified and quiet,
-                    cert.margin,
-                    cert.solver_status,
-                    cert.certified,
-                    noise,
-                )
+                certify_cell(exp, controller, gains, inner, fuzzy, k, lat, sigma_min, noise_n)
             )
     setpoints = [exp.setpoints[i] for i in range(3) if exp.selection[i]]
     model: dict[str, Any] = {
@@ -230,6 +260,7 @@ def certify_region(
         "contact_damping_n_s_per_m": exp.scenario.contact.damping_n_s_per_m,
         "sensor_filter_cutoff_hz": exp.scenario.sensor.cutoff_hz,
         "contact_sector": [sigma_min, 1.0],
+        "contact_sector_fallback": [1.0, 1.0],
         "contact_sector_holds_while_force_above_n": [
             (1.0 - 1.0 / sigma_min) * sp for sp in setpoints
         ],

@@ -51,13 +51,16 @@ def compare(
     stiffnesses: Sequence[float] = STIFFNESSES,
     latencies: Sequence[tuple[int, int]] = LATENCIES,
     workers: int | None = 2,
+    **certify_options: Any,
 ) -> tuple[Row, list[dict[str, Any]]]:
     """Certify and simulate every cell for one plant and controller."""
     exp = regulation_experiment()
     detail = []
     for f in factors:
         gains = scaled_default_gains(controller, f)
-        region = certify_region(exp, controller, plant, stiffnesses, latencies, gains=gains)
+        region = certify_region(
+            exp, controller, plant, stiffnesses, latencies, gains=gains, **certify_options
+        )
         outcomes = simulate_cells(
             exp, plant, controller, gains, stiffnesses, latencies, workers=workers
         )
