@@ -68,8 +68,9 @@ def verify(p: FloatArray, matrices: list[FloatArray]) -> float:
 @lru_cache(maxsize=32)
 def _problem(n: int, count: int) -> tuple[Any, Any, list[Any]]:
     """The parametrised SDP for ``count`` vertex matrices of size ``n`` (built once, DPP)."""
-    import cvxpy as cp
+    import cvxpy
 
+    cp: Any = cvxpy  # untyped library
     p = cp.Variable((n, n), symmetric=True)
     t = cp.Variable()
     mats = [cp.Parameter((n, n)) for _ in range(count)]

@@ -113,7 +113,8 @@ def triangles(
 def _plane(xs: FloatArray, ys: FloatArray, fs: FloatArray) -> FloatArray:
     """Per triangle, ``(alpha, beta, gamma)`` with ``F = alpha*x + beta*y + gamma``."""
     m = np.stack([xs, ys, np.ones_like(xs)], axis=-1)  # (n, 3, 3)
-    return np.linalg.solve(m, fs[..., None])[..., 0]
+    out: FloatArray = np.linalg.solve(m, fs[..., None])[..., 0].astype(np.float64)
+    return out
 
 
 def covered_rho(bp0: FloatArray, bp1: FloatArray, rho: float) -> float:

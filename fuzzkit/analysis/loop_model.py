@@ -140,14 +140,19 @@ def closed_loop_matrix(
 
 def vertex_matrices(loop: AxisLoop) -> list[FloatArray]:
     """``A`` at every vertex of the parameter box (duplicates of degenerate intervals dropped)."""
-    axes = [
-        sorted({loop.sigma_min, 1.0}),
-        sorted(set(loop.phi)),
-        sorted(set(loop.inner_a)),
-        sorted(set(loop.inner_g)),
-        [None] if loop.phi_de is None else sorted(set(loop.phi_de)),
+    des: list[float | None] = [None]
+    if loop.phi_de is not None:
+        des = [*sorted(set(loop.phi_de))]
+    return [
+        closed_loop_matrix(loop, sigma, phi, a, g, de)
+        for sigma, phi, a, g, de in itertools.product(
+            sorted({loop.sigma_min, 1.0}),
+            sorted(set(loop.phi)),
+            sorted(set(loop.inner_a)),
+            sorted(set(loop.inner_g)),
+            des,
+        )
     ]
-    return [closed_loop_matrix(loop, *v) for v in itertools.product(*axes)]
 
 
 def noise_std(loop: AxisLoop, noise_std_n: float) -> float:

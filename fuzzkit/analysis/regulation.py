@@ -86,3 +86,14 @@ def impact_speed_limit(
     if delay_s <= 0.0:
         return float("inf")
     return max(limit_n - setpoint_n, 0.0) / (stiffness_n_per_m * delay_s)
+
+
+#: The scenario name ``fuzzkit stability`` and the validation use for :func:`regulation_experiment`.
+REGULATION_NAME = "regulate"
+
+
+def scenario(name: str) -> Experiment:
+    """``regulate`` (:func:`regulation_experiment`), a shipped experiment, or a scenario file."""
+    if name.lower() == REGULATION_NAME:
+        return regulation_experiment()
+    return experiment(name)

@@ -105,7 +105,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--detail", help="write every cell as JSON here")
     args = parser.parse_args(argv)
-    rows, details = [], []
+    rows: list[Row] = []
+    details: list[dict[str, Any]] = []
     t0 = time.perf_counter()
     for plant in args.plants.split(","):
         for controller in args.controllers.split(","):

@@ -29,6 +29,7 @@ COMMAND_MODULES = (
     "tuning",
     "demo",
     "sweep",
+    "stability",
 )
 
 EXIT_OK = 0
