@@ -23,13 +23,15 @@ PYTEST_WORKERS ?= 2
 # codegen/ and planar_sim/ into the one installed package; they read this tree of symlinks,
 # laid out as the wheel installs it (fuzzkit/, fuzzkit/codegen, fuzzkit/planar_sim, ...).
 PACKAGE_TREE := build/package-tree
+# The repository folders installed inside fuzzkit (codegen planar_sim rulebases), read from setup.py.
+MAPPED_FOLDERS := $(shell sed -n 's/^MAPPED_FOLDERS = (\(.*\))/\1/p' setup.py | tr -d '",')
 
 .PHONY: demo test test-latest verify bench interop lint typecheck imports golden lock clean package-tree
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 
-$(STAMP): pyproject.toml $(LOCK) | $(BIN)/python
+$(STAMP): pyproject.toml setup.py $(LOCK) | $(BIN)/python
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet --require-hashes -r $(LOCK)
 	$(BIN)/python -m pip install --quiet --no-deps -e .
@@ -69,13 +71,11 @@ lock: | $(BIN)/python
 package-tree:
 	rm -rf $(PACKAGE_TREE) && mkdir -p $(PACKAGE_TREE)/fuzzkit
 	for entry in fuzzkit/*; do ln -s "$(CURDIR)/$$entry" $(PACKAGE_TREE)/fuzzkit/; done
-	ln -s "$(CURDIR)/codegen" $(PACKAGE_TREE)/fuzzkit/codegen
-	ln -s "$(CURDIR)/planar_sim" $(PACKAGE_TREE)/fuzzkit/planar_sim
-	ln -s "$(CURDIR)/rulebases" $(PACKAGE_TREE)/fuzzkit/rulebases
+	for folder in $(MAPPED_FOLDERS); do ln -s "$(CURDIR)/$$folder" $(PACKAGE_TREE)/fuzzkit/$$folder; done
 
 lint: $(STAMP)
-	$(BIN)/ruff check fuzzkit codegen planar_sim tests bench
-	$(BIN)/ruff format --check fuzzkit codegen planar_sim tests bench
+	$(BIN)/ruff check fuzzkit $(MAPPED_FOLDERS) tests bench setup.py
+	$(BIN)/ruff format --check fuzzkit $(MAPPED_FOLDERS) tests bench setup.py
 
 typecheck: $(STAMP) package-tree
 	cd $(PACKAGE_TREE) && $(CURDIR)/$(BIN)/mypy --config-file $(CURDIR)/pyproject.toml fuzzkit

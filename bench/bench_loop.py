@@ -192,7 +192,7 @@ def _compiled_planar_split() -> tuple[float, float]:
 
     from fuzzkit.planar_sim import PlanarArmPlant
     from fuzzkit.planar_sim import chipmunk_calls as cc
-    from fuzzkit.planar_sim.kernel import (
+    from fuzzkit.planar_sim.arm_period import (
         X_LINK1,
         X_LINK2,
         X_MOTOR1,

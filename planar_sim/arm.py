@@ -17,6 +17,10 @@ Model
   calibrated sensor).
 
 Everything is fixed-step: ``substeps`` physics steps per controller period.
+
+Twins: this plant is the **reference** for its compiled copy
+(:mod:`fuzzkit.planar_sim.arm_period`, tested against it in ``tests/test_compiled_loop.py``), so
+the step's math is kept as a separate implementation on purpose.
 """
 
 from __future__ import annotations

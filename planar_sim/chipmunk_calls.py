@@ -1,6 +1,6 @@
 """Calls into pymunk's Chipmunk library from numba-compiled code, by function address.
 
-The compiled planar loop (:mod:`fuzzkit.planar_sim.kernel`) makes the same Chipmunk calls as
+The compiled planar loop (:mod:`fuzzkit.planar_sim.arm_period`) makes the same Chipmunk calls as
 :class:`fuzzkit.planar_sim.arm.PlanarArmPlant` (``cpSpaceStep``, ``cpBodyGetAngle``, ...), but from
 inside one numba function. pymunk's cffi module keeps ``cpBody`` and friends opaque, and a
 function address baked into compiled code would defeat numba's on-disk cache (the library loads

@@ -27,10 +27,11 @@ import pytest
 
 from fuzzkit.control.controllers import lookup_table_surface
 from fuzzkit.errors import ConfigError
-from fuzzkit.plants.arm6 import Arm6Parameters, Arm6Plant, HeightField
+from fuzzkit.plants.arm6 import Arm6Parameters, Arm6Plant
 from fuzzkit.plants.arm6_heightfield import height_field_contact, pack_height_field
-from fuzzkit.plants.arm6_kernel import pack
+from fuzzkit.plants.arm6_period import pack
 from fuzzkit.plants.contract import ContactPlant, UnsupportedPlant
+from fuzzkit.plants.environment3d import HeightField
 from fuzzkit.studies.compiled.generated_c import GeneratedC
 from fuzzkit.studies.compiled.loop import run_compiled
 from fuzzkit.studies.compiled.table import load_table, table2, table_arrays
@@ -290,13 +291,13 @@ def test_planar_compiled_loop_raises_the_python_loops_error_on_a_non_finite_stat
 def test_planar_runs_compiled_by_default_and_falls_back_where_it_cannot(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    from fuzzkit.planar_sim import kernel
+    from fuzzkit.planar_sim import arm_period
     from fuzzkit.studies.batch import RunSpec, run_spec
 
     spec = RunSpec("E2", "pi", "planar", duration_s=0.2)
     assert run_spec(spec).loop == "compiled"
     # a machine whose calling convention the Chipmunk calls are not lowered for
-    monkeypatch.setattr(kernel, "calls_supported", lambda: False)
+    monkeypatch.setattr(arm_period, "calls_supported", lambda: False)
     result = run_spec(spec)
     assert result.loop.startswith("python (fallback:") and "x86-64 and AArch64" in result.loop
     assert result.plant == "planar" and len(result.t) == 50

@@ -11,7 +11,8 @@ import numpy.typing as npt
 import pytest
 
 from fuzzkit.errors import ConfigError
-from fuzzkit.plants.kinematics import IKStatus, Joint, RobotDescription, SerialChain, load_robot
+from fuzzkit.plants.kinematics import IKStatus, SerialChain
+from fuzzkit.plants.robot_description import Joint, RobotDescription, load_robot
 from fuzzkit.plants.rotations import rotation_error
 
 Arr = npt.NDArray[np.float64]

@@ -11,21 +11,17 @@ import numpy.typing as npt
 import pytest
 
 from fuzzkit.errors import ConfigError, SimulationError
-from fuzzkit.plants.arm6 import (
-    Arm6Parameters,
-    Arm6Plant,
-    Arm6Sample,
-    Box3,
-    CartesianPath,
-    Contact3Solver,
-    HeightField,
-    PathPose,
-    Plane,
-    objects_from_scenario,
-)
+from fuzzkit.plants.arm6 import Arm6Parameters, Arm6Plant, Arm6Sample, CartesianPath, PathPose
 from fuzzkit.plants.contact import ContactModel, ContactSolver, SensorModel
 from fuzzkit.plants.contract import ContactPlant, Scenario
 from fuzzkit.plants.environment import Box, RoughSurface, Table, Waypoint
+from fuzzkit.plants.environment3d import (
+    Box3,
+    Contact3Solver,
+    HeightField,
+    Plane,
+    objects_from_scenario,
+)
 from fuzzkit.plants.rotations import matrix_from_quat, quat_from_rotvec, rotation_error
 
 Arr = npt.NDArray[np.float64]
@@ -433,7 +429,7 @@ def test_force_loop_holds_30_n_on_a_3d_rough_field_along_a_diagonal_path() -> No
 
 
 def test_translated_objects_touch_at_the_moved_place() -> None:
-    from fuzzkit.plants.arm6 import ExtrudedProfile, translated
+    from fuzzkit.plants.environment3d import ExtrudedProfile, translated
 
     off = (0.07, 0.01, 0.287)
     sphere = 0.02

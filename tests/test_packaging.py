@@ -42,6 +42,67 @@ def test_python_dash_m_fuzzkit_is_the_fuzzkit_command() -> None:
     assert run.stdout.strip() == f"fuzzkit {fuzzkit.__version__}"
 
 
+#: The repository folders installed inside ``fuzzkit`` under the same name (issue 19).
+MAPPED_FOLDERS = ("codegen", "planar_sim", "rulebases")
+
+
+def source_files() -> list[str]:
+    """Every file of the package's source folders, as its path inside the wheel."""
+    out = []
+    for top in ("fuzzkit", *MAPPED_FOLDERS):
+        for path in sorted((ROOT / top).rglob("*")):
+            if path.is_file() and "__pycache__" not in path.parts and path.suffix != ".pyc":
+                rel = path.relative_to(ROOT).as_posix()
+                out.append(rel if top == "fuzzkit" else f"fuzzkit/{rel}")
+    return out
+
+
+def test_every_top_level_package_folder_is_fuzzkit_or_mapped_into_it() -> None:
+    folders = {p.parent.name for p in ROOT.glob("*/__init__.py")}
+    assert folders == {"fuzzkit", *MAPPED_FOLDERS}
+
+
+@pytest.mark.parametrize("folder", MAPPED_FOLDERS)
+def test_a_mapped_folder_imported_from_the_repository_root_names_its_package(folder: str) -> None:
+    run = subprocess.run(
+        [sys.executable, "-c", f"import {folder}"],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=60,
+    )
+    assert run.returncode == 1
+    last = run.stderr.strip().splitlines()[-1]
+    assert last.startswith("ImportError:") and f"import fuzzkit.{folder} " in last, run.stderr
+
+
+def test_make_typecheck_sees_every_mapped_folder(tmp_path: Path) -> None:
+    """``make typecheck`` (mypy on the installed layout) reports a type error planted in each
+    mapped folder and in a new subpackage of one, and passes on the same tree without them."""
+    if shutil.which("make") is None:
+        pytest.skip("no make")
+    tree = tmp_path / "repo"
+    for name in ("Makefile", "pyproject.toml", "setup.py"):
+        (tree / name).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy(ROOT / name, tree / name)
+    for top in ("fuzzkit", *MAPPED_FOLDERS, "codegen/backends/new_target"):
+        (tree / top).mkdir(parents=True, exist_ok=True)
+        (tree / top / "__init__.py").write_text('"""A package."""\n')
+    (tree / ".venv").symlink_to(Path(sys.prefix))
+    make = ["make", "-C", str(tree), "-o", ".venv/.fuzzkit-installed", "typecheck"]
+    clean = subprocess.run(make, capture_output=True, text=True, timeout=300)
+    assert clean.returncode == 0, clean.stdout[-3000:] + clean.stderr[-3000:]
+    planted = [*MAPPED_FOLDERS, "codegen/backends/new_target"]
+    for top in planted:
+        (tree / top / "planted.py").write_text('def f() -> int:\n    return "not an int"\n')
+    run = subprocess.run(make, capture_output=True, text=True, timeout=300)
+    assert run.returncode != 0
+    for top in planted:
+        assert f"fuzzkit/{top}/planted.py:2: error: Incompatible return value" in run.stdout, (
+            run.stdout[-3000:]
+        )
+
+
 @pytest.fixture(scope="module")
 def dists(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     """(wheel, sdist) built from a clean copy of the repository."""
@@ -83,14 +144,10 @@ def test_wheel_installs_one_top_level_package(dists: tuple[Path, Path]) -> None:
     ):
         assert expected in names
     assert any(n.endswith(".dist-info/licenses/LICENSE") for n in names)
-    # every package of the source tree is in the wheel, at its installed name
-    for init in sorted(ROOT.glob("fuzzkit/**/__init__.py")):
-        assert init.relative_to(ROOT).as_posix() in names
-    for top in ("codegen", "planar_sim", "rulebases"):
-        for init in sorted((ROOT / top).glob("**/__init__.py")):
-            assert f"fuzzkit/{init.relative_to(ROOT).as_posix()}" in names
-    for data in ("studies/scenarios/E1.yaml", "codegen/backends/c/exact.c.jinja"):
-        assert f"fuzzkit/{data}" in names
+    # every file of the source tree (modules, templates, YAML, markers) is in the wheel, at its
+    # installed name: a new subpackage or data file cannot go missing
+    missing = sorted(set(source_files()) - set(names))
+    assert not missing, missing
 
 
 @pytest.mark.slow

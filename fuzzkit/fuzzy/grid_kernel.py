@@ -1,7 +1,7 @@
 """Compiled integration of an aggregated output set on a fine grid (outputs with smooth terms).
 
 The exact engine integrates outputs with gaussian or bell terms on a grid whose spacing comes
-from an a-priori error bound (``inference._GridGeometry``: up to 2^20 points). Done with numpy,
+from an a-priori error bound (``output_geometry.GridGeometry``: up to 2^20 points). Done with numpy,
 every evaluated point materialised an (N grid points x K pieces) array. This kernel computes the
 same trapezoid sums (area, moment, cumulative area for the bisector, height and extent of the
 maximum), with the same formulas, in O(1) extra memory per point:

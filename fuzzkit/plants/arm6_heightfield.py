@@ -1,12 +1,16 @@
 """Gridded rough surfaces and tangent-plane contact in compiled code (the arm6 kernel's twin of
-:class:`fuzzkit.plants.arm6.HeightField`).
+:class:`fuzzkit.plants.environment3d.HeightField`).
 
-:func:`pack_height_field` reads a :class:`~fuzzkit.plants.arm6.HeightField` into a parameter row
-and its heights (row-major); :func:`height_field_contact` is ``HeightField.contact`` (bilinear
-height, its gradient, the local tangent plane) with the same operations in the same order, so a
-compiled run over E3's 3-D floor touches where and as hard as the Python plant does.
+:func:`pack_height_field` reads a :class:`~fuzzkit.plants.environment3d.HeightField` into a
+parameter row and its heights (row-major); :func:`height_field_contact` is
+``HeightField.contact`` (bilinear height, its gradient, the local tangent plane) with the same
+operations in the same order, so a compiled run over E3's 3-D floor touches where and as hard as
+the Python plant does.
 :func:`tangent_plane_contact` is the tangent-plane step shared with the extruded profiles of
-:mod:`fuzzkit.plants.arm6_kernel`.
+:mod:`fuzzkit.plants.arm6_period`.
+
+Twins: compiled copy; :class:`fuzzkit.plants.environment3d.HeightField` is the independent
+reference it is tested against.
 """
 
 from __future__ import annotations
@@ -17,7 +21,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.jit import jit
-from fuzzkit.plants.arm6 import HeightField
+from fuzzkit.plants.environment3d import HeightField
 
 FloatArray = npt.NDArray[np.float64]
 

@@ -192,6 +192,6 @@ class ContactPlant(Protocol):
 class UnsupportedPlant(ConfigError):
     """The plant uses something its compiled twin does not model (the Python loop still runs).
 
-    Raised by the compiled loops' ``pack`` functions (:mod:`fuzzkit.plants.arm6_kernel`,
-    :mod:`fuzzkit.planar_sim.kernel`); callers fall back to the Python loop and say why.
+    Raised by the compiled loops' ``pack`` functions (:mod:`fuzzkit.plants.arm6_period`,
+    :mod:`fuzzkit.planar_sim.arm_period`); callers fall back to the Python loop and say why.
     """

@@ -9,10 +9,10 @@ instead, so its x force follows a ramp (docs/simulation.md says how the two diff
 
 World (scenario frame, like every scenario; the plant places it in the IRB 140's frame):
 
-* a rough floor, a :class:`~fuzzkit.plants.arm6.HeightField` rough in x *and* y (0.2 mm RMS,
-  2 mm grid), 1 mm higher than the CAD floor at z = -0.30 and tilted by 0.8 deg along the
-  path, as E2's workpiece;
-* a side wall, a :class:`~fuzzkit.plants.arm6.Plane` facing -x, 1 mm further away than the
+* a rough floor, a :class:`~fuzzkit.plants.environment3d.HeightField` rough in x *and* y
+  (0.2 mm RMS, 2 mm grid), 1 mm higher than the CAD floor at z = -0.30 and tilted by 0.8 deg
+  along the path, as E2's workpiece;
+* a side wall, a :class:`~fuzzkit.plants.environment3d.Plane` facing -x, 1 mm further away than the
   CAD wall at x = 0.55 where the path starts, and receding by 0.5 deg (1.75 mm over the
   path), so x has a slow disturbance to follow as z has the tilt (down 2.8 mm over the path);
 * the nominal path: a diagonal approach at 20 mm/s (22 mm in x and z) onto the CAD corner,
@@ -30,10 +30,11 @@ import math
 
 import numpy as np
 
-from fuzzkit.plants.arm6 import Arm6Parameters, Arm6Plant, EnvObject3, HeightField, Plane
+from fuzzkit.plants.arm6 import Arm6Parameters, Arm6Plant
 from fuzzkit.plants.contact import ContactModel
 from fuzzkit.plants.contract import ContactPlant, Scenario
 from fuzzkit.plants.environment import Waypoint
+from fuzzkit.plants.environment3d import EnvObject3, HeightField, Plane
 from fuzzkit.studies.experiments import Experiment, experiment
 from fuzzkit.studies.plants import make_plant
 

@@ -28,8 +28,8 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.errors import ConfigError
-from fuzzkit.plants.arm6 import (
-    Arm6Parameters,
+from fuzzkit.plants.arm6 import Arm6Parameters
+from fuzzkit.plants.environment3d import (
     Box3,
     EnvObject3,
     ExtrudedProfile,

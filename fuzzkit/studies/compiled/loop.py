@@ -19,9 +19,9 @@ import numpy as np
 
 from fuzzkit.errors import ConfigError
 from fuzzkit.plants.arm6 import Arm6Plant
-from fuzzkit.plants.arm6_kernel import IK_STATUS_NAMES, pack
+from fuzzkit.plants.arm6_period import IK_STATUS_NAMES, pack
 from fuzzkit.plants.contact import sensor_noise
-from fuzzkit.studies.compiled import kernel as K
+from fuzzkit.studies.compiled import arm6_run as K
 from fuzzkit.studies.compiled import period as P
 from fuzzkit.studies.compiled.common import (
     ControllerArgs,

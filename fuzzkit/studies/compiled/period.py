@@ -5,8 +5,8 @@ the plant's measured force -> :func:`inject_faults` -> :func:`sensor_latency` (t
 consumes the sample of ``sensor_delay`` periods ago, a delay fault's periods included; the queue
 starts filled with the reset sample's force) -> :func:`controller_step` -> :func:`command_latency`
 (the plant receives the correction computed ``command_delay`` periods ago; the queue starts with
-zeros). The plant kernels (:mod:`fuzzkit.studies.compiled.kernel` for arm6,
-:mod:`fuzzkit.studies.compiled.planar_kernel` for the pymunk arm) wrap their plant step with
+zeros). The plant kernels (:mod:`fuzzkit.studies.compiled.arm6_run` for arm6,
+:mod:`fuzzkit.studies.compiled.planar_run` for the pymunk arm) wrap their plant step with
 these.
 
 The controller is :class:`fuzzkit.control.controllers.HybridForceController` (spike gate,

@@ -1,8 +1,8 @@
 """Run an experiment on the pymunk planar arm through the compiled loop.
 
 The plant is reset in Python (:meth:`PlanarArmPlant.reset` builds the pymunk space), read into
-arrays (:func:`fuzzkit.planar_sim.kernel.pack`), then one compiled call
-(:func:`fuzzkit.studies.compiled.planar_kernel.run_planar`) runs every period, calling Chipmunk
+arrays (:func:`fuzzkit.planar_sim.arm_period.pack`), then one compiled call
+(:func:`fuzzkit.studies.compiled.planar_run.run_planar`) runs every period, calling Chipmunk
 directly on that space.
 """
 
@@ -16,11 +16,11 @@ import numpy as np
 
 from fuzzkit.errors import SimulationError
 from fuzzkit.planar_sim import PlanarArmPlant
-from fuzzkit.planar_sim.kernel import STEP_NON_FINITE, pack, sensor_samples
+from fuzzkit.planar_sim.arm_period import STEP_NON_FINITE, pack, sensor_samples
 from fuzzkit.plants.contact import sensor_noise
 from fuzzkit.studies.compiled import period as P
 from fuzzkit.studies.compiled.common import ControllerArgs, result_from_recording, warm_up
-from fuzzkit.studies.compiled.planar_kernel import run_planar
+from fuzzkit.studies.compiled.planar_run import run_planar
 from fuzzkit.studies.experiments import Experiment
 from fuzzkit.studies.runner import RunResult
 

@@ -10,6 +10,13 @@ built (:mod:`fuzzkit.planar_sim.chipmunk_calls`). Only the Python glue around th
 
 The plant is reset in Python and read into arrays by :func:`pack`; the Python objects must stay
 alive while the kernel runs (the arrays hold raw pointers into them).
+
+Twins: this is the **compiled copy** of the planar plant's step (IK, angle wrapping, servo,
+contact law, sensor); :class:`~fuzzkit.planar_sim.arm.PlanarArmPlant` with
+:class:`fuzzkit.plants.contact.ContactSolver` is the independent reference it is tested against
+(``tests/test_compiled_loop.py``, ``tests/test_planar_sim.py``), so the two are written twice on
+purpose. The rough profile is shared with the 6-DOF compiled plant
+(:mod:`fuzzkit.plants.rough_profile`).
 """
 
 from __future__ import annotations
@@ -41,6 +48,7 @@ from fuzzkit.planar_sim.chipmunk_calls import (
 from fuzzkit.plants.contact import padded_terms
 from fuzzkit.plants.contract import UnsupportedPlant
 from fuzzkit.plants.environment import Box, RoughSurface, Table, _roughness_terms
+from fuzzkit.plants.rough_profile import profile_height_slope
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -237,13 +245,7 @@ def _penetration(
     # rough surface
     if not op[0] <= x <= op[1]:
         return False
-    tan_tilt = math.tan(op[4])
-    h = op[2] + op[3] + tan_tilt * (x - op[0])
-    for j in range(nterms):
-        h += terms[j, 1] * math.sin(terms[j, 0] * x + terms[j, 2])
-    m = tan_tilt
-    for j in range(nterms):
-        m += terms[j, 1] * terms[j, 0] * math.cos(terms[j, 0] * x + terms[j, 2])
+    h, m = profile_height_slope(op, terms, nterms, x)
     inv = 1.0 / math.sqrt(1.0 + m * m)
     depth = (h - z) * inv + radius
     if depth <= 0.0:

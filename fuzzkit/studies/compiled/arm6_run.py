@@ -1,8 +1,8 @@
-"""The whole closed-loop run on the pymunk planar arm as one compiled loop over periods.
+"""The whole closed-loop run on the arm6 plant as one compiled loop over periods.
 
-Per period: the planar plant step (:func:`fuzzkit.planar_sim.kernel.plant_step`: numba code
-around the same Chipmunk calls the Python plant makes), then the plant-independent part shared
-with the arm6 loop (:mod:`fuzzkit.studies.compiled.period`), then recording.
+Per period: the compiled plant step (:func:`fuzzkit.plants.arm6_period.plant_step`), then the
+plant-independent part shared with the planar loop (:mod:`fuzzkit.studies.compiled.period`:
+fault injection, latency queues, the hybrid controller), then recording.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.jit import jit
-from fuzzkit.planar_sim.kernel import STEP_OK, arm_pose, nominal_at, plant_step
+from fuzzkit.plants.arm6_period import plant_step, pose_at
 from fuzzkit.studies.compiled.period import (
     C_COMMAND_DELAY,
     C_PERIOD,
@@ -37,17 +37,28 @@ BoolArray = npt.NDArray[np.bool_]
 
 
 @jit
-def run_planar(
-    # plant (see fuzzkit.planar_sim.kernel.PlanarArrays)
-    a_path: FloatArray,
+def run_arm6(
+    # plant (see fuzzkit.plants.arm6_period.Arm6Arrays)
+    a_links: FloatArray,
+    a_tool_r: FloatArray,
+    a_tool_p: FloatArray,
+    a_lower: FloatArray,
+    a_upper: FloatArray,
+    a_dq_max: FloatArray,
+    a_path_t: FloatArray,
+    a_path_pos: FloatArray,
+    a_path_quat: FloatArray,
     a_kind: IntArray,
     a_p: FloatArray,
     a_terms: FloatArray,
     a_nterms: IntArray,
-    a_rot: FloatArray,
+    a_grid: FloatArray,
+    a_rot_task: FloatArray,
+    a_offset: FloatArray,
     params: FloatArray,
-    functions: IntArray,
-    pointers: IntArray,
+    q: FloatArray,
+    q_ref: FloatArray,
+    q_ik: FloatArray,
     stick: FloatArray,
     state: FloatArray,
     noise: FloatArray,
@@ -80,16 +91,16 @@ def run_planar(
     r_contact: BoolArray,
     r_force_normal: FloatArray,
     r_moving: BoolArray,
-    r_flags: IntArray,
+    r_ik: IntArray,
+    r_limited: BoolArray,
     r_arm: FloatArray,
     r_points: FloatArray,
     r_npoints: IntArray,
     out_scalars: FloatArray,
-) -> int:
-    """Run up to ``r_t.shape[0]`` periods, filling the recording arrays and ``out_scalars``;
-    returns the periods done (fewer when the arm's state became non-finite: ``r_flags[k, 0]``
-    of the last one says so)."""
-    n_periods: int = r_t.shape[0]
+) -> None:
+    """Run ``r_t.shape[0]`` periods; fill the recording arrays and ``out_scalars``."""
+    n_periods = r_t.shape[0]
+    dof = q.shape[0]
     n_obj = a_kind.shape[0]
     period = cp[C_PERIOD]
     sd = int(cp[C_SENSOR_DELAY])
@@ -104,13 +115,17 @@ def run_planar(
     c_io = np.empty(3)
     correction = np.zeros(3)
     corr_base = np.zeros(3)
+    # plant outputs
     nominal = np.empty(3)
     nominal_before = np.empty(3)
-    target = np.empty(3)
+    quat_tmp = np.empty(4)
+    tcp = np.empty(3)
+    rot = np.empty((3, 3))
+    origins = np.empty((dof, 3))
     f_true = np.empty(3)
     f_meas = np.empty(3)
-    points = np.empty((max(n_obj, 1), 2))
-    normals = np.empty((max(n_obj, 1), 2))
+    points = np.empty((max(n_obj, 1), 3))
+    normals = np.empty((max(n_obj, 1), 3))
     measured = np.empty(3)
     path_t = 0.0
     for k in range(n_periods):
@@ -119,16 +134,44 @@ def run_planar(
             path_t += period
         for j in range(3):
             corr_base[j] = (
-                a_rot[j, 0] * applied[0] + a_rot[j, 1] * applied[1] + a_rot[j, 2] * applied[2]
+                a_rot_task[j, 0] * applied[0]
+                + a_rot_task[j, 1] * applied[1]
+                + a_rot_task[j, 2] * applied[2]
             )
-        count = plant_step(
-            a_path, a_kind, a_p, a_terms, a_nterms, a_rot, params, functions, pointers, stick,
-            state, noise, corr_base, path_t,
-            nominal, target, f_true, f_meas, points, normals, r_flags[k],
-        )  # fmt: skip
-        if r_flags[k, 0] != STEP_OK:
-            store_results(cs, out_scalars)
-            return k
+        ik_status, count, limited = plant_step(
+            a_links,
+            a_tool_r,
+            a_tool_p,
+            a_lower,
+            a_upper,
+            a_dq_max,
+            a_path_t,
+            a_path_pos,
+            a_path_quat,
+            a_kind,
+            a_p,
+            a_terms,
+            a_nterms,
+            a_grid,
+            a_rot_task,
+            params,
+            q,
+            q_ref,
+            q_ik,
+            stick,
+            state,
+            noise,
+            corr_base,
+            path_t,
+            nominal,
+            tcp,
+            rot,
+            origins,
+            f_true,
+            f_meas,
+            points,
+            normals,
+        )
         t_s = state[0]
         inject_faults(cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured)
         consumed = sensor_latency(k, sd, sensor_q, measured, reset_force)
@@ -149,16 +192,17 @@ def run_planar(
             correction,
         )
         command_latency(k, cd, command_q, correction, applied)
-        # ---- recording (PlanarArmPlant._sample and the runner's row) ----
+        # ---- recording ----
         moving = False
         if path_t > path_before:
-            nominal_at(a_path, path_before, nominal_before)
+            pose_at(a_path_t, a_path_pos, a_path_quat, path_before, nominal_before, quat_tmp)
             for j in range(3):
                 if abs(nominal[j] - nominal_before[j]) > 1e-9:
                     moving = True
-        arm_pose(params, functions, pointers, r_joints[k], r_arm[k])
         r_t[k] = t_s
         r_moving[k] = moving
+        r_ik[k] = ik_status
+        r_limited[k] = limited
         r_contact[k] = count > 0
         r_npoints[k] = count
         for j in range(3):
@@ -169,15 +213,31 @@ def run_planar(
             r_de[k, j] = de[j]
             r_du[k, j] = du[j]
             r_u[k, j] = correction[j]
-            r_tool[k, j] = r_arm[k, 3, j]
-            r_nominal[k, j] = nominal[j]
-            r_target[k, j] = target[j]
+            r_tool[k, j] = tcp[j] - a_offset[j]
+            r_nominal[k, j] = nominal[j] - a_offset[j]
+            r_target[k, j] = nominal[j] + corr_base[j] - a_offset[j]
             r_force_normal[k, j] = 0.0
         for c in range(count):
-            r_points[k, c, 0] = points[c, 0]
-            r_points[k, c, 1] = 0.0
-            r_points[k, c, 2] = points[c, 1]
-            # what the tool exerts on the object: minus the normal reaction on the tool
-            credit_normal(a_rot, -normals[c, 0], 0.0, -normals[c, 1], r_force_normal[k])
+            for j in range(3):
+                r_points[k, c, j] = points[c, j] - a_offset[j]
+            credit_normal(
+                a_rot_task, normals[c, 0], normals[c, 1], normals[c, 2], r_force_normal[k]
+            )
+        for i in range(dof):
+            r_joints[k, i] = q[i]
+            for j in range(3):
+                r_arm[k, i, j] = origins[i, j] - a_offset[j]
+        # flange = TCP minus the tool offset (SerialChain.frames_of)
+        for j in range(3):
+            back_j = 0.0
+            acc = 0.0
+            for m in range(3):
+                back_j = (
+                    a_tool_r[0, m] * a_tool_p[0]
+                    + a_tool_r[1, m] * a_tool_p[1]
+                    + a_tool_r[2, m] * a_tool_p[2]
+                )
+                acc += rot[j, m] * back_j
+            r_arm[k, dof, j] = tcp[j] - acc - a_offset[j]
+            r_arm[k, dof + 1, j] = tcp[j] - a_offset[j]
     store_results(cs, out_scalars)
-    return n_periods

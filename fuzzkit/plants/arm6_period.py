@@ -14,6 +14,13 @@ numpy) and the summation order of small matrix products, which differ in the las
 equivalence test (``tests/test_compiled_loop.py``) bounds what that does to a closed-loop force
 trace. Sensor noise is drawn beforehand from the same ``numpy.random.Generator`` stream as the
 Python sensor (:func:`fuzzkit.plants.contact.sensor_noise`), so both loops see the same noise.
+
+Twins: this is the **compiled copy** of the 6-DOF plant's math (forward kinematics, Jacobian,
+damped least squares, IK, rotation error, contact with friction); the Python plant
+(:mod:`fuzzkit.plants.arm6`, :mod:`~fuzzkit.plants.kinematics`,
+:mod:`~fuzzkit.plants.environment3d`) is the independent reference it is tested against, so the
+two are written twice on purpose. Only compiled code is shared between the compiled plants
+(:mod:`fuzzkit.plants.rough_profile`).
 """
 
 from __future__ import annotations
@@ -25,7 +32,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.jit import jit
-from fuzzkit.plants.arm6 import Arm6Plant, Box3, ExtrudedProfile, HeightField, Plane
+from fuzzkit.plants.arm6 import Arm6Plant
 from fuzzkit.plants.arm6_heightfield import (
     height_field_contact,
     pack_height_field,
@@ -34,6 +41,8 @@ from fuzzkit.plants.arm6_heightfield import (
 from fuzzkit.plants.contact import padded_terms
 from fuzzkit.plants.contract import UnsupportedPlant
 from fuzzkit.plants.environment import _roughness_terms
+from fuzzkit.plants.environment3d import Box3, ExtrudedProfile, HeightField, Plane
+from fuzzkit.plants.rough_profile import profile_height_slope
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -615,13 +624,7 @@ def _object_contact(
     x = c[0] - op[7]
     if not (op[0] <= x <= op[1] and op[5] <= c[1] - op[8] <= op[6]):
         return -1.0
-    tan_tilt = math.tan(op[4])
-    h = op[2] + op[3] + tan_tilt * (x - op[0])
-    for j in range(nterms):
-        h += terms[j, 1] * math.sin(terms[j, 0] * x + terms[j, 2])
-    slope = tan_tilt
-    for j in range(nterms):
-        slope += terms[j, 1] * terms[j, 0] * math.cos(terms[j, 0] * x + terms[j, 2])
+    h, slope = profile_height_slope(op, terms, nterms, x)
     return tangent_plane_contact(c, radius, h + op[9], slope, 0.0, nrm, pt)
 
 

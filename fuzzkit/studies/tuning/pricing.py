@@ -1,0 +1,134 @@
+"""Pricing a gain set: simulating every case of a problem and costing each run, in this process
+or in a worker process (one :class:`CaseRunner` per problem and process).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from fuzzkit.control.controllers import Surface, engine_table_surface, tabulated_surface
+from fuzzkit.errors import ConfigError
+from fuzzkit.studies.plants import make_plant
+from fuzzkit.studies.runner import RunResult, run
+from fuzzkit.studies.tuning.cost import run_cost
+from fuzzkit.studies.tuning.problem import TuningProblem
+
+#: Samples per side of the lookup table standing in for the exact fuzzy engine while tuning.
+TABLE_SIZE = 201
+
+
+class CaseRunner:
+    """Prices gain sets for one problem in this process (the surface table is built once).
+
+    Runs the compiled loop (:mod:`fuzzkit.studies.compiled`) where the plant has one, with the
+    rule base's double lookup table as the fuzzy surface; the Python loop otherwise, with a
+    201 x 201 bilinear table.
+    """
+
+    def __init__(self, problem: TuningProblem) -> None:
+        from fuzzkit.studies.compiled.loop import compiled_supports, compiled_table
+
+        self.problem = problem
+        self.surface: Surface | None = None
+        self.table: Any = None
+        self.compiled = (
+            problem.loop != "python"
+            and isinstance(problem.plant, str)
+            and compiled_supports(problem.plant)
+            and (problem.surface is None or isinstance(problem.surface, str))
+        )
+        if problem.loop == "compiled" and not self.compiled:
+            raise ConfigError(
+                f"the compiled loop does not run plant {problem.plant_name} "
+                "(or a surface given as a function); use loop='python'"
+            )
+        if self.compiled:
+            if isinstance(problem.surface, str):
+                self.table = compiled_table(problem.surface)
+        elif isinstance(problem.surface, str):
+            from fuzzkit.formats.registry import load
+            from fuzzkit.fuzzy.inference import Engine
+
+            self.surface = engine_table_surface(Engine(load(problem.surface)), n=TABLE_SIZE)
+        elif problem.surface is not None:
+            self.surface = tabulated_surface(problem.surface, n=TABLE_SIZE)
+
+    def run_case(
+        self, case: int, gains: Mapping[str, float], duration_s: float | None
+    ) -> RunResult:
+        """Run case ``case`` with ``gains`` (searched names only, or complete) for
+        ``duration_s`` (None: the experiment's whole duration)."""
+        from fuzzkit.studies.compiled.loop import run_compiled
+
+        p = self.problem
+        full = p.full_gains(gains)
+        exp = p.cases[case]
+        own = p.plant_of(case)
+        if self.compiled:
+            return run_compiled(
+                exp,
+                own if own is not None else str(p.plant),
+                p.controller,
+                gains=full,
+                table=self.table,
+                seed=p.noise_seed,
+                duration_s=duration_s,
+                latency=p.latency_of(case),
+            )
+        plant = own or (make_plant(p.plant) if isinstance(p.plant, str) else p.plant())
+        return run(
+            exp,
+            plant,
+            p.controller,
+            gains=full,
+            surface=self.surface,
+            seed=p.noise_seed,
+            duration_s=duration_s,
+            latency=p.latency_of(case),
+        )
+
+    def case_costs(self, gains: Mapping[str, float]) -> tuple[float, ...]:
+        """The cost of ``gains`` (searched names only, or complete) on every case."""
+        p = self.problem
+        out = []
+        for i, horizon in enumerate(p.horizons):
+            try:
+                result = self.run_case(i, gains, horizon)
+            except (ArithmeticError, ValueError):
+                # Gains that break the simulation (overflow, unreachable targets) are merely
+                # bad candidates: price them like a run that failed.
+                out.append(p.weights.none)
+                continue
+            out.append(run_cost(result, p.weights))
+        return tuple(out)
+
+
+def evaluate_gains(problem: TuningProblem, gains: Mapping[str, float]) -> tuple[float, ...]:
+    """The cost of ``gains`` on every case of ``problem``, computed in this process.
+
+    The independent way to price a gain set (tests, benchmarks, the report); :func:`optimise`
+    prices candidates the same way in worker processes.
+    """
+    return CaseRunner(problem).case_costs(gains)
+
+
+# Worker-side state: one runner per problem and process, built on the first task that needs it.
+_RUNNERS: dict[str, CaseRunner] = {}
+
+
+def problem_key(problem: TuningProblem) -> str:
+    import hashlib
+    import pickle
+
+    return hashlib.sha256(pickle.dumps(problem)).hexdigest()
+
+
+def worker_costs(task: tuple[str, TuningProblem, dict[str, float]]) -> tuple[float, ...]:
+    """Price one gain set in a worker (local process or Dask worker)."""
+    key, problem, gains = task
+    runner = _RUNNERS.get(key)
+    if runner is None:
+        _RUNNERS.clear()  # one problem at a time: keep the memory of one table
+        runner = _RUNNERS[key] = CaseRunner(problem)
+    return runner.case_costs(gains)
