@@ -40,6 +40,8 @@ IntArray = npt.NDArray[np.int64]
 #: Relative size (of the table's largest |value|) below which a triangle's constant term and
 #: slope difference count as rounding when checking ``F = lam * (x + y)`` on it.
 STRUCTURE_TOLERANCE = 1e-9
+#: Relative distance (of the input range) within which a breakpoint counts as equal to rho.
+_BREAKPOINT_ROUNDING = 1e-12
 
 
 @dataclass(frozen=True, slots=True)
@@ -84,8 +86,9 @@ def triangles(
     """
     if not (math.isfinite(rho) and rho > 0.0):
         raise ConfigError(f"the fuzzy region must be a number > 0 (got {rho})")
-    ci = [i for i in range(len(bp0) - 1) if bp0[i] < rho and bp0[i + 1] > -rho]
-    cj = [j for j in range(len(bp1) - 1) if bp1[j] < rho and bp1[j + 1] > -rho]
+    r = rho - _BREAKPOINT_ROUNDING * float(bp0[-1] - bp0[0])  # a breakpoint at rho is the edge
+    ci = [i for i in range(len(bp0) - 1) if bp0[i] < r and bp0[i + 1] > -r]
+    cj = [j for j in range(len(bp1) - 1) if bp1[j] < r and bp1[j + 1] > -r]
     xs: list[tuple[float, float, float]] = []
     ys: list[tuple[float, float, float]] = []
     fs: list[tuple[float, float, float]] = []
@@ -119,9 +122,10 @@ def _plane(xs: FloatArray, ys: FloatArray, fs: FloatArray) -> FloatArray:
 
 def covered_rho(bp0: FloatArray, bp1: FloatArray, rho: float) -> float:
     """The half-width of the box the cells meeting ``(-rho, rho)^2`` cover."""
+    r = rho - _BREAKPOINT_ROUNDING * float(bp0[-1] - bp0[0])
     hi = min(
-        float(np.min(bp0[bp0 >= rho])) if np.any(bp0 >= rho) else float(bp0[-1]),
-        float(np.min(bp1[bp1 >= rho])) if np.any(bp1 >= rho) else float(bp1[-1]),
+        float(np.min(bp0[bp0 >= r])) if np.any(bp0 >= r) else float(bp0[-1]),
+        float(np.min(bp1[bp1 >= r])) if np.any(bp1 >= r) else float(bp1[-1]),
     )
     return min(hi, float(bp0[-1]), float(bp1[-1]))
 
