@@ -4,10 +4,15 @@ bounded time-varying gains (docs/stability.md states and justifies it).
 Per controller period ``T``, in deviations from the equilibrium (force at the set point), with
 every state in newtons (positions and corrections times the contact stiffness ``k``):
 
-* inner motion loop: ``p[k+1] = a p[k] + (1 - a) g r[k+1]`` (identified,
-  :mod:`fuzzkit.analysis.inner_loop`; ``a``, ``g`` uncertain in intervals);
-* contact: ``f = sigma * (k p + c (p[k+1] - p[k]) / T)``; ``sigma`` in ``[sigma_min, 1]`` is
-  the sector of the clamp ``max(0, .)`` that lets the tool leave the surface (loss of contact);
+* inner motion loop: two lags, ``x[k+1] = q x[k] + (1 - q) r[k+1]``,
+  ``p[k+1] = a p[k] + (1 - a) g x[k+1]`` (identified, :mod:`fuzzkit.analysis.inner_loop`;
+  ``a``, ``q``, ``g`` uncertain in intervals);
+* contact: ``f[k+1] = sigma * (k ((1 - l) p[k+1] + l p[k]) + c (p[k+1] - p[k]) / T)``;
+  ``sigma`` in ``[sigma_min, 1]`` is the sector of the clamp ``max(0, .)`` that lets the tool
+  leave the surface (loss of contact); ``l`` in ``contact_lag`` is the fraction of a period by
+  which the force the sensor sample stands for precedes the period's end (arm6: 0, contact and
+  sensor are evaluated once, at the period's end; planar arm: its sensor filters the forces of
+  4 physics substeps, each evaluated at the substep's start, :func:`substep_lag`);
 * F/T sensor: first-order filter sampled once per period, ``w[k+1] = beta w[k] + (1 - beta)
   f[k+1]``, ``beta = exp(-2 pi f_c T)``;
 * sensor delay ``S`` periods: the controller sees ``y[k] = w[k - S]``;
@@ -17,9 +22,10 @@ every state in newtons (positions and corrections times the contact stiffness ``
 * command delay ``C`` periods plus the one period every correction waits for the next plant
   step: ``r[k+1] = u[k - C]``.
 
-The state is ``(p[k], w[k], ..., w[k-S], u[k], ..., u[k-C])``, of size ``S + C + 3``. The
-closed-loop matrix is multi-affine in ``(sigma, phi, a, g)`` (no parameter appears squared), so
-for any values in the box it is a convex combination of its values at the box's 16 vertices
+The state is ``(p[k], x[k], w[k], ..., w[k-S], u[k], ..., u[k-C])``, of size ``S + C + 4``.
+The closed-loop matrix is multi-affine in ``(sigma, phi, a, q, g)`` (no parameter appears
+squared), so for any values in the box it is a convex combination of its values at the box's
+vertices
 (:func:`vertex_matrices`): a Lyapunov function common to the vertices holds for every
 combination, varying from one period to the next.
 """
@@ -62,6 +68,8 @@ class AxisLoop:
     inner_a: tuple[float, float] = (0.0, 0.0)
     inner_g: tuple[float, float] = (1.0, 1.0)
     sigma_min: float = 0.1
+    inner_q: tuple[float, float] = (0.0, 0.0)
+    contact_lag: tuple[float, float] = (0.0, 0.0)
 
     def __post_init__(self) -> None:
         problems = []
@@ -73,7 +81,7 @@ class AxisLoop:
             problems.append(f"damping must be >= 0 (got {self.damping_n_s_per_m})")
         if self.sensor_delay < 0 or self.command_delay < 0:
             problems.append("delays must be whole periods >= 0")
-        for name in ("phi", "phi_de", "inner_a", "inner_g"):
+        for name in ("phi", "phi_de", "inner_a", "inner_g", "inner_q", "contact_lag"):
             if getattr(self, name) is None:
                 continue
             lo, hi = getattr(self, name)
@@ -87,7 +95,7 @@ class AxisLoop:
     @property
     def order(self) -> int:
         """The number of states."""
-        return self.sensor_delay + self.command_delay + 3
+        return self.sensor_delay + self.command_delay + 4
 
     @property
     def filter_pole(self) -> float:
@@ -103,7 +111,14 @@ class AxisLoop:
 
 
 def closed_loop_matrix(
-    loop: AxisLoop, sigma: float, phi: float, a: float, g: float, phi_de: float | None = None
+    loop: AxisLoop,
+    sigma: float,
+    phi: float,
+    a: float,
+    g: float,
+    phi_de: float | None = None,
+    q: float = 0.0,
+    lag: float = 0.0,
 ) -> FloatArray:
     """``A`` with ``x[k+1] = A x[k]`` for fixed values of the uncertain parameters
     (``phi_de`` None: the same ``phi`` on both terms)."""
@@ -112,7 +127,7 @@ def closed_loop_matrix(
     k = loop.stiffness_n_per_m
     damp = loop.damping_n_s_per_m / (k * loop.period_s)
     beta = loop.filter_pole
-    ip, iw, iu = 0, 1, 2 + s  # first index of p, of the w queue, of the u queue
+    ip, ix, iw, iu = 0, 1, 2, 3 + s  # p, x, first of the w queue, first of the u queue
     a_mat = np.zeros((n, n))
 
     def unit(i: int) -> FloatArray:
@@ -120,8 +135,9 @@ def closed_loop_matrix(
         e[i] = 1.0
         return e
 
-    p_next = a * unit(ip) + (1.0 - a) * g * unit(iu + c)
-    f_next = sigma * ((1.0 + damp) * p_next - damp * unit(ip))
+    x_next = q * unit(ix) + (1.0 - q) * unit(iu + c)
+    p_next = a * unit(ip) + (1.0 - a) * g * x_next
+    f_next = sigma * ((1.0 - lag + damp) * p_next + (lag - damp) * unit(ip))
     w_next = beta * unit(iw) + (1.0 - beta) * f_next
     y_next = w_next if s == 0 else unit(iw + s - 1)
     y_now = unit(iw + s)
@@ -129,6 +145,7 @@ def closed_loop_matrix(
     pd = phi if phi_de is None else phi_de
     u_next = unit(iu) - (pd * kp + phi * ki) * y_next + pd * kp * y_now
     a_mat[ip] = p_next
+    a_mat[ix] = x_next
     a_mat[iw] = w_next
     for i in range(1, s + 1):
         a_mat[iw + i] = unit(iw + i - 1)
@@ -138,19 +155,30 @@ def closed_loop_matrix(
     return a_mat
 
 
-def vertex_matrices(loop: AxisLoop) -> list[FloatArray]:
-    """``A`` at every vertex of the parameter box (duplicates of degenerate intervals dropped)."""
+def vertex_matrices(loop: AxisLoop, nominal_plant: bool = False) -> list[FloatArray]:
+    """``A`` at every vertex of the parameter box (duplicates of degenerate intervals dropped).
+
+    ``nominal_plant``: the inner loop's identified parameters (``a``, ``g``, ``q``, intervals
+    as narrow as the fit error) at their mid-points, the others at their vertices: a smaller
+    set to search a Lyapunov function on, before checking it on all.
+    """
+
+    def corners(iv: tuple[float, float]) -> list[float]:
+        return [0.5 * (iv[0] + iv[1])] if nominal_plant else sorted(set(iv))
+
     des: list[float | None] = [None]
     if loop.phi_de is not None:
         des = [*sorted(set(loop.phi_de))]
     return [
-        closed_loop_matrix(loop, sigma, phi, a, g, de)
-        for sigma, phi, a, g, de in itertools.product(
+        closed_loop_matrix(loop, sigma, phi, a, g, de, q, lag)
+        for sigma, phi, a, g, de, q, lag in itertools.product(
             sorted({loop.sigma_min, 1.0}),
             sorted(set(loop.phi)),
-            sorted(set(loop.inner_a)),
-            sorted(set(loop.inner_g)),
+            corners(loop.inner_a),
+            corners(loop.inner_g),
             des,
+            corners(loop.inner_q),
+            sorted(set(loop.contact_lag)),  # wide (planar): its corners stay in the core
         )
     ]
 
@@ -165,15 +193,16 @@ def noise_std(loop: AxisLoop, noise_std_n: float) -> float:
     """
     from scipy.linalg import solve_discrete_lyapunov
 
-    mid = [0.5 * (lo + hi) for lo, hi in (loop.phi, loop.inner_a, loop.inner_g)]
+    mid = [0.5 * (lo + hi) for lo, hi in (loop.phi, loop.inner_a, loop.inner_g, loop.inner_q)]
     phi_de = None if loop.phi_de is None else 0.5 * sum(loop.phi_de)
-    a_mat = closed_loop_matrix(loop, 1.0, mid[0], mid[1], mid[2], phi_de)
+    lag = 0.5 * sum(loop.contact_lag)
+    a_mat = closed_loop_matrix(loop, 1.0, mid[0], mid[1], mid[2], phi_de, mid[3], lag)
     if max(abs(np.linalg.eigvals(a_mat))) >= 1.0:
         return math.inf
     n = loop.order
     k = loop.stiffness_n_per_m
     pd = mid[0] if phi_de is None else phi_de
-    iu = 2 + loop.sensor_delay
+    iu = 3 + loop.sensor_delay
     aug = np.zeros((n + 1, n + 1))
     aug[:n, :n] = a_mat
     aug[iu, n] = pd * loop.kp * k  # + phi Kp n[k]: the previous sample's noise
@@ -184,8 +213,21 @@ def noise_std(loop: AxisLoop, noise_std_n: float) -> float:
     cov = solve_discrete_lyapunov(aug, np.outer(b, b) * noise_std_n**2)
     # the true force at the next plant step, from the state (contact held)
     damp = loop.damping_n_s_per_m / (k * loop.period_s)
-    a, g = mid[1], mid[2]
+    a, g, q = mid[1], mid[2], mid[3]
     c = np.zeros(n + 1)
-    c[0] = (1.0 + damp) * a - damp
-    c[iu + loop.command_delay] += (1.0 + damp) * (1.0 - a) * g
+    now = 1.0 - lag + damp  # weight of p[k+1] in the force, of p[k]: 1 - now
+    c[0] = now * a + (1.0 - now)
+    c[1] = now * (1.0 - a) * g * q
+    c[iu + loop.command_delay] += now * (1.0 - a) * g * (1.0 - q)
     return float(math.sqrt(max(float(c @ cov @ c), 0.0)))
+
+
+def substep_lag(substeps: int, cutoff_hz: float, period_s: float) -> float:
+    """The mean lag, in periods, of the forces a per-substep sensor filter has taken in during
+    one period: substep ``j`` (0 = the last) evaluates the contact ``(j + 1) / substeps`` of a
+    period before the end and enters the sample with weight ``alpha (1 - alpha)^j``."""
+    dt = period_s / substeps
+    alpha = 1.0 - math.exp(-2.0 * math.pi * cutoff_hz * dt)
+    weights = [alpha * (1.0 - alpha) ** j for j in range(substeps)]
+    lags = [(j + 1) / substeps for j in range(substeps)]
+    return sum(w * d for w, d in zip(weights, lags, strict=True)) / sum(weights)

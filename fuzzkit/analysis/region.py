@@ -182,6 +182,8 @@ def axis_loop(
         phi_de=phi_de,
         inner_a=inner.a_range,
         inner_g=inner.g_range,
+        inner_q=inner.q_range,
+        contact_lag=inner.contact_lag,
         sigma_min=sigma_min,
     )
 
@@ -206,10 +208,11 @@ def certify_cell(
     loop = axis_loop(
         exp, controller, gains, inner, fuzzy, stiffness_n_per_mm * 1e3, latency, sigma_min
     )
-    cert = certify(vertex_matrices(replace(loop, sigma_min=1.0)))
+    held = replace(loop, sigma_min=1.0)
+    cert = certify(vertex_matrices(held), vertex_matrices(held, nominal_plant=True))
     sector = (1.0, 1.0)
     if cert.certified and sigma_min < 1.0:
-        wide = certify(vertex_matrices(loop))
+        wide = certify(vertex_matrices(loop), vertex_matrices(loop, nominal_plant=True))
         if wide.certified:
             cert, sector = wide, (sigma_min, 1.0)
     noise = noise_std(loop, noise_n)
