@@ -26,20 +26,12 @@ def _stiffness_list(text: str) -> list[float]:
 
 
 def _latency_list(text: str) -> list[tuple[int, int]]:
-    out: list[tuple[int, int]] = []
-    for part in text.split(","):
-        fields = part.split(":")
-        try:
-            pair = tuple(int(f) for f in fields)
-        except ValueError:
-            pair = ()
-        if len(pair) != 2 or min(pair) < 0:
-            raise argparse.ArgumentTypeError(
-                "expected SENSOR:COMMAND pairs of whole periods >= 0, comma separated "
-                f"(e.g. 0:0,1:1,4:4), got {text!r}"
-            )
-        out.append((pair[0], pair[1]))
-    return out
+    from fuzzkit.cli.sweep import parse_latencies
+
+    try:
+        return parse_latencies(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def _unit_interval(text: str) -> float:
