@@ -12,9 +12,11 @@ on trust: the returned ``P`` is symmetrised and checked with numpy's symmetric e
     margin = min_i lambda_min(P - A_i' P A_i) / lambda_max(P),    lambda_min(P) > 0,
 
 and the cell is certified only when ``margin >= MIN_MARGIN``. ``margin`` is the guaranteed decay
-of ``V`` per period (``V[k+1] <= (1 - margin) V[k]``); the threshold is far above the
-eigenvalue routine's rounding (about ``n * eps * ||P|| * ||A||^2``, below 1e-12 here), so a
-solver tolerance cannot turn a failed certificate into a pass.
+of ``V`` per period (``V[k+1] <= (1 - margin) V[k]``, also for any convex combination of the
+``A_i``, since ``x' A' P A x`` is convex in ``A``); the threshold is far above the eigenvalue
+routine's rounding (about ``n * eps * ||P|| * ||A||^2``: below 1e-9 with ``||P|| <= 1`` and
+``||A||`` up to a few hundred), so a solver tolerance cannot turn a failed certificate into a
+pass.
 """
 
 from __future__ import annotations
