@@ -3,9 +3,9 @@ parameter box, found by an LMI (cvxpy with the Clarabel solver) and verified in 
 
 For vertex matrices ``A_i``, the semidefinite program
 
-    maximise t  subject to  P <= I,  [[P - t I, A_i' P], [P A_i, P]] >= 0  for every i
+    maximise t  subject to  P <= I,  P - A_i' P A_i >= t I  for every i
 
-(the Schur complement of ``P - A_i' P A_i >= t I`` with ``P > 0``) looks for ``V(x) = x' P x``
+(linear in ``P`` and ``t`` for the known ``A_i``) looks for ``V(x) = x' P x``
 decreasing along every trajectory of the polytopic system. The solver's answer is never taken
 on trust: the returned ``P`` is symmetrised and checked with numpy's symmetric eigenvalues,
 
@@ -24,7 +24,6 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -70,24 +69,6 @@ def verify(p: FloatArray, matrices: list[FloatArray]) -> float:
     return worst / float(eig_p[-1])
 
 
-@lru_cache(maxsize=32)
-def _problem(n: int, count: int) -> tuple[Any, Any, list[Any]]:
-    """The parametrised SDP for ``count`` vertex matrices of size ``n`` (built once, DPP)."""
-    import cvxpy
-
-    cp: Any = cvxpy  # untyped library
-    p = cp.Variable((n, n), symmetric=True)
-    t = cp.Variable()
-    mats = [cp.Parameter((n, n)) for _ in range(count)]
-    eye = np.eye(n)
-    cons = [p << eye]
-    for a in mats:
-        pa = p @ a
-        cons.append(cp.bmat([[p - t * eye, pa.T], [pa, p]]) >> 0)
-    problem = cp.Problem(cp.Maximize(t), cons)
-    return problem, p, mats
-
-
 def certify(matrices: list[FloatArray], core: list[FloatArray] | None = None) -> Certificate:
     """Search for a common quadratic Lyapunov function of ``matrices`` and verify it.
 
@@ -116,15 +97,18 @@ def certify(matrices: list[FloatArray], core: list[FloatArray] | None = None) ->
 
 def _search(matrices: list[FloatArray]) -> Certificate:
     """Solve the SDP on ``matrices``; the returned certificate carries ``P`` unverified."""
-    import cvxpy as cp
+    import cvxpy
 
+    cp: Any = cvxpy  # untyped library
     n = matrices[0].shape[0]
-    problem, p, params = _problem(n, len(matrices))
-    for param, a in zip(params, matrices, strict=True):
-        param.value = a
+    eye = np.eye(n)
+    p = cp.Variable((n, n), symmetric=True)
+    t = cp.Variable()
+    cons = [p << eye] + [p - a.T @ p @ a - t * eye >> 0 for a in matrices]
+    problem = cp.Problem(cp.Maximize(t), cons)
     try:
         with warnings.catch_warnings():
-            # "solution may be inaccurate": the numpy check below decides, not the status
+            # "solution may be inaccurate": the numpy check decides, not the status
             warnings.simplefilter("ignore", UserWarning)
             problem.solve(solver=cp.CLARABEL, **SOLVER_SETTINGS)
     except cp.error.SolverError as exc:
