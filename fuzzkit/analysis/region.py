@@ -288,3 +288,37 @@ def certify_region(
             **fuzzy.details,
         }
     return Region(model, tuple(cells))
+
+
+@dataclass(frozen=True, slots=True)
+class CertifiedOver:
+    """A gain-set predicate: certified in every cell of a stiffness x latency grid
+    (``fuzzkit tune --certify``). Stops at the first cell that is not."""
+
+    experiment: Experiment
+    controller: str
+    plant: str
+    stiffnesses_n_per_mm: tuple[float, ...]
+    latencies: tuple[tuple[int, int], ...]
+    rulebase: str = "macvicar_whelan"
+    sigma_min: float = SIGMA_MIN
+
+    def __call__(self, gains: Mapping[str, float]) -> bool:
+        inner = identify(self.plant)
+        fuzzy = fuzzy_part(self.rulebase) if self.controller == "fuzzy-pi" else None
+        noise_n = self.experiment.scenario.sensor.noise_std_n
+        return all(
+            certify_cell(
+                self.experiment,
+                self.controller,
+                gains,
+                inner,
+                fuzzy,
+                k,
+                lat,
+                self.sigma_min,
+                noise_n,
+            ).certified
+            for k in self.stiffnesses_n_per_mm
+            for lat in self.latencies
+        )
