@@ -1,6 +1,7 @@
 """``fuzzkit validate | info | eval | surface | schema``: working with rule bases.
 
 Every RULEBASE argument is a path to a YAML file or the name of a shipped rule base.
+``validate`` and ``schema`` also take controller specs (``docs/controller.md``).
 """
 
 from __future__ import annotations
@@ -31,20 +32,23 @@ def register(sub: Any) -> None:
     """Add the rule-base subcommands to the ``fuzzkit`` parser."""
     p = sub.add_parser(
         "validate",
-        help="check rule-base files; list every problem",
-        description="Check rule-base YAML files (paths or shipped names). Exit 0 "
+        help="check rule-base files and controller specs; list every problem",
+        description="Check rule-base YAML files (paths or shipped names) and controller "
+        "specs (YAML files with axes and a controller kind; docs/controller.md), each "
+        "recognised by its content. Exit 0 "
         "when all are valid, 2 listing every problem otherwise. Warnings (input ranges no "
         "term covers, in rule bases with coverage: allow_gaps) are printed and do not fail "
         "unless --strict is given.",
         epilog="examples:\n"
         "  fuzzkit validate rulebases/*.yaml\n"
-        "  fuzzkit validate --strict my_controller.yaml macvicar_whelan",
+        "  fuzzkit validate --strict my_controller.yaml macvicar_whelan\n"
+        "  fuzzkit validate docs/examples/controller.yaml",
     )
     p.add_argument(
         "files",
         nargs="+",
         metavar="FILE",
-        help="rule-base YAML file or shipped rule-base name (any number)",
+        help="rule-base YAML file, shipped rule-base name or controller spec (any number)",
     )
     p.add_argument("--strict", action="store_true", help="treat warnings (coverage gaps) as errors")
     p.set_defaults(handler=cmd_validate)
@@ -129,15 +133,22 @@ def register(sub: Any) -> None:
 
     p = sub.add_parser(
         "schema",
-        help="print the JSON Schema of the rule-base (or scenario) format",
+        help="print the JSON Schema of the rule-base (or scenario, or controller-spec) format",
         description="Print a JSON Schema (draft 2020-12) of the rule-base YAML "
         "format, e.g. for the YAML language server.",
-        epilog="example:\n  fuzzkit schema > fuzzkit-rulebase.schema.json",
+        epilog="examples:\n  fuzzkit schema > fuzzkit-rulebase.schema.json\n"
+        "  fuzzkit schema --controller > fuzzkit-controller.schema.json",
     )
-    p.add_argument(
+    which = p.add_mutually_exclusive_group()
+    which.add_argument(
         "--scenario",
         action="store_true",
         help="the schema of scenario files (fuzzkit simulate TASK.yaml) instead",
+    )
+    which.add_argument(
+        "--controller",
+        action="store_true",
+        help="the schema of controller specs (docs/controller.md) instead",
     )
     p.set_defaults(handler=cmd_schema)
 
@@ -155,12 +166,49 @@ def _count(n: int, noun: str) -> str:
     return f"{n} {noun}{'' if n == 1 else 's'}"
 
 
+def _controller_spec_text(arg: str) -> bool:
+    """True when ``arg`` names a readable YAML file whose content is a controller spec."""
+    from fuzzkit.control.spec_reader import looks_like_spec
+    from fuzzkit.located_yaml import MAX_FILE_BYTES
+
+    path = Path(arg)
+    try:
+        if not path.is_file() or path.stat().st_size > MAX_FILE_BYTES:
+            return False
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return False  # the rule-base reader reports it
+    return looks_like_spec(text)
+
+
+def _validate_spec(arg: str) -> bool:
+    """Print ``FILE: ok (...)`` or every problem of a controller spec; True when valid."""
+    from fuzzkit.control.spec_reader import load_spec
+    from fuzzkit.errors import ControllerSpecError
+
+    try:
+        spec = load_spec(arg)
+    except ControllerSpecError as exc:
+        for problem in exc.problems:
+            print(f"{problem}", file=sys.stderr)
+        return False
+    axes = ", ".join(f"{a.axis} {a.setpoint_n:g} N" for a in spec.axes)
+    rb = f" on {spec.rulebase.name}" if spec.rulebase is not None else ""
+    print(f"{arg}: ok (controller spec {spec.name}: {spec.kind}{rb}; {axes})")
+    return True
+
+
 def cmd_validate(args: argparse.Namespace) -> int:
     """Load every file, print ``FILE: ok`` or every problem; exit 2 if any is invalid."""
     from fuzzkit.formats.registry import load_with_warnings
 
     failed = 0
+    noun = "rule base"
     for spec in args.files:
+        if _controller_spec_text(spec):
+            noun = "file"
+            failed += not _validate_spec(spec)
+            continue
         try:
             rb, warnings = load_with_warnings(spec)
         except RuleBaseError as exc:
@@ -186,8 +234,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
         )
     if failed:
         print(
-            f"fuzzkit: error: {failed} of {len(args.files)} rule base"
-            f"{'s' if len(args.files) != 1 else ''} invalid",
+            f"fuzzkit: error: {failed} of {_count(len(args.files), noun)} invalid",
             file=sys.stderr,
         )
         return EXIT_BAD_INPUT
@@ -279,7 +326,7 @@ def _parse_inputs(
     rb: RuleBase, items: Sequence[str], option: str = "--input", every: bool = True
 ) -> dict[str, float]:
     """``NAME=VALUE`` items of ``option`` as input values; all inputs needed when ``every``."""
-    from fuzzkit.fuzzy.validation import did_you_mean
+    from fuzzkit.errors import did_you_mean
 
     values: dict[str, float] = {}
     problems: list[str] = []
@@ -526,6 +573,11 @@ def cmd_surface(args: argparse.Namespace) -> int:
 
 
 def cmd_schema(args: argparse.Namespace) -> int:
+    if args.controller:
+        from fuzzkit.control.spec_schema import json_schema as controller_schema
+
+        print(json.dumps(controller_schema(), indent=2))
+        return EXIT_OK
     if args.scenario:
         from fuzzkit.studies.scenario_file import json_schema as scenario_schema
 

@@ -123,6 +123,13 @@ def register(subparsers: Any) -> None:
         help="gains file (fuzzkit.control.gains): flat {kp: .., ki: ..}, or keyed by controller "
         "as fuzzkit tune writes",
     )
+    sim.add_argument(
+        "--spec",
+        metavar="SPEC.yaml",
+        help="run the controller of a controller spec (docs/controller.md): its kind, rule "
+        "base, gains, axes, set points, limits, safety and sensor front end replace "
+        "--controller, --rulebase and the scenario's task (not with --gains)",
+    )
     sim.set_defaults(handler=_simulate)
 
     cmp_ = subparsers.add_parser(
@@ -232,6 +239,8 @@ def _simulate(args: argparse.Namespace) -> int:
     if args.latency is not None:
         sensor, command = args.latency
         latency = (sensor, exp.latency_periods[1] if command is None else command)
+    if args.spec and args.gains:
+        raise ConfigError("--spec: a controller spec holds its gains; give --spec or --gains")
     spec = RunSpec(
         experiment=args.experiment,
         controller=args.controller,
@@ -245,6 +254,7 @@ def _simulate(args: argparse.Namespace) -> int:
         loop=args.loop or "auto",
         fuzzy_impl=args.fuzzy_impl,
         fault=args.fault,
+        controller_spec=args.spec,
     )
     result = run_spec(spec)
     if args.rrd:
@@ -254,7 +264,7 @@ def _simulate(args: argparse.Namespace) -> int:
         write_run_rrd(result, args.rrd, None if isinstance(plant, str) else plant)
     data = summary(result)
     if args.json:
-        print(json.dumps(data, indent=2))
+        print(json.dumps(data, indent=2, allow_nan=False))  # never invalid JSON
         return 0
     print(
         f"{data['experiment']} {data['controller']} on {data['plant']}: "
@@ -361,7 +371,7 @@ def _compare(args: argparse.Namespace) -> int:
             row["gains_source"] = chosen[controller].source
             rows.append(row)
     if args.json:
-        print(json.dumps(rows, indent=2))
+        print(json.dumps(rows, indent=2, allow_nan=False))
     else:
         print(f"protocol: {args.protocol} (rule base {args.rulebase})")
         for controller in CONTROLLERS:

@@ -17,6 +17,7 @@ planar plant's Python loop.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import IO, Any
@@ -105,6 +106,7 @@ def build_report(
     verdict_latencies: Sequence[tuple[int, int]] = VERDICT_LATENCIES,
     latency_factors: Sequence[float] | None = None,
     latency_delays: Sequence[int] | None = None,
+    specs: Sequence[Path] = (),
 ) -> Path:
     """Run everything and write ``out/report.md``, its PNGs, and one .rrd per run.
 
@@ -129,6 +131,7 @@ def build_report(
     verdict_latencies : the latencies the claims are judged at.
     latency_factors, latency_delays : the latency stability map's gain factors and sensor
         delays (None: :data:`LATENCY_FACTORS`, :data:`LATENCY_DELAYS`).
+    specs : controller spec files, each run on E1-E3 per plant in a section of their own.
 
     Returns
     -------
@@ -155,6 +158,10 @@ def build_report(
         raise ConfigError(f"{out}: folder {parent} does not exist")
     for p in plants:
         make_plant(p)  # unknown plant: fail before any work
+    from fuzzkit.control.spec_reader import load_spec
+
+    for path in specs:
+        load_spec(path)  # a bad spec: fail before any work
     rb = load(rulebase)
     final = out
     # Everything is written into a staging folder that becomes ``out`` only when complete:
@@ -163,7 +170,7 @@ def build_report(
         if rrd:
             (out / "rrd").mkdir()
 
-        from fuzzkit.studies.matching import matched_fuzzy_gains
+        from fuzzkit.studies.matching import matched_fuzzy_gains, small_signal_ratios
 
         surface = load_surface(rulebase)
         gains: dict[tuple[str, str], dict[str, float]] = {}
@@ -299,7 +306,19 @@ def build_report(
             swept,
             conds,
             rrd,
+            small_signal_ratios(surface),
         )
+        from fuzzkit.report.specs import spec_rows, spec_section
+
+        with progress_bar(
+            len(specs) * len(plants) * len(EXPERIMENT_NAMES),
+            "controller specs",
+            stream=log,
+            quiet=log is None or not specs,
+            unit="run",
+        ) as bar:
+            spec_runs = spec_rows(specs, plants, EXPERIMENT_NAMES, lambda: bar.update(1))
+        text += "\n".join(spec_section(spec_runs))
         text += _latency_section(
             out,
             surface,
@@ -385,6 +404,24 @@ def comparison_markdown(summaries: Mapping[Key, Mapping[str, Any]]) -> str:
     return "\n".join(lines)
 
 
+def default_gain_sentence(rulebase: str, ratios: tuple[float, float]) -> str:
+    """What the default gains give the fuzzy-PI running ``rulebase``, from its small-signal gain
+    ratios to the PI's ``(proportional, integral)`` (``studies.matching.small_signal_ratios``)."""
+
+    def times(r: float) -> str:
+        return "no" if r == 0.0 else f"{r:.3g}x the PI's"
+
+    p, i = ratios
+    if math.isclose(p, i, rel_tol=1e-3):
+        what = f"{times(p)} small-signal gain"
+    else:
+        what = f"{times(p)} proportional and {times(i)} integral small-signal gain"
+    return (
+        f"the fuzzy-PI has {what} (`{rulebase}`: its control surface's slopes at the origin, "
+        "where the saturated sum that the default gains are set for has slope 1)"
+    )
+
+
 def _markdown(
     plants: Sequence[str],
     rulebase: str,
@@ -399,6 +436,7 @@ def _markdown(
     swept: Sequence[ClaimResult],
     conds: Sequence[Condition],
     rrd: bool,
+    gain_ratios: tuple[float, float],
 ) -> str:
     plist = ", ".join(plants)
     everything = [*claims, *(c for c in swept if c.condition != NOMINAL)]
@@ -425,8 +463,8 @@ def _markdown(
         "## Gains",
         "",
         "Default gains are the hand-tuned `DEFAULT_GAINS` (like the paper's, by trial and error, "
-        "for 10 N/mm); with them the fuzzy-PI has 1.5x the PI's small-signal gain "
-        "(`macvicar_whelan`). Matched gains: the PI runs its defaults and the fuzzy-PI's "
+        f"for 10 N/mm); with them {default_gain_sentence(rulebase, gain_ratios)}. "
+        "Matched gains: the PI runs its defaults and the fuzzy-PI's "
         "scaling factors are derived from them through the rule base's measured slopes at the "
         "origin, so both have the same small-signal gain (docs/comparison.md). Tuned gains "
         "minimise `fuzzkit.studies.tuning.run_cost` "
