@@ -42,9 +42,8 @@ def test_certified_over_agrees_with_the_region():
     assert CertifiedOver(experiment("E1"), "pi", "arm6", (10.0,), ((1, 1),))({})
 
 
-def test_cli_tune_certify_says_so_and_the_result_is_certified(tmp_path: Path, capsys):
-    out = tmp_path / "g.yaml"
-    code = main(
+def _tune_certified(out: Path, budget: str, certify: str, latency: str) -> int:
+    return main(
         [
             "tune",
             "E1",
@@ -55,18 +54,23 @@ def test_cli_tune_certify_says_so_and_the_result_is_certified(tmp_path: Path, ca
             "--stiffness",
             "10",
             "--budget",
-            "12",
+            budget,
             "--workers",
             "1",
             "--quiet",
             "--certify",
-            "10,20",
+            certify,
             "--certify-latency",
-            "1:1",
+            latency,
             "--out",
             str(out),
         ]
     )
+
+
+def test_cli_tune_certify_says_so_and_the_result_is_certified(tmp_path: Path, capsys):
+    out = tmp_path / "g.yaml"
+    code = _tune_certified(out, "12", "10,20", "1:1")
     text = capsys.readouterr().out
     assert code == 0
     assert "certified stable at 10/20 N/mm" in text
@@ -78,29 +82,7 @@ def test_cli_tune_certify_says_so_and_the_result_is_certified(tmp_path: Path, ca
 
 def test_cli_tune_certify_refuses_to_write_uncertified_gains(tmp_path: Path, capsys):
     out = tmp_path / "g.yaml"
-    code = main(
-        [
-            "tune",
-            "E1",
-            "--controller",
-            "pi",
-            "--plant",
-            "arm6",
-            "--stiffness",
-            "10",
-            "--budget",
-            "10",
-            "--workers",
-            "1",
-            "--quiet",
-            "--certify",
-            "1000",
-            "--certify-latency",
-            "4:4",
-            "--out",
-            str(out),
-        ]
-    )
+    code = _tune_certified(out, "10", "1000", "4:4")
     captured = capsys.readouterr()
     pred = CertifiedOver(experiment("E1"), "pi", "arm6", (1000.0,), ((4, 4),))
     assert not pred({})  # the defaults are not certified there
