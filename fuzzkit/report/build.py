@@ -138,7 +138,7 @@ def build_report(
     ConfigError
         Unusable output folder, missing or bad gains files, unknown plant or rule base.
     """
-    from fuzzkit.formats.registry import load
+    from fuzzkit.control.loop_rulebase import load_loop_rulebase
     from fuzzkit.studies.batch import experiment_and_plant, run_spec
     from fuzzkit.studies.experiments import DEFAULT_GAINS, press_experiment
     from fuzzkit.studies.metrics import summary
@@ -154,7 +154,7 @@ def build_report(
         raise ConfigError(f"{out}: folder {parent} does not exist")
     for p in plants:
         make_plant(p)  # unknown plant: fail before any work
-    rb = load(rulebase)
+    rb = load_loop_rulebase(rulebase)  # unfit for the loop: fail before any work
     final = out
     # Everything is written into a staging folder that becomes ``out`` only when complete:
     # Ctrl-C or an error at any point leaves no partial report.

@@ -98,6 +98,10 @@ def run_spec(spec: RunSpec) -> RunResult:
     from fuzzkit.studies.faults import fault
 
     exp, plant = experiment_and_plant(spec)
+    if spec.controller == "fuzzy-pi":
+        from fuzzkit.control.loop_rulebase import load_loop_rulebase
+
+        load_loop_rulebase(spec.rulebase)  # what the loop needs, said before any table search
     if spec.stiffness_n_per_mm is not None:
         k = spec.stiffness_n_per_mm
         if not (math.isfinite(k) and k > 0.0):

@@ -91,10 +91,10 @@ class RunResult:
 
 def load_surface(rulebase: str = "macvicar_whelan") -> Surface:
     """The control surface of a rule base (shipped name or YAML path), by the exact engine."""
-    from fuzzkit.formats.registry import load
+    from fuzzkit.control.loop_rulebase import load_loop_rulebase
     from fuzzkit.fuzzy.inference import Engine
 
-    rb = load(rulebase)
+    rb = load_loop_rulebase(rulebase)
     return engine_surface(Engine(rb))
 
 
