@@ -109,7 +109,7 @@ def test_validate_info_and_eval_read_foreign_files(
     files = [str(EXAMPLES / n) for n in ("heater.fis", "gripper_iec.fcl", "feed.fll")]
     code, out, err = run(capsys, "validate", *files)
     assert code == 0, err
-    assert "heater.fis: ok (heater: 2 inputs, 1 output, 6 rules)" in out
+    assert "heater.fis: ok (rule base heater: 2 inputs, 1 output, 6 rules)" in out
     code, out, _ = run(capsys, "info", files[0])
     assert code == 0 and "left_shoulder" in out and "out_of_range: extend" in out
     code, out, _ = run(capsys, "eval", files[2], "-i", "roughness=0.5", "-i", "load=5", "--json")

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from fuzzkit.cli import RULEBASE_SPEC_HELP
-from fuzzkit.errors import EvaluationError, Location, Problem, ProblemsError, RuleBaseError
+from fuzzkit.errors import EvaluationError, FuzzkitError, Location, Problem, ProblemsError
 from fuzzkit.fileio import check_output_path
 from fuzzkit.fuzzy.describe import num as _num
 from fuzzkit.fuzzy.describe import range_text, rule_grid, rule_sentence
@@ -31,20 +31,22 @@ def register(sub: Any) -> None:
     """Add the rule-base subcommands to the ``fuzzkit`` parser."""
     p = sub.add_parser(
         "validate",
-        help="check rule-base files; list every problem",
-        description="Check rule-base YAML files (paths or shipped names). Exit 0 "
-        "when all are valid, 2 listing every problem otherwise. Warnings (input ranges no "
-        "term covers, in rule bases with coverage: allow_gaps) are printed and do not fail "
-        "unless --strict is given.",
+        help="check any file fuzzkit reads (rule bases, scenarios); list every problem",
+        description="Check files fuzzkit reads, each recognised by its content: rule bases "
+        "(YAML, .fis, .fcl, .fll) and scenario files (paths, shipped rule-base names or E1, E2, "
+        "E3). Exit 0 when all are valid, 2 listing every problem (file:line:col) otherwise. "
+        "Warnings (input ranges no term covers, in rule bases with coverage: allow_gaps) are "
+        "printed and do not fail unless --strict is given.",
         epilog="examples:\n"
         "  fuzzkit validate rulebases/*.yaml\n"
-        "  fuzzkit validate --strict my_controller.yaml macvicar_whelan",
+        "  fuzzkit validate --strict my_controller.yaml macvicar_whelan\n"
+        "  fuzzkit validate my_task.yaml docs/examples/heater.fis E1",
     )
     p.add_argument(
         "files",
         nargs="+",
         metavar="FILE",
-        help="rule-base YAML file or shipped rule-base name (any number)",
+        help="a rule-base or scenario file, or a shipped name (any number)",
     )
     p.add_argument("--strict", action="store_true", help="treat warnings (coverage gaps) as errors")
     p.set_defaults(handler=cmd_validate)
@@ -156,18 +158,24 @@ def _count(n: int, noun: str) -> str:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
-    """Load every file, print ``FILE: ok`` or every problem; exit 2 if any is invalid."""
-    from fuzzkit.formats.registry import load_with_warnings
+    """Recognise and check every file, print ``FILE: ok (...)`` or every problem; exit 2 if any
+    is invalid (:mod:`fuzzkit.cli.file_kinds` says which kinds and how they are told apart)."""
+    from fuzzkit.cli.file_kinds import check_file
 
     failed = 0
     for spec in args.files:
         try:
-            rb, warnings = load_with_warnings(spec)
-        except RuleBaseError as exc:
+            checked = check_file(spec)
+        except ProblemsError as exc:
             failed += 1
             for problem in exc.problems:
                 print(f"{problem}", file=sys.stderr)
             continue
+        except FuzzkitError as exc:
+            failed += 1
+            print(f"{spec}: {exc}", file=sys.stderr)
+            continue
+        warnings = checked.warnings
         for warning in warnings:
             if args.strict:
                 print(
@@ -180,14 +188,10 @@ def cmd_validate(args: argparse.Namespace) -> int:
             failed += 1
             continue
         note = f", {_count(len(warnings), 'warning')}" if warnings else ""
-        print(
-            f"{spec}: ok ({rb.name}: {_count(len(rb.inputs), 'input')}, "
-            f"{_count(len(rb.outputs), 'output')}, {_count(len(rb.rules), 'rule')}{note})"
-        )
+        print(f"{spec}: ok ({checked.summary}{note})")
     if failed:
         print(
-            f"fuzzkit: error: {failed} of {len(args.files)} rule base"
-            f"{'s' if len(args.files) != 1 else ''} invalid",
+            f"fuzzkit: error: {failed} of {_count(len(args.files), 'file')} invalid",
             file=sys.stderr,
         )
         return EXIT_BAD_INPUT
