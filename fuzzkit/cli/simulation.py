@@ -116,6 +116,18 @@ def register(subparsers: Any) -> None:
         "needs a C compiler). Default: table when compiled, exact in python",
     )
     sim.add_argument("--rrd", metavar="OUT.rrd", help="write a Rerun recording of the run")
+    sim.add_argument(
+        "--png",
+        metavar="RUN.png",
+        help="write a figure of the run: forces against set points per axis, error, correction "
+        "(units on every axis; engagement and a trip marked)",
+    )
+    sim.add_argument(
+        "--csv",
+        metavar="RUN.csv",
+        help="write the run as CSV, one row per period: t, measured and true forces, set points, "
+        "e, de, du, u, status (columns: docs/simulation.md)",
+    )
     sim.add_argument("--json", action="store_true", help="print the metrics as JSON")
     sim.add_argument(
         "--gains",
@@ -178,6 +190,12 @@ def register(subparsers: Any) -> None:
     )
     cmp_.add_argument("--json", action="store_true", help="print every run's metrics as JSON")
     cmp_.add_argument("--rrd-dir", metavar="DIR", help="write one .rrd per run into DIR")
+    cmp_.add_argument(
+        "--png-dir", metavar="DIR", help="write one figure per run into DIR (as simulate --png)"
+    )
+    cmp_.add_argument(
+        "--csv-dir", metavar="DIR", help="write one CSV per run into DIR (as simulate --csv)"
+    )
     cmp_.set_defaults(handler=_compare)
 
 
@@ -226,6 +244,10 @@ def _simulate(args: argparse.Namespace) -> int:
     exp = experiment(args.experiment)  # reject a bad name before loading anything
     if args.rrd:
         check_output_path(args.rrd, ".rrd file")
+    from fuzzkit.viz.run_files import check_trace_path, write_run_traces
+
+    png = check_trace_path(args.png, "--png", ".png") if args.png else None
+    csv = check_trace_path(args.csv, "--csv", ".csv") if args.csv else None
     from fuzzkit.studies.batch import RunSpec, experiment_and_plant, gains_items, run_spec
 
     latency = None
@@ -252,6 +274,7 @@ def _simulate(args: argparse.Namespace) -> int:
 
         plant = experiment_and_plant(spec)[1]  # the 3-D E3's floor and wall, for the drawing
         write_run_rrd(result, args.rrd, None if isinstance(plant, str) else plant)
+    written = write_run_traces(result, png, csv)
     data = summary(result)
     if args.json:
         print(json.dumps(data, indent=2))
@@ -282,8 +305,8 @@ def _simulate(args: argparse.Namespace) -> int:
         print(f"  sensor faults: {result.faults}, safety trip: {result.tripped}")
     for msg, count in sorted(result.messages.items()):
         print(f"  plant: {msg} ({count} periods)")
-    if args.rrd:
-        print(f"  wrote {args.rrd}")
+    for path in [*([args.rrd] if args.rrd else []), *written]:
+        print(f"  wrote {path}")
     return 0
 
 
@@ -316,6 +339,10 @@ def _compare(args: argparse.Namespace) -> int:
         experiment(name)  # reject unknown names before any simulation runs
     if args.rrd_dir and not Path(args.rrd_dir).is_dir():
         raise ConfigError(f"{args.rrd_dir}: folder does not exist")
+    from fuzzkit.viz.run_files import check_trace_dir, write_run_traces
+
+    png_dir = check_trace_dir(args.png_dir, "--png-dir")
+    csv_dir = check_trace_dir(args.csv_dir, "--csv-dir")
     from fuzzkit.studies.e3_arm6 import resolve
     from fuzzkit.studies.protocol import format_gains, protocol_gains
     from fuzzkit.studies.runner import run
@@ -355,6 +382,12 @@ def _compare(args: argparse.Namespace) -> int:
                 write_run_rrd(
                     result, Path(args.rrd_dir) / f"{name.upper()}_{controller}.rrd", plant
                 )
+            stem = f"{Path(name).stem.upper()}_{controller}"
+            write_run_traces(
+                result,
+                png_dir / f"{stem}.png" if png_dir else None,
+                csv_dir / f"{stem}.csv" if csv_dir else None,
+            )
             row = summary(result)
             row["protocol"] = args.protocol
             row["gains"] = dict(chosen[controller].gains)

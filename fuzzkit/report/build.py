@@ -74,14 +74,16 @@ FIGURE_DPI = 80
 # --------------------------------------------------------------------------------------------
 
 
-def quick_options() -> dict[str, Any]:
+def quick_options(plant: str = "planar") -> dict[str, Any]:
     """Keyword arguments of :func:`build_report` for a small, fast report (``fuzzkit report
-    --quick``; the tests): tuning over 10 N/mm x latencies 1+1 and 3+3, the stiffness study
-    and the verdicts at 10 and 1000 N/mm, the latency map for 1x and 8x the gains up to 3
-    periods. Every section is there; only the sweeps are shorter."""
+    --quick``; the tests): tuning on ``plant`` over 10 N/mm x latencies 1+1 and 3+3, the
+    stiffness study and the verdicts at 10 and 1000 N/mm, the latency map for 1x and 8x the gains
+    up to 3 periods. Every section is there; only the sweeps are shorter."""
     return {
         "stiffnesses_n_per_mm": (10.0, 1000.0),
-        "tuning": TuningSetup(stiffnesses_n_per_mm=(10.0,), latencies=((1, 1), (3, 3))),
+        "tuning": TuningSetup(
+            plant=plant, stiffnesses_n_per_mm=(10.0,), latencies=((1, 1), (3, 3))
+        ),
         "verdict_latencies": ((0, 0), (1, 1), (3, 3)),
         "latency_factors": (1.0, 8.0),
         "latency_delays": (0, 1, 2, 3),
@@ -171,7 +173,15 @@ def build_report(
         for ctrl in CONTROLLERS:
             gains[(ctrl, "default")] = dict(DEFAULT_GAINS[ctrl])
             g, prov, setups[ctrl] = gains_for(
-                ctrl, gains_dir, out, tuning or TuningSetup(), budget, rulebase, seed, workers, log
+                ctrl,
+                gains_dir,
+                out,
+                tuning or TuningSetup(plant=plants[0]),  # tuned on the plant the report runs
+                budget,
+                rulebase,
+                seed,
+                workers,
+                log,
             )
             gains[(ctrl, "tuned")] = g
             provenance[ctrl] = prov

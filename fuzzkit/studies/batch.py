@@ -199,9 +199,14 @@ def execute(spec: RunSpec) -> dict[str, Any]:
     Per-axis metrics are flattened as ``<axis>_<metric>`` (``z_overshoot_pct`` ...); axes that
     are not force-controlled are absent (the table fills them with empty cells).
     """
+    return result_row(spec, run_spec(spec))
+
+
+def result_row(spec: RunSpec, result: RunResult) -> dict[str, Any]:
+    """The tidy row of :func:`execute` for a run of ``spec`` that already ran."""
     from fuzzkit.studies.metrics import summary
 
-    data = summary(run_spec(spec))
+    data = summary(result)
     row: dict[str, Any] = {
         "experiment": spec.experiment,
         "controller": spec.controller,
