@@ -22,6 +22,7 @@ from fuzzkit.fileio import check_output_path
 from fuzzkit.fuzzy.describe import num as _num
 from fuzzkit.fuzzy.describe import range_text, rule_grid, rule_sentence
 from fuzzkit.fuzzy.model import SHAPE_PARAMS, RuleBase, Variable
+from fuzzkit.viz.figures import figure_format
 
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2
@@ -70,7 +71,8 @@ def register(sub: Any) -> None:
         "with the outputs appended). NaN inputs give NaN outputs.",
         epilog="examples:\n"
         "  fuzzkit eval macvicar_whelan -i e=0.25 -i de=-0.1\n"
-        "  fuzzkit eval macvicar_whelan --points points.csv > out.csv",
+        "  fuzzkit eval macvicar_whelan --points points.csv > out.csv\n"
+        "  fuzzkit eval macvicar_whelan -i e=0.25 -i de=-0.1 --explain --png why.png",
     )
     p.add_argument("rulebase", metavar="RULEBASE", help=RULEBASE_SPEC_HELP)
     group = p.add_mutually_exclusive_group(required=True)
@@ -88,6 +90,17 @@ def register(sub: Any) -> None:
         help="CSV file with a header of input names ('-' reads stdin)",
     )
     p.add_argument("--json", action="store_true", help="print the point's outputs as JSON")
+    p.add_argument(
+        "--explain",
+        action="store_true",
+        help="also say why (one --input point): the fuzzified inputs, every rule that fires "
+        "with its strength, and each output's aggregated set (with --json: as data)",
+    )
+    p.add_argument(
+        "--png",
+        metavar="OUT.png",
+        help="with --explain: draw each output's aggregated set and its defuzzified value",
+    )
     p.set_defaults(handler=cmd_eval)
 
     p = sub.add_parser(
@@ -400,8 +413,17 @@ def cmd_eval(args: argparse.Namespace) -> int:
 
     from fuzzkit.fuzzy.inference import Engine
 
+    if args.png is not None and not args.explain:
+        raise EvaluationError("--png draws the explanation: give --explain too")
+    if args.explain and args.points is not None:
+        raise EvaluationError("--explain explains one point: give --input NAME=VALUE, not --points")
+    if args.png is not None:
+        figure_format(args.png, "--png")
+        check_output_path(args.png, "--png file")
     rb = _load(args.rulebase)
     engine = Engine(rb)
+    if args.points is None and args.explain:
+        return _explain(rb, _parse_inputs(rb, args.inputs), args.json, args.png)
     if args.points is None:
         point = _parse_inputs(rb, args.inputs)
         result = engine.evaluate_point(point)
@@ -443,6 +465,63 @@ def cmd_eval(args: argparse.Namespace) -> int:
     for i, row in enumerate(rows):
         writer.writerow([*row, *(repr(float(outputs[n][i])) for n in rb.output_names)])
     sys.stdout.write(buf.getvalue())
+    return EXIT_OK
+
+
+_BARS = " ▁▂▃▄▅▆▇█"
+
+
+def _sparkline(mu: Any, width: int = 64) -> str:
+    """The set's membership across the range as one line of block characters."""
+    import numpy as np
+
+    cols = np.array_split(np.asarray(mu, dtype=np.float64), width)
+    return "".join(_BARS[round(float(c.max()) * (len(_BARS) - 1))] for c in cols)
+
+
+def explanation_text(rb: RuleBase, data: Any) -> str:
+    """What ``fuzzkit eval --explain`` prints for an :class:`~fuzzkit.fuzzy.explain.Explanation`."""
+    lines = []
+    for i in data.inputs:
+        fired = [f"{t} {_num(m)}" for t, m in i.memberships.items() if m > 0.0]
+        seen = "" if i.seen == i.value else f" (clamped to {_num(i.seen)})"
+        lines.append(f"{i.name} = {_num(i.value)}{seen}: {', '.join(fired) or 'no term'}")
+    ops = data.operators
+    lines.append(
+        f"rules that fire: {len(data.rules)} of {len(rb.rules)} (strength: and={ops['and']} of "
+        "the memberships, times the weight)"
+    )
+    lines += [f"  {r.strength:.4f}  #{r.index}: {r.text}" for r in data.rules]
+    for o in data.outputs:
+        var = rb.output(o.name)
+        active = ", ".join(f"{t} {_num(a)}" for t, a in o.activations.items() if a > 0.0)
+        if len(o.y):
+            lines.append(
+                f"{o.name}: aggregated set (implication {ops['implication']}, aggregation "
+                f"{ops['aggregation']}); term levels {active or 'none'}"
+            )
+            lines.append(f"  {_num(var.low)} |{_sparkline(o.mu)}| {_num(var.high)}")
+        else:
+            values = ", ".join(f"{t} = {_num(v)}" for t, v in o.term_values.items())
+            lines.append(f"{o.name}: Sugeno terms at this point: {values}; activations {active}")
+        lines.append(f"  {o.name} = {o.value!r} ({o.defuzzifier})")
+    return "\n".join(lines)
+
+
+def _explain(rb: RuleBase, point: dict[str, float], as_json: bool, png: str | None) -> int:
+    from fuzzkit.fuzzy.explain import explain
+
+    data = explain(rb, point)
+    if png is not None:
+        from fuzzkit.viz.explain_plot import write_explanation_png
+
+        write_explanation_png(rb, data, png)
+    if as_json:
+        print(json.dumps(data.as_data(), allow_nan=False))
+    else:
+        print(explanation_text(rb, data))
+        if png is not None:
+            print(f"wrote {png}")
     return EXIT_OK
 
 
