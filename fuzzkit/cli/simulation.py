@@ -273,7 +273,7 @@ def _simulate(args: argparse.Namespace) -> int:
         from fuzzkit.viz.traces import write_run_rrd
 
         plant = experiment_and_plant(spec)[1]  # the 3-D E3's floor and wall, for the drawing
-        write_run_rrd(result, args.rrd, None if isinstance(plant, str) else plant)
+        write_run_rrd(result, args.rrd, None if isinstance(plant, str) else plant, _fuzzy(spec))
     written = write_run_traces(result, png, csv)
     data = summary(result)
     if args.json:
@@ -308,6 +308,15 @@ def _simulate(args: argparse.Namespace) -> int:
     for path in [*([args.rrd] if args.rrd else []), *written]:
         print(f"  wrote {path}")
     return 0
+
+
+def _fuzzy(spec: Any) -> Any:
+    """The rule base and gains of a fuzzy-PI run, for its recording's rule activity."""
+    if spec.controller != "fuzzy-pi":
+        return None
+    from fuzzkit.control.loop_rulebase import load_loop_rulebase
+
+    return load_loop_rulebase(spec.rulebase), dict(spec.gains)
 
 
 def comparison_table(rows: list[dict[str, Any]]) -> str:
@@ -347,6 +356,8 @@ def _compare(args: argparse.Namespace) -> int:
     from fuzzkit.studies.protocol import format_gains, protocol_gains
     from fuzzkit.studies.runner import run
 
+    from fuzzkit.control.loop_rulebase import load_loop_rulebase
+
     surface = _surface_for("fuzzy-pi", args.rulebase)
     chosen = protocol_gains(args.protocol, surface, args.gains)
     if args.gains:
@@ -380,7 +391,10 @@ def _compare(args: argparse.Namespace) -> int:
                 from fuzzkit.viz.traces import write_run_rrd
 
                 write_run_rrd(
-                    result, Path(args.rrd_dir) / f"{name.upper()}_{controller}.rrd", plant
+                    result,
+                    Path(args.rrd_dir) / f"{name.upper()}_{controller}.rrd",
+                    plant,
+                    (load_loop_rulebase(args.rulebase), chosen[controller].gains),
                 )
             stem = f"{Path(name).stem.upper()}_{controller}"
             write_run_traces(
