@@ -352,11 +352,10 @@ def _compare(args: argparse.Namespace) -> int:
 
     png_dir = check_trace_dir(args.png_dir, "--png-dir")
     csv_dir = check_trace_dir(args.csv_dir, "--csv-dir")
+    from fuzzkit.control.loop_rulebase import load_loop_rulebase
     from fuzzkit.studies.e3_arm6 import resolve
     from fuzzkit.studies.protocol import format_gains, protocol_gains
     from fuzzkit.studies.runner import run
-
-    from fuzzkit.control.loop_rulebase import load_loop_rulebase
 
     surface = _surface_for("fuzzy-pi", args.rulebase)
     chosen = protocol_gains(args.protocol, surface, args.gains)

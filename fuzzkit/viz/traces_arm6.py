@@ -38,8 +38,8 @@ from fuzzkit.plants.environment3d import (
     objects_from_scenario,
 )
 from fuzzkit.studies.runner import RunResult
-from fuzzkit.viz.rule_activity import RuleRecording
 from fuzzkit.viz.recording import log_series, open_recording
+from fuzzkit.viz.rule_activity import RuleRecording
 from fuzzkit.viz.run_series import (
     log_control_series,
     log_paths,

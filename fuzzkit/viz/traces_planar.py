@@ -31,8 +31,8 @@ import numpy.typing as npt
 from fuzzkit.errors import ConfigError
 from fuzzkit.plants.environment import Box, EnvObject, RoughSurface, Table
 from fuzzkit.studies.runner import RunResult
-from fuzzkit.viz.rule_activity import RuleRecording
 from fuzzkit.viz.recording import log_series, open_recording
+from fuzzkit.viz.rule_activity import RuleRecording
 from fuzzkit.viz.run_series import (
     log_control_series,
     log_paths,
