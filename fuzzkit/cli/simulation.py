@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from fuzzkit.cli import RULEBASE_SPEC_HELP
+from fuzzkit.cli import EXIT_TRIPPED, RULEBASE_SPEC_HELP
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
 
@@ -38,6 +38,11 @@ def _latency(text: str) -> tuple[int, int | None]:
         )
     return values[0], values[1] if len(values) == 2 else None
 
+
+FAIL_ON_TRIP_HELP = (
+    f"exit with status {EXIT_TRIPPED} when a run tripped the safety limit (after printing and "
+    "writing everything; 0 otherwise, 2 for bad input)"
+)
 
 #: ``fuzzkit compare --protocol`` choices (fuzzkit.studies.protocol.PROTOCOLS).
 PROTOCOL_CHOICES = ("matched", "tuned", "default")
@@ -129,6 +134,7 @@ def register(subparsers: Any) -> None:
         "e, de, du, u, status (columns: docs/simulation.md)",
     )
     sim.add_argument("--json", action="store_true", help="print the metrics as JSON")
+    sim.add_argument("--fail-on-trip", action="store_true", help=FAIL_ON_TRIP_HELP)
     sim.add_argument(
         "--gains",
         metavar="GAINS.yaml",
@@ -189,6 +195,7 @@ def register(subparsers: Any) -> None:
         "(the hand-set defaults, --gains on top); see docs/simulation.md",
     )
     cmp_.add_argument("--json", action="store_true", help="print every run's metrics as JSON")
+    cmp_.add_argument("--fail-on-trip", action="store_true", help=FAIL_ON_TRIP_HELP)
     cmp_.add_argument("--rrd-dir", metavar="DIR", help="write one .rrd per run into DIR")
     cmp_.add_argument(
         "--png-dir", metavar="DIR", help="write one figure per run into DIR (as simulate --png)"
@@ -276,9 +283,12 @@ def _simulate(args: argparse.Namespace) -> int:
         write_run_rrd(result, args.rrd, None if isinstance(plant, str) else plant, _fuzzy(spec))
     written = write_run_traces(result, png, csv)
     data = summary(result)
+    data["gains"] = run_gains(args.controller, dict(spec.gains))
+    data["gains_source"] = f"{args.gains} over the defaults" if args.gains else "the defaults"
+    status = EXIT_TRIPPED if args.fail_on_trip and result.tripped else 0
     if args.json:
         print(json.dumps(data, indent=2))
-        return 0
+        return status
     print(
         f"{data['experiment']} {data['controller']} on {data['plant']}: "
         f"{data['sim_time_s']:.2f} s simulated in {data['wall_time_s']:.2f} s "
@@ -286,6 +296,8 @@ def _simulate(args: argparse.Namespace) -> int:
         f"controller: {data['controller_impl']})"
     )
     print(f"  {result.experiment.title}")
+    gains = ", ".join(f"{k}={v:.6g}" for k, v in data["gains"].items())
+    print(f"  gains: {gains} ({data['gains_source']})")
     sensor, command = data["latency_periods"]
     print(
         f"  stiffness {data['stiffness']:g} N/mm, latency {sensor} + {command} periods "
@@ -307,7 +319,15 @@ def _simulate(args: argparse.Namespace) -> int:
         print(f"  plant: {msg} ({count} periods)")
     for path in [*([args.rrd] if args.rrd else []), *written]:
         print(f"  wrote {path}")
-    return 0
+    return status
+
+
+def run_gains(controller: str, overrides: dict[str, float]) -> dict[str, float]:
+    """The complete gains a run uses: the defaults with ``overrides`` on top (as the runner
+    builds its controller), in a fixed order."""
+    from fuzzkit.studies.experiments import DEFAULT_GAINS
+
+    return {**DEFAULT_GAINS[controller], **overrides}
 
 
 def _fuzzy(spec: Any) -> Any:
@@ -321,8 +341,11 @@ def _fuzzy(spec: Any) -> Any:
 
 def comparison_table(rows: list[dict[str, Any]]) -> str:
     """Format PI vs fuzzy-PI summaries (``fuzzkit.studies.experiments.summary``) as a text table."""
+    # the experiment column is as wide as its longest name (a scenario file's name can be long)
+    w = max([3, *(len(str(d["experiment"])) for d in rows)]) + 1
     head = (
-        f"{'exp':<4}{'axis':<5}{'set N':>6}  {'controller':<9}{'contact s':>10}{'overshoot %':>12}"
+        f"{'exp':<{w}}{'axis':<5}{'set N':>6}  {'controller':<9}{'contact s':>10}"
+        f"{'overshoot %':>12}"
         f"{'settle s':>10}"
         f"{'ss mean N':>11}{'ss std N':>10}{'rms move N':>12}{'peak N':>8}{'lost s':>8}"
     )
@@ -330,7 +353,7 @@ def comparison_table(rows: list[dict[str, Any]]) -> str:
     for data in rows:
         for axis, m in data["axes"].items():
             lines.append(
-                f"{data['experiment']:<4}{axis:<5}{m['setpoint']:>6g}  {data['controller']:<9}"
+                f"{data['experiment']:<{w}}{axis:<5}{m['setpoint']:>6g}  {data['controller']:<9}"
                 f"{_fmt(m.get('first_contact_s')):>10}{_fmt(m['overshoot_pct'], 1):>12}"
                 f"{_fmt(m['settling_time_s']):>10}"
                 f"{_fmt(m['steady_state_error_mean']):>11}{_fmt(m['steady_state_error_std']):>10}"
@@ -386,16 +409,16 @@ def _compare(args: argparse.Namespace) -> int:
                 surface=surface if controller == "fuzzy-pi" else None,
                 seed=args.seed,
             )
+            stem = f"{Path(name).stem.upper()}_{controller}"  # E1_pi, MY_TASK_fuzzy-pi
             if args.rrd_dir:
                 from fuzzkit.viz.traces import write_run_rrd
 
                 write_run_rrd(
                     result,
-                    Path(args.rrd_dir) / f"{name.upper()}_{controller}.rrd",
+                    Path(args.rrd_dir) / f"{stem}.rrd",
                     plant,
                     (load_loop_rulebase(args.rulebase), chosen[controller].gains),
                 )
-            stem = f"{Path(name).stem.upper()}_{controller}"
             write_run_traces(
                 result,
                 png_dir / f"{stem}.png" if png_dir else None,
@@ -413,4 +436,4 @@ def _compare(args: argparse.Namespace) -> int:
         for controller in CONTROLLERS:
             print(f"  {format_gains(chosen[controller])}")
         print(comparison_table(rows))
-    return 0
+    return EXIT_TRIPPED if args.fail_on_trip and any(r["tripped"] for r in rows) else 0

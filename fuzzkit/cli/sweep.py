@@ -7,7 +7,8 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from fuzzkit.cli import RULEBASE_SPEC_HELP
+from fuzzkit.cli import EXIT_TRIPPED, RULEBASE_SPEC_HELP
+from fuzzkit.cli.simulation import FAIL_ON_TRIP_HELP
 from fuzzkit.errors import ConfigError
 
 CONTROLLERS = ("pi", "fuzzy-pi")
@@ -99,6 +100,7 @@ def register(subparsers: Any) -> None:
         "--csv-dir", metavar="DIR", help="write one CSV per run into DIR (as simulate --csv)"
     )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--fail-on-trip", action="store_true", help=FAIL_ON_TRIP_HELP)
     # the old spelling, kept working but no longer shown
     p.add_argument("--no-progress", action="store_true", dest="quiet", help=argparse.SUPPRESS)
     p.set_defaults(handler=_sweep)
@@ -189,7 +191,10 @@ def _sweep(args: argparse.Namespace) -> int:
     write_sweep_figure(rows, figure)
     where = args.scheduler or f"{args.workers or 'all'} local cores"
     print(f"{len(rows)} runs ({where}) -> {out}, {figure}")
-    return 0
+    tripped = sum(bool(r.get("tripped")) for r in rows)
+    if tripped:
+        print(f"{tripped} of {len(rows)} runs tripped the safety limit")
+    return EXIT_TRIPPED if args.fail_on_trip and tripped else 0
 
 
 def run_sweep_traced(

@@ -389,6 +389,15 @@ class HybridForceController:
         self._e_last = self.e.copy()
         return self._output()
 
+    def wait(self) -> Vec:
+        """A period in which no sample can have arrived yet (at start-up, while the sensor's
+        latency queue still holds no measurement): the output is held, as for a missing sample,
+        but it is not counted as a sensor fault."""
+        self._t += self.period_s
+        self.du = np.zeros(3)
+        self._above = 0
+        return self._output()
+
     def _plausible(self, f: Vec) -> bool:
         """Spike gate: accept ``f`` unless it jumps past the gate from the last accepted sample
         (a run of ``spike_confirm`` rejections means the level really changed: accept it)."""

@@ -143,7 +143,8 @@ def run(
 
     Timing of period k: the plant moves with the correction it receives, its measured force
     passes the fault injection into the sensor queue, the controller consumes the sample of
-    ``sensor`` periods ago (the queue starts filled with the reset sample's force), and its
+    ``sensor`` periods ago (the queue starts filled with the reset sample's force: when that is no
+    measurement, those start-up periods wait, uncounted as sensor faults), and its
     correction enters the command queue, whose output (``command`` periods old; zeros at the
     start) the plant receives in period k + 1. ``controller_impl`` is only a label for the
     result.
@@ -170,7 +171,8 @@ def run(
     command_queue: deque[Vec] = deque(np.zeros(3) for _ in range(command_delay))
     wall0 = time.perf_counter()
     cpu0 = time.process_time()
-    for _ in range(n):
+    controlled = np.asarray(exp.selection, dtype=bool)
+    for k in range(n):
         held = ctrl.tripped or (
             exp.hold_path_on_contact and ctrl.engaged and engaged_at is not None
         )
@@ -181,7 +183,10 @@ def run(
         delivered = inject(sample.t_s, sample.force)
         sensor_queue.append(delivered)
         measured = sensor_queue.popleft()
-        correction_task = ctrl.step(measured)
+        if k < sensor_delay and not np.all(np.isfinite(measured[controlled])):
+            correction_task = ctrl.wait()  # start-up: no measurement can have arrived yet
+        else:
+            correction_task = ctrl.step(measured)
         command_queue.append(correction_task.copy())
         applied = command_queue.popleft()
         if ctrl.engaged and engaged_at is None:

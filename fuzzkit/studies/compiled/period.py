@@ -187,7 +187,10 @@ def controller_step(
         if selection[i] > 0.0 and not math.isfinite(consumed[i]):
             valid = False
     if not valid:
-        cs[CS_FAULTS] += 1.0
+        # HybridForceController.wait: in the first sensor-delay periods no measurement can
+        # have arrived yet (the queue holds the reset sample): held, but not a sensor fault
+        if round(cs[CS_CTRL_T] / period) > cp[C_SENSOR_DELAY]:
+            cs[CS_FAULTS] += 1.0
         cs[CS_ENGAGE_COUNT] = 0.0
     else:
         fmax = 0.0
