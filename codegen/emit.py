@@ -427,10 +427,7 @@ def build_spec(
         defaults = {k: lit(v) for k, v in gains.items()}
     file_name, sha = source_sha256(rb)
     desc = tuple(textwrap.wrap(_comment_safe(" ".join(rb.description.split())), 88)[:8])
-    bound_summary = ", ".join(
-        f"{o.name}: {o.bound}" + (f" (tolerance {o.tolerance})" if o.tolerance else "")
-        for o in outputs
-    )
+    bound_summary = table.bound_summary()  # as fuzzkit compile prints it
     return Spec(
         name=name,
         upper=name.upper(),

@@ -146,7 +146,7 @@ def test_surface_and_compile_read_foreign_files(
         capsys, "compile", src, "--target", "python", "--out", str(tmp_path / "exact"), "--verify"
     )
     assert code == 0, err
-    assert "method: exact (no table: out_of_range is 'extend'" in out
+    assert "because no table can be made: out_of_range is 'extend'" in out
     src = str(EXAMPLES / "feed.fll")  # lock-range: true, so clamped like the table
     code, _, err = run(
         capsys,

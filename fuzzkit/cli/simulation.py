@@ -205,6 +205,20 @@ def register(subparsers: Any) -> None:
     )
     cmp_.set_defaults(handler=_compare)
 
+    scn = subparsers.add_parser(
+        "scenario",
+        help="print a shipped scenario file (E1, E2, E3) to start your own from",
+        description="Print the YAML of a shipped scenario, to copy and edit; the copy runs "
+        "with simulate, compare, sweep and tune as the shipped one does. Without a name, list "
+        "the shipped scenarios.",
+        epilog="examples:\n"
+        "  fuzzkit scenario E1 > my_task.yaml\n"
+        "  fuzzkit validate my_task.yaml\n"
+        "  fuzzkit simulate ./my_task.yaml",
+    )
+    scn.add_argument("name", nargs="?", metavar="NAME", help="E1, E2 or E3")
+    scn.set_defaults(handler=_scenario)
+
 
 def load_gains(path: str | None, controller: str, required: bool = True) -> dict[str, float]:
     """Gain overrides for ``controller`` from a gains file (see
@@ -437,3 +451,19 @@ def _compare(args: argparse.Namespace) -> int:
             print(f"  {format_gains(chosen[controller])}")
         print(comparison_table(rows))
     return EXIT_TRIPPED if args.fail_on_trip and any(r["tripped"] for r in rows) else 0
+
+
+def _scenario(args: argparse.Namespace) -> int:
+    from fuzzkit.studies.experiments import EXPERIMENTS, experiment
+    from fuzzkit.studies.scenario_file import shipped_scenario_text
+
+    if args.name is None:
+        for name in EXPERIMENTS:
+            print(f"{name}  {experiment(name).title}")
+        return 0
+    if args.name.upper() not in EXPERIMENTS:
+        raise ConfigError(
+            f"no shipped scenario {args.name!r} (expected one of {', '.join(EXPERIMENTS)})"
+        )
+    sys.stdout.write(shipped_scenario_text(args.name.upper()))
+    return 0
