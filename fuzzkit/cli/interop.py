@@ -91,9 +91,8 @@ def cmd_export(args: argparse.Namespace) -> int:
 
     from fuzzkit.fileio import check_output_path, write_atomic
     from fuzzkit.formats import fcl, fis
-    from fuzzkit.formats.registry import dumps, load
-
     from fuzzkit.formats.foreign import ExportError
+    from fuzzkit.formats.registry import dumps, load
 
     check_output_path(args.out, f".{args.fmt} file")
     rb = load(args.rulebase)
