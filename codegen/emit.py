@@ -1,17 +1,18 @@
 """Render a lookup table into source files: ``{relative path: text}``, never written here.
 
-The one object a template sees is a :class:`Spec`, built here from the rule base and its
+The one object a template sees is a :class:`TableSpec`, built here from the rule base and its
 :class:`~fuzzkit.codegen.lut.LookupTable`: every number is already formatted as a literal of the
 target language and every name already checked, so templates only lay text out. Each target lives in
-``fuzzkit.codegen/backends/<target>/`` with its templates and a small config (``config.py``).
+``fuzzkit.codegen/backends/<target>/`` with its templates and a small config (``config.py``, a
+:class:`~fuzzkit.codegen.target.Target`): what differs between targets is asked of it, never
+branched on here. The helpers every artefact's spec builder shares (checked names, comment-safe
+text, wrapped literal lists, the banner's source hash) are here too.
 """
 
 from __future__ import annotations
 
 import hashlib
-import importlib
 import math
-import sys
 import textwrap
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -29,25 +30,10 @@ from fuzzkit.codegen.lut import (
     LookupTable,
     bound_margin,
 )
+from fuzzkit.codegen.target import Target, all_targets, load_target
 from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy.model import RuleBase
-from fuzzkit.fuzzy.validation import C_KEYWORDS, IDENTIFIER, PYTHON_KEYWORDS, identifier_problem
-
-TARGETS = ("c", "python")
-
-#: The keyword lists live with the model's validation (one source for YAML and emitters).
-C_RESERVED = C_KEYWORDS
-PYTHON_RESERVED = PYTHON_KEYWORDS
-#: Standard C headers (C99, C11): a rule base ``NAME`` generates ``NAME.h``, which an
-#: ``#include <NAME.h>`` elsewhere in the firmware could pick up instead (with ``-I.``).
-C_STANDARD_HEADERS = frozenset(
-    """
-    assert complex ctype errno fenv float inttypes iso646 limits locale math setjmp signal
-    stdalign stdarg stdatomic stdbool stddef stdint stdio stdlib stdnoreturn string tgmath
-    threads time uchar wchar wctype
-    """.split()  # noqa: SIM905 (a word list reads better than 29 quoted strings)
-)
-
+from fuzzkit.fuzzy.validation import IDENTIFIER, identifier_problem
 
 #: The fuzzy-PI parameters the generated code takes (and a gains file may bake in).
 FPI_GAIN_KEYS = ("kp", "ki", "kx", "u_min", "u_max")
@@ -111,8 +97,8 @@ class OutputSpec:
 
 
 @dataclass(frozen=True)
-class Spec:
-    """Everything a template may use; nothing else reaches the generated text."""
+class TableSpec:
+    """Everything a lookup-table template may use; nothing else reaches the generated text."""
 
     name: str
     upper: str
@@ -169,7 +155,12 @@ def _check_note(table: LookupTable) -> str:
 
 
 def check_identifier(name: str, what: str) -> str:
-    """Return ``name`` if it may appear in generated C and Python, else raise CodegenError."""
+    """Return ``name`` if it may appear in the code of every target, else raise CodegenError.
+
+    The model's own rule (``identifier_problem``: C and Python keywords, checked when a file is
+    read) comes first, then each target's ``reserved_words``, so a target whose language
+    reserves other words refuses them here.
+    """
     if not isinstance(name, str) or not IDENTIFIER.match(name):
         raise CodegenError(
             f"{what} {name!r} is not an identifier (expected [A-Za-z_][A-Za-z0-9_]*)"
@@ -177,25 +168,26 @@ def check_identifier(name: str, what: str) -> str:
     why = identifier_problem(name)
     if why is not None:
         raise CodegenError(f"{what} {why}")
+    for target in all_targets():
+        if name in target.reserved_words:
+            raise CodegenError(
+                f"{what} {name!r} is reserved in {target.label}; choose another name"
+            )
     return name
 
 
-def check_module_name(name: str) -> str:
-    """Return ``name`` if ``NAME.py`` / ``NAME.h`` shadow no standard module, else raise.
+def check_module_name(name: str, what: str = "rule base") -> str:
+    """Return ``name`` if no target's file named after it shadows a standard module, else raise.
 
     A generated ``math.py`` is imported by its own ``import math`` (and by every other
     ``import math`` beside it), a generated ``stdint.h`` is what ``#include <stdint.h>``
-    finds; both break the build far from the cause.
+    finds; both break the build far from the cause. Every target is asked (its
+    ``module_clash``), so a name is usable whichever target it is compiled to.
     """
-    clashes = []
-    if name in sys.stdlib_module_names:
-        clashes.append(f"{name}.py would shadow the Python standard module {name!r}")
-    # Case-insensitive: Math.h is math.h on the default macOS and Windows file systems.
-    if name.lower() in C_STANDARD_HEADERS:
-        clashes.append(f"{name}.h would shadow the C standard header <{name.lower()}.h>")
+    clashes = [why for t in all_targets() if (why := t.module_clash(name))]
     if clashes:
         raise CodegenError(
-            f"rule base name {name!r}: " + " and ".join(clashes) + "; rename the rule base"
+            f"{what} name {name!r}: " + " and ".join(clashes) + f"; rename the {what}"
         )
     return name
 
@@ -249,7 +241,7 @@ def _check_float32_gains(gains: Mapping[str, float], source: str) -> None:
         )
 
 
-def _rounding_note(number_type: str, target: str) -> str:
+def _rounding_note(number_type: str, target: Target) -> str:
     """How the bound relates to the target's rounding (what verification allows on top)."""
     if number_type == "q15":
         return "Q15: the bound models this integer arithmetic bit for bit (no allowance)."
@@ -262,31 +254,11 @@ def _rounding_note(number_type: str, target: str) -> str:
             f"fuses multiply-adds (FMA) may differ by up to 2^{exponent} of an output's full "
             "scale (largest |range end|), which verification allows on top."
         )
-    runtime = "Python floats" if target == "python" else "double arithmetic"
+    runtime = target.runtime[number_type]
     return (
         f"double: the bound is measured in float64; {runtime} may differ by up to "
         f"2^{exponent} of an output's full scale (largest |range end|), allowed on top."
     )
-
-
-def _c_literal(value: float, number_type: str) -> str:
-    if not math.isfinite(value):
-        raise CodegenError(f"cannot emit the non-finite constant {value}")
-    if number_type == "float":
-        text = format(float(np.float32(value)), ".9g")
-        suffix = "f"
-    else:
-        text = format(float(value), ".17g")
-        suffix = ""
-    if not any(ch in text for ch in ".en"):
-        text += ".0"
-    return text + suffix
-
-
-def _py_literal(value: float) -> str:
-    if not math.isfinite(value):
-        raise CodegenError(f"cannot emit the non-finite constant {value}")
-    return repr(float(value))
 
 
 def _wrap(items: Sequence[str], per_line: int, width: int = 94) -> tuple[str, ...]:
@@ -319,7 +291,7 @@ def build_spec(
     target: str,
     *,
     fpi_defaults: FpiDefaults | None = None,
-) -> Spec:
+) -> TableSpec:
     """Collect, check and format everything the ``target`` templates need.
 
     Raises
@@ -330,21 +302,17 @@ def build_spec(
     """
     from fuzzkit import __version__
 
-    if target not in TARGETS:
-        raise CodegenError(f"unknown target {target!r} (expected one of {', '.join(TARGETS)})")
-    if target == "python" and table.number_type != "double":
-        raise CodegenError(f"the python target computes in double; got a {table.number_type} table")
+    tg = load_target(target)
+    tg.check_number_type(table.number_type, f"a {table.number_type} table")
     name = check_module_name(check_identifier(rb.name, "rule base name"))
     for var in rb.inputs + rb.outputs:
         check_identifier(var.name, f"variable name ({rb.name})")
     nt = table.number_type
-    py = target == "python"
 
     def lit(v: float) -> str:
-        return _py_literal(v) if py else _c_literal(v, nt)
+        return tg.literal(v, nt)
 
-    # Python reprs are up to 23 characters: 4 a line keeps generated Python under 100 columns.
-    per_line = 4 if py else 8
+    per_line = tg.values_per_line["table"]
     shape = table.shape
     strides = [math.prod(shape[a + 1 :]) for a in range(len(shape))]
     axes = []
@@ -383,7 +351,7 @@ def build_spec(
                 inv_widths=()
                 if uniform or q is not None
                 else _wrap([lit(1.0 / float(w)) for w in np.diff(bp)], 8),
-                scale=_c_literal(q.in_scale[a], "double") if q is not None else "",
+                scale=tg.literal(q.in_scale[a], "double") if q is not None else "",
                 q_low=q.q_low[a] if q is not None else 0,
                 q_high=q.q_high[a] if q is not None else 0,
                 recip=_wrap([str(int(v)) for v in q.recip[a]], 8) if q is not None else (),
@@ -403,7 +371,7 @@ def build_spec(
                 rows=_wrap(items, per_line),
                 bound=format(table.bound[k], ".3g"),
                 tolerance=format(table.tolerance[k], ".3g") if table.tolerance else "",
-                scale=_c_literal(table.q15.out_scale[k], "double") if table.q15 else "",
+                scale=tg.literal(table.q15.out_scale[k], "double") if table.q15 else "",
                 units=units_comment(var.units),
             )
         )
@@ -422,18 +390,18 @@ def build_spec(
     defaults = None
     if fpi_defaults is not None and has_fpi:
         gains = {k: float(getattr(fpi_defaults, k)) for k in FPI_GAIN_KEYS}
-        if not py and nt in ("float", "q15"):
+        if nt in ("float", "q15"):
             _check_float32_gains(gains, fpi_defaults.source)
         defaults = {k: lit(v) for k, v in gains.items()}
     file_name, sha = source_sha256(rb)
     desc = tuple(textwrap.wrap(_comment_safe(" ".join(rb.description.split())), 88)[:8])
     bound_summary = table.bound_summary()  # as fuzzkit compile prints it
-    return Spec(
+    return TableSpec(
         name=name,
         upper=name.upper(),
         target=target,
         number_type=nt,
-        ctype={"float": "float", "double": "double", "q15": "int16_t"}[nt],
+        ctype=tg.type_names[nt],
         version=__version__,
         source_file=_comment_safe(file_name),
         source_sha256=sha,
@@ -450,7 +418,7 @@ def build_spec(
         memory_bytes=table.memory_bytes,
         check_note=tuple(textwrap.wrap(_check_note(table), 92)),
         bound_summary=bound_summary,
-        rounding_note=tuple(textwrap.wrap(_rounding_note(nt, target), 88)),
+        rounding_note=tuple(textwrap.wrap(_rounding_note(nt, tg), 88)),
         split_bytes=split_bytes,
         has_fpi=has_fpi,
         fpi_note=note.replace("NAME", name),
@@ -465,9 +433,9 @@ def build_spec(
 
 
 def _environment(target: str) -> jinja2.Environment:
-    folder = Path(__file__).parent / "backends" / target
+    """The one Jinja setup every target's templates are rendered with."""
     return jinja2.Environment(
-        loader=jinja2.FileSystemLoader(str(folder)),
+        loader=jinja2.FileSystemLoader(str(load_target(target).folder)),
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,
         lstrip_blocks=True,
@@ -476,19 +444,16 @@ def _environment(target: str) -> jinja2.Environment:
     )
 
 
-def _config(target: str) -> Any:
-    return importlib.import_module(f"fuzzkit.codegen.backends.{target}.config")
+def render_files(target: str, name: str, spec: Any, artefact: str = "table") -> dict[str, str]:
+    """Render the ``artefact`` templates of ``target`` with its one spec object ``spec``.
 
-
-def render_files(target: str, name: str, spec: Any, files_key: str = "FILES") -> dict[str, str]:
-    """Render the templates ``config.<files_key>`` of ``target`` with ``spec``.
-
-    ``FILES`` are the lookup-table templates, ``EXACT_FILES`` the exact method's.
+    ``artefact`` is a key of the target's ``files`` (``table``, ``exact``, ``controller``).
     """
-    config = _config(target)
+    outputs = load_target(target).files.get(artefact)
+    if outputs is None:
+        raise CodegenError(f"the {target} target has no {artefact} templates")
     env = _environment(target)
     files: dict[str, str] = {}
-    outputs: Mapping[str, str] = getattr(config, files_key)
     for pattern, template in outputs.items():
         path = pattern.format(name=name)
         try:
@@ -498,7 +463,7 @@ def render_files(target: str, name: str, spec: Any, files_key: str = "FILES") ->
     return files
 
 
-def render(spec: Spec) -> dict[str, str]:
+def render(spec: TableSpec) -> dict[str, str]:
     """Render every file of ``spec.target``: ``{relative path: text}``."""
     return render_files(spec.target, spec.name, spec)
 

@@ -28,15 +28,15 @@ from dataclasses import dataclass
 from fuzzkit.codegen.emit import (
     FPI_GAIN_KEYS,
     FpiDefaults,
-    _c_literal,
     _check_float32_gains,
     _comment_safe,
-    _py_literal,
     _wrap,
     check_identifier,
     check_module_name,
+    render_files,
     source_sha256,
 )
+from fuzzkit.codegen.target import Target, load_target
 from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy import membership
 from fuzzkit.fuzzy.inference import OutputPieces, PiecewiseLinearGeometry, partition_centroid
@@ -248,20 +248,18 @@ def unsupported_reason(rb: RuleBase, number_type: str = "double") -> str | None:
 
 
 class _Lit:
-    """Literal formatting for one target and number type."""
+    """Literals of one target and number type (the target's ``literal`` and ``nan``)."""
 
-    def __init__(self, target: str, number_type: str) -> None:
-        self.py = target == "python"
+    def __init__(self, target: Target, number_type: str) -> None:
+        self.target = target
         self.number_type = number_type
 
     def __call__(self, value: float) -> str:
-        if self.py:
-            return _py_literal(value)
-        return _c_literal(value, self.number_type)
+        return self.target.literal(value, self.number_type)
 
     def maybe_nan(self, value: float | None) -> str:
         if value is None or math.isnan(value):
-            return "_NAN" if self.py else "NAN"
+            return self.target.nan
         return self(float(value))
 
 
@@ -540,8 +538,8 @@ def _output(
     else:
         levels = tuple(f"w[{int(r)}]" for r in pieces.inst_rules)
     geo = PiecewiseLinearGeometry(rb, out, pieces)
-    # the C target takes the engine's fast centroid; the Python target the general sweep
-    poly = None if lit.py else _poly(rb, out, pieces, geo, lit, wrap)
+    # the engine's fast centroid where the target's templates take it, else the general sweep
+    poly = _poly(rb, out, pieces, geo, lit, wrap) if lit.target.fast_centroid else None
     if poly is not None:
         return ExactOutput(
             index=k, name=out.name, low=lit(out.low), high=lit(out.high),
@@ -589,9 +587,9 @@ def _output(
     )
 
 
-def _bound_note(number_type: str, target: str) -> str:
+def _bound_note(number_type: str, target: Target) -> str:
     eps = "2^-52" if number_type == "double" else "2^-23"
-    what = "Python floats" if target == "python" else f"{number_type} arithmetic"
+    what = target.runtime[number_type]
     return (
         f"Exact inference in {what}: the only error against fuzzkit's exact engine is rounding, "
         f"at most {ROUNDING_ULPS} x {eps} x the output's full scale (largest |range end|) for "
@@ -616,21 +614,17 @@ def build_exact_spec(
         method cannot integrate (see :func:`unsupported_reason`).
     """
     from fuzzkit import __version__
-    from fuzzkit.codegen.emit import TARGETS
 
-    if target not in TARGETS:
-        raise CodegenError(f"unknown target {target!r} (expected one of {', '.join(TARGETS)})")
-    if target == "python" and number_type != "double":
-        raise CodegenError(f"the python target computes in double; got --type {number_type}")
+    tg = load_target(target)
+    tg.check_number_type(number_type, f"--type {number_type}")
     why = unsupported_reason(rb, number_type)
     if why is not None:
         raise CodegenError(f"rule base {rb.name!r}: --method exact: {why}")
     name = check_module_name(check_identifier(rb.name, "rule base name"))
     for var in rb.inputs + rb.outputs:
         check_identifier(var.name, f"variable name ({rb.name})")
-    py = target == "python"
-    lit = _Lit(target, number_type)
-    per_line = 4 if py else 6
+    lit = _Lit(tg, number_type)
+    per_line = tg.values_per_line["exact"]
 
     def wrap(items: list[str]) -> tuple[str, ...]:
         return _wrap(items, per_line)
@@ -649,13 +643,9 @@ def build_exact_spec(
         )
         offset += len(var.terms)
     ops = rb.operators
-    prefix = "" if py else f"{name}_"
-    agg_fmt = {
-        "min": "min({a}, {b})" if py else prefix + "min({a}, {b})",
-        "max": "max({a}, {b})" if py else prefix + "max({a}, {b})",
-        "psum": "_psum({a}, {b})" if py else prefix + "psum({a}, {b})",
-        "product": "{a} * {b}",
-    }
+    callee = {h: f.format(name=name) for h, f in tg.functions.items()}
+    agg_fmt = {h: callee[h] + "({a}, {b})" for h in ("min", "max", "psum")}
+    agg_fmt["product"] = "{a} * {b}"
     expr_ops = {
         "and": agg_fmt["min"] if ops.and_ == "min" else agg_fmt["product"],
         "or": agg_fmt["max"] if ops.or_ == "max" else agg_fmt["psum"],
@@ -669,7 +659,7 @@ def build_exact_spec(
         if any_weight:
             expr = f"({expr}) * {lit(rule.weight)}"
         rules.append(ExactRule(r, _comment_safe(_rule_text(rule.antecedent)), expr))
-    grid = None if py else grid_rules(rb)
+    grid = grid_rules(rb) if tg.visits_firing_cells else None
     windows = _windows(rb, lit) if grid is not None else None
     outputs = tuple(
         _output(rb, k, out, lit, agg_fmt, wrap, grid) for k, out in enumerate(rb.outputs)
@@ -692,7 +682,7 @@ def build_exact_spec(
     defaults = None
     if fpi_defaults is not None and has_fpi:
         gains = {k: float(getattr(fpi_defaults, k)) for k in FPI_GAIN_KEYS}
-        if not py and number_type == "float":
+        if number_type == "float":
             _check_float32_gains(gains, fpi_defaults.source)
         defaults = {k: lit(v) for k, v in gains.items()}
     file_name, sha = source_sha256(rb)
@@ -709,7 +699,7 @@ def build_exact_spec(
         if grid is not None
         else " ".join([r.expr for r in rules] + [e for o in outputs for e in o.level_exprs])
     )
-    helpers = {h for h in ("min", "max", "psum") if f"{prefix}{h}(" in code}
+    helpers = {h for h in ("min", "max", "psum") if f"{callee[h]}(" in code}
     geo = [o for o in outputs if o.n_intervals]
     if (ops.implication == "product" and ops.aggregation == "max" and geo) or (
         rb.defuzzifier == "bisector" and ops.aggregation != "probabilistic_sum" and geo
@@ -722,8 +712,8 @@ def build_exact_spec(
         upper=name.upper(),
         target=target,
         number_type=number_type,
-        ctype=number_type,
-        fsuffix="f" if number_type == "float" else "",
+        ctype=tg.type_names[number_type],
+        fsuffix=tg.math_suffix[number_type],
         version=__version__,
         source_file=_comment_safe(file_name),
         source_sha256=sha,
@@ -739,7 +729,7 @@ def build_exact_spec(
         aggregation=ops.aggregation,
         clamp=rb.out_of_range == "clamp",
         libm=tuple(sorted(libm)),
-        bound_note=tuple(textwrap.wrap(_bound_note(number_type, target), 88)),
+        bound_note=tuple(textwrap.wrap(_bound_note(number_type, tg), 88)),
         has_fpi=has_fpi,
         fpi_note=note,
         fpi_defaults=defaults,
@@ -787,10 +777,8 @@ def emit_exact(
     fpi_defaults: FpiDefaults | None = None,
 ) -> dict[str, str]:
     """Generate the exact-method ``target`` sources for ``rb``: ``{relative path: text}``."""
-    from fuzzkit.codegen.emit import render_files
-
     spec = build_exact_spec(rb, target, number_type, fpi_defaults=fpi_defaults)
-    return render_files(target, spec.name, spec, "EXACT_FILES")
+    return render_files(target, spec.name, spec, "exact")
 
 
 def rounding_allowance(rb: RuleBase, number_type: str) -> tuple[float, ...]:

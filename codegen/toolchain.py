@@ -109,6 +109,36 @@ def run_compiler(
     return proc
 
 
+def build_library(
+    folder: Path,
+    files: Mapping[str, str],
+    name: str,
+    *,
+    compiler: Sequence[str] | None = None,
+    flags: Sequence[str] = (*STRICT_FLAGS, "-O2"),
+    libs: Sequence[str] = ("-lm",),
+) -> Any:
+    """Write ``files`` into ``folder``, compile their ``.c`` files into ``libNAME.so`` there and
+    load it (a ``ctypes.CDLL``; it stays mapped after the folder is removed).
+
+    Raises
+    ------
+    ToolchainError
+        No C compiler found, or the code does not compile.
+    """
+    cc = list(compiler) if compiler else find_compiler()
+    if cc is None:
+        raise ToolchainError(
+            "no C compiler found (set $CC or install cc, gcc or clang) to compile generated C"
+        )
+    for rel, text in files.items():
+        (folder / rel).write_text(text, encoding="utf-8")
+    sources = [rel for rel in files if rel.endswith(".c")]
+    lib = folder / f"lib{name}.so"
+    run_compiler([*cc, *flags, "-shared", "-fPIC", "-o", str(lib), *sources, *libs], folder)
+    return ctypes.CDLL(str(lib))
+
+
 class CompiledTable:
     """Generated C compiled into a shared library and loaded; use as a context manager.
 
@@ -129,25 +159,15 @@ class CompiledTable:
         flags: Sequence[str] = (*STRICT_FLAGS, "-O2"),
         libs: Sequence[str] = ("-lm",),
     ) -> None:
-        cc = list(compiler) if compiler else find_compiler()
-        if cc is None:
-            raise ToolchainError(
-                "no C compiler found (set $CC or install cc, gcc or clang) to compile generated C"
-            )
         self.number_type = number_type
         self.n_inputs = n_inputs
         self.n_outputs = n_outputs
         self._tmp = tempfile.TemporaryDirectory(prefix="fuzzkit-cc-")
-        folder = Path(self._tmp.name)
-        for rel, text in files.items():
-            (folder / rel).write_text(text, encoding="utf-8")
-        (folder / "fuzzkit_harness.c").write_text(
-            harness_source(name, number_type, n_inputs, n_outputs, fpi), encoding="utf-8"
-        )
-        sources = [rel for rel in files if rel.endswith(".c")] + ["fuzzkit_harness.c"]
-        lib = folder / f"lib{name}.so"
-        run_compiler([*cc, *flags, "-shared", "-fPIC", "-o", str(lib), *sources, *libs], folder)
-        self.library = ctypes.CDLL(str(lib))
+        harness = {"fuzzkit_harness.c": harness_source(name, number_type, n_inputs, n_outputs, fpi)}
+        self.library = build_library(
+            Path(self._tmp.name), {**files, **harness}, name,
+            compiler=compiler, flags=flags, libs=libs,
+        )  # fmt: skip
         ptr = ctypes.POINTER(_CTYPES[number_type])
         self._batch = self.library.fuzzkit_batch_eval
         self._batch.argtypes = [ptr, ptr, ctypes.c_long]

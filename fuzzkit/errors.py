@@ -7,8 +7,21 @@ fuzzkit, and every error about a file names the place as ``file:line:col``.
 
 from __future__ import annotations
 
+import difflib
 from collections.abc import Iterable
 from dataclasses import dataclass
+
+
+def did_you_mean(word: str, candidates: Iterable[str]) -> str:
+    """`` (did you mean 'X'?)`` for the closest candidate, or an empty string."""
+    pool = list(candidates)
+    close = difflib.get_close_matches(word, pool, n=1, cutoff=0.5)
+    if not close:
+        # Labels differ in case often enough ('pl' for 'PL') to try a case-insensitive match.
+        lowered = {c.lower(): c for c in pool}
+        if word.lower() in lowered:
+            close = [lowered[word.lower()]]
+    return f" (did you mean {close[0]!r}?)" if close else ""
 
 
 @dataclass(frozen=True, slots=True)
@@ -89,5 +102,13 @@ class ConfigError(FuzzkitError, ValueError):
     """A configuration file (gains, robot description, experiment options) is malformed."""
 
 
+class ConfigFileError(ProblemsError, ConfigError):
+    """A configuration file (gains, robot description) is malformed; every problem located."""
+
+
 class ScenarioError(ProblemsError):
     """A scenario file is malformed; every problem is listed as ``file:line:col``."""
+
+
+class ControllerSpecError(ProblemsError):
+    """A controller spec file is malformed; every problem is listed as ``file:line:col``."""

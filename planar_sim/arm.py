@@ -32,8 +32,8 @@ import numpy as np
 import numpy.typing as npt
 import pymunk
 
-from fuzzkit.errors import SimulationError
-from fuzzkit.plants.contact import ContactSolver, ForceSensor
+from fuzzkit.errors import ConfigError, SimulationError
+from fuzzkit.plants.contact import ContactSolver, ForceSensor, tool_weight
 from fuzzkit.plants.contract import PlantSample, Scenario, normal_force_by_axis
 from fuzzkit.plants.environment import nominal_position
 
@@ -103,12 +103,21 @@ class PlanarArmPlant:
     def reset(self, scenario: Scenario, seed: int = 0) -> PlantSample:
         """Build the arm at the start of ``scenario``'s path, at rest; returns the first sample."""
         p = self.params
+        if any(w.tilt_rad != 0.0 for w in scenario.path):
+            raise ConfigError(
+                f"scenario {scenario.name}: the planar arm keeps its tool vertical; a tilting "
+                "tool (path tilt_deg) needs the 6-DOF plant (--plant arm6)"
+            )
         self._scenario = scenario
         self._tool_len = scenario.tool.length_m
+        # what the wrist sensor carries (the tool never turns: a constant weight)
+        self._weight = tool_weight(scenario.tool.mass_kg, scenario.rotation)
         self._dt = scenario.period_s / p.substeps
         self._rot_t = scenario.rotation.T
         self._contact = ContactSolver(scenario.objects, scenario.contact, scenario.tool.radius_m)
         self._sensor = ForceSensor(scenario.sensor, seed)
+        if scenario.tool.mass_kg != 0.0:
+            self._sensor.settle(self._weight)
         self._t = 0.0
 
         start = nominal_position(scenario.path, 0.0)
@@ -201,7 +210,7 @@ class PlanarArmPlant:
             true_task = np.array(
                 [r00 * fbx + r02 * fbz, r10 * fbx + r12 * fbz, r20 * fbx + r22 * fbz]
             )
-            self._sensor.update(self._t, dt, true_task)
+            self._sensor.update(self._t, dt, true_task + self._weight)
             self._true_task = true_task
             self._last_points = res.points
             self._last_normals = res.normals

@@ -46,7 +46,7 @@ from fuzzkit.planar_sim.chipmunk_calls import (
     pointer,
 )
 from fuzzkit.plants.contact import padded_terms
-from fuzzkit.plants.contract import UnsupportedPlant
+from fuzzkit.plants.contract import UnsupportedPlant, wrist_sensor_extras
 from fuzzkit.plants.environment import Box, RoughSurface, Table, _roughness_terms
 from fuzzkit.plants.rough_profile import profile_height_slope
 
@@ -100,7 +100,8 @@ def pack(plant: PlanarArmPlant) -> PlanarArrays:
     ------
     UnsupportedPlant
         On a machine whose C calling convention the Chipmunk calls are not lowered for, or for
-        an environment object other than a table, a box or a rough surface.
+        an environment object other than a table, a box or a rough surface, or a wrist sensor
+        with a tool weight or a drifting bias.
     """
     if not calls_supported():
         raise UnsupportedPlant(
@@ -109,6 +110,9 @@ def pack(plant: PlanarArmPlant) -> PlanarArrays:
     scn = plant._scenario
     if scn is None:
         raise RuntimeError("PlanarArmPlant.reset(scenario) must be called before pack")
+    extras = wrist_sensor_extras(scn)
+    if extras:
+        raise UnsupportedPlant(f"the compiled planar loop does not model {', '.join(extras)}")
     p = plant.params
     k = len(scn.objects)
     kinds = np.zeros(k, dtype=np.int64)

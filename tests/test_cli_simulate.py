@@ -101,3 +101,37 @@ def test_bad_scenario_file_gives_a_located_error(
     assert main(["simulate", str(task)]) == 2
     err = capsys.readouterr().err
     assert f"{task}:" in err and "unknown fault 'spikes'" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize(
+    "old, new", [("z: 10.0", "z: .nan"), ("x: 0.4, z: -0.19", "x: .inf, z: 0")]
+)
+def test_a_nan_scenario_is_refused_and_json_prints_nothing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], old: str, new: str
+) -> None:
+    task = tmp_path / "task.yaml"
+    task.write_text(shipped_scenario_text("E1").replace(old, new, 1))
+    assert main(["simulate", str(task), "--json"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and f"{task}:" in err and "must be a finite number" in err
+
+
+def test_json_is_strict_json_when_metrics_have_no_value(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # the tool never touches anything: force metrics have no value, printed as null, not NaN
+    text = (
+        shipped_scenario_text("E1")
+        .replace("height_m: -0.3", "height_m: -3.0")
+        .replace("center_z: -0.28", "center_z: -2.8")
+        .replace("duration_s: 5.0", "duration_s: 1.0")
+    )
+    task = tmp_path / "air.yaml"
+    task.write_text(text)
+    assert main(["simulate", str(task), "--json"]) == 0
+
+    def refuse(name: str) -> None:
+        raise AssertionError(f"{name} is not JSON")
+
+    data = json.loads(capsys.readouterr().out, parse_constant=refuse)
+    assert None in [v for axis in data["axes"].values() for v in axis.values()]

@@ -43,17 +43,7 @@ GOLDEN_CASES = [
 def test_output_matches_golden_files(name: str, target: str, number_type: str) -> None:
     files = sources(name, target, number_type)  # type: ignore[arg-type]
     folder = GOLDEN / name / f"{target}-{number_type}"
-    if REFRESH:
-        folder.mkdir(parents=True, exist_ok=True)
-        for old in folder.iterdir():
-            old.unlink()
-        for rel, text in files.items():
-            (folder / rel).write_text(text, encoding="utf-8")
-    expected = {p.name: p.read_text(encoding="utf-8") for p in sorted(folder.iterdir())}
-    assert sorted(expected) == sorted(files), "set FUZZKIT_REFRESH_GOLDEN=1 to rewrite"
-    for rel, text in files.items():
-        problem = golden_difference(text, expected[rel], ULPS[number_type], number_type)
-        assert problem is None, f"{folder / rel}: {problem}; FUZZKIT_REFRESH_GOLDEN=1 rewrites it"
+    check_golden(folder, files, number_type)
 
 
 #: Floating-point literals in generated tables come from numpy/scipy sums whose rounding changes
@@ -71,6 +61,22 @@ def _split_literals(text: str) -> tuple[list[str], list[float]]:
     parts = _FLOAT_LITERAL.split(text)
     values = [float(m.rstrip("f")) for m in _FLOAT_LITERAL.findall(text)]
     return parts, values
+
+
+def check_golden(folder: Path, files: dict[str, str], number_type: str) -> None:
+    """``files`` equal the golden files in ``folder`` (``FUZZKIT_REFRESH_GOLDEN=1`` rewrites
+    them): the same names, text equal but for float literals within ``ULPS``."""
+    if REFRESH:
+        folder.mkdir(parents=True, exist_ok=True)
+        for old in folder.iterdir():
+            old.unlink()
+        for rel, text in files.items():
+            (folder / rel).write_text(text, encoding="utf-8")
+    expected = {p.name: p.read_text(encoding="utf-8") for p in sorted(folder.iterdir())}
+    assert sorted(expected) == sorted(files), "set FUZZKIT_REFRESH_GOLDEN=1 to rewrite"
+    for rel, text in files.items():
+        problem = golden_difference(text, expected[rel], ULPS[number_type], number_type)
+        assert problem is None, f"{folder / rel}: {problem}; FUZZKIT_REFRESH_GOLDEN=1 rewrites it"
 
 
 def golden_difference(got: str, want: str, ulps: int, number_type: str) -> str | None:
@@ -187,8 +193,8 @@ def test_bad_names_in_a_model_never_reach_source() -> None:
     [
         (
             "math",
-            r"math\.py would shadow the Python standard module 'math' and math\.h would "
-            r"shadow the C standard header <math\.h>",
+            r"math\.h would shadow the C standard header <math\.h> and math\.py would "
+            r"shadow the Python standard module 'math'",
         ),
         ("stdint", r"stdint\.h would shadow the C standard header <stdint\.h>"),
         ("bisect", r"bisect\.py would shadow the Python standard module 'bisect'"),
@@ -206,12 +212,12 @@ def test_names_that_shadow_standard_modules_or_headers_are_refused(
         build_spec(rb, tab, target)
 
 
-def test_emit_and_validation_share_one_keyword_list() -> None:
-    from fuzzkit.codegen import emit as emit_module
+def test_targets_and_validation_share_one_keyword_list() -> None:
+    from fuzzkit.codegen.target import load_target
     from fuzzkit.fuzzy import validation
 
-    assert emit_module.C_RESERVED is validation.C_KEYWORDS
-    assert emit_module.PYTHON_RESERVED is validation.PYTHON_KEYWORDS
+    assert load_target("c").reserved_words is validation.C_KEYWORDS
+    assert load_target("python").reserved_words is validation.PYTHON_KEYWORDS
     for name in ("EOF", "NULL", "_Atomic", "int16_t", "match", "lambda"):
         assert validation.identifier_problem(name) is not None
         with pytest.raises(CodegenError):

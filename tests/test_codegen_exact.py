@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import os
 import subprocess
 from pathlib import Path
 
@@ -19,7 +18,7 @@ import numpy as np
 import pytest
 from _codegen_util import CC, CLANG, needs_cc, rulebase, skip_no_cc
 from test_codegen_c import HARNESS
-from test_codegen_emit import GOLDEN, ULPS, golden_difference
+from test_codegen_emit import GOLDEN, check_golden
 from test_inference_random import random_rulebase
 
 from fuzzkit.codegen.emit import emit
@@ -51,7 +50,6 @@ DEFUZZIFIERS = (
     "largest_of_maximum",
 )
 CONTINUOUS = ("centroid", "bisector", "weighted_average")
-REFRESH = os.environ.get("FUZZKIT_REFRESH_GOLDEN") == "1"
 
 
 def random_family(seed: int, count: int) -> list[RuleBase]:
@@ -402,17 +400,7 @@ GOLDEN_CASES = [
 def test_exact_output_matches_golden_files(name: str, target: str, number_type: str) -> None:
     files = emit_exact(rulebase(name), target, number_type)
     folder = GOLDEN / name / f"{target}-exact-{number_type}"
-    if REFRESH:
-        folder.mkdir(parents=True, exist_ok=True)
-        for old in folder.iterdir():
-            old.unlink()
-        for rel, text in files.items():
-            (folder / rel).write_text(text, encoding="utf-8")
-    expected = {p.name: p.read_text(encoding="utf-8") for p in sorted(folder.iterdir())}
-    assert sorted(expected) == sorted(files), "set FUZZKIT_REFRESH_GOLDEN=1 to rewrite"
-    for rel, text in files.items():
-        problem = golden_difference(text, expected[rel], ULPS[number_type], number_type)
-        assert problem is None, f"{folder / rel}: {problem}; FUZZKIT_REFRESH_GOLDEN=1 rewrites it"
+    check_golden(folder, files, number_type)
 
 
 # --------------------------------------------------------------------------- table search

@@ -9,6 +9,7 @@ from string import Template
 
 import pytest
 
+from fuzzkit import located_yaml
 from fuzzkit.errors import Problem, RuleBaseError
 from fuzzkit.formats import yaml_reader as dsl
 from fuzzkit.formats.registry import loads
@@ -488,15 +489,15 @@ def test_huge_file_is_refused_before_parsing(monkeypatch: pytest.MonkeyPatch) ->
     def never(*args: object, **kwargs: object) -> None:
         raise AssertionError("a file over the size limit reached the YAML parser")
 
-    monkeypatch.setattr(dsl.yaml, "compose", never)
-    text = GOOD + "# " + "x" * (dsl.MAX_FILE_BYTES + 10) + "\n"
+    monkeypatch.setattr(located_yaml.yaml, "compose", never)
+    text = GOOD + "# " + "x" * (located_yaml.MAX_FILE_BYTES + 10) + "\n"
     (p,) = problems(text)
     assert "limited to 1048576 bytes" in p.message
 
 
 def test_huge_file_on_disk_is_refused_without_reading(tmp_path: Path) -> None:
     path = tmp_path / "big.yaml"
-    path.write_text(GOOD + "#" * (dsl.MAX_FILE_BYTES + 1))
+    path.write_text(GOOD + "#" * (located_yaml.MAX_FILE_BYTES + 1))
     with pytest.raises(RuleBaseError, match=r"big\.yaml: file is \d+ bytes; rule bases are "):
         dsl.load_file(path)
 

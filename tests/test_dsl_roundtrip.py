@@ -244,10 +244,10 @@ def test_awkward_names_and_numbers_survive() -> None:
     x = Variable(
         "x",
         -1e-300,
-        1e300,
+        1e100,  # the largest range end fuzzkit.fuzzy.resolution accepts
         (
-            Term("lo", "left_shoulder", (0.1 + 0.2, 1e299)),
-            Term("hi", "right_shoulder", (0.1 + 0.2, 1e299)),
+            Term("lo", "left_shoulder", (0.1 + 0.2, 1e99)),
+            Term("hi", "right_shoulder", (0.1 + 0.2, 1e99)),
         ),
     )
     y = Variable("y", 0.0, 1.0, (Term("on_", "triangle", (0.0, 0.5, 1.0)),), default=1 / 3)

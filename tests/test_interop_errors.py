@@ -100,6 +100,10 @@ END_RULEBLOCK
 END_FUNCTION_BLOCK
 """
 
+#: The level input's RANGE and terms (cases take them away: the range cannot be derived).
+FCL_LEVEL_TERMS = (
+    "  RANGE := (0 .. 1);\n  TERM low := (0.2, 1) (0.8, 0);\n  TERM high := (0.2, 0) (0.8, 1);"
+)
 READERS = {"fis": (fis.loads, FIS), "fll": (fll.loads, FLL), "fcl": (fcl.loads, FCL)}
 
 
@@ -328,9 +332,15 @@ def test_the_valid_bases_load() -> None:
         ("fcl", "METHOD : COG;", "METHOD : COGF;", r"t:17:\d+: METHOD : COGF cannot be expressed"),
         (
             "fcl",
-            "  RANGE := (0 .. 1);\n  TERM low",
-            "  TERM low",
-            r"t:3:3: input 'level': missing RANGE := \(low \.\. high\)",
+            FCL_LEVEL_TERMS,
+            "",
+            r"t:8:1: input 'level' has no RANGE := \(low \.\. high\) and no terms to derive",
+        ),
+        (
+            "fcl",
+            FCL_LEVEL_TERMS,
+            "  TERM low := 0.5;\n  TERM high := 0.5;",
+            r"t:8:1: input 'level' has no RANGE := \(low \.\. high\), and its terms all sit at",
         ),
         (
             "fcl",

@@ -267,7 +267,20 @@ def test_shipped_irb140_description_matches_the_data_sheet() -> None:
             r"x\.yaml:2: unknown key 'colour'",
         ),
         ("name: x\nangle_unit: grad\njoints: []\n", r"2 problems found"),
-        ("name: [x\n", r"not valid YAML"),
+        ("name: [x\n", r"x\.yaml:2:1: invalid YAML"),
+        # the located-YAML reader's checks (shared with rule bases and scenarios)
+        ("name: x\nname: y\njoints: []\n", r"x\.yaml:2:1: duplicate key 'name'"),
+        ("name: x\non: 1\njoints: []\n", r"x\.yaml:2:1: expected a name as key, got on"),
+        ("name: x\x01\njoints: []\n", r"x\.yaml:1:8: control character U\+0001"),
+        ("name: x\njoints: [{d: 1" + "0" * 320 + "}]\n", r"x\.yaml:2:14: integer of 321 digits"),
+        (
+            "a: &a [1, 1, 1, 1, 1, 1, 1, 1, 1, 1]\n"
+            + "".join(
+                f"{c}: &{c} [*{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}]\n"
+                for p, c in zip("abcde", "bcdef", strict=True)
+            ),
+            r"x\.yaml: the document expands to more than 100000 nodes",
+        ),
     ],
 )
 def test_bad_robot_descriptions_get_located_errors(tmp_path: Path, text: str, match: str) -> None:

@@ -114,7 +114,8 @@ def test_report_writes_markdown_figures_and_recordings(tmp_path: Path) -> None:
         gains_dir / "fuzzy-pi.yaml", GainsEntry("fuzzy-pi", {"kp": 0.3, "ki": 0.05, "kx": 2e-4})
     )
     out = tmp_path / "report"
-    path = build_report(out, gains_dir=gains_dir, **quick_options())
+    spec = Path(__file__).resolve().parent.parent / "docs" / "examples" / "controller_pi.yaml"
+    path = build_report(out, gains_dir=gains_dir, specs=[spec], **quick_options())
     assert path == out / "report.md"
     names = {p.name for p in out.iterdir()}
     for png in (
@@ -147,8 +148,12 @@ def test_report_writes_markdown_figures_and_recordings(tmp_path: Path) -> None:
         "| 1 | >= 3 | >= 3 |",
         "| 8 | 0 | 0 |",
         "| claim | gains | nominal | latency 0+0 | latency 3+3 | 1000 N/mm |",
+        "## Controller specs",
     ):
         assert section in text, section
+    # the spec on E1-E3 (its own axes x and z on each): 6 rows, run by the Python loop
+    spec_lines = [line for line in text.splitlines() if line.startswith(f"| `{spec}` |")]
+    assert len(spec_lines) == 6 and all(line.endswith("| no | python |") for line in spec_lines)
     assert "| pi | tuned | 2e-05 | 1.5e-05 | - |" in text
     # The nominal verdict rows are the ones assess_claims derives (the text is not canned):
     # 3 gains sets in the nominal table, matched and tuned in each of 4 conditions below.

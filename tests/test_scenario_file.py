@@ -96,6 +96,35 @@ def _line_col(text: str, needle: str) -> tuple[int, int]:
         ("{t_s: 0.2,", "{t_s: 9.0,", "3.737742", "time 3.73774 s is before the previous 9 s"),
         ("friction: 0.4", "friction: 0.4, mu: 1", "mu: 1", "unknown key 'mu' in contact"),
         ("name: cup,", "name: 3,", "3,", "expected a name"),
+        # hostile values (issue 25): bounded, finite, located
+        (
+            "duration_s: 5.0",
+            "duration_s: 1e9",
+            "1e9",
+            "duration_s must be a finite number > 0 and <= 600",
+        ),
+        ("period_s: 0.004", "period_s: 1e-300", "1e-300", "period_s must be >= 0.0001 s"),
+        (
+            "sensor: 1, command: 1",
+            "sensor: 1000000000000, command: 1",
+            "1000000000000",
+            "(at most 1000)",
+        ),
+        ("{t_s: 0.2, x: 0.4,", "{t_s: 0.2, x: .nan,", ".nan", "path[1] x must be a finite number"),
+        (
+            "{t_s: 0.2, x: 0.4,",
+            "{t_s: 0.2, x: 1" + "0" * 400 + ",",
+            "1000",
+            "integer of 401 digits",
+        ),
+        ("  z: 10.0\n", "  z: .inf\n", ".inf", "the z set point must be a finite number"),
+        (
+            "friction: 0.4",
+            "friction: 0.4, tilt_deg: 3",
+            "tilt_deg",
+            "unknown key 'tilt_deg' in contact",
+        ),
+        ("noise_std_n: 0.1", "noise_std_n: -.inf", "-.inf", "sensor noise_std_n must be a finite"),
     ],
 )
 def test_bad_scenarios_give_located_errors(old: str, new: str, needle: str, match: str) -> None:
@@ -167,3 +196,25 @@ def test_cli_schema_scenario(capsys: pytest.CaptureFixture[str]) -> None:
 
     assert main(["schema", "--scenario"]) == 0
     assert json.loads(capsys.readouterr().out) == json_schema()
+
+
+def test_yaml_11_integer_spellings_are_read_in_integer_fields() -> None:
+    # 0x1 (hex), 1_0 (digit groups), 1:30 (base 60) as the rule-base reader reads them
+    text = E1_TEXT.replace("sensor: 1, command: 1", "sensor: 0x1, command: 1_0").replace(
+        "samples: 3", "samples: 1:30"
+    )
+    exp = loads_scenario(text, "task.yaml")
+    assert exp.latency_periods == (1, 10) and exp.engage_samples == 90
+
+
+def test_nan_tilt_and_too_many_periods_are_refused_at_their_line() -> None:
+    e2 = shipped_scenario_text("E2")
+    text = e2.replace("tilt_deg: -0.8", "tilt_deg: .nan")
+    with pytest.raises(ScenarioError, match=r"task.yaml:23:17: .*tilt_deg must be a finite"):
+        loads_scenario(text, "task.yaml")
+    many = E1_TEXT.replace("duration_s: 5.0", "duration_s: 500").replace(
+        "period_s: 0.004", "period_s: 0.0001"
+    )
+    line, col = _line_col(many, "500")
+    with pytest.raises(ScenarioError, match=rf"task.yaml:{line}:{col}: .*limited to 1000000 "):
+        loads_scenario(many, "task.yaml")

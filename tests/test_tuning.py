@@ -259,17 +259,22 @@ def test_gains_file_round_trip_and_merge(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     "text, match",
     [
-        ("pi:\n  gains:\n    kp: -1\n", "g.yaml:3: gain kp must be >= 0"),
-        ("fuzzy-pi:\n  gains: {kp: 0.1, ki: 0, kx: 1e-4}\n", "g.yaml:2: gain ki must be > 0"),
-        ("pi:\n  gains:\n    kp: 1e-5\n    kd: 2\n", "g.yaml:4: unknown gain 'kd' for pi"),
-        ("pi:\n  gains: {kp: 1e-5}\n  notes: x\n", "g.yaml:3: unknown key 'notes' in the pi"),
+        ("pi:\n  gains:\n    kp: -1\n", "g.yaml:3:5: gain kp must be >= 0"),
+        ("fuzzy-pi:\n  gains: {kp: 0.1, ki: 0, kx: 1e-4}\n", "g.yaml:2:20: gain ki must be > 0"),
+        ("pi:\n  gains:\n    kp: 1e-5\n    kd: 2\n", "g.yaml:4:5: unknown gain 'kd' for pi"),
+        ("pi:\n  gains: {kp: 1e-5}\n  notes: x\n", "g.yaml:3:3: unknown key 'notes' in the pi"),
         ("pi:\n  gains: {kp: 1e-5}\n  provenance: [1]\n", "provenance must be a mapping"),
         ("pi:\n  gains: [1, 2]\n", "gains must be a mapping"),
-        ("kp: .nan\n", "g.yaml:1: gain kp must be a finite number"),
+        ("kp: .nan\n", "g.yaml:1:1: gain kp must be a finite number"),
         ("pi: {u_min: 0.1}\n", "u_min must be <= 0"),
-        ("", "got an empty file"),
-        ("pi: {kp: [1\n", "g.yaml:2: not valid YAML"),
-        ("pid: {kp: 1}\npi: {kp: 1e-5}\n", "g.yaml:1: unknown controller keys ['pid']"),
+        ("", "g.yaml:1:1: file is empty"),
+        ("pi: {kp: [1\n", "g.yaml:2:1: invalid YAML"),
+        ("pid: {kp: 1}\npi: {kp: 1e-5}\n", "g.yaml:1:1: unknown controller keys ['pid']"),
+        ("pi: {kp: 1e-5, kp: 2e-5}\n", "g.yaml:1:16: duplicate key 'kp' (first defined on line 1)"),
+        ("pi: {yes: 1e-5}\n", "g.yaml:1:6: expected a name as key, got yes (YAML reads"),
+        ("pi: {kp: 1" + "0" * 400 + "}\n", "g.yaml:1:10: integer of 401 digits for a number"),
+        ("pi: {kp: 1e-5}\x07\n", "g.yaml:1:15: control character U+0007"),
+        ("pi: {kp: 0x1" + "0" * 300 + "}\n", "g.yaml:1:10: integer of 302 digits for a number"),
     ],
 )
 def test_bad_gains_files(tmp_path: Path, text: str, match: str) -> None:
@@ -284,7 +289,8 @@ def test_every_problem_of_a_gains_file_is_listed() -> None:
     with pytest.raises(ConfigError) as info:
         parse_gains("pi:\n  kp: -1\n  ki: fast\n  kd: 1\n", "g.yaml")
     msg = str(info.value)
-    assert "g.yaml:2: gain kp" in msg and "g.yaml:3: gain ki" in msg and "g.yaml:4: unknown" in msg
+    assert "g.yaml:2:3: gain kp" in msg and "g.yaml:3:3: gain ki" in msg
+    assert "g.yaml:4:3: unknown" in msg
 
 
 def test_flat_file_with_a_key_the_controller_lacks(tmp_path: Path) -> None:

@@ -25,6 +25,7 @@ COMMAND_MODULES = (
     "plot",
     "interop",
     "codegen_cmd",
+    "replay",
     "simulation",
     "tuning",
     "demo",

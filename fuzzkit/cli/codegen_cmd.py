@@ -24,21 +24,31 @@ def register(sub: Any) -> None:
     """Add ``compile`` to the ``fuzzkit`` parser."""
     p = sub.add_parser(
         "compile",
-        help="compile a rule base to C or Python (lookup table or exact inference)",
+        help="compile a rule base (lookup table or exact inference) or a whole controller "
+        "spec to C or Python",
         description="Generate C (NAME.h, NAME.c) or Python (NAME.py) for a rule base, either "
         "as a lookup table sampled from the exact engine with a verified error bound "
         "(--method table) or as the exact inference itself, rounding error only "
         "(--method exact). --method auto (default) takes the table when one meets the "
         "tolerance within --max-bytes and the exact method otherwise, and says why. "
         "--verify compiles/imports the result and compares it with the exact engine on 1e5 "
-        "random points and the edge cases.",
+        "random points and the edge cases. "
+        "Given a controller spec (a YAML file with axes/controller keys) it generates the "
+        "whole outer-loop controller instead: NAME_controller.{h,c} (plus NAME_surface.{h,c}, "
+        "a fuzzy-PI's rule base by the exact method) or NAME_controller.py, --type float "
+        "(default for C) or double; --verify then runs it on a hostile sensor log against "
+        "fuzzkit's reference controller.",
         epilog="examples:\n"
         "  fuzzkit compile macvicar_whelan --target c --out gen --verify\n"
         "  fuzzkit compile macvicar_whelan --target c --method exact --out gen_exact --verify\n"
         "  fuzzkit compile macvicar_whelan --target c --type q15 --tolerance 2e-3 --out gen_q15\n"
-        "  fuzzkit compile my_controller.yaml --target python --resolution 65 --out gen_py",
+        "  fuzzkit compile my_controller.yaml --target python --resolution 65 --out gen_py\n"
+        "  fuzzkit compile docs/examples/controller.yaml --target c --type double --out fw "
+        "--verify",
     )
-    p.add_argument("rulebase", metavar="RULEBASE", help=RULEBASE_SPEC_HELP)
+    p.add_argument(
+        "rulebase", metavar="RULEBASE|SPEC", help=RULEBASE_SPEC_HELP + ", or a controller spec"
+    )
     p.add_argument("--target", required=True, help="c or python (required)")
     p.add_argument(
         "--type",
@@ -132,31 +142,33 @@ def cmd_compile(args: argparse.Namespace) -> int:
     """Handler of ``fuzzkit compile``."""
     from pathlib import Path
 
-    from fuzzkit.codegen.emit import TARGETS
+    from fuzzkit.cli.file_kinds import is_kind
+
+    if is_kind(args.rulebase, "controller spec"):
+        from fuzzkit.cli.controller_compile import compile_spec
+
+        return compile_spec(args)
+
     from fuzzkit.codegen.lut import NUMBER_TYPES
     from fuzzkit.codegen.method import DEFAULT_MAX_BYTES, compile_rulebase
-    from fuzzkit.codegen.verify import (
-        verify_c,
-        verify_exact_c,
-        verify_exact_python,
-        verify_python,
-    )
+    from fuzzkit.codegen.target import all_targets, load_target
     from fuzzkit.errors import CodegenError, ConfigError
     from fuzzkit.fileio import write_tree_atomic
     from fuzzkit.formats.registry import load
     from fuzzkit.progress import TaskBars
 
     # Cheap checks first, so a typo costs nothing and nothing is written.
-    if args.target not in TARGETS:
-        raise CodegenError(f"unknown target {args.target!r} (expected one of {', '.join(TARGETS)})")
-    number_type = args.number_type or ("double" if args.target == "python" else "float")
+    target = load_target(args.target)
+    number_type = args.number_type or target.default_number_type
     if number_type not in NUMBER_TYPES:
         raise CodegenError(
             f"unknown --type {number_type!r} (expected one of {', '.join(NUMBER_TYPES)})"
         )
-    if args.target == "python" and number_type != "double":
+    if number_type not in target.number_types:
+        others = [t.label for t in all_targets() if number_type in t.number_types]
         raise CodegenError(
-            f"--type {number_type} applies to the C target; the python target computes in double"
+            f"--type {number_type} applies to the {' and '.join(others)} target; the "
+            f"{target.name} target computes in {' or '.join(target.number_types)}"
         )
     out = Path(args.out)
     if out.exists() and not out.is_dir():
@@ -195,14 +207,9 @@ def cmd_compile(args: argparse.Namespace) -> int:
         print("note: --gains ignored (no fuzzy-PI API)")
     if args.verify:
         if table is None:
-            if args.target == "c":
-                result_v = verify_exact_c(rb, number_type, files)
-            else:
-                result_v = verify_exact_python(rb, files)
-        elif args.target == "c":
-            result_v = verify_c(rb, table, files)
+            result_v = target.verify_exact(rb, number_type, files)
         else:
-            result_v = verify_python(rb, table, files)
+            result_v = target.verify_table(rb, table, files)
         print(result_v.describe())
         if not result_v.ok:
             print("nothing written: the generated code does not match the exact engine")

@@ -15,6 +15,8 @@ from pathlib import Path
 
 from fuzzkit.errors import Location, Problem, ProblemsError
 
+#: Files read as rule bases when their content says nothing (the YAML reader reports why).
+_RULEBASE_SUFFIXES = (".yaml", ".yml", ".fis", ".fcl", ".fll")
 #: How much of a file is read to recognise it (the kind's own reader reads the whole file).
 SNIFF_BYTES = 65536
 
@@ -92,6 +94,19 @@ def _shipped_scenarios() -> list[str]:
     return list(EXPERIMENTS)
 
 
+def _check_spec(spec: str, suffix: str) -> Checked:
+    from fuzzkit.control.spec_reader import load_spec
+
+    ctl = load_spec(spec)
+    axes = ", ".join(f"{a.axis} {a.setpoint_n:g} N" for a in ctl.axes)
+    rb = f" on {ctl.rulebase.name}" if ctl.rulebase is not None else ""
+    return Checked(f"controller spec {ctl.name}: {ctl.kind}{rb}; {axes}")
+
+
+def _no_shipped() -> list[str]:
+    return []
+
+
 #: Every kind ``fuzzkit validate`` knows, in the order named in messages.
 KINDS: tuple[FileKind, ...] = (
     FileKind(
@@ -106,6 +121,12 @@ KINDS: tuple[FileKind, ...] = (
         frozenset({"force_control", "objects", "path", "safety_limit_n", "duration_s"}),
         _check_scenario,
         _shipped_scenarios,
+    ),
+    FileKind(
+        "controller spec",
+        frozenset({"controller", "axes", "limits", "safety", "adaptation"}),
+        _check_spec,
+        _no_shipped,
     ),
 )
 
@@ -146,6 +167,8 @@ def recognise(spec: str) -> tuple[FileKind, str]:
             if text.startswith(word):
                 return kind, suffix
     keys = set(_TOP_KEY.findall(head))
+    if not keys and path.suffix.lower() in _RULEBASE_SUFFIXES:
+        return KINDS[0], ""  # no readable top level: the rule-base reader locates what is wrong
     scores = sorted(((len(kind.yaml_keys & keys), i) for i, kind in enumerate(KINDS)), reverse=True)
     best, index = scores[0]
     if best == 0 or (len(scores) > 1 and scores[1][0] == best):
@@ -174,3 +197,12 @@ def check_file(spec: str) -> Checked:
     """
     kind, suffix = recognise(spec)
     return kind.check(spec, suffix)
+
+
+def is_kind(spec: str, name: str) -> bool:
+    """True when ``spec`` is recognised as the kind called ``name`` (``"controller spec"`` ...);
+    False also when it cannot be recognised (the reader the caller uses reports why)."""
+    try:
+        return recognise(spec)[0].name == name
+    except ProblemsError:
+        return False

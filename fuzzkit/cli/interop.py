@@ -66,10 +66,25 @@ def register(sub: Any) -> None:
     p.set_defaults(handler=cmd_export)
 
 
+def _readable_size(text: str, out: str) -> str:
+    """``text`` if fuzzkit's readers would read it back; else a ConfigError with the limit."""
+    from fuzzkit.errors import ConfigError
+    from fuzzkit.located_yaml import MAX_FILE_BYTES
+
+    size = len(text.encode("utf-8"))
+    if size > MAX_FILE_BYTES:
+        raise ConfigError(
+            f"{out}: not written: it would be {size} bytes, and rule-base files are limited to "
+            f"{MAX_FILE_BYTES} bytes (1 MiB), so fuzzkit could not read it back"
+        )
+    return text
+
+
 def cmd_import(args: argparse.Namespace) -> int:
     """Read FILE by extension, write it as YAML to --out."""
     from fuzzkit.errors import ConfigError
     from fuzzkit.fileio import check_output_path, write_atomic
+    from fuzzkit.formats import fcl
     from fuzzkit.formats.registry import READERS, load
     from fuzzkit.formats.yaml_writer import dump
 
@@ -79,8 +94,12 @@ def cmd_import(args: argparse.Namespace) -> int:
             f"{args.file}: expected a .fis, .fcl or .fll file, got {suffix or 'no extension'!r}"
         )
     check_output_path(args.out, "YAML file")
-    rb = load(args.file)
-    write_atomic(args.out, dump(rb))
+    notes: dict[str, str] = {}
+    if suffix == fcl.SUFFIX:  # FCL may leave ranges to be derived: say so in the YAML
+        rb, _, notes = fcl.load_with_notes(args.file)
+    else:
+        rb = load(args.file)
+    write_atomic(args.out, _readable_size(dump(rb, range_notes=notes), args.out))
     print(f"{args.file} -> {args.out} ({rb.name}: {len(rb.rules)} rules)")
     return EXIT_OK
 
@@ -112,6 +131,6 @@ def cmd_export(args: argparse.Namespace) -> int:
         raise
     for item in lost:
         print(f"fuzzkit: warning: {args.out}: {item}", file=sys.stderr)
-    write_atomic(args.out, text)
+    write_atomic(args.out, _readable_size(text, args.out))
     print(f"{args.rulebase} -> {args.out}")
     return EXIT_OK

@@ -1,6 +1,7 @@
 """``fuzzkit validate | info | eval | surface | schema``: working with rule bases.
 
 Every RULEBASE argument is a path to a YAML file or the name of a shipped rule base.
+``validate`` and ``schema`` also take controller specs (``docs/controller.md``).
 """
 
 from __future__ import annotations
@@ -32,22 +33,25 @@ def register(sub: Any) -> None:
     """Add the rule-base subcommands to the ``fuzzkit`` parser."""
     p = sub.add_parser(
         "validate",
-        help="check any file fuzzkit reads (rule bases, scenarios); list every problem",
+        help="check any file fuzzkit reads (rule bases, scenarios, controller specs); list every "
+        "problem",
         description="Check files fuzzkit reads, each recognised by its content: rule bases "
-        "(YAML, .fis, .fcl, .fll) and scenario files (paths, shipped rule-base names or E1, E2, "
-        "E3). Exit 0 when all are valid, 2 listing every problem (file:line:col) otherwise. "
+        "(YAML, .fis, .fcl, .fll), scenario files and controller specs (docs/controller.md); "
+        "paths, shipped rule-base names or E1, E2, E3. Exit 0 when all are valid, 2 listing "
+        "every problem (file:line:col) otherwise. "
         "Warnings (input ranges no term covers, in rule bases with coverage: allow_gaps) are "
         "printed and do not fail unless --strict is given.",
         epilog="examples:\n"
         "  fuzzkit validate rulebases/*.yaml\n"
         "  fuzzkit validate --strict my_controller.yaml macvicar_whelan\n"
-        "  fuzzkit validate my_task.yaml docs/examples/heater.fis E1",
+        "  fuzzkit validate my_task.yaml docs/examples/heater.fis E1\n"
+        "  fuzzkit validate docs/examples/controller.yaml",
     )
     p.add_argument(
         "files",
         nargs="+",
         metavar="FILE",
-        help="a rule-base or scenario file, or a shipped name (any number)",
+        help="a rule-base, scenario or controller-spec file, or a shipped name (any number)",
     )
     p.add_argument("--strict", action="store_true", help="treat warnings (coverage gaps) as errors")
     p.set_defaults(handler=cmd_validate)
@@ -144,15 +148,22 @@ def register(sub: Any) -> None:
 
     p = sub.add_parser(
         "schema",
-        help="print the JSON Schema of the rule-base (or scenario) format",
+        help="print the JSON Schema of the rule-base (or scenario, or controller-spec) format",
         description="Print a JSON Schema (draft 2020-12) of the rule-base YAML "
         "format, e.g. for the YAML language server.",
-        epilog="example:\n  fuzzkit schema > fuzzkit-rulebase.schema.json",
+        epilog="examples:\n  fuzzkit schema > fuzzkit-rulebase.schema.json\n"
+        "  fuzzkit schema --controller > fuzzkit-controller.schema.json",
     )
-    p.add_argument(
+    which = p.add_mutually_exclusive_group()
+    which.add_argument(
         "--scenario",
         action="store_true",
         help="the schema of scenario files (fuzzkit simulate TASK.yaml) instead",
+    )
+    which.add_argument(
+        "--controller",
+        action="store_true",
+        help="the schema of controller specs (docs/controller.md) instead",
     )
     p.set_defaults(handler=cmd_schema)
 
@@ -296,7 +307,7 @@ def _parse_inputs(
     rb: RuleBase, items: Sequence[str], option: str = "--input", every: bool = True
 ) -> dict[str, float]:
     """``NAME=VALUE`` items of ``option`` as input values; all inputs needed when ``every``."""
-    from fuzzkit.fuzzy.validation import did_you_mean
+    from fuzzkit.errors import did_you_mean
 
     values: dict[str, float] = {}
     problems: list[str] = []
@@ -609,6 +620,11 @@ def cmd_surface(args: argparse.Namespace) -> int:
 
 
 def cmd_schema(args: argparse.Namespace) -> int:
+    if args.controller:
+        from fuzzkit.control.spec_schema import json_schema as controller_schema
+
+        print(json.dumps(controller_schema(), indent=2))
+        return EXIT_OK
     if args.scenario:
         from fuzzkit.studies.scenario_file import json_schema as scenario_schema
 

@@ -141,6 +141,13 @@ def register(subparsers: Any) -> None:
         help="gains file (fuzzkit.control.gains): flat {kp: .., ki: ..}, or keyed by controller "
         "as fuzzkit tune writes",
     )
+    sim.add_argument(
+        "--spec",
+        metavar="SPEC.yaml",
+        help="run the controller of a controller spec (docs/controller.md): its kind, rule "
+        "base, gains, axes, set points, limits, safety and sensor front end replace "
+        "--controller, --rulebase and the scenario's task (not with --gains)",
+    )
     sim.set_defaults(handler=_simulate)
 
     cmp_ = subparsers.add_parser(
@@ -269,12 +276,14 @@ def _simulate(args: argparse.Namespace) -> int:
 
     png = check_trace_path(args.png, "--png", ".png") if args.png else None
     csv = check_trace_path(args.csv, "--csv", ".csv") if args.csv else None
-    from fuzzkit.studies.batch import RunSpec, experiment_and_plant, gains_items, run_spec
+    from fuzzkit.studies.batch import RunSpec, gains_items, resolve, run_spec
 
     latency = None
     if args.latency is not None:
         sensor, command = args.latency
         latency = (sensor, exp.latency_periods[1] if command is None else command)
+    if args.spec and args.gains:
+        raise ConfigError("--spec: a controller spec holds its gains; give --spec or --gains")
     spec = RunSpec(
         experiment=args.experiment,
         controller=args.controller,
@@ -288,20 +297,25 @@ def _simulate(args: argparse.Namespace) -> int:
         loop=args.loop or "auto",
         fuzzy_impl=args.fuzzy_impl,
         fault=args.fault,
+        controller_spec=args.spec,
     )
     result = run_spec(spec)
+    ran, ran_exp, plant = resolve(spec)  # with a controller spec, its controller and rule base
+    gains, source = ran_gains(ran, ran_exp, args.gains)
     if args.rrd:
         from fuzzkit.viz.traces import write_run_rrd
 
-        plant = experiment_and_plant(spec)[1]  # the 3-D E3's floor and wall, for the drawing
-        write_run_rrd(result, args.rrd, None if isinstance(plant, str) else plant, _fuzzy(spec))
+        # plant: the 3-D E3's floor and wall, for the drawing
+        write_run_rrd(
+            result, args.rrd, None if isinstance(plant, str) else plant, _fuzzy(ran, gains)
+        )
     written = write_run_traces(result, png, csv)
     data = summary(result)
-    data["gains"] = run_gains(args.controller, dict(spec.gains))
-    data["gains_source"] = f"{args.gains} over the defaults" if args.gains else "the defaults"
+    data["gains"] = gains
+    data["gains_source"] = source
     status = EXIT_TRIPPED if args.fail_on_trip and result.tripped else 0
     if args.json:
-        print(json.dumps(data, indent=2))
+        print(json.dumps(data, indent=2, allow_nan=False))  # never invalid JSON
         return status
     print(
         f"{data['experiment']} {data['controller']} on {data['plant']}: "
@@ -310,8 +324,7 @@ def _simulate(args: argparse.Namespace) -> int:
         f"controller: {data['controller_impl']})"
     )
     print(f"  {result.experiment.title}")
-    gains = ", ".join(f"{k}={v:.6g}" for k, v in data["gains"].items())
-    print(f"  gains: {gains} ({data['gains_source']})")
+    print(f"  gains: {_gains_text(gains)} ({source})")
     sensor, command = data["latency_periods"]
     print(
         f"  stiffness {data['stiffness']:g} N/mm, latency {sensor} + {command} periods "
@@ -336,21 +349,36 @@ def _simulate(args: argparse.Namespace) -> int:
     return status
 
 
-def run_gains(controller: str, overrides: dict[str, float]) -> dict[str, float]:
-    """The complete gains a run uses: the defaults with ``overrides`` on top (as the runner
-    builds its controller), in a fixed order."""
+def ran_gains(ran: Any, exp: Any, gains_file: str | None) -> tuple[dict[str, Any], str]:
+    """The complete gains a run used and where they came from: a controller spec's per axis
+    (``{axis: {kp: ..}}``), or the defaults with the gains file's values on top (as the runner
+    builds its controller)."""
     from fuzzkit.studies.experiments import DEFAULT_GAINS
 
-    return {**DEFAULT_GAINS[controller], **overrides}
+    cs = exp.controller_spec
+    if cs is not None:
+        per_axis = {
+            a.axis: {k: v for k, v in (("kp", a.kp), ("ki", a.ki), ("kx", a.kx)) if v is not None}
+            for a in cs.axes
+        }
+        return per_axis, f"controller spec {cs.name}"
+    source = f"{gains_file} over the defaults" if gains_file else "the defaults"
+    return {**DEFAULT_GAINS[ran.controller], **dict(ran.gains)}, source
 
 
-def _fuzzy(spec: Any) -> Any:
+def _gains_text(gains: dict[str, Any]) -> str:
+    if all(isinstance(v, dict) for v in gains.values()):
+        return "; ".join(f"{axis}: {_gains_text(g)}" for axis, g in gains.items())
+    return ", ".join(f"{k}={v:.6g}" for k, v in gains.items())
+
+
+def _fuzzy(ran: Any, gains: dict[str, Any]) -> Any:
     """The rule base and gains of a fuzzy-PI run, for its recording's rule activity."""
-    if spec.controller != "fuzzy-pi":
+    if ran.controller != "fuzzy-pi":
         return None
     from fuzzkit.control.loop_rulebase import load_loop_rulebase
 
-    return load_loop_rulebase(spec.rulebase), dict(spec.gains)
+    return load_loop_rulebase(ran.rulebase), gains
 
 
 def comparison_table(rows: list[dict[str, Any]]) -> str:
@@ -444,7 +472,7 @@ def _compare(args: argparse.Namespace) -> int:
             row["gains_source"] = chosen[controller].source
             rows.append(row)
     if args.json:
-        print(json.dumps(rows, indent=2))
+        print(json.dumps(rows, indent=2, allow_nan=False))
     else:
         print(f"protocol: {args.protocol} (rule base {args.rulebase})")
         for controller in CONTROLLERS:

@@ -59,6 +59,13 @@ def register(subparsers: Any) -> None:
         help="gains files to compare (each one a value of the sweep); default gains otherwise",
     )
     p.add_argument(
+        "--spec",
+        default=None,
+        metavar="SPEC[,SPEC...]",
+        help="controller specs (docs/controller.md) to compare, each a value of the sweep in "
+        "place of --controller (a spec holds its gains: not with --gains)",
+    )
+    p.add_argument(
         "--plant",
         choices=sorted(PLANTS),
         default="planar",
@@ -173,6 +180,7 @@ def _sweep(args: argparse.Namespace) -> int:
         rulebase=args.rulebase,
         loop=args.loop or "auto",
         duration_s=args.duration,
+        controller_specs=args.spec.split(",") if args.spec else (),
     )
     from fuzzkit.progress import progress_bar
 

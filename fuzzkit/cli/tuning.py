@@ -83,6 +83,20 @@ def register(subparsers: Any) -> None:
     )
     tune.add_argument("--out", required=True, metavar="GAINS.yaml", help="gains file to write")
     tune.add_argument(
+        "--spec",
+        metavar="SPEC.yaml",
+        help="tune the gains of a controller spec (docs/controller.md): every run is the spec's "
+        "controller (its kind, rule base, task, limits, safety and front end) with the "
+        "candidate kp, ki, kx on every axis; replaces --controller and --rulebase",
+    )
+    tune.add_argument(
+        "--spec-out",
+        metavar="SPEC.yaml",
+        help="also write a controller spec: --spec's with the tuned gains, or else the first "
+        "experiment's task (axes, set points, safety) with the tuned gains on every axis and "
+        "no sensor front end",
+    )
+    tune.add_argument(
         "--replace",
         action="store_true",
         help="overwrite --out (default: keep the other controller's entry if the file has one)",
@@ -148,6 +162,13 @@ def register(subparsers: Any) -> None:
         help="small report for a smoke test: shorter tuning, stiffness and latency sweeps "
         "(fuzzkit.report.build.quick_options)",
     )
+    rep.add_argument(
+        "--spec",
+        default=None,
+        metavar="SPEC[,SPEC...]",
+        help="controller specs (docs/controller.md) to run on E1-E3 as they ship, in a "
+        "section of their own",
+    )
     rep.add_argument("--quiet", action="store_true", help="no progress bars")
     rep.set_defaults(handler=_report)
 
@@ -186,17 +207,18 @@ def _tune(args: argparse.Namespace) -> int:
 
     ks = parse_stiffness(args.stiffness)
     latencies = parse_latencies(args.latency) if args.latency else None
+    experiments, controller, rulebase, loop = _tuning_target(args)
     out = Path(args.out)
     check_output_path(out, "gains file")
+    if args.spec_out:
+        check_output_path(args.spec_out, "controller spec")
     if out.is_file() and not args.replace:
         read_gains_file(out)  # an unreadable existing file is reported now, not after tuning
-    with progress_bar(
-        args.budget, f"tune {args.controller}", quiet=args.quiet, unit="gain set"
-    ) as bar:
+    with progress_bar(args.budget, f"tune {controller}", quiet=args.quiet, unit="gain set") as bar:
         result = tune(
-            args.experiments,
-            args.controller,
-            args.rulebase,
+            experiments,
+            controller,
+            rulebase,
             args.plant,
             ks,
             budget=args.budget,
@@ -205,7 +227,7 @@ def _tune(args: argparse.Namespace) -> int:
             callback=progress_callback(bar),
             admit=args.admit,
             latencies=latencies,
-            loop=args.loop or "auto",
+            loop=loop,
             scheduler=args.scheduler,
         )
     _, kept = write_gains(out, result.to_entry(), merge=not args.replace)
@@ -223,10 +245,80 @@ def _tune(args: argparse.Namespace) -> int:
     for line in tune_report_lines(result, cases):
         print(line)
     print(f"wrote {out}" + (f" (kept the {', '.join(kept)} entry)" if kept else ""))
+    if args.spec_out:
+        _write_spec(args, result)
+        print(f"wrote {args.spec_out}")
     if result.interrupted:
         print(f"fuzzkit: interrupted (Ctrl-C); {out} holds the best gains so far", file=sys.stderr)
         return EXIT_INTERRUPTED
     return 0
+
+
+def _tuning_target(args: argparse.Namespace) -> tuple[list[Any], str, str, str]:
+    """What ``tune`` tunes: ``(experiments, controller, rule base, loop)``; with ``--spec``,
+    the experiments carry the spec and its kind and rule base are the controller's."""
+    loop = args.loop or "auto"
+    if not args.spec:
+        return list(args.experiments), args.controller, args.rulebase, loop
+    from fuzzkit.control.reference import front_end_from_spec
+    from fuzzkit.control.spec_reader import load_spec
+    from fuzzkit.studies.experiments import experiment, with_spec
+
+    spec = load_spec(args.spec)
+    if args.plant == "arm6" and any(e.upper() == "E3" for e in args.experiments):
+        raise ConfigError(
+            "tune --spec: E3 on arm6 (the paper's 3-D world) cannot carry a spec yet; "
+            "tune on E1, E2 or the planar plant"
+        )
+    if front_end_from_spec(spec) is not None:
+        if loop == "compiled":
+            raise ConfigError(
+                f"tune --spec: {args.spec} has a sensor front end, which only the Python "
+                "loop runs; leave out --loop compiled"
+            )
+        loop = "python"
+    experiments = [with_spec(experiment(e), spec) for e in args.experiments]
+    return experiments, spec.kind, spec.rulebase_source or args.rulebase, loop
+
+
+def _write_spec(args: argparse.Namespace, result: Any) -> None:
+    """The tuned gains as a controller spec (atomically): ``--spec``'s, or one of the first
+    experiment's task."""
+    import re
+
+    from fuzzkit.control.spec import require_valid, with_gains
+    from fuzzkit.control.spec_reader import load_spec
+    from fuzzkit.control.spec_writer import dump_spec
+    from fuzzkit.fileio import write_atomic
+    from fuzzkit.formats.registry import load
+    from fuzzkit.studies.experiments import experiment
+    from fuzzkit.studies.task import spec_for
+
+    header = (
+        f"# written by fuzzkit tune {' '.join(args.experiments)} ({result.plant}); "
+        "format: docs/controller.md\n"
+    )
+    gains = dict(result.to_entry().gains)
+    if args.spec:
+        write_atomic(
+            Path(args.spec_out), dump_spec(with_gains(load_spec(args.spec), gains), header)
+        )
+        return
+    exp = experiment(args.experiments[0])
+    name = re.sub(r"\W", "_", Path(args.spec_out).stem) or "tuned"
+    if not re.match(r"[A-Za-z_]", name):
+        name = "c_" + name
+    fuzzy = result.controller == "fuzzy-pi"
+    spec = spec_for(
+        exp,
+        result.controller,
+        gains,
+        name,
+        load(args.rulebase) if fuzzy else None,
+        args.rulebase if fuzzy else None,
+    )
+    require_valid(spec)
+    write_atomic(Path(args.spec_out), dump_spec(spec, header))
 
 
 def _latencies(pairs: Any) -> str:
@@ -314,6 +406,7 @@ def _report(args: argparse.Namespace) -> int:
         workers=args.workers,
         rrd=not args.no_rrd,
         log=None if args.quiet else sys.stderr,
+        specs=[Path(p) for p in args.spec.split(",")] if args.spec else (),
         **(quick_options(plants[0]) if args.quick else {}),
     )
     print(f"wrote {path}")

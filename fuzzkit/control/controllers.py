@@ -28,6 +28,8 @@ from typing import Any, Protocol, cast, runtime_checkable
 import numpy as np
 import numpy.typing as npt
 
+from fuzzkit.control import status as st
+from fuzzkit.control.frontend import FrontEnd
 from fuzzkit.errors import ConfigError
 
 Vec = npt.NDArray[np.float64]
@@ -148,6 +150,7 @@ class _Incremental:
         self.de = 0.0
         self.du = 0.0
         self.faults = 0
+        self.saturated = False  # a limit (|du| or u) acted in the last step
         self._e_prev: float | None = None
 
     def set_output(self, u: float) -> None:
@@ -163,6 +166,7 @@ class _Incremental:
         A NaN/inf ``measured`` is a sensor fault: u is held, ``faults`` counts it, and the next
         valid sample's ``de`` is taken against the last valid error.
         """
+        self.saturated = False
         if not math.isfinite(measured) or not math.isfinite(setpoint):
             self.faults += 1
             self.du = 0.0
@@ -174,9 +178,11 @@ class _Incremental:
         if not math.isfinite(du):  # a surface that answers NaN must not move the robot
             self.faults += 1
             du = 0.0
-        if self.rate_limit is not None:
+        if self.rate_limit is not None and abs(du) > self.rate_limit:
             du = min(max(du, -self.rate_limit), self.rate_limit)
+            self.saturated = True
         u = min(max(self.u + du, self.u_min), self.u_max)
+        self.saturated |= u != self.u + du
         self.e, self.de, self.du, self.u = e, de, u - self.u, u
         return u
 
@@ -277,7 +283,13 @@ class HybridForceController:
     * **sensor faults**: a sample with NaN/inf on a force-controlled axis (or ``None``) holds
       the correction and increments ``faults``.
 
-    :meth:`step` returns the task-frame correction ``S*u + backoff`` (m).
+    An optional ``front_end`` (:class:`~fuzzkit.control.frontend.FrontEnd`: tare, gravity
+    compensation, low-pass) turns each raw sample into the force the logic above sees: the
+    spike gate and the trip see the compensated sample, engagement and the axis controllers
+    the filtered one (``docs/controller.md`` gives the order).
+
+    :meth:`step` returns the task-frame correction ``S*u + backoff`` (m); ``status`` then holds
+    the step's bits (:mod:`fuzzkit.control.status`).
     """
 
     def __init__(
@@ -293,6 +305,7 @@ class HybridForceController:
         engage_samples: int = 3,
         spike_gate_n: float | None = None,
         spike_confirm: int = 4,
+        front_end: FrontEnd | None = None,
     ) -> None:
         if len(controllers) != 3 or len(setpoints) != 3:
             raise ConfigError(
@@ -320,13 +333,18 @@ class HybridForceController:
         self.engage_samples = engage_samples
         self.spike_gate_n = 0.5 * force_limit_n if spike_gate_n is None else spike_gate_n
         self.spike_confirm = spike_confirm
+        self.front_end = front_end
         self.reset()
 
     def reset(self) -> None:
-        """Clear every axis controller, the engagement, the trip latch and the fault count."""
+        """Clear every axis controller, the engagement, the trip latch, the fault count and the
+        front end (whose tare starts again)."""
         for c in self.controllers:
             if c is not None:
                 c.reset()
+        if self.front_end is not None:
+            self.front_end.reset()
+        self.status = 0
         self.u = np.zeros(3)
         self.e = np.zeros(3)
         self.de = np.zeros(3)
@@ -345,16 +363,34 @@ class HybridForceController:
         self._e_last: Vec | None = None
         self._t = 0.0
 
-    def step(self, force: Vec | None) -> Vec:
-        """Consume one measured force sample (task frame, N) and return the correction (m)."""
+    def request_tare(self) -> None:
+        """Take the next valid samples as a new tare (front end with tare only; free air)."""
+        if self.front_end is not None:
+            self.front_end.request_tare()
+
+    def step(self, force: Vec | None, rotation: Vec | None = None) -> Vec:
+        """Consume one raw force sample and return the correction (m, task frame).
+
+        ``force``: the sensor's reading (N, task frame; NaN entries or None: missing).
+        ``rotation``: the tool's rotation, world-from-sensor (3x3), needed when the front end
+        compensates gravity (without it the sample is missing).
+        """
         self._t += self.period_s
         self.du = np.zeros(3)
+        self.status = 0
+        fe = self.front_end
+        no_rotation = rotation is None or not bool(np.all(np.isfinite(rotation)))
+        if fe is not None and fe.needs_rotation and no_rotation:
+            force = None  # the tool's weight is unknown: the sample cannot be used
         valid = force is not None and bool(np.all(np.isfinite(force[self.selection > 0])))
         if force is None or not valid:
-            self.faults += 1
-            self._above = 0
-            return self._output()
-        f = np.where(np.isfinite(force), force, 0.0)
+            return self._missing()
+        if fe is not None and fe.taring:
+            return self._tare(fe, force, rotation)
+        if fe is not None:
+            f = fe.compensate(force, rotation)
+        else:
+            f = np.where(np.isfinite(force), force, 0.0)
         plausible = self._plausible(f)
         if not self.tripped:
             # The trip sees every finite sample, gated or not: a real force that rises faster
@@ -366,12 +402,16 @@ class HybridForceController:
             self.faults += 1
             self.rejected += 1
             self._above = 0
+            self.status |= st.REJECTED | st.HELD
             return self._output()
         if self.tripped:
             step = self.backoff_speed_m_s * self.period_s
             if float(np.linalg.norm(self._backoff)) < self.backoff_m:
                 self._backoff = self._backoff + step * self._backoff_dir
+                self.status |= st.RETREATING
             return self._output()
+        if fe is not None:
+            f = fe.filter(f)
         if not self.engaged:
             thr = self.engage_threshold_n if self.engage_threshold_n is not None else 0.0
             self._above = self._above + 1 if float(np.max(np.abs(f))) > thr else 0
@@ -385,6 +425,8 @@ class HybridForceController:
             self.u[i] = c.step(float(self.setpoints[i]), float(f[i]))
             self.du[i] = self.u[i] - before
             self.e[i] = self.setpoints[i] - f[i]
+            if getattr(c, "saturated", False):
+                self.status |= st.SATURATED
         self.de = self.e - self._e_last if self._e_last is not None else np.zeros(3)
         self._e_last = self.e.copy()
         return self._output()
@@ -395,7 +437,39 @@ class HybridForceController:
         but it is not counted as a sensor fault."""
         self._t += self.period_s
         self.du = np.zeros(3)
+        self.status = st.HELD
         self._above = 0
+        if self.front_end is not None and self.front_end.taring:
+            self.status |= st.TARING
+        return self._output()
+
+    def _tare(self, fe: FrontEnd, force: Vec, rotation: Vec | None) -> Vec:
+        """One tare sample: the spike gate keeps spikes out of the bias (a level confirmed
+        after ``spike_confirm`` rejections restarts the tare: what came before was the
+        outlier), the correction is held."""
+        if not bool(np.all(np.isfinite(force))):
+            return self._missing()
+        confirmed = self._accepted is not None and self._rejected_run >= self.spike_confirm
+        if not self._plausible(force - fe.weight(rotation)):
+            self.faults += 1
+            self.rejected += 1
+            self.status |= st.TARING | st.HELD | st.REJECTED
+            return self._output()
+        if confirmed:
+            fe.request_tare()
+        if fe.tare(force, rotation):
+            self._accepted = None  # the bias moved: the gate starts afresh
+            self._rejected_run = 0
+        self.status |= st.TARING | st.HELD
+        return self._output()
+
+    def _missing(self) -> Vec:
+        """A sample that cannot be used: hold, count it, restart the engagement count."""
+        self.faults += 1
+        self._above = 0
+        self.status |= st.HELD
+        if self.front_end is not None and self.front_end.taring:
+            self.status |= st.TARING
         return self._output()
 
     def _plausible(self, f: Vec) -> bool:
@@ -420,6 +494,10 @@ class HybridForceController:
         self._backoff_dir = -f / norm if norm > 0.0 else np.zeros(3)
 
     def _output(self) -> Vec:
+        if self.engaged:
+            self.status |= st.ENGAGED
+        if self.tripped:
+            self.status |= st.TRIPPED
         return self.selection * self.u + self._backoff
 
 

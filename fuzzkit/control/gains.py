@@ -20,21 +20,28 @@ A file holding only gains (``kp: 4e-5`` ...) applies to whichever controller rea
 
 Gain keys: PI ``kp``, ``ki`` (m/N, >= 0); fuzzy-PI ``kp`` (scales de, 1/N), ``ki`` (scales e,
 1/N), ``kx`` (m per step), all > 0; both accept ``u_min <= 0 <= u_max`` (m) and
-``rate_limit > 0`` (m per step). Every problem is reported at once as ``file:line: what (expected
-X, got Y)`` in one :class:`~fuzzkit.errors.ConfigError`.
+``rate_limit > 0`` (m per step). Every problem is reported at once as ``file:line:col: what
+(expected X, got Y)`` in one :class:`~fuzzkit.errors.ConfigFileError` (a ``ConfigError``).
 """
 
 from __future__ import annotations
 
 import math
 import os
-import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from fuzzkit.errors import ConfigError
+from fuzzkit.errors import ConfigError, ConfigFileError, Location, Problem
+from fuzzkit.located_yaml import (
+    DocumentKind,
+    compose_document,
+    locations,
+    raise_problems,
+    read_document,
+    to_python,
+)
 
 #: Controller names a gains file may hold, in file order.
 CONTROLLERS = ("pi", "fuzzy-pi")
@@ -47,9 +54,6 @@ GAIN_KEYS: dict[str, tuple[str, ...]] = {
 
 #: Every gain key of any controller (a flat file may hold any of them).
 _ALL_KEYS = tuple(dict.fromkeys(k for keys in GAIN_KEYS.values() for k in keys))
-
-#: A decimal number in exponent notation (what YAML 1.1 fails to read as a float).
-_FLOAT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
 
 #: Keys of a structured entry (``{gains: ..., provenance: ...}``).
 _ENTRY_KEYS = ("gains", "provenance")
@@ -64,66 +68,46 @@ class GainsEntry:
     provenance: dict[str, Any] = field(default_factory=dict)
 
 
-def _line_index(node: Any) -> dict[tuple[str, ...], int]:
-    """Map every key path of a composed YAML mapping tree to its 1-based line."""
-    import yaml
+GAINS_DOCUMENT = DocumentKind(
+    "gains file",
+    "gains files",
+    "expected a mapping of gains (kp: ..., ki: ...) or of controllers (pi: ..., fuzzy-pi: ...)",
+    ConfigFileError,
+)
 
-    out: dict[tuple[str, ...], int] = {}
-
-    def walk(n: Any, path: tuple[str, ...]) -> None:
-        if isinstance(n, yaml.MappingNode):
-            for k, v in n.value:
-                key = (*path, str(k.value))
-                out[key] = k.start_mark.line + 1
-                walk(v, key)
-
-    if node is not None:
-        out[()] = node.start_mark.line + 1
-        walk(node, ())
-    return out
-
-
-def _number(val: Any) -> Any:
-    """``val``, or the float a string like ``1e-4`` spells.
-
-    YAML 1.1 (PyYAML) reads ``1e-4`` without a decimal point as a *string*; engineers write
-    gains that way, so such strings are accepted as numbers (not nan/inf spellings).
-    """
-    if isinstance(val, str) and _FLOAT.fullmatch(val.strip()):
-        return float(val)
-    return val
+_Where = dict[tuple[str | int, ...], Location]
 
 
 def _check_gains(
     controller: str | None,
     data: Any,
     where: str,
-    lines: dict[tuple[str, ...], int],
+    lines: _Where,
     path: tuple[str, ...],
-    problems: list[str],
+    problems: list[Problem],
 ) -> dict[str, float]:
     """Validate one gains mapping; append located problems; return the valid gains."""
 
-    def at(*keys: str) -> str:
-        line = lines.get((*path, *keys)) or lines.get(path) or 0
-        return f"{where}:{line}" if line else where
+    def at(*keys: str) -> Location:
+        return lines.get((*path, *keys)) or lines.get(path) or Location(where)
 
     if not isinstance(data, dict):
-        problems.append(f"{at()}: gains must be a mapping (got {type(data).__name__})")
+        problems.append(Problem(at(), f"gains must be a mapping (got {type(data).__name__})"))
         return {}
     allowed = GAIN_KEYS[controller] if controller else _ALL_KEYS
     out: dict[str, float] = {}
-    for key, val in data.items():
-        k = str(key)
-        val = _number(val)
+    for k, val in data.items():
         if k not in allowed:
             problems.append(
-                f"{at(k)}: unknown gain {k!r}"
-                + (f" for {controller}" if controller else "")
-                + f" (expected one of {', '.join(allowed)})"
+                Problem(
+                    at(k),
+                    f"unknown gain {k!r}"
+                    + (f" for {controller}" if controller else "")
+                    + f" (expected one of {', '.join(allowed)})",
+                )
             )
         elif isinstance(val, bool) or not isinstance(val, int | float) or not math.isfinite(val):
-            problems.append(f"{at(k)}: gain {k} must be a finite number (got {val!r})")
+            problems.append(Problem(at(k), f"gain {k} must be a finite number (got {val!r})"))
         else:
             out[k] = float(val)
     # Sign and order checks the controllers would make, but located in the file.
@@ -131,18 +115,23 @@ def _check_gains(
     for k in ("kp", "ki", "kx"):
         if k in out and (out[k] <= 0.0 if strict else out[k] < 0.0):
             want = "> 0" if strict else ">= 0"
-            problems.append(f"{at(k)}: gain {k} must be {want} (got {out[k]!r})")
+            problems.append(Problem(at(k), f"gain {k} must be {want} (got {out[k]!r})"))
     if "u_min" in out and out["u_min"] > 0.0:
-        problems.append(f"{at('u_min')}: u_min must be <= 0 (got {out['u_min']!r})")
+        problems.append(Problem(at("u_min"), f"u_min must be <= 0 (got {out['u_min']!r})"))
     if "u_max" in out and out["u_max"] < 0.0:
-        problems.append(f"{at('u_max')}: u_max must be >= 0 (got {out['u_max']!r})")
+        problems.append(Problem(at("u_max"), f"u_max must be >= 0 (got {out['u_max']!r})"))
     if "rate_limit" in out and out["rate_limit"] <= 0.0:
-        problems.append(f"{at('rate_limit')}: rate_limit must be > 0 (got {out['rate_limit']!r})")
+        problems.append(
+            Problem(at("rate_limit"), f"rate_limit must be > 0 (got {out['rate_limit']!r})")
+        )
     return out
 
 
 def parse_gains(text: str, where: str = "<gains>") -> dict[str | None, GainsEntry]:
     """Parse a gains file's text into entries keyed by controller (None: a flat file).
+
+    The text is read by :mod:`fuzzkit.located_yaml` (size and alias limits, duplicate and
+    boolean keys refused, ``1e-4`` read as a number).
 
     Parameters
     ----------
@@ -156,35 +145,30 @@ def parse_gains(text: str, where: str = "<gains>") -> dict[str | None, GainsEntr
     Raises
     ------
     ConfigError
-        Not YAML, not a mapping, unknown controllers or keys, non-finite or out-of-range gains:
-        every problem, each as ``file:line: ...``.
+        (a :class:`~fuzzkit.errors.ConfigFileError`) Not YAML, not a mapping, unknown
+        controllers or keys, non-finite or out-of-range gains: every problem, each as
+        ``file:line:col: ...``.
     """
-    import yaml
-
-    try:
-        node = yaml.compose(text, Loader=yaml.SafeLoader)
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        loc = f"{where}:{mark.line + 1}" if mark is not None else where
-        problem = getattr(exc, "problem", None)
-        raise ConfigError(f"{loc}: not valid YAML" + (f" ({problem})" if problem else "")) from exc
+    root = compose_document(text, where, GAINS_DOCUMENT)
+    data = to_python(root, where, GAINS_DOCUMENT)
+    lines = locations(root, where)
     if not isinstance(data, dict):
-        got = "an empty file" if data is None else type(data).__name__
-        raise ConfigError(f"{where}: expected a mapping of gains, got {got}")
-    lines = _line_index(node)
-    problems: list[str] = []
+        raise ConfigFileError(
+            [Problem(lines[()], f"expected a mapping of gains, got {type(data).__name__}")]
+        )
+    problems: list[Problem] = []
     entries: dict[str | None, GainsEntry] = {}
-    keys = [str(k) for k in data]
-    if not any(k in CONTROLLERS for k in keys):
+    if not any(k in CONTROLLERS for k in data):
         gains = _check_gains(None, data, where, lines, (), problems)
         entries[None] = GainsEntry(None, gains)
     else:
-        unknown = [k for k in keys if k not in CONTROLLERS]
+        unknown = [k for k in data if k not in CONTROLLERS]
         if unknown:
-            line = lines.get((unknown[0],), 0)
             problems.append(
-                f"{where}:{line}: unknown controller keys {unknown} (expected pi, fuzzy-pi)"
+                Problem(
+                    lines[(unknown[0],)],
+                    f"unknown controller keys {unknown} (expected pi, fuzzy-pi)",
+                )
             )
         for ctrl in CONTROLLERS:
             if ctrl not in data:
@@ -194,27 +178,31 @@ def parse_gains(text: str, where: str = "<gains>") -> dict[str | None, GainsEntr
                 val = {}
             provenance: dict[str, Any] = {}
             if isinstance(val, dict) and "gains" in val:
-                extra = [str(k) for k in val if k not in _ENTRY_KEYS]
+                extra = [k for k in val if k not in _ENTRY_KEYS]
                 if extra:
-                    line = lines.get((ctrl, extra[0]), 0)
                     problems.append(
-                        f"{where}:{line}: unknown key {extra[0]!r} in the {ctrl} entry "
-                        f"(expected gains, provenance)"
+                        Problem(
+                            lines[(ctrl, extra[0])],
+                            f"unknown key {extra[0]!r} in the {ctrl} entry "
+                            "(expected gains, provenance)",
+                        )
                     )
                 prov = val.get("provenance") or {}
                 if not isinstance(prov, dict):
-                    line = lines.get((ctrl, "provenance"), 0)
                     problems.append(
-                        f"{where}:{line}: provenance must be a mapping (got {type(prov).__name__})"
+                        Problem(
+                            lines[(ctrl, "provenance")],
+                            f"provenance must be a mapping (got {type(prov).__name__})",
+                        )
                     )
                 else:
-                    provenance = {str(k): v for k, v in prov.items()}
+                    provenance = dict(prov)
                 gains = _check_gains(ctrl, val["gains"], where, lines, (ctrl, "gains"), problems)
             else:
                 gains = _check_gains(ctrl, val, where, lines, (ctrl,), problems)
             entries[ctrl] = GainsEntry(ctrl, gains, provenance)
     if problems:
-        raise ConfigError("\n".join(problems) if len(problems) > 1 else problems[0])
+        raise_problems(problems, GAINS_DOCUMENT)
     return entries
 
 
@@ -226,13 +214,7 @@ def read_gains_file(path: str | os.PathLike[str]) -> dict[str | None, GainsEntry
     ConfigError
         The file cannot be read, or any problem :func:`parse_gains` reports.
     """
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read gains file ({exc.strerror})") from exc
-    except UnicodeDecodeError as exc:
-        raise ConfigError(f"{path}: not a text file ({exc.reason})") from exc
-    return parse_gains(text, str(path))
+    return parse_gains(read_document(Path(path), GAINS_DOCUMENT), str(path))
 
 
 def read_gains(
@@ -265,10 +247,10 @@ def read_gains(
                 f"(expected one of {', '.join(GAIN_KEYS[controller])})"
             )
         # Re-check signs with the controller's own rule (fuzzy-PI needs > 0).
-        problems: list[str] = []
+        problems: list[Problem] = []
         _check_gains(controller, dict(gains), str(path), {}, (), problems)
         if problems:
-            raise ConfigError("\n".join(problems))
+            raise_problems(problems, GAINS_DOCUMENT)
         return dict(gains)
     entry = entries.get(controller)
     if entry is None and required:

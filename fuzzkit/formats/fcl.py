@@ -9,8 +9,15 @@ and ``sigm`` too). A bare number is a singleton (an input) or a Sugeno constant 
 Semantics kept: FCL has no input clamping (``out_of_range: extend``); ``DEFAULT := v`` applies
 where no rule fires (``NC``, keep the previous value, is refused); ``ACCU`` may sit in the
 ``DEFUZZIFY`` block (fuzzylite) or in the ``RULEBLOCK`` (IEC); ``METHOD : COGS`` and ``COGSS``
-are Sugeno weighted average and weighted sum. Keywords are case-insensitive; comments are
-``(* ... *)``, ``/* ... */`` and ``//``. Statements end with ``;`` or at the end of the line.
+are Sugeno weighted average and weighted sum; an ``AND`` or ``OR`` not declared is the De
+Morgan partner of the one declared (``MIN``/``MAX``, ``PROD``/``ASUM``). Keywords are
+case-insensitive; comments are ``(* ... *)``, ``/* ... */`` and ``//``. Statements end with
+``;`` or at the end of the line.
+
+Ranges: IEC 61131-7 gives a ``FUZZIFY`` block no ``RANGE`` (and makes it optional in
+``DEFUZZIFY``); jFuzzyLogic also accepts ``RANGE := (low .. high)`` after the declaration in
+``VAR_INPUT``/``VAR_OUTPUT``. A variable without one gets the span of its terms (see
+:func:`term_span`), as jFuzzyLogic derives its universe; :func:`loads_with_notes` says which.
 """
 
 from __future__ import annotations
@@ -62,6 +69,10 @@ _METHOD = {
 #: jFuzzyLogic's shape names, as the fuzzylite class they mean (parameters in the same order
 #: except gbell, whose (a, b, mean) becomes Bell's (centre, width, slope)).
 _JFL = {"TRIAN": "Triangle", "TRAPE": "Trapezoid", "GAUSS": "Gaussian", "SIGM": None, "GBELL": None}
+#: Shapes whose parameters are all positions on the axis (their span is the term's).
+_POSITIONAL = frozenset({"singleton", "constant", "s_shape", "z_shape", "pi_shape"})
+#: De Morgan partners: the OR an AND implies when only the AND is declared, and back.
+_DE_MORGAN = {"min": "max", "product": "probabilistic_sum"}
 _PAIR = re.compile(r"\(\s*([^,()]+?)\s*,\s*([^,()]+?)\s*\)")
 # an unterminated comment runs to the end of the file (one match, so scanning stays linear)
 _COMMENTS = re.compile(r"\(\*.*?(?:\*\)|\Z)|/\*.*?(?:\*/|\Z)|//[^\n]*", re.DOTALL)
@@ -134,6 +145,8 @@ class _Var:
     #: (statement, term name, definition, column of the definition)
     terms: list[tuple[_Stmt, str, str, int]] = field(default_factory=list)
     default: float | None = None
+    #: line and column of its FUZZIFY/DEFUZZIFY block, where a derived range is located
+    block: tuple[int, int] | None = None
 
 
 def _assign(s: _Stmt, found: Collector, sep: str) -> tuple[str, int] | None:
@@ -144,6 +157,51 @@ def _assign(s: _Stmt, found: Collector, sep: str) -> tuple[str, int] | None:
         return None
     value = rest[len(sep) :]
     return value.strip(), col + len(sep) + (len(value) - len(value.lstrip()))
+
+
+def _range(s: _Stmt, var: _Var, found: Collector) -> None:
+    """``RANGE := (low .. high)`` of ``var``."""
+    got = _assign(s, found, ":=")
+    m = re.fullmatch(r"\(\s*(\S+)\s*\.\.\s*(\S+)\s*\)", got[0]) if got else None
+    lo = parse_number(m.group(1)) if m else None
+    hi = parse_number(m.group(2)) if m else None
+    if got is not None and (lo is None or hi is None):
+        found.add(s.line, got[1], f"RANGE: expected (low .. high), got {got[0]!r}")
+    elif lo is not None and hi is not None and got is not None:
+        var.low, var.high = lo, hi
+        found.mark((var.kind + "s", var.name, "range"), s.line, got[1])
+
+
+def term_span(body: str, term: Term) -> tuple[float, float] | None:
+    """Where a term lies on its axis, for a variable without ``RANGE``; None if unknown.
+
+    A point list spans its first to its last point (held constant beyond them, so these are
+    where its shape is); a singleton or constant is its value; a named shape whose parameters
+    are all positions (triangle, trapezoid, ramp, S/Z/Pi splines) spans its parameters. Smooth
+    shapes have no ends: jFuzzyLogic's estimates are used, where the membership is negligible
+    (gaussian: mean +- 4 sigma, both halves of a two-sided one; bell: where it falls to 0.001;
+    sigmoid: centre +- 9/|slope|). A Sugeno ``linear`` term, a difference or product of
+    sigmoids have no such place on the axis (None).
+    """
+    p = term.params
+    if body.startswith("("):
+        xs = [parse_number(x) for x, _ in _PAIR.findall(body)]
+        pts = [x for x in xs if x is not None]
+        return (min(pts), max(pts)) if pts else None
+    if term.is_piecewise_linear or term.shape in _POSITIONAL:
+        return min(p), max(p)
+    if term.shape == "gaussian_product":  # mean1, sigma1, mean2, sigma2
+        return min(p[0] - 4.0 * abs(p[1]), p[2]), max(p[0], p[2] + 4.0 * abs(p[3]))
+    half: float | None = None
+    if term.shape == "gaussian":  # mean, sigma
+        centre, half = p[0], 4.0 * abs(p[1])
+    elif term.shape == "bell":  # width, slope, centre: 1/(1 + |d/width|^(2 slope)) = 0.001
+        centre, half = p[2], abs(p[0]) * 999.0 ** (1.0 / (2.0 * p[1])) if p[1] > 0 else None
+    elif term.shape == "sigmoid":  # slope, centre
+        centre, half = p[1], 9.0 / abs(p[0]) if p[0] != 0 else None
+    if half is None or not math.isfinite(half):
+        return None
+    return centre - half, centre + half
 
 
 def _word(s: _Stmt, table: dict[str, str], found: Collector) -> str | None:
@@ -176,6 +234,8 @@ def _term_def(body: str, name: str, output: bool, sugeno: bool, n_inputs: int) -
             return "a Sugeno output takes Constant or Linear terms, not a point list"
         return points_to_term(name, points)
     words = body.split()
+    if not words:  # a truncated file: "TERM x :=" and nothing after it
+        return "expected a term after ':=' (a point list, a number or a shape), got nothing"
     value = parse_number(body)
     if value is not None:  # IEC singleton
         if output:
@@ -219,6 +279,18 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
     RuleBaseError
         Every problem as ``source:line:col: message``.
     """
+    rb, warnings, _ = loads_with_notes(text, source)
+    return rb, warnings
+
+
+def loads_with_notes(
+    text: str, source: str = "<string>"
+) -> tuple[RuleBase, list[Problem], dict[str, str]]:
+    """:func:`loads_with_warnings`, also saying how each range without ``RANGE`` was derived.
+
+    The third item maps the name of every variable whose file gives no ``RANGE`` to a note
+    (``fuzzkit import`` writes it as a comment on the YAML range).
+    """
     found = Collector(source)
     stmts = _statements(text)
     if not stmts or stmts[0].head != "FUNCTION_BLOCK":
@@ -239,6 +311,7 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
     methods: list[tuple[str, _Stmt]] = []
     accus: list[tuple[str, _Stmt]] = []
     rule_stmts: list[_Stmt] = []
+    last_declared: _Var | None = None
     ended = False
     for s in stmts[1:]:
         head = s.head
@@ -246,7 +319,7 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
             found.add(s.line, s.col, f"unexpected {s.text!r} after END_FUNCTION_BLOCK")
             break
         if head in ("VAR_INPUT", "VAR_OUTPUT"):
-            block = head
+            block, last_declared = head, None
             continue
         if head in _CLOSERS:
             if head == "END_FUNCTION_BLOCK":
@@ -254,6 +327,12 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
             block, current = "FUNCTION_BLOCK", None
             continue
         if block in ("VAR_INPUT", "VAR_OUTPUT"):
+            if head == "RANGE":  # jFuzzyLogic: `x : REAL; RANGE := (0 .. 10);`
+                if last_declared is None:
+                    found.add(s.line, s.col, "RANGE before any variable declaration")
+                else:
+                    _range(s, last_declared, found)
+                continue
             vname, colon, vtype = s.text.partition(":")
             kind = "input" if block == "VAR_INPUT" else "output"
             if not colon or vtype.strip().upper() != "REAL":
@@ -263,7 +342,7 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
             if vname in variables:
                 found.add(s.line, s.col, f"variable {vname!r} declared twice")
                 continue
-            variables[vname] = _Var(vname, kind, s.line, s.col)
+            variables[vname] = last_declared = _Var(vname, kind, s.line, s.col)
             order[kind].append(vname)
             continue
         if head in ("FUZZIFY", "DEFUZZIFY"):
@@ -277,6 +356,8 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
                     f"{head} {vname}: no {want} {vname!r} declared in VAR_{want.upper()}",
                 )
                 current = None
+            elif current.block is None:
+                current.block = (s.line, s.col)
             block = head
             continue
         if head == "RULEBLOCK":
@@ -286,15 +367,7 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
             if current is None:
                 continue  # the block's header was already reported
             if head == "RANGE":
-                got = _assign(s, found, ":=")
-                m = re.fullmatch(r"\(\s*(\S+)\s*\.\.\s*(\S+)\s*\)", got[0]) if got else None
-                lo = parse_number(m.group(1)) if m else None
-                hi = parse_number(m.group(2)) if m else None
-                if got is not None and (lo is None or hi is None):
-                    found.add(s.line, got[1], f"RANGE: expected (low .. high), got {got[0]!r}")
-                elif lo is not None and hi is not None and got is not None:
-                    current.low, current.high = lo, hi
-                    found.mark((current.kind + "s", current.name, "range"), s.line, got[1])
+                _range(s, current, found)
             elif head == "TERM":
                 rest, rcol = s.rest()
                 tname, eq, body = rest.partition(":=")
@@ -316,13 +389,14 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
                 if got is None:
                     continue
                 value_text, _, nc = got[0].partition("|")
-                if nc.strip():
+                if nc.strip() or value_text.strip().upper() == "NC":
                     found.add(
                         s.line,
                         got[1],
                         "DEFAULT ... | NC (keep the previous value when no "
                         "rule fires) cannot be expressed in fuzzkit",
                     )
+                    continue
                 value = parse_number(value_text.strip())
                 if value is None:
                     found.add(
@@ -398,27 +472,22 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
             "fuzzkit weights every rule separately; remove it",
         )
     built: dict[str, list[Variable]] = {"input": [], "output": []}
+    notes: dict[str, str] = {}
     n_inputs = len(order["input"])
     for kind in ("input", "output"):
         for vname in order[kind]:
             v = variables[vname]
             base = (kind + "s", vname)
             found.mark(base, v.line, v.col)
-            if v.low is None or v.high is None:
-                found.add(
-                    v.line,
-                    v.col,
-                    f"{kind} {vname!r}: missing RANGE := (low .. high); "
-                    "fuzzkit needs every variable's range",
-                )
-                continue
             terms: list[Term] = []
+            spans: list[tuple[_Stmt, Term, tuple[float, float] | None]] = []
             seen: set[str] = set()
             for s, tname, body, bcol in v.terms:
                 term = _term_def(body, tname, kind == "output", sugeno, n_inputs)
                 if isinstance(term, str):
                     found.add(s.line, bcol, f"TERM {tname}: {term}")
                     continue
+                spans.append((s, term, term_span(body, term)))
                 if tname in seen:
                     found.add(
                         s.line,
@@ -430,6 +499,11 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
                 seen.add(tname)
                 found.mark((*base, "terms", tname), s.line, bcol)
                 terms.append(term)
+            if v.low is None or v.high is None:
+                derived = _derived_range(v, spans, len(spans) < len(v.terms), found)
+                # reported when None; a stand-in keeps the rules' references to it quiet
+                v.low, v.high = derived or (0.0, 1.0)
+                notes[vname] = f"derived: the span of its terms (no RANGE in {FsPath(source).name})"
             built[kind].append(Variable(vname, v.low, v.high, tuple(terms), v.default))
     by_in = {v.name: v for v in built["input"]}
     by_out = {v.name: v for v in built["output"]}
@@ -456,16 +530,60 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
         inputs=tuple(built["input"]),
         outputs=tuple(built["output"]),
         rules=tuple(rules),
-        operators=Operators(
-            ops["AND"][0] if "AND" in ops else "min",
-            ops["OR"][0] if "OR" in ops else "max",
-            ops["ACT"][0] if "ACT" in ops else "min",
-            agg or "max",
-        ),
+        operators=Operators(*_and_or(ops), ops["ACT"][0] if "ACT" in ops else "min", agg or "max"),
         defuzzifier=defuzz or "centroid",
         out_of_range="extend",
     )
-    return finish(rb, found, text)
+    return (*finish(rb, found, text), notes)
+
+
+def _and_or(ops: dict[str, tuple[str, _Stmt]]) -> tuple[str, str]:
+    """AND and OR; one not declared is the De Morgan partner of the other (IEC 61131-7)."""
+    and_ = ops["AND"][0] if "AND" in ops else None
+    or_ = ops["OR"][0] if "OR" in ops else None
+    if and_ is None:
+        and_ = next((a for a, o in _DE_MORGAN.items() if o == or_), "min")
+    return and_, or_ if or_ is not None else _DE_MORGAN[and_]
+
+
+def _derived_range(
+    v: _Var,
+    spans: list[tuple[_Stmt, Term, tuple[float, float] | None]],
+    broken: bool,
+    found: Collector,
+) -> tuple[float, float] | None:
+    """The span of a variable's terms, for a variable without RANGE (or why not, reported).
+
+    ``broken``: a term did not parse (reported already), so the span would be a guess.
+    """
+    line, col = v.block or (v.line, v.col)
+    what = f"{v.kind} {v.name!r} has no RANGE := (low .. high)"
+    if not spans and not broken:
+        found.add(line, col, f"{what} and no terms to derive it from")
+        return None
+    known: list[tuple[float, float]] = []
+    for s, term, span in spans:
+        if span is None:
+            found.add(
+                s.line,
+                s.col,
+                f"{what}, and TERM {term.name} ({term.shape}) has no place on the axis to "
+                "derive it from: add a RANGE",
+            )
+        else:
+            known.append(span)
+    if broken or len(known) < len(spans):
+        return None
+    low, high = min(lo for lo, _ in known), max(hi for _, hi in known)
+    if not low < high:
+        found.add(
+            line,
+            col,
+            f"{what}, and its terms all sit at {fmt(low)}: add a RANGE to give it a width",
+        )
+        return None
+    found.mark((v.kind + "s", v.name, "range"), line, col)
+    return low, high
 
 
 def load(path: str | FsPath) -> RuleBase:
@@ -476,6 +594,11 @@ def load(path: str | FsPath) -> RuleBase:
 def load_with_warnings(path: str | FsPath) -> tuple[RuleBase, list[Problem]]:
     """:func:`load`, also returning the warnings (coverage gaps), located."""
     return loads_with_warnings(read_text(path, "an .fcl file"), str(path))
+
+
+def load_with_notes(path: str | FsPath) -> tuple[RuleBase, list[Problem], dict[str, str]]:
+    """:func:`load_with_warnings`, also the notes on derived ranges (:func:`loads_with_notes`)."""
+    return loads_with_notes(read_text(path, "an .fcl file"), str(path))
 
 
 # ---------------------------------------------------------------------------- export

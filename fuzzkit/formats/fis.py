@@ -280,7 +280,10 @@ def _variable(
     found.mark((*base, "range"), sec.keys["Range"].line, sec.keys["Range"].col)
     terms: list[Term] = []
     seen: dict[str, int] = {}
-    for i in range(1, n_mfs + 1):
+    # A count is checked against the lines there are, never looped over: NumMFs=1e18 is one
+    # problem (the first missing MF), not an endless loop.
+    n_present = sum(1 for k in sec.keys if re.fullmatch(r"MF\d+", k))
+    for i in range(1, min(n_mfs, n_present + 1) + 1):
         mf = sec.keys.get(f"MF{i}")
         if mf is None:
             found.add(
@@ -474,6 +477,7 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
         found.fail()
     name = _quoted(sys.keys["Name"], found, "[System] Name") or "imported"
     found.mark(("name",), sys.keys["Name"].line, sys.keys["Name"].col)
+    found.mark((), sys.line, 1)  # problems of the whole rule base
     kind = _quoted(sys.keys["Type"], found, "[System] Type")
     if kind not in (None, "mamdani", "sugeno"):
         v = sys.keys["Type"]
@@ -511,7 +515,8 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
     groups: dict[str, list[Variable]] = {"input": [], "output": []}
     for kind_, count in (("input", n_in), ("output", n_out)):
         title = kind_.capitalize()
-        for i in range(1, count + 1):
+        n_present = sum(1 for sec in sections if re.fullmatch(rf"{title}\d+", sec.name))
+        for i in range(1, min(count, n_present + 1) + 1):
             sec = by_name.get(f"{title}{i}")
             if sec is None:
                 declared = sys.keys[f"Num{title}s"]
@@ -532,6 +537,8 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
         if not known and (limit is None or not num or not 1 <= int(num) <= limit):
             found.add(sec.line, 1, f"unexpected section [{sec.name}]")
     rules_sec = by_name.get("Rules")
+    if rules_sec is not None:
+        found.mark(("rules",), rules_sec.line, 1)
     rules: list[Rule] = []
     if rules_sec is None:
         found.add(len(text.splitlines()) or 1, 1, "missing [Rules] section (truncated file?)")

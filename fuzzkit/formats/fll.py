@@ -390,6 +390,7 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
         found.fail()
     engine = engines[0]
     found.mark(("name",), engine.line, engine.col)
+    found.mark((), engine.line, 1)  # problems of the whole rule base
     ins = [b for b in blocks if b.kind == "InputVariable"]
     outs = [b for b in blocks if b.kind == "OutputVariable"]
     rule_blocks = [b for b in blocks if b.kind == "RuleBlock"]
@@ -454,6 +455,7 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
         )
         found.fail()
     rb_block = rule_blocks[0]
+    found.mark(("rules",), rb_block.line, 1)
     if not _bool(rb_block.get("enabled"), found, True):
         found.add(rb_block.line, 1, "the RuleBlock is disabled")
     and_ = _one_of(rb_block.get("conjunction"), _AND, found, "conjunction", allow_none=True)

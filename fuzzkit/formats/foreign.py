@@ -25,9 +25,7 @@ from fuzzkit.errors import FuzzkitError, Location, Problem, RuleBaseError
 from fuzzkit.fuzzy import validation
 from fuzzkit.fuzzy.model import Compound, Expression, Proposition, RuleBase, Source, Term
 from fuzzkit.fuzzy.validation import Path
-
-#: Foreign rule-base files are text of at most this many bytes (as for YAML).
-MAX_FILE_BYTES = 1 << 20
+from fuzzkit.located_yaml import DocumentKind, read_text_file
 
 #: Sugeno (Takagi-Sugeno-Kang) output shapes: ``constant (value,)`` and ``linear
 #: (c_1, ..., c_n, c_0)`` with one coefficient per input in the rule base's input order.
@@ -117,37 +115,14 @@ def finish(rb: RuleBase, found: Collector, text: str) -> tuple[RuleBase, list[Pr
     return replace(rb, source=Source(found.source, digest)), warnings
 
 
+#: What a foreign rule-base file is, for the messages of the shared file reading.
+FOREIGN_DOCUMENT = DocumentKind("rule base", "rule bases", "expected a rule base", RuleBaseError)
+
+
 def read_text(path: str | FsPath, what: str) -> str:
-    """The UTF-8 text of a rule-base file ``what`` (e.g. ``a .fis file``), size-checked."""
-    p = FsPath(path)
-    name = str(path)
-    try:
-        size = p.stat().st_size
-        if size > MAX_FILE_BYTES:
-            raise RuleBaseError(
-                [
-                    Problem(
-                        Location(name),
-                        f"file is {size} bytes; rule bases are limited to "
-                        f"{MAX_FILE_BYTES} bytes (1 MiB)",
-                    )
-                ]
-            )
-        data = p.read_bytes()
-    except IsADirectoryError:
-        raise RuleBaseError(
-            [Problem(Location(name), f"is a directory (expected {what})")]
-        ) from None
-    except OSError as exc:
-        raise RuleBaseError(
-            [Problem(Location(name), f"cannot read: {exc.strerror or exc}")]
-        ) from None
-    try:
-        return data.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise RuleBaseError(
-            [Problem(Location(name), f"not UTF-8 text (byte {exc.start}); expected {what}")]
-        ) from None
+    """The UTF-8 text of a rule-base file ``what`` (e.g. ``a .fis file``), size-checked; a
+    byte-order mark is dropped (MATLAB on Windows writes one)."""
+    return read_text_file(path, FOREIGN_DOCUMENT, what, encoding="utf-8-sig")
 
 
 def parse_number(token: str) -> float | None:

@@ -15,11 +15,11 @@ import os
 from importlib import resources
 from pathlib import Path
 
-from fuzzkit.errors import Location, Problem, RuleBaseError
+from fuzzkit.errors import Location, Problem, RuleBaseError, did_you_mean
 from fuzzkit.formats import fcl, fis, fll
 from fuzzkit.formats.yaml_reader import load_file_with_warnings, loads_rulebase_with_warnings
+from fuzzkit.fuzzy import validation
 from fuzzkit.fuzzy.model import RuleBase
-from fuzzkit.fuzzy.validation import did_you_mean
 
 _PACKAGE = "fuzzkit.rulebases"
 _SUFFIXES = (".yaml", ".yml")
@@ -44,6 +44,9 @@ def dumps(rb: RuleBase, fmt: str, *, allow_loss: bool = False, dialect: str = "n
     ValueError
         Unknown format or FCL dialect.
     """
+    too_deep = validation.depth_problems(rb)
+    if too_deep:  # the readers refuse these; the writers must not produce them
+        raise RuleBaseError(validation.as_problems(rb, too_deep))
     if fmt == "fis":
         return fis.dumps(rb, allow_loss=allow_loss)
     if fmt == "fll":

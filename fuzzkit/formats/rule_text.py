@@ -28,9 +28,11 @@ from fuzzkit.fuzzy.model import (
     Rule,
     Variable,
 )
+from fuzzkit.fuzzy.validation import MAX_CONDITION_DEPTH
 
-#: Parentheses nest at most this deep (a hostile file must not exhaust the stack).
-MAX_DEPTH = 32
+#: Parentheses nest at most this deep (a hostile file must not exhaust the stack); a
+#: condition of the most and/or levels validation allows needs one level fewer.
+MAX_DEPTH = MAX_CONDITION_DEPTH
 HEDGES = frozenset({"very", "somewhat", "seldom", "extremely", "any"})
 _TOKEN = re.compile(r"\(|\)|[^\s()]+")
 

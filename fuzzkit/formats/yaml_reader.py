@@ -1,15 +1,18 @@
 """Rule-base YAML -> model: strict loading with every problem located.
 
-The format is documented in ``docs/rulebase-format.md``. Loading is as safe as
-``yaml.safe_load`` (the document is composed with PyYAML's ``SafeLoader``, which builds no
-Python objects) and stricter: the node tree is converted by hand so that every problem, from
-an unknown key to an uncovered input range, is reported as ``file:line:col: message`` and all
-of them are raised together in one :class:`~fuzzkit.errors.RuleBaseError`.
+The format is documented in ``docs/rulebase-format.md``. The document is composed by
+:mod:`fuzzkit.located_yaml` (the hardened reader every fuzzkit YAML file goes through: size
+and alias limits, control characters, duplicate and boolean keys), then converted by hand so
+that every problem, from an unknown key to an uncovered input range, is reported as
+``file:line:col: message`` and all of them are raised together in one
+:class:`~fuzzkit.errors.RuleBaseError`.
 
 Semantic checks live in :mod:`fuzzkit.fuzzy.validation` (shared with the engines); this module
 maps the logical paths that :func:`fuzzkit.fuzzy.validation.check` returns back to YAML
-positions. The writer is :mod:`fuzzkit.formats.yaml_writer`, the schema
-:mod:`fuzzkit.formats.schema`.
+positions. It is about 900 lines because it is one walker: variables, terms, rules and the rule
+table all record into the same marks and hidden paths that place every semantic problem, so
+they stay in one class; the generic YAML layer is :mod:`fuzzkit.located_yaml`. The writer is
+:mod:`fuzzkit.formats.yaml_writer`, the schema :mod:`fuzzkit.formats.schema`.
 
 Examples
 --------
@@ -21,14 +24,14 @@ from __future__ import annotations
 import hashlib
 import math
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path as FsPath
 
 import yaml
 from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 
-from fuzzkit.errors import Location, Problem, ProblemsError, RuleBaseError
+from fuzzkit.errors import Location, Problem, RuleBaseError, did_you_mean
 from fuzzkit.fuzzy import validation
 from fuzzkit.fuzzy.model import (
     PIECEWISE_LINEAR_SHAPES,
@@ -46,12 +49,19 @@ from fuzzkit.fuzzy.model import (
     Variable,
 )
 from fuzzkit.fuzzy.partition import PARTITION_ENDS, PARTITION_KINDS, partition_terms
-from fuzzkit.fuzzy.validation import Path, did_you_mean
-
-#: Larger files are refused before parsing: a rule base is a few kilobytes.
-MAX_FILE_BYTES = 1 << 20
-#: Documents whose node tree, with every alias expanded, is larger are refused (alias bombs).
-MAX_NODES = 100_000
+from fuzzkit.fuzzy.validation import Path
+from fuzzkit.located_yaml import (
+    BOOL_TAG,
+    FLOAT_TAG,
+    INT_TAG,
+    NULL_TAG,
+    STR_TAG,
+    DocumentKind,
+    NodeReader,
+    compose_document,
+    describe,
+    read_document,
+)
 
 TOP_KEYS = (
     "name",
@@ -71,49 +81,16 @@ RULE_KEYS = ("if", "then", "weight")
 CONNECTIVES = ("and", "or", "not")
 EMPTY_CELL = "-"
 
-STR_TAG = "tag:yaml.org,2002:str"
-_INT = "tag:yaml.org,2002:int"
-_FLOAT = "tag:yaml.org,2002:float"
-_BOOL = "tag:yaml.org,2002:bool"
-_BOOL_HINT = " (YAML reads an unquoted yes/no/on/off/true/false as a boolean; quote it)"
-_NULL = "tag:yaml.org,2002:null"
-_MERGE = "tag:yaml.org,2002:merge"
-# YAML 1.1 (PyYAML) reads ``1e-3`` as a string; accept the YAML 1.2 number syntax when unquoted.
-_NUMBER_12 = re.compile(r"[-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?\Z")
-_CONSTRUCTOR = yaml.constructor.SafeConstructor()
-
 
 def shape_param_keys(shape: str) -> tuple[str, ...]:
     """The keys holding a shape's parameters in YAML: ``points`` or the parameter names."""
     return ("points",) if shape in PIECEWISE_LINEAR_SHAPES else SHAPE_PARAMS[shape]
 
 
-def describe(node: Node) -> str:
-    """A node as an error message shows it: ``'abc'``, ``3``, ``true``, ``a list``."""
-    if isinstance(node, ScalarNode):
-        if node.tag == STR_TAG:
-            return repr(node.value)
-        if node.tag == _NULL:
-            return "nothing (null)" if node.value in ("", "~") else "null"
-        return str(node.value)
-    if isinstance(node, SequenceNode):
-        return "a list"
-    if isinstance(node, MappingNode):
-        return "a mapping"
-    return "an unknown node"  # pragma: no cover - PyYAML has no other node kinds
-
-
-class _TooBig(Exception):
-    """Raised to stop at once on a document that must not be processed further."""
-
-
 @dataclass
-class _Reader:
+class _Reader(NodeReader):
     """Converts one composed YAML document into a model, collecting located problems."""
 
-    file: str
-    lines: list[str]
-    problems: list[Problem] = field(default_factory=list)
     #: logical path (see fuzzkit.fuzzy.validation) -> node whose position names it
     marks: dict[Path, Node] = field(default_factory=dict)
     #: semantic problems under these paths are consequences of a reported structural one
@@ -123,92 +100,6 @@ class _Reader:
     broken_vars: set[str] = field(default_factory=set)
     #: the inputs' names in order, once read (linear Sugeno terms name their coefficients)
     input_names: list[str] = field(default_factory=list)
-
-    # ------------------------------------------------------------------ primitives
-
-    def loc(self, node: Node, column_offset: int = 0, line_offset: int = 0) -> Location:
-        mark = node.start_mark
-        return Location(self.file, mark.line + 1 + line_offset, mark.column + 1 + column_offset)
-
-    def error(self, node: Node, message: str) -> None:
-        self.problems.append(Problem(self.loc(node), message))
-
-    def mapping(self, node: Node, what: str) -> dict[str, tuple[Node, Node]] | None:
-        """The entries of a mapping node by key; reports non-mappings and duplicate keys."""
-        if not isinstance(node, MappingNode):
-            self.error(node, f"expected {what}, got {describe(node)}")
-            return None
-        entries: dict[str, tuple[Node, Node]] = {}
-        for key, value in node.value:
-            if key.tag == _MERGE:
-                self.error(key, "merge keys (<<) are not supported; write the entries out")
-                continue
-            if not isinstance(key, ScalarNode) or key.tag != STR_TAG:
-                hint = ""
-                if isinstance(key, ScalarNode):
-                    hint = _BOOL_HINT if key.tag == _BOOL else "; quote it"
-                self.error(key, f"expected a name as key, got {describe(key)}{hint}")
-                continue
-            if key.value in entries:
-                first = entries[key.value][0].start_mark.line + 1
-                self.error(key, f"duplicate key {key.value!r} (first defined on line {first})")
-                continue
-            entries[key.value] = (key, value)
-        return entries
-
-    def keys(
-        self,
-        entries: dict[str, tuple[Node, Node]],
-        node: Node,
-        allowed: Sequence[str],
-        required: Sequence[str],
-        what: str,
-    ) -> None:
-        """Report keys of ``entries`` not in ``allowed`` and missing ``required`` keys."""
-        for key, (knode, _) in entries.items():
-            if key not in allowed:
-                self.error(
-                    knode,
-                    f"unknown key {key!r} in {what}{did_you_mean(key, allowed)}; "
-                    f"expected one of {', '.join(allowed)}",
-                )
-        typos = {did_you_mean(k, allowed) for k in entries if k not in allowed}
-        for key in required:
-            # A misspelt key was reported with a did-you-mean already; one message is enough.
-            if key not in entries and f" (did you mean {key!r}?)" not in typos:
-                self.error(node, f"missing required key {key!r} in {what}")
-
-    def number(self, node: Node, what: str) -> float | None:
-        if isinstance(node, ScalarNode):
-            if node.tag == _FLOAT:
-                return float(_CONSTRUCTOR.construct_yaml_float(node))
-            if node.tag == _INT:
-                return float(_CONSTRUCTOR.construct_yaml_int(node))
-            if node.tag == STR_TAG and node.style is None and _NUMBER_12.match(node.value):
-                return float(node.value)
-        self.error(node, f"expected a number for {what}, got {describe(node)}")
-        return None
-
-    def name(self, node: Node, what: str) -> str | None:
-        if isinstance(node, ScalarNode) and node.tag == STR_TAG:
-            return str(node.value)
-        hint = ""
-        if isinstance(node, ScalarNode) and node.tag == _BOOL:
-            hint = _BOOL_HINT
-        self.error(node, f"expected {what}, got {describe(node)}{hint}")
-        return None
-
-    def text(self, node: Node, what: str) -> str | None:
-        if isinstance(node, ScalarNode) and node.tag == STR_TAG:
-            return str(node.value)
-        self.error(node, f"expected {what} (a string), got {describe(node)}")
-        return None
-
-    def sequence(self, node: Node, what: str) -> list[Node] | None:
-        if isinstance(node, SequenceNode):
-            return list(node.value)
-        self.error(node, f"expected {what} (a list), got {describe(node)}")
-        return None
 
     def choice(self, node: Node, what: str, path: Path) -> str | None:
         """A name whose allowed values validation checks; records where it is."""
@@ -378,7 +269,7 @@ class _Reader:
         if "default" in entries and kind == "output":
             dnode = entries["default"][1]
             self.marks[(*base, "default")] = dnode
-            if not (isinstance(dnode, ScalarNode) and dnode.tag == _NULL):
+            if not (isinstance(dnode, ScalarNode) and dnode.tag == NULL_TAG):
                 default = self.number(dnode, f"the default of {what}")
         units: str | None = None
         if "units" in entries:
@@ -388,11 +279,11 @@ class _Reader:
 
     def units(self, node: Node, what: str) -> str | None:
         """The ``units:`` of a variable as written (``None`` for null or a non-string)."""
-        if isinstance(node, ScalarNode) and node.tag == _NULL:
+        if isinstance(node, ScalarNode) and node.tag == NULL_TAG:
             return None
         if not (isinstance(node, ScalarNode) and node.tag == STR_TAG):
             hint = ""
-            if isinstance(node, ScalarNode) and node.tag in (_INT, _FLOAT, _BOOL):
+            if isinstance(node, ScalarNode) and node.tag in (INT_TAG, FLOAT_TAG, BOOL_TAG):
                 hint = "; quote it"
             self.error(
                 node,
@@ -931,11 +822,6 @@ class _Reader:
         return locate
 
 
-#: The generic primitives of :class:`_Reader` (mapping, keys, number, name, text, sequence,
-#: error), for readers of other strict YAML documents (scenario files).
-NodeReader = _Reader
-
-
 class _At(Node):
     """A pseudo-node marking a position inside a scalar (a table cell)."""
 
@@ -947,169 +833,12 @@ class _At(Node):
 # ---------------------------------------------------------------------------- loading
 
 
-_CORE_TAGS = frozenset(
-    {STR_TAG, _INT, _FLOAT, _BOOL, _NULL, _MERGE, "tag:yaml.org,2002:seq", "tag:yaml.org,2002:map"}
-)
-
-
-def _foreign_tags(root: Node, source: str, plural: str = "rule bases") -> list[Problem]:
-    """A problem for every node with an explicit tag outside plain YAML (``!!python/...``).
-
-    SafeLoader would refuse to construct them; fuzzkit reads nodes itself, so it says so
-    instead of silently reading the tagged value as plain data.
-    """
-    problems: list[Problem] = []
-    seen: set[int] = set()
-    stack = [root]
-    while stack:
-        node = stack.pop()
-        if id(node) in seen:
-            continue
-        seen.add(id(node))
-        if node.tag not in _CORE_TAGS:
-            mark = node.start_mark
-            problems.append(
-                Problem(
-                    Location(source, mark.line + 1, mark.column + 1),
-                    f"unsupported YAML tag {node.tag!r} ({plural} are plain YAML: "
-                    "mappings, lists, strings and numbers)",
-                )
-            )
-        if isinstance(node, MappingNode):
-            stack.extend(n for kv in node.value for n in kv)
-        elif isinstance(node, SequenceNode):
-            stack.extend(node.value)
-    problems.sort(key=lambda p: (p.location.line, p.location.col))
-    return problems
-
-
-def _expanded_size(root: Node, limit: int) -> int:
-    """Nodes in the document with every alias expanded, counting stops past ``limit``.
-
-    Computed on the composed graph (aliases are shared nodes) without expanding anything, so
-    a billion-laughs document is measured in time linear in its text.
-    """
-    size: dict[int, int] = {}
-    on_path: set[int] = set()
-    stack: list[tuple[Node, bool]] = [(root, False)]
-
-    def children(n: Node) -> list[Node]:
-        if isinstance(n, SequenceNode):
-            return list(n.value)
-        if isinstance(n, MappingNode):
-            return [x for pair in n.value for x in pair]
-        return []
-
-    while stack:
-        node, done = stack.pop()
-        nid = id(node)
-        if done:
-            on_path.discard(nid)
-            total = 1 + sum(size[id(c)] for c in children(node))
-            size[nid] = min(total, limit + 1)
-            if total > limit:
-                return total
-            continue
-        if nid in size:
-            continue
-        on_path.add(nid)
-        stack.append((node, True))
-        for child in children(node):
-            if id(child) in on_path:
-                raise _TooBig(
-                    "the document refers to itself through an alias (recursive "
-                    "structure); expected a tree"
-                )
-            if id(child) not in size:
-                stack.append((child, False))
-    return size[id(root)]
-
-
-def _compose(text: str, file: str, kind: DocumentKind | None = None) -> Node | None:
-    kind = kind or RULE_BASE_DOCUMENT
-    error = kind.error
-    try:
-        return yaml.compose(text, Loader=yaml.SafeLoader)
-    except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        where = Location(file, mark.line + 1, mark.column + 1) if mark else Location(file)
-        what = " ".join(x for x in (exc.context, exc.problem) if x) or "invalid YAML"
-        if "\t" in text and "'\\t'" in what:
-            what += " (YAML forbids tabs for indentation; use spaces)"
-        raise error([Problem(where, f"invalid YAML: {what}")]) from None
-    except yaml.YAMLError as exc:
-        raise error([Problem(Location(file), f"invalid YAML: {exc}")]) from None
-    except RecursionError:
-        raise error(
-            [
-                Problem(
-                    Location(file),
-                    f"invalid {kind.noun}: YAML nested too deeply "
-                    "(expected a few levels of mappings and lists)",
-                )
-            ]
-        ) from None
-
-
-@dataclass(frozen=True, slots=True)
-class DocumentKind:
-    """What a strict YAML document holds, for the messages of :func:`compose_document`."""
-
-    noun: str  # "rule base"
-    plural: str  # "rule bases"
-    empty_hint: str  # what a non-empty document has
-    error: type[ProblemsError]
-
-
 RULE_BASE_DOCUMENT = DocumentKind(
     "rule base",
     "rule bases",
     "expected a mapping with name, inputs, outputs and rules",
     RuleBaseError,
 )
-
-
-def compose_document(text: str, source: str, kind: DocumentKind) -> Node:
-    """Compose ``text`` into a node tree with the limits every fuzzkit YAML file obeys.
-
-    Refuses (raising ``kind.error`` with located problems) files over :data:`MAX_FILE_BYTES`,
-    invalid or empty YAML, alias bombs and recursive aliases (more than :data:`MAX_NODES`
-    nodes once expanded), and explicit tags outside plain YAML. Readers such as
-    :class:`NodeReader` then convert the tree by hand.
-    """
-    size = len(text.encode("utf-8", errors="replace"))
-    if size > MAX_FILE_BYTES:
-        raise kind.error(
-            [
-                Problem(
-                    Location(source),
-                    f"file is {size} bytes; {kind.plural} are "
-                    f"limited to {MAX_FILE_BYTES} bytes (1 MiB)",
-                )
-            ]
-        )
-    root = _compose(text, source, kind)
-    if root is None:
-        raise kind.error([Problem(Location(source), f"file is empty; {kind.empty_hint}")])
-    try:
-        nodes = _expanded_size(root, MAX_NODES)
-    except _TooBig as exc:
-        raise kind.error([Problem(Location(source), str(exc))]) from None
-    if nodes > MAX_NODES:
-        raise kind.error(
-            [
-                Problem(
-                    Location(source),
-                    f"the document expands to more than "
-                    f"{MAX_NODES} nodes through aliases (an alias bomb?); "
-                    f"{kind.plural} are far smaller",
-                )
-            ]
-        )
-    foreign = _foreign_tags(root, source, kind.plural)
-    if foreign:
-        raise kind.error(foreign)
-    return root
 
 
 def loads_rulebase(text: str, source: str = "<string>") -> RuleBase:
@@ -1171,37 +900,6 @@ def _locate(reader: _Reader, path: Path, root: Node) -> Location:
         if node is not None:
             return reader.loc(node)
     return reader.loc(root)
-
-
-def read_document(path: str | FsPath, kind: DocumentKind) -> str:
-    """The text of a strict YAML file, refusing (with ``kind.error``) what is not one."""
-    p = FsPath(path)
-    name = str(path)
-    try:
-        size = p.stat().st_size
-        if size > MAX_FILE_BYTES:
-            raise kind.error(
-                [
-                    Problem(
-                        Location(name),
-                        f"file is {size} bytes; {kind.plural} are "
-                        f"limited to {MAX_FILE_BYTES} bytes (1 MiB)",
-                    )
-                ]
-            )
-        data = p.read_bytes()
-    except IsADirectoryError:
-        raise kind.error(
-            [Problem(Location(name), "is a directory (expected a .yaml file)")]
-        ) from None
-    except OSError as exc:
-        raise kind.error([Problem(Location(name), f"cannot read: {exc.strerror or exc}")]) from None
-    try:
-        return data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise kind.error(
-            [Problem(Location(name), f"not UTF-8 text (byte {exc.start}); expected a YAML file")]
-        ) from None
 
 
 def load_file(path: str | FsPath) -> RuleBase:

@@ -7,12 +7,14 @@ tables where the rules form one, partitions as the shorthand where the terms are
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import yaml
 
-from fuzzkit.formats.yaml_reader import EMPTY_CELL, STR_TAG
+from fuzzkit.errors import RuleBaseError
+from fuzzkit.formats.yaml_reader import EMPTY_CELL
+from fuzzkit.fuzzy import validation
 from fuzzkit.fuzzy.model import (
     PIECEWISE_LINEAR_SHAPES,
     SHAPE_PARAMS,
@@ -26,6 +28,7 @@ from fuzzkit.fuzzy.model import (
     Variable,
 )
 from fuzzkit.fuzzy.partition import PARTITION_ENDS, partition_terms
+from fuzzkit.located_yaml import STR_TAG
 
 
 class _Flow(list[Any]):
@@ -172,12 +175,29 @@ def _dump_table(rb: RuleBase) -> dict[str, Any] | None:
     return None
 
 
-def dump(rb: RuleBase) -> str:
+#: Stands in for a range that gets a comment; a plain YAML word no rule base has as a range.
+_NOTED_RANGE = "fuzzkit_noted_range_{}"
+
+
+def dump(rb: RuleBase, range_notes: Mapping[str, str] | None = None) -> str:
     """The YAML text of ``rb``; ``loads_rulebase(dump(rb)) == rb`` for every valid model.
 
     Partitions are written back as the ``partition`` shorthand when the terms are exactly one,
     and the rules as a table when ``rb.table`` is set and the rules are exactly that table.
+    ``range_notes`` maps variable names to a comment written after their range (an importer
+    saying where a range came from).
+
+    Raises
+    ------
+    RuleBaseError
+        A condition nests deeper than the readers accept
+        (:data:`~fuzzkit.fuzzy.validation.MAX_CONDITION_DEPTH`).
     """
+    too_deep = validation.depth_problems(rb)
+    if too_deep:
+        raise RuleBaseError(validation.as_problems(rb, too_deep))
+    notes = {name: " ".join(note.split()) for name, note in (range_notes or {}).items()}
+    noted: dict[str, str] = {}
     doc: dict[str, Any] = {"name": rb.name}
     if rb.description:
         doc["description"] = rb.description
@@ -185,6 +205,12 @@ def dump(rb: RuleBase) -> str:
         section: dict[str, Any] = {}
         for var in group:
             spec: dict[str, Any] = {"range": _Flow([float(var.low), float(var.high)])}
+            if var.name in notes:
+                # PyYAML writes no comments: a placeholder, replaced in the text below
+                flow = yaml.dump(spec["range"], Dumper=_Dumper, width=100).strip()
+                key = _NOTED_RANGE.format(len(noted))
+                noted[key] = f"{flow}  # {notes[var.name]}"
+                spec["range"] = key
             if var.units is not None:
                 spec["units"] = var.units
             if kind == "output" and var.default is not None:
@@ -219,4 +245,7 @@ def dump(rb: RuleBase) -> str:
                 item["weight"] = float(rule.weight)
             rules.append(_FlowMap(item))
         doc["rules"] = rules
-    return yaml.dump(doc, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=100)
+    text = yaml.dump(doc, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=100)
+    for key, value in noted.items():
+        text = text.replace(f"range: {key}\n", f"range: {value}\n")
+    return text

@@ -11,6 +11,7 @@ The piecewise-linear shapes (triangle, trapezoid, shoulders) are also available 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from typing import cast
 
@@ -28,7 +29,23 @@ _XMAX = 1e100
 
 
 def _ramp_slope(lo: float, hi: float) -> float:
-    return _VERTICAL if hi <= lo else 1.0 / (hi - lo)
+    """The slope of an edge from ``lo`` to ``hi``: ``1/(hi - lo)``, rounded so the foot is 0.
+
+    A piecewise-linear membership is ``clip(1 + (x - peak) * slope, 0, 1)`` (and its mirror):
+    exactly 1 at the peak. At the foot the product is ``-(hi - lo) * slope``, and the nearest
+    double to ``1/(hi - lo)`` can round it to ``-(1 - 2**-53)``: a membership of 1e-16 where
+    the term ends, so at a partition's label peak (its neighbours' foot) a rule fires that
+    should not. There the next double up is taken (the product then rounds to at least 1,
+    as the exact one is): the foot is exactly 0 in the engine and in the generated code that
+    embeds the slope. Slopes whose foot was already exact are left as they are.
+    """
+    if hi <= lo:
+        return _VERTICAL
+    width = hi - lo  # the rounded difference that x - peak also gives at x = foot
+    slope = 1.0 / width
+    if width * slope < 1.0:
+        slope = math.nextafter(slope, math.inf)
+    return slope
 
 
 def _trapezoid_core(x: FloatArray, b: float, c: float, s_rise: float, s_fall: float) -> FloatArray:

@@ -28,7 +28,6 @@ models with ``coverage="allow_gaps"``.
 
 from __future__ import annotations
 
-import difflib
 import keyword
 import math
 import re
@@ -36,7 +35,8 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import TypeAlias
 
-from fuzzkit.errors import Location, Problem, RuleBaseError
+from fuzzkit.errors import Location, Problem, RuleBaseError, did_you_mean
+from fuzzkit.fuzzy import resolution
 from fuzzkit.fuzzy.model import (
     AGGREGATIONS,
     AND_OPERATORS,
@@ -84,8 +84,20 @@ MAX_UNITS_CHARS = 24
 PYTHON_KEYWORDS = frozenset(keyword.kwlist) | frozenset(keyword.softkwlist)
 
 
+#: Names (rule base, variables, terms) are at most this long: C99 guarantees 63 significant
+#: characters in an identifier, and a generated symbol adds the rule base's name to it.
+MAX_NAME_CHARS = 64
+#: Conditions nest at most this many and/or levels; every reader and writer obeys it.
+MAX_CONDITION_DEPTH = 32
+
+
 def identifier_problem(name: str) -> str | None:
     """Why ``name`` cannot become a C and Python identifier, or ``None`` when it can."""
+    if len(name) > MAX_NAME_CHARS:
+        return (
+            f"name {name[:20]!r}... is {len(name)} characters long; names are limited to "
+            f"{MAX_NAME_CHARS} characters"
+        )
     if not IDENTIFIER.match(name):
         return f"expected an identifier matching [A-Za-z_][A-Za-z0-9_]*, got {name!r}"
     if name in C_KEYWORDS and name in PYTHON_KEYWORDS:
@@ -111,18 +123,6 @@ def units_problem(units: str) -> str | None:
     if not units.isprintable():
         return f"expected printable characters on one line, got {units!r}"
     return None
-
-
-def did_you_mean(word: str, candidates: Iterable[str]) -> str:
-    """`` (did you mean 'X'?)`` for the closest candidate, or an empty string."""
-    pool = list(candidates)
-    close = difflib.get_close_matches(word, pool, n=1, cutoff=0.5)
-    if not close:
-        # Labels differ in case often enough ('pl' for 'PL') to try a case-insensitive match.
-        lowered = {c.lower(): c for c in pool}
-        if word.lower() in lowered:
-            close = [lowered[word.lower()]]
-    return f" (did you mean {close[0]!r}?)" if close else ""
 
 
 def _fmt(x: float) -> str:
@@ -333,6 +333,9 @@ def _check_variable(var: Variable, kind: str, base: Path, rb: RuleBase) -> list[
                 f"got [{_fmt(var.low)}, {_fmt(var.high)}]",
             )
         )
+    elif (why := resolution.range_problem(var)) is not None:
+        out.append(((*base, "range"), why))
+        range_ok = False
     if not var.terms and not (kind == "input" and _used_in_linear(rb, var.name)):
         hint = (
             " (an input may have none only when a linear output term uses it)"
@@ -358,7 +361,11 @@ def _check_variable(var: Variable, kind: str, base: Path, rb: RuleBase) -> list[
                 )
             )
             continue
-        out.extend(_check_term(term, tpath, len(rb.inputs)))
+        term_issues = _check_term(term, tpath, len(rb.inputs))
+        out.extend(term_issues)
+        fine = resolution.term_problem(term, var) if range_ok and not term_issues else None
+        if fine is not None:
+            out.append(((*tpath, term_param_path(term)), fine))
     if kind == "output":
         families = {t.is_sugeno for t in var.terms}
         if len(families) > 1:
@@ -427,6 +434,34 @@ def _coverage_gaps(rb: RuleBase) -> list[Issue]:
 # ---------------------------------------------------------------------------- rules
 
 
+def condition_depth(expr: Expression) -> int:
+    """How many and/or levels ``expr`` nests (0 for a single condition); iterative."""
+    deepest = 0
+    stack: list[tuple[Expression, int]] = [(expr, 0)]
+    while stack:
+        node, depth = stack.pop()
+        if isinstance(node, Compound):
+            deepest = max(deepest, depth + 1)
+            stack.extend((sub, depth + 1) for sub in node.operands)
+    return deepest
+
+
+def depth_problems(rb: RuleBase) -> list[Issue]:
+    """A problem per rule whose condition nests deeper than :data:`MAX_CONDITION_DEPTH`."""
+    out: list[Issue] = []
+    for k, rule in enumerate(rb.rules):
+        depth = condition_depth(rule.antecedent)
+        if depth > MAX_CONDITION_DEPTH:
+            out.append(
+                (
+                    ("rules", k, "if"),
+                    f"condition nested {depth} and/or levels deep; conditions are limited to "
+                    f"{MAX_CONDITION_DEPTH} levels",
+                )
+            )
+    return out
+
+
 def _check_expression(expr: Expression, rb: RuleBase, base: Path) -> list[Issue]:
     if isinstance(expr, Compound):
         out: list[Issue] = []
@@ -473,8 +508,11 @@ def _check_rules(rb: RuleBase) -> list[Issue]:
     out: list[Issue] = []
     if not rb.rules:
         out.append((("rules",), "the rule base has no rules (expected at least one)"))
+    too_deep = depth_problems(rb)
+    out.extend(too_deep)
     for k, rule in enumerate(rb.rules):
-        out.extend(_check_expression(rule.antecedent, rb, ("rules", k, "if")))
+        if not any(path[1] == k for path, _ in too_deep):
+            out.extend(_check_expression(rule.antecedent, rb, ("rules", k, "if")))
         if not rule.consequents:
             out.append(
                 (("rules", k, "then"), "rule has no conclusion (expected then: {output: label})")
@@ -666,7 +704,9 @@ def format_path(path: Path) -> str:
         if isinstance(part, int):
             text += f"[{part}]"
         else:
-            text += ("." if text else "") + part
+            # an over-long name is reported by its start (the problem says how long it is)
+            shown = part if len(part) <= MAX_NAME_CHARS else part[:20] + "..."
+            text += ("." if text else "") + shown
     return text
 
 

@@ -50,7 +50,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.errors import ConfigError, SimulationError
-from fuzzkit.plants.contact import ForceSensor
+from fuzzkit.plants.contact import ForceSensor, tool_weight
 from fuzzkit.plants.contract import PlantSample, Scenario, normal_force_by_axis
 from fuzzkit.plants.environment import Waypoint
 from fuzzkit.plants.environment3d import (
@@ -133,14 +133,28 @@ class CartesianPath:
         rotation: Sequence[Sequence[float]] | FloatArray,
         offset: Sequence[float] = (0.0, 0.0, 0.0),
     ) -> CartesianPath:
-        """Build a path from a scenario's waypoints, all with one orientation (base-from-tool).
+        """Build a path from a scenario's waypoints with the orientation ``rotation``
+        (base-from-tool), turned by each waypoint's ``tilt_rad`` about the base y axis.
 
         ``offset`` is added to every position (scenario frame -> robot base frame).
         """
-        quat = quat_from_matrix(np.asarray(rotation, dtype=float).tolist())
+        base = np.asarray(rotation, dtype=float)
+        quat = quat_from_matrix(base.tolist())
+
+        def orientation(tilt: float) -> Quat:
+            if tilt == 0.0:
+                return quat
+            c, s = math.cos(tilt), math.sin(tilt)
+            turn = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+            return quat_from_matrix((turn @ base).tolist())
+
         return cls(
             [
-                PathPose(w.t_s, (w.x + offset[0], w.y + offset[1], w.z + offset[2]), quat)
+                PathPose(
+                    w.t_s,
+                    (w.x + offset[0], w.y + offset[1], w.z + offset[2]),
+                    orientation(w.tilt_rad),
+                )
                 for w in waypoints
             ]
         )
@@ -416,6 +430,12 @@ class Arm6Plant:
         self._rot_task = scenario.rotation
         self._rot_task_t = [list(r) for r in scenario.rotation.T]
         self.path = CartesianPath.from_waypoints(scenario.path, scenario.rotation, off)
+        # A tilting tool turns the wrist sensor with it: its readings (and the true force
+        # reported beside them) are then in the sensor frame, reported as tool_rotation.
+        self._tilts = any(w.tilt_rad != 0.0 for w in scenario.path)
+        self._rot_sensor = (
+            np.asarray(matrix_from_quat(self.path.pose_at(0.0)[1])) if self._tilts else None
+        )
         self.objects = objects_from_scenario(scenario, off, p.object_half_width) + tuple(
             translated(obj, off) for obj in p.extra_objects
         )
@@ -453,6 +473,7 @@ class Arm6Plant:
         self._state = self._contact.step(self._p_prev, (0.0, 0.0, 0.0), self._dt)
         self._contact.reset()
         self._true_task = np.zeros(3)
+        self._sensor.settle(self._with_weight(self._true_task))
         nominal = self._to_scenario(pos)
         return self._sample(nominal, nominal, ())
 
@@ -553,9 +574,23 @@ class Arm6Plant:
                 rt[2][0] * f[0] + rt[2][1] * f[1] + rt[2][2] * f[2],
             ]
         )
-        self._sensor.update(self._t, self._dt, true_task)
+        if self._tilts:
+            self._rot_sensor = np.asarray(matrix_from_quat(quat))
+            true_task = self._rot_sensor.T @ np.asarray(f, dtype=float)
+        self._sensor.update(self._t, self._dt, self._with_weight(true_task))
         self._true_task = true_task
         return self._sample(self._to_scenario(pos), self._to_scenario(target_pos), tuple(messages))
+
+    def _with_weight(self, force: FloatArray) -> FloatArray:
+        """The sensor's input: the contact force plus the tool's weight (if it has a mass)."""
+        mass = self.scenario.tool.mass_kg
+        if mass == 0.0:
+            return force
+        return force + tool_weight(mass, self._sensor_rotation())
+
+    def _sensor_rotation(self) -> FloatArray:
+        """Base-from-sensor rotation: the task frame's, or the tilting tool's of this period."""
+        return self._rot_task if self._rot_sensor is None else self._rot_sensor
 
     # -- reporting ------------------------------------------------------------------------------
 
@@ -596,7 +631,8 @@ class Arm6Plant:
             contact_points=pts,
             arm_points=arm,
             messages=messages,
-            force_normal=normal_force_by_axis(state.normal_forces, self._rot_task),
+            force_normal=normal_force_by_axis(state.normal_forces, self._sensor_rotation()),
+            tool_rotation=None if self._rot_sensor is None else self._rot_sensor.copy(),
             detail=Arm6Detail(
                 ev,
                 state,

@@ -39,7 +39,7 @@ from fuzzkit.plants.arm6_heightfield import (
     tangent_plane_contact,
 )
 from fuzzkit.plants.contact import padded_terms
-from fuzzkit.plants.contract import UnsupportedPlant
+from fuzzkit.plants.contract import UnsupportedPlant, wrist_sensor_extras
 from fuzzkit.plants.environment import _roughness_terms
 from fuzzkit.plants.environment3d import Box3, ExtrudedProfile, HeightField, Plane
 from fuzzkit.plants.rough_profile import profile_height_slope
@@ -103,12 +103,16 @@ def pack(plant: Arm6Plant) -> Arm6Arrays:
     ------
     UnsupportedPlant
         For what the twin does not model: an object other than a plane, a box, an extruded
-        rough profile or a height field, or ``strict`` mode (which raises mid-run).
+        rough profile or a height field, ``strict`` mode (which raises mid-run), or a wrist
+        sensor with a tool weight, a drifting bias or a tilting tool.
     """
     p = plant.params
     if p.strict:
         raise UnsupportedPlant("the compiled arm6 loop does not model strict mode")
     scn = plant.scenario
+    extras = wrist_sensor_extras(scn)
+    if extras:
+        raise UnsupportedPlant(f"the compiled arm6 loop does not model {', '.join(extras)}")
     chain = plant.chain
     links = np.array(chain._links, dtype=np.float64)
     objs = plant.objects

@@ -32,23 +32,52 @@ class ContactModel:
     tangential_stiffness_n_per_m: float = 5.0e3
 
 
+#: Standard gravity (m/s^2): the tool's weight per kilogram.
+GRAVITY_M_S2 = 9.80665
+
+
 @dataclass(frozen=True, slots=True)
 class SensorModel:
-    """The wrist F/T sensor: sample rate, first-order anti-alias filter, Gaussian noise, bias."""
+    """The wrist F/T sensor: sample rate, first-order anti-alias filter, Gaussian noise, bias.
+
+    The bias is ``bias_n + bias_drift_n_per_s * t`` at a sample taken at time ``t`` (a slow,
+    deterministic drift, as temperature gives a real sensor).
+    """
 
     rate_hz: float = 250.0
     cutoff_hz: float = 60.0
     noise_std_n: float = 0.1
     bias_n: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    bias_drift_n_per_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True, slots=True)
 class ToolModel:
-    """The tool below the wrist: tip ``length_m`` along the tool axis, contact disc ``radius_m``."""
+    """The tool below the wrist: tip ``length_m`` along the tool axis, contact disc ``radius_m``.
+
+    ``mass_kg``: what the wrist sensor carries; its weight enters every reading
+    (:func:`tool_weight`; 0: a sensor reading the contact force alone). ``com_m``: its centre of
+    mass in the sensor frame (m), the lever arm of the weight's torque; the simulated wrist
+    sensor reports forces only (a weight is the same force wherever it acts), so no reading
+    depends on it.
+    """
 
     length_m: float = 0.12
     radius_m: float = 0.02
     name: str = "probe"
+    mass_kg: float = 0.0
+    com_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+def tool_weight(mass_kg: float, rotation: Vec) -> Vec:
+    """The tool's weight as the wrist sensor reads it (N, sensor frame).
+
+    The sensor reports the force the wrist exerts on the tool in the sign of the contact force
+    (what the tool exerts on the environment), so a tool of mass ``m`` adds
+    ``-m * R^T g`` with ``g = (0, 0, -9.80665)`` m/s^2 in the base frame (z up) and ``R`` the
+    base-from-sensor rotation: a hanging tool pointing down reads ``-m*g`` along its axis.
+    """
+    return np.asarray(-mass_kg * (rotation.T @ np.array([0.0, 0.0, -GRAVITY_M_S2])))
 
 
 @dataclass(frozen=True, slots=True)
@@ -130,6 +159,11 @@ class ForceSensor:
         self._latest = np.full(3, np.nan)
         self._fresh = False
 
+    def settle(self, force: Vec) -> None:
+        """Start the filter at rest on ``force`` (a sensor powered on long before the run, as
+        a tool's weight has been on it)."""
+        self._filtered = np.array(force, dtype=np.float64)
+
     def update(self, t_s: float, dt: float, true_force: Vec) -> None:
         """Advance the filter by ``dt`` and take a sample if one is due at ``t_s``."""
         alpha = 1.0 - math.exp(-2.0 * math.pi * self.model.cutoff_hz * dt)
@@ -140,7 +174,8 @@ class ForceSensor:
                 if self.model.noise_std_n > 0
                 else 0.0
             )
-            self._latest = self._filtered + np.asarray(self.model.bias_n) + noise
+            bias = np.asarray(self.model.bias_n) + np.asarray(self.model.bias_drift_n_per_s) * t_s
+            self._latest = self._filtered + bias + noise
             self._fresh = True
             self._next_t += 1.0 / self.model.rate_hz
 

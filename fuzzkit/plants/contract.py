@@ -151,6 +151,9 @@ class PlantSample:
         not report it (metrics then take any contact as every axis's contact).
     arm_points : (m, 3) base-frame polyline from the base through the joints to the tool tip.
     messages : status and limit messages of this period (torque limit, unreachable target ...).
+    tool_rotation : world-from-sensor rotation (3, 3) of the frame ``force`` is in, when the
+        tool turns away from the task frame (a tilted tool); None: ``force`` is in the
+        scenario's fixed task frame (``Scenario.rotation``).
     """
 
     t_s: float
@@ -165,6 +168,7 @@ class PlantSample:
     arm_points: Vec
     messages: tuple[str, ...] = ()
     force_normal: Vec | None = None
+    tool_rotation: Vec | None = None
 
 
 @runtime_checkable
@@ -187,6 +191,19 @@ class ContactPlant(Protocol):
     def reset(self, scenario: Scenario, seed: int = 0) -> PlantSample: ...
 
     def step(self, correction_xyz: Vec, path_time_s: float) -> PlantSample: ...
+
+
+def wrist_sensor_extras(scenario: Scenario) -> list[str]:
+    """What of ``scenario``'s wrist-sensor model goes beyond filter, noise and a constant bias:
+    a tool weight, a drifting bias, a tilting tool (the compiled loops model none of them)."""
+    out = []
+    if scenario.tool.mass_kg != 0.0:
+        out.append("a tool weight (tool mass_kg)")
+    if any(v != 0.0 for v in scenario.sensor.bias_drift_n_per_s):
+        out.append("a drifting sensor bias (sensor bias_drift_n_per_s)")
+    if any(w.tilt_rad != 0.0 for w in scenario.path):
+        out.append("a tilting tool (path tilt_deg)")
+    return out
 
 
 class UnsupportedPlant(ConfigError):

@@ -19,12 +19,17 @@ Vec = npt.NDArray[np.float64]
 
 @dataclass(frozen=True, slots=True)
 class Waypoint:
-    """A point of the nominal (CAD) path: tool tip at ``(x, y, z)`` m at time ``t_s`` s."""
+    """A point of the nominal (CAD) path: tool tip at ``(x, y, z)`` m at time ``t_s`` s.
+
+    ``tilt_rad``: the tool turned about the base y axis from the task frame's orientation
+    (right-handed, interpolated between waypoints); only the 6-DOF plant turns its tool.
+    """
 
     t_s: float
     x: float
     y: float
     z: float
+    tilt_rad: float = 0.0
 
 
 def nominal_position(path: tuple[Waypoint, ...], t_s: float) -> Vec:

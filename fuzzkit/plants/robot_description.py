@@ -14,9 +14,15 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-import yaml
 
-from fuzzkit.errors import ConfigError
+from fuzzkit.errors import ConfigError, ConfigFileError
+from fuzzkit.located_yaml import (
+    DocumentKind,
+    compose_document,
+    locations,
+    read_document,
+    to_python,
+)
 from fuzzkit.plants.rotations import rpy_to_matrix
 
 FloatArray = npt.NDArray[np.float64]
@@ -98,21 +104,23 @@ _TOP_KEYS = {"name", "description", "source", "angle_unit", "joints", "tool"}
 _JOINT_KEYS = {"name", "d", "a", "alpha", "offset", "limits", "max_velocity"}
 
 
+ROBOT_DOCUMENT = DocumentKind(
+    "robot description",
+    "robot descriptions",
+    "expected a mapping with name, angle_unit and joints",
+    ConfigFileError,
+)
+
+
 def _node_lines(text: str) -> tuple[int, dict[str, int], list[int]]:
     """Line numbers (1-based) of the document, its top-level keys and its joint entries."""
     try:
-        node = yaml.compose(text)
-    except yaml.YAMLError:
+        where = locations(compose_document(text, "<robot>", ROBOT_DOCUMENT), "<robot>")
+    except ConfigError:
         return 0, {}, []
-    if not isinstance(node, yaml.MappingNode):
-        return 1, {}, []
-    keys: dict[str, int] = {}
-    joint_lines: list[int] = []
-    for k, v in node.value:
-        keys[str(k.value)] = k.start_mark.line + 1
-        if k.value == "joints" and isinstance(v, yaml.SequenceNode):
-            joint_lines = [item.start_mark.line + 1 for item in v.value]
-    return node.start_mark.line + 1, keys, joint_lines
+    keys = {str(p[0]): loc.line for p, loc in where.items() if len(p) == 1}
+    joints = [loc.line for p, loc in where.items() if len(p) == 2 and p[0] == "joints"]
+    return where[()].line, keys, joints
 
 
 def _number(value: Any) -> float | None:
@@ -146,10 +154,11 @@ def robot_from_mapping(
     ConfigError
         Listing every problem as ``file:line: what is wrong (expected X, got Y)``.
     """
-    _, key_lines, joint_lines = _node_lines(text) if text is not None else (0, {}, [])
+    doc_line, key_lines, joint_lines = _node_lines(text) if text is not None else (0, {}, [])
     problems: list[str] = []
 
     def where(line: int) -> str:
+        line = line or doc_line  # a missing key: the document's start
         return f"{source}:{line}" if line > 0 else source
 
     if not isinstance(data, Mapping):
@@ -286,10 +295,7 @@ def load_robot(name_or_path: str | Path = "irb140") -> RobotDescription:
     """
     path = Path(name_or_path)
     if path.suffix in (".yaml", ".yml") or path.exists():
-        try:
-            text = path.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise ConfigError(f"{path}: cannot read robot description ({exc.strerror})") from exc
+        text = read_document(path, ROBOT_DOCUMENT)
         source = str(path)
     else:
         resource = resources.files("fuzzkit").joinpath("data", f"{name_or_path}.yaml")
@@ -300,10 +306,6 @@ def load_robot(name_or_path: str | Path = "irb140") -> RobotDescription:
             )
         text = resource.read_text(encoding="utf-8")
         source = f"fuzzkit/data/{name_or_path}.yaml"
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        line = f":{mark.line + 1}" if mark is not None else ""
-        raise ConfigError(f"{source}{line}: not valid YAML ({exc})") from exc
+    # the hardened reader: size and alias limits, duplicate and boolean keys, located
+    data = to_python(compose_document(text, source, ROBOT_DOCUMENT), source, ROBOT_DOCUMENT)
     return robot_from_mapping(data, source=source, text=text)

@@ -106,6 +106,7 @@ def build_report(
     verdict_latencies: Sequence[tuple[int, int]] = VERDICT_LATENCIES,
     latency_factors: Sequence[float] | None = None,
     latency_delays: Sequence[int] | None = None,
+    specs: Sequence[Path] = (),
 ) -> Path:
     """Run everything and write ``out/report.md``, its PNGs, and one .rrd per run.
 
@@ -130,6 +131,7 @@ def build_report(
     verdict_latencies : the latencies the claims are judged at.
     latency_factors, latency_delays : the latency stability map's gain factors and sensor
         delays (None: :data:`LATENCY_FACTORS`, :data:`LATENCY_DELAYS`).
+    specs : controller spec files, each run on E1-E3 per plant in a section of their own.
 
     Returns
     -------
@@ -156,6 +158,10 @@ def build_report(
         raise ConfigError(f"{out}: folder {parent} does not exist")
     for p in plants:
         make_plant(p)  # unknown plant: fail before any work
+    from fuzzkit.control.spec_reader import load_spec
+
+    for path in specs:
+        load_spec(path)  # a bad spec: fail before any work
     rb = load_loop_rulebase(rulebase)  # unfit for the loop: fail before any work
     final = out
     # Everything is written into a staging folder that becomes ``out`` only when complete:
@@ -309,6 +315,17 @@ def build_report(
             conds,
             rrd,
         )
+        from fuzzkit.report.specs import spec_rows, spec_section
+
+        with progress_bar(
+            len(specs) * len(plants) * len(EXPERIMENT_NAMES),
+            "controller specs",
+            stream=log,
+            quiet=log is None or not specs,
+            unit="run",
+        ) as bar:
+            spec_runs = spec_rows(specs, plants, EXPERIMENT_NAMES, lambda: bar.update(1))
+        text += "\n".join(spec_section(spec_runs))
         text += _latency_section(
             out,
             surface,

@@ -43,7 +43,9 @@ class RunSpec:
     ``gains``: overrides of the default gains, as sorted ``(name, value)`` pairs;
     ``gains_label`` names where they came from (a file) for the table. ``loop``:
     ``compiled`` (arm6, planar), ``python``, or ``auto`` (compiled where supported).
-    ``duration_s``: None runs the experiment's whole duration.
+    ``duration_s``: None runs the experiment's whole duration. ``controller_spec``: a
+    controller spec file (``docs/controller.md``) whose controller runs instead of
+    ``controller`` with ``gains`` (a scenario with a ``controller:`` runs its own).
     """
 
     experiment: str
@@ -59,6 +61,7 @@ class RunSpec:
     duration_s: float | None = None
     fuzzy_impl: str = "auto"
     fault: str | None = None
+    controller_spec: str | None = None
 
     def resolved_loop(self) -> str:
         """``compiled`` or ``python``: what ``auto`` means for this plant."""
@@ -97,7 +100,7 @@ def run_spec(spec: RunSpec) -> RunResult:
     from fuzzkit.studies.experiments import with_stiffness
     from fuzzkit.studies.faults import fault
 
-    exp, plant = experiment_and_plant(spec)
+    spec, exp, plant = resolve(spec)
     if spec.controller == "fuzzy-pi":
         from fuzzkit.control.loop_rulebase import load_loop_rulebase
 
@@ -165,6 +168,8 @@ def run_spec(spec: RunSpec) -> RunResult:
 
             surface = c_surface(spec.rulebase)
             label = f"{surface.__name__} (python loop)"
+    if exp.controller_spec is not None:
+        label = f"spec {exp.controller_spec.name}: {label}"
     result = run(
         exp,
         plant,
@@ -179,6 +184,41 @@ def run_spec(spec: RunSpec) -> RunResult:
     )
     result.loop += fallback
     return result
+
+
+@lru_cache(maxsize=8)
+def _load_controller_spec(path: str) -> Any:
+    from fuzzkit.control.spec_reader import load_spec
+
+    return load_spec(path)
+
+
+def resolve(spec: RunSpec) -> tuple[RunSpec, Experiment, Any]:
+    """The run, its experiment and its plant, with a controller spec (``spec.controller_spec``
+    or the scenario's own) applied: the run's ``controller`` and ``rulebase`` become the spec's.
+
+    Raises
+    ------
+    ConfigError
+        Gains given with a controller spec (the spec holds its gains), or a spec whose period is
+        not the scenario's.
+    """
+    from dataclasses import replace
+
+    from fuzzkit.studies.experiments import with_spec
+
+    exp, plant = experiment_and_plant(spec)
+    if spec.controller_spec is not None:
+        exp = with_spec(exp, _load_controller_spec(spec.controller_spec))
+    cs = exp.controller_spec
+    if cs is None:
+        return spec, exp, plant
+    if spec.gains:
+        raise ConfigError(
+            f"controller spec {cs.name!r} holds its gains; give a spec or gains, not both"
+        )
+    rulebase = cs.rulebase_source or spec.rulebase
+    return replace(spec, controller=cs.kind, rulebase=rulebase), exp, plant
 
 
 def experiment_and_plant(spec: RunSpec) -> tuple[Experiment, Any]:
@@ -207,6 +247,7 @@ def result_row(spec: RunSpec, result: RunResult) -> dict[str, Any]:
     from fuzzkit.studies.metrics import summary
 
     data = summary(result)
+    spec = resolve(spec)[0]  # the controller and rule base a controller spec chose
     row: dict[str, Any] = {
         "experiment": spec.experiment,
         "controller": spec.controller,
@@ -218,6 +259,7 @@ def result_row(spec: RunSpec, result: RunResult) -> dict[str, Any]:
         "gains": spec.gains_label,
         **{f"gain_{k}": v for k, v in spec.gains},
         "rulebase": spec.rulebase if spec.controller == "fuzzy-pi" else None,
+        "controller_spec": spec.controller_spec,
     }
     for key, value in data.items():
         if key == "axes":

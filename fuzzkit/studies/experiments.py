@@ -22,7 +22,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.errors import ConfigError
-from fuzzkit.studies.task import AXES, DEFAULT_LATENCY, Experiment
+from fuzzkit.studies.task import AXES, DEFAULT_LATENCY, Experiment, with_spec
 
 __all__ = [
     "AXES",
@@ -33,6 +33,7 @@ __all__ = [
     "experiment",
     "press_experiment",
     "scaled_gains",
+    "with_spec",
     "with_stiffness",
 ]
 from fuzzkit.plants.environment import Box, Waypoint

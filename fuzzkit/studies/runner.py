@@ -24,7 +24,7 @@ from fuzzkit.control.controllers import (
     make_axis_controllers,
 )
 from fuzzkit.errors import ConfigError
-from fuzzkit.plants.contract import ContactPlant, PlantSample, Scenario, task_to_base
+from fuzzkit.plants.contract import ContactPlant, PlantSample, Scenario
 from fuzzkit.studies.experiments import DEFAULT_GAINS, Experiment
 from fuzzkit.studies.faults import FaultInjector, Faults, fault, fault_name
 from fuzzkit.studies.plants import make_plant
@@ -104,7 +104,18 @@ def build_controller(
     gains: Mapping[str, float] | None = None,
     surface: Surface | None = None,
 ) -> HybridForceController:
-    """The hybrid force controller of ``exp`` with ``kind`` (pi | fuzzy-pi) axis controllers."""
+    """The hybrid force controller of ``exp`` with ``kind`` (pi | fuzzy-pi) axis controllers.
+
+    An experiment with a controller spec runs the spec's controller
+    (:func:`fuzzkit.control.reference.hybrid_from_spec`; ``kind`` is not used), with the
+    ``kp``, ``ki``, ``kx`` of ``gains`` on every axis when given (tuning a spec); ``surface``
+    replaces the fuzzy-PI's exact engine when given.
+    """
+    if exp.controller_spec is not None:
+        from fuzzkit.control.reference import hybrid_from_spec
+        from fuzzkit.control.spec import with_gains
+
+        return hybrid_from_spec(with_gains(exp.controller_spec, gains or {}), surface)
     if kind not in DEFAULT_GAINS:
         raise ConfigError(f"unknown controller {kind!r} (expected pi or fuzzy-pi)")
     g = dict(DEFAULT_GAINS[kind])
@@ -167,7 +178,10 @@ def run(
     correction_task = np.zeros(3)
     applied = np.zeros(3)
     sample: PlantSample = plant.reset(scn, seed=seed)
-    sensor_queue: deque[Vec] = deque(sample.force.copy() for _ in range(sensor_delay))
+    # (force, tool rotation) pairs: the rotation travels with its sample
+    sensor_queue: deque[tuple[Vec, Vec]] = deque(
+        (sample.force.copy(), _rotation(scn, sample)) for _ in range(sensor_delay)
+    )
     command_queue: deque[Vec] = deque(np.zeros(3) for _ in range(command_delay))
     wall0 = time.perf_counter()
     cpu0 = time.process_time()
@@ -179,15 +193,16 @@ def run(
         path_before = path_t
         if not held:
             path_t += period
-        sample = plant.step(task_to_base(scn, applied), path_t)
+        sample = plant.step(applied, path_t)
         delivered = inject(sample.t_s, sample.force)
-        sensor_queue.append(delivered)
-        measured = sensor_queue.popleft()
+        sensor_queue.append((delivered, _rotation(scn, sample)))
+        measured, rotation = sensor_queue.popleft()
         if k < sensor_delay and not np.all(np.isfinite(measured[controlled])):
             correction_task = ctrl.wait()  # start-up: no measurement can have arrived yet
         else:
-            correction_task = ctrl.step(measured)
-        command_queue.append(correction_task.copy())
+            correction_task = ctrl.step(measured, rotation)
+        # the correction is along the controller's (the sensor's) axes at that sample
+        command_queue.append(rotation @ correction_task)
         applied = command_queue.popleft()
         if ctrl.engaged and engaged_at is None:
             engaged_at = sample.t_s
@@ -223,7 +238,7 @@ def run(
     arr = {k: np.asarray(v) for k, v in zip(_SERIES, columns, strict=True)}
     return RunResult(
         experiment=exp,
-        controller=controller if hybrid is None else "custom",
+        controller=_controller_name(exp, controller, hybrid),
         plant=plant.name,
         t=arr["t"].astype(np.float64),
         force=arr["force"].astype(np.float64),
@@ -255,8 +270,19 @@ def run(
         messages=messages,
         loop="python",
         cpu_time_s=cpu,
-        controller_impl=controller_impl or _impl_label(controller, hybrid, surface),
+        controller_impl=controller_impl or _impl_label(exp, controller, hybrid, surface),
     )
+
+
+def _rotation(scn: Scenario, sample: PlantSample) -> Vec:
+    """World-from-sensor rotation of a sample: the plant's, else the scenario's task frame."""
+    return scn.rotation if sample.tool_rotation is None else sample.tool_rotation
+
+
+def _controller_name(exp: Experiment, controller: str, hybrid: object) -> str:
+    if hybrid is not None:
+        return "custom"
+    return controller if exp.controller_spec is None else exp.controller_spec.kind
 
 
 def run_faults_and_latency(
@@ -281,10 +307,17 @@ def check_latency(latency: tuple[int, int]) -> tuple[int, int]:
 
 
 def _impl_label(
-    controller: str, hybrid: HybridForceController | None, surface: Surface | None
+    exp: Experiment,
+    controller: str,
+    hybrid: HybridForceController | None,
+    surface: Surface | None,
 ) -> str:
     if hybrid is not None:
         return "custom"
+    if exp.controller_spec is not None:
+        spec = exp.controller_spec
+        on = spec.rulebase.name if spec.rulebase is not None else ""
+        return f"spec {spec.name} ({spec.kind}{' ' + on if on else ''}, python)"
     if controller == "pi":
         return "pi (python)"
     return f"fuzzy-pi surface {getattr(surface, '__name__', 'callable')} (python)"

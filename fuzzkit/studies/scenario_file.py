@@ -2,7 +2,7 @@
 
 The shipped experiments E1-E3 are such files (``fuzzkit/studies/scenarios/*.yaml``); a user's
 own task is one more. Loading is as strict as for rule bases (the same composing, limits and
-``file:line:col`` problems, all reported together, :mod:`fuzzkit.formats.yaml_reader`). The
+``file:line:col`` problems, all reported together, :mod:`fuzzkit.located_yaml`). The
 format is documented in ``docs/simulation.md`` (Scenario files); :func:`json_schema` is its
 JSON Schema.
 """
@@ -10,26 +10,29 @@ JSON Schema.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import math
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from yaml.nodes import Node, ScalarNode
+from yaml.nodes import MappingNode, Node, ScalarNode
 
-from fuzzkit.errors import ConfigError, Location, Problem, ScenarioError
-from fuzzkit.formats.yaml_reader import (
+from fuzzkit.control.spec import ControllerSpec
+from fuzzkit.errors import ConfigError, ControllerSpecError, Location, Problem, ScenarioError
+from fuzzkit.fuzzy.model import Source
+from fuzzkit.located_yaml import (
+    NULL_TAG,
     DocumentKind,
     NodeReader,
     compose_document,
-    describe,
     read_document,
 )
 from fuzzkit.plants.contact import ContactModel, SensorModel, ToolModel
 from fuzzkit.plants.contract import Scenario
 from fuzzkit.plants.environment import Box, EnvObject, RoughSurface, Table, Waypoint
 from fuzzkit.studies.faults import FAULTS
-from fuzzkit.studies.task import AXES, Experiment
+from fuzzkit.studies.task import AXES, Experiment, with_spec
 
 SCENARIO_DOCUMENT = DocumentKind(
     "scenario",
@@ -55,9 +58,13 @@ TOP_KEYS = (
     "steady_window_s",
     "latency_periods",
     "fault",
+    "controller",
 )
 REQUIRED_KEYS = ("name", "duration_s", "path", "objects", "force_control", "safety_limit_n")
-WAYPOINT_KEYS = ("t_s", "x", "y", "z")
+#: What a scenario with a controller spec leaves to the spec (the spec holds them).
+SPEC_KEYS = ("force_control", "safety_limit_n")
+SPEC_ENGAGE_KEYS = ("threshold_n", "samples")
+WAYPOINT_KEYS = ("t_s", "x", "y", "z", "tilt_deg")
 ENGAGE_KEYS = ("threshold_n", "samples", "hold_path")
 LATENCY_KEYS = ("sensor", "command")
 #: Environment objects by their key in ``objects``; RoughSurface also takes ``tilt_deg``.
@@ -66,36 +73,60 @@ OBJECT_KINDS: dict[str, type[Any]] = {"table": Table, "box": Box, "rough_surface
 SECTIONS: dict[str, type[Any]] = {"tool": ToolModel, "contact": ContactModel, "sensor": SensorModel}
 SHIPPED = ("E1", "E2", "E3")
 
-_NULL = "tag:yaml.org,2002:null"
-_BOOL = "tag:yaml.org,2002:bool"
+#: Limits that keep a scenario a simulation this machine can run (documented in
+#: docs/simulation.md): simulated time, control period, periods in one run, delays.
+MAX_DURATION_S = 600.0
+MIN_PERIOD_S = 1e-4
+MAX_PERIOD_S = 0.1
+MAX_STEPS = 1_000_000
+MAX_LATENCY_PERIODS = 1000
 
 
 class _ScenarioReader(NodeReader):
     """Converts a composed scenario document into an :class:`Experiment`."""
 
-    def positive(self, node: Node, what: str, allow_zero: bool = False) -> float | None:
+    def __init__(self, file: str, text: str, base_dir: Path | None) -> None:
+        super().__init__(file, text.split("\n"))
+        self.source_text = text
+        self.base_dir = base_dir
+
+    def controller(self, node: Node) -> ControllerSpec | None:
+        """The scenario's controller: a spec file's path (relative to the scenario) or an
+        embedded spec mapping; its problems join the scenario's."""
+        from fuzzkit.control.spec_reader import load_spec, read_spec_node
+
+        if isinstance(node, MappingNode):
+            digest = hashlib.sha256(self.source_text.encode("utf-8")).hexdigest()
+            spec, problems = read_spec_node(
+                node, Source(self.file, digest), self.source_text, self.base_dir
+            )
+            self.problems.extend(problems)
+            return spec
+        ref = self.name(node, "a controller spec (a path, or the spec as a mapping)")
+        if ref is None:
+            return None
+        path = Path(ref)
+        if not path.is_absolute() and self.base_dir is not None:
+            path = self.base_dir / path
+        try:
+            return load_spec(path)
+        except ControllerSpecError as exc:
+            self.error(node, f"controller spec {ref!r} is not valid (its problems follow)")
+            self.problems.extend(exc.problems)
+            return None
+
+    def positive(
+        self, node: Node, what: str, allow_zero: bool = False, high: float = math.inf
+    ) -> float | None:
         v = self.number(node, what)
         if v is None:
             return None
-        if not math.isfinite(v) or v < 0.0 or (v == 0.0 and not allow_zero):
+        if not math.isfinite(v) or v < 0.0 or (v == 0.0 and not allow_zero) or v > high:
             bound = ">= 0" if allow_zero else "> 0"
-            self.error(node, f"{what} must be a finite number {bound} (got {v:g})")
+            upper = f" and <= {high:g}" if math.isfinite(high) else ""
+            self.error(node, f"{what} must be a finite number {bound}{upper} (got {v:g})")
             return None
         return v
-
-    def integer(self, node: Node, what: str, minimum: int = 0) -> int | None:
-        if isinstance(node, ScalarNode) and node.tag == "tag:yaml.org,2002:int":
-            value = int(node.value)
-            if value >= minimum:
-                return value
-        self.error(node, f"expected an integer >= {minimum} for {what}, got {describe(node)}")
-        return None
-
-    def boolean(self, node: Node, what: str) -> bool | None:
-        if isinstance(node, ScalarNode) and node.tag == _BOOL:
-            return bool(node.value.lower() in ("true", "yes", "on"))
-        self.error(node, f"expected true or false for {what}, got {describe(node)}")
-        return None
 
     def record(self, cls: type[Any], node: Node, what: str, extra: tuple[str, ...] = ()) -> Any:
         """A dataclass of ``cls`` from a mapping keyed by its field names (defaults apply)."""
@@ -114,12 +145,12 @@ class _ScenarioReader(NodeReader):
         values: dict[str, Any] = {}
         ok = True
         for key, (_, vnode) in entries.items():
-            if key == "tilt_deg":
+            if key == "tilt_deg" and key in extra:
                 if "tilt_rad" in entries:
                     self.error(vnode, f"{what}: give tilt_deg or tilt_rad, not both")
                     ok = False
                     continue
-                deg = self.number(vnode, f"{what} tilt_deg")
+                deg = self.finite(vnode, f"{what} tilt_deg")
                 ok &= deg is not None
                 if deg is not None:
                     values["tilt_rad"] = math.radians(deg)
@@ -152,13 +183,9 @@ class _ScenarioReader(NodeReader):
             if len(items) != 3:
                 self.error(node, f"expected 3 numbers (x, y, z) for {what}, got {len(items)}")
                 return None
-            nums = [self.number(n, what) for n in items]
+            nums = [self.finite(n, what) for n in items]
             return None if any(v is None for v in nums) else tuple(nums)
-        value = self.number(node, what)
-        if value is not None and not math.isfinite(value):
-            self.error(node, f"{what} must be finite (got {value})")
-            return None
-        return value
+        return self.finite(node, what)
 
     def path(self, node: Node) -> tuple[Waypoint, ...] | None:
         items = self.sequence(node, "path")
@@ -173,7 +200,7 @@ class _ScenarioReader(NodeReader):
             if entries is None:
                 continue
             self.keys(entries, item, WAYPOINT_KEYS, ("t_s", "x", "z"), f"path[{k}]")
-            vals = {key: self.number(v, f"path[{k}] {key}") for key, (_, v) in entries.items()}
+            vals = {key: self.finite(v, f"path[{k}] {key}") for key, (_, v) in entries.items()}
             if any(vals.get(key) is None for key in ("t_s", "x", "z")) or len(vals) != len(
                 [key for key in vals if key in WAYPOINT_KEYS]
             ):
@@ -186,7 +213,8 @@ class _ScenarioReader(NodeReader):
                     f"path[{k}]: time {t:g} s is before the previous {before:g} s",
                 )
                 continue
-            out.append(Waypoint(t, vals["x"], vals.get("y") or 0.0, vals["z"]))  # type: ignore[arg-type]
+            tilt = math.radians(vals.get("tilt_deg") or 0.0)
+            out.append(Waypoint(t, vals["x"], vals.get("y") or 0.0, vals["z"], tilt))  # type: ignore[arg-type]
         return tuple(out) if len(out) == len(items) else None
 
     def objects(self, node: Node) -> tuple[EnvObject, ...] | None:
@@ -227,7 +255,7 @@ class _ScenarioReader(NodeReader):
         for axis, (_, vnode) in entries.items():
             if axis not in AXES:
                 return None
-            value = self.number(vnode, f"the {axis} set point")
+            value = self.finite(vnode, f"the {axis} set point")
             if value is None:
                 return None
             i = AXES.index(axis)
@@ -246,13 +274,13 @@ class _ScenarioReader(NodeReader):
         ok = True
         if "threshold_n" in entries:
             tnode = entries["threshold_n"][1]
-            if isinstance(tnode, ScalarNode) and tnode.tag == _NULL:
+            if isinstance(tnode, ScalarNode) and tnode.tag == NULL_TAG:
                 threshold = None  # active from the start
             else:
                 threshold = self.positive(tnode, "engage threshold_n", allow_zero=True)
                 ok &= threshold is not None
         if "samples" in entries:
-            s = self.integer(entries["samples"][1], "engage samples", minimum=1)
+            s = self.integer(entries["samples"][1], "engage samples", 1, MAX_STEPS)
             ok &= s is not None
             samples = s or samples
         if "hold_path" in entries:
@@ -267,18 +295,43 @@ class _ScenarioReader(NodeReader):
             return None
         self.keys(entries, node, LATENCY_KEYS, LATENCY_KEYS, "latency_periods")
         vals = [
-            self.integer(entries[k][1], f"latency_periods {k}") if k in entries else None
+            self.integer(entries[k][1], f"latency_periods {k}", maximum=MAX_LATENCY_PERIODS)
+            if k in entries
+            else None
             for k in LATENCY_KEYS
         ]
         if vals[0] is None or vals[1] is None:
             return None
         return vals[0], vals[1]
 
+    def time_limits(self, values: dict[str, Any], top: dict[str, tuple[Node, Node]]) -> None:
+        """Refuse a period below :data:`MIN_PERIOD_S` or more than :data:`MAX_STEPS` periods."""
+        period, duration = values.get("period_s", 0.004), values.get("duration_s")
+        if period is None or duration is None:
+            return
+        if period < MIN_PERIOD_S:
+            self.error(
+                top["period_s"][1], f"period_s must be >= {MIN_PERIOD_S:g} s (got {period:g})"
+            )
+            values["period_s"] = None
+        elif duration / period > MAX_STEPS:
+            self.error(
+                top["duration_s"][1],
+                f"duration_s / period_s is {duration / period:.3g} periods; a run is limited "
+                f"to {MAX_STEPS} periods (shorten duration_s or lengthen period_s)",
+            )
+            values["duration_s"] = None
+
     def experiment(self, root: Node) -> Experiment | None:
         top = self.mapping(root, "a scenario (a mapping)")
         if top is None:
             return None
-        self.keys(top, root, TOP_KEYS, REQUIRED_KEYS, "the scenario")
+        with_spec_keys = "controller" in top
+        required = tuple(k for k in REQUIRED_KEYS if not (with_spec_keys and k in SPEC_KEYS))
+        self.keys(top, root, TOP_KEYS, required, "the scenario")
+        spec = self.controller(top["controller"][1]) if with_spec_keys else None
+        if with_spec_keys:
+            self.spec_owned(top)
 
         def get(key: str) -> Node | None:
             return top[key][1] if key in top else None
@@ -288,10 +341,16 @@ class _ScenarioReader(NodeReader):
             node = get(key)
             if node is not None:
                 values[key] = self.text(node, key)
-        for key in ("duration_s", "period_s", "safety_limit_n", "steady_window_s"):
+        for key, high in (
+            ("duration_s", MAX_DURATION_S),
+            ("period_s", MAX_PERIOD_S),
+            ("safety_limit_n", math.inf),
+            ("steady_window_s", MAX_DURATION_S),
+        ):
             node = get(key)
             if node is not None:
-                values[key] = self.positive(node, key)
+                values[key] = self.positive(node, key, high=high)
+        self.time_limits(values, top)
         sections = {}
         for key, cls in SECTIONS.items():
             node = get(key)
@@ -315,6 +374,17 @@ class _ScenarioReader(NodeReader):
                 if name is not None and name not in FAULTS:
                     self.error(node, f"unknown fault {name!r}; expected one of {', '.join(FAULTS)}")
                 fault = name or fault
+        if spec is not None:
+            fc = (spec.setpoints, spec.selection)
+            values["safety_limit_n"] = spec.safety.limit_n
+            if "period_s" not in values:
+                values["period_s"] = spec.period_s
+            elif values["period_s"] != spec.period_s:
+                self.error(
+                    top["period_s"][1],
+                    f"period_s {values['period_s']:g} differs from the controller spec's "
+                    f"{spec.period_s:g}; give one period (or leave it to the spec)",
+                )
         if path is None or objects is None or fc is None or engage is None:
             return None
         if self.problems or any(v is None for v in (*values.values(), *sections.values())):
@@ -339,7 +409,7 @@ class _ScenarioReader(NodeReader):
             extra["latency_periods"] = latency
         if "steady_window_s" in values:
             extra["steady_window_s"] = values["steady_window_s"]
-        return Experiment(
+        exp = Experiment(
             name=values["name"],
             title=values.get("title", values.get("description", values["name"])),
             scenario=scn,
@@ -352,10 +422,32 @@ class _ScenarioReader(NodeReader):
             fault=fault,
             **extra,
         )
+        return exp if spec is None else with_spec(exp, spec)
+
+    def spec_owned(self, top: dict[str, tuple[Node, Node]]) -> None:
+        """With a controller spec, the task's axes, set points, safety limit and engagement are
+        the spec's: giving them in the scenario too is an error (one source of truth)."""
+        for key in SPEC_KEYS:
+            if key in top:
+                self.error(
+                    top[key][0],
+                    f"{key} is the controller spec's (its axes and safety); remove it here",
+                )
+        if "engage" in top and isinstance(top["engage"][1], MappingNode):
+            for knode, _ in top["engage"][1].value:
+                if isinstance(knode, ScalarNode) and knode.value in SPEC_ENGAGE_KEYS:
+                    self.error(
+                        knode,
+                        f"engage {knode.value} is the controller spec's (safety.engage); "
+                        "remove it here (hold_path stays)",
+                    )
 
 
-def loads_scenario(text: str, source: str = "<string>") -> Experiment:
-    """Parse scenario YAML ``text``; ``source`` names it in messages.
+def loads_scenario(
+    text: str, source: str = "<string>", base_dir: str | Path | None = None
+) -> Experiment:
+    """Parse scenario YAML ``text``; ``source`` names it in messages. A controller spec given
+    by a relative path is read relative to ``base_dir`` (the working directory when None).
 
     Raises
     ------
@@ -363,7 +455,7 @@ def loads_scenario(text: str, source: str = "<string>") -> Experiment:
         Listing every problem as ``source:line:col: message``, sorted by position.
     """
     root = compose_document(text, source, SCENARIO_DOCUMENT)
-    reader = _ScenarioReader(source, text.split("\n"))
+    reader = _ScenarioReader(source, text, None if base_dir is None else Path(base_dir))
     exp = reader.experiment(root)
     if reader.problems or exp is None:
         problems = list(dict.fromkeys(reader.problems)) or [
@@ -376,7 +468,7 @@ def loads_scenario(text: str, source: str = "<string>") -> Experiment:
 
 def load_scenario(path: str | Path) -> Experiment:
     """Read and parse a scenario YAML file (see :func:`loads_scenario`)."""
-    return loads_scenario(read_document(path, SCENARIO_DOCUMENT), str(path))
+    return loads_scenario(read_document(path, SCENARIO_DOCUMENT), str(path), Path(path).parent)
 
 
 def shipped_scenario_text(name: str) -> str:
@@ -389,6 +481,13 @@ def json_schema() -> dict[str, Any]:
 
     Structural only; the loader also checks values (positive durations, waypoint order ...).
     """
+    from fuzzkit.control.spec_schema import json_schema as spec_schema
+
+    def controller_schema() -> dict[str, Any]:
+        embedded = spec_schema()
+        embedded.pop("$schema")
+        return embedded
+
     number = {"type": "number"}
 
     def record(cls: type[Any], extra: dict[str, Any] | None = None) -> dict[str, Any]:
@@ -420,9 +519,19 @@ def json_schema() -> dict[str, Any]:
         "$schema": "https://json-schema.org/draft/2020-12/schema",
         "title": "fuzzkit scenario",
         "type": "object",
-        "required": list(REQUIRED_KEYS),
+        "required": [k for k in REQUIRED_KEYS if k not in SPEC_KEYS],
         "additionalProperties": False,
+        # without a controller spec, the scenario names its axes and safety limit itself
+        "if": {"not": {"required": ["controller"]}},
+        "then": {"required": list(SPEC_KEYS)},
+        "else": {"not": {"anyOf": [{"required": [k]} for k in SPEC_KEYS]}},
         "properties": {
+            "controller": {
+                "oneOf": [
+                    {"type": "string", "description": "a controller spec file (relative path)"},
+                    controller_schema(),
+                ]
+            },
             "name": {"type": "string"},
             "title": {"type": "string"},
             "description": {"type": "string"},

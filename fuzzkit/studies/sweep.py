@@ -38,8 +38,12 @@ def sweep_specs(
     rulebase: str = "macvicar_whelan",
     loop: str = "auto",
     duration_s: float | None = None,
+    controller_specs: Sequence[str] = (),
 ) -> list[RunSpec]:
     """Every combination, as run specs.
+
+    ``controller_specs``: controller spec files, each a value of the sweep in place of the
+    ``controllers`` (a spec holds its controller and gains, so ``gains`` must be None).
 
     ``gains`` maps a label (a gains file name) to per-controller overrides
     (``{label: {controller: {name: value}}}``); None runs the default gains only.
@@ -61,9 +65,16 @@ def sweep_specs(
         if not values:
             raise ConfigError(f"a sweep needs at least one value for {what}")
     gain_sets = gains or {"default": {}}
+    choices: list[tuple[str, str | None]] = [(c, None) for c in controllers]
+    if controller_specs:
+        from fuzzkit.control.spec_reader import load_spec
+
+        if gains:
+            raise ConfigError("controller specs hold their gains; give specs or gains, not both")
+        choices = [(load_spec(path).kind, path) for path in controller_specs]
     specs = []
-    for exp, ctrl, k, lat, label, seed in itertools.product(
-        experiments, controllers, stiffnesses_n_per_mm, latencies, gain_sets, range(seeds)
+    for exp, (ctrl, cspec), k, lat, label, seed in itertools.product(
+        experiments, choices, stiffnesses_n_per_mm, latencies, gain_sets, range(seeds)
     ):
         specs.append(
             RunSpec(
@@ -78,6 +89,7 @@ def sweep_specs(
                 rulebase=rulebase,
                 loop=loop,
                 duration_s=duration_s,
+                controller_spec=cspec,
             )
         )
     return specs

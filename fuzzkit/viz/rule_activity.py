@@ -38,11 +38,12 @@ class AxisRules:
 
 
 def strongest_rules(
-    rb: RuleBase, result: RunResult, gains: Mapping[str, float], top: int = TOP_RULES
+    rb: RuleBase, result: RunResult, gains: Mapping[str, Any], top: int = TOP_RULES
 ) -> list[AxisRules]:
     """The ``top`` strongest rules of every controlled period, per force-controlled axis.
 
-    ``gains``: the fuzzy-PI's complete gains (``ki``, ``kp``) the run used.
+    ``gains``: the fuzzy-PI's complete gains (``ki``, ``kp``) the run used, or per axis
+    (``{"z": {"ki": ..}}``, as a controller spec gives them).
     """
     from fuzzkit.fuzzy.inference import engine_for
 
@@ -53,8 +54,9 @@ def strongest_rules(
     for i, axis in enumerate("xyz"):
         if not result.experiment.selection[i]:
             continue
-        en = np.clip(gains["ki"] * result.e[ran, i], -1.0, 1.0)
-        den = np.clip(gains["kp"] * result.de[ran, i], -1.0, 1.0)
+        g = gains.get(axis, gains)
+        en = np.clip(g["ki"] * result.e[ran, i], -1.0, 1.0)
+        den = np.clip(g["kp"] * result.de[ran, i], -1.0, 1.0)
         firing = engine.firing_strengths({"e": en, "de": den})
         order = np.argsort(-firing, axis=1, kind="stable")[:, :top]
         out.append(AxisRules(axis, result.t[ran], order, np.take_along_axis(firing, order, axis=1)))
@@ -81,17 +83,19 @@ class RuleRecording:
 
 
 def rule_recording(
-    result: RunResult, rulebase: RuleBase, gains: Mapping[str, float]
+    result: RunResult, rulebase: RuleBase, gains: Mapping[str, Any]
 ) -> RuleRecording | None:
     """The rule activity of a fuzzy-PI run for its recording (None for any other controller).
 
-    ``gains``: the fuzzy-PI's gains as given to the run (overrides of the defaults).
+    ``gains``: the fuzzy-PI's gains as given to the run (overrides of the defaults), or its
+    complete gains per axis (a controller spec's).
     """
     from fuzzkit.studies.experiments import DEFAULT_GAINS
 
     if result.controller != "fuzzy-pi":
         return None
-    full = {**DEFAULT_GAINS["fuzzy-pi"], **gains}
+    per_axis = any(isinstance(v, Mapping) for v in gains.values())
+    full = dict(gains) if per_axis else {**DEFAULT_GAINS["fuzzy-pi"], **gains}
     return RuleRecording(rulebase, strongest_rules(rulebase, result, full))
 
 

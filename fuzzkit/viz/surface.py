@@ -18,10 +18,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from fuzzkit.errors import ConfigError, EvaluationError
+from fuzzkit.errors import ConfigError, EvaluationError, did_you_mean
 from fuzzkit.fuzzy.describe import axis_label, num
 from fuzzkit.fuzzy.model import RuleBase, Term, Variable
-from fuzzkit.fuzzy.validation import did_you_mean
 from fuzzkit.viz.figures import figure_format, new_figure, save_figure
 from fuzzkit.viz.recording import open_recording
 

@@ -17,7 +17,7 @@ def write_run_rrd(
     result: RunResult,
     path: str | os.PathLike[str],
     plant: Any = None,
-    fuzzy: tuple[RuleBase, Mapping[str, float]] | None = None,
+    fuzzy: tuple[RuleBase, Mapping[str, Any]] | None = None,
 ) -> Path:
     """Write a run's recording with the drawing its plant needs (planar, or 3-D for arm6).
 

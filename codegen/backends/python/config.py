@@ -1,7 +1,72 @@
-"""Python target: which templates make which files (``{name}`` is the rule base name)."""
+"""Python target: one standard-library module (``math`` only), computing in Python floats.
 
-#: Lookup-table method.
-FILES = {"{name}.py": "module.py.jinja"}
+Every Python-specific choice of the generators is here; the templates beside this file lay the
+spec objects out (``{name}`` in a file pattern is the rule base's or controller's name).
+"""
 
-#: Exact method (``--method exact``): the inference itself, no table.
-EXACT_FILES = {"{name}.py": "exact.py.jinja"}
+from __future__ import annotations
+
+import math
+import sys
+from collections.abc import Mapping
+from pathlib import Path
+
+from fuzzkit.codegen.backends.python.run import open_controller
+from fuzzkit.codegen.lut import LookupTable
+from fuzzkit.codegen.target import Target
+from fuzzkit.codegen.verify import Verification, verify_exact_python, verify_python
+from fuzzkit.errors import CodegenError
+from fuzzkit.fuzzy.model import RuleBase
+from fuzzkit.fuzzy.validation import PYTHON_KEYWORDS
+
+
+def literal(value: float, number_type: str) -> str:
+    """A Python float constant: its ``repr`` (the shortest text that reads back exactly)."""
+    if not math.isfinite(value):
+        raise CodegenError(f"cannot emit the non-finite constant {value}")
+    return repr(float(value))
+
+
+def module_clash(name: str) -> str | None:
+    """``NAME.py`` named like a standard module: its own ``import NAME`` would find it."""
+    if name in sys.stdlib_module_names:
+        return f"{name}.py would shadow the Python standard module {name!r}"
+    return None
+
+
+def _verify_exact(rb: RuleBase, number_type: str, files: Mapping[str, str]) -> Verification:
+    return verify_exact_python(rb, files)
+
+
+def _verify_table(rb: RuleBase, table: LookupTable, files: Mapping[str, str]) -> Verification:
+    return verify_python(rb, table, files)
+
+
+TARGET = Target(
+    name="python",
+    folder=Path(__file__).parent,
+    label="Python",
+    number_types=("double",),
+    default_number_type="double",
+    type_names={"double": "float"},
+    math_suffix={"double": ""},
+    runtime={"double": "Python floats"},
+    literal=literal,
+    nan="_NAN",
+    functions={"min": "min", "max": "max", "psum": "_psum"},
+    reserved_words=PYTHON_KEYWORDS,
+    module_clash=module_clash,
+    # reprs are up to 23 characters: 4 a line keeps generated Python under 100 columns
+    values_per_line={"table": 4, "exact": 4, "controller": 3},
+    files={
+        "table": {"{name}.py": "module.py.jinja"},
+        "exact": {"{name}.py": "exact.py.jinja"},
+        # the fuzzy-PI surface is embedded (exact_body.py.jinja): one module, no import path
+        "controller": {"{name}.py": "controller.py.jinja"},
+    },
+    visits_firing_cells=False,
+    fast_centroid=False,
+    verify_table=_verify_table,
+    verify_exact=_verify_exact,
+    open_controller=open_controller,
+)

@@ -11,7 +11,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from fuzzkit.control.spec import ControllerSpec
 from fuzzkit.errors import ConfigError
+from fuzzkit.plants.contract import UnsupportedPlant
 from fuzzkit.studies.compiled import period as P
 from fuzzkit.studies.compiled.generated_c import GeneratedC
 from fuzzkit.studies.compiled.table import table_arrays
@@ -63,6 +65,10 @@ def controller_args(
         )
     if table is not None and generated_c is not None:
         raise ConfigError("give the compiled fuzzy-pi a lookup table or the generated C, not both")
+    if exp.controller_spec is not None:
+        from fuzzkit.control.spec import with_gains
+
+        controller, gains = spec_gains(with_gains(exp.controller_spec, gains or {}))
     faults, sensor_delay, command_delay = run_faults_and_latency(exp, seed, faults, latency)
     # The Python controller object validates the gains and holds the safeguard settings.
     hybrid = build_controller(exp, controller, gains, lambda e, de: 0.0)
@@ -112,6 +118,8 @@ def controller_args(
             np.zeros((2, 2)),
             np.zeros((1, 1), dtype=np.int64),
         )
+    if exp.controller_spec is not None:
+        impl = f"spec {exp.controller_spec.name}: {impl}"
     return ControllerArgs(
         cp=cp,
         selection=np.array([1.0 if s else 0.0 for s in exp.selection]),
@@ -125,6 +133,40 @@ def controller_args(
         latency=(sensor_delay, command_delay),
         periods=n,
     )
+
+
+def spec_gains(spec: ControllerSpec) -> tuple[str, dict[str, float]]:
+    """The controller kind and the gains the compiled loop runs for a controller spec.
+
+    Raises
+    ------
+    UnsupportedPlant
+        The spec needs what the compiled controller lacks: the sensor front end (tare, gravity
+        compensation, low-pass) or different gains per axis. The Python loop runs it.
+    """
+    from fuzzkit.control.reference import front_end_from_spec
+
+    if front_end_from_spec(spec) is not None:
+        raise UnsupportedPlant(
+            f"controller spec {spec.name!r} has a sensor front end (tare, tool or low-pass), "
+            "which the compiled loop does not model"
+        )
+    first = spec.axes[0]
+    if any((a.kp, a.ki, a.kx) != (first.kp, first.ki, first.kx) for a in spec.axes):
+        raise UnsupportedPlant(
+            f"controller spec {spec.name!r} has different gains per axis; the compiled loop "
+            "runs one set"
+        )
+    gains = {
+        "kp": first.kp,
+        "ki": first.ki,
+        "u_min": -spec.limits.correction_m,
+        "u_max": spec.limits.correction_m,
+        "rate_limit": spec.limits.step_m,
+    }
+    if first.kx is not None:
+        gains["kx"] = first.kx
+    return spec.kind, gains
 
 
 def result_from_recording(

@@ -229,11 +229,12 @@ _SPLIT = bytes((
 
 def _in_order(inputs: Mapping[str, float]) -> list[float]:
     """Inputs given by name (as fuzzkit's engine takes them), in declaration order."""
-    missing = [n for n in INPUT_NAMES if n not in inputs]
-    unknown = sorted(str(n) for n in inputs if n not in INPUT_NAMES)
+    names = ("e", "de",)
+    missing = [n for n in names if n not in inputs]
+    unknown = sorted(str(n) for n in inputs if n not in names)
     if missing or unknown:
         raise ValueError(
-            "expected a value for every input by name (" + ", ".join(INPUT_NAMES) + "); "
+            "expected a value for every input by name (" + ", ".join(names) + "); "
             + "; ".join(
                 part
                 for part in (
@@ -243,7 +244,7 @@ def _in_order(inputs: Mapping[str, float]) -> list[float]:
                 if part
             )
         )
-    return [inputs[n] for n in INPUT_NAMES]
+    return [inputs[n] for n in names]
 
 
 def eval(inputs: Sequence[float] | Mapping[str, float]) -> tuple[float, ...]:

@@ -1,0 +1,47 @@
+"""Run a generated Python controller: import ``NAME_controller.py`` and drive its Controller."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from fuzzkit.codegen.verify import load_module
+
+
+class ImportedController:
+    """The generated module, imported; ``step``, ``run`` and ``reset`` as the C runner's."""
+
+    def __init__(self, files: Mapping[str, str], module: str) -> None:
+        self.module: Any = load_module(files, module)
+        self.controller: Any = self.module.Controller()
+
+    def reset(self) -> None:
+        """``Controller.reset``."""
+        self.controller.reset()
+
+    def step(
+        self, force_n: Sequence[float], tool_rotation: Sequence[float] | None = None
+    ) -> tuple[list[float], int]:
+        """One period: ``(correction_m, status)``."""
+        out, status = self.controller.step(force_n, tool_rotation)
+        return list(out), int(status)
+
+    def run(
+        self, forces: npt.ArrayLike, rotations: npt.ArrayLike | None = None
+    ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]:
+        """``n`` periods: corrections ``(n, 3)`` and statuses, as the C runner's ``run``."""
+        f = np.asarray(forces, dtype=np.float64).tolist()
+        r = None if rotations is None else np.asarray(rotations, dtype=np.float64).tolist()
+        out = np.empty((len(f), 3))
+        status = np.zeros(len(f), dtype=np.int64)
+        for k, force in enumerate(f):
+            out[k], status[k] = self.controller.step(force, None if r is None else r[k])
+        return out, status
+
+
+def open_controller(files: Mapping[str, str], module: str, number_type: str) -> ImportedController:
+    """The Python target's way to run a generated controller (``Target.open_controller``)."""
+    return ImportedController(files, module)

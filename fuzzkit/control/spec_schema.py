@@ -1,0 +1,166 @@
+"""JSON Schema (draft 2020-12) of the controller-spec YAML format (``fuzzkit schema
+--controller``), for editors and linters.
+
+Structural only: keys, types, required entries and simple bounds. The reader
+(:mod:`fuzzkit.control.spec_reader`) also checks what a schema cannot say (a set point below
+the safety limit, a rule base that loads, a corner below the Nyquist frequency).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fuzzkit.control.spec import ADAPTATIONS, AXES, KINDS
+from fuzzkit.control.spec_reader import REQUIRED_KEYS
+
+
+def _number(
+    description: str, minimum: float | None = None, exclusive: bool = False
+) -> dict[str, Any]:
+    out: dict[str, Any] = {"type": "number", "description": description}
+    if minimum is not None:
+        out["exclusiveMinimum" if exclusive else "minimum"] = minimum
+    return out
+
+
+def _count(description: str, minimum: int) -> dict[str, Any]:
+    return {"type": "integer", "minimum": minimum, "description": description}
+
+
+def _object(props: dict[str, Any], required: tuple[str, ...] = (), **extra: Any) -> dict[str, Any]:
+    return {
+        "type": "object",
+        "properties": props,
+        "required": list(required),
+        "additionalProperties": False,
+        **extra,
+    }
+
+
+def json_schema() -> dict[str, Any]:
+    """The schema of a controller spec (see ``docs/controller.md`` for every field)."""
+    gains = {
+        "kp": _number("pi: gain on the change of error (m/N); fuzzy-pi: scale of de (1/N)", 0),
+        "ki": _number("pi: gain on the error (m/N); fuzzy-pi: scale of e (1/N)", 0),
+        "kx": _number("fuzzy-pi only: scale of the surface's output (m per period)", 0, True),
+    }
+    axis = _object(
+        {
+            "setpoint_n": _number("force set point f_d (N): what the tool exerts on the surface"),
+            "gains": _object(gains, ("kp", "ki")),
+        },
+        ("setpoint_n", "gains"),
+    )
+    nullable_threshold = {
+        "type": ["number", "null"],
+        "minimum": 0,
+    }
+    safety = _object(
+        {
+            "limit_n": _number("force safety limit on every axis (N)", 0, True),
+            "engage": _object(
+                {
+                    "threshold_n": {
+                        **nullable_threshold,
+                        "description": "engage once a force exceeds it (N); null: at once",
+                    },
+                    "samples": _count("consecutive valid samples above the threshold", 1),
+                }
+            ),
+            "spike_gate": _object(
+                {
+                    "threshold_n": {
+                        "type": ["number", "null"],
+                        "exclusiveMinimum": 0,
+                        "description": "largest accepted jump from the last accepted sample "
+                        "(N); null: half of limit_n",
+                    },
+                    "confirm": _count("rejections in a row that confirm a real step", 1),
+                }
+            ),
+            "trip": _object({"samples": _count("consecutive samples above limit_n to trip", 1)}),
+            "backoff": _object(
+                {
+                    "distance_m": _number("retreat distance after a trip (m)", 0, True),
+                    "speed_m_s": _number("retreat speed (m/s)", 0, True),
+                }
+            ),
+        },
+        ("limit_n",),
+    )
+    sensor = _object(
+        {
+            "tare": _object(
+                {"samples": _count("free-air samples averaged into the bias; 0: no tare", 0)},
+                ("samples",),
+            ),
+            "tool": {
+                "oneOf": [
+                    {"type": "null"},
+                    _object(
+                        {
+                            "mass_kg": _number("tool mass below the sensor (kg)", 0),
+                            "com_m": {
+                                "type": "array",
+                                "items": {"type": "number"},
+                                "minItems": 3,
+                                "maxItems": 3,
+                                "description": "centre of mass, sensor frame (m)",
+                            },
+                        },
+                        ("mass_kg",),
+                    ),
+                ],
+                "description": "gravity compensation; null or absent: off",
+            },
+            "lowpass_hz": {
+                "type": ["number", "null"],
+                "exclusiveMinimum": 0,
+                "description": "first-order low-pass corner (Hz), below 1 / (2 period_s); "
+                "null: no filter",
+            },
+        }
+    )
+    return {
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "title": "fuzzkit controller spec",
+        **_object(
+            {
+                "name": {
+                    "type": "string",
+                    "pattern": r"^[A-Za-z_][A-Za-z0-9_]*$",
+                    "description": "C identifier prefixing the generated symbols",
+                },
+                "description": {"type": "string"},
+                "controller": {"enum": list(KINDS)},
+                "rulebase": {
+                    "type": "string",
+                    "description": "fuzzy-pi only: shipped name or path (relative to the spec)",
+                },
+                "period_s": _number("outer-loop sample period T (s)", 0, True),
+                "axes": _object(
+                    {a: axis for a in AXES},
+                    minProperties=1,
+                    description="the selection matrix: force-controlled task axes",
+                ),
+                "limits": _object(
+                    {
+                        "correction_m": _number("largest |u| per axis (m)", 0, True),
+                        "step_m": _number("largest |du| per period (m)", 0, True),
+                    },
+                    ("correction_m", "step_m"),
+                ),
+                "safety": safety,
+                "sensor": sensor,
+                "adaptation": {"enum": list(ADAPTATIONS)},
+            },
+            REQUIRED_KEYS,
+            allOf=[
+                {
+                    "if": {"properties": {"controller": {"const": "fuzzy-pi"}}},
+                    "then": {"required": ["rulebase"]},
+                    "else": {"not": {"required": ["rulebase"]}},
+                }
+            ],
+        ),
+    }

@@ -1,0 +1,56 @@
+"""ControllerSpec -> YAML text in the format :mod:`fuzzkit.control.spec_reader` reads.
+
+Floats are written with ``repr`` precision, so reading the text back gives the same spec
+(``fuzzkit tune --spec-out`` writes its result this way). Only the CLI writes files.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fuzzkit.control.spec import ControllerSpec
+
+
+def spec_document(spec: ControllerSpec) -> dict[str, Any]:
+    """The YAML document of ``spec`` as plain data (the reader's key order)."""
+    doc: dict[str, Any] = {"name": spec.name}
+    if spec.description:
+        doc["description"] = spec.description
+    doc["controller"] = spec.kind
+    if spec.rulebase_ref is not None:
+        doc["rulebase"] = spec.rulebase_ref
+    doc["period_s"] = spec.period_s
+    axes: dict[str, Any] = {}
+    for a in spec.axes:
+        gains = {"kp": a.kp, "ki": a.ki}
+        if a.kx is not None:
+            gains["kx"] = a.kx
+        axes[a.axis] = {"setpoint_n": a.setpoint_n, "gains": gains}
+    doc["axes"] = axes
+    doc["limits"] = {"correction_m": spec.limits.correction_m, "step_m": spec.limits.step_m}
+    s = spec.safety
+    doc["safety"] = {
+        "limit_n": s.limit_n,
+        "engage": {"threshold_n": s.engage_threshold_n, "samples": s.engage_samples},
+        "spike_gate": {"threshold_n": s.spike_gate_n, "confirm": s.spike_confirm},
+        "trip": {"samples": s.trip_samples},
+        "backoff": {"distance_m": s.backoff_m, "speed_m_s": s.backoff_speed_m_s},
+    }
+    sensor = spec.sensor
+    doc["sensor"] = {
+        "tare": {"samples": sensor.tare_samples},
+        "tool": None
+        if sensor.tool is None
+        else {"mass_kg": sensor.tool.mass_kg, "com_m": list(sensor.tool.com_m)},
+        "lowpass_hz": sensor.lowpass_hz,
+    }
+    doc["adaptation"] = spec.adaptation
+    return doc
+
+
+def dump_spec(spec: ControllerSpec, header: str = "") -> str:
+    """The YAML text of ``spec``, after ``header`` (comment lines, each starting with ``#``)."""
+    import yaml
+
+    body = yaml.safe_dump(spec_document(spec), sort_keys=False, default_flow_style=None)
+    return header + body

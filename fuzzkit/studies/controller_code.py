@@ -1,0 +1,102 @@
+"""From a controller spec to its generated code and back: generate, compile or import, run.
+
+``fuzzkit.codegen`` knows no controller spec (it reads the fuzzy model only), and
+``fuzzkit.control`` no code generation; this module, above both, hands the spec to the
+generator as plain data (:func:`design_of` -> ``codegen.controller.ControllerDesign``) and
+opens what it generated as a runnable controller (:func:`open_generated`), for ``fuzzkit
+compile SPEC``, ``fuzzkit replay --impl c`` and the tests.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from fuzzkit.codegen.controller import ControllerDesign, StatusBit, emit_controller
+from fuzzkit.codegen.target import load_target
+from fuzzkit.control import status as st
+from fuzzkit.control.spec import AXES, STANDARD_GRAVITY_M_S2, ControllerSpec
+
+#: What each status bit means, as the generated header and module document it.
+STATUS_DOCS: Mapping[str, str] = {
+    "ENGAGED": "The force loop has taken over (the engagement debounce passed); set until reset.",
+    "HELD": "This sample did not reach the axis controllers (missing, rejected by the spike "
+    "gate, or taken for the tare): the correction is held.",
+    "TRIPPED": "The force safety limit tripped; latched until reset. The correction is frozen.",
+    "RETREATING": "Tripped and still backing off (the back-off distance is not yet covered).",
+    "SATURATED": "A correction limit acted in this step on some axis: |du| clamped to the step "
+    "limit or |u| to the correction limit.",
+    "TARING": "The tare is collecting free-air samples (the first N valid ones, or N after a "
+    "request).",
+    "REJECTED": "The spike gate rejected this sample (HELD is set too).",
+}
+
+
+def status_bits() -> tuple[StatusBit, ...]:
+    """The reference's status bits (``fuzzkit.control.status``) with their meaning."""
+    return tuple(StatusBit(name, bit, STATUS_DOCS[name]) for name, bit in st.BITS.items())
+
+
+def design_of(spec: ControllerSpec) -> ControllerDesign:
+    """The spec as the generator takes it: plain numbers, the rule base, the status bits."""
+    by_axis = {a.axis: a for a in spec.axes}
+
+    def per_axis(field: str) -> tuple[float, float, float]:
+        vals = [getattr(by_axis[a], field) if a in by_axis else 0.0 for a in AXES]
+        return (float(vals[0] or 0.0), float(vals[1] or 0.0), float(vals[2] or 0.0))
+
+    safety = spec.safety
+    tool = spec.sensor.tool
+    source_file, sha = ("<spec>", "")
+    if spec.source is not None:
+        source_file, sha = Path(spec.source.path).name, spec.source.sha256
+    return ControllerDesign(
+        name=spec.name,
+        kind=spec.kind,
+        period_s=spec.period_s,
+        selection=spec.selection,
+        setpoints_n=spec.setpoints,
+        kp=per_axis("kp"),
+        ki=per_axis("ki"),
+        kx=per_axis("kx"),
+        correction_m=spec.limits.correction_m,
+        step_m=spec.limits.step_m,
+        limit_n=safety.limit_n,
+        engage_threshold_n=safety.engage_threshold_n,
+        engage_samples=safety.engage_samples,
+        spike_gate_n=safety.spike_gate,
+        spike_confirm=safety.spike_confirm,
+        trip_samples=safety.trip_samples,
+        backoff_m=safety.backoff_m,
+        backoff_speed_m_s=safety.backoff_speed_m_s,
+        tare_samples=spec.sensor.tare_samples,
+        mass_kg=None if tool is None else tool.mass_kg,
+        gravity_m_s2=STANDARD_GRAVITY_M_S2,
+        lowpass_alpha=spec.sensor.lowpass_alpha(spec.period_s),
+        rulebase=spec.rulebase,
+        status_bits=status_bits(),
+        description=spec.description,
+        source_file=source_file,
+        source_sha256=sha,
+    )
+
+
+def generate(spec: ControllerSpec, target: str, number_type: str | None = None) -> dict[str, str]:
+    """The generated controller's sources for ``target``: ``{relative path: text}``."""
+    return emit_controller(design_of(spec), target, number_type)
+
+
+def open_generated(spec: ControllerSpec, target: str, number_type: str | None = None) -> Any:
+    """Generate the controller, then compile (C) or import (Python) it, ready to ``step``.
+
+    Raises
+    ------
+    ToolchainError
+        C: no compiler, or the code does not compile.
+    """
+    tg = load_target(target)
+    nt = number_type or tg.default_number_type
+    if tg.open_controller is None:  # pragma: no cover - every shipped target can run one
+        raise NotImplementedError(f"the {target} target cannot run a generated controller")
+    return tg.open_controller(generate(spec, target, nt), f"{spec.name}_controller", nt)

@@ -1,0 +1,189 @@
+"""Replay a recorded wrist-sensor log through a controller: the check of generated code against
+a user's own robot (``fuzzkit replay``).
+
+The log is CSV with a header: ``fx,fy,fz`` (N, task frame) required, ``t`` (s) and the nine
+rotation entries ``r11,r12,...,r33`` (row-major, world-from-sensor) optional, in any order. An
+empty cell or ``nan`` is a missing sample. Reading is strict: every problem is reported as
+``file:line:col`` at once (:class:`~fuzzkit.errors.ProblemsError`). The output CSV has
+``t`` (when the log has it), ``ux,uy,uz`` (m) and ``status`` per row.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from fuzzkit.control.spec import ControllerSpec
+from fuzzkit.errors import Location, Problem, ProblemsError
+
+FloatArray = npt.NDArray[np.float64]
+
+FORCE_COLUMNS = ("fx", "fy", "fz")
+ROTATION_COLUMNS = tuple(f"r{i}{j}" for i in range(1, 4) for j in range(1, 4))
+COLUMNS = ("t", *FORCE_COLUMNS, *ROTATION_COLUMNS)
+IMPLS = ("python", "c")
+#: A number as the log may write it (no thousands separators, no quotes).
+_NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?|[+-]?inf(?:inity)?", re.I)
+#: Problems listed before the reader stops (a wrong file would list every row).
+MAX_PROBLEMS = 20
+
+
+@dataclass(frozen=True)
+class SensorLog:
+    """A log read from CSV: forces ``(n, 3)``, rotations ``(n, 9)`` or None, times or None."""
+
+    forces: FloatArray
+    rotations: FloatArray | None
+    times: FloatArray | None
+
+
+def _cells(line: str) -> list[tuple[str, int]]:
+    """The comma-separated cells of ``line`` with the 1-based column where each starts."""
+    out = []
+    col = 1
+    for raw in line.split(","):
+        stripped = raw.strip()
+        lead = len(raw) - len(raw.lstrip())
+        out.append((stripped, col + lead))
+        col += len(raw) + 1
+    return out
+
+
+def read_sensor_log(path: str | Path) -> SensorLog:
+    """Read a sensor log (see the module docstring).
+
+    Raises
+    ------
+    ProblemsError
+        Every problem with its ``file:line:col``: no header, unknown or repeated columns,
+        ``fx,fy,fz`` missing, some but not all rotation columns, a row with the wrong number
+        of cells, a cell that is not a number, a missing or non-increasing time.
+    OSError
+        The file cannot be read.
+    """
+    name = str(path)
+    data = Path(path).read_bytes()
+    problems: list[Problem] = []
+
+    def bad(line: int, col: int, message: str) -> None:
+        problems.append(Problem(Location(name, line, col), message))
+
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        where = data[: exc.start].count(b"\n") + 1
+        raise ProblemsError([Problem(Location(name, where), "not UTF-8 text")]) from None
+    lines = text.splitlines()
+    if not lines or not lines[0].strip():
+        raise ProblemsError(
+            [Problem(Location(name, 1, 1), "expected a header row (fx,fy,fz[,t][,r11..r33])")]
+        )
+    header = _cells(lines[0])
+    index: dict[str, int] = {}
+    for k, (cell, col) in enumerate(header):
+        key = cell.lower()
+        if key not in COLUMNS:
+            bad(1, col, f"unknown column {cell!r} (expected {', '.join(COLUMNS)})")
+        elif key in index:
+            bad(1, col, f"column {cell!r} appears twice")
+        else:
+            index[key] = k
+    for col_name in FORCE_COLUMNS:
+        if col_name not in index:
+            bad(1, 1, f"column {col_name!r} is missing (fx, fy, fz are required)")
+    rot_given = [c for c in ROTATION_COLUMNS if c in index]
+    if rot_given and len(rot_given) != 9:
+        missing = [c for c in ROTATION_COLUMNS if c not in index]
+        bad(1, 1, f"rotation columns incomplete: {', '.join(missing)} missing (all 9 or none)")
+    if problems:
+        raise ProblemsError(problems)
+    rows: list[list[float]] = []
+    width = len(header)
+    for n, line in enumerate(lines[1:], start=2):
+        if not line.strip():
+            if all(not rest.strip() for rest in lines[n - 1 :]):
+                break  # trailing blank lines
+            bad(n, 1, "blank line inside the log (a missing sample is a row of empty cells)")
+            continue
+        cells = _cells(line)
+        if len(cells) != width:
+            bad(n, len(line) + 1, f"expected {width} cells (as the header), got {len(cells)}")
+            continue
+        row = []
+        for cell, col in cells:
+            if not cell or cell.lower() == "nan":
+                row.append(math.nan)
+            elif _NUMBER.fullmatch(cell):
+                row.append(float(cell))
+            else:
+                bad(n, col, f"expected a number, an empty cell or nan, got {cell!r}")
+                row.append(math.nan)
+        rows.append(row)
+        if len(problems) >= MAX_PROBLEMS:
+            break
+    if not rows and not problems:
+        bad(2, 1, "the log has a header but no rows")
+    values = np.array(rows, dtype=np.float64).reshape(len(rows), width)
+    times = None
+    if "t" in index:
+        times = values[:, index["t"]]
+        for k in range(len(times)):
+            if not math.isfinite(times[k]):
+                bad(k + 2, header[index["t"]][1], "t must be a finite time (s)")
+            elif k and math.isfinite(times[k - 1]) and times[k] <= times[k - 1]:
+                bad(
+                    k + 2,
+                    header[index["t"]][1],
+                    f"t must increase (got {times[k]!r} after {times[k - 1]!r})",
+                )
+    if problems:
+        raise ProblemsError(problems[:MAX_PROBLEMS])
+    forces = values[:, [index[c] for c in FORCE_COLUMNS]]
+    rotations = values[:, [index[c] for c in ROTATION_COLUMNS]] if rot_given else None
+    return SensorLog(np.ascontiguousarray(forces), rotations, times)
+
+
+def replay(
+    spec: ControllerSpec, log: SensorLog, impl: str = "python", number_type: str = "double"
+) -> tuple[FloatArray, npt.NDArray[np.int64]]:
+    """Run the controller of ``spec`` on ``log`` from reset: corrections ``(n, 3)`` and status.
+
+    ``impl``: ``python`` is fuzzkit's reference controller (``fuzzkit.control.reference``),
+    ``c`` the generated C compiled and called through ctypes (``number_type`` float/double).
+    """
+    if impl == "python":
+        from fuzzkit.control.reference import Controller
+
+        ref = Controller(spec)
+        n = log.forces.shape[0]
+        out = np.empty((n, 3))
+        status = np.zeros(n, dtype=np.int64)
+        rot = None if log.rotations is None else log.rotations.tolist()
+        for k, force in enumerate(log.forces.tolist()):
+            out[k], status[k] = ref.step(force, None if rot is None else rot[k])
+        return out, status
+    if impl == "c":
+        from fuzzkit.studies.controller_code import open_generated
+
+        ctl: Any = open_generated(spec, "c", number_type)
+        result: tuple[FloatArray, npt.NDArray[np.int64]] = ctl.run(log.forces, log.rotations)
+        return result
+    raise ValueError(f"unknown --impl {impl!r} (expected one of {', '.join(IMPLS)})")
+
+
+def replay_csv(log: SensorLog, out: FloatArray, status: npt.NDArray[np.int64]) -> str:
+    """The output CSV: ``[t,]ux,uy,uz,status`` per row (numbers as Python writes them back
+    exactly)."""
+    head = ("t," if log.times is not None else "") + "ux,uy,uz,status"
+    lines = [head]
+    for k in range(out.shape[0]):
+        t = f"{float(log.times[k])!r}," if log.times is not None else ""
+        u = ",".join(repr(float(v)) for v in out[k])
+        lines.append(f"{t}{u},{int(status[k])}")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,207 @@
+"""Mutation fuzzing of every reader (issue 25): a damaged file gives a located error, or a
+rule base (scenario) that the engine evaluates to finite numbers at its label peaks.
+
+Seeded and bounded: :data:`MUTANTS` per format, each given :data:`HUNG_S` seconds. The
+sources are the shipped rule bases, the files of ``docs/examples/`` (and the shipped rule
+bases exported to each foreign format) and the shipped scenarios. Warnings are errors
+throughout: no ``RuntimeWarning`` may escape."""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import itertools
+import math
+import signal
+import warnings
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from _mutate import Mutant, mutants
+
+from fuzzkit.control.gains import read_gains_file
+from fuzzkit.errors import ConfigError, ProblemsError
+from fuzzkit.formats import fcl, fis, fll, registry, yaml_reader
+from fuzzkit.formats.foreign import ExportError
+from fuzzkit.fuzzy import membership
+from fuzzkit.fuzzy.inference import evaluate
+from fuzzkit.fuzzy.model import RuleBase
+from fuzzkit.plants.robot_description import load_robot
+from fuzzkit.studies.scenario_file import SHIPPED, loads_scenario, shipped_scenario_text
+
+ROOT = Path(__file__).resolve().parent.parent
+#: Mutants per format; with the seed, what the test covers (and the issue's closing note).
+MUTANTS = 400
+SEED = 25
+#: Label-peak grids larger than this are sampled (seeded), to bound the time per mutant.
+MAX_POINTS = 343
+
+READERS: dict[str, Callable[[str, str], RuleBase]] = {
+    "yaml": yaml_reader.loads_rulebase,
+    "fis": fis.loads,
+    "fcl": fcl.loads,
+    "fll": fll.loads,
+}
+
+
+def _sources(fmt: str) -> dict[str, str]:
+    shipped = sorted((ROOT / "rulebases").glob("*.yaml"))
+    if fmt == "yaml":
+        return {p.name: p.read_text() for p in shipped}
+    out = {p.name: p.read_text() for p in sorted((ROOT / "docs" / "examples").glob(f"*.{fmt}"))}
+    for p in shipped:
+        try:
+            out[f"{p.stem}.{fmt}"] = registry.dumps(registry.load(p), fmt, allow_loss=True)
+        except ExportError:
+            continue  # a construct the format cannot hold (e.g. nested conditions in .fis)
+    return out
+
+
+def _peaks(rb: RuleBase) -> dict[str, np.ndarray]:
+    axes = [
+        sorted({membership.centre(t, v.low, v.high) for t in v.terms} | {v.low, v.high})
+        for v in rb.inputs
+    ]
+    grid = list(itertools.product(*axes))
+    if len(grid) > MAX_POINTS:
+        pick = np.random.default_rng(SEED).choice(len(grid), MAX_POINTS, replace=False)
+        grid = [grid[i] for i in sorted(pick)]
+    cols = np.array(grid, dtype=np.float64).reshape(len(grid), len(rb.inputs))
+    return {v.name: cols[:, i] for i, v in enumerate(rb.inputs)}
+
+
+#: A reader that takes longer than this on a mutant of a few kilobytes is taken as hung.
+HUNG_S = 30.0
+
+
+class _Hung(Exception):
+    """A mutant took longer than :data:`HUNG_S` (a reader looping over a count, say)."""
+
+
+@contextlib.contextmanager
+def _strict() -> Iterator[None]:
+    """Warnings as errors, and :class:`_Hung` after :data:`HUNG_S` seconds."""
+
+    def hung(signum: int, frame: object) -> None:
+        raise _Hung(f"no answer within {HUNG_S:g} s")
+
+    previous = signal.signal(signal.SIGALRM, hung)
+    signal.setitimer(signal.ITIMER_REAL, HUNG_S)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0.0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def _located(exc: ProblemsError, source: str) -> str | None:
+    for p in exc.problems:
+        if p.location.file != source or p.location.line < 1:
+            return f"problem without file:line: {p}"
+    return None
+
+
+def _rule_base_failure(fmt: str, m: Mutant) -> str | None:
+    """Why mutant ``m`` breaks the property, or None if it holds."""
+    source = f"mutant.{fmt}"
+    try:
+        with _strict():
+            try:
+                rb = READERS[fmt](m.text, source)
+            except ProblemsError as exc:
+                return _located(exc, source)
+            values = evaluate(rb, _peaks(rb))
+    except Exception as exc:
+        return f"{type(exc).__name__}: {str(exc)[:300]}"
+    for var in rb.outputs:
+        y = values[var.name]
+        nan_default = var.default is None or math.isnan(var.default)
+        bad = ~np.isfinite(y) & ~(np.isnan(y) & nan_default)
+        if bad.any():
+            return f"output {var.name!r} is {y[bad][0]} at a label peak"
+    return None
+
+
+@pytest.mark.parametrize("fmt", sorted(READERS))
+def test_mutated_rule_bases_give_located_errors_or_finite_outputs(fmt: str) -> None:
+    sources = _sources(fmt)
+    assert len(sources) >= 2
+    for origin, text in sources.items():  # compile the engine's kernels outside the timer
+        rb = READERS[fmt](text, origin)
+        evaluate(rb, _peaks(rb))
+    failures = []
+    for m in mutants(sources, MUTANTS, SEED):
+        why = _rule_base_failure(fmt, m)
+        if why is not None:
+            failures.append(f"{m.origin} ({m.what}): {why}")
+    assert not failures, f"{len(failures)} of {MUTANTS} mutants:\n" + "\n".join(failures[:15])
+
+
+def _finite_fields(value: Any) -> bool:
+    if isinstance(value, float):
+        return math.isfinite(value)
+    if isinstance(value, tuple | list):
+        return all(_finite_fields(v) for v in value)
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return all(_finite_fields(getattr(value, f.name)) for f in dataclasses.fields(value))
+    return True
+
+
+def test_mutated_scenarios_give_located_errors_or_finite_experiments() -> None:
+    sources = {f"{name}.yaml": shipped_scenario_text(name) for name in SHIPPED}
+    failures = []
+    for m in mutants(sources, MUTANTS, SEED):
+        try:
+            with _strict():
+                exp = loads_scenario(m.text, "mutant.yaml")
+        except ProblemsError as exc:
+            why = _located(exc, "mutant.yaml")
+        except Exception as exc:
+            why = f"{type(exc).__name__}: {str(exc)[:300]}"
+        else:
+            why = None if _finite_fields(exp) else "a non-finite number was accepted"
+        if why is not None:
+            failures.append(f"{m.origin} ({m.what}): {why}")
+    assert not failures, f"{len(failures)} of {MUTANTS} mutants:\n" + "\n".join(failures[:15])
+
+
+def _config_failure(load: Callable[[Path], Any], path: Path) -> str | None:
+    """Why loading the config file ``path`` breaks the property (located error or finite)."""
+    try:
+        with _strict():
+            loaded = load(path)
+    except ConfigError as exc:
+        first = str(exc).split("\n")[-1] if "problems found" in str(exc) else str(exc)
+        located = first.startswith(f"{path}:") and first[len(str(path)) + 1 :][:1].isdigit()
+        return None if located else f"error without file:line: {first[:200]}"
+    except Exception as exc:
+        return f"{type(exc).__name__}: {str(exc)[:300]}"
+    return None if _finite_fields(loaded) else "a non-finite number was accepted"
+
+
+@pytest.mark.parametrize("kind", ["gains", "robot"])
+def test_mutated_gains_files_and_robot_descriptions_give_located_errors(
+    tmp_path: Path, kind: str
+) -> None:
+    if kind == "gains":
+        folder = ROOT / "docs" / "report" / "gains"
+        sources = {p.name: p.read_text() for p in sorted(folder.glob("*.yaml"))}
+
+        def load(path: Path) -> Any:
+            return [dataclasses.astuple(e) for e in read_gains_file(path).values()]
+    else:
+        sources = {"irb140.yaml": (ROOT / "fuzzkit" / "data" / "irb140.yaml").read_text()}
+        load = load_robot
+    failures = []
+    path = tmp_path / "mutant.yaml"
+    for m in mutants(sources, MUTANTS // 2, SEED):
+        path.write_text(m.text, encoding="utf-8", errors="surrogatepass")
+        why = _config_failure(load, path)
+        if why is not None:
+            failures.append(f"{m.origin} ({m.what}): {why}")
+    assert not failures, f"{len(failures)} of {MUTANTS // 2}:\n" + "\n".join(failures[:15])

@@ -1,0 +1,236 @@
+"""``fuzzkit replay`` (issue 20 item 3) and ``fuzzkit compile SPEC``: the reference and the
+generated C on one hostile log, strict CSV reading with located errors."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+import pytest
+from _codegen_util import needs_cc
+
+from fuzzkit.cli import main
+from fuzzkit.control.reference import Controller
+from fuzzkit.control.spec_reader import load_spec
+from fuzzkit.studies.replay import ROTATION_COLUMNS
+from fuzzkit.studies.sensor_logs import hostile_log
+
+REPO = Path(__file__).parent.parent
+SPEC = REPO / "docs" / "examples" / "controller.yaml"
+SPEC_PI = REPO / "docs" / "examples" / "controller_pi.yaml"
+
+
+def _run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def _cell(v: float) -> str:
+    return "" if math.isnan(v) else repr(float(v))
+
+
+def write_log(
+    path: Path,
+    forces: npt.NDArray[np.float64],
+    rotations: npt.NDArray[np.float64] | None,
+    *,
+    times: bool = True,
+    nan_word: bool = False,
+) -> None:
+    head = (
+        (["t"] if times else [])
+        + ["fx", "fy", "fz"]
+        + (list(ROTATION_COLUMNS) if rotations is not None else [])
+    )
+    lines = [",".join(head)]
+    for k, f in enumerate(forces):
+        cells = ([repr(k * 0.004)] if times else []) + [
+            ("nan" if nan_word and math.isnan(v) else _cell(v)) for v in f
+        ]
+        if rotations is not None:
+            cells += [_cell(v) for v in rotations[k]]
+        lines.append(",".join(cells))
+    path.write_text("\n".join(lines) + "\n")
+
+
+def read_out(path: Path) -> tuple[list[str], npt.NDArray[np.float64]]:
+    lines = path.read_text().splitlines()
+    return lines[0].split(","), np.array(
+        [[float(c) for c in line.split(",")] for line in lines[1:]]
+    )
+
+
+@needs_cc
+def test_replay_python_and_c_agree_on_a_hostile_log(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    spec = load_spec(SPEC)
+    forces, rotations = hostile_log(spec, n=200, seed=3)
+    log = tmp_path / "log.csv"
+    write_log(log, forces, rotations, nan_word=True)
+    outs = {}
+    for impl in ("python", "c"):
+        out = tmp_path / f"u_{impl}.csv"
+        code, stdout, err = _run(
+            capsys, "replay", str(SPEC), "--forces", str(log), "--out", str(out), "--impl", impl
+        )
+        assert code == 0, err
+        assert f"{len(forces)} samples replayed" in stdout
+        outs[impl] = read_out(out)
+    head, py = outs["python"]
+    assert head == ["t", "ux", "uy", "uz", "status"] and outs["c"][0] == head
+    c = outs["c"][1]
+    assert py.shape == (len(forces), 5)
+    np.testing.assert_array_equal(py[:, 0], np.arange(len(forces)) * 0.004)
+    assert float(np.max(np.abs(py[:, 1:4] - c[:, 1:4]))) <= 1e-9
+    np.testing.assert_array_equal(py[:, 4], c[:, 4])
+    # --impl python is the reference controller itself, sample by sample
+    ref = Controller(spec)
+    want = [ref.step(list(f), list(r)) for f, r in zip(forces, rotations, strict=True)]
+    np.testing.assert_array_equal(py[:, 1:4], np.array([u for u, _ in want]))
+    np.testing.assert_array_equal(py[:, 4], [s for _, s in want])
+    assert len(set(py[:, 4].astype(int))) >= 6  # the log is hostile: many kinds of status
+
+
+def test_replay_without_time_or_rotation_for_a_spec_without_a_tool(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import dataclasses
+
+    from fuzzkit.control.spec import SensorSpec
+
+    spec = dataclasses.replace(load_spec(SPEC_PI), sensor=SensorSpec())
+    forces, _ = hostile_log(spec, n=60, seed=1)
+    log = tmp_path / "log.csv"
+    write_log(log, forces, None, times=False)
+    spec_file = tmp_path / "pi.yaml"
+    text = SPEC_PI.read_text()
+    spec_file.write_text(text.split("sensor:")[0] + "adaptation: none\n")
+    out = tmp_path / "u.csv"
+    code, _, err = _run(capsys, "replay", str(spec_file), "--forces", str(log), "--out", str(out))
+    assert code == 0, err
+    head, got = read_out(out)
+    assert head == ["ux", "uy", "uz", "status"]
+    ref = Controller(load_spec(spec_file))
+    want = np.array([ref.step(list(f))[0] for f in forces])
+    np.testing.assert_array_equal(got[:, :3], want)
+
+
+GOOD_HEAD = "t,fx,fy,fz"
+
+
+@pytest.mark.parametrize(
+    "text, where, message",
+    [
+        ("", ":1:1", "expected a header row"),
+        ("fx,fy\n1,2\n", ":1:1", "column 'fz' is missing"),
+        ("t,fx,fy,fz,fw\n0,1,2,3,4\n", ":1:12", "unknown column 'fw'"),
+        ("fx,fy,fz,fx\n1,2,3,4\n", ":1:10", "column 'fx' appears twice"),
+        ("fx,fy,fz,r11,r12\n1,2,3,1,0\n", ":1:1", "rotation columns incomplete"),
+        (GOOD_HEAD + "\n0,1,2\n", ":2:6", "expected 4 cells"),
+        (GOOD_HEAD + "\n0,1,abc,3\n", ":2:5", "got 'abc'"),
+        (GOOD_HEAD + "\n0,1,1_000,3\n", ":2:5", "got '1_000'"),
+        (GOOD_HEAD + '\n0,1,"2",3\n', ":2:5", "got '\"2\"'"),
+        (GOOD_HEAD + "\n0,1,2,3\n\n0.1,1,2,3\n", ":3:1", "blank line inside the log"),
+        (GOOD_HEAD + "\n0,1,2,3\n0,1,2,3\n", ":3:1", "t must increase"),
+        (GOOD_HEAD + "\n,1,2,3\n", ":2:1", "t must be a finite time"),
+        (GOOD_HEAD + "\n", ":2:1", "header but no rows"),
+    ],
+)
+def test_malformed_logs_are_located_errors_and_nothing_is_written(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str, where: str, message: str
+) -> None:
+    log = tmp_path / "log.csv"
+    log.write_text(text)
+    out = tmp_path / "u.csv"
+    code, _, err = _run(capsys, "replay", str(SPEC_PI), "--forces", str(log), "--out", str(out))
+    assert code == 2
+    assert f"{log}{where}: " in err and message in err, err
+    assert "Traceback" not in err
+    assert not out.exists() and list(tmp_path.iterdir()) == [log]
+
+
+def test_a_log_without_rotation_for_a_spec_with_a_tool_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    log = tmp_path / "log.csv"
+    log.write_text("fx,fy,fz\n1,2,3\n")
+    out = tmp_path / "u.csv"
+    code, _, err = _run(capsys, "replay", str(SPEC), "--forces", str(log), "--out", str(out))
+    assert code == 2 and f"{log}:1:1: " in err and "r11,r12,...,r33" in err
+    assert not out.exists()
+
+
+def test_a_log_that_is_not_utf8_is_a_located_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    log = tmp_path / "log.csv"
+    log.write_bytes(b"fx,fy,fz\n1,2,3\n\xff\xfe,1,2\n")
+    code, _, err = _run(
+        capsys, "replay", str(SPEC_PI), "--forces", str(log), "--out", str(tmp_path / "u.csv")
+    )
+    assert code == 2 and f"{log}:3: not UTF-8 text" in err
+
+
+# ------------------------------------------------------------------------- fuzzkit compile SPEC
+
+
+@pytest.mark.parametrize(
+    "target, extra, files",
+    [
+        ("python", [], ["e1_fuzzy_controller.py"]),
+        pytest.param(
+            "c", ["--type", "double"],
+            [f"e1_fuzzy_{part}.{ext}" for part in ("controller", "surface") for ext in "ch"],
+            marks=needs_cc,
+        ),
+    ],
+)  # fmt: skip
+def test_compile_spec_verifies_and_writes_the_controller(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    target: str,
+    extra: list[str],
+    files: list[str],
+) -> None:
+    out = tmp_path / "gen"
+    code, stdout, err = _run(
+        capsys, "compile", str(SPEC), "--target", target, *extra, "--out", str(out), "--verify"
+    )
+    assert code == 0, err
+    assert "verify: ok" in stdout and "0 status mismatches" in stdout
+    assert sorted(p.name for p in out.iterdir()) == files
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--target", "c", "--method", "table"], "--method table applies to rule bases"),
+        (["--target", "c", "--tolerance", "1e-3"], "--tolerance applies to rule bases"),
+        (["--target", "c", "--type", "q15"], "the controller computes in float or double"),
+        (["--target", "python", "--type", "float"], "the python target computes in double"),
+        (["--target", "rust"], "unknown target 'rust'"),
+    ],
+)
+def test_compile_spec_refuses_options_it_cannot_honour(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], argv: list[str], message: str
+) -> None:
+    out = tmp_path / "gen"
+    code, _, err = _run(capsys, "compile", str(SPEC), *argv, "--out", str(out))
+    assert code == 2 and message in err, err
+    assert not out.exists()
+
+
+def test_compile_of_a_bad_spec_is_a_located_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(SPEC_PI.read_text().replace("limit_n: 25.0", "limit_n: 5.0"))
+    code, _, err = _run(
+        capsys, "compile", str(bad), "--target", "c", "--out", str(tmp_path / "gen")
+    )
+    assert code == 2 and f"{bad}:" in err and "Traceback" not in err
+    assert not (tmp_path / "gen").exists()
