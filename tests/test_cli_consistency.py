@@ -112,6 +112,20 @@ def test_simulate_prints_and_reports_the_gains_it_ran_with(
     assert "  gains: kp=4e-05, ki=1e-05, u_min=-0.05, u_max=0.05 (the defaults)" in text
 
 
+def test_simulate_with_a_controller_spec_reports_its_gains_per_axis(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    from fuzzkit.control.spec_reader import load_spec
+
+    path = Path(__file__).resolve().parent.parent / "docs" / "examples" / "controller_pi.yaml"
+    spec = load_spec(path)
+    args = ["simulate", "E1", "--spec", str(path), "--json", "--loop", "python"]
+    assert main(args) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["gains_source"] == f"controller spec {spec.name}"
+    assert data["gains"] == {a.axis: {"kp": a.kp, "ki": a.ki} for a in spec.axes}
+
+
 @pytest.mark.parametrize("loop", ["python", "compiled"])
 @pytest.mark.parametrize("sensor_delay", [1, 3])
 def test_start_up_samples_are_not_sensor_faults(loop: str, sensor_delay: int) -> None:
