@@ -96,3 +96,9 @@ def test_each_kind_recognises_its_own_shipped_files() -> None:
     for kind in KINDS:
         for name in kind.shipped():
             assert recognise(name)[0] is kind
+
+
+def test_a_controller_spec_is_one_more_kind() -> None:
+    spec = EXAMPLES / "controller.yaml"
+    assert recognise(str(spec))[0].name == "controller spec"
+    assert [k.name for k in KINDS] == ["rule base", "scenario", "controller spec"]
