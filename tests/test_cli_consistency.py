@@ -223,3 +223,11 @@ def test_a_shipped_scenario_copied_out_runs_as_the_shipped_one(
     assert main(["scenario"]) == 0 and "E2  straight path" in capsys.readouterr().out
     assert main(["scenario", "E7"]) == 2
     assert "no shipped scenario 'E7'" in capsys.readouterr().err
+
+
+def test_compare_runs_at_the_latency_it_is_given(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["compare", "E1", "--latency", "3", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert [r["latency_periods"] for r in rows] == [[3, 1], [3, 1]]  # as simulate --latency 3
+    assert main(["compare", "E1", "--latency", "0,2", "--json"]) == 0
+    assert {tuple(r["latency_periods"]) for r in json.loads(capsys.readouterr().out)} == {(0, 2)}

@@ -443,6 +443,10 @@ def _compare(args: argparse.Namespace) -> int:
     for name in args.experiments:
         for controller in CONTROLLERS:
             exp, plant = resolve(name, args.plant)  # E3 on arm6: the paper's 3-D geometry
+            latency = None
+            if args.latency is not None:  # one number sets the sensor delay only, as simulate
+                sensor, command = args.latency
+                latency = (sensor, exp.latency_periods[1] if command is None else command)
             result = run(
                 exp,
                 plant,
@@ -450,6 +454,7 @@ def _compare(args: argparse.Namespace) -> int:
                 gains=chosen[controller].gains,
                 surface=surface if controller == "fuzzy-pi" else None,
                 seed=args.seed,
+                latency=latency,
             )
             stem = f"{Path(name).stem.upper()}_{controller}"  # E1_pi, MY_TASK_fuzzy-pi
             if args.rrd_dir:
