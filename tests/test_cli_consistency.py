@@ -38,7 +38,7 @@ def test_the_same_default_plant_for_every_command_that_runs_the_loop() -> None:
     assert set(plants.values()) == {"planar"}, plants
 
 
-@pytest.mark.parametrize("command", ["sweep", "tune", "report"])
+@pytest.mark.parametrize("command", ["sweep", "tune", "report", "compile"])
 def test_quiet_everywhere_a_progress_bar_is(command: str) -> None:
     assert _default(command, "quiet") is False
     opts = {o for a in _subparser(command)._actions for o in a.option_strings}
