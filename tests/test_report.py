@@ -151,9 +151,9 @@ def test_report_writes_markdown_figures_and_recordings(tmp_path: Path) -> None:
         "## Controller specs",
     ):
         assert section in text, section
-    # the spec on E1-E3 (its own axes x and z on each): 6 rows, run by the Python loop
+    # the spec on E1-E3 (its own axes x and z on each): 6 rows, run by the compiled loop
     spec_lines = [line for line in text.splitlines() if line.startswith(f"| `{spec}` |")]
-    assert len(spec_lines) == 6 and all(line.endswith("| no | python |") for line in spec_lines)
+    assert len(spec_lines) == 6 and all(line.endswith("| no | compiled |") for line in spec_lines)
     assert "| pi | tuned | 2e-05 | 1.5e-05 | - |" in text
     # measured on macvicar_whelan (1.49999 by the symmetric difference, printed to 3 digits)
     assert "the fuzzy-PI has 1.5x the PI's small-signal gain (`macvicar_whelan`: " in text
