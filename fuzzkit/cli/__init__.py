@@ -45,6 +45,8 @@ COMMAND_MODULES = (
 EXIT_OK = 0
 EXIT_FAILURE = 1
 EXIT_BAD_INPUT = 2
+#: ``--fail-on-trip`` (simulate, compare, sweep): a run tripped the safety limit.
+EXIT_TRIPPED = 3
 #: 128 + SIGINT / SIGPIPE, as a shell reports a command ended by that signal.
 EXIT_INTERRUPTED = 130
 EXIT_BROKEN_PIPE = 141

@@ -101,6 +101,10 @@ def run_spec(spec: RunSpec) -> RunResult:
     from fuzzkit.studies.faults import fault
 
     spec, exp, plant = resolve(spec)
+    if spec.controller == "fuzzy-pi":
+        from fuzzkit.control.loop_rulebase import load_loop_rulebase
+
+        load_loop_rulebase(spec.rulebase)  # what the loop needs, said before any table search
     if spec.stiffness_n_per_mm is not None:
         k = spec.stiffness_n_per_mm
         if not (math.isfinite(k) and k > 0.0):
@@ -235,9 +239,14 @@ def execute(spec: RunSpec) -> dict[str, Any]:
     Per-axis metrics are flattened as ``<axis>_<metric>`` (``z_overshoot_pct`` ...); axes that
     are not force-controlled are absent (the table fills them with empty cells).
     """
+    return result_row(spec, run_spec(spec))
+
+
+def result_row(spec: RunSpec, result: RunResult) -> dict[str, Any]:
+    """The tidy row of :func:`execute` for a run of ``spec`` that already ran."""
     from fuzzkit.studies.metrics import summary
 
-    data = summary(run_spec(spec))
+    data = summary(result)
     spec = resolve(spec)[0]  # the controller and rule base a controller spec chose
     row: dict[str, Any] = {
         "experiment": spec.experiment,

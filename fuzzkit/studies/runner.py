@@ -91,10 +91,10 @@ class RunResult:
 
 def load_surface(rulebase: str = "macvicar_whelan") -> Surface:
     """The control surface of a rule base (shipped name or YAML path), by the exact engine."""
-    from fuzzkit.formats.registry import load
+    from fuzzkit.control.loop_rulebase import load_loop_rulebase
     from fuzzkit.fuzzy.inference import Engine
 
-    rb = load(rulebase)
+    rb = load_loop_rulebase(rulebase)
     return engine_surface(Engine(rb))
 
 
@@ -154,7 +154,8 @@ def run(
 
     Timing of period k: the plant moves with the correction it receives, its measured force
     passes the fault injection into the sensor queue, the controller consumes the sample of
-    ``sensor`` periods ago (the queue starts filled with the reset sample's force), and its
+    ``sensor`` periods ago (the queue starts filled with the reset sample's force: when that is no
+    measurement, those start-up periods wait, uncounted as sensor faults), and its
     correction enters the command queue, whose output (``command`` periods old; zeros at the
     start) the plant receives in period k + 1. ``controller_impl`` is only a label for the
     result.
@@ -184,7 +185,8 @@ def run(
     command_queue: deque[Vec] = deque(np.zeros(3) for _ in range(command_delay))
     wall0 = time.perf_counter()
     cpu0 = time.process_time()
-    for _ in range(n):
+    controlled = np.asarray(exp.selection, dtype=bool)
+    for k in range(n):
         held = ctrl.tripped or (
             exp.hold_path_on_contact and ctrl.engaged and engaged_at is not None
         )
@@ -195,7 +197,10 @@ def run(
         delivered = inject(sample.t_s, sample.force)
         sensor_queue.append((delivered, _rotation(scn, sample)))
         measured, rotation = sensor_queue.popleft()
-        correction_task = ctrl.step(measured, rotation)
+        if k < sensor_delay and not np.all(np.isfinite(measured[controlled])):
+            correction_task = ctrl.wait()  # start-up: no measurement can have arrived yet
+        else:
+            correction_task = ctrl.step(measured, rotation)
         # the correction is along the controller's (the sensor's) axes at that sample
         command_queue.append(rotation @ correction_task)
         applied = command_queue.popleft()

@@ -174,6 +174,7 @@ def run_arm6(
         )
         t_s = state[0]
         inject_faults(cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured)
+        # before the first measurement arrives (k < sd) controller_step waits: no fault counted
         consumed = sensor_latency(k, sd, sensor_q, measured, reset_force)
         controller_step(
             cp,

@@ -63,9 +63,11 @@ def _shared_plant() -> Arm6Plant:
 
 def compiled_table(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3) -> TableArrays:
     """:func:`load_table`'s arrays, from the on-disk cache after the first build."""
-    from fuzzkit.formats.registry import load
+    from fuzzkit.control.loop_rulebase import load_loop_rulebase
 
-    return cached_table(load(rulebase), tolerance, lambda: load_table(rulebase, tolerance))
+    return cached_table(
+        load_loop_rulebase(rulebase), tolerance, lambda: load_table(rulebase, tolerance)
+    )
 
 
 def run_compiled(

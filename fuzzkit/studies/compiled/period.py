@@ -200,7 +200,10 @@ def controller_step(
             all_finite = False
     taring = cs[CS_TARING] > 0.0
     if not valid or (taring and not all_finite):
-        cs[CS_FAULTS] += 1.0
+        # HybridForceController.wait: in the first sensor-delay periods no measurement can
+        # have arrived yet (the queue holds the reset sample): held, but not a sensor fault
+        if round(cs[CS_CTRL_T] / period) > cp[C_SENSOR_DELAY]:
+            cs[CS_FAULTS] += 1.0
         cs[CS_ENGAGE_COUNT] = 0.0
     elif taring:
         _tare_step(cp, consumed, cs, cv)

@@ -47,10 +47,12 @@ class CaseRunner:
             if isinstance(problem.surface, str):
                 self.table = compiled_table(problem.surface)
         elif isinstance(problem.surface, str):
-            from fuzzkit.formats.registry import load
+            from fuzzkit.control.loop_rulebase import load_loop_rulebase
             from fuzzkit.fuzzy.inference import Engine
 
-            self.surface = engine_table_surface(Engine(load(problem.surface)), n=TABLE_SIZE)
+            self.surface = engine_table_surface(
+                Engine(load_loop_rulebase(problem.surface)), n=TABLE_SIZE
+            )
         elif problem.surface is not None:
             self.surface = tabulated_surface(problem.surface, n=TABLE_SIZE)
 

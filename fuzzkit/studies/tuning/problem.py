@@ -137,9 +137,9 @@ class TuningProblem:
         surface: SurfaceSpec | None = None
         if controller == "fuzzy-pi":
             if isinstance(rulebase, str):
-                from fuzzkit.formats.registry import load
+                from fuzzkit.control.loop_rulebase import load_loop_rulebase
 
-                load(rulebase)  # a bad rule base fails here, with its own message
+                load_loop_rulebase(rulebase)  # a bad or unfit rule base fails here
             surface = rulebase
         cases: list[Experiment] = []
         labels: list[str] = []
