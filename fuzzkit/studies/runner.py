@@ -77,6 +77,9 @@ class RunResult:
     cpu_time_s: float = 0.0
     #: which controller implementation ran (exact engine, lookup table, generated C ...)
     controller_impl: str = ""
+    #: the controller's status bits per period (fuzzkit.control.status), where it reports them
+    #: (the Python loop's controller, the generated C controller); None otherwise
+    status: npt.NDArray[np.int64] | None = None
 
     @property
     def real_time_factor(self) -> float:
