@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from fuzzkit.cli import RULEBASE_SPEC_HELP
+from fuzzkit.cli import RULEBASE_SPEC_HELP, add_controller_impl_argument
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
 
@@ -115,6 +115,7 @@ def register(subparsers: Any) -> None:
         "double lookup table (both loops), or the generated C through ctypes (both loops; "
         "needs a C compiler). Default: table when compiled, exact in python",
     )
+    add_controller_impl_argument(sim)
     sim.add_argument("--rrd", metavar="OUT.rrd", help="write a Rerun recording of the run")
     sim.add_argument("--json", action="store_true", help="print the metrics as JSON")
     sim.add_argument(
@@ -255,6 +256,7 @@ def _simulate(args: argparse.Namespace) -> int:
         fuzzy_impl=args.fuzzy_impl,
         fault=args.fault,
         controller_spec=args.spec,
+        controller_impl=args.controller_impl,
     )
     result = run_spec(spec)
     if args.rrd:

@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from fuzzkit.cli import EXIT_INTERRUPTED, RULEBASE_SPEC_HELP
+from fuzzkit.cli import EXIT_INTERRUPTED, RULEBASE_SPEC_HELP, add_controller_impl_argument
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
 
@@ -75,6 +75,7 @@ def register(subparsers: Any) -> None:
         default=None,
         help="default: the compiled loop where the plant has one (arm6, planar)",
     )
+    add_controller_impl_argument(tune)
     tune.add_argument(
         "--scheduler",
         default=None,
@@ -228,6 +229,7 @@ def _tune(args: argparse.Namespace) -> int:
             latencies=latencies,
             loop=loop,
             scheduler=args.scheduler,
+            controller_impl=args.controller_impl,
         )
     _, kept = write_gains(out, result.to_entry(), merge=not args.replace)
     print(
@@ -269,7 +271,8 @@ def _tuning_target(args: argparse.Namespace) -> tuple[list[Any], str, str, str]:
             "tune --spec: E3 on arm6 (the paper's 3-D world) cannot carry a spec yet; "
             "tune on E1, E2 or the planar plant"
         )
-    if front_end_from_spec(spec) is not None:
+    if front_end_from_spec(spec) is not None and args.controller_impl != "c":
+        # the generated controller carries the front end into the compiled loop
         if loop == "compiled":
             raise ConfigError(
                 f"tune --spec: {args.spec} has a sensor front end, which only the Python "

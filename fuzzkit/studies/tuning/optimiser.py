@@ -350,6 +350,7 @@ def tune(
     latencies: Sequence[tuple[int, int]] | None = None,
     loop: str = "auto",
     scheduler: str | None = None,
+    controller_impl: str = "python",
 ) -> TuneResult:
     """Find the gains of least cost for ``controller`` over experiments and stiffnesses.
 
@@ -375,6 +376,8 @@ def tune(
         experiment's own).
     loop : ``auto`` (compiled where the plant has a compiled loop), ``compiled`` or ``python``.
     scheduler : a ``dask.distributed`` scheduler address to price the candidates on.
+    controller_impl : ``python`` (fuzzkit's controller) or ``c`` (every candidate generated as
+        C and run whole in the compiled loop).
 
     Returns
     -------
@@ -404,6 +407,7 @@ def tune(
         noise_seed=noise_seed,
         latencies=latencies,
         loop=loop,
+        controller_impl=controller_impl,
     )
     return optimise(problem, budget, seed, workers, callback, baseline, admit, scheduler)
 
