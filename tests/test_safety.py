@@ -5,10 +5,11 @@ the reference controller and on the generated C controller.
 surface). ``generated-c``: the controller spec of the same settings
 (:func:`~fuzzkit.studies.compiled.generated_controller.run_controller_spec`) generated as C
 (double), compiled, and run whole inside the compiled loop: what ``--controller-impl c``
-runs and what ships. For every run: the *true* contact force stays below the experiment's safety limit, the loop
-does not trip, every force-controlled axis with a set point reaches contact, and the set point
-is held at the end (after the fault). ``make test`` runs 10 seeds per case; ``make verify``
-runs 50 (``FUZZKIT_VERIFY_SEEDS``). Faults at the strength of ``fuzzkit.studies.faults.FAULTS``.
+runs and what ships. For every run: the *true* contact force stays below the experiment's
+safety limit, the loop does not trip, every force-controlled axis with a set point reaches
+contact, and the set point is held at the end (after the fault). ``make test`` runs 10 seeds
+per case; ``make verify`` runs 50 (``FUZZKIT_VERIFY_SEEDS``). Faults at the strength of
+``fuzzkit.studies.faults.FAULTS``.
 """
 
 from __future__ import annotations
