@@ -14,7 +14,7 @@ import numpy.typing as npt
 
 from fuzzkit.jit import jit
 from fuzzkit.plants.arm6_period import plant_step, pose_at
-from fuzzkit.studies.compiled.generated_controller import generated_step
+from fuzzkit.studies.compiled.generated_controller import controller_period
 from fuzzkit.studies.compiled.period import (
     C_COMMAND_DELAY,
     C_PERIOD,
@@ -24,7 +24,6 @@ from fuzzkit.studies.compiled.period import (
     V_E,
     command_latency,
     controller_state,
-    controller_step,
     credit_normal,
     inject_faults,
     path_held,
@@ -183,29 +182,10 @@ def run_arm6(
         t_s = state[0]
         inject_faults(cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured)
         consumed = sensor_latency(k, sd, sensor_q, measured, reset_force)
-        if c_step is None:  # a compile-time branch: c_step is typed None or a C function
-            controller_step(
-                cp,
-                selection,
-                setpoints,
-                bp0,
-                bp1,
-                tab,
-                splits,
-                c_eval,
-                c_io,
-                consumed,
-                t_s,
-                cs,
-                cv,
-                correction,
-            )
-            r_status[k] = -1
-        else:
-            r_status[k] = generated_step(
-                c_step, c_state, c_rot, cp, selection, setpoints, consumed, t_s, cs, cv,
-                correction,
-            )  # fmt: skip
+        r_status[k] = controller_period(
+            cp, selection, setpoints, bp0, bp1, tab, splits, c_eval, c_io, c_step, c_state,
+            c_rot, consumed, t_s, cs, cv, correction,
+        )  # fmt: skip
         command_latency(k, cd, command_q, correction, applied)
         # ---- recording ----
         moving = False

@@ -37,19 +37,19 @@ from fuzzkit.studies.compiled.period import (
     CS_ENGAGED,
     CS_ENGAGED_AT,
     CS_FAULTS,
-    CS_HAS_E_LAST,
     CS_TRIP_TIME,
     CS_TRIPPED,
-    V_DE,
     V_DU,
     V_E,
-    V_E_LAST,
     V_U,
+    controller_step,
+    error_change,
 )
 from fuzzkit.studies.experiments import DEFAULT_GAINS
 from fuzzkit.studies.task import Experiment, spec_for
 
 FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
 
 #: Compiled controllers stay loaded for the life of the process, by their code's sha256.
 _LOADED: dict[str, GeneratedController] = {}
@@ -177,7 +177,7 @@ def generated_step(
     """
     cs[CS_CTRL_T] += cp[C_PERIOD]
     status = int(c_step(c_state.ctypes, consumed.ctypes, c_rot.ctypes, correction.ctypes))
-    u, e, de, du, e_last = cv[V_U], cv[V_E], cv[V_DE], cv[V_DU], cv[V_E_LAST]
+    u, e, du = cv[V_U], cv[V_E], cv[V_DU]
     missing = False
     for i in range(3):
         if selection[i] > 0.0 and not math.isfinite(consumed[i]):
@@ -199,9 +199,39 @@ def generated_step(
                 du[i] = correction[i] - u[i]
                 u[i] = correction[i]
                 e[i] = setpoints[i] - consumed[i]
-        has_e_last = cs[CS_HAS_E_LAST] > 0.0
-        for i in range(3):
-            de[i] = e[i] - e_last[i] if has_e_last else 0.0
-            e_last[i] = e[i]
-        cs[CS_HAS_E_LAST] = 1.0
+        error_change(cs, cv)
     return status
+
+
+@jit
+def controller_period(
+    cp: FloatArray,
+    selection: FloatArray,
+    setpoints: FloatArray,
+    bp0: FloatArray,
+    bp1: FloatArray,
+    tab: FloatArray,
+    splits: IntArray,
+    c_eval: Any,
+    c_io: FloatArray,
+    c_step: Any,
+    c_state: FloatArray,
+    c_rot: FloatArray,
+    consumed: FloatArray,
+    t_s: float,
+    cs: FloatArray,
+    cv: FloatArray,
+    correction: FloatArray,
+) -> int:
+    """One period of the run's controller, for every plant's loop: the loop's own
+    (:func:`~fuzzkit.studies.compiled.period.controller_step`; returns -1, it keeps no status)
+    when ``c_step`` is None, else the generated C controller (:func:`generated_step`)."""
+    if c_step is None:  # a compile-time branch: c_step is typed None or a C function
+        controller_step(
+            cp, selection, setpoints, bp0, bp1, tab, splits, c_eval, c_io, consumed, t_s, cs, cv,
+            correction,
+        )  # fmt: skip
+        return -1
+    return generated_step(
+        c_step, c_state, c_rot, cp, selection, setpoints, consumed, t_s, cs, cv, correction
+    )

@@ -14,7 +14,7 @@ import numpy.typing as npt
 
 from fuzzkit.jit import jit
 from fuzzkit.planar_sim.arm_period import STEP_OK, arm_pose, nominal_at, plant_step
-from fuzzkit.studies.compiled.generated_controller import generated_step
+from fuzzkit.studies.compiled.generated_controller import controller_period
 from fuzzkit.studies.compiled.period import (
     C_COMMAND_DELAY,
     C_PERIOD,
@@ -24,7 +24,6 @@ from fuzzkit.studies.compiled.period import (
     V_E,
     command_latency,
     controller_state,
-    controller_step,
     credit_normal,
     inject_faults,
     path_held,
@@ -140,29 +139,10 @@ def run_planar(
         t_s = state[0]
         inject_faults(cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured)
         consumed = sensor_latency(k, sd, sensor_q, measured, reset_force)
-        if c_step is None:  # a compile-time branch: c_step is typed None or a C function
-            controller_step(
-                cp,
-                selection,
-                setpoints,
-                bp0,
-                bp1,
-                tab,
-                splits,
-                c_eval,
-                c_io,
-                consumed,
-                t_s,
-                cs,
-                cv,
-                correction,
-            )
-            r_status[k] = -1
-        else:
-            r_status[k] = generated_step(
-                c_step, c_state, c_rot, cp, selection, setpoints, consumed, t_s, cs, cv,
-                correction,
-            )  # fmt: skip
+        r_status[k] = controller_period(
+            cp, selection, setpoints, bp0, bp1, tab, splits, c_eval, c_io, c_step, c_state,
+            c_rot, consumed, t_s, cs, cv, correction,
+        )  # fmt: skip
         command_latency(k, cd, command_q, correction, applied)
         # ---- recording (PlanarArmPlant._sample and the runner's row) ----
         moving = False
