@@ -100,8 +100,8 @@ def test_generated_controller_in_the_loop_equals_the_reference_per_period(
 
 @pytest.mark.parametrize("plant", ["arm6", "planar"])
 def test_a_spec_with_a_front_end_runs_its_generated_controller_in_the_loop(plant: str) -> None:
-    # docs/examples/controller.yaml: tare, gravity compensation and a low-pass, which the
-    # loop's own numba controller does not model; the generated one carries them
+    # docs/examples/controller.yaml: tare, gravity compensation and a low-pass, all in the
+    # generated code (the loop's own front end stays off)
     path = "docs/examples/controller.yaml"
     r = _run(plant, "fuzzy-pi", "spike", path)
     assert r.controller_impl.startswith("generated C controller (double) e1_fuzzy_controller")
