@@ -125,6 +125,18 @@ def test_pi_generated_controller_follows_the_loops_own_controller() -> None:
     )
 
 
+def test_the_python_loop_records_the_same_status_as_the_generated_controller() -> None:
+    # planar: both loops give the same traces bit for bit (test_compiled_loop), so the
+    # reference controller in the Python loop must report the generated C's status bits
+    c = _run("planar", "pi", "spike")
+    py = run_spec(
+        RunSpec("E1", "pi", "planar", seed=3, fault="spike", duration_s=DURATION_S, loop="python")
+    )
+    assert py.status is not None and c.status is not None
+    np.testing.assert_array_equal(py.status, c.status)
+    assert float(np.max(np.abs(c.u - py.u))) <= TOLERANCE_M
+
+
 def test_float_build_stays_within_its_header_bound_on_the_loops_samples() -> None:
     r = _run("arm6", "fuzzy-pi", "spike")
     s = _spec_of("fuzzy-pi", None)

@@ -174,6 +174,7 @@ def run(
     records: list[tuple[Any, ...]] = []
     arm_points: list[Vec] = []
     contact_points: list[Vec] = []
+    statuses: list[int] = []
     messages: dict[str, int] = {}
     engaged_at: float | None = None
     path_t = 0.0
@@ -229,6 +230,7 @@ def run(
             )
         )
         arm_points.append(sample.arm_points)
+        statuses.append(ctrl.status)
         contact_points.append(sample.contact_points)
     wall = time.perf_counter() - wall0
     cpu = time.process_time() - cpu0
@@ -269,6 +271,7 @@ def run(
         loop="python",
         cpu_time_s=cpu,
         controller_impl=controller_impl or _impl_label(exp, controller, hybrid, surface),
+        status=np.asarray(statuses, dtype=np.int64),
     )
 
 
