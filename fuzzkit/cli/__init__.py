@@ -54,6 +54,21 @@ EXIT_BROKEN_PIPE = 141
 RULEBASE_SPEC_HELP = "a shipped name, or a rule-base file (.yaml, .yml, .fis, .fcl, .fll)"
 
 
+def add_controller_impl_argument(parser: argparse.ArgumentParser) -> None:
+    """``--controller-impl python|c``, the same for ``simulate``, ``sweep`` and ``tune``
+    (``fuzzkit.studies.batch.CONTROLLER_IMPLS``)."""
+    parser.add_argument(
+        "--controller-impl",
+        choices=("python", "c"),
+        default="python",
+        help="python (default): fuzzkit's own controller, the reference (in the compiled loop "
+        "its numba twin); c: the run's controller spec (--spec, or built from the controller, "
+        "gains, rule base and scenario) generated as C (double, the exact fuzzy surface) and "
+        "run whole (front end, engagement, spike gate, trip and back-off, limits) inside the "
+        "compiled loop; needs a C compiler",
+    )
+
+
 class CommandModuleError(RuntimeError):
     """A module of :data:`COMMAND_MODULES` failed to import (a bug, not the user's error)."""
 

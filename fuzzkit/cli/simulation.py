@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from fuzzkit.cli import EXIT_TRIPPED, RULEBASE_SPEC_HELP
+from fuzzkit.cli import EXIT_TRIPPED, RULEBASE_SPEC_HELP, add_controller_impl_argument
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
 
@@ -120,6 +120,7 @@ def register(subparsers: Any) -> None:
         "double lookup table (both loops), or the generated C through ctypes (both loops; "
         "needs a C compiler). Default: table when compiled, exact in python",
     )
+    add_controller_impl_argument(sim)
     sim.add_argument("--rrd", metavar="OUT.rrd", help="write a Rerun recording of the run")
     sim.add_argument(
         "--png",
@@ -298,6 +299,7 @@ def _simulate(args: argparse.Namespace) -> int:
         fuzzy_impl=args.fuzzy_impl,
         fault=args.fault,
         controller_spec=args.spec,
+        controller_impl=args.controller_impl,
     )
     result = run_spec(spec)
     ran, ran_exp, plant = resolve(spec)  # with a controller spec, its controller and rule base

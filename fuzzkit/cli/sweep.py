@@ -7,7 +7,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from fuzzkit.cli import EXIT_TRIPPED, RULEBASE_SPEC_HELP
+from fuzzkit.cli import EXIT_TRIPPED, RULEBASE_SPEC_HELP, add_controller_impl_argument
 from fuzzkit.cli.simulation import FAIL_ON_TRIP_HELP
 from fuzzkit.errors import ConfigError
 
@@ -83,6 +83,7 @@ def register(subparsers: Any) -> None:
         default=None,
         help="default: compiled where the plant supports it",
     )
+    add_controller_impl_argument(p)
     p.add_argument("--duration", type=float, default=None, metavar="S", help="simulated time")
     p.add_argument(
         "--out",
@@ -181,6 +182,7 @@ def _sweep(args: argparse.Namespace) -> int:
         loop=args.loop or "auto",
         duration_s=args.duration,
         controller_specs=args.spec.split(",") if args.spec else (),
+        controller_impl=args.controller_impl,
     )
     from fuzzkit.progress import progress_bar
 

@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from fuzzkit.cli import EXIT_INTERRUPTED, RULEBASE_SPEC_HELP
+from fuzzkit.cli import EXIT_INTERRUPTED, RULEBASE_SPEC_HELP, add_controller_impl_argument
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
 
@@ -75,6 +75,7 @@ def register(subparsers: Any) -> None:
         default=None,
         help="default: the compiled loop where the plant has one (arm6, planar)",
     )
+    add_controller_impl_argument(tune)
     tune.add_argument(
         "--scheduler",
         default=None,
@@ -245,6 +246,7 @@ def _tune(args: argparse.Namespace) -> int:
             latencies=latencies,
             loop=loop,
             scheduler=args.scheduler,
+            controller_impl=args.controller_impl,
             constraint=constraint,
         )
     if constraint is not None:

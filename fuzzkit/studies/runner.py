@@ -77,6 +77,9 @@ class RunResult:
     cpu_time_s: float = 0.0
     #: which controller implementation ran (exact engine, lookup table, generated C ...)
     controller_impl: str = ""
+    #: the controller's status bits per period (fuzzkit.control.status), where it reports them
+    #: (the Python loop's controller, the generated C controller); None otherwise
+    status: npt.NDArray[np.int64] | None = None
 
     @property
     def real_time_factor(self) -> float:
@@ -172,6 +175,7 @@ def run(
     records: list[tuple[Any, ...]] = []
     arm_points: list[Vec] = []
     contact_points: list[Vec] = []
+    statuses: list[int] = []
     messages: dict[str, int] = {}
     engaged_at: float | None = None
     path_t = 0.0
@@ -231,6 +235,7 @@ def run(
             )
         )
         arm_points.append(sample.arm_points)
+        statuses.append(ctrl.status)
         contact_points.append(sample.contact_points)
     wall = time.perf_counter() - wall0
     cpu = time.process_time() - cpu0
@@ -271,6 +276,7 @@ def run(
         loop="python",
         cpu_time_s=cpu,
         controller_impl=controller_impl or _impl_label(exp, controller, hybrid, surface),
+        status=np.asarray(statuses, dtype=np.int64),
     )
 
 
