@@ -81,6 +81,9 @@ class RunResult:
     #: and the stiffness estimate (N/mm, NaN without a schedule); None for fixed gains
     gain_scale: Vec | None = None
     stiffness_n_mm: Vec | None = None
+    #: the controller's status bits per period (fuzzkit.control.status), where it reports them
+    #: (the Python loop's controller, the generated C controller); None otherwise
+    status: npt.NDArray[np.int64] | None = None
 
     @property
     def real_time_factor(self) -> float:
@@ -95,10 +98,10 @@ class RunResult:
 
 def load_surface(rulebase: str = "macvicar_whelan") -> Surface:
     """The control surface of a rule base (shipped name or YAML path), by the exact engine."""
-    from fuzzkit.formats.registry import load
+    from fuzzkit.control.loop_rulebase import load_loop_rulebase
     from fuzzkit.fuzzy.inference import Engine
 
-    rb = load(rulebase)
+    rb = load_loop_rulebase(rulebase)
     return engine_surface(Engine(rb))
 
 
@@ -158,7 +161,8 @@ def run(
 
     Timing of period k: the plant moves with the correction it receives, its measured force
     passes the fault injection into the sensor queue, the controller consumes the sample of
-    ``sensor`` periods ago (the queue starts filled with the reset sample's force), and its
+    ``sensor`` periods ago (the queue starts filled with the reset sample's force: when that is no
+    measurement, those start-up periods wait, uncounted as sensor faults), and its
     correction enters the command queue, whose output (``command`` periods old; zeros at the
     start) the plant receives in period k + 1. ``controller_impl`` is only a label for the
     result.
@@ -175,6 +179,7 @@ def run(
     records: list[tuple[Any, ...]] = []
     arm_points: list[Vec] = []
     contact_points: list[Vec] = []
+    statuses: list[int] = []
     messages: dict[str, int] = {}
     engaged_at: float | None = None
     path_t = 0.0
@@ -191,7 +196,8 @@ def run(
     estimates: list[Vec] = []
     wall0 = time.perf_counter()
     cpu0 = time.process_time()
-    for _ in range(n):
+    controlled = np.asarray(exp.selection, dtype=bool)
+    for k in range(n):
         held = ctrl.tripped or (
             exp.hold_path_on_contact and ctrl.engaged and engaged_at is not None
         )
@@ -202,7 +208,10 @@ def run(
         delivered = inject(sample.t_s, sample.force)
         sensor_queue.append((delivered, _rotation(scn, sample)))
         measured, rotation = sensor_queue.popleft()
-        correction_task = ctrl.step(measured, rotation)
+        if k < sensor_delay and not np.all(np.isfinite(measured[controlled])):
+            correction_task = ctrl.wait()  # start-up: no measurement can have arrived yet
+        else:
+            correction_task = ctrl.step(measured, rotation)
         # the correction is along the controller's (the sensor's) axes at that sample
         command_queue.append(rotation @ correction_task)
         applied = command_queue.popleft()
@@ -236,6 +245,7 @@ def run(
             scales.append(ctrl.gain_scale)
             estimates.append(ctrl.stiffness_n_mm)
         arm_points.append(sample.arm_points)
+        statuses.append(ctrl.status)
         contact_points.append(sample.contact_points)
     wall = time.perf_counter() - wall0
     cpu = time.process_time() - cpu0
@@ -278,6 +288,7 @@ def run(
         controller_impl=controller_impl or _impl_label(exp, controller, hybrid, surface),
         gain_scale=np.array(scales).reshape(-1, 3) if adaptive else None,
         stiffness_n_mm=np.array(estimates).reshape(-1, 3) if adaptive else None,
+        status=np.asarray(statuses, dtype=np.int64),
     )
 
 

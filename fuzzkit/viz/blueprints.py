@@ -17,6 +17,7 @@ FORCES = "forces"
 ERROR = "control/error"
 CORRECTION = "control/correction"
 ADAPTATION = "adaptation"
+RULES = "control/rules"
 JOINTS = "joints"
 WORLD = "world"
 
@@ -29,9 +30,12 @@ def scene_view(origin: str, name: str) -> Any:
     return rrb.Spatial3DView(origin=origin, name=name, line_grid=rrb.LineGrid3D(visible=True))
 
 
-def run_blueprint(controlled_axes: Sequence[str], title: str, adaptive: bool = False) -> Any:
-    """The layout of a closed-loop run's recording (``controlled_axes``: "x", "z", ...); an
-    ``adaptive`` run's adds its scheduled gain factor and stiffness estimate."""
+def run_blueprint(
+    controlled_axes: Sequence[str], title: str, rules: bool = False, adaptive: bool = False
+) -> Any:
+    """The layout of a closed-loop run's recording (``controlled_axes``: "x", "z", ...;
+    ``rules``: a fuzzy-PI run that logged its strongest rules under ``control/rules``;
+    ``adaptive``: a run with adaptation, whose gain factor and stiffness estimate it plots)."""
     import rerun.blueprint as rrb
 
     force_views = [
@@ -47,10 +51,16 @@ def run_blueprint(controlled_axes: Sequence[str], title: str, adaptive: bool = F
             rrb.TimeSeriesView(origin=f"{ADAPTATION}/gain_scale", name="output gain factor"),
             rrb.TimeSeriesView(origin=f"{ADAPTATION}/stiffness", name="stiffness estimate (N/mm)"),
         ]
-    scene = rrb.Tabs(
+    tabs = [
         scene_view(WORLD, f"3-D scene: {title} (m)"),
         rrb.TimeSeriesView(origin=JOINTS, name="joint angles"),
-    )
+    ]
+    if rules:
+        tabs += [
+            rrb.TextLogView(origin=RULES, name="strongest fuzzy rules per period"),
+            rrb.TimeSeriesView(origin=RULES, name="strongest rule's strength (0-1)"),
+        ]
+    scene = rrb.Tabs(*tabs)
     return rrb.Blueprint(
         rrb.Horizontal(
             rrb.Vertical(*force_views, *control_views),

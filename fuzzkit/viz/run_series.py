@@ -69,10 +69,11 @@ def log_adaptation(rec: Any, result: RunResult, times: Any, i: int) -> None:
         )
 
 
-def run_recording_blueprint(result: RunResult, title: str) -> Any:
-    """The default layout of a run's recording: the force-controlled axes, control, 3-D."""
+def run_recording_blueprint(result: RunResult, title: str, rules: bool = False) -> Any:
+    """The default layout of a run's recording: the force-controlled axes, control, 3-D
+    (``rules``: and the fuzzy-PI's strongest rules)."""
     controlled = [a for i, a in enumerate(AXES) if result.experiment.selection[i]]
-    return run_blueprint(controlled, title, adaptive=result.gain_scale is not None)
+    return run_blueprint(controlled, title, rules=rules, adaptive=result.gain_scale is not None)
 
 
 def log_world_axes(rec: Any) -> None:
