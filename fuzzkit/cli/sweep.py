@@ -39,7 +39,6 @@ def register(subparsers: Any) -> None:
         metavar="EXPERIMENT",
         help="E1, E2, E3 (shipped scenarios) or scenario files TASK.yaml",
     )
-    p.add_argument("experiments", nargs="+", metavar="SCENARIO", help="E1, E2, E3")
     p.add_argument(
         "--controller",
         default="pi,fuzzy-pi",
