@@ -411,3 +411,19 @@ def test_tune_tunes_the_base_gains_under_the_schedule(
     spec = adaptive_spec_for(experiment("E1"), "adaptive-pi", "macvicar_whelan", 2)
     with pytest.raises(UnsupportedPlant, match="adapts its gains"):
         spec_gains(spec)
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_self_tuning_settles_where_the_fixed_gains_oscillate(seed: int) -> None:
+    # the guarded press at 20 N/mm with 1+1 periods of latency (bench/adaptive_press.py)
+    bench = SpringBench(
+        stiffness=((0.0, 20.0),), duration_s=6.0, latency_in=1, latency_out=1, seed=seed
+    )
+    base = adaptive()
+    tail = slice(-250, None)  # the last second
+    tuning = dataclasses.replace(base, adaptation=Adaptation("self-tuning"))
+    res = run_spring(bench, Controller(tuning).step)
+    assert not np.any(res.status & st.TRIPPED)
+    assert np.all(np.abs(res.force_n[tail] - SETPOINT_N) <= 0.05 * SETPOINT_N)
+    fixed = run_spring(bench, Controller(dataclasses.replace(base, adaptation=NONE)).step)
+    assert np.max(np.abs(fixed.force_n[tail] - SETPOINT_N)) > 0.05 * SETPOINT_N
