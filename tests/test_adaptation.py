@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -427,3 +428,45 @@ def test_self_tuning_settles_where_the_fixed_gains_oscillate(seed: int) -> None:
     assert np.all(np.abs(res.force_n[tail] - SETPOINT_N) <= 0.05 * SETPOINT_N)
     fixed = run_spring(bench, Controller(dataclasses.replace(base, adaptation=NONE)).step)
     assert np.max(np.abs(fixed.force_n[tail] - SETPOINT_N)) > 0.05 * SETPOINT_N
+
+
+# ------------------------------------------------------------------------------- the report
+
+
+def _summary(tripped: bool, settling: float | None) -> dict[str, object]:
+    return {"tripped": tripped, "axes": {"z": {"settling_time_s": settling}}}
+
+
+@pytest.mark.parametrize(
+    ("adaptive_run", "fixed_run", "verdict"),
+    [
+        ((False, 1.0), (True, None), "better"),
+        ((True, None), (False, 5.0), "worse"),
+        ((True, None), (True, None), "same"),
+        ((False, 2.0), (False, None), "better"),
+        ((False, None), (False, 2.0), "worse"),
+        ((False, 1.0), (False, 2.0), "better"),
+        ((False, 2.0), (False, 1.0), "worse"),
+        ((False, 1.95), (False, 2.0), "same"),
+    ],
+)
+def test_adaptive_verdict_per_setting(
+    adaptive_run: tuple[bool, float | None], fixed_run: tuple[bool, float | None], verdict: str
+) -> None:
+    from fuzzkit.report.specs import adaptive_verdict
+
+    assert adaptive_verdict(_summary(*adaptive_run), _summary(*fixed_run), "z") == verdict
+
+
+def test_report_section_runs_each_adaptive_spec_beside_its_fixed_twin() -> None:
+    from fuzzkit.report.specs import adaptive_rows, adaptive_section
+
+    fixed_only = EXAMPLES / "controller_pi.yaml"
+    rows = adaptive_rows([ADAPTIVE, fixed_only], ["planar"], ["E2"])
+    assert len(rows) == 1  # the fixed spec has no twin to compare
+    assert rows[0]["adaptive"]["stiffness_estimate_n_mm"]["z"] is not None
+    assert "stiffness_estimate_n_mm" not in rows[0]["fixed"]
+    text = "\n".join(adaptive_section(rows))
+    assert "## Adaptive against fixed scaling factors" in text
+    assert re.search(r"\| (better|worse|same) \|", text)
+    assert "of 1 settings" in text
