@@ -438,7 +438,7 @@ def build_spec(
 def _environment(target: str) -> jinja2.Environment:
     """The one Jinja setup every target's templates are rendered with."""
     return jinja2.Environment(
-        loader=jinja2.FileSystemLoader(str(load_target(target).folder)),
+        loader=jinja2.FileSystemLoader([str(f) for f in load_target(target).template_folders()]),
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,
         lstrip_blocks=True,
