@@ -19,9 +19,10 @@ routine it pulls in) and instructions per call.
 **Instructions, not cycles.** QEMU models no pipeline, caches or wait states: with
 ``-icount shift=0`` every instruction advances the virtual clock by 1 ns, and SysTick runs off
 that clock (25 MHz on mps2: one tick per 40 instructions; 16 MHz on microbit: per 62.5). Each
-call is timed by reading SysTick before and after; the same measurement around a function
-that does nothing is subtracted; the mean over all calls is exact to well under one
-instruction, the largest single call only to one tick. The host column is nanoseconds per
+call (through a function pointer) is timed by reading SysTick before and after; two
+back-to-back reads are timed the same way and subtracted, so the figure is the call's own
+instructions including the call and return; the mean over all calls is exact to well under
+one instruction, the largest single call only to one tick. The host column is nanoseconds per
 call (``clock_gettime``) of the same harness built with the host's ``cc -O2``.
 
 Exit status: 0 when every comparison matched, 1 on a mismatch, 2 when a tool is missing.
@@ -491,7 +492,7 @@ def main(argv: list[str] | None = None) -> int:
         "flash/RAM: bytes that calling the code adds to an empty program (code, tables and the "
         "libgcc/libc routines it pulls in; RAM: the controller's state), -O2 -fno-math-errno, "
         "--gc-sections. Instructions: QEMU -icount shift=0 (1 instruction = 1 ns of virtual "
-        "time) read through SysTick, the empty-call calibration subtracted; QEMU models no "
+        "time) read through SysTick, the cost of the reads subtracted; QEMU models no "
         "cycles (no pipeline, flash wait states or caches). Host: valgrind callgrind, "
         "instructions of the call including its callees."
     )
