@@ -21,6 +21,7 @@ def main(argv: list[str]) -> int:
     if spec is None or spec.loader is None:
         raise RuntimeError(f"cannot load {DRIVER}")
     module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # its dataclasses look their module up there
     spec.loader.exec_module(module)
     print(
         "targets: controller step on Cortex-M4F <= 2,500 instructions and <= 6 KiB flash; "
