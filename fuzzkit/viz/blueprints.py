@@ -16,6 +16,7 @@ from typing import Any
 FORCES = "forces"
 ERROR = "control/error"
 CORRECTION = "control/correction"
+RULES = "control/rules"
 JOINTS = "joints"
 WORLD = "world"
 
@@ -28,8 +29,9 @@ def scene_view(origin: str, name: str) -> Any:
     return rrb.Spatial3DView(origin=origin, name=name, line_grid=rrb.LineGrid3D(visible=True))
 
 
-def run_blueprint(controlled_axes: Sequence[str], title: str) -> Any:
-    """The layout of a closed-loop run's recording (``controlled_axes``: "x", "z", ...)."""
+def run_blueprint(controlled_axes: Sequence[str], title: str, rules: bool = False) -> Any:
+    """The layout of a closed-loop run's recording (``controlled_axes``: "x", "z", ...;
+    ``rules``: a fuzzy-PI run that logged its strongest rules under ``control/rules``)."""
     import rerun.blueprint as rrb
 
     force_views = [
@@ -40,10 +42,16 @@ def run_blueprint(controlled_axes: Sequence[str], title: str) -> Any:
         rrb.TimeSeriesView(origin=ERROR, name="force error e, de (N)"),
         rrb.TimeSeriesView(origin=CORRECTION, name="position correction du, u (mm)"),
     ]
-    scene = rrb.Tabs(
+    tabs = [
         scene_view(WORLD, f"3-D scene: {title} (m)"),
         rrb.TimeSeriesView(origin=JOINTS, name="joint angles"),
-    )
+    ]
+    if rules:
+        tabs += [
+            rrb.TextLogView(origin=RULES, name="strongest fuzzy rules per period"),
+            rrb.TimeSeriesView(origin=RULES, name="strongest rule's strength (0-1)"),
+        ]
+    scene = rrb.Tabs(*tabs)
     return rrb.Blueprint(
         rrb.Horizontal(
             rrb.Vertical(*force_views, *control_views),

@@ -51,10 +51,11 @@ def log_control_series(rec: Any, result: RunResult, times: Any) -> None:
             log_series(rec, f"{cor}/u", times, result.u[:, i] * 1e3, f"u{axis} (mm)", c)
 
 
-def run_recording_blueprint(result: RunResult, title: str) -> Any:
-    """The default layout of a run's recording: the force-controlled axes, control, 3-D."""
+def run_recording_blueprint(result: RunResult, title: str, rules: bool = False) -> Any:
+    """The default layout of a run's recording: the force-controlled axes, control, 3-D
+    (``rules``: and the fuzzy-PI's strongest rules)."""
     controlled = [a for i, a in enumerate(AXES) if result.experiment.selection[i]]
-    return run_blueprint(controlled, title)
+    return run_blueprint(controlled, title, rules=rules)
 
 
 def log_world_axes(rec: Any) -> None:

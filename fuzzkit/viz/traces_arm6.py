@@ -39,6 +39,7 @@ from fuzzkit.plants.environment3d import (
 )
 from fuzzkit.studies.runner import RunResult
 from fuzzkit.viz.recording import log_series, open_recording
+from fuzzkit.viz.rule_activity import RuleRecording
 from fuzzkit.viz.run_series import (
     log_control_series,
     log_paths,
@@ -95,6 +96,7 @@ def write_rrd(
     path: str | os.PathLike[str],
     geometry_every: int = 5,
     params: Arm6Parameters | None = None,
+    rules: RuleRecording | None = None,
 ) -> Path:
     """Write an arm6 run as a 3-D Rerun recording at ``path`` (temporary file, then rename).
 
@@ -129,10 +131,14 @@ def write_rrd(
         path,
         f"fuzzkit_{exp.name}_{result.controller}_arm6",
         f"{exp.name}-{result.controller}-arm6",
-        blueprint=run_recording_blueprint(result, f"{exp.name} {result.controller}, 6-DOF arm"),
+        blueprint=run_recording_blueprint(
+            result, f"{exp.name} {result.controller}, 6-DOF arm", rules=rules is not None
+        ),
     ) as rec:
         times = rr.TimeColumn("sim_time", duration=result.t)
         log_control_series(rec, result, times)
+        if rules is not None:
+            rules.log(rec)
         log_world_axes(rec)
         for j in range(6):
             log_series(

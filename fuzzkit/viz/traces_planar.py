@@ -6,6 +6,8 @@ Entity layout (timeline ``sim_time``, a duration in seconds):
 * ``forces/<axis>/measured``, ``forces/<axis>/setpoint``, ``forces/<axis>/true`` (N, task frame)
 * ``control/error/<axis>/e``, ``/de`` (N) and ``control/correction/<axis>/du``, ``/u`` (mm)
   for every force-controlled axis; every series name ends with its unit
+* ``control/rules/<axis>`` (text: the fuzzy-PI's strongest rules and strengths per controlled
+  period) and ``control/rules/<axis>/strongest`` (0-1), when the writer is given the rule base
 * ``world/axes`` (labelled x, y, z arrows, 0.1 m)
 * ``joints/q<i>`` (rad)
 * ``world/arm`` (line strip base -> joints -> tool tip), ``world/tool`` (tool contact disc),
@@ -30,6 +32,7 @@ from fuzzkit.errors import ConfigError
 from fuzzkit.plants.environment import Box, EnvObject, RoughSurface, Table
 from fuzzkit.studies.runner import RunResult
 from fuzzkit.viz.recording import log_series, open_recording
+from fuzzkit.viz.rule_activity import RuleRecording
 from fuzzkit.viz.run_series import (
     log_control_series,
     log_paths,
@@ -61,7 +64,12 @@ def _circle(cx: float, cz: float, r: float, n: int = 24) -> list[list[float]]:
     return [[cx + r * math.cos(t), 0.0, cz + r * math.sin(t)] for t in a]
 
 
-def write_rrd(result: RunResult, path: str | os.PathLike[str], geometry_every: int = 5) -> Path:
+def write_rrd(
+    result: RunResult,
+    path: str | os.PathLike[str],
+    geometry_every: int = 5,
+    rules: RuleRecording | None = None,
+) -> Path:
     """Write ``result`` as a Rerun recording at ``path`` (temporary file, then rename).
 
     ``geometry_every``: log the arm and contacts every that many controller periods (the
@@ -74,10 +82,14 @@ def write_rrd(result: RunResult, path: str | os.PathLike[str], geometry_every: i
         path,
         f"fuzzkit_{exp.name}_{result.controller}",
         f"{exp.name}-{result.controller}",
-        blueprint=run_recording_blueprint(result, f"{exp.name} {result.controller}, planar arm"),
+        blueprint=run_recording_blueprint(
+            result, f"{exp.name} {result.controller}, planar arm", rules=rules is not None
+        ),
     ) as rec:
         times = rr.TimeColumn("sim_time", duration=result.t)
         log_control_series(rec, result, times)
+        if rules is not None:
+            rules.log(rec)
         log_world_axes(rec)
         for j in range(result.joint_angles.shape[1]):
             log_series(
