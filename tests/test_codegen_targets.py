@@ -96,8 +96,8 @@ def toy_target(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[targ
     It is the Python target with every number written as ``float.fromhex(...)`` and its own
     reserved word, registered as the folder scan would register it.
     """
-    for template in ("exact.py.jinja", "exact_body.py.jinja"):
-        shutil.copy(CODEGEN / "backends" / "python" / template, tmp_path)
+    for template in (CODEGEN / "backends" / "python").glob("*.jinja"):  # includes included
+        shutil.copy(template, tmp_path)
 
     def hex_literal(value: float, number_type: str) -> str:
         return f"float.fromhex({float(value).hex()!r})"
