@@ -24,6 +24,7 @@ import hashlib
 import itertools
 import math
 import textwrap
+import uuid
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -237,6 +238,9 @@ class ControllerCodeSpec:
     #: exact-method spec of the surface (Python embeds it; C renders it as a sibling unit)
     surface: ExactSpec | None
     float_bound_note: tuple[str, ...]
+    #: a stable identifier of this generated controller (same spec, fuzzkit version and
+    #: number type -> same value): the FMU's ``guid``
+    guid: str
     #: the online adaptation of the output gain (None: fixed gains)
     adapt: AdaptationCode | None = None
 
@@ -333,6 +337,12 @@ def _surface_rulebase(design: ControllerDesign, surface_name: str) -> RuleBase:
             f"and an output (has {len(rb.inputs)} inputs, {len(rb.outputs)} outputs)"
         )
     return dataclasses.replace(rb, name=surface_name)
+
+
+def _guid(design: ControllerDesign, number_type: str, version: str) -> str:
+    """FMI's ``{8-4-4-4-12}`` identifier of what is generated: a hash of every input to it."""
+    content = f"fuzzkit {version} {number_type} {design!r}"
+    return "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, content)) + "}"
 
 
 def build_controller_spec(
@@ -469,6 +479,7 @@ def build_controller_spec(
         libm=tuple(sorted(libm)),
         surface=surface,
         float_bound_note=tuple(textwrap.wrap(_float_note(design, nt), 88)),
+        guid=_guid(design, nt, __version__),
     )
 
 
