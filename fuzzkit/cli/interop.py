@@ -110,7 +110,7 @@ def cmd_export(args: argparse.Namespace) -> int:
 
     from fuzzkit.fileio import check_output_path, write_atomic
     from fuzzkit.formats import fcl, fis
-    from fuzzkit.formats.foreign import ExportError
+    from fuzzkit.formats.foreign_common import ExportError
     from fuzzkit.formats.registry import dumps, load
 
     check_output_path(args.out, f".{args.fmt} file")

@@ -34,7 +34,7 @@ from typing import Literal
 
 from fuzzkit.errors import Problem
 from fuzzkit.formats.fll import named_term, term_body
-from fuzzkit.formats.foreign import (
+from fuzzkit.formats.foreign_common import (
     SUGENO_DEFUZZIFIERS,
     Collector,
     ExportError,
@@ -264,7 +264,7 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
     """Parse FCL text (either dialect) into a rule base; ``source`` names it in messages.
 
     Returns the rule base and the warnings (coverage gaps, located; see
-    :func:`fuzzkit.formats.foreign.finish`).
+    :func:`fuzzkit.formats.foreign_common.finish`).
 
     Raises
     ------

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from pathlib import Path as FsPath
 
 from fuzzkit.errors import Problem
-from fuzzkit.formats.foreign import (
+from fuzzkit.formats.foreign_common import (
     SUGENO_DEFUZZIFIERS,
     Collector,
     ExportError,
@@ -420,7 +420,7 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
     """Parse ``.fis`` text into a rule base; ``source`` names it in messages.
 
     Returns the rule base and the warnings (coverage gaps, located; see
-    :func:`fuzzkit.formats.foreign.finish`).
+    :func:`fuzzkit.formats.foreign_common.finish`).
 
     Raises
     ------
