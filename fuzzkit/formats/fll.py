@@ -34,6 +34,7 @@ from fuzzkit.formats.foreign_common import (
     SUGENO_DEFUZZIFIERS,
     Collector,
     ExportError,
+    ForeignFormat,
     finish,
     fmt,
     is_sugeno,
@@ -581,3 +582,18 @@ def dumps(rb: RuleBase, *, allow_loss: bool = False) -> str:
     ]
     lines += [f"  rule: {rule_text(r)}" for r in rb.rules]
     return "\n".join(lines) + "\n"
+
+
+def _write(rb: RuleBase, allow_loss: bool, dialect: str) -> str:
+    return dumps(rb, allow_loss=allow_loss)
+
+
+#: The format as :data:`fuzzkit.formats.registry.FORMATS` lists it.
+FORMAT = ForeignFormat(
+    name="fll",
+    suffix=SUFFIX,
+    label="fuzzylite .fll",
+    first_word="Engine:",
+    read=load_with_warnings,
+    write=_write,
+)
