@@ -23,8 +23,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 from fuzzkit.control.adaptation_spec import MODES, NONE, Adaptation, adaptation_problems
-from fuzzkit.control.names import AXES as AXES
-from fuzzkit.control.names import KINDS as KINDS
+from fuzzkit.control.names import AXES, KINDS
 from fuzzkit.errors import ConfigError
 from fuzzkit.fuzzy.model import RuleBase, Source
 from fuzzkit.fuzzy.validation import identifier_problem
