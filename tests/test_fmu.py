@@ -7,18 +7,17 @@ from __future__ import annotations
 import zipfile
 from pathlib import Path
 
+import fmpy
 import numpy as np
 import numpy.typing as npt
 import pytest
 from _codegen_util import needs_cc
+from fmpy.validation import validate_fmu
 from test_replay import read_out, write_log
 
 from fuzzkit.cli import main
 from fuzzkit.control.spec_reader import load_spec
 from fuzzkit.studies.sensor_logs import hostile_log
-
-fmpy = pytest.importorskip("fmpy", reason="FMPy (dev dependency) validates and runs the FMU")
-from fmpy.validation import validate_fmu  # noqa: E402
 
 REPO = Path(__file__).parent.parent
 #: fuzzy-PI with the tool's weight compensated (inputs fx fy fz r11..r33)
