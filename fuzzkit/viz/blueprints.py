@@ -16,6 +16,7 @@ from typing import Any
 FORCES = "forces"
 ERROR = "control/error"
 CORRECTION = "control/correction"
+ADAPTATION = "adaptation"
 RULES = "control/rules"
 JOINTS = "joints"
 WORLD = "world"
@@ -29,9 +30,12 @@ def scene_view(origin: str, name: str) -> Any:
     return rrb.Spatial3DView(origin=origin, name=name, line_grid=rrb.LineGrid3D(visible=True))
 
 
-def run_blueprint(controlled_axes: Sequence[str], title: str, rules: bool = False) -> Any:
+def run_blueprint(
+    controlled_axes: Sequence[str], title: str, rules: bool = False, adaptive: bool = False
+) -> Any:
     """The layout of a closed-loop run's recording (``controlled_axes``: "x", "z", ...;
-    ``rules``: a fuzzy-PI run that logged its strongest rules under ``control/rules``)."""
+    ``rules``: a fuzzy-PI run that logged its strongest rules under ``control/rules``;
+    ``adaptive``: a run with adaptation, whose gain factor and stiffness estimate it plots)."""
     import rerun.blueprint as rrb
 
     force_views = [
@@ -42,6 +46,11 @@ def run_blueprint(controlled_axes: Sequence[str], title: str, rules: bool = Fals
         rrb.TimeSeriesView(origin=ERROR, name="force error e, de (N)"),
         rrb.TimeSeriesView(origin=CORRECTION, name="position correction du, u (mm)"),
     ]
+    if adaptive:
+        control_views += [
+            rrb.TimeSeriesView(origin=f"{ADAPTATION}/gain_scale", name="output gain factor"),
+            rrb.TimeSeriesView(origin=f"{ADAPTATION}/stiffness", name="stiffness estimate (N/mm)"),
+        ]
     tabs = [
         scene_view(WORLD, f"3-D scene: {title} (m)"),
         rrb.TimeSeriesView(origin=JOINTS, name="joint angles"),

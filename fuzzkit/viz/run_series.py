@@ -9,7 +9,7 @@ import numpy as np
 from fuzzkit.plants.environment import nominal_position
 from fuzzkit.studies.experiments import AXES
 from fuzzkit.studies.runner import RunResult
-from fuzzkit.viz.blueprints import CORRECTION, ERROR, FORCES, WORLD, run_blueprint
+from fuzzkit.viz.blueprints import ADAPTATION, CORRECTION, ERROR, FORCES, WORLD, run_blueprint
 from fuzzkit.viz.recording import log_axes, log_series
 
 _AXIS_COLOURS = {"x": (230, 80, 60), "y": (60, 170, 80), "z": (60, 110, 230)}
@@ -49,13 +49,31 @@ def log_control_series(rec: Any, result: RunResult, times: Any) -> None:
             log_series(rec, f"{err}/de", times, result.de[:, i], f"de{axis} (N)", light)
             log_series(rec, f"{cor}/du", times, result.du[:, i] * 1e3, f"du{axis} (mm)", light)
             log_series(rec, f"{cor}/u", times, result.u[:, i] * 1e3, f"u{axis} (mm)", c)
+            log_adaptation(rec, result, times, i)
+
+
+def log_adaptation(rec: Any, result: RunResult, times: Any, i: int) -> None:
+    """An adaptive run's scheduled output-gain factor (``adaptation/gain_scale/<axis>``) and
+    stiffness estimate (``adaptation/stiffness/<axis>``, N/mm) of task axis ``i``."""
+    if result.gain_scale is None or result.stiffness_n_mm is None:
+        return
+    axis, c = AXES[i], _AXIS_COLOURS[AXES[i]]
+    log_series(
+        rec, f"{ADAPTATION}/gain_scale/{axis}", times, result.gain_scale[:, i],
+        f"{axis} output gain factor (1)", c,
+    )  # fmt: skip
+    k = result.stiffness_n_mm[:, i]
+    if not np.all(np.isnan(k)):
+        log_series(
+            rec, f"{ADAPTATION}/stiffness/{axis}", times, k, f"{axis} stiffness estimate (N/mm)", c
+        )
 
 
 def run_recording_blueprint(result: RunResult, title: str, rules: bool = False) -> Any:
     """The default layout of a run's recording: the force-controlled axes, control, 3-D
     (``rules``: and the fuzzy-PI's strongest rules)."""
     controlled = [a for i, a in enumerate(AXES) if result.experiment.selection[i]]
-    return run_blueprint(controlled, title, rules=rules)
+    return run_blueprint(controlled, title, rules=rules, adaptive=result.gain_scale is not None)
 
 
 def log_world_axes(rec: Any) -> None:
