@@ -8,6 +8,7 @@ from pathlib import Path
 
 from fuzzkit.fileio import write_atomic
 from fuzzkit.studies.latency_sweep import StabilityMap
+from fuzzkit.viz.palette import controller_colour
 
 
 def write_stability_png(
@@ -29,7 +30,7 @@ def write_stability_png(
         xs = list(bound)
         ys = [-1 if b is None else b for b in bound.values()]
         top = max(top, *m.delays)
-        ax.plot(xs, ys, marker, label=label)
+        ax.plot(xs, ys, marker, label=label, color=controller_colour(m.controller))
     ax.set_xscale("log", base=2)
     factors = sorted({f for m in maps for f in m.factors})
     ax.set_xticks(factors, [f"{f:g}" for f in factors])
