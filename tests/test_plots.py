@@ -518,7 +518,7 @@ def test_sweep_figure_keeps_never_settled_and_tripped_runs_and_names_the_plant()
 
     fig = sweep_figure(_sweep_rows())
     overshoot, settling, _, peak = fig.axes
-    assert "arm6 plant" in overshoot.get_title()
+    assert "arm6 plant" in fig.get_suptitle()
     assert [ax.get_ylabel() for ax in fig.axes] == [
         "overshoot [%]",
         "settling time [s]",
@@ -541,7 +541,7 @@ def test_sweep_figure_keeps_never_settled_and_tripped_runs_and_names_the_plant()
     assert len(crosses) == 1 and len(crosses[0].get_xdata()) == 1
     assert len(_trip_marks(overshoot)) == len(_trip_marks(settling)) == 1
     assert _trip_marks(peak) == []
-    legend = [t.get_text() for t in overshoot.get_legend().get_texts()]
+    legend = [t.get_text() for t in fig.legends[0].get_texts()]
     assert any(NEVER_SETTLED_LABEL in t for t in legend)
     assert any(TRIP_LABEL in t for t in legend)
     assert figure_bytes(fig)[:8] == PNG_MAGIC
@@ -565,9 +565,7 @@ def test_each_controller_keeps_one_colour_in_every_figure() -> None:
         if not line.get_label().startswith("_"):
             seen[ctrl].add(_rgba(line.get_color()))
     sweep = sweep_figure(_sweep_rows())
-    for patch, ctrl in zip(
-        sweep.axes[0].get_legend().get_patches(), ("pi", "fuzzy-pi"), strict=True
-    ):
+    for patch, ctrl in zip(sweep.legends[0].get_patches(), ("pi", "fuzzy-pi"), strict=True):
         seen[ctrl].add(_rgba(patch.get_facecolor()))
     maps = [
         StabilityMap(c, (1.0, 2.0), (0, 1), ((True, True), (True, False)))

@@ -1,10 +1,11 @@
 """Rerun blueprints shipped inside every .rrd, so a recording opens on a layout made for it.
 
-A run recording opens on: one plot per force-controlled axis (measured, true and set-point
-force, N), the force error and its change (N), the position correction and its sum (mm), and
-the 3-D scene beside them (joint angles in a second tab). A surface recording opens on the
-3-D surface with its description. Entity paths are the ones :mod:`fuzzkit.viz.run_series`
-and :mod:`fuzzkit.viz.surface` log.
+A run recording opens on: per force-controlled axis a column of three plots (measured, true
+and set-point force, N; the force error and its change, N; the position correction and its
+sum, mm), and the 3-D scene beside them, its camera on the whole arm (joint angles in a second
+tab). A surface recording opens on the 3-D surface, seen from between its two inputs, with
+its description. The viewer's side panels start folded, so every plot has room for its ticks.
+Entity paths are the ones :mod:`fuzzkit.viz.run_series` and :mod:`fuzzkit.viz.surface` log.
 """
 
 from __future__ import annotations
@@ -20,38 +21,67 @@ JOINTS = "joints"
 WORLD = "world"
 
 
-def scene_view(origin: str, name: str) -> Any:
+Vec3 = tuple[float, float, float]
+
+
+def scene_view(origin: str, name: str, eye: tuple[Vec3, Vec3] | None = None) -> Any:
     """A 3-D view of ``origin`` with the ground grid (the labelled axes are logged data:
-    :func:`fuzzkit.viz.recording.log_axes`)."""
+    :func:`fuzzkit.viz.recording.log_axes`); ``eye``: the camera's (position, target)."""
     import rerun.blueprint as rrb
 
-    return rrb.Spatial3DView(origin=origin, name=name, line_grid=rrb.LineGrid3D(visible=True))
+    controls = None
+    if eye is not None:
+        controls = rrb.EyeControls3D(position=eye[0], look_target=eye[1], eye_up=(0.0, 0.0, 1.0))
+    return rrb.Spatial3DView(
+        origin=origin,
+        name=name,
+        line_grid=rrb.LineGrid3D(visible=True),
+        eye_controls=controls,
+    )
 
 
-def run_blueprint(controlled_axes: Sequence[str], title: str) -> Any:
-    """The layout of a closed-loop run's recording (``controlled_axes``: "x", "z", ...)."""
+def _panels() -> list[Any]:
+    """The viewer's side panels folded away: the plots get the height their ticks need."""
     import rerun.blueprint as rrb
 
-    force_views = [
-        rrb.TimeSeriesView(origin=f"{FORCES}/{axis}", name=f"force {axis} vs set point (N)")
+    return [
+        rrb.BlueprintPanel(state="collapsed"),
+        rrb.SelectionPanel(state="collapsed"),
+        rrb.TimePanel(state="collapsed"),
+    ]
+
+
+def run_blueprint(
+    controlled_axes: Sequence[str], title: str, eye: tuple[Vec3, Vec3] | None = None
+) -> Any:
+    """The layout of a closed-loop run's recording (``controlled_axes``: "x", "z", ...): a
+    column per force-controlled axis (force vs set point, error, correction), then the 3-D
+    scene seen from ``eye`` (joint angles in a second tab)."""
+    import rerun.blueprint as rrb
+
+    columns = [
+        rrb.Vertical(
+            rrb.TimeSeriesView(origin=f"{FORCES}/{axis}", name=f"force {axis} vs set point (N)"),
+            rrb.TimeSeriesView(origin=f"{ERROR}/{axis}", name=f"force error e{axis}, de{axis} (N)"),
+            rrb.TimeSeriesView(
+                origin=f"{CORRECTION}/{axis}", name=f"position correction du{axis}, u{axis} (mm)"
+            ),
+        )
         for axis in controlled_axes
     ]
-    control_views = [
-        rrb.TimeSeriesView(origin=ERROR, name="force error e, de (N)"),
-        rrb.TimeSeriesView(origin=CORRECTION, name="position correction du, u (mm)"),
-    ]
     scene = rrb.Tabs(
-        scene_view(WORLD, f"3-D scene: {title} (m)"),
+        scene_view(WORLD, f"3-D scene: {title} (m)", eye),
         rrb.TimeSeriesView(origin=JOINTS, name="joint angles"),
     )
     return rrb.Blueprint(
-        rrb.Horizontal(
-            rrb.Vertical(*force_views, *control_views),
-            scene,
-            column_shares=[3, 2],
-        ),
-        collapse_panels=False,
+        rrb.Horizontal(*columns, scene, column_shares=[2] * len(columns) + [3]),
+        *_panels(),
     )
+
+
+#: The surface's camera: its cube ([-1, 1] on every axis) seen from the diagonal between the
+#: two inputs' low ends, so neither input is foreshortened more than the other.
+SURFACE_EYE: tuple[Vec3, Vec3] = ((-3.4, -3.4, 2.6), (0.0, 0.0, -0.1))
 
 
 def surface_blueprint(entity: str, title: str) -> Any:
@@ -60,9 +90,9 @@ def surface_blueprint(entity: str, title: str) -> Any:
 
     return rrb.Blueprint(
         rrb.Horizontal(
-            scene_view(entity, title),
+            scene_view(entity, title, SURFACE_EYE),
             rrb.TextDocumentView(origin=f"{entity}/description", name="about this surface"),
             column_shares=[4, 1],
         ),
-        collapse_panels=True,
+        *_panels(),
     )

@@ -15,6 +15,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from fuzzkit.viz.figures import figure_bytes, new_figure
 from fuzzkit.viz.palette import TRIP_LABEL, TRIP_STYLE, controller_colour, controller_name
 
@@ -76,13 +78,17 @@ def sweep_figure(rows: Sequence[Mapping[str, Any]], axis: str = "z") -> Any:
             for i, case in enumerate(cases):
                 mine = [r for r in rows if r["controller"] == ctrl and case_label(r) == case]
                 vals: list[float] = []
+                marks: dict[str, int] = {"never": 0, "trip": 0}
                 for r in mine:
                     if stops and _tripped(r):
-                        edge["trip"].append(i + offset)
+                        marks["trip"] += 1
                     elif r.get(col) is not None:
                         vals.append(float(r[col]))
                     elif metric == SETTLING:
-                        edge["never"].append(i + offset)
+                        marks["never"] += 1
+                for kind, n in marks.items():  # side by side, one per run, within the bar
+                    spread = np.linspace(-0.3, 0.3, n) * width if n > 1 else np.zeros(n)
+                    edge[kind].extend(float(i + offset + d) for d in spread)
                 xs.extend([i + offset] * len(vals))
                 ys.extend(vals)
                 means.append(sum(vals) / len(vals) if vals else float("nan"))
@@ -100,19 +106,22 @@ def sweep_figure(rows: Sequence[Mapping[str, Any]], axis: str = "z") -> Any:
         ax.set_ylabel(label)
         ax.grid(axis="y", alpha=0.3)
         ax.set_ylim(bottom=0.0, top=ax.get_ylim()[1] * 1.12 or 1.0)  # room for the edge marks
-    _legend(axes[0], controllers, marked)
-    axes[0].set_title(
+    axes[-1].set_xticks(range(len(cases)))
+    axes[-1].set_xticklabels(cases, fontsize=8)
+    height = fig.get_figheight()
+    fig.suptitle(
         f"sweep on the {', '.join(plants)} plant: {len(rows)} runs, force axis {axis} "
         f"(dots: seeds, bars: mean of the plotted dots)",
         fontsize=10,
+        y=1 - 0.06 / height,
     )
-    axes[-1].set_xticks(range(len(cases)))
-    axes[-1].set_xticklabels(cases, fontsize=8)
-    fig.tight_layout()
+    _legend(fig, controllers, marked, 1 - 0.3 / height)
+    fig.tight_layout(rect=(0, 0, 1, 1 - 0.6 / height))
     return fig
 
 
-def _legend(ax: Any, controllers: Sequence[str], marked: Mapping[str, bool]) -> None:
+def _legend(fig: Any, controllers: Sequence[str], marked: Mapping[str, bool], top: float) -> None:
+    """One legend above the panels: the controllers' colours and the edge marks used."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
@@ -126,7 +135,14 @@ def _legend(ax: Any, controllers: Sequence[str], marked: Mapping[str, bool]) -> 
                               label=f"{NEVER_SETTLED_LABEL} (top edge)"))  # fmt: skip
     if marked["trip"]:
         handles.append(Line2D([], [], label=f"{TRIP_LABEL} (top edge)", **TRIP_STYLE))
-    ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.9)
+    fig.legend(
+        handles=handles,
+        loc="upper center",
+        ncol=len(handles),
+        fontsize=8,
+        bbox_to_anchor=(0.5, top),
+        frameon=False,
+    )
 
 
 def write_sweep_figure(
