@@ -59,19 +59,23 @@ def run_blueprint(
     scene seen from ``eye`` (joint angles in a second tab)."""
     import rerun.blueprint as rrb
 
+    def plot(origin: str, name: str) -> Any:
+        # one time axis for every plot: e and de start at engagement, the forces at 0 s
+        return rrb.TimeSeriesView(
+            origin=origin, name=name, axis_x=rrb.TimeAxis(link="LinkToGlobal")
+        )
+
     columns = [
         rrb.Vertical(
-            rrb.TimeSeriesView(origin=f"{FORCES}/{axis}", name=f"force {axis} vs set point (N)"),
-            rrb.TimeSeriesView(origin=f"{ERROR}/{axis}", name=f"force error e{axis}, de{axis} (N)"),
-            rrb.TimeSeriesView(
-                origin=f"{CORRECTION}/{axis}", name=f"position correction du{axis}, u{axis} (mm)"
-            ),
+            plot(f"{FORCES}/{axis}", f"force {axis} vs set point (N)"),
+            plot(f"{ERROR}/{axis}", f"force error e{axis}, de{axis} (N)"),
+            plot(f"{CORRECTION}/{axis}", f"position correction du{axis}, u{axis} (mm)"),
         )
         for axis in controlled_axes
     ]
     scene = rrb.Tabs(
         scene_view(WORLD, f"3-D scene: {title} (m)", eye),
-        rrb.TimeSeriesView(origin=JOINTS, name="joint angles"),
+        plot(JOINTS, "joint angles"),
     )
     return rrb.Blueprint(
         rrb.Horizontal(*columns, scene, column_shares=[2] * len(columns) + [3]),

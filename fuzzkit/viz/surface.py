@@ -275,9 +275,10 @@ def _log_labelled_axes(rec: Any, entity: str, rb: RuleBase, out: Variable, ticks
     points: list[tuple[float, float, float]] = []
     labels: list[str] = []
     colours: list[tuple[int, int, int]] = []
-    # Each axis's ticks run along a different edge of the cube, just outside it, so that no
-    # two axes' end ticks share a corner.
-    edges = ([0.0, -1.15, -1.0], [1.15, 0.0, -1.0], [-1.0, 1.15, 0.0])
+    # The inputs' ticks run beside their arrows (the edges nearest the default camera,
+    # :data:`fuzzkit.viz.blueprints.SURFACE_EYE`), the output's up the back corner, each just
+    # outside the cube.
+    edges = ([0.0, -1.15, -1.0], [-1.15, 0.0, -1.0], [-1.0, 1.15, 0.0])
     for axis, var in enumerate((vx, vy, out)):
         raw = var.low + (u + 1.0) * 0.5 * (var.high - var.low)
         for t, r in zip(u, raw, strict=True):
