@@ -52,18 +52,29 @@ def _panels() -> list[Any]:
 
 
 def run_blueprint(
-    controlled_axes: Sequence[str], title: str, eye: tuple[Vec3, Vec3] | None = None
+    controlled_axes: Sequence[str],
+    title: str,
+    eye: tuple[Vec3, Vec3] | None = None,
+    duration_s: float | None = None,
 ) -> Any:
     """The layout of a closed-loop run's recording (``controlled_axes``: "x", "z", ...): a
     column per force-controlled axis (force vs set point, error, correction), then the 3-D
-    scene seen from ``eye`` (joint angles in a second tab)."""
+    scene seen from ``eye`` (joint angles in a second tab). Every plot shows the run's whole
+    ``duration_s`` and pans with the others."""
+    import rerun as rr
     import rerun.blueprint as rrb
+
+    span = None
+    if duration_s is not None:
+        span = rr.TimeRange(
+            start=rr.TimeRangeBoundary.absolute(seconds=0.0),
+            end=rr.TimeRangeBoundary.absolute(seconds=duration_s),
+        )
 
     def plot(origin: str, name: str) -> Any:
         # one time axis for every plot: e and de start at engagement, the forces at 0 s
-        return rrb.TimeSeriesView(
-            origin=origin, name=name, axis_x=rrb.TimeAxis(link="LinkToGlobal")
-        )
+        axis = rrb.TimeAxis(link="LinkToGlobal", view_range=span)
+        return rrb.TimeSeriesView(origin=origin, name=name, axis_x=axis)
 
     columns = [
         rrb.Vertical(

@@ -145,7 +145,8 @@ def run_recording_blueprint(
     """The default layout of a run's recording: per force-controlled axis its force, error
     and correction; the 3-D scene (camera on the whole arm) and the joint angles beside."""
     controlled = [a for i, a in enumerate(AXES) if result.experiment.selection[i]]
-    return run_blueprint(controlled, title, scene_eye(result, extra_scene_points))
+    end = float(result.t[-1]) if len(result.t) else None
+    return run_blueprint(controlled, title, scene_eye(result, extra_scene_points), end)
 
 
 def log_world_axes(rec: Any) -> None:
