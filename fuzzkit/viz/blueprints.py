@@ -59,8 +59,9 @@ def run_blueprint(
 ) -> Any:
     """The layout of a closed-loop run's recording (``controlled_axes``: "x", "z", ...): a
     column per force-controlled axis (force vs set point, error, correction), then the 3-D
-    scene seen from ``eye`` (joint angles in a second tab). Every plot shows the run's whole
-    ``duration_s`` and pans with the others."""
+    scene seen from ``eye`` (joint angles in a second tab). Every plot opens on the run's whole
+    ``duration_s`` (0 s to the end), so series that start late (e at engagement) line up with
+    the forces."""
     import rerun as rr
     import rerun.blueprint as rrb
 
@@ -72,8 +73,8 @@ def run_blueprint(
         )
 
     def plot(origin: str, name: str) -> Any:
-        # one time axis for every plot: e and de start at engagement, the forces at 0 s
-        axis = rrb.TimeAxis(link="LinkToGlobal", view_range=span)
+        # the same span on every plot (the viewer's global link ignores a view range)
+        axis = rrb.TimeAxis(link="Independent", view_range=span)
         return rrb.TimeSeriesView(origin=origin, name=name, axis_x=axis)
 
     columns = [
