@@ -276,9 +276,9 @@ def _log_labelled_axes(rec: Any, entity: str, rb: RuleBase, out: Variable, ticks
     labels: list[str] = []
     colours: list[tuple[int, int, int]] = []
     # The inputs' ticks run beside their arrows (the edges nearest the default camera,
-    # :data:`fuzzkit.viz.blueprints.SURFACE_EYE`), the output's up the back corner, each just
-    # outside the cube.
-    edges = ([0.0, -1.15, -1.0], [-1.15, 0.0, -1.0], [-1.0, 1.15, 0.0])
+    # :data:`fuzzkit.viz.blueprints.SURFACE_EYE`), the output's up the back corner, far enough
+    # out that its lowest tick stays clear of the second input's highest.
+    edges = ([0.0, -1.15, -1.0], [-1.15, 0.0, -1.0], [-1.0, 1.45, 0.0])
     for axis, var in enumerate((vx, vy, out)):
         raw = var.low + (u + 1.0) * 0.5 * (var.high - var.low)
         for t, r in zip(u, raw, strict=True):
