@@ -63,3 +63,85 @@ def test_codegen_claims_match_the_generated_header() -> None:
     scaled = measured * (1 + int(margin.group(1)) / 100)
     assert scaled <= bound <= scaled * (1 + 1e-2)
     assert f"du: {bound:g}" in header
+
+
+# --------------------------------------------------------------------------- every command
+
+
+def _pages_with_commands() -> list[Path]:
+    from tests._doc_commands import PAGES, commands
+
+    return [p for p in PAGES if commands(p)]
+
+
+def test_every_command_is_run_or_says_why_not() -> None:
+    """A command block holds only commands the docs test runs, or ones it names a reason for."""
+    from tests._doc_commands import PAGES, commands, not_run_reason
+
+    found = [c for p in PAGES for c in commands(p)]
+    assert len(found) > 30
+    strays = [
+        f"{c.where}: {c.text}"
+        for c in found
+        if not c.text.startswith("fuzzkit ") and not_run_reason(c.text) is None
+    ]
+    assert not strays, "commands neither run nor explained (tests/_doc_commands.py NOT_RUN)"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("page", _pages_with_commands(), ids=lambda p: p.name)
+def test_the_commands_of_the_page_run_as_written(page: Path, tmp_path: Path) -> None:
+    """Every ``fuzzkit`` command of the page's ``sh`` blocks, in order, in a scratch folder
+    holding copies of what they read; slow ones with smaller budgets (``LIMITS``)."""
+    import os
+    import subprocess
+    import sys
+
+    from tests._doc_commands import commands, limited, not_run_reason, workspace
+
+    workspace(tmp_path)
+    env = dict(os.environ)
+    env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"
+    env["MPLBACKEND"] = "Agg"
+    ran = 0
+    for cmd in commands(page):
+        if not_run_reason(cmd.text) is not None:
+            continue
+        shell = limited(cmd.text)
+        res = subprocess.run(
+            shell, shell=True, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=600
+        )
+        assert res.returncode == 0, (
+            f"{cmd.where}: {shell}\n{res.stdout[-2000:]}{res.stderr[-3000:]}"
+        )
+        ran += 1
+    assert ran > 0
+
+
+def test_no_page_refers_outside_the_repository() -> None:
+    """Links resolve to files in the repository; no page names the authors' working files."""
+    from tests._doc_commands import PAGES, ROOT
+
+    problems = []
+    for page in PAGES:
+        text = page.read_text(encoding="utf-8")
+        for word in ("DESIGN.md", "STYLE.md", "/work/"):
+            if word in text:
+                problems.append(f"{page.name}: mentions {word}")
+        for target in re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", text):
+            if "://" in target or target.startswith("mailto:"):
+                continue
+            resolved = (page.parent / target).resolve()
+            if not resolved.is_relative_to(ROOT) or not resolved.exists():
+                problems.append(f"{page.name}: link to {target}")
+    assert not problems, problems
+
+
+def test_the_shipped_rule_base_list_is_complete() -> None:
+    from fuzzkit.formats.registry import available
+
+    text = (README.parent / "docs" / "rulebase-format.md").read_text(encoding="utf-8")
+    section = text[text.index("## Shipped rule bases") :]
+    section = section[: section.find("\n## ", 5) if "\n## " in section[5:] else None]
+    listed = re.findall(r"^\| `([a-z0-9_]+)` \|", section, re.M)
+    assert sorted(listed) == sorted(available())
