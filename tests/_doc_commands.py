@@ -101,7 +101,7 @@ def _add_flags(argv: list[str], *flags: str) -> list[str]:
 #: How slow commands are limited (they still run): by subcommand.
 LIMITS: dict[str, Callable[[list[str]], list[str]]] = {
     "tune": lambda a: _add_flags(
-        _set_option(_set_option(a, "--budget", "4"), "--workers", "1"), "--quiet"
+        _set_option(_set_option(a, "--budget", "10"), "--workers", "1"), "--quiet"
     ),
     "report": lambda a: _add_flags(
         _set_option(
@@ -140,6 +140,56 @@ def limited(command: str) -> str:
     return " ".join(shlex.quote(a) if a != ">" else a for a in [*argv, *redirect])
 
 
+#: The user's MATLAB file the interop commands name: a water tank's level controller with
+#: piecewise-linear terms (every format, both FCL dialects, can hold it).
+TANK_FIS = """[System]
+Name='tank'
+Type='mamdani'
+Version=2.0
+NumInputs=2
+NumOutputs=1
+NumRules=5
+AndMethod='min'
+OrMethod='max'
+ImpMethod='min'
+AggMethod='max'
+DefuzzMethod='centroid'
+
+[Input1]
+Name='level'
+Range=[-1 1]
+NumMFs=3
+MF1='high':'trapmf',[-2 -1 -0.5 0]
+MF2='okay':'trimf',[-0.5 0 0.5]
+MF3='low':'trapmf',[0 0.5 1 2]
+
+[Input2]
+Name='rate'
+Range=[-0.1 0.1]
+NumMFs=3
+MF1='negative':'trimf',[-0.2 -0.1 0]
+MF2='none':'trimf',[-0.1 0 0.1]
+MF3='positive':'trimf',[0 0.1 0.2]
+
+[Output1]
+Name='valve'
+Range=[-1 1]
+NumMFs=5
+MF1='close_fast':'trimf',[-1 -0.9 -0.8]
+MF2='close_slow':'trimf',[-0.6 -0.5 -0.4]
+MF3='no_change':'trimf',[-0.1 0 0.1]
+MF4='open_slow':'trimf',[0.2 0.3 0.4]
+MF5='open_fast':'trimf',[0.8 0.9 1]
+
+[Rules]
+2 0, 3 (1) : 1
+3 0, 5 (1) : 1
+1 0, 1 (1) : 1
+2 3, 2 (1) : 1
+2 1, 4 (1) : 1
+"""
+
+
 def workspace(folder: Path) -> None:
     """Copy what the commands read into ``folder`` (copies: nothing they write reaches the
     repository) and write the user's own files the docs name (``my_rules.yaml`` ...)."""
@@ -147,12 +197,15 @@ def workspace(folder: Path) -> None:
     shutil.copytree(ROOT / "docs" / "examples", folder / "docs" / "examples")
     shutil.copy(ROOT / "rulebases" / "macvicar_whelan.yaml", folder / "my_rules.yaml")
     shutil.copy(ROOT / "fuzzkit" / "studies" / "scenarios" / "E1.yaml", folder / "my_task.yaml")
-    shutil.copy(ROOT / "docs" / "examples" / "heater.fis", folder / "tank.fis")
+    (folder / "tank.fis").write_text(TANK_FIS, encoding="utf-8")
     shutil.copy(ROOT / "docs" / "examples" / "controller.yaml", folder / "a.yaml")
     shutil.copy(ROOT / "docs" / "examples" / "controller_pi.yaml", folder / "b.yaml")
     shutil.copy(ROOT / "docs" / "report" / "gains" / "fuzzy-pi.yaml", folder / "gains.yaml")
     (folder / "samples.csv").write_text("e,de\n0.3,-0.2\n-0.5,0.1\n", encoding="utf-8")
-    rows = ["t,fx,fy,fz"] + [
-        f"{k * 0.004:.3f},0.0,0.0,{min(12.0, 0.05 * k):.3f}" for k in range(400)
+    # a press to 12 N, the tool upright (identity rotation: the spec compensates its weight)
+    identity = "1,0,0,0,1,0,0,0,1"
+    header = "t,fx,fy,fz," + ",".join(f"r{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3))
+    rows = [header] + [
+        f"{k * 0.004:.3f},0.0,0.0,{min(12.0, 0.05 * k):.3f},{identity}" for k in range(400)
     ]
     (folder / "log.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
