@@ -26,7 +26,7 @@ PACKAGE_TREE := build/package-tree
 # The repository folders installed inside fuzzkit (codegen planar_sim rulebases), read from setup.py.
 MAPPED_FOLDERS := $(shell sed -n 's/^MAPPED_FOLDERS = (\(.*\))/\1/p' setup.py | tr -d '",')
 
-.PHONY: demo test test-latest verify bench interop lint typecheck imports golden lock clean package-tree
+.PHONY: demo test test-latest verify bench interop interop-refs fuzzylite-program lint typecheck imports golden lock clean package-tree
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -41,9 +41,12 @@ demo: $(STAMP)
 	$(BIN)/fuzzkit demo --out $(DEMO_OUT)
 
 # The whole suite: static checks first (cheap, and they catch what tests miss), then pytest.
+# The live peer comparisons are `make interop`'s; here fuzzkit is compared with the peers'
+# committed outputs (tests/peers/refs, `make interop-refs`), so no peer need be installed.
+PEER_MARKS := needs_fuzzylite or needs_pyfuzzylite
 test: $(STAMP)
 	$(MAKE) --no-print-directory lint typecheck imports VENV=$(VENV)
-	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) -q -p no:cacheprovider
+	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) -q -p no:cacheprovider -m "not ($(PEER_MARKS))"
 
 # The safety matrix (tests/test_safety.py) over 50 noise/fault seeds per case instead of the
 # 10 of `make test`: every experiment x controller x fault kind x plant.
@@ -104,13 +107,20 @@ $(INTEROP_STAMP): | $(INTEROP_VENV)/bin/python
 	$(INTEROP_VENV)/bin/python -m pip install --quiet "pyfuzzylite==8.0.6"
 	touch $@
 
+fuzzylite-program:
+	command -v fuzzylite >/dev/null || { $(SUDO) apt-get update -qq && \
+		$(SUDO) apt-get install -y -qq --no-install-recommends fuzzylite; }
+
 # FIS/FCL/FLL equivalence with fuzzylite 6 and pyfuzzylite 8: installs both, runs the marked
 # tests (skips listed with -rs), then prints the largest differences per format.
-interop: $(STAMP) $(INTEROP_STAMP)
-	command -v fuzzylite >/dev/null || { $(SUDO) apt-get update && $(SUDO) apt-get install -y fuzzylite; }
+interop: $(STAMP) $(INTEROP_STAMP) fuzzylite-program
 	FUZZKIT_INTEROP_PYTHON=$(INTEROP_VENV)/bin/python $(BIN)/python -m pytest -q -n 0 \
-		-p no:cacheprovider -m "needs_fuzzylite or needs_pyfuzzylite" -rs tests
+		-p no:cacheprovider -m "$(PEER_MARKS)" -rs tests
 	FUZZKIT_INTEROP_PYTHON=$(INTEROP_VENV)/bin/python $(BIN)/python bench/interop_equivalence.py
+
+# Rewrite the peers' committed outputs (tests/peers/refs) that `make test` compares with.
+interop-refs: $(STAMP) $(INTEROP_STAMP) fuzzylite-program
+	FUZZKIT_INTEROP_PYTHON=$(INTEROP_VENV)/bin/python $(BIN)/python tests/peers/make_refs.py
 
 # Rewrite the expected generated files under tests/golden/ after an intended change.
 golden: $(STAMP)

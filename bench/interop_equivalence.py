@@ -25,6 +25,7 @@ from _peers import (  # noqa: E402
     _has_pyfuzzylite,
     fuzzylite_convert,
     fuzzylite_eval,
+    peer_points,
     pyfuzzylite_eval,
     pyfuzzylite_export,
 )
@@ -37,14 +38,6 @@ from fuzzkit.fuzzy.model import RuleBase  # noqa: E402
 
 SEEDS = range(16)
 EXAMPLES = ["heater.fis", "gripper_iec.fcl", "gripper_named.fcl", "feed.fll"]
-
-
-def _points(rb: RuleBase, seed: int, n: int = 200) -> dict[str, np.ndarray]:
-    rng = np.random.default_rng(seed)
-    return {
-        v.name: rng.uniform(v.low - 0.1 * (v.high - v.low), v.high + 0.1 * (v.high - v.low), n)
-        for v in rb.inputs
-    }
 
 
 class Row:
@@ -90,7 +83,7 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
         for k, rb in enumerate(systems):
-            points = _points(rb, k)
+            points = peer_points(rb, k)
             ours = evaluate(rb, points)
             if FUZZYLITE is not None:
                 for fmt, write in writers.items():

@@ -38,9 +38,18 @@ from fuzzkit.codegen.emit import (
 )
 from fuzzkit.codegen.target import Target, load_target
 from fuzzkit.errors import CodegenError
-from fuzzkit.fuzzy import membership
+from fuzzkit.fuzzy import membership, shapes
 from fuzzkit.fuzzy.inference import OutputPieces, PiecewiseLinearGeometry, partition_centroid
-from fuzzkit.fuzzy.model import Compound, Expression, Proposition, Rule, RuleBase, Variable
+from fuzzkit.fuzzy.model import (
+    SUGENO_SHAPES,
+    Compound,
+    Expression,
+    Proposition,
+    Rule,
+    RuleBase,
+    Term,
+    Variable,
+)
 
 #: Number types the exact target computes in (Q15 has no exact inference: use a table).
 EXACT_NUMBER_TYPES = ("float", "double")
@@ -67,10 +76,9 @@ EXACT_DEFUZZIFIERS = (
     "largest_of_maximum",
     "weighted_average",
 )
-SUGENO_SHAPES = ("constant", "linear")
-
-#: Shapes the generated code fuzzifies; trapezoid_form covers the piecewise-linear ones.
-_SMOOTH_INPUT_SHAPES = ("gaussian", "bell", "sigmoid", "singleton")
+#: Fuzzification kinds the exact templates implement (a shape's registry record says which
+#: one it uses, ``fuzzkit.fuzzy.shapes.ExactForm``; a shape without one is refused).
+TEMPLATE_KINDS = ("linear", "gaussian", "bell", "sigmoid", "singleton")
 
 
 @dataclass(frozen=True)
@@ -79,7 +87,7 @@ class ExactTerm:
 
     index: int  # position in the flat membership array
     name: str
-    kind: str  # "linear" (trapezoid form), "gaussian", "bell", "sigmoid", "singleton"
+    kind: str  # one of TEMPLATE_KINDS
     params: tuple[str, ...]
 
 
@@ -228,12 +236,8 @@ def unsupported_reason(rb: RuleBase, number_type: str = "double") -> str | None:
         )
     for out in rb.outputs:
         for term in out.terms:
-            if term.shape not in membership.SHAPES:
-                return (
-                    f"output {out.name!r} term {term.name!r}: shape {term.shape!r} is not "
-                    "supported by the exact method yet"
-                )
-            if rb.defuzzifier != "weighted_average" and not term.is_piecewise_linear:
+            pwl = shapes.shape(term.shape).piecewise_linear  # an unregistered shape raises
+            if rb.defuzzifier != "weighted_average" and not pwl:
                 return (
                     f"output {out.name!r} term {term.name!r} is a {term.shape}: the exact "
                     f"method integrates only piecewise-linear output terms in closed form "
@@ -242,9 +246,24 @@ def unsupported_reason(rb: RuleBase, number_type: str = "double") -> str | None:
                 )
     for var in rb.inputs:
         for term in var.terms:
-            if not term.is_piecewise_linear and term.shape not in _SMOOTH_INPUT_SHAPES:
-                return f"input {var.name!r} term {term.name!r}: unknown shape {term.shape!r}"
+            if _exact_form(term) is None:
+                return _no_exact_form(var, term)
     return None
+
+
+def _no_exact_form(var: Variable, term: Term) -> str:
+    return (
+        f"input {var.name!r} term {term.name!r}: the exact method has no generated "
+        f"fuzzification for shape {term.shape!r} yet; compile with --method table"
+    )
+
+
+def _exact_form(term: Term) -> shapes.ExactForm | None:
+    """How generated code fuzzifies ``term`` (None: it cannot); an unregistered shape raises."""
+    form = shapes.shape(term.shape).exact
+    if form is not None and form.kind not in TEMPLATE_KINDS:
+        raise CodegenError(f"shape {term.shape!r}: no exact template for kind {form.kind!r}")
+    return form
 
 
 class _Lit:
@@ -266,27 +285,16 @@ class _Lit:
 def _input_terms(var: Variable, offset: int, lit: _Lit, vertical: float) -> tuple[ExactTerm, ...]:
     terms = []
     for j, term in enumerate(var.terms):
-        if term.is_piecewise_linear:
-            b, c, rise, fall = membership.trapezoid_form(term)
+        form = _exact_form(term)
+        if form is None:
+            raise CodegenError(_no_exact_form(var, term))
+        values = form.constants(term.params)
+        if form.kind == "linear":
             # the engine's 1e200 vertical slope overflows a float: any slope large enough to
             # turn every representable non-zero distance into a step does the same
-            rise, fall = (min(s, vertical) for s in (rise, fall))
-            params = tuple(lit(v) for v in (b, c, rise, fall))
-            kind = "linear"
-        else:
-            kind = term.shape
-            if kind == "gaussian":
-                mean, sigma = term.params
-                params = (lit(mean), lit(sigma))
-            elif kind == "bell":
-                width, slope, centre = term.params
-                params = (lit(centre), lit(width), lit(2.0 * slope))
-            elif kind == "sigmoid":
-                slope, centre = term.params
-                params = (lit(slope), lit(centre))
-            else:
-                params = (lit(term.params[0]),)
-        terms.append(ExactTerm(offset + j, term.name, kind, params))
+            b, c, rise, fall = values
+            values = (b, c, min(rise, vertical), min(fall, vertical))
+        terms.append(ExactTerm(offset + j, term.name, form.kind, tuple(lit(v) for v in values)))
     return tuple(terms)
 
 
@@ -375,7 +383,9 @@ class WindowSpec:
 def _window(var: Variable, index: int, lit: _Lit, vertical: float) -> WindowSpec | None:
     if not all(t.is_piecewise_linear for t in var.terms):
         return None
-    cuts = sorted({float(p) for t in var.terms for p in t.params if var.low < p < var.high})
+    cuts = sorted(
+        {float(p) for t in var.terms for p in membership.breakpoints(t) if var.low < p < var.high}
+    )
     edges = [var.low, *cuts, var.high]
     n = len(var.terms)
     first = []
@@ -665,11 +675,10 @@ def build_exact_spec(
         _output(rb, k, out, lit, agg_fmt, wrap, grid) for k, out in enumerate(rb.outputs)
     )
     libm: set[str] = set()
-    shapes = {t.shape for v in rb.inputs for t in v.terms}
-    if shapes & {"gaussian", "sigmoid"}:
-        libm.add("exp")
-    if "bell" in shapes:
-        libm.update({"pow", "fabs"})
+    for var in rb.inputs:
+        for term in var.terms:
+            form = _exact_form(term)
+            libm.update(form.libm if form is not None else ())
     if rb.defuzzifier == "bisector" and ops.aggregation != "probabilistic_sum":
         libm.add("sqrt")
     has_fpi = len(rb.inputs) == 2

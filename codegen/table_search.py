@@ -47,6 +47,7 @@ from fuzzkit.codegen.lut import (
     quantize_q15,
 )
 from fuzzkit.errors import CodegenError
+from fuzzkit.fuzzy.membership import breakpoints
 from fuzzkit.fuzzy.model import RuleBase, Variable
 
 #: ``progress(task, done, total)``: reports exact-engine points evaluated (``done``) out of
@@ -69,7 +70,7 @@ def knots(var: Variable) -> FloatArray:
     pts = {float(var.low), float(var.high)}
     for term in var.terms:
         if term.is_piecewise_linear:
-            pts.update(float(p) for p in term.params if var.low < p < var.high)
+            pts.update(float(p) for p in breakpoints(term) if var.low < p < var.high)
     ordered = np.array(sorted(pts), dtype=np.float64)
     # Knots closer than a millionth of the range would make needlessly tiny cells.
     keep = np.concatenate(([True], np.diff(ordered) > 1e-6 * (var.high - var.low)))

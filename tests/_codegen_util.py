@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import functools
 import shutil
+import subprocess
+import tempfile
+from pathlib import Path
 
 import pytest
 
@@ -11,7 +14,7 @@ import fuzzkit
 from fuzzkit.codegen.emit import emit
 from fuzzkit.codegen.lut import LookupTable, NumberType
 from fuzzkit.codegen.table_search import make_table
-from fuzzkit.codegen.toolchain import find_compiler
+from fuzzkit.codegen.toolchain import SANITIZE_FLAGS, find_compiler
 from fuzzkit.fuzzy.model import RuleBase
 
 #: Small resolutions keep the tests fast; the bound is what is checked, whatever it is.
@@ -47,6 +50,33 @@ CC = find_compiler()
 needs_cc = pytest.mark.needs_cc
 skip_no_cc = pytest.mark.skipif(CC is None, reason="no C compiler found (cc, gcc, clang or $CC)")
 CLANG = shutil.which("clang")
+
+
+@functools.cache
+def _sanitizer_probe(cc: tuple[str, ...]) -> str | None:
+    """Why ``cc`` cannot build and run a trivial program with :data:`SANITIZE_FLAGS`, or
+    None when it can. Probed once per compiler and test process."""
+    with tempfile.TemporaryDirectory() as name:
+        folder = Path(name)
+        (folder / "probe.c").write_text("int main(void) { return 0; }\n")
+        for argv in ([*cc, *SANITIZE_FLAGS, "-o", "probe", "probe.c"], [str(folder / "probe")]):
+            try:
+                done = subprocess.run(
+                    argv, cwd=folder, capture_output=True, text=True, timeout=120, check=False
+                )
+            except OSError as exc:
+                return f"{argv[0]}: {exc}"
+            if done.returncode != 0:
+                return f"{' '.join(argv)}: exit {done.returncode}: {done.stderr.strip()}"
+    return None
+
+
+def require_sanitizers(cc: list[str]) -> None:
+    """Skip the calling test when ``cc`` cannot link (or run) an address- and
+    undefined-sanitized trivial program; any later failure of the real build is a failure."""
+    reason = _sanitizer_probe(tuple(cc))
+    if reason is not None:
+        pytest.skip(f"this compiler cannot build sanitized programs: {reason}")
 
 
 @functools.cache

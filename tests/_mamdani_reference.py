@@ -41,11 +41,11 @@ def mu(term: Term, x: np.ndarray) -> np.ndarray:
             right = np.where(x >= p[2], np.exp(-((x - p[2]) ** 2) / (2.0 * p[3] ** 2)), 1.0)
             return left * right
         if term.shape == "s_shape":
-            return _smf(x, p[0], p[1])
+            return smf(x, p[0], p[1])
         if term.shape == "z_shape":
-            return _zmf(x, p[0], p[1])
+            return zmf(x, p[0], p[1])
         if term.shape == "pi_shape":
-            return _smf(x, p[0], p[1]) * _zmf(x, p[2], p[3])
+            return smf(x, p[0], p[1]) * zmf(x, p[2], p[3])
         if term.shape in ("sigmoid_difference", "sigmoid_product"):
             s1 = 1.0 / (1.0 + np.exp(-p[0] * (x - p[1])))
             s2 = 1.0 / (1.0 + np.exp(-p[2] * (x - p[3])))
@@ -53,7 +53,7 @@ def mu(term: Term, x: np.ndarray) -> np.ndarray:
     raise AssertionError(term.shape)
 
 
-def _smf(x: np.ndarray, a: float, b: float) -> np.ndarray:
+def smf(x: np.ndarray, a: float, b: float) -> np.ndarray:
     m = (a + b) / 2
     return np.select(
         [x <= a, x <= m, x <= b],
@@ -62,7 +62,7 @@ def _smf(x: np.ndarray, a: float, b: float) -> np.ndarray:
     )
 
 
-def _zmf(x: np.ndarray, a: float, b: float) -> np.ndarray:
+def zmf(x: np.ndarray, a: float, b: float) -> np.ndarray:
     m = (a + b) / 2
     return np.select(
         [x <= a, x <= m, x <= b],

@@ -36,7 +36,42 @@ def _round(x: float) -> float:
     return float(np.round(x, 3))
 
 
-def _variable(rng: np.random.Generator, name: str, output: bool, smooth: bool) -> Variable:
+#: The smooth shapes of MATLAB (gauss2mf, smf, zmf, pimf, dsigmf, psigmf) and fuzzylite.
+MATLAB_SHAPES = (
+    "gaussian_product",
+    "s_shape",
+    "z_shape",
+    "pi_shape",
+    "sigmoid_difference",
+    "sigmoid_product",
+)
+
+
+def matlab_term(rng: np.random.Generator, shape: str, low: float, high: float) -> Term:
+    """A valid term of one of :data:`MATLAB_SHAPES` inside ``[low, high]``, named ``M``."""
+    w = high - low
+    a, b, c, d = (_round(low + w * f) for f in np.sort(rng.uniform(0.05, 0.95, 4)))
+    if len({a, b, c, d}) < 4:  # rounding merged two points: spread them evenly
+        a, b, c, d = (_round(low + w * f) for f in (0.2, 0.4, 0.6, 0.8))
+    slope = _round(float(rng.uniform(2, 8)) / w)
+    params: tuple[float, ...] = {
+        "gaussian_product": (b, _round(w * rng.uniform(0.05, 0.2)), c, _round(w * 0.1)),
+        "s_shape": (a, d),
+        "z_shape": (b, c),
+        "pi_shape": (a, b, c, d),
+        "sigmoid_difference": (slope, b, _round(slope * rng.uniform(0.5, 2)), c),
+        "sigmoid_product": (slope, a, -slope, d),
+    }[shape]
+    return Term("M", shape, params)
+
+
+def _variable(
+    rng: np.random.Generator,
+    name: str,
+    output: bool,
+    smooth: bool,
+    extra: np.random.Generator | None,
+) -> Variable:
     low = _round(rng.uniform(-5, 0))
     high = _round(low + rng.uniform(1, 10))
     n = int(rng.integers(2, 5))
@@ -64,16 +99,22 @@ def _variable(rng: np.random.Generator, name: str, output: bool, smooth: bool) -
             terms.append(Term("S", "bell", (_round(step * 0.5), _round(rng.uniform(1, 3)), mid)))
         elif not output:
             terms.append(Term("S", "sigmoid", (_round(rng.choice([-1, 1]) * 4 / step), mid)))
+    if smooth and extra is not None:  # its own stream: the rest is as without MATLAB shapes
+        terms.append(matlab_term(extra, str(extra.choice(MATLAB_SHAPES)), low, high))
     return Variable(name, low, high, tuple(terms), (low + high) / 2 if output else None)
 
 
 MAXIMA = ("mean_of_maximum", "smallest_of_maximum", "largest_of_maximum")
 
 
-def random_rulebase(seed: int, out_of_range: str = "extend") -> RuleBase:
+def random_rulebase(
+    seed: int, out_of_range: str = "extend", *, matlab_shapes: bool = False
+) -> RuleBase:
     """A valid rule base: 1-3 inputs, 1-2 outputs, NOT, AND/OR, weights, every operator.
 
-    The defuzzifier cycles with ``seed`` through the five Mamdani ones.
+    The defuzzifier cycles with ``seed`` through the five Mamdani ones. With ``matlab_shapes``
+    every variable that has a smooth term also gets one of :data:`MATLAB_SHAPES` (named ``M``),
+    drawn from a stream of its own; rules may use it.
 
     Rule bases with a maxima defuzzifier get piecewise-linear outputs, min implication and max
     aggregation, so that their aggregated sets have exactly flat tops or slopes no smaller than
@@ -83,9 +124,12 @@ def random_rulebase(seed: int, out_of_range: str = "extend") -> RuleBase:
     rng = np.random.default_rng(seed)
     defuzzifier = MAMDANI_DEFUZZIFIERS[seed % len(MAMDANI_DEFUZZIFIERS)]  # each one in turn
     maxima = defuzzifier in MAXIMA
-    inputs = tuple(_variable(rng, f"x{i}", False, True) for i in range(int(rng.integers(1, 4))))
+    extra = np.random.default_rng([seed, 25]) if matlab_shapes else None
+    inputs = tuple(
+        _variable(rng, f"x{i}", False, True, extra) for i in range(int(rng.integers(1, 4)))
+    )
     outputs = tuple(
-        _variable(rng, f"y{i}", True, not maxima) for i in range(int(rng.integers(1, 3)))
+        _variable(rng, f"y{i}", True, not maxima, extra) for i in range(int(rng.integers(1, 3)))
     )
     rules: list[Rule] = []
     first = inputs[0]

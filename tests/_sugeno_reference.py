@@ -7,6 +7,8 @@ from __future__ import annotations
 
 from string import Template
 
+import numpy as np
+
 # x: lo falls 1 -> 0 over [2, 8], hi rises; y: small falls over [0, 1], big rises.
 # r1: x lo AND y small -> A (4); r2: x hi OR y big -> B (0.5 x - 2 y + 1), weight 0.5;
 # r3: x NOT lo -> A again (rules sharing a term count separately).
@@ -67,3 +69,70 @@ def sugeno_pi_by_hand(e: float, de: float) -> float:
     table = [[firm, gentle, gentle], [gentle, hold, gentle], [gentle, gentle, firm]]
     me, md = _part(e), _part(de)
     return sum(me[i] * md[j] * table[i][j] for i in range(3) for j in range(3))
+
+
+#: The system of :data:`HAND` written by hand in fuzzylite's FLL (no fuzzkit exporter involved).
+HAND_FLL = """\
+Engine: hand
+InputVariable: x
+  enabled: true
+  range: 0.000 10.000
+  lock-range: true
+  term: lo Ramp 8.000 2.000
+  term: hi Ramp 2.000 8.000
+InputVariable: y
+  enabled: true
+  range: 0.000 1.000
+  lock-range: true
+  term: small Triangle -1.000 0.000 1.000
+  term: big Triangle 0.000 1.000 2.000
+OutputVariable: z
+  enabled: true
+  range: -10.000 10.000
+  lock-range: false
+  aggregation: none
+  defuzzifier: {defuzzifier} TakagiSugeno
+  default: nan
+  lock-previous: false
+  term: A Constant 4.000
+  term: B Linear 0.500 -2.000 1.000
+RuleBlock: rb
+  enabled: true
+  conjunction: {conjunction}
+  disjunction: {disjunction}
+  implication: none
+  activation: General
+  rule: if x is lo and y is small then z is A
+  rule: if x is hi or y is big then z is B with 0.5
+  rule: if x is not lo then z is A
+"""
+
+#: (fuzzkit defuzzifier, and, or, then the same in fuzzylite's names) per compared case.
+HAND_FLL_CASES = [
+    ("weighted_average", "min", "max", "WeightedAverage", "Minimum", "Maximum"),
+    ("weighted_sum", "min", "max", "WeightedSum", "Minimum", "Maximum"),
+    (
+        "weighted_average",
+        "product",
+        "probabilistic_sum",
+        "WeightedAverage",
+        "AlgebraicProduct",
+        "AlgebraicSum",
+    ),
+]
+
+
+def hand_fll(fl_defuzz: str, fl_and: str, fl_or: str) -> str:
+    """:data:`HAND_FLL` with fuzzylite's defuzzifier, conjunction and disjunction."""
+    return HAND_FLL.format(defuzzifier=fl_defuzz, conjunction=fl_and, disjunction=fl_or)
+
+
+def hand_points() -> list[tuple[float, float]]:
+    """The (x, y) points the hand system is compared at, up to 20 % beyond its ranges."""
+    pts = np.random.default_rng(6).uniform([-1.0, -0.2], [11.0, 1.2], (300, 2))
+    return [(float(x), float(y)) for x, y in pts]
+
+
+def hand_case_name(defuzz: str, and_: str) -> str:
+    """The stem of the committed input and reference of one case of :data:`HAND_FLL_CASES`."""
+    return f"sugeno_hand_{defuzz}_{and_}"

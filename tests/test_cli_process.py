@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+import fcntl
 import os
+import pty
+import re
 import signal
+import struct
 import subprocess
 import sys
+import termios
+import threading
 import time
 from pathlib import Path
 
@@ -17,21 +23,19 @@ FUZZKIT = [sys.executable, "-m", "fuzzkit"]
 
 
 def _start(
-    args: list[str], cwd: Path, extra_env: dict[str, str] | None = None
+    args: list[str],
+    cwd: Path,
+    extra_env: dict[str, str] | None = None,
+    stderr: int = subprocess.PIPE,
 ) -> subprocess.Popen[str]:
     env = {k: v for k, v in os.environ.items() if k != "FUZZKIT_DEBUG"}
     env.update(extra_env or {})
     return subprocess.Popen(
-        [*FUZZKIT, *args],
-        cwd=cwd,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
+        [*FUZZKIT, *args], cwd=cwd, stdout=subprocess.PIPE, stderr=stderr, text=True, env=env
     )
 
 
-def _wait_for(pred: object, proc: subprocess.Popen[str], timeout_s: float = 60.0) -> None:
+def _wait_for(pred: object, proc: subprocess.Popen[str], timeout_s: float = 120.0) -> None:
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         if callable(pred) and pred():
@@ -42,6 +46,60 @@ def _wait_for(pred: object, proc: subprocess.Popen[str], timeout_s: float = 60.0
         time.sleep(0.05)
     proc.kill()
     pytest.fail("timed out waiting for the process to start its work")
+
+
+class Terminal:
+    """A pseudo-terminal for a command's stderr, so that it draws its progress bars (only a
+    terminal gets them); a thread collects what the command writes there."""
+
+    def __init__(self) -> None:
+        self.fd, self.child_fd = pty.openpty()
+        # 24 rows of 200 columns: a terminal of no width gets bars of no text
+        fcntl.ioctl(self.child_fd, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 200, 0, 0))
+        self._text = bytearray()
+        self._lock = threading.Lock()
+        self._reader = threading.Thread(target=self._read, daemon=True)
+
+    def start(self) -> None:
+        os.close(self.child_fd)  # the command holds its own copy
+        self._reader.start()
+
+    def _read(self) -> None:
+        while True:
+            try:
+                chunk = os.read(self.fd, 65536)
+            except OSError:  # EIO: every writer has closed the terminal
+                break
+            if not chunk:
+                break
+            with self._lock:
+                self._text += chunk
+
+    def text(self) -> str:
+        with self._lock:
+            return self._text.decode("utf-8", errors="replace")
+
+    def shows(self, pattern: str) -> bool:
+        return re.search(pattern, self.text()) is not None
+
+    def lines(self) -> list[str]:
+        """The lines as they stand on the screen: each one's text after its last carriage
+        return (a redrawn bar), without terminal escapes, blank lines dropped."""
+        self._reader.join(timeout=30)
+        os.close(self.fd)
+        plain = re.sub(r"\x1b\[[0-9;]*[A-Za-z]", "", self.text())
+        shown = [ln.rsplit("\r", 1)[-1].rstrip() for ln in plain.split("\r\n")]
+        return [ln for ln in shown if ln]
+
+
+def _start_on_terminal(
+    args: list[str], cwd: Path, extra_env: dict[str, str] | None = None
+) -> tuple[subprocess.Popen[str], Terminal]:
+    """``fuzzkit ARGS`` with stderr on a :class:`Terminal` (stdout piped)."""
+    terminal = Terminal()
+    proc = _start(args, cwd, extra_env, stderr=terminal.child_fd)
+    terminal.start()
+    return proc, terminal
 
 
 def _interrupt(proc: subprocess.Popen[str]) -> tuple[int, str, str]:
@@ -60,14 +118,18 @@ def _said_on_interrupt(err: str) -> list[str]:
 @pytest.mark.slow
 def test_sigint_on_report_exits_130_and_leaves_no_report(tmp_path: Path) -> None:
     out = tmp_path / "report"
-    proc = _start(["report", "--out", str(out), "--budget", "10", "--workers", "1"], tmp_path)
-    # The staging folder appears once the work has begun (tuning the first controller).
-    _wait_for(lambda: any(p.name.endswith(".partial") for p in tmp_path.iterdir()), proc)
-    time.sleep(1.0)
-    code, stdout, err = _interrupt(proc)
+    args = ["report", "--out", str(out), "--budget", "10", "--workers", "1"]
+    proc, terminal = _start_on_terminal(args, tmp_path)
+    # The staging folder exists and the first controller's tuning has evaluated a gain set.
+    _wait_for(lambda: terminal.shows(r"tuning pi: .*\b[1-9]/10"), proc, 300.0)
+    assert any(p.name.endswith(".partial") for p in tmp_path.iterdir())
+    code, stdout, _ = _interrupt(proc)
     assert code == 130
-    assert _said_on_interrupt(err) == ["fuzzkit: interrupted (Ctrl-C); nothing half-written"]
-    assert "Traceback" not in err and "wrote" not in stdout
+    said = [ln for ln in terminal.lines() if not ln.startswith("tuning pi: ")]
+    assert _said_on_interrupt("\n".join(said)) == [
+        "fuzzkit: interrupted (Ctrl-C); nothing half-written"
+    ]
+    assert "wrote" not in stdout
     assert list(tmp_path.iterdir()) == []  # no report folder, no staging folder
 
 
@@ -77,10 +139,11 @@ def test_sigint_on_report_keeps_an_existing_report_as_it_was(tmp_path: Path) -> 
     (out / "rrd").mkdir(parents=True)
     (out / "report.md").write_text("the previous report\n")
     (out / "rrd" / "old.rrd").write_text("x")
-    proc = _start(["report", "--out", str(out), "--budget", "10", "--workers", "1"], tmp_path)
-    _wait_for(lambda: any(p.name.endswith(".partial") for p in tmp_path.iterdir()), proc)
-    time.sleep(1.0)
+    args = ["report", "--out", str(out), "--budget", "10", "--workers", "1"]
+    proc, terminal = _start_on_terminal(args, tmp_path)
+    _wait_for(lambda: terminal.shows(r"tuning pi: .*\b[1-9]/10"), proc, 300.0)
     code, _, _ = _interrupt(proc)
+    terminal.lines()  # the terminal closed
     assert code == 130
     assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]
     assert sorted(str(p.relative_to(out)) for p in out.rglob("*")) == [
@@ -96,17 +159,21 @@ def test_sigint_on_compile_exits_130_and_writes_nothing(tmp_path: Path) -> None:
     out = tmp_path / "gen"
     # A 3-input table at 41 points per input takes the exact engine well over ten seconds
     # (CC names no compiler, so the table search cannot use the compiled exact sampler).
-    proc = _start(
+    proc, terminal = _start_on_terminal(
         ["compile", "three_input", "--target", "python", "--method", "table",
          "--resolution", "41", "--out", str(out)],
         tmp_path,
         {"CC": "no-such-compiler"},
     )  # fmt: skip
-    time.sleep(4.0)
+    # the table search's progress bar, with some exact-engine points evaluated
+    _wait_for(lambda: terminal.shows(r"three_input: .*\b[1-9][\d.]*k?/"), proc, 300.0)
     assert proc.poll() is None, "compile ended before the interrupt; make the job larger"
-    code, _, err = _interrupt(proc)
+    code, _, _ = _interrupt(proc)
     assert code == 130
-    assert _said_on_interrupt(err) == ["fuzzkit: interrupted (Ctrl-C); nothing half-written"]
+    said = [ln for ln in terminal.lines() if not ln.startswith("three_input: ")]
+    assert _said_on_interrupt("\n".join(said)) == [
+        "fuzzkit: interrupted (Ctrl-C); nothing half-written"
+    ]
     assert not out.exists() and list(tmp_path.iterdir()) == []
 
 
@@ -162,12 +229,16 @@ def test_sigint_on_tune_exits_130_and_keeps_the_best_so_far(tmp_path: Path) -> N
     out = tmp_path / "gains.yaml"
     args = ["tune", "E1", "--controller", "pi", "--stiffness", "10", "--budget", "400"]
     # the Python loop: the compiled one would finish 400 evaluations before the interrupt
-    proc = _start([*args, "--loop", "python", "--workers", "2", "--out", str(out)], tmp_path)
-    time.sleep(8.0)  # start-up plus the baseline evaluation, then well into the search
+    proc, terminal = _start_on_terminal(
+        [*args, "--loop", "python", "--workers", "2", "--out", str(out)], tmp_path
+    )
+    # the progress bar past the baseline evaluation: the search has gains to keep
+    _wait_for(lambda: terminal.shows(r"tune pi: .*\b([2-9]|\d\d+)/400"), proc, 300.0)
     assert proc.poll() is None, "tune ended before the interrupt; raise the budget"
-    code, stdout, err = _interrupt(proc)
+    code, stdout, _ = _interrupt(proc)
     assert code == 130
-    assert _said_on_interrupt(err) == [
+    said = [ln for ln in terminal.lines() if not ln.startswith("tune pi: ")]
+    assert _said_on_interrupt("\n".join(said)) == [
         f"fuzzkit: interrupted (Ctrl-C); {out} holds the best gains so far"
     ]
     assert "(interrupted: best so far)" in stdout

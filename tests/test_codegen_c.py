@@ -8,7 +8,17 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from _codegen_util import CC, CLANG, OFFSET_YAML, needs_cc, rulebase, skip_no_cc, sources, table
+from _codegen_util import (
+    CC,
+    CLANG,
+    OFFSET_YAML,
+    needs_cc,
+    require_sanitizers,
+    rulebase,
+    skip_no_cc,
+    sources,
+    table,
+)
 
 from fuzzkit.codegen.lut import Q15_ONE
 from fuzzkit.codegen.toolchain import SANITIZE_FLAGS, STRICT_FLAGS, CompiledTable, run_compiler
@@ -199,17 +209,13 @@ def test_runs_clean_under_address_and_undefined_sanitizers(
         )
     )
     assert CC is not None
-    try:
-        defines = [] if len(rb.inputs) != 2 else ["-DWITH_FPI"]
-        if defines and number_type != "q15":
-            defines.append("-DWITH_NAN")
-        run_compiler(
-            [*CC, *STRICT_FLAGS, *SANITIZE_FLAGS, *defines, "-o", "h", "main.c", *srcs], tmp_path
-        )
-    except ToolchainError as exc:
-        if "sanitize" in str(exc) or "asan" in str(exc).lower():
-            pytest.skip(f"this compiler cannot link sanitizers: {exc}")
-        raise
+    require_sanitizers(CC)
+    defines = [] if len(rb.inputs) != 2 else ["-DWITH_FPI"]
+    if defines and number_type != "q15":
+        defines.append("-DWITH_NAN")
+    run_compiler(
+        [*CC, *STRICT_FLAGS, *SANITIZE_FLAGS, *defines, "-o", "h", "main.c", *srcs], tmp_path
+    )
     points = verification_points(rb, 2000, seed=3)
     args, real = c_points(tab, points)
     text = "\n".join(" ".join(repr(float(v)) for v in row) for row in args.astype(np.float64))
@@ -228,6 +234,16 @@ def test_runs_clean_under_address_and_undefined_sanitizers(
     got = c_outputs_real(tab, got)
     result = compare(rb, tab, "c", got, _exact(name, real))
     assert result.ok, result.describe()
+
+
+def test_a_broken_file_under_sanitizers_fails_rather_than_skips(tmp_path: Path) -> None:
+    # every sanitized command line names -fsanitize: only the probe decides a skip
+    assert CC is not None
+    require_sanitizers(CC)
+    (tmp_path / "main.c").write_text("int main(void) { return undefined_symbol_xyz; }\n")
+    with pytest.raises(ToolchainError, match="undefined_symbol_xyz") as caught:
+        run_compiler([*CC, *STRICT_FLAGS, *SANITIZE_FLAGS, "-o", "h", "main.c"], tmp_path)
+    assert "-fsanitize=address,undefined" in str(caught.value)
 
 
 def test_compile_failure_is_a_toolchain_error_with_the_compiler_output(tmp_path: Path) -> None:

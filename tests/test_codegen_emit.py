@@ -21,6 +21,7 @@ from fuzzkit import __version__
 from fuzzkit.codegen.emit import build_spec, check_identifier, emit
 from fuzzkit.codegen.table_search import build_table, make_table
 from fuzzkit.errors import CodegenError
+from fuzzkit.fuzzy.model import RuleBase
 
 GOLDEN = Path(__file__).parent / "golden"
 REFRESH = os.environ.get("FUZZKIT_REFRESH_GOLDEN") == "1"
@@ -43,12 +44,13 @@ GOLDEN_CASES = [
 def test_output_matches_golden_files(name: str, target: str, number_type: str) -> None:
     files = sources(name, target, number_type)  # type: ignore[arg-type]
     folder = GOLDEN / name / f"{target}-{number_type}"
-    check_golden(folder, files, number_type)
+    check_golden(folder, files, number_type, full_scale(rulebase(name)))
 
 
 #: Floating-point literals in generated tables come from numpy/scipy sums whose rounding changes
 #: between releases; they are compared by value within this many units in the last place of the
-#: target's number type (of the literal, with the file's largest literal as the floor near 0).
+#: target's number type (of the literal, with the rule base's output full scale as the floor
+#: near 0: see :func:`full_scale`).
 #: Q15 codes are integers and compared exactly, like every other part of the text.
 ULPS = {"double": 64, "float": 2, "q15": 0}
 _EPS = {"double": float(np.finfo(np.float64).eps), "float": float(np.finfo(np.float32).eps)}
@@ -57,15 +59,21 @@ _FLOAT_LITERAL = re.compile(
 )
 
 
+_LIST_SEPARATOR = re.compile(r"\s*,\s*")
+
+
 def _split_literals(text: str) -> tuple[list[str], list[float]]:
-    parts = _FLOAT_LITERAL.split(text)
+    # a list of literals wrapped at another place (a literal printed longer or shorter) is the
+    # same list: separators that are a comma and white space compare as ", "
+    parts = [", " if _LIST_SEPARATOR.fullmatch(p) else p for p in _FLOAT_LITERAL.split(text)]
     values = [float(m.rstrip("f")) for m in _FLOAT_LITERAL.findall(text)]
     return parts, values
 
 
-def check_golden(folder: Path, files: dict[str, str], number_type: str) -> None:
+def check_golden(folder: Path, files: dict[str, str], number_type: str, scale: float) -> None:
     """``files`` equal the golden files in ``folder`` (``FUZZKIT_REFRESH_GOLDEN=1`` rewrites
-    them): the same names, text equal but for float literals within ``ULPS``."""
+    them): the same names, text equal but for float literals within ``ULPS`` of the larger of
+    the literal and ``scale`` (the output's full scale, :func:`full_scale`)."""
     if REFRESH:
         folder.mkdir(parents=True, exist_ok=True)
         for old in folder.iterdir():
@@ -75,15 +83,22 @@ def check_golden(folder: Path, files: dict[str, str], number_type: str) -> None:
     expected = {p.name: p.read_text(encoding="utf-8") for p in sorted(folder.iterdir())}
     assert sorted(expected) == sorted(files), "set FUZZKIT_REFRESH_GOLDEN=1 to rewrite"
     for rel, text in files.items():
-        problem = golden_difference(text, expected[rel], ULPS[number_type], number_type)
+        problem = golden_difference(text, expected[rel], ULPS[number_type], number_type, scale)
         assert problem is None, f"{folder / rel}: {problem}; FUZZKIT_REFRESH_GOLDEN=1 rewrites it"
 
 
-def golden_difference(got: str, want: str, ulps: int, number_type: str) -> str | None:
+def full_scale(rb: RuleBase) -> float:
+    """The largest magnitude of the rule base's output ranges: the floor of a literal's
+    tolerance (a file's largest literal may be a placeholder such as 1e30 or 1e200)."""
+    return max(max(abs(v.low), abs(v.high)) for v in rb.outputs)
+
+
+def golden_difference(got: str, want: str, ulps: int, number_type: str, scale: float) -> str | None:
     """Why ``got`` differs from the golden ``want``, or None if it matches.
 
     Everything outside floating-point literals must be identical; each literal must be within
-    ``ulps`` units in the last place of the target type (Q15: exact text).
+    ``ulps`` units in the last place of the target type, of the literal or of ``scale`` (the
+    output's full scale, :func:`full_scale`) if larger (Q15: exact text).
     """
     if number_type == "q15" or ulps == 0:
         return None if got == want else "text differs"
@@ -95,9 +110,8 @@ def golden_difference(got: str, want: str, ulps: int, number_type: str) -> str |
                 return f"text differs at line {k + 1}: {a!r} != {b!r}"
         return "text differs (line count)"
     eps = _EPS[number_type]
-    floor = max((abs(v) for v in want_values), default=0.0)
     for a, b in zip(got_values, want_values, strict=True):
-        tol = ulps * eps * max(abs(a), abs(b), floor)
+        tol = ulps * eps * max(abs(a), abs(b), scale)
         if not abs(a - b) <= tol:
             return f"literal {a!r} differs from golden {b!r} by more than {ulps} ulps ({tol:.3g})"
     return None
@@ -112,6 +126,9 @@ def golden_difference(got: str, want: str, ulps: int, number_type: str) -> str |
         ("x = 0.5f; y = 1.0f;", "x = 0.5f; z = 1.0f;", "float", False),  # text, not number
         ("t = (0.1, 1e-18)", "t = (0.1, 4e-19)", "double", True),  # noise below the floor
         ("t = (0.1, 1e-14)", "t = (0.1, 0.0)", "double", False),
+        ("a = {0.25,\n  0.5};", "a = {0.25, 0.5};", "double", True),  # a list wrapped elsewhere
+        ("a = {0.25;\n  0.5};", "a = {0.25; 0.5};", "double", False),  # not a list separator
+        ("    x = 0.5\n", "  x = 0.5\n", "double", False),  # indentation is text
         ("q = 16384;", "q = 16385;", "q15", False),  # Q15 codes are exact
         ("int n = 41;", "int n = 42;", "float", False),  # integers are text
     ],
@@ -120,7 +137,7 @@ def test_golden_comparison_is_exact_for_text_and_tolerant_for_literals(
     got: str, want: str, number_type: str, same: bool
 ) -> None:
     ulps = ULPS[number_type]
-    assert (golden_difference(got, want, ulps, number_type) is None) is same
+    assert (golden_difference(got, want, ulps, number_type, 0.1) is None) is same
 
 
 def test_same_input_gives_byte_identical_output() -> None:

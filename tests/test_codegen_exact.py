@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from _codegen_util import CC, CLANG, needs_cc, rulebase, skip_no_cc
+from _codegen_util import CC, CLANG, needs_cc, require_sanitizers, rulebase, skip_no_cc
 from test_codegen_c import HARNESS
-from test_codegen_emit import GOLDEN, check_golden
+from test_codegen_emit import GOLDEN, ULPS, check_golden, full_scale, golden_difference
 from test_inference_random import random_rulebase
 
 from fuzzkit.codegen.emit import emit
@@ -36,7 +36,7 @@ from fuzzkit.codegen.verify import (
     verify_exact_c,
     verify_exact_python,
 )
-from fuzzkit.errors import CodegenError, ToolchainError
+from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy.model import RuleBase, Term, Variable
 from fuzzkit.fuzzy.validation import check
 
@@ -118,25 +118,11 @@ def _sanitized_run(tmp_path: Path, cc: list[str], rb: RuleBase, number_type: str
         )
     )
     defines = ["-DWITH_FPI", "-DWITH_NAN"] if len(rb.inputs) == 2 else []
-    try:
-        run_compiler(
-            [
-                *cc,
-                *STRICT_FLAGS,
-                *SANITIZE_FLAGS,
-                *defines,
-                "-o",
-                "h",
-                "main.c",
-                f"{rb.name}.c",
-                "-lm",
-            ],
-            tmp_path,
-        )
-    except ToolchainError as exc:
-        if "sanitize" in str(exc) or "asan" in str(exc).lower():
-            pytest.skip(f"this compiler cannot link sanitizers: {exc}")
-        raise
+    require_sanitizers(cc)
+    run_compiler(
+        [*cc, *STRICT_FLAGS, *SANITIZE_FLAGS, *defines, "-o", "h", "main.c", f"{rb.name}.c", "-lm"],
+        tmp_path,
+    )
     points = verification_points(rb, n, seed=3)
     dtype = np.float32 if number_type == "float" else np.float64
     with np.errstate(over="ignore"):
@@ -400,7 +386,25 @@ GOLDEN_CASES = [
 def test_exact_output_matches_golden_files(name: str, target: str, number_type: str) -> None:
     files = emit_exact(rulebase(name), target, number_type)
     folder = GOLDEN / name / f"{target}-exact-{number_type}"
-    check_golden(folder, files, number_type)
+    check_golden(folder, files, number_type, full_scale(rulebase(name)))
+
+
+def test_a_changed_number_in_an_exact_golden_is_caught() -> None:
+    # the exact-method files hold placeholders of 1e30: a tolerance scaled by the file's
+    # largest literal would let any number change; the output's full scale (1) does not
+    golden = (GOLDEN / "macvicar_whelan" / "c-exact-double" / "macvicar_whelan.c").read_text()
+    assert "1e+30" in golden
+    want = "0.0, 0.50000000000000022, 1e+30, 0.0, 0.49999999999999994, 1e+30,"
+    assert want in golden
+    scale = full_scale(rulebase("macvicar_whelan"))
+    assert golden_difference(golden, golden, ULPS["double"], "double", scale) is None
+    for changed in ("0.50000000000005", "0.5000001", "0.6"):
+        got = golden.replace(want, want.replace("0.50000000000000022", changed))
+        problem = golden_difference(got, golden, ULPS["double"], "double", scale)
+        assert problem is not None and changed in problem
+    # rounding-sized differences (what numpy/scipy releases change) still pass
+    got = golden.replace(want, want.replace("0.50000000000000022", "0.50000000000000033"))
+    assert golden_difference(got, golden, ULPS["double"], "double", scale) is None
 
 
 # --------------------------------------------------------------------------- table search

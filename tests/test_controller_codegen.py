@@ -21,7 +21,7 @@ import numpy as np
 import numpy.typing as npt
 import pytest
 from _codegen_util import CC, CLANG, needs_cc
-from test_codegen_emit import GOLDEN, check_golden
+from test_codegen_emit import GOLDEN, check_golden, full_scale
 
 from fuzzkit.codegen.backends.c.run import CompiledController
 from fuzzkit.codegen.controller import float_step_bound
@@ -323,7 +323,10 @@ def test_controller_matches_golden_files(variant: str, target: str, number_type:
     s = spec(variant)
     files = generate(s, target, number_type)
     folder = GOLDEN / "controller" / s.name / f"{target}-{number_type}"
-    check_golden(folder, files, number_type)
+    # the surface's literals live on the rule base's output range; a PI's are gains and limits,
+    # compared relative to themselves (scale 0)
+    scale = full_scale(s.rulebase) if s.rulebase is not None else 0.0
+    check_golden(folder, files, number_type, scale)
 
 
 @needs_cc

@@ -167,6 +167,16 @@ def _line_col(text: str, needle: str) -> tuple[int, int]:
             "not below the Nyquist frequency 125 Hz",
         ),
         (
+            ("lowpass_hz: 40.0", "lowpass_hz: 1e-300", "1e-300"),
+            ControllerSpecError,
+            "too low for period_s 0.004: the filter would never move",
+        ),
+        (
+            ("period_s: 0.004", "period_s: 1e-300", "1e-300"),
+            ControllerSpecError,
+            r"period_s must be in \[1e-05, 10\] s",
+        ),
+        (
             ("samples: 25}", "samples: 2.5}", "samples: |2.5"),
             ControllerSpecError,
             "expected an integer",

@@ -205,3 +205,31 @@ def test_mutated_gains_files_and_robot_descriptions_give_located_errors(
         if why is not None:
             failures.append(f"{m.origin} ({m.what}): {why}")
     assert not failures, f"{len(failures)} of {MUTANTS // 2}:\n" + "\n".join(failures[:15])
+
+
+def test_mutated_controller_specs_give_located_errors_or_working_controllers() -> None:
+    """A damaged controller spec is refused at its place, or it is a valid, finite spec whose
+    reference controller steps (the rule base is read relative to the examples)."""
+    from fuzzkit.control.reference import Controller
+    from fuzzkit.control.spec_reader import loads_spec
+
+    examples = ROOT / "docs" / "examples"
+    sources = {p.name: p.read_text() for p in sorted(examples.glob("controller*.yaml"))}
+    assert len(sources) >= 4
+    down = [1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0]
+    failures = []
+    for m in mutants(sources, MUTANTS, SEED):
+        try:
+            with _strict():
+                spec = loads_spec(m.text, "mutant.yaml", examples)
+                u, _ = Controller(spec).step([0.0, 0.0, 1.0], down)
+        except ProblemsError as exc:
+            why = _located(exc, "mutant.yaml")
+        except Exception as exc:
+            why = f"{type(exc).__name__}: {str(exc)[:300]}"
+        else:
+            finite = _finite_fields(dataclasses.replace(spec, rulebase=None))
+            why = None if finite and all(map(math.isfinite, u)) else "non-finite spec or output"
+        if why is not None:
+            failures.append(f"{m.origin} ({m.what}): {why}")
+    assert not failures, f"{len(failures)} of {MUTANTS} mutants:\n" + "\n".join(failures[:15])

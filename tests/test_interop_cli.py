@@ -34,11 +34,11 @@ def test_import_refuses_a_bad_file_and_writes_nothing(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     bad = tmp_path / "bad.fis"
-    bad.write_text((EXAMPLES / "heater.fis").read_text().replace("'sigmf'", "'pimf'", 1))
+    bad.write_text((EXAMPLES / "heater.fis").read_text().replace("'sigmf'", "'cosinemf'", 1))
     out = tmp_path / "rb.yaml"
     code, _, err = run(capsys, "import", str(bad), "--out", str(out))
     assert code == 2
-    assert f"{bad}:26:5: [Input2] MF1 ('falling'): membership function 'pimf'" in err
+    assert f"{bad}:26:5: [Input2] MF1 ('falling'): membership function 'cosinemf'" in err
     assert "Traceback" not in err
     assert not out.exists() and list(tmp_path.iterdir()) == [bad]
 

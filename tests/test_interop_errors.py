@@ -194,8 +194,8 @@ def test_the_valid_bases_load() -> None:
         (
             "fis",
             "'trimf',[0 0 0.6]",
-            "'zmf',[0 0.6]",
-            r"t:31:5: \[Output1\] MF1 \('shut'\): membership function 'zmf' is not in fuzzkit's",
+            "'cosinemf',[0 0.6]",
+            r"t:31:5: \[Output1\] MF1 \('shut'\): membership function 'cosinemf' is not in",
         ),
         (
             "fis",
@@ -386,7 +386,7 @@ def test_truncated_files_are_refused(fmt: str, cut: str, match: str) -> None:
 
 
 def test_every_problem_is_listed_not_only_the_first() -> None:
-    text = FIS.replace("'trimf',[0 0 0.6]", "'zmf',[0 0.6]").replace(
+    text = FIS.replace("'trimf',[0 0 0.6]", "'cosinemf',[0 0.6]").replace(
         "1 1, 2 (1) : 1", "1 1, 9 (1) : 1"
     )
     with pytest.raises(RuleBaseError) as err:

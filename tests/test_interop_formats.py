@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from _random_rulebases import random_rulebase
+from _random_rulebases import MATLAB_SHAPES, random_rulebase
 
 from fuzzkit.formats import fcl, fis, fll
 from fuzzkit.formats.foreign import ExportError
@@ -272,7 +272,7 @@ def test_shipped_rule_bases_round_trip_yaml_to_format_to_yaml(name: str, fmt: st
 @pytest.mark.parametrize("fmt", FORMATS)
 @pytest.mark.parametrize("seed", range(40))
 def test_random_rule_bases_round_trip_exactly(seed: int, fmt: str) -> None:
-    rb = random_rulebase(seed)
+    rb = random_rulebase(seed, matlab_shapes=True)
     if fmt == "fcl-iec":  # point lists hold only piecewise-linear terms
         rb = replace(
             rb,
@@ -285,6 +285,13 @@ def test_random_rule_bases_round_trip_exactly(seed: int, fmt: str) -> None:
         assert all("appears twice" in item or "'bounded_sum'" in item for item in refused)
         return
     assert _read(_write(rb, fmt), fmt) == as_format_holds(rb, fmt)
+
+
+def test_the_random_round_trips_hold_every_matlab_shape_on_inputs_and_outputs() -> None:
+    rbs = [random_rulebase(seed, matlab_shapes=True) for seed in range(40)]
+    for group in ("inputs", "outputs"):
+        held = {t.shape for rb in rbs for v in getattr(rb, group) for t in v.terms}
+        assert set(MATLAB_SHAPES) <= held, (group, set(MATLAB_SHAPES) - held)
 
 
 def _piecewise_linear(var: Variable) -> Variable:

@@ -10,9 +10,10 @@ import pytest
 from fuzzkit.cli import main
 from fuzzkit.control.controllers import FuzzyPI, Surface, engine_surface, saturated_sum_surface
 from fuzzkit.errors import ConfigError
-from fuzzkit.formats.registry import load
+from fuzzkit.formats.registry import load, loads
 from fuzzkit.fuzzy.inference import Engine
-from fuzzkit.studies.matching import matched_fuzzy_gains, measure_slopes
+from fuzzkit.studies.experiments import DEFAULT_GAINS
+from fuzzkit.studies.matching import matched_fuzzy_gains, measure_slopes, small_signal_ratios
 from fuzzkit.studies.protocol import protocol_gains
 
 
@@ -192,3 +193,54 @@ def test_cli_compare_protocol_prints_the_gains(capsys: pytest.CaptureFixture[str
     rows = json.loads(capsys.readouterr().out)
     fz = next(r for r in rows if r["controller"] == "fuzzy-pi")
     assert fz["protocol"] == "default" and fz["gains"]["kx"] == 2e-4
+
+
+#: A Sugeno fuzzy-PI whose slopes at the origin are worked by hand: on the axis de = 0 with
+#: 0 < e < 1 only (Z, Z) -> 0 and (P, Z) -> 0.5 fire, with product strengths 1 - e and e, so
+#: the weighted average is F = 0.5 e (slope 0.5 along e); on e = 0 likewise F = 2 de.
+HAND_SLOPES_YAML = """
+name: hand_slopes
+inputs:
+  e: {range: [-1, 1], terms: {partition: triangular, labels: [N, Z, P]}}
+  de: {range: [-1, 1], terms: {partition: triangular, labels: [N, Z, P]}}
+outputs:
+  du:
+    range: [-2, 2]
+    terms:
+      zero: {shape: constant, value: 0}
+      half_up: {shape: constant, value: 0.5}
+      half_down: {shape: constant, value: -0.5}
+      two_up: {shape: constant, value: 2}
+      two_down: {shape: constant, value: -2}
+operators: {and: product, or: max, implication: min, aggregation: max}
+defuzzifier: weighted_average
+rules:
+  - {if: {e: Z, de: Z}, then: {du: zero}}
+  - {if: {e: P, de: Z}, then: {du: half_up}}
+  - {if: {e: N, de: Z}, then: {du: half_down}}
+  - {if: {e: Z, de: P}, then: {du: two_up}}
+  - {if: {e: Z, de: N}, then: {du: two_down}}
+  - {if: {e: P, de: P}, then: {du: two_up}}
+  - {if: {e: N, de: N}, then: {du: two_down}}
+  - {if: {e: P, de: N}, then: {du: zero}}
+  - {if: {e: N, de: P}, then: {du: zero}}
+"""
+
+
+def test_small_signal_ratios_follow_the_rule_base_in_use(mw_surface: Surface) -> None:
+    # DEFAULT_GAINS: Kx*Kp = kp and Kx*Ki = ki, so the ratios are the slopes at the origin
+    # (proportional along de, integral along e): 1.5 for MacVicar-Whelan (the closed form
+    # above: (e/2) / (1/3)), 2 and 0.5 for the hand system, 0 along e for the paper's table
+    hand = engine_surface(Engine(loads(HAND_SLOPES_YAML)))
+    assert hand(0.01, 0.0) == pytest.approx(0.005, abs=1e-12)  # the hand F = 0.5 e
+    cases = [
+        (mw_surface, (1.5, 1.5)),
+        (hand, (2.0, 0.5)),
+        (engine_surface(Engine(load("paper_table1"))), (1.5, 0.0)),
+    ]
+    for surface, (p, i) in cases:
+        got = small_signal_ratios(surface)
+        assert got == (pytest.approx(p, rel=1e-4), pytest.approx(i, rel=1e-4, abs=1e-9))
+    # other gains scale the ratios: Kx doubled doubles both
+    doubled = small_signal_ratios(hand, {"kx": 2 * DEFAULT_GAINS["fuzzy-pi"]["kx"]})
+    assert doubled == (pytest.approx(4.0, rel=1e-4), pytest.approx(1.0, rel=1e-4))

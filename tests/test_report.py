@@ -10,7 +10,7 @@ import pytest
 
 from fuzzkit.control.gains import GainsEntry, write_gains
 from fuzzkit.errors import ConfigError
-from fuzzkit.report.build import build_report, quick_options
+from fuzzkit.report.build import build_report, default_gain_sentence, quick_options
 from fuzzkit.report.grid import Condition, conditions
 from fuzzkit.report.tuned import TuningSetup, setup_from_provenance
 from fuzzkit.report.verdicts import (
@@ -151,10 +151,12 @@ def test_report_writes_markdown_figures_and_recordings(tmp_path: Path) -> None:
         "## Controller specs",
     ):
         assert section in text, section
-    # the spec on E1-E3 (its own axes x and z on each): 6 rows, run by the Python loop
+    # the spec on E1-E3 (its own axes x and z on each): 6 rows, run by the compiled loop
     spec_lines = [line for line in text.splitlines() if line.startswith(f"| `{spec}` |")]
-    assert len(spec_lines) == 6 and all(line.endswith("| no | python |") for line in spec_lines)
+    assert len(spec_lines) == 6 and all(line.endswith("| no | compiled |") for line in spec_lines)
     assert "| pi | tuned | 2e-05 | 1.5e-05 | - |" in text
+    # measured on macvicar_whelan (1.49999 by the symmetric difference, printed to 3 digits)
+    assert "the fuzzy-PI has 1.5x the PI's small-signal gain (`macvicar_whelan`: " in text
     # The nominal verdict rows are the ones assess_claims derives (the text is not canned):
     # 3 gains sets in the nominal table, matched and tuned in each of 4 conditions below.
     assert text.count("| E1: fuzzy-PI overshoots less than PI | planar |") == 3 + 2 * 4
@@ -168,6 +170,20 @@ def test_report_writes_markdown_figures_and_recordings(tmp_path: Path) -> None:
     assert "carry no tuning provenance" in text
     for label in ("E1@10N/mm@lat1:1", "E3@10N/mm@lat3:3"):
         assert f"| pi | {label} |" in text and f"| fuzzy-pi | {label} |" in text
+
+
+@pytest.mark.parametrize(
+    ("ratios", "said"),
+    [
+        ((1.4999940, 1.4999940), "has 1.5x the PI's small-signal gain (`rb`: "),
+        ((2.0, 0.5), "has 2x the PI's proportional and 0.5x the PI's integral small-signal gain"),
+        ((1.5, 0.0), "has 1.5x the PI's proportional and no integral small-signal gain (`rb`"),
+    ],
+)
+def test_the_default_gain_sentence_says_the_rule_bases_ratios(
+    ratios: tuple[float, float], said: str
+) -> None:
+    assert said in default_gain_sentence("rb", ratios)
 
 
 def test_report_rejects_bad_inputs(tmp_path: Path) -> None:

@@ -65,3 +65,32 @@ def test_faults_never_push_the_true_force_past_the_limit_and_the_task_gets_done(
         assert abs(held - setpoint) < HOLD_TOLERANCE_N[name], (axis, held)
     if fault_kind in ("nan", "dropout", "spike"):
         assert r.faults > 0  # the bad samples were seen, counted and held
+
+
+SPEC_EXAMPLES = ("controller.yaml", "controller_pi.yaml")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("plant", ["planar", "arm6"])
+@pytest.mark.parametrize("fault_kind", sorted(FAULTS))
+@pytest.mark.parametrize("spec_file", SPEC_EXAMPLES)
+def test_the_shipped_specs_pass_the_safety_matrix(
+    spec_file: str, fault_kind: str, plant: str
+) -> None:
+    """The example controller specs (E1's task), sensor front end and all, on E1 with every
+    fault kind (seed 0): below the limit, no trip, the set point held."""
+    name = "E1"
+    from pathlib import Path
+
+    from fuzzkit.control.spec_reader import load_spec
+    from fuzzkit.studies.experiments import with_spec
+
+    spec = load_spec(Path(__file__).resolve().parent.parent / "docs" / "examples" / spec_file)
+    exp = with_spec(experiment(name), spec)
+    r = run(exp, plant, seed=0, faults=fault(fault_kind, 0), duration_s=DURATION_S[name])
+    assert float(np.max(np.abs(r.force_true))) < exp.force_limit_n
+    assert not r.tripped
+    tail = r.t >= r.t[-1] - 0.5
+    for axis in (i for i in range(3) if exp.selection[i]):
+        held = float(np.mean(r.force_true[tail, axis]))
+        assert abs(held - exp.setpoints[axis]) < HOLD_TOLERANCE_N[name], (axis, held)

@@ -96,6 +96,8 @@ def _line_col(text: str, needle: str) -> tuple[int, int]:
         ("{t_s: 0.2,", "{t_s: 9.0,", "3.737742", "time 3.73774 s is before the previous 9 s"),
         ("friction: 0.4", "friction: 0.4, mu: 1", "mu: 1", "unknown key 'mu' in contact"),
         ("name: cup,", "name: 3,", "3,", "expected a name"),
+        ("radius_m: 0.035}", "radius_m: 0.035, mass_kg: -1}", "{name: cup", "mass_kg must be >= 0"),
+        ("x: 0.52, z: -0.265}", "x: 0.52, z: -0.265, tilt_deg: .inf}", ".inf", "finite"),
         # hostile values (issue 25): bounded, finite, located
         (
             "duration_s: 5.0",

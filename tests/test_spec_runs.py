@@ -142,29 +142,42 @@ def test_simulate_spec_runs_the_specs_controller(capsys: pytest.CaptureFixture[s
     data = json.loads(capsys.readouterr().out)
     assert code == 0
     assert data["controller"] == "pi" and "spec e1_pi" in data["controller_impl"]
-    assert "fallback" in data["loop"]  # the front end runs in the Python loop
+    assert data["loop"] == "compiled"  # front end and all
     assert abs(data["axes"]["z"]["steady_state_error_mean"]) < 0.1
     assert main(["simulate", "E1", "--spec", str(PI), "--gains", str(PI)]) == 2
     assert "give --spec or --gains" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("fault", ["none", "spike", "nan"])
 @pytest.mark.parametrize("path", [FUZZY, PI], ids=["fuzzy-pi", "pi"])
-def test_a_spec_without_front_end_runs_compiled_as_in_python(path: Path, tmp_path: Path) -> None:
-    """The compiled loop runs a spec without a sensor front end, with the spec's gains and
-    limits, and repeats the Python loop's run to its usual tolerances."""
+def test_a_spec_runs_compiled_as_in_python(path: Path, fault: str) -> None:
+    """The compiled loop runs a spec, sensor front end included (tare screened by the gate,
+    gravity compensation, low-pass), with the spec's gains and limits, and repeats the Python
+    loop's run: the same samples in, the same corrections out."""
     from fuzzkit.studies.batch import RunSpec, run_spec
 
-    bare = dataclasses.replace(load_spec(path), sensor=SensorSpec())
-    spec_file = tmp_path / "bare.yaml"
-    spec_file.write_text(dump_spec(bare))
-    kw = {"plant": "arm6", "controller_spec": str(spec_file), "duration_s": 2.5}
-    impl = "table" if bare.kind == "fuzzy-pi" else "auto"
+    kw = {"plant": "arm6", "controller_spec": str(path), "fault": fault, "duration_s": 2.5}
+    impl = "table" if load_spec(path).kind == "fuzzy-pi" else "auto"
     co = run_spec(RunSpec("E1", loop="compiled", fuzzy_impl=impl, **kw))  # type: ignore[arg-type]
     py = run_spec(RunSpec("E1", loop="python", fuzzy_impl=impl, **kw))  # type: ignore[arg-type]
-    assert co.loop == "compiled" and f"spec {bare.name}" in co.controller_impl
+    assert co.loop == "compiled" and f"spec {load_spec(path).name}" in co.controller_impl
     assert np.any(co.in_contact)
-    np.testing.assert_allclose(co.u, py.u, rtol=0, atol=1e-9)
-    np.testing.assert_allclose(co.force_true, py.force_true, rtol=0, atol=1e-6)
+    np.testing.assert_array_equal(np.isnan(co.force), np.isnan(py.force))
+    np.testing.assert_allclose(co.u, py.u, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(co.force_true, py.force_true, rtol=0, atol=1e-9)
+    assert (co.faults, co.engaged_time_s) == (py.faults, py.engaged_time_s)
+
+
+def test_a_spec_with_different_gains_per_axis_runs_in_python(tmp_path: Path) -> None:
+    from fuzzkit.studies.batch import RunSpec, run_spec
+
+    spec = load_spec(PI)
+    x, z = spec.axes
+    uneven = dataclasses.replace(spec, axes=(x, dataclasses.replace(z, kp=2 * z.kp)))
+    path = tmp_path / "uneven.yaml"
+    path.write_text(dump_spec(uneven))
+    result = run_spec(RunSpec("E1", plant="arm6", controller_spec=str(path), duration_s=0.5))
+    assert result.loop.startswith("python (fallback:") and "gains per axis" in result.loop
 
 
 def test_sweep_over_specs() -> None:
@@ -229,7 +242,4 @@ def test_tune_a_spec_refuses_what_it_cannot_run(
     argv = ["tune", "E3", "--spec", str(PI), "--plant", "arm6", "--out", never]
     assert main(argv) == 2
     assert "E3 on arm6" in capsys.readouterr().err
-    argv = ["tune", "E1", "--spec", str(PI), "--loop", "compiled", "--out", never]
-    assert main(argv) == 2
-    assert "only the Python loop runs" in capsys.readouterr().err
     assert not (tmp_path / "never.yaml").exists()

@@ -1,9 +1,15 @@
 """The ``fuzzkit`` command.
 
 Each group of subcommands lives in its own module with a ``register(subparsers)`` function;
-handlers import their heavy dependencies lazily so ``fuzzkit --help`` stays fast. Any fuzzkit
-error (all derive from ValueError or RuntimeError) is printed as ``fuzzkit: error: ...`` with a
-non-zero exit code; no traceback reaches the user for bad input.
+handlers import their heavy dependencies lazily so ``fuzzkit --help`` stays fast.
+
+Errors are told apart by type, never by message: the user's errors (:data:`USER_ERRORS`: bad
+input, a bad setting or environment, all of fuzzkit's own exception family rooted at
+``fuzzkit.errors.FuzzkitError``, and an operating-system error such as a missing file) are
+printed as ``fuzzkit: error: ...`` with exit 2. Anything else, a plain ``ValueError`` raised
+deep inside a library included, is a bug in fuzzkit: ``fuzzkit: internal error: ...``, exit 1,
+the traceback only with ``FUZZKIT_DEBUG=1``. A command module that fails to import is such a
+bug too; no command silently drops out of ``--help``.
 """
 
 from __future__ import annotations
@@ -18,6 +24,9 @@ from collections.abc import Sequence
 
 from fuzzkit.errors import FuzzkitError
 from fuzzkit.progress import interrupt_latch
+
+#: The exceptions that are the user's error (module docstring); every other one is a bug.
+USER_ERRORS: tuple[type[Exception], ...] = (FuzzkitError, OSError)
 
 #: Modules under fuzzkit.cli that contribute subcommands, in help order.
 COMMAND_MODULES = (
@@ -40,6 +49,10 @@ EXIT_INTERRUPTED = 130
 EXIT_BROKEN_PIPE = 141
 #: What a rule-base argument accepts (kept light: the CLI imports no format code to print help).
 RULEBASE_SPEC_HELP = "a shipped name, or a rule-base file (.yaml, .yml, .fis, .fcl, .fll)"
+
+
+class CommandModuleError(RuntimeError):
+    """A module of :data:`COMMAND_MODULES` failed to import (a bug, not the user's error)."""
 
 
 class HelpFormatter(argparse.RawDescriptionHelpFormatter):
@@ -90,19 +103,33 @@ def build_parser() -> argparse.ArgumentParser:
     for name in COMMAND_MODULES:
         try:
             module = importlib.import_module(f"fuzzkit.cli.{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name == f"fuzzkit.cli.{name}":
-                continue  # that command group is not built yet
-            raise
+        except Exception as exc:
+            raise CommandModuleError(f"command module fuzzkit.cli.{name} failed to import") from exc
         module.register(sub)
     for command in sub.choices.values():
         command.formatter_class = HelpFormatter
     return parser
 
 
+def _internal_error(exc: Exception) -> int:
+    """Report ``exc`` as a bug in fuzzkit (re-raised with ``FUZZKIT_DEBUG`` set)."""
+    if os.environ.get("FUZZKIT_DEBUG"):
+        raise exc
+    cause = f" ({type(exc.__cause__).__name__}: {exc.__cause__})" if exc.__cause__ else ""
+    print(
+        f"fuzzkit: internal error: {type(exc).__name__}: {exc}{cause}\n"
+        "  this is a bug in fuzzkit; rerun with FUZZKIT_DEBUG=1 for the traceback",
+        file=sys.stderr,
+    )
+    return EXIT_FAILURE
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the console script; returns the process exit code."""
-    parser = build_parser()
+    try:
+        parser = build_parser()
+    except CommandModuleError as exc:
+        return _internal_error(exc)
     args = parser.parse_args(argv)
     try:
         with interrupt_latch():
@@ -116,10 +143,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         os.dup2(devnull, sys.stdout.fileno())
         os.close(devnull)
         return EXIT_BROKEN_PIPE
-    except FuzzkitError as exc:
-        print(f"fuzzkit: error: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except (OSError, ValueError) as exc:
+    except USER_ERRORS as exc:
         print(f"fuzzkit: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
@@ -127,14 +151,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("fuzzkit: interrupted (Ctrl-C); nothing half-written", file=sys.stderr)
         return EXIT_INTERRUPTED
     except Exception as exc:  # a bug, not bad input: say so, traceback only on request
-        if os.environ.get("FUZZKIT_DEBUG"):
-            raise
-        print(
-            f"fuzzkit: internal error: {type(exc).__name__}: {exc}\n"
-            "  this is a bug in fuzzkit; rerun with FUZZKIT_DEBUG=1 for the traceback",
-            file=sys.stderr,
-        )
-        return EXIT_FAILURE
+        return _internal_error(exc)
     return int(code or 0)
 
 

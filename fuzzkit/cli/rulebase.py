@@ -256,7 +256,7 @@ def _variable_lines(var: Variable, kind: str, input_names: Sequence[str] = ()) -
     if not var.terms:
         lines.append("    (no terms: used only in linear Sugeno terms)")
     for t in var.terms:
-        names = (*input_names, "constant") if t.shape == "linear" else SHAPE_PARAMS.get(t.shape, ())
+        names = (*input_names, "constant") if t.shape == "linear" else SHAPE_PARAMS[t.shape]
         params = " ".join(f"{n}={_num(v)}" for n, v in zip(names, t.params, strict=False))
         lines.append(f"    {t.name.ljust(width)}  {t.shape:<14} {params}")
     return lines

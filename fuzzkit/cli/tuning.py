@@ -259,7 +259,6 @@ def _tuning_target(args: argparse.Namespace) -> tuple[list[Any], str, str, str]:
     loop = args.loop or "auto"
     if not args.spec:
         return list(args.experiments), args.controller, args.rulebase, loop
-    from fuzzkit.control.reference import front_end_from_spec
     from fuzzkit.control.spec_reader import load_spec
     from fuzzkit.studies.experiments import experiment, with_spec
 
@@ -269,13 +268,6 @@ def _tuning_target(args: argparse.Namespace) -> tuple[list[Any], str, str, str]:
             "tune --spec: E3 on arm6 (the paper's 3-D world) cannot carry a spec yet; "
             "tune on E1, E2 or the planar plant"
         )
-    if front_end_from_spec(spec) is not None:
-        if loop == "compiled":
-            raise ConfigError(
-                f"tune --spec: {args.spec} has a sensor front end, which only the Python "
-                "loop runs; leave out --loop compiled"
-            )
-        loop = "python"
     experiments = [with_spec(experiment(e), spec) for e in args.experiments]
     return experiments, spec.kind, spec.rulebase_source or args.rulebase, loop
 

@@ -35,6 +35,10 @@ ADAPTATIONS = ("none",)
 #: Standard gravity (m/s^2, CGPM 1901), the magnitude of the tool's weight per kilogram.
 STANDARD_GRAVITY_M_S2 = 9.80665
 
+#: The sample periods a spec may have (s): 100 kHz to 0.1 Hz.
+MIN_PERIOD_S = 1e-5
+MAX_PERIOD_S = 10.0
+
 #: A logical position in a spec: the YAML keys leading to a value (``("axes", "z", "kp")``).
 SpecPath = tuple[str, ...]
 
@@ -249,6 +253,14 @@ def spec_problems(spec: ControllerSpec) -> list[tuple[SpecPath, str]]:
     if spec.adaptation not in ADAPTATIONS:
         out.append((("adaptation",), f"unknown adaptation {spec.adaptation!r}; expected none"))
     _positive(out, ("period_s",), spec.period_s)
+    if _finite(spec.period_s) and not MIN_PERIOD_S <= spec.period_s <= MAX_PERIOD_S:
+        out.append(
+            (
+                ("period_s",),
+                f"period_s must be in [{MIN_PERIOD_S:g}, {MAX_PERIOD_S:g}] s "
+                f"(got {spec.period_s:g})",
+            )
+        )
     if not spec.axes:
         out.append((("axes",), "axes needs at least one force-controlled axis (x, y or z)"))
     names = [a.axis for a in spec.axes]
@@ -313,6 +325,14 @@ def _sensor_problems(spec: ControllerSpec) -> list[tuple[SpecPath, str]]:
                     ("sensor", "lowpass_hz"),
                     f"lowpass_hz {fc:g} is not below the Nyquist frequency {nyquist:g} Hz "
                     f"of period_s {spec.period_s:g}",
+                )
+            )
+        elif math.isfinite(fc) and fc > 0.0 and not sensor.lowpass_alpha(spec.period_s) > 0.0:
+            out.append(
+                (
+                    ("sensor", "lowpass_hz"),
+                    f"lowpass_hz {fc:g} is too low for period_s {spec.period_s:g}: the filter "
+                    "would never move (its gain per period rounds to 0)",
                 )
             )
     return out

@@ -39,6 +39,7 @@ from fuzzkit.control.spec import (
 from fuzzkit.errors import ControllerSpecError, Location, Problem, RuleBaseError
 from fuzzkit.fuzzy.model import RuleBase, Source
 from fuzzkit.located_yaml import (
+    NULL_TAG,
     DocumentKind,
     NodeReader,
     compose_document,
@@ -79,13 +80,13 @@ TOOL_KEYS = ("mass_kg", "com_m")
 #: Rule-base references ending so (or holding a path separator) are paths, others names.
 RULEBASE_SUFFIXES = (".yaml", ".yml", ".fis", ".fcl", ".fll")
 
-
-_NULL = "tag:yaml.org,2002:null"
+#: Largest sample count a spec may give (tare, debounce, confirmation): 4000 s at 4 ms.
+MAX_SAMPLES = 1_000_000
 
 
 def is_null(node: Node) -> bool:
     """True for an explicit YAML null (``null``, ``~`` or nothing)."""
-    return isinstance(node, ScalarNode) and node.tag == _NULL
+    return isinstance(node, ScalarNode) and node.tag == NULL_TAG
 
 
 class _SpecReader(NodeReader):
@@ -153,13 +154,13 @@ class _SpecReader(NodeReader):
             else None
         )
 
-    def integer_at(self, entries: dict[str, Node], path: SpecPath, default: int) -> int:
-        """The integer (>= 0, any YAML 1.1 spelling) at ``path``, or ``default`` when absent or
-        (reported, hidden) bad."""
+    def count(self, entries: dict[str, Node], path: SpecPath, default: int) -> int:
+        """The sample count at ``path`` (0 to :data:`MAX_SAMPLES`; the semantic checks say
+        where 1 is the least), or ``default`` when absent or (reported, hidden) bad."""
         node = entries.get(path[-1])
         if node is None:
             return default
-        value = self.integer(node, ".".join(path))
+        value = self.integer(node, ".".join(path), 0, MAX_SAMPLES)
         if value is None:
             self.quiet.add(path)
             return default
@@ -288,14 +289,10 @@ class _SpecReader(NodeReader):
             engage_threshold_n=self.optional_real(
                 engage, ("safety", "engage", "threshold_n"), d.engage_threshold_n
             ),
-            engage_samples=self.integer_at(
-                engage, ("safety", "engage", "samples"), d.engage_samples
-            ),
+            engage_samples=self.count(engage, ("safety", "engage", "samples"), d.engage_samples),
             spike_gate_n=self.optional_real(spike, ("safety", "spike_gate", "threshold_n"), None),
-            spike_confirm=self.integer_at(
-                spike, ("safety", "spike_gate", "confirm"), d.spike_confirm
-            ),
-            trip_samples=self.integer_at(trip, ("safety", "trip", "samples"), d.trip_samples),
+            spike_confirm=self.count(spike, ("safety", "spike_gate", "confirm"), d.spike_confirm),
+            trip_samples=self.count(trip, ("safety", "trip", "samples"), d.trip_samples),
             backoff_m=self.real(backoff, ("safety", "backoff", "distance_m"), d.backoff_m),
             backoff_speed_m_s=self.real(
                 backoff, ("safety", "backoff", "speed_m_s"), d.backoff_speed_m_s
@@ -311,7 +308,7 @@ class _SpecReader(NodeReader):
         if "tool" in entries and not is_null(entries["tool"]):
             tool = self.tool(entries["tool"])
         return SensorSpec(
-            tare_samples=self.integer_at(tare, ("sensor", "tare", "samples"), 0),
+            tare_samples=self.count(tare, ("sensor", "tare", "samples"), 0),
             tool=tool,
             lowpass_hz=self.optional_real(entries, ("sensor", "lowpass_hz"), None),
         )

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from fuzzkit.control.spec import ADAPTATIONS, AXES, KINDS
-from fuzzkit.control.spec_reader import REQUIRED_KEYS
+from fuzzkit.control.spec import ADAPTATIONS, AXES, KINDS, MAX_PERIOD_S, MIN_PERIOD_S
+from fuzzkit.control.spec_reader import MAX_SAMPLES, REQUIRED_KEYS
 
 
 def _number(
@@ -24,7 +24,12 @@ def _number(
 
 
 def _count(description: str, minimum: int) -> dict[str, Any]:
-    return {"type": "integer", "minimum": minimum, "description": description}
+    return {
+        "type": "integer",
+        "minimum": minimum,
+        "maximum": MAX_SAMPLES,
+        "description": description,
+    }
 
 
 def _object(props: dict[str, Any], required: tuple[str, ...] = (), **extra: Any) -> dict[str, Any]:
@@ -137,7 +142,12 @@ def json_schema() -> dict[str, Any]:
                     "type": "string",
                     "description": "fuzzy-pi only: shipped name or path (relative to the spec)",
                 },
-                "period_s": _number("outer-loop sample period T (s)", 0, True),
+                "period_s": {
+                    "type": "number",
+                    "minimum": MIN_PERIOD_S,
+                    "maximum": MAX_PERIOD_S,
+                    "description": "outer-loop sample period T (s)",
+                },
                 "axes": _object(
                     {a: axis for a in AXES},
                     minProperties=1,

@@ -3,8 +3,12 @@
 Both dialects are read: IEC point lists (``TERM warm := (10, 0) (20, 1) (30, 0);``, the
 membership held constant beyond the first and last points, exact when they draw a triangle,
 trapezoid or shoulder) and the named shapes fuzzylite and jFuzzyLogic write
-(``TERM warm := Triangle 10 20 30;``; jFuzzyLogic's ``trian``, ``trape``, ``gauss``, ``gbell``
-and ``sigm`` too). A bare number is a singleton (an input) or a Sugeno constant (an output).
+(``TERM warm := Triangle 10 20 30;``, every shape fuzzylite names, the smooth ``SShape``,
+``ZShape``, ``PiShape``, ``GaussianProduct``, ``SigmoidDifference`` and ``SigmoidProduct``
+among them; jFuzzyLogic's ``trian``, ``trape``, ``gauss``, ``gauss2``, ``gbell`` and ``sigm``
+too, as the shape registry spells them). A bare number is a singleton (an input) or a Sugeno
+constant (an output). The IEC dialect's point lists hold piecewise-linear terms only: writing a
+smooth shape in it is refused (the named dialect writes it).
 
 Semantics kept: FCL has no input clamping (``out_of_range: extend``); ``DEFAULT := v`` applies
 where no rule fires (``NC``, keep the previous value, is refused); ``ACCU`` may sit in the
@@ -39,10 +43,12 @@ from fuzzkit.formats.foreign import (
     is_sugeno,
     parse_number,
     points_to_term,
+    read_named,
     read_text,
     term_to_points,
 )
 from fuzzkit.formats.rule_text import parse_rule, rule_text
+from fuzzkit.fuzzy import shapes
 from fuzzkit.fuzzy.model import Operators, Rule, RuleBase, Term, Variable
 
 SUFFIX = ".fcl"
@@ -66,11 +72,12 @@ _METHOD = {
     "COGS": "weighted_average",
     "COGSS": "weighted_sum",
 }
-#: jFuzzyLogic's shape names, as the fuzzylite class they mean (parameters in the same order
-#: except gbell, whose (a, b, mean) becomes Bell's (centre, width, slope)).
-_JFL = {"TRIAN": "Triangle", "TRAPE": "Trapezoid", "GAUSS": "Gaussian", "SIGM": None, "GBELL": None}
-#: Shapes whose parameters are all positions on the axis (their span is the term's).
-_POSITIONAL = frozenset({"singleton", "constant", "s_shape", "z_shape", "pi_shape"})
+#: jFuzzyLogic's shapes that are not fuzzkit's (those that are, TRIAN, TRAPE, GAUSS, GAUSS2,
+#: GBELL and SIGM, are the shape registry's ``fcl`` spellings).
+_JFL_REFUSED = {
+    "DSIGM": "DSIGM is jFuzzyLogic's max(s1 - s2, 0), not MATLAB's |s1 - s2| "
+    "(sigmoid_difference; write SigmoidDifference): refused, not approximated",
+}
 #: De Morgan partners: the OR an AND implies when only the AND is declared, and back.
 _DE_MORGAN = {"min": "max", "product": "probabilistic_sum"}
 _PAIR = re.compile(r"\(\s*([^,()]+?)\s*,\s*([^,()]+?)\s*\)")
@@ -176,32 +183,16 @@ def term_span(body: str, term: Term) -> tuple[float, float] | None:
     """Where a term lies on its axis, for a variable without ``RANGE``; None if unknown.
 
     A point list spans its first to its last point (held constant beyond them, so these are
-    where its shape is); a singleton or constant is its value; a named shape whose parameters
-    are all positions (triangle, trapezoid, ramp, S/Z/Pi splines) spans its parameters. Smooth
-    shapes have no ends: jFuzzyLogic's estimates are used, where the membership is negligible
-    (gaussian: mean +- 4 sigma, both halves of a two-sided one; bell: where it falls to 0.001;
-    sigmoid: centre +- 9/|slope|). A Sugeno ``linear`` term, a difference or product of
-    sigmoids have no such place on the axis (None).
+    where its shape is); a named shape spans what its shape registry record's ``span`` says
+    (:attr:`fuzzkit.fuzzy.shapes.Shape.span`): its parameters when they are all positions,
+    jFuzzyLogic's estimates of where a smooth shape becomes negligible, or nothing.
     """
-    p = term.params
     if body.startswith("("):
         xs = [parse_number(x) for x, _ in _PAIR.findall(body)]
         pts = [x for x in xs if x is not None]
         return (min(pts), max(pts)) if pts else None
-    if term.is_piecewise_linear or term.shape in _POSITIONAL:
-        return min(p), max(p)
-    if term.shape == "gaussian_product":  # mean1, sigma1, mean2, sigma2
-        return min(p[0] - 4.0 * abs(p[1]), p[2]), max(p[0], p[2] + 4.0 * abs(p[3]))
-    half: float | None = None
-    if term.shape == "gaussian":  # mean, sigma
-        centre, half = p[0], 4.0 * abs(p[1])
-    elif term.shape == "bell":  # width, slope, centre: 1/(1 + |d/width|^(2 slope)) = 0.001
-        centre, half = p[2], abs(p[0]) * 999.0 ** (1.0 / (2.0 * p[1])) if p[1] > 0 else None
-    elif term.shape == "sigmoid":  # slope, centre
-        centre, half = p[1], 9.0 / abs(p[0]) if p[0] != 0 else None
-    if half is None or not math.isfinite(half):
-        return None
-    return centre - half, centre + half
+    span = shapes.shape(term.shape).span
+    return None if span is None else span(term.params)
 
 
 def _word(s: _Stmt, table: dict[str, str], found: Collector) -> str | None:
@@ -251,15 +242,16 @@ def _term_def(body: str, name: str, output: bool, sugeno: bool, n_inputs: int) -
         return f"{cls}: expected numbers after it, got {' '.join(args_text)!r}"
     nums = [a for a in args if a is not None]
     upper = cls.upper()
-    if upper in _JFL:
-        if upper == "SIGM" and len(nums) == 2:  # gain, centre
-            return Term(name, "sigmoid", (nums[0], nums[1]))
-        if upper == "GBELL" and len(nums) == 3:  # a, b, mean
-            return Term(name, "bell", (nums[0], nums[1], nums[2]))
-        mapped = _JFL[upper]
-        if mapped is None:
-            return f"{cls} needs {2 if upper == 'SIGM' else 3} parameters, got {len(nums)}"
-        cls = mapped
+    if upper in _JFL_REFUSED:
+        return _JFL_REFUSED[upper]
+    jfl = {k.upper(): k for k in shapes.spellings("fcl")}
+    if upper in jfl:  # jFuzzyLogic's names, case-insensitive as its keywords
+        spelling = shapes.spellings("fcl")[jfl[upper]][0][1]
+        if len(nums) != spelling.arity:
+            return f"{cls} needs {spelling.arity} parameters, got {len(nums)}"
+        if output and sugeno:
+            return f"{cls}: a Sugeno output takes Constant or Linear terms"
+        return read_named("fcl", name, jfl[upper], nums)
     return named_term(name, cls, nums, output and sugeno, n_inputs)
 
 

@@ -11,12 +11,15 @@ Semantics kept from MATLAB:
   out1 is mf3 with weight 0.5"; ``0`` is "don't care" (input) or "no conclusion" (output), the
   last number is the connective (1 AND, 2 OR).
 
-Shapes map exactly: ``trimf [a b c]`` = triangle, ``trapmf [a b c d]`` = trapezoid (with
-``-inf -inf`` or ``inf inf`` ends it is a shoulder; ``linzmf``/``linsmf`` and fuzzylite's
-``rampmf`` are shoulders too), ``gaussmf [sigma c]``, ``gbellmf [a b c]``, ``sigmf [a c]``, and
-the Sugeno output terms ``constant [v]`` and ``linear [c_1 ... c_n c_0]``. Everything else
-(``zmf``, ``pimf``, custom functions, unbounded ``sum`` aggregation, hedges, negated
-conclusions) is refused with its line and column, never approximated.
+Shapes map exactly, as the shape registry (:mod:`fuzzkit.fuzzy.shapes`) spells them:
+``trimf [a b c]`` = triangle, ``trapmf [a b c d]`` = trapezoid (with ``-inf -inf`` or
+``inf inf`` ends it is a shoulder; ``linzmf``/``linsmf`` and fuzzylite's ``rampmf`` are
+shoulders too), ``gaussmf [sigma c]``, ``gbellmf [a b c]``, ``sigmf [a c]``, the smooth
+``gauss2mf [sigma1 c1 sigma2 c2]``, ``smf [a b]``, ``zmf [a b]``, ``pimf [a b c d]``,
+``dsigmf [a1 c1 a2 c2]`` and ``psigmf [a1 c1 a2 c2]``, and the Sugeno output terms
+``constant [v]`` and ``linear [c_1 ... c_n c_0]``. Everything else (custom functions, unbounded
+``sum`` aggregation, hedges, negated conclusions) is refused with its line and column, never
+approximated.
 """
 
 from __future__ import annotations
@@ -37,9 +40,10 @@ from fuzzkit.formats.foreign import (
     fmt,
     is_sugeno,
     parse_number,
+    read_named,
     read_text,
-    trapezoid_term,
 )
+from fuzzkit.fuzzy import shapes
 from fuzzkit.fuzzy.model import (
     Consequent,
     Expression,
@@ -70,15 +74,10 @@ _WHY_NOT = {
     "sum": "aggregation 'sum' is MATLAB's unbounded sum; fuzzkit has bounded_sum "
     "(min(1, a + b)), which differs where the sum exceeds 1",
 }
-#: MATLAB membership functions fuzzkit's model does not have (refused by name).
+#: MATLAB membership functions fuzzkit's model does not have (refused by name); those it
+#: has are the shape registry's (fuzzkit.fuzzy.shapes).
 _OTHER_MFS = frozenset(
     [
-        "zmf",
-        "smf",
-        "pimf",
-        "gauss2mf",
-        "dsigmf",
-        "psigmf",
         "trimf2",
         "trapmf2",
         "gaussmf2",
@@ -90,12 +89,7 @@ _OTHER_MFS = frozenset(
         "discretemf",
         "binarymf",
         "rectanglemf",
-        "sshapemf",
-        "zshapemf",
-        "pishapemf",
-        "gaussprodmf",
-        "sigdiffmf",
-        "sigprodmf",
+        "rectmf",
     ]
 )
 _SYSTEM_KEYS = (
@@ -215,47 +209,20 @@ def _mf_term(
     name: str, kind: str, p: list[float], sugeno_output: bool, n_inputs: int
 ) -> Term | str:
     """One MATLAB membership function as a fuzzkit term, or why it cannot be one."""
-    counts = {
-        "trimf": 3,
-        "trapmf": 4,
-        "gaussmf": 2,
-        "gbellmf": 3,
-        "sigmf": 2,
-        "linzmf": 2,
-        "linsmf": 2,
-        "rampmf": 2,
-        "constant": 1,
-        "linear": n_inputs + 1,
-    }
+    known = shapes.spellings("fis")
     if kind in _OTHER_MFS:
         return f"membership function {kind!r} is not in fuzzkit's model (refused, not approximated)"
-    if kind not in counts:
+    if kind not in known:
         return f"unknown or custom membership function {kind!r} (refused, not approximated)"
-    if len(p) != counts[kind]:
-        return f"{kind} needs {counts[kind]} parameters, got {len(p)}"
-    if kind in ("constant", "linear") and not sugeno_output:
+    shape, spelling = known[kind][0]
+    count = spelling.arity if spelling.arity is not None else n_inputs + 1  # linear: c_i, c_0
+    if len(p) != count:
+        return f"{kind} needs {count} parameters, got {len(p)}"
+    if shape.sugeno and not sugeno_output:
         return f"{kind!r} terms are Sugeno outputs only (in a Type='sugeno' file)"
-    if sugeno_output and kind not in ("constant", "linear"):
+    if sugeno_output and not shape.sugeno:
         return f"a Sugeno output term must be 'constant' or 'linear', got {kind!r}"
-    if kind == "trimf":
-        return Term(name, "triangle", tuple(p))
-    if kind == "trapmf":
-        return trapezoid_term(name, p)
-    if kind == "gaussmf":
-        return Term(name, "gaussian", (p[1], p[0]))
-    if kind == "gbellmf":
-        return Term(name, "bell", tuple(p))
-    if kind == "sigmf":
-        return Term(name, "sigmoid", tuple(p))
-    if kind == "linzmf":
-        return Term(name, "left_shoulder", tuple(p))
-    if kind == "linsmf":
-        return Term(name, "right_shoulder", tuple(p))
-    if kind == "rampmf":
-        if p[0] > p[1]:
-            return Term(name, "left_shoulder", (p[1], p[0]))
-        return Term(name, "right_shoulder", tuple(p))
-    return Term(name, kind, tuple(p))
+    return read_named("fis", name, kind, p)
 
 
 def _variable(
@@ -581,22 +548,10 @@ def load_with_warnings(path: str | FsPath) -> tuple[RuleBase, list[Problem]]:
 
 
 def _mf_text(term: Term) -> str | None:
-    p = term.params
-    table = {
-        "triangle": ("trimf", p),
-        "trapezoid": ("trapmf", p),
-        "left_shoulder": ("trapmf", (-math.inf, -math.inf, *p)),
-        "right_shoulder": ("trapmf", (*p, math.inf, math.inf)),
-        "gaussian": ("gaussmf", (p[1], p[0])) if len(p) == 2 else None,
-        "bell": ("gbellmf", p),
-        "sigmoid": ("sigmf", p),
-        "constant": ("constant", p),
-        "linear": ("linear", p),
-    }
-    entry = table.get(term.shape)
-    if entry is None:
+    written = shapes.write_term("fis", term.shape, term.params)
+    if written is None:
         return None
-    kind, params = entry
+    kind, params = written
     return f"'{term.name}':'{kind}',[{' '.join(fmt(x) for x in params)}]"
 
 

@@ -12,11 +12,15 @@ open sections, each followed by ``key: value`` lines; ``#`` starts a comment. Se
 * Sugeno outputs (``Constant``, ``Linear``) with ``WeightedAverage``/``WeightedSum`` and
   ``aggregation: none``: every rule is weighted separately.
 
-Terms map exactly: ``Triangle a b c``, ``Trapezoid a b c d``, ``Ramp start end`` (a shoulder),
-``Gaussian mean sigma``, ``Bell centre width slope``, ``Sigmoid inflection slope``,
-``Discrete`` point lists drawing a triangle, trapezoid or shoulder, ``Constant v`` and
-``Linear c_1 ... c_n c_0``. Other terms, hedges, activation methods other than ``General``,
-``lock-previous: true`` and disabled parts are refused with their line and column.
+Terms map exactly, as the shape registry (:mod:`fuzzkit.fuzzy.shapes`) spells them:
+``Triangle a b c``, ``Trapezoid a b c d``, ``Ramp start end`` (a shoulder), ``Gaussian mean
+sigma``, ``Bell centre width slope``, ``Sigmoid inflection slope``, the smooth
+``GaussianProduct meanA sigmaA meanB sigmaB``, ``SShape start end``, ``ZShape start end``,
+``PiShape bottomLeft topLeft topRight bottomRight``, ``SigmoidDifference left rising falling
+right`` and ``SigmoidProduct left rising falling right``, ``Discrete`` point lists drawing a
+triangle, trapezoid or shoulder, ``Constant v`` and ``Linear c_1 ... c_n c_0``. Other
+terms, hedges, activation methods other than ``General``, ``lock-previous: true`` and disabled
+parts are refused with their line and column.
 """
 
 from __future__ import annotations
@@ -35,10 +39,12 @@ from fuzzkit.formats.foreign import (
     is_sugeno,
     parse_number,
     points_to_term,
+    read_named,
     read_text,
-    trapezoid_term,
+    write_named,
 )
 from fuzzkit.formats.rule_text import parse_rule, rule_text
+from fuzzkit.fuzzy import shapes
 from fuzzkit.fuzzy.model import Operators, Rule, RuleBase, Term, Variable
 
 SUFFIX = ".fll"
@@ -58,26 +64,13 @@ _DEFUZZ = {
     "WeightedAverage": "weighted_average",
     "WeightedSum": "weighted_sum",
 }
-_TERM_ARGS = {
-    "Triangle": 3,
-    "Trapezoid": 4,
-    "Ramp": 2,
-    "Gaussian": 2,
-    "Bell": 3,
-    "Sigmoid": 2,
-    "Constant": 1,
-}
+#: fuzzylite terms fuzzkit's model does not have (refused by name); those it has are the
+#: shape registry's (fuzzkit.fuzzy.shapes).
 _OTHER_TERMS = frozenset(
     [
         "Rectangle",
         "Cosine",
         "Concave",
-        "SShape",
-        "ZShape",
-        "PiShape",
-        "GaussianProduct",
-        "SigmoidDifference",
-        "SigmoidProduct",
         "Spike",
         "Binary",
         "Function",
@@ -201,47 +194,33 @@ def named_term(
     the ``Constant`` and ``Linear`` terms; ``n_inputs`` is the number of coefficients a
     ``Linear`` term needs, less its constant.
     """
+    known = shapes.spellings("fll")
     if cls in _OTHER_TERMS:
         return f"{cls} is not in fuzzkit's model (refused, not approximated)"
-    if cls not in (*_TERM_ARGS, "Linear", "Discrete"):
-        return (
-            f"unknown term class {cls!r}; expected one of {', '.join(_TERM_ARGS)}, Linear, Discrete"
-        )
-    if (cls in ("Constant", "Linear")) != sugeno_out:
+    if cls not in (*known, "Discrete"):
+        return f"unknown term class {cls!r}; expected one of {', '.join(known)}, Discrete"
+    if (cls in known and known[cls][0][0].sugeno) != sugeno_out:
         return f"{cls}: Constant and Linear terms belong to Sugeno outputs, which take no others"
-    if cls == "Linear":
-        if len(args) != n_inputs + 1:
-            return (
-                f"Linear needs {n_inputs + 1} coefficients (one per input, then the "
-                f"constant), got {len(args)}"
-            )
-        return Term(name, "linear", tuple(args))
     if cls == "Discrete":
         if len(args) % 2:
             return f"Discrete needs x y pairs, got {len(args)} numbers"
         return points_to_term(name, list(zip(args[::2], args[1::2], strict=True)))
-    n = _TERM_ARGS[cls]
-    if len(args) == n + 1 and cls != "Constant":
+    shape, spelling = known[cls][0]
+    if spelling.arity is None:  # Linear: one coefficient per input, then the constant
+        if len(args) != n_inputs + 1:
+            return (
+                f"{cls} needs {n_inputs + 1} coefficients (one per input, then the "
+                f"constant), got {len(args)}"
+            )
+        return read_named("fll", name, cls, args)
+    n = spelling.arity
+    if len(args) == n + 1 and not shape.sugeno:
         if args[-1] != 1.0:  # fuzzylite's optional height
             return f"height {fmt(args[-1])} cannot be expressed (fuzzkit terms reach 1)"
         args = args[:-1]
     if len(args) != n:
         return f"{cls} needs {n} parameters, got {len(args)}"
-    if cls == "Triangle":
-        return Term(name, "triangle", tuple(args))
-    if cls == "Trapezoid":
-        return trapezoid_term(name, args)
-    if cls == "Ramp":
-        if args[0] > args[1]:
-            return Term(name, "left_shoulder", (args[1], args[0]))
-        return Term(name, "right_shoulder", tuple(args))
-    if cls == "Gaussian":
-        return Term(name, "gaussian", tuple(args))
-    if cls == "Bell":
-        return Term(name, "bell", (args[1], args[2], args[0]))
-    if cls == "Sigmoid":
-        return Term(name, "sigmoid", (args[1], args[0]))
-    return Term(name, "constant", tuple(args))
+    return read_named("fll", name, cls, args)
 
 
 def _term(e: _Entry, found: Collector, sugeno_out: bool, n_inputs: int) -> Term | None:
@@ -518,28 +497,7 @@ def load_with_warnings(path: str | FsPath) -> tuple[RuleBase, list[Problem]]:
 
 def term_body(term: Term) -> str | None:
     """``Class params`` of a term as fuzzylite writes it (FLL and named FCL), else None."""
-    p = term.params
-    if term.shape == "triangle":
-        body = "Triangle " + " ".join(map(fmt, p))
-    elif term.shape == "trapezoid":
-        body = "Trapezoid " + " ".join(map(fmt, p))
-    elif term.shape == "left_shoulder":
-        body = f"Ramp {fmt(p[1])} {fmt(p[0])}"
-    elif term.shape == "right_shoulder":
-        body = f"Ramp {fmt(p[0])} {fmt(p[1])}"
-    elif term.shape == "gaussian":
-        body = f"Gaussian {fmt(p[0])} {fmt(p[1])}"
-    elif term.shape == "bell":
-        body = f"Bell {fmt(p[2])} {fmt(p[0])} {fmt(p[1])}"
-    elif term.shape == "sigmoid":
-        body = f"Sigmoid {fmt(p[1])} {fmt(p[0])}"
-    elif term.shape == "constant":
-        body = f"Constant {fmt(p[0])}"
-    elif term.shape == "linear":
-        body = "Linear " + " ".join(map(fmt, p))
-    else:
-        return None
-    return body
+    return write_named("fll", term)
 
 
 def _term_text(term: Term) -> str | None:

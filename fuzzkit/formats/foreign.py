@@ -22,14 +22,19 @@ from pathlib import Path as FsPath
 from typing import NoReturn
 
 from fuzzkit.errors import FuzzkitError, Location, Problem, RuleBaseError
-from fuzzkit.fuzzy import validation
-from fuzzkit.fuzzy.model import Compound, Expression, Proposition, RuleBase, Source, Term
+from fuzzkit.fuzzy import shapes, validation
+from fuzzkit.fuzzy.model import (
+    SUGENO_SHAPES,
+    Compound,
+    Expression,
+    Proposition,
+    RuleBase,
+    Source,
+    Term,
+)
 from fuzzkit.fuzzy.validation import Path
 from fuzzkit.located_yaml import DocumentKind, read_text_file
 
-#: Sugeno (Takagi-Sugeno-Kang) output shapes: ``constant (value,)`` and ``linear
-#: (c_1, ..., c_n, c_0)`` with one coefficient per input in the rule base's input order.
-SUGENO_SHAPES = frozenset({"constant", "linear"})
 #: Defuzzifiers of Sugeno rule bases.
 SUGENO_DEFUZZIFIERS = frozenset({"weighted_average", "weighted_sum"})
 
@@ -196,31 +201,38 @@ def points_to_term(name: str, points: Sequence[tuple[float, float]]) -> Term | s
     return Term(name, shape, tuple(xs))
 
 
-def trapezoid_term(name: str, p: Sequence[float]) -> Term:
-    """A trapezoid ``(a, b, c, d)``; with ``-inf -inf`` or ``inf inf`` feet, the shoulder it is.
-
-    MATLAB and fuzzylite write shoulders that way, and their formulas give exactly fuzzkit's
-    shoulders everywhere (1 beyond the open side, linear between the finite points).
-    """
-    if p[0] == p[1] == -math.inf and math.isfinite(p[2]) and math.isfinite(p[3]):
-        return Term(name, "left_shoulder", (p[2], p[3]))
-    if p[2] == p[3] == math.inf and math.isfinite(p[0]) and math.isfinite(p[1]):
-        return Term(name, "right_shoulder", (p[0], p[1]))
-    return Term(name, "trapezoid", tuple(p))
-
-
 def term_to_points(term: Term) -> list[tuple[float, float]] | None:
     """A piecewise-linear term as a point list (constant beyond its ends), else None."""
-    p = term.params
-    if term.shape == "triangle":
-        return [(p[0], 0.0), (p[1], 1.0), (p[2], 0.0)]
-    if term.shape == "trapezoid":
-        return [(p[0], 0.0), (p[1], 1.0), (p[2], 1.0), (p[3], 0.0)]
-    if term.shape == "left_shoulder":
-        return [(p[0], 1.0), (p[1], 0.0)]
-    if term.shape == "right_shoulder":
-        return [(p[0], 0.0), (p[1], 1.0)]
-    return None
+    points = shapes.shape(term.shape).points
+    return None if points is None else points(term.params)
+
+
+# ---------------------------------------------------------------------------- named shapes
+
+
+def read_named(
+    file_format: shapes.Format, name: str, kind: str, values: Sequence[float]
+) -> Term | str:
+    """The term ``file_format`` writes as ``kind values`` (a name it spells, with its arity),
+    or why not.
+
+    Which shape and parameter order a name means is the shape registry's
+    (:func:`fuzzkit.fuzzy.shapes.read_term`): MATLAB's ``trapmf`` with ``-inf -inf`` feet is a
+    left shoulder, fuzzylite's ``Ramp`` a left or right shoulder by its direction.
+    """
+    found = shapes.read_term(file_format, kind, values)
+    if isinstance(found, str):
+        return found
+    return Term(name, *found)
+
+
+def write_named(file_format: shapes.Format, term: Term) -> str | None:
+    """``kind p1 p2 ...`` as ``file_format`` writes ``term``; None if it has no name for it."""
+    found = shapes.write_term(file_format, term.shape, term.params)
+    if found is None:
+        return None
+    kind, params = found
+    return " ".join([kind, *map(fmt, params)])
 
 
 # ---------------------------------------------------------------------------- rules

@@ -16,8 +16,6 @@ from fuzzkit.errors import RuleBaseError
 from fuzzkit.formats.yaml_reader import EMPTY_CELL
 from fuzzkit.fuzzy import validation
 from fuzzkit.fuzzy.model import (
-    PIECEWISE_LINEAR_SHAPES,
-    SHAPE_PARAMS,
     Compound,
     Consequent,
     Expression,
@@ -28,6 +26,7 @@ from fuzzkit.fuzzy.model import (
     Variable,
 )
 from fuzzkit.fuzzy.partition import PARTITION_ENDS, partition_terms
+from fuzzkit.fuzzy.shapes import shape
 from fuzzkit.located_yaml import STR_TAG
 
 
@@ -76,10 +75,10 @@ def _dump_terms(var: Variable, kind: str, input_names: Sequence[str]) -> dict[st
                 zip(input_names, map(float, t.params[:-1]), strict=True)
             )
             spec["constant"] = float(t.params[-1])
-        elif t.shape in PIECEWISE_LINEAR_SHAPES or t.shape not in SHAPE_PARAMS:
+        elif shape(t.shape).piecewise_linear:  # an unregistered shape raises
             spec["points"] = _Flow(float(x) for x in t.params)
         else:
-            spec.update(zip(SHAPE_PARAMS[t.shape], map(float, t.params), strict=True))
+            spec.update(zip(shape(t.shape).params, map(float, t.params), strict=True))
         out[t.name] = _FlowMap(spec)
     return out
 

@@ -16,38 +16,10 @@ from typing import Literal, TypeAlias
 
 from fuzzkit.fuzzy.display import NotebookDisplay
 
-#: Membership-function shapes and the names of their parameters, in order.
-SHAPE_PARAMS: dict[str, tuple[str, ...]] = {
-    "triangle": ("a", "b", "c"),
-    "trapezoid": ("a", "b", "c", "d"),
-    "left_shoulder": ("a", "b"),
-    "right_shoulder": ("a", "b"),
-    "gaussian": ("mean", "sigma"),
-    "bell": ("width", "slope", "centre"),
-    "sigmoid": ("slope", "centre"),
-    "singleton": ("value",),
-    # Smooth shapes as in MATLAB's Fuzzy Logic Toolbox (gauss2mf, smf, zmf, pimf, dsigmf,
-    # psigmf) and fuzzylite (GaussianProduct, SShape, ZShape, PiShape, SigmoidDifference,
-    # SigmoidProduct); formulas in fuzzkit.fuzzy.membership.
-    "gaussian_product": ("mean1", "sigma1", "mean2", "sigma2"),
-    "s_shape": ("start", "end"),
-    "z_shape": ("start", "end"),
-    "pi_shape": ("a", "b", "c", "d"),
-    "sigmoid_difference": ("slope1", "centre1", "slope2", "centre2"),
-    "sigmoid_product": ("slope1", "centre1", "slope2", "centre2"),
-    # Sugeno (Takagi-Sugeno-Kang) output terms: not membership functions but the rule's output
-    # value. ``linear`` has one coefficient per input, in the rule base's input order, then the
-    # constant term: ``z = c_1 x_1 + ... + c_n x_n + constant`` (its params have n + 1 entries;
-    # the names here are the YAML keys).
-    "constant": ("value",),
-    "linear": ("coefficients", "constant"),
-}
-
-#: Sugeno output terms (zero order ``constant``, first order ``linear``).
-SUGENO_SHAPES = frozenset({"constant", "linear"})
-
-#: Shapes that are piecewise linear (the exact engine integrates these in closed form).
-PIECEWISE_LINEAR_SHAPES = frozenset({"triangle", "trapezoid", "left_shoulder", "right_shoulder"})
+# The shape vocabulary is the registry's (fuzzkit.fuzzy.shapes), re-exported here.
+from fuzzkit.fuzzy.shapes import PIECEWISE_LINEAR_SHAPES as PIECEWISE_LINEAR_SHAPES
+from fuzzkit.fuzzy.shapes import SHAPE_PARAMS as SHAPE_PARAMS
+from fuzzkit.fuzzy.shapes import SUGENO_SHAPES as SUGENO_SHAPES
 
 AND_OPERATORS = ("min", "product")
 OR_OPERATORS = ("max", "probabilistic_sum")
@@ -89,7 +61,7 @@ OutOfRange: TypeAlias = Literal["clamp", "extend"]
 
 @dataclass(frozen=True, slots=True)
 class Term:
-    """A linguistic label of a variable: a name, a shape and its parameters (see SHAPE_PARAMS)."""
+    """A linguistic label of a variable: a name, a shape and its parameters (fuzzy.shapes)."""
 
     name: str
     shape: str

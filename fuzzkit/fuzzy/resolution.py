@@ -14,10 +14,8 @@ file that ``eval`` then cannot handle:
 
 from __future__ import annotations
 
-import itertools
-from collections.abc import Iterator
-
-from fuzzkit.fuzzy.model import PIECEWISE_LINEAR_SHAPES, Term, Variable
+from fuzzkit.fuzzy.model import Term, Variable
+from fuzzkit.fuzzy.shapes import shape
 
 #: Range ends beyond this are refused (moments of the centroid square them).
 MAX_MAGNITUDE = 1e100
@@ -27,11 +25,6 @@ MIN_WIDTH = 1e-100
 MIN_RELATIVE_WIDTH = 1e-6
 #: The smallest term feature, relative to the range width.
 RESOLUTION = 1e-9
-
-#: Smooth shapes' parameters that are widths (sigma) or inverse widths (slopes).
-_WIDTHS = {"gaussian": (1,), "bell": (0,), "gaussian_product": (1, 3)}
-_SLOPES = {"sigmoid": (0,), "sigmoid_difference": (0, 2), "sigmoid_product": (0, 2)}
-_SPANS = {"s_shape": ((0, 1),), "z_shape": ((0, 1),), "pi_shape": ((0, 1), (2, 3))}
 
 
 def _fmt(x: float) -> str:
@@ -57,25 +50,10 @@ def range_problem(var: Variable) -> str | None:
     return None
 
 
-def _features(term: Term) -> Iterator[tuple[str, float]]:
-    """(how to say it, size) of each feature of a valid term."""
-    p = term.params
-    if term.shape in PIECEWISE_LINEAR_SHAPES:
-        for a, b in itertools.pairwise(p):
-            if b > a:
-                yield f"points {_fmt(a)} and {_fmt(b)} are {{}} apart", b - a
-    for i in _WIDTHS.get(term.shape, ()):
-        yield "its width is {}", p[i]
-    for i in _SLOPES.get(term.shape, ()):
-        yield f"its slope {_fmt(p[i])} makes it {{}} wide", 1.0 / abs(p[i])
-    for i, j in _SPANS.get(term.shape, ()):
-        yield f"its span {_fmt(p[i])} .. {_fmt(p[j])} is {{}}", p[j] - p[i]
-
-
 def term_problem(term: Term, var: Variable) -> str | None:
     """Why a valid ``term`` of ``var`` (whose range is fine) is too fine to evaluate, or None."""
     smallest = RESOLUTION * (var.high - var.low)
-    for what, size in _features(term):
+    for what, size in shape(term.shape).features(term.params):  # the shape registry's
         if size < smallest:
             return (
                 f"term {term.name!r}: {what.format(_fmt(size))}, below the engines' "

@@ -54,6 +54,8 @@ from fuzzkit.fuzzy.model import (
     Term,
     Variable,
 )
+from fuzzkit.fuzzy.shapes import Piece
+from fuzzkit.fuzzy.shapes import shape as shape_record
 
 PathPart: TypeAlias = str | int
 Path: TypeAlias = tuple[PathPart, ...]
@@ -166,60 +168,10 @@ def _check_term(term: Term, base: Path, n_inputs: int = 0) -> list[Issue]:
         if pwl:
             return [(where, f"{shape} points must be finite numbers, got {_fmt_list(p)}")]
         return [((*base, n), f"{n} must be a finite number, got {p[names.index(n)]}") for n in bad]
-    if shape == "triangle":
-        a, b, c = p
-        if not a <= b <= c:
-            return [(where, f"triangle points must be ordered a <= b <= c, got {_fmt_list(p)}")]
-        if not a < c:
-            return [
-                (
-                    where,
-                    f"triangle is degenerate (a == c), got {_fmt_list(p)}; "
-                    "use a singleton for a single point",
-                )
-            ]
-    elif shape == "trapezoid":
-        a, b, c, d = p
-        if not a <= b <= c <= d:
-            return [
-                (where, f"trapezoid points must be ordered a <= b <= c <= d, got {_fmt_list(p)}")
-            ]
-        if not a < d:
-            return [(where, f"trapezoid is degenerate (a == d), got {_fmt_list(p)}")]
-    elif shape in ("left_shoulder", "right_shoulder"):
-        if not p[0] < p[1]:
-            return [(where, f"{shape} points must be ordered a < b, got {_fmt_list(p)}")]
-    elif shape == "gaussian":
-        if not p[1] > 0:
-            return [((*base, "sigma"), f"gaussian sigma must be > 0, got {_fmt(p[1])}")]
-    elif shape == "bell":
-        out: list[Issue] = []
-        if not p[0] > 0:
-            out.append(((*base, "width"), f"bell width must be > 0, got {_fmt(p[0])}"))
-        if not p[1] > 0:
-            out.append(((*base, "slope"), f"bell slope must be > 0, got {_fmt(p[1])}"))
-        return out
-    elif shape == "sigmoid" and p[0] == 0:
-        return [((*base, "slope"), "sigmoid slope must be non-zero, got 0.0")]
-    elif shape == "gaussian_product":
-        return [
-            ((*base, n), f"gaussian_product {n} must be > 0, got {_fmt(v)}")
-            for n, v in (("sigma1", p[1]), ("sigma2", p[3]))
-            if not v > 0
-        ]
-    elif shape in ("s_shape", "z_shape"):
-        if not p[0] < p[1]:
-            return [((*base, "start"), f"{shape} needs start < end, got {_fmt_list(p)}")]
-    elif shape == "pi_shape":
-        if not (p[0] < p[1] and p[2] < p[3]):
-            return [((*base, "a"), f"pi_shape needs a < b and c < d, got {_fmt_list(p)}")]
-    elif shape in ("sigmoid_difference", "sigmoid_product"):
-        return [
-            ((*base, n), f"{shape} {n} must be non-zero, got 0.0")
-            for n, v in (("slope1", p[0]), ("slope2", p[2]))
-            if v == 0
-        ]
-    return []
+    return [
+        ((*base, key) if key != "points" else where, message)
+        for key, message in shape_record(shape).check(p)
+    ]
 
 
 def _check_linear(term: Term, base: Path, n_inputs: int) -> list[Issue]:
@@ -243,41 +195,16 @@ def _term_is_valid(term: Term) -> bool:
 
 # ---------------------------------------------------------------------------- coverage
 
-# A piece of a term's support: (low, low included, high, high included).
-_Piece: TypeAlias = tuple[float, bool, float, bool]
+
+def _support(term: Term) -> list[Piece]:
+    """Where a (valid) term's membership is > 0, exactly, as pieces of the real line.
+
+    Raises UnknownShapeError for a shape that is not registered (nothing is assumed).
+    """
+    return shape_record(term.shape).support(term.params)
 
 
-def _support(term: Term) -> list[_Piece]:
-    """Where a (valid) term's membership is > 0, exactly, as pieces of the real line."""
-    p = term.params
-    inf = math.inf
-    if term.shape == "triangle":
-        return [(p[0], p[0] == p[1], p[2], p[1] == p[2])]
-    if term.shape == "trapezoid":
-        return [(p[0], p[0] == p[1], p[3], p[2] == p[3])]
-    if term.shape == "left_shoulder":
-        return [(-inf, False, p[1], False)]
-    if term.shape == "right_shoulder":
-        return [(p[0], False, inf, False)]
-    if term.shape == "singleton":
-        return [(p[0], True, p[0], True)]
-    if term.shape == "s_shape":
-        return [(p[0], False, inf, False)]
-    if term.shape == "z_shape":
-        return [(-inf, False, p[1], False)]
-    if term.shape == "pi_shape":
-        return [(p[0], False, p[3], False)] if p[0] < p[3] else []
-    if term.shape == "sigmoid_difference":
-        a1, c1, a2, c2 = p
-        if a1 == a2:
-            return [] if c1 == c2 else [(-inf, False, inf, False)]
-        x0 = (a1 * c1 - a2 * c2) / (a1 - a2)  # where the two sigmoids are equal
-        return [(-inf, False, x0, False), (x0, False, inf, False)]
-    # gaussian, bell, sigmoid, gaussian_product, sigmoid_product: > 0 everywhere
-    return [(-inf, False, inf, False)]
-
-
-def _covered(x: float, pieces: Sequence[_Piece]) -> bool:
+def _covered(x: float, pieces: Sequence[Piece]) -> bool:
     for lo, lo_in, hi, hi_in in pieces:
         if (lo < x or (lo == x and lo_in)) and (x < hi or (x == hi and hi_in)):
             return True
@@ -685,7 +612,7 @@ def _check_defuzzifier(rb: RuleBase) -> list[Issue]:
             )
         elif not var.is_sugeno and d != "weighted_average":
             for term in var.terms:
-                if term.shape == "singleton":
+                if shape_record(term.shape).impulse:
                     out.append(
                         (
                             ("outputs", var.name, "terms", term.name, "shape"),

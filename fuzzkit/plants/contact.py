@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from fuzzkit.errors import ConfigError
 from fuzzkit.plants.environment import EnvObject
 
 Vec = npt.NDArray[np.float64]
@@ -67,6 +68,10 @@ class ToolModel:
     name: str = "probe"
     mass_kg: float = 0.0
     com_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        if not self.mass_kg >= 0.0:
+            raise ConfigError(f"mass_kg must be >= 0 (got {self.mass_kg})")
 
 
 def tool_weight(mass_kg: float, rotation: Vec) -> Vec:

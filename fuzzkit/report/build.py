@@ -17,6 +17,7 @@ planar plant's Python loop.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import IO, Any
@@ -171,7 +172,7 @@ def build_report(
         if rrd:
             (out / "rrd").mkdir()
 
-        from fuzzkit.studies.matching import matched_fuzzy_gains
+        from fuzzkit.studies.matching import matched_fuzzy_gains, small_signal_ratios
 
         surface = load_surface(rulebase)
         gains: dict[tuple[str, str], dict[str, float]] = {}
@@ -312,6 +313,7 @@ def build_report(
             swept,
             conds,
             rrd,
+            small_signal_ratios(surface),
         )
         from fuzzkit.report.specs import spec_rows, spec_section
 
@@ -406,6 +408,24 @@ def comparison_markdown(summaries: Mapping[Key, Mapping[str, Any]]) -> str:
     return "\n".join(lines)
 
 
+def default_gain_sentence(rulebase: str, ratios: tuple[float, float]) -> str:
+    """What the default gains give the fuzzy-PI running ``rulebase``, from its small-signal gain
+    ratios to the PI's ``(proportional, integral)`` (``studies.matching.small_signal_ratios``)."""
+
+    def times(r: float) -> str:
+        return "no" if r == 0.0 else f"{r:.3g}x the PI's"
+
+    p, i = ratios
+    if math.isclose(p, i, rel_tol=1e-3):
+        what = f"{times(p)} small-signal gain"
+    else:
+        what = f"{times(p)} proportional and {times(i)} integral small-signal gain"
+    return (
+        f"the fuzzy-PI has {what} (`{rulebase}`: its control surface's slopes at the origin, "
+        "where the saturated sum that the default gains are set for has slope 1)"
+    )
+
+
 def _markdown(
     plants: Sequence[str],
     rulebase: str,
@@ -420,6 +440,7 @@ def _markdown(
     swept: Sequence[ClaimResult],
     conds: Sequence[Condition],
     rrd: bool,
+    gain_ratios: tuple[float, float],
 ) -> str:
     plist = ", ".join(plants)
     everything = [*claims, *(c for c in swept if c.condition != NOMINAL)]
@@ -446,8 +467,8 @@ def _markdown(
         "## Gains",
         "",
         "Default gains are the hand-tuned `DEFAULT_GAINS` (like the paper's, by trial and error, "
-        "for 10 N/mm); with them the fuzzy-PI has 1.5x the PI's small-signal gain "
-        "(`macvicar_whelan`). Matched gains: the PI runs its defaults and the fuzzy-PI's "
+        f"for 10 N/mm); with them {default_gain_sentence(rulebase, gain_ratios)}. "
+        "Matched gains: the PI runs its defaults and the fuzzy-PI's "
         "scaling factors are derived from them through the rule base's measured slopes at the "
         "origin, so both have the same small-signal gain (docs/comparison.md). Tuned gains "
         "minimise `fuzzkit.studies.tuning.run_cost` "

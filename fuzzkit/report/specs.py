@@ -2,7 +2,7 @@
 
 A spec (``docs/controller.md``) is what ships; the report runs it as it is (its gains, limits,
 safety and sensor front end) on the same experiments as the gain sets, and says which loop ran
-it (a spec with a sensor front end runs in the Python loop).
+it (``docs/controller.md``, "what runs where").
 """
 
 from __future__ import annotations

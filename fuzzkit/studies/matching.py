@@ -95,6 +95,34 @@ def measure_slopes(surface: Surface, step: float = SLOPE_STEP) -> SurfaceSlopes:
     )
 
 
+def small_signal_gains(gains: Mapping[str, float], slopes: SurfaceSlopes) -> tuple[float, float]:
+    """A fuzzy-PI's small-signal PI gains ``(kp, ki)`` in m/N: ``Kx * Kp * dF/dde`` and
+    ``Kx * Ki * dF/de`` (module docstring); a slope below :data:`ZERO_SLOPE` counts as 0."""
+
+    def slope(s: float) -> float:
+        return s if abs(s) > ZERO_SLOPE else 0.0
+
+    return gains["kx"] * gains["kp"] * slope(slopes.de), gains["kx"] * gains["ki"] * slope(slopes.e)
+
+
+def small_signal_ratios(
+    surface: Surface,
+    fuzzy_gains: Mapping[str, float] | None = None,
+    pi_gains: Mapping[str, float] | None = None,
+) -> tuple[float, float]:
+    """The fuzzy-PI's small-signal gains relative to the PI's: ``(proportional, integral)``.
+
+    The fuzzy-PI runs ``surface`` with ``fuzzy_gains``, the PI ``pi_gains`` (defaults:
+    ``DEFAULT_GAINS``). The default gains make the fuzzy-PI the PI exactly on the saturated-sum
+    surface (``Kx * Kp = kp``, ``Kx * Ki = ki``, slopes 1), so with them the ratios are the
+    rule base's slopes at the origin: 1.5 for ``macvicar_whelan``.
+    """
+    fz = {**DEFAULT_GAINS["fuzzy-pi"], **(fuzzy_gains or {})}
+    pi = {**DEFAULT_GAINS["pi"], **(pi_gains or {})}
+    kp, ki = small_signal_gains(fz, measure_slopes(surface))
+    return kp / pi["kp"], ki / pi["ki"]
+
+
 @dataclass(frozen=True, slots=True)
 class MatchedGains:
     """Fuzzy-PI gains matched to a PI, and how: which gains could not be matched and why."""
@@ -107,8 +135,7 @@ class MatchedGains:
     @property
     def small_signal(self) -> tuple[float, float]:
         """The fuzzy-PI's small-signal PI gains ``(kp, ki)`` in m/N (compare with the PI's)."""
-        g = self.gains
-        return g["kx"] * g["kp"] * self.slopes.de, g["kx"] * g["ki"] * self.slopes.e
+        return small_signal_gains(self.gains, self.slopes)
 
     def describe(self) -> str:
         """One line for humans: the slopes and what was matched."""

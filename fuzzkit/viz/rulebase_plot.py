@@ -25,6 +25,7 @@ from fuzzkit.fuzzy.describe import (
 )
 from fuzzkit.fuzzy.membership import breakpoints, evaluate_term
 from fuzzkit.fuzzy.model import RuleBase, Variable
+from fuzzkit.fuzzy.shapes import shape
 from fuzzkit.viz.figures import figure_format, new_figure, save_figure
 
 #: Height of one membership-function panel (inches).
@@ -57,7 +58,7 @@ def _plot_variable(ax: Any, var: Variable, kind: str) -> None:
     colours = [colormaps["tab10"](i % 10) for i in range(len(var.terms))]
     for k, term in enumerate(var.terms):
         colour = colours[k]
-        if term.shape == "singleton":
+        if shape(term.shape).impulse:  # no area: a spike at its value
             value = term.params[0]
             ax.vlines(value, 0.0, 1.0, color=colour, lw=2)
             ax.plot([value], [1.0], "o", color=colour, ms=4)

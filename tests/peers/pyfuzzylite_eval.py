@@ -2,6 +2,7 @@
 
     python pyfuzzylite_eval.py eval ENGINE.fll POINTS.json   -> {"output": [values...]} on stdout
     python pyfuzzylite_eval.py export ENGINE.fll             -> the engine as pyfuzzylite writes FLL
+    python pyfuzzylite_eval.py version                       -> pyfuzzylite's version
 
 POINTS.json is {"input name": [values...]}; missing outputs are NaN, written as null.
 Integral defuzzifiers keep the resolution written in the file.
@@ -18,7 +19,11 @@ import numpy as np
 
 
 def main() -> None:
-    verb, path = sys.argv[1], sys.argv[2]
+    verb = sys.argv[1]
+    if verb == "version":
+        sys.stdout.write(fl.__version__ + "\n")
+        return
+    path = sys.argv[2]
     engine = fl.FllImporter().from_file(path)
     if verb == "export":
         sys.stdout.write(fl.FllExporter().to_string(engine))

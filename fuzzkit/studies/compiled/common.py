@@ -102,6 +102,7 @@ def controller_args(
     cp[P.C_DROPOUT_START] = math.nan if faults.dropout is None else faults.dropout[0]
     cp[P.C_DROPOUT_LENGTH] = 0.0 if faults.dropout is None else faults.dropout[1]
     cp[P.C_SPIKE_N] = faults.spike_n
+    _front_end_params(exp, cp)
     impl = "pi (compiled)"
     c_eval = None
     if generated_c is not None and controller == "fuzzy-pi":
@@ -135,22 +136,28 @@ def controller_args(
     )
 
 
+def _front_end_params(exp: Experiment, cp: FloatArray) -> None:
+    """The sensor front end's entries of ``cp`` (none without a spec or front end): the tool's
+    weight is taken at the scenario's fixed task rotation, as the Python loop passes it for a
+    plant that does not turn its tool."""
+    from fuzzkit.control.reference import front_end_from_spec
+
+    fe = None if exp.controller_spec is None else front_end_from_spec(exp.controller_spec)
+    cp[P.C_TARE_N] = 0.0 if fe is None else fe.tare_samples
+    weight = np.zeros(3) if fe is None else fe.weight(exp.scenario.rotation)
+    cp[P.C_WEIGHT : P.C_WEIGHT + 3] = weight
+    cp[P.C_ALPHA] = 1.0 if fe is None else fe.alpha
+
+
 def spec_gains(spec: ControllerSpec) -> tuple[str, dict[str, float]]:
     """The controller kind and the gains the compiled loop runs for a controller spec.
 
     Raises
     ------
     UnsupportedPlant
-        The spec needs what the compiled controller lacks: the sensor front end (tare, gravity
-        compensation, low-pass) or different gains per axis. The Python loop runs it.
+        The spec has different gains per axis (the compiled controller runs one set); the
+        Python loop runs it.
     """
-    from fuzzkit.control.reference import front_end_from_spec
-
-    if front_end_from_spec(spec) is not None:
-        raise UnsupportedPlant(
-            f"controller spec {spec.name!r} has a sensor front end (tare, tool or low-pass), "
-            "which the compiled loop does not model"
-        )
     first = spec.axes[0]
     if any((a.kp, a.ki, a.kx) != (first.kp, first.ki, first.kx) for a in spec.axes):
         raise UnsupportedPlant(

@@ -10,7 +10,9 @@ zeros). The plant kernels (:mod:`fuzzkit.studies.compiled.arm6_run` for arm6,
 these.
 
 The controller is :class:`fuzzkit.control.controllers.HybridForceController` (spike gate,
-debounced engagement, trip rule, back-off, sensor faults) over PI or fuzzy-PI axis
+debounced engagement, trip rule, back-off, sensor faults; the sensor front end of
+:mod:`fuzzkit.control.frontend`: tare screened by the gate, gravity compensation with the
+scenario's fixed tool rotation, first-order low-pass) over PI or fuzzy-PI axis
 controllers, the fuzzy surface being a double lookup table
 (:mod:`fuzzkit.studies.compiled.table`) or, when ``c_eval`` is a ctypes function, the generated
 C itself (:mod:`fuzzkit.studies.compiled.generated_c`). Its state lives in two arrays made by
@@ -42,7 +44,10 @@ C_ENGAGE_SAMPLES, C_HOLD, C_PERIOD = 12, 13, 14
 C_SENSOR_DELAY, C_COMMAND_DELAY = 15, 16  # the fault's delay included in the sensor delay
 C_DROPOUT_START, C_DROPOUT_LENGTH, C_SPIKE_N = 17, 18, 19
 C_SPIKE_GATE, C_SPIKE_CONFIRM = 20, 21
-N_CP = 22
+# The sensor front end: tare samples (0: none), the tool's weight as the sensor reads it (the
+# compiled plants never turn the tool, so it is constant), the low-pass gain (1: no filter)
+C_TARE_N, C_WEIGHT, C_ALPHA = 22, 23, 26
+N_CP = 27
 
 # Scalar results (``out_scalars``)
 R_FAULTS, R_TRIPPED, R_TRIP_TIME, R_ENGAGED_TIME = 0, 1, 2, 3
@@ -51,12 +56,14 @@ N_RESULTS = 4
 # Controller scalar state (``cs``); flags are 0.0 / 1.0, times NaN until they happen
 CS_FAULTS, CS_ENGAGED, CS_ENGAGE_COUNT, CS_HAS_ACCEPTED, CS_REJECTED_RUN = 0, 1, 2, 3, 4
 CS_TRIPPED, CS_TRIP_TIME, CS_OVER, CS_CTRL_T, CS_ENGAGED_AT, CS_HAS_E_LAST = 5, 6, 7, 8, 9, 10
-N_CS = 11
+CS_TARING, CS_TARE_COUNT, CS_HAS_FILTERED = 11, 12, 13
+N_CS = 14
 
 # Controller vector state (rows of ``cv``)
 V_U, V_E, V_DE, V_DU, V_E_LAST, V_AX_U, V_AX_PREV, V_AX_HAS_PREV = 0, 1, 2, 3, 4, 5, 6, 7
 V_BACKOFF, V_BACKOFF_DIR, V_ACCEPTED = 8, 9, 10
-N_CV = 11
+V_BIAS, V_TARE_SUM, V_FILTERED = 11, 12, 13
+N_CV = 14
 
 
 @jit
@@ -66,6 +73,7 @@ def controller_state(cp: FloatArray) -> tuple[FloatArray, FloatArray]:
     cs[CS_ENGAGED] = 1.0 if math.isnan(cp[C_ENGAGE_THR]) else 0.0
     cs[CS_TRIP_TIME] = math.nan
     cs[CS_ENGAGED_AT] = math.nan
+    cs[CS_TARING] = 1.0 if cp[C_TARE_N] > 0.0 else 0.0
     return cs, np.zeros((N_CV, 3))
 
 
@@ -186,28 +194,23 @@ def controller_step(
     for i in range(3):
         if selection[i] > 0.0 and not math.isfinite(consumed[i]):
             valid = False
-    if not valid:
+    all_finite = True
+    for i in range(3):
+        if not math.isfinite(consumed[i]):
+            all_finite = False
+    taring = cs[CS_TARING] > 0.0
+    if not valid or (taring and not all_finite):
         cs[CS_FAULTS] += 1.0
         cs[CS_ENGAGE_COUNT] = 0.0
+    elif taring:
+        _tare_step(cp, consumed, cs, cv)
     else:
         fmax = 0.0
         for i in range(3):
-            f[i] = consumed[i] if math.isfinite(consumed[i]) else 0.0
+            c = consumed[i] - cp[C_WEIGHT + i] - cv[V_BIAS][i]
+            f[i] = c if math.isfinite(c) else 0.0
             fmax = max(fmax, abs(f[i]))
-        # spike gate (HybridForceController._plausible)
-        plausible = True
-        if cs[CS_HAS_ACCEPTED] > 0.0 and cs[CS_REJECTED_RUN] < spike_confirm:
-            jump = 0.0
-            for i in range(3):
-                jump = max(jump, abs(f[i] - accepted[i]))
-            if jump > cp[C_SPIKE_GATE]:
-                cs[CS_REJECTED_RUN] += 1.0
-                plausible = False
-        if plausible:
-            for i in range(3):
-                accepted[i] = f[i]
-            cs[CS_HAS_ACCEPTED] = 1.0
-            cs[CS_REJECTED_RUN] = 0.0
+        plausible = _gate(cp, f, cs, accepted)
         tripped = cs[CS_TRIPPED] > 0.0
         if not tripped:
             # the trip sees every finite sample, gated or not
@@ -229,6 +232,10 @@ def controller_step(
                 for i in range(3):
                     backoff[i] = backoff[i] + step * backoff_dir[i]
         else:
+            _filter(cp, f, cs, cv)
+            fmax = 0.0
+            for i in range(3):
+                fmax = max(fmax, abs(f[i]))
             go = True
             if cs[CS_ENGAGED] == 0.0:
                 cs[CS_ENGAGE_COUNT] = cs[CS_ENGAGE_COUNT] + 1.0 if fmax > engage_thr else 0.0
@@ -244,6 +251,65 @@ def controller_step(
         correction[i] = selection[i] * u[i] + backoff[i]
     if cs[CS_ENGAGED] > 0.0 and math.isnan(cs[CS_ENGAGED_AT]):
         cs[CS_ENGAGED_AT] = t_s
+
+
+@jit
+def _gate(cp: FloatArray, f: FloatArray, cs: FloatArray, accepted: FloatArray) -> bool:
+    """The spike gate (``HybridForceController._plausible``): True when ``f`` is accepted."""
+    if cs[CS_HAS_ACCEPTED] > 0.0 and cs[CS_REJECTED_RUN] < int(cp[C_SPIKE_CONFIRM]):
+        jump = 0.0
+        for i in range(3):
+            jump = max(jump, abs(f[i] - accepted[i]))
+        if jump > cp[C_SPIKE_GATE]:
+            cs[CS_REJECTED_RUN] += 1.0
+            return False
+    for i in range(3):
+        accepted[i] = f[i]
+    cs[CS_HAS_ACCEPTED] = 1.0
+    cs[CS_REJECTED_RUN] = 0.0
+    return True
+
+
+@jit
+def _tare_step(cp: FloatArray, raw: FloatArray, cs: FloatArray, cv: FloatArray) -> None:
+    """One tare sample (``HybridForceController._tare``): screened by the gate, a confirmed
+    new level restarts the tare, the N-th accepted sample sets the bias."""
+    c = np.empty(3)
+    for i in range(3):
+        c[i] = raw[i] - cp[C_WEIGHT + i]
+    confirmed = cs[CS_HAS_ACCEPTED] > 0.0 and cs[CS_REJECTED_RUN] >= int(cp[C_SPIKE_CONFIRM])
+    if not _gate(cp, c, cs, cv[V_ACCEPTED]):
+        cs[CS_FAULTS] += 1.0
+        return
+    total = cv[V_TARE_SUM]
+    if confirmed:
+        total[:] = 0.0
+        cs[CS_TARE_COUNT] = 0.0
+    for i in range(3):
+        total[i] = total[i] + c[i]
+    cs[CS_TARE_COUNT] += 1.0
+    if cs[CS_TARE_COUNT] >= cp[C_TARE_N]:
+        for i in range(3):
+            cv[V_BIAS][i] = total[i] / cs[CS_TARE_COUNT]
+        cs[CS_TARING] = 0.0
+        cs[CS_HAS_FILTERED] = 0.0
+        cs[CS_HAS_ACCEPTED] = 0.0  # the bias moved: the gate starts afresh
+        cs[CS_REJECTED_RUN] = 0.0
+
+
+@jit
+def _filter(cp: FloatArray, f: FloatArray, cs: FloatArray, cv: FloatArray) -> None:
+    """The low-pass on an accepted sample, in place (``FrontEnd.filter``)."""
+    alpha = cp[C_ALPHA]
+    y = cv[V_FILTERED]
+    if cs[CS_HAS_FILTERED] == 0.0 or alpha == 1.0:
+        for i in range(3):
+            y[i] = f[i]
+    else:
+        for i in range(3):
+            y[i] = y[i] + alpha * (f[i] - y[i])
+            f[i] = y[i]
+    cs[CS_HAS_FILTERED] = 1.0
 
 
 @jit
