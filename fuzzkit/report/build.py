@@ -254,7 +254,9 @@ def build_report(
                         rows.append((k, m))
                         bar.update(1)
                     study[(ctrl, label)] = rows
-        write_atomic(out / "stiffness.png", figure_bytes(stiffness_figure(study, "planar"), dpi=FIGURE_DPI))
+        write_atomic(
+            out / "stiffness.png", figure_bytes(stiffness_figure(study, "planar"), dpi=FIGURE_DPI)
+        )
 
         # The claims at every latency and stiffness, for the fair gains sets.
         conds = conditions(verdict_latencies, stiffnesses_n_per_mm)
