@@ -4,6 +4,12 @@ Compiled code is cached on disk next to the module (numba ``cache=True``), so on
 call after an install (or a change of the source) pays the compilation; later processes load it.
 Kept typed here so that ``mypy --strict`` sees through the decorator.
 
+numba stamps a cached kernel with the content of the kernel's own source file only, so an edit to
+a compiled function it calls in another module (``studies/compiled/period.py`` called from
+``arm6_run.py``) would silently load the stale kernel. fuzzkit's kernels are therefore stamped
+with a fingerprint of every fuzzkit source file as well (:func:`source_fingerprint`, read once
+per process): any edit to the package recompiles them, and nothing else's cache is touched.
+
 Ctrl-C is held while numba compiles or loads a kernel (numba's compiler lock is
 held): a KeyboardInterrupt raised inside the compiler corrupts LLVM's memory. See
 :func:`fuzzkit.progress.interrupt_shield`; the listener below is numba's documented event API.
@@ -11,11 +17,16 @@ held): a KeyboardInterrupt raised inside the compiler corrupts LLVM's memory. Se
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import functools
+import hashlib
+import importlib.util
+import os
+from collections.abc import Callable, Iterable
+from pathlib import Path
 from typing import Any, TypeVar, cast
 
 import numba
-from numba.core import event
+from numba.core import caching, event
 
 from fuzzkit.progress import enter_interrupt_shield, leave_interrupt_shield
 
@@ -40,6 +51,72 @@ class _ShieldWhileCompiling(event.Listener):
 _SHIELD = _ShieldWhileCompiling()
 for _kind in COMPILER_EVENTS:
     event.register(_kind, _SHIELD)  # type: ignore[no-untyped-call]
+
+
+#: The folders of the installed package: ``fuzzkit/`` and the folders mapped into it.
+_MAPPED = ("fuzzkit.codegen", "fuzzkit.planar_sim")
+
+
+def package_roots() -> list[Path]:
+    """The source folders of the installed package (``fuzzkit`` and its mapped folders)."""
+    roots = [Path(__file__).resolve().parent]
+    for name in _MAPPED:
+        spec = importlib.util.find_spec(name)
+        for location in (spec.submodule_search_locations or []) if spec is not None else []:
+            roots.append(Path(location).resolve())
+    return roots
+
+
+def fingerprint_of(roots: Iterable[Path]) -> str:
+    """sha256 over the relative path and content of every ``.py`` file under ``roots``."""
+    digest = hashlib.sha256()
+    for root in roots:
+        for path in sorted(root.rglob("*.py")):
+            digest.update(path.relative_to(root).as_posix().encode("utf-8") + b"\0")
+            digest.update(path.read_bytes() + b"\0")
+    return digest.hexdigest()
+
+
+@functools.cache
+def source_fingerprint() -> str:
+    """The fingerprint of this installation's sources (:func:`fingerprint_of` its roots)."""
+    return fingerprint_of(package_roots())
+
+
+def _in_package(py_file: str) -> bool:
+    path = Path(os.path.abspath(py_file))
+    return any(path.is_relative_to(root) for root in package_roots())
+
+
+class _PackageStamp:
+    """Locator mixin: valid for a fuzzkit source file, stamped with the whole package's
+    fingerprint besides numba's own stamp of the file."""
+
+    def get_source_stamp(self) -> Any:
+        return (super().get_source_stamp(), source_fingerprint())  # type: ignore[misc]
+
+    @classmethod
+    def from_function(cls, py_func: Any, py_file: str) -> Any:
+        if not _in_package(py_file):
+            return None
+        return super().from_function(py_func, py_file)  # type: ignore[misc]
+
+
+def _install_locators() -> None:
+    """Put the package-stamped twins of numba's source-file locators first (once), in numba's
+    order: a user-provided ``NUMBA_CACHE_DIR``, the module's ``__pycache__``, the user cache."""
+    # numba 0.68 made the names public; older releases keep the underscore
+    impl: Any = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl")  # noqa: B009
+    if any(issubclass(c, _PackageStamp) for c in impl._locator_classes):
+        return
+    ours = []
+    for name in ("UserProvidedCacheLocator", "InTreeCacheLocator", "UserWideCacheLocator"):
+        base = getattr(caching, name, None) or getattr(caching, "_" + name)
+        ours.append(type("Fuzzkit" + name, (_PackageStamp, base), {}))
+    impl._locator_classes = ours + list(impl._locator_classes)
+
+
+_install_locators()
 
 
 def jit(fn: F) -> F:

@@ -39,6 +39,7 @@ COMMAND_MODULES = (
     "tuning",
     "demo",
     "sweep",
+    "stability",
 )
 
 EXIT_OK = 0

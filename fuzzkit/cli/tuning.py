@@ -109,6 +109,19 @@ def register(subparsers: Any) -> None:
         "on every experiment x stiffness case; experiment = no worse on each experiment's "
         "mean over the stiffnesses (a compromise: may be worse at some stiffness)",
     )
+    tune.add_argument(
+        "--certify",
+        default=None,
+        metavar="K1,K2,...",
+        help="search only gains certified stable (fuzzkit stability, docs/stability.md) at "
+        "each of these contact stiffnesses (N/mm), at every --certify-latency",
+    )
+    tune.add_argument(
+        "--certify-latency",
+        default="0:0,1:1",
+        metavar="S:C[,S:C...]",
+        help="with --certify: the sensor:command delays (periods) to certify at",
+    )
     tune.add_argument("--quiet", action="store_true", help="no progress bar")
     tune.set_defaults(handler=_tune)
 
@@ -207,6 +220,9 @@ def _tune(args: argparse.Namespace) -> int:
     ks = parse_stiffness(args.stiffness)
     latencies = parse_latencies(args.latency) if args.latency else None
     experiments, controller, rulebase, loop = _tuning_target(args)
+    constraint = (
+        _certified_over(args, experiments[0], controller, rulebase) if args.certify else None
+    )
     out = Path(args.out)
     check_output_path(out, "gains file")
     if args.spec_out:
@@ -228,7 +244,21 @@ def _tune(args: argparse.Namespace) -> int:
             latencies=latencies,
             loop=loop,
             scheduler=args.scheduler,
+            constraint=constraint,
         )
+    if constraint is not None:
+        where = (
+            f"{'/'.join(f'{k:g}' for k in constraint.stiffnesses_n_per_mm)} N/mm x latency "
+            f"{_latencies(constraint.latencies)} periods ({constraint.plant})"
+        )
+        if not constraint(result.gains):
+            print(
+                f"fuzzkit: no certified gains: no candidate certified at {where} beat the "
+                f"defaults, and the defaults are not certified there; {out} not written",
+                file=sys.stderr,
+            )
+            return 1
+        print(f"certified stable at {where}: only certified gains were searched")
     _, kept = write_gains(out, result.to_entry(), merge=not args.replace)
     print(
         f"tuned {result.controller} on {' '.join(result.experiments)} ({result.plant}, "
@@ -310,6 +340,24 @@ def _write_spec(args: argparse.Namespace, result: Any) -> None:
     )
     require_valid(spec)
     write_atomic(Path(args.spec_out), dump_spec(spec, header))
+
+
+def _certified_over(args: argparse.Namespace, first: Any, controller: str, rulebase: str) -> Any:
+    """The ``--certify`` predicate (``fuzzkit.analysis.region.CertifiedOver``) on the first
+    tuned experiment (its period, contact damping and sensor)."""
+    from fuzzkit.analysis.region import CertifiedOver
+    from fuzzkit.cli.sweep import parse_latencies
+    from fuzzkit.studies.experiments import experiment
+
+    ks = parse_stiffness(args.certify)
+    return CertifiedOver(
+        experiment(first) if isinstance(first, str) else first,
+        controller,
+        args.plant,
+        tuple(ks),
+        tuple(parse_latencies(args.certify_latency)),
+        rulebase,
+    )
 
 
 def _latencies(pairs: Any) -> str:

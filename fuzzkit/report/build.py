@@ -25,6 +25,7 @@ from typing import IO, Any
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import staged_folder, write_atomic
 from fuzzkit.progress import progress_bar
+from fuzzkit.report.certified import latency_lines, stiffness_lines
 from fuzzkit.report.grid import Condition, RunCache, conditions, grid_summaries, spec
 from fuzzkit.report.tuned import (
     TuningSetup,
@@ -334,6 +335,7 @@ def build_report(
             log,
             tuple(latency_factors or LATENCY_FACTORS),
             tuple(latency_delays or LATENCY_DELAYS),
+            rulebase,
         )
         write_atomic(out / "report.md", text)
     return final / "report.md"
@@ -350,6 +352,7 @@ def _latency_section(
     stream: IO[str] | None,
     factors: tuple[float, ...],
     delays: tuple[int, ...],
+    rulebase: str = "macvicar_whelan",
 ) -> str:
     """Run the latency sweep, write ``latency.png`` and return the report's Latency section."""
     from fuzzkit.studies.experiments import DEFAULT_LATENCY
@@ -386,6 +389,7 @@ def _latency_section(
             b = m.boundary()[factor]
             cells.append("unstable at 0" if b is None else f">= {b}" if b == top else str(b))
         md.append(f"| {factor:g} | " + " | ".join(cells) + " |")
+    md += latency_lines(maps, rulebase)
     md.append("")
     return "\n".join(md)
 
@@ -615,6 +619,7 @@ def _markdown(
                 f"{fmt(m['overshoot_pct'], ' %', 1)}, {fmt(m['settling_time_s'], ' s')}{tr}"
             )
         md.append(f"| {k:g} | " + " | ".join(cells) + " |")
+    md += stiffness_lines(study, gains, rulebase)
     md += ["", "## Recordings", ""]
     if rrd:
         md.append(

@@ -58,10 +58,13 @@ class _Pricer:
         callback: Callable[[Progress], None] | None,
         admit: str = "case",
         scheduler: str | None = None,
+        constraint: Callable[[Mapping[str, float]], bool] | None = None,
     ) -> None:
         from fuzzkit.studies.batch import BatchExecutor
 
         self.problem = problem
+        self.constraint = constraint
+        self.rejected = 0  # gain sets the constraint refused
         self.budget = budget
         self.admit = admit
         self.cheapest: Evaluation | None = None
@@ -94,8 +97,14 @@ class _Pricer:
             self.executor.close(abort)
             self.executor = None
 
-    def price(self, gains_list: Sequence[Mapping[str, float]]) -> list[Evaluation]:
-        """Price ``gains_list`` (memoised; new points beyond the budget are priced inf)."""
+    def price(
+        self, gains_list: Sequence[Mapping[str, float]], constrained: bool = True
+    ) -> list[Evaluation]:
+        """Price ``gains_list`` (memoised; new points beyond the budget are priced inf).
+
+        With a ``constraint`` (and ``constrained``), a gain set it rejects is not simulated:
+        it is priced inf with no case costs, so it is never admissible.
+        """
         keyed = [
             tuple(round(math.log10(g[n]), 12) for n in self.problem.space.names) for g in gains_list
         ]
@@ -106,15 +115,26 @@ class _Pricer:
         todo = todo[: max(0, self.remaining)]
         fresh = [dict(gains_list[i]) for i in todo]
         if fresh:
-            if self.executor is not None:
-                results = self.executor.map(
-                    worker_costs, [(self.key, self.problem, g) for g in fresh]
+            check = self.constraint if constrained else None
+            allowed = [check is None or check(g) for g in fresh]
+            run = [g for g, ok in zip(fresh, allowed, strict=True) if ok]
+            if not run:
+                simulated: list[tuple[float, ...]] = []
+            elif self.executor is not None:
+                simulated = self.executor.map(
+                    worker_costs, [(self.key, self.problem, g) for g in run]
                 )
             else:
                 if self.runner is None:  # pragma: no cover - set in __init__ without a pool
                     raise RuntimeError("no runner for in-process pricing")
-                results = [self.runner.case_costs(g) for g in fresh]
-            for i, g, costs in zip(todo, fresh, results, strict=True):
+                simulated = [self.runner.case_costs(g) for g in run]
+            it = iter(simulated)
+            for i, g, ok in zip(todo, fresh, allowed, strict=True):
+                if not ok:  # rejected, not simulated: remembered, not counted in the budget
+                    self.memo[keyed[i]] = Evaluation(g, (), (), math.inf)
+                    self.rejected += 1
+                    continue
+                costs = next(it)
                 ev = Evaluation(
                     g, costs, self.problem.experiment_costs(costs), self.problem.aggregate(costs)
                 )
@@ -184,6 +204,7 @@ def optimise(
     baseline: Mapping[str, float] | None = None,
     admit: str = "case",
     scheduler: str | None = None,
+    constraint: Callable[[Mapping[str, float]], bool] | None = None,
 ) -> TuneResult:
     """Search ``problem.space`` for the gain set of least cost (see the module docstring).
 
@@ -199,6 +220,9 @@ def optimise(
     admit : ``case`` (no worse than the baseline on every experiment x stiffness case) or
         ``experiment`` (no worse on each experiment's mean over the stiffnesses).
     scheduler : a ``dask.distributed`` scheduler address: price the candidates on its workers.
+    constraint : when given, only gain sets it accepts are simulated and may be returned
+        (``fuzzkit tune --certify``: certified stable); the baseline is priced regardless and
+        is returned when no accepted candidate beats it (the caller checks it).
 
     Returns
     -------
@@ -227,10 +251,11 @@ def optimise(
         raise ConfigError(f"baseline gains lack {', '.join(missing)}")
     lo, hi = space.log_bounds
     ndim = len(space.names)
-    pricer = _Pricer(problem, nworkers, budget, callback, admit, scheduler)
+    pricer = _Pricer(problem, nworkers, budget, callback, admit, scheduler, constraint)
     interrupted = False
     try:
-        pricer.baseline = pricer.price([{n: base_gains[n] for n in space.names}])[0]
+        baseline_gains = {n: base_gains[n] for n in space.names}
+        pricer.baseline = pricer.price([baseline_gains], constrained=False)[0]
         pricer.stage = "global"
         pop, generations = _plan(budget, ndim)
         rng = np.random.default_rng(seed)
@@ -350,6 +375,7 @@ def tune(
     latencies: Sequence[tuple[int, int]] | None = None,
     loop: str = "auto",
     scheduler: str | None = None,
+    constraint: Callable[[Mapping[str, float]], bool] | None = None,
 ) -> TuneResult:
     """Find the gains of least cost for ``controller`` over experiments and stiffnesses.
 
@@ -375,6 +401,7 @@ def tune(
         experiment's own).
     loop : ``auto`` (compiled where the plant has a compiled loop), ``compiled`` or ``python``.
     scheduler : a ``dask.distributed`` scheduler address to price the candidates on.
+    constraint : only gain sets it accepts are searched (see :func:`optimise`).
 
     Returns
     -------
@@ -405,7 +432,9 @@ def tune(
         latencies=latencies,
         loop=loop,
     )
-    return optimise(problem, budget, seed, workers, callback, baseline, admit, scheduler)
+    return optimise(
+        problem, budget, seed, workers, callback, baseline, admit, scheduler, constraint
+    )
 
 
 def progress_callback(bar: Any) -> Callable[[Progress], None]:

@@ -1,0 +1,324 @@
+"""The certified region: every cell of a stiffness x latency grid, certified or not, with the
+model it was certified for (the JSON of ``fuzzkit stability``)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from functools import lru_cache
+from typing import Any
+
+from fuzzkit.analysis.certificate import MIN_MARGIN, certify
+from fuzzkit.analysis.fuzzy_bounds import StructureError, gradient_bounds, phi_bounds
+from fuzzkit.analysis.inner_loop import InnerLoop, identify
+from fuzzkit.analysis.loop_model import AxisLoop, noise_std, vertex_matrices
+from fuzzkit.errors import ConfigError
+from fuzzkit.studies.experiments import DEFAULT_GAINS
+from fuzzkit.studies.task import Experiment
+
+CONTROLLERS = ("pi", "fuzzy-pi")
+
+#: Default lower end of the contact sector: the certificate holds while the spring-damper force
+#: the contact would have stays above (1 - 1/SIGMA_MIN) times the set point (docs/stability.md).
+SIGMA_MIN = 0.1
+
+#: The settling band of the simulated check (N): a settled force has its mean within it of the
+#: set point and its standard deviation below it.
+BAND_N = 0.5
+#: A certified cell must also keep the force's noise-driven standard deviation, predicted by
+#: the nominal model, below this share of the band (a stable loop can still amplify the
+#: sensor noise past it: 4x the default PI at 10 N/mm without latency, about 1 N).
+NOISE_SHARE = 0.5
+
+METHOD = (
+    "common quadratic Lyapunov function over the vertices of the loop's parameter box "
+    "(contact sector, fuzzy gain, inner-loop uncertainty), LMI solved by cvxpy/Clarabel, "
+    f"verified in numpy with a decay margin >= {MIN_MARGIN:g} per period"
+)
+
+
+@dataclass(frozen=True, slots=True)
+class FuzzyPart:
+    """How the fuzzy surface enters the linear model: ``phi`` on both terms (PI-like
+    structure) or ``phi`` on the error term and ``phi_de`` on the change of error."""
+
+    kind: str  # "phi" | "gradient"
+    phi: tuple[float, float]
+    phi_de: tuple[float, float] | None
+    rho: float
+    details: dict[str, Any] = field(default_factory=dict)
+
+
+@lru_cache(maxsize=8)
+def fuzzy_part(rulebase: str, rho: float = 1.0) -> FuzzyPart:
+    """The bounds of ``rulebase``'s lookup table over ``[-rho, rho]^2`` (exact, from its
+    triangles): the PI-like factorisation where it holds, else the gradient bounds."""
+    from fuzzkit.studies.compiled.loop import compiled_table
+
+    t = compiled_table(rulebase)
+    try:
+        b = phi_bounds(t.bp0, t.bp1, t.values, t.splits, rho)
+    except StructureError as exc:
+        g = gradient_bounds(t.bp0, t.bp1, t.values, t.splits, rho)
+        return FuzzyPart(
+            "gradient",
+            g.a_range,
+            g.b_range,
+            g.rho,
+            {
+                "method": g.method,
+                "why": str(exc),
+                "dF_de": list(g.a_range),
+                "dF_dde": list(g.b_range),
+                "table": t.label,
+            },
+        )
+    return FuzzyPart(
+        "phi",
+        (b.low, b.high),
+        None,
+        b.rho,
+        {
+            "method": b.method,
+            "phi": [b.low, b.high],
+            "small_signal_phi": b.small_signal,
+            "rounding_residual": b.residual,
+            "table": t.label,
+        },
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class Cell:
+    """One grid cell's verdict."""
+
+    stiffness_n_per_mm: float
+    latency: tuple[int, int]
+    certified: bool
+    margin: float
+    solver_status: str
+    stable: bool = False
+    noise_std_n: float = math.nan
+    contact_sector: tuple[float, float] | None = None
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON form (a NaN or infinite number becomes null)."""
+        return {
+            "stiffness_n_per_mm": self.stiffness_n_per_mm,
+            "latency_periods": list(self.latency),
+            "certified": self.certified,
+            "margin": _finite(self.margin),
+            "lyapunov_certificate": self.stable,
+            "noise_std_n": _finite(self.noise_std_n),
+            "contact_sector": None if self.contact_sector is None else list(self.contact_sector),
+            "solver_status": self.solver_status,
+        }
+
+
+def _finite(x: float) -> float | None:
+    return x if math.isfinite(x) else None
+
+
+@dataclass(frozen=True, slots=True)
+class Region:
+    """The verdict of every cell and the model they were judged on."""
+
+    model: dict[str, Any]
+    cells: tuple[Cell, ...]
+    method: str = METHOD
+
+    def as_dict(self) -> dict[str, Any]:
+        """The JSON of ``fuzzkit stability --json``."""
+        return {
+            "method": self.method,
+            "model": self.model,
+            "cells": [c.as_dict() for c in self.cells],
+        }
+
+
+def effective_gains(
+    controller: str, gains: Mapping[str, float] | None
+) -> tuple[dict[str, float], float, float]:
+    """The controller's gains (defaults updated by ``gains``) and the incremental law's
+    ``(kp, ki)`` in m/N: PI's own, the fuzzy-PI's ``Kx*Kp`` and ``Kx*Ki``."""
+    if controller not in CONTROLLERS:
+        raise ConfigError(f"unknown controller {controller!r} (expected pi or fuzzy-pi)")
+    g = dict(DEFAULT_GAINS[controller])
+    g.update(gains or {})
+    if controller == "pi":
+        return g, g["kp"], g["ki"]
+    return g, g["kx"] * g["kp"], g["kx"] * g["ki"]
+
+
+def axis_loop(
+    exp: Experiment,
+    controller: str,
+    gains: Mapping[str, float] | None,
+    inner: InnerLoop,
+    fuzzy: FuzzyPart | None,
+    stiffness_n_per_m: float,
+    latency: tuple[int, int],
+    sigma_min: float = SIGMA_MIN,
+) -> AxisLoop:
+    """The linear model of a force axis of ``exp`` at one stiffness and latency."""
+    _, kp, ki = effective_gains(controller, gains)
+    scn = exp.scenario
+    phi, phi_de = (1.0, 1.0), None
+    if controller == "fuzzy-pi":
+        if fuzzy is None:
+            raise ConfigError("fuzzy-pi needs the rule base's bounds")
+        phi, phi_de = fuzzy.phi, fuzzy.phi_de
+    return AxisLoop(
+        period_s=scn.period_s,
+        stiffness_n_per_m=stiffness_n_per_m,
+        damping_n_s_per_m=scn.contact.damping_n_s_per_m,
+        sensor_delay=latency[0],
+        command_delay=latency[1],
+        filter_cutoff_hz=scn.sensor.cutoff_hz,
+        kp=kp,
+        ki=ki,
+        phi=phi,
+        phi_de=phi_de,
+        inner_a=inner.a_range,
+        inner_g=inner.g_range,
+        inner_q=inner.q_range,
+        contact_lag=inner.contact_lag,
+        sigma_min=sigma_min,
+    )
+
+
+def certify_cell(
+    exp: Experiment,
+    controller: str,
+    gains: Mapping[str, float] | None,
+    inner: InnerLoop,
+    fuzzy: FuzzyPart | None,
+    stiffness_n_per_mm: float,
+    latency: tuple[int, int],
+    sigma_min: float,
+    noise_n: float,
+) -> Cell:
+    """Certify one cell: with the contact sector ``[sigma_min, 1]`` (contact may be lost), else
+    with contact held (``[1, 1]``); ``Cell.contact_sector`` says which one holds.
+
+    Contact held is tried first: its vertices are a subset of the wider sector's, so when it
+    fails the wider one fails too and is not tried.
+    """
+    loop = axis_loop(
+        exp, controller, gains, inner, fuzzy, stiffness_n_per_mm * 1e3, latency, sigma_min
+    )
+    held = replace(loop, sigma_min=1.0)
+    cert = certify(vertex_matrices(held), vertex_matrices(held, nominal_plant=True))
+    sector = (1.0, 1.0)
+    if cert.certified and sigma_min < 1.0:
+        wide = certify(vertex_matrices(loop), vertex_matrices(loop, nominal_plant=True))
+        if wide.certified:
+            cert, sector = wide, (sigma_min, 1.0)
+    noise = noise_std(loop, noise_n)
+    quiet = noise <= NOISE_SHARE * BAND_N
+    return Cell(
+        float(stiffness_n_per_mm),
+        (int(latency[0]), int(latency[1])),
+        cert.certified and quiet,
+        cert.margin,
+        cert.solver_status,
+        cert.certified,
+        noise,
+        sector if cert.certified else None,
+    )
+
+
+def certify_region(
+    exp: Experiment,
+    controller: str,
+    plant: str,
+    stiffnesses_n_per_mm: Sequence[float],
+    latencies: Sequence[tuple[int, int]],
+    *,
+    gains: Mapping[str, float] | None = None,
+    rulebase: str = "macvicar_whelan",
+    fuzzy_region: float = 1.0,
+    sigma_min: float = SIGMA_MIN,
+) -> Region:
+    """Certify every (stiffness, latency) cell for ``controller`` on ``plant``'s inner loop."""
+    all_gains, kp, ki = effective_gains(controller, gains)
+    inner = identify(plant)
+    fuzzy = fuzzy_part(rulebase, fuzzy_region) if controller == "fuzzy-pi" else None
+    noise_n = exp.scenario.sensor.noise_std_n
+    cells = []
+    for k in stiffnesses_n_per_mm:
+        for lat in latencies:
+            cells.append(
+                certify_cell(exp, controller, gains, inner, fuzzy, k, lat, sigma_min, noise_n)
+            )
+    setpoints = [exp.setpoints[i] for i in range(3) if exp.selection[i]]
+    model: dict[str, Any] = {
+        "scenario": exp.name,
+        "controller": controller,
+        "gains": all_gains,
+        "incremental_gains_m_per_n": {"kp": kp, "ki": ki},
+        "plant": plant,
+        "period_s": exp.scenario.period_s,
+        "contact_damping_n_s_per_m": exp.scenario.contact.damping_n_s_per_m,
+        "sensor_filter_cutoff_hz": exp.scenario.sensor.cutoff_hz,
+        "contact_sector": [sigma_min, 1.0],
+        "contact_sector_fallback": [1.0, 1.0],
+        "contact_sector_holds_while_force_above_n": [
+            (1.0 - 1.0 / sigma_min) * sp for sp in setpoints
+        ],
+        "inner_loop": inner.as_dict(),
+        "sensor_noise_std_n": noise_n,
+        "certified_means": (
+            "the Lyapunov certificate holds and the nominal model predicts a noise-driven "
+            f"force standard deviation <= {NOISE_SHARE * BAND_N:g} N"
+        ),
+        "not_covered": ["impact", "friction", "joint saturation", "correction and rate limits"],
+    }
+    if fuzzy is not None:
+        model["fuzzy"] = {
+            "rulebase": rulebase,
+            "bounds": fuzzy.kind,
+            "region": {
+                "abs_ki_e_max": fuzzy.rho,
+                "abs_kp_de_max": fuzzy.rho,
+                "abs_e_max_n": fuzzy.rho / all_gains["ki"],
+                "abs_de_max_n_per_period": fuzzy.rho / all_gains["kp"],
+            },
+            **fuzzy.details,
+        }
+    return Region(model, tuple(cells))
+
+
+@dataclass(frozen=True, slots=True)
+class CertifiedOver:
+    """A gain-set predicate: certified in every cell of a stiffness x latency grid
+    (``fuzzkit tune --certify``). Stops at the first cell that is not."""
+
+    experiment: Experiment
+    controller: str
+    plant: str
+    stiffnesses_n_per_mm: tuple[float, ...]
+    latencies: tuple[tuple[int, int], ...]
+    rulebase: str = "macvicar_whelan"
+    sigma_min: float = SIGMA_MIN
+
+    def __call__(self, gains: Mapping[str, float]) -> bool:
+        inner = identify(self.plant)
+        fuzzy = fuzzy_part(self.rulebase) if self.controller == "fuzzy-pi" else None
+        noise_n = self.experiment.scenario.sensor.noise_std_n
+        return all(
+            certify_cell(
+                self.experiment,
+                self.controller,
+                gains,
+                inner,
+                fuzzy,
+                k,
+                lat,
+                self.sigma_min,
+                noise_n,
+            ).certified
+            for k in self.stiffnesses_n_per_mm
+            for lat in self.latencies
+        )

@@ -1,0 +1,91 @@
+"""Each cell's simulated outcome, to check the certificate against: settled, oscillating or
+tripped, from a closed-loop run of the scenario at that stiffness and latency (compiled loop).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from fuzzkit.analysis.region import BAND_N
+from fuzzkit.studies.batch import map_runs
+from fuzzkit.studies.experiments import with_stiffness
+from fuzzkit.studies.runner import RunResult
+from fuzzkit.studies.task import Experiment
+
+#: A run has settled when it did not trip and, over its last :data:`TAIL_S`, the true force on
+#: every force-controlled axis has a mean within :data:`BAND_N` of the set point and a standard
+#: deviation below it (the sensor noise is 0.1 N).
+TAIL_S = 0.5
+
+OUTCOMES = ("settled", "oscillating", "tripped")
+
+
+@dataclass(frozen=True, slots=True)
+class SimCase:
+    """One run: everything picklable a worker needs."""
+
+    experiment: Experiment
+    plant: str
+    controller: str
+    gains: tuple[tuple[str, float], ...]
+    stiffness_n_per_mm: float
+    latency: tuple[int, int]
+    rulebase: str = "macvicar_whelan"
+
+
+def outcome(result: RunResult) -> str:
+    """``settled``, ``oscillating`` (neither tripped nor settled) or ``tripped``."""
+    if result.tripped:
+        return "tripped"
+    exp = result.experiment
+    tail = result.t >= result.t[-1] - TAIL_S
+    for axis in range(3):
+        if not exp.selection[axis]:
+            continue
+        f = result.force_true[tail, axis]
+        sp = float(exp.setpoints[axis])
+        if not (abs(float(np.mean(f)) - sp) < BAND_N and float(np.std(f)) < BAND_N):
+            return "oscillating"
+    return "settled"
+
+
+def simulate_case(case: SimCase) -> str:
+    """Run one case in the compiled loop (the fuzzy-PI as the rule base's lookup table)."""
+    from fuzzkit.studies.compiled.loop import compiled_table, run_compiled
+
+    exp = with_stiffness(case.experiment, case.stiffness_n_per_mm * 1e3)
+    table = compiled_table(case.rulebase) if case.controller == "fuzzy-pi" else None
+    result = run_compiled(
+        exp,
+        case.plant,
+        case.controller,
+        gains=dict(case.gains),
+        table=table,
+        seed=0,
+        latency=case.latency,
+    )
+    return outcome(result)
+
+
+def simulate_cells(
+    exp: Experiment,
+    plant: str,
+    controller: str,
+    gains: Mapping[str, float],
+    stiffnesses_n_per_mm: Sequence[float],
+    latencies: Sequence[tuple[int, int]],
+    *,
+    rulebase: str = "macvicar_whelan",
+    workers: int | None = None,
+) -> list[str]:
+    """The outcome of every (stiffness, latency) cell, stiffness-major as the certificate's."""
+    items = tuple(sorted((str(k), float(v)) for k, v in gains.items()))
+    cases = [
+        SimCase(exp, plant, controller, items, float(k), (int(s), int(c)), rulebase)
+        for k in stiffnesses_n_per_mm
+        for s, c in latencies
+    ]
+    return map_runs(simulate_case, cases, workers=workers)

@@ -1,0 +1,209 @@
+"""``fuzzkit stability``: certify the force loop over a grid of contact stiffness x latency."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from typing import Any
+
+from fuzzkit.cli import RULEBASE_SPEC_HELP
+from fuzzkit.fileio import check_output_path
+
+CONTROLLERS = ("pi", "fuzzy-pi")
+
+
+def _stiffness_list(text: str) -> list[float]:
+    try:
+        values = [float(p) for p in text.split(",")]
+    except ValueError:
+        values = []
+    if not values or not all(math.isfinite(v) and v > 0.0 for v in values):
+        raise argparse.ArgumentTypeError(
+            f"expected stiffnesses in N/mm > 0, comma separated (e.g. 5,10,100), got {text!r}"
+        )
+    return values
+
+
+def _latency_list(text: str) -> list[tuple[int, int]]:
+    from fuzzkit.cli.sweep import parse_latencies
+
+    try:
+        return parse_latencies(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _unit_interval(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not 0.0 < value <= 1.0:
+        raise argparse.ArgumentTypeError(f"expected a number in (0, 1], got {text!r}")
+    return value
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``stability`` subcommand."""
+    from fuzzkit.studies.plants import PLANTS
+
+    p = subparsers.add_parser(
+        "stability",
+        help="certify the force loop's stability over contact stiffness x latency",
+        description="Certify each cell of a contact stiffness x latency grid, or say it cannot: "
+        "a common quadratic Lyapunov function of the loop's linear model (docs/stability.md), "
+        "found by an LMI and verified in numpy.",
+        epilog="examples:\n"
+        "  fuzzkit stability regulate --controller pi --plant arm6 --stiffness 5,10,100 "
+        "--latency 0:0,1:1,4:4\n"
+        "  fuzzkit stability E1 --controller fuzzy-pi --gains gains.yaml --stiffness 10,20 "
+        "--latency 1:1 --json\n"
+        "  fuzzkit stability regulate --controller pi --stiffness 5,10,20,50,100 "
+        "--latency 0:0,2:2 --png region.png --simulate",
+    )
+    p.add_argument(
+        "scenario",
+        metavar="SCENARIO",
+        help="regulate (guarded approach onto a flat surface, then hold), E1, E2, E3, or a "
+        "scenario file TASK.yaml: its period, contact damping, sensor and set points",
+    )
+    p.add_argument("--controller", choices=CONTROLLERS, default="pi", help="force controller")
+    p.add_argument(
+        "--rulebase",
+        default="macvicar_whelan",
+        metavar="RB",
+        help="rule base for fuzzy-pi: " + RULEBASE_SPEC_HELP,
+    )
+    p.add_argument("--gains", metavar="GAINS.yaml", help="gains file (default: the defaults)")
+    p.add_argument("--plant", choices=sorted(PLANTS), default="planar", help="simulated robot")
+    p.add_argument(
+        "--stiffness",
+        type=_stiffness_list,
+        required=True,
+        metavar="K1,K2,...",
+        help="contact stiffnesses (N/mm)",
+    )
+    p.add_argument(
+        "--latency",
+        type=_latency_list,
+        required=True,
+        metavar="S:C,...",
+        help="sensor:command delays in periods",
+    )
+    p.add_argument(
+        "--contact-sector",
+        type=_unit_interval,
+        default=0.1,
+        metavar="SIGMA_MIN",
+        help="lower end of the loss-of-contact sector [SIGMA_MIN, 1] (a cell that cannot be "
+        "certified with it is tried with contact held)",
+    )
+    p.add_argument(
+        "--fuzzy-region",
+        type=_unit_interval,
+        default=1.0,
+        metavar="RHO",
+        help="fuzzy-pi: bound the surface over |Ki*e|, |Kp*de| <= RHO (1: the whole universe)",
+    )
+    p.add_argument("--json", action="store_true", help="print the region as JSON")
+    p.add_argument("--png", metavar="region.png", help="draw the region")
+    p.add_argument(
+        "--simulate",
+        action="store_true",
+        help="also run each cell in closed loop (compiled loop) and show its outcome",
+    )
+    p.add_argument("--workers", type=int, default=None, help="processes for --simulate")
+    p.set_defaults(handler=_stability)
+
+
+def _stability(args: argparse.Namespace) -> int:
+    from fuzzkit.analysis.region import certify_region
+    from fuzzkit.analysis.regulation import scenario
+    from fuzzkit.cli.simulation import load_gains
+
+    if args.png:
+        check_output_path(args.png, "PNG file")
+    exp = scenario(args.scenario)
+    gains = load_gains(args.gains, args.controller) if args.gains else {}
+    region = certify_region(
+        exp,
+        args.controller,
+        args.plant,
+        args.stiffness,
+        args.latency,
+        gains=gains,
+        rulebase=args.rulebase,
+        fuzzy_region=args.fuzzy_region,
+        sigma_min=args.contact_sector,
+    )
+    simulated: list[str] | None = None
+    if args.simulate:
+        from fuzzkit.analysis.region import effective_gains
+        from fuzzkit.analysis.simulated import simulate_cells
+
+        simulated = simulate_cells(
+            exp,
+            args.plant,
+            args.controller,
+            effective_gains(args.controller, gains)[0],
+            args.stiffness,
+            args.latency,
+            rulebase=args.rulebase,
+            workers=args.workers,
+        )
+    if args.png:
+        from fuzzkit.viz.stability_figure import write_region_png
+
+        write_region_png(region, args.png, simulated)
+    data = region.as_dict()
+    if simulated is not None:
+        for cell, outcome in zip(data["cells"], simulated, strict=True):
+            cell["simulated"] = outcome
+    if args.json:
+        print(json.dumps(data, indent=2))
+    else:
+        print(_text(data, args))
+    return 0
+
+
+def _text(data: dict[str, Any], args: argparse.Namespace) -> str:
+    """A grid: one row per latency, one column per stiffness."""
+    model = data["model"]
+    lines = [
+        f"{model['scenario']}: {model['controller']} on {model['plant']}, "
+        f"inner loop a in [{model['inner_loop']['a'][0]:.4f}, {model['inner_loop']['a'][1]:.4f}]"
+        f" (fit error {100 * model['inner_loop']['fit_error_nrmse']:.2g} %)",
+    ]
+    if "fuzzy" in model:
+        fz = model["fuzzy"]
+        lines.append(f"fuzzy bounds ({fz['bounds']}, {fz['method']}): {fz.get('phi', '')}")
+    lines.append(
+        "C: certified, contact may be lost; c: certified while contact is held; "
+        "n: stable but noise above the band; -: not certified"
+        + (
+            "; then the simulated outcome (s settled, o oscillating, t tripped)"
+            if args.simulate
+            else ""
+        )
+    )
+    ks = list(dict.fromkeys(c["stiffness_n_per_mm"] for c in data["cells"]))
+    lats = list(dict.fromkeys(tuple(c["latency_periods"]) for c in data["cells"]))
+    by = {(c["stiffness_n_per_mm"], tuple(c["latency_periods"])): c for c in data["cells"]}
+    lines.append("latency \\ N/mm " + " ".join(f"{k:>6g}" for k in ks))
+    for lat in lats:
+        row = []
+        for k in ks:
+            c = by[(k, lat)]
+            mark = "-"
+            if c["certified"]:
+                mark = "C" if c["contact_sector"] != [1.0, 1.0] else "c"
+            elif c["lyapunov_certificate"]:
+                mark = "n"
+            if "simulated" in c:
+                mark += c["simulated"][0]
+            row.append(f"{mark:>6}")
+        lines.append(f"{lat[0]}+{lat[1]:<13}" + " ".join(row))
+    certified = sum(c["certified"] for c in data["cells"])
+    lines.append(f"certified {certified} of {len(data['cells'])} cells")
+    return "\n".join(lines)

@@ -1,0 +1,83 @@
+"""The certified region of ``fuzzkit stability`` as a figure: stiffness x latency cells, each
+certified (with or without loss of contact) or not, and optionally the simulated outcome."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from fuzzkit.analysis.region import Region
+
+#: Fill colour per verdict, and the marker per simulated outcome.
+_FILL = {
+    "contact loss": "#2e7d32",
+    "contact held": "#9ccc65",
+    "stable, noisy": "#fff176",
+    "not certified": "#e0e0e0",
+}
+_MARK = {"settled": ("o", "#1b5e20"), "oscillating": ("^", "#e65100"), "tripped": ("x", "#b71c1c")}
+
+
+def _verdict(cell: Any) -> str:
+    if cell.certified:
+        return "contact held" if cell.contact_sector == (1.0, 1.0) else "contact loss"
+    return "stable, noisy" if cell.stable else "not certified"
+
+
+def region_figure(region: Region, simulated: Sequence[str] | None = None) -> Any:
+    """A matplotlib Figure of the region (built without pyplot)."""
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Patch
+
+    ks = sorted({c.stiffness_n_per_mm for c in region.cells})
+    lats = list(dict.fromkeys(c.latency for c in region.cells))
+    fig = Figure(figsize=(1.6 + 0.75 * len(ks), 1.8 + 0.45 * len(lats)), dpi=110)
+    ax = fig.add_subplot(1, 1, 1)
+    for idx, cell in enumerate(region.cells):
+        x, y = ks.index(cell.stiffness_n_per_mm), lats.index(cell.latency)
+        ax.add_patch(_rect(x, y, _FILL[_verdict(cell)]))
+        if simulated is not None:
+            marker, colour = _MARK[simulated[idx]]
+            ax.plot(x, y, marker, color=colour, ms=9, mew=2, mfc="none")
+    ax.set_xlim(-0.5, len(ks) - 0.5)
+    ax.set_ylim(-0.5, len(lats) - 0.5)
+    ax.set_xticks(range(len(ks)), [f"{k:g}" for k in ks])
+    ax.set_yticks(range(len(lats)), [f"{s}+{c}" for s, c in lats])
+    period_ms = 1e3 * float(region.model["period_s"])
+    ax.set_xlabel("contact stiffness (N/mm)")
+    ax.set_ylabel(f"latency sensor+command (periods of {period_ms:g} ms)")
+    m = region.model
+    ax.set_title(f"{m['scenario']}: {m['controller']} on {m['plant']}", fontsize=10)
+    handles: list[Any] = [
+        Patch(facecolor=_FILL["contact loss"], label="certified (contact may be lost)"),
+        Patch(facecolor=_FILL["contact held"], label="certified while contact is held"),
+        Patch(facecolor=_FILL["stable, noisy"], label="stable, but noise > band"),
+        Patch(facecolor=_FILL["not certified"], label="not certified"),
+    ]
+    if simulated is not None:
+        from matplotlib.lines import Line2D
+
+        handles += [
+            Line2D([], [], ls="", marker=mk, color=col, mfc="none", mew=2, label=f"sim: {name}")
+            for name, (mk, col) in _MARK.items()
+        ]
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def _rect(x: int, y: int, colour: str) -> Any:
+    from matplotlib.patches import Rectangle
+
+    return Rectangle((x - 0.48, y - 0.48), 0.96, 0.96, facecolor=colour, edgecolor="white")
+
+
+def write_region_png(
+    region: Region, path: str | os.PathLike[str], simulated: Sequence[str] | None = None
+) -> Path:
+    """Draw :func:`region_figure` and write it as a PNG, atomically."""
+    from fuzzkit.viz.figures import save_figure
+
+    return save_figure(region_figure(region, simulated), path)
