@@ -94,6 +94,14 @@ def _set_option(argv: list[str], option: str, value: str) -> list[str]:
     return [*argv, option, value]
 
 
+def _first_of(argv: list[str], *options: str) -> list[str]:
+    """``argv`` with each comma-separated option cut to its first value (one grid cell)."""
+    for option in options:
+        if option in argv:
+            argv = _set_option(argv, option, argv[argv.index(option) + 1].split(",")[0])
+    return argv
+
+
 def _add_flags(argv: list[str], *flags: str) -> list[str]:
     return [*argv, *(f for f in flags if f not in argv)]
 
@@ -114,6 +122,7 @@ LIMITS: dict[str, Callable[[list[str]], list[str]]] = {
         "--quiet",
     ),
     "sweep": lambda a: _set_option(_set_option(a, "--seeds", "1"), "--workers", "1"),
+    "stability": lambda a: _first_of(a, "--stiffness", "--latency"),
 }
 
 
