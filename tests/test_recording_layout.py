@@ -295,3 +295,20 @@ rules:
     (about,) = texts
     assert "e [-20, 20] (x), de [-2, 2] (y), power [0, 100] (z)" in about["args"][0]
     assert re.search(r"store_id: StoreId\( Blueprint,", flat)
+
+
+def test_arm6_recording_has_every_axis_and_one_colour_per_joint(tmp_path: Path) -> None:
+    from fuzzkit.viz.traces_arm6 import write_rrd
+
+    res = run(experiment("E1"), "arm6", "pi", duration_s=0.3)
+    text = _dump(write_rrd(res, tmp_path / "e1_arm6.rrd"))
+    entities = set(re.findall(r" - (/\S+) - ", text))
+    # the 6-DOF arm has a y axis: its force is recorded (not force-controlled in E1)
+    assert {"/forces/y/measured", "/forces/y/true", "/world/robot_base"} <= entities
+    assert "/forces/y/setpoint" not in entities
+    styles = _series_styles(text)
+    joints = {name: colour for name, (entity, colour) in styles.items() if "/joints/" in entity}
+    assert sorted(joints) == [f"axis {j} (deg)" for j in range(1, 7)]
+    assert len(set(joints.values())) == 6
+    for colour in joints.values():
+        assert _luminance(colour) > 60  # visible on the dark theme
