@@ -210,6 +210,14 @@ def _comment_safe(text: str) -> str:
 _UNIT_ASCII = {"°": "deg", "µ": "u", "μ": "u", "²": "^2", "³": "^3", "Ω": "Ohm", "·": "*"}
 
 
+def units_line(rb: RuleBase) -> str:
+    """``e [N], de [N], du [mm]`` for a generated header when any variable has units, else ""."""
+    variables = rb.inputs + rb.outputs
+    if not any(v.units for v in variables):
+        return ""
+    return ", ".join(f"{v.name}{units_comment(v.units)}" for v in variables)
+
+
 def units_comment(units: str | None) -> str:
     """A variable's units as generated comments show them: ``" [N]"``, ``" [degC]"`` or ``""``."""
     if not units:
@@ -395,10 +403,7 @@ def build_spec(
         defaults = {k: lit(v) for k, v in gains.items()}
     file_name, sha = source_sha256(rb)
     desc = tuple(textwrap.wrap(_comment_safe(" ".join(rb.description.split())), 88)[:8])
-    bound_summary = ", ".join(
-        f"{o.name}: {o.bound}" + (f" (tolerance {o.tolerance})" if o.tolerance else "")
-        for o in outputs
-    )
+    bound_summary = table.bound_summary()  # as fuzzkit compile prints it
     return TableSpec(
         name=name,
         upper=name.upper(),
@@ -409,9 +414,7 @@ def build_spec(
         source_file=_comment_safe(file_name),
         source_sha256=sha,
         description=desc,
-        units_line=", ".join(f"{v.name}{units_comment(v.units)}" for v in rb.inputs + rb.outputs)
-        if any(v.units for v in rb.inputs + rb.outputs)
-        else "",
+        units_line=units_line(rb),
         n_inputs=len(rb.inputs),
         n_outputs=len(rb.outputs),
         inputs=tuple(axes),

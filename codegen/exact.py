@@ -35,6 +35,8 @@ from fuzzkit.codegen.emit import (
     check_module_name,
     render_files,
     source_sha256,
+    units_comment,
+    units_line,
 )
 from fuzzkit.codegen.target import Target, load_target
 from fuzzkit.errors import CodegenError
@@ -215,6 +217,10 @@ class ExactSpec:
     n_terms0: int
     n_terms1: int
     windows: tuple[WindowSpec, ...]  # grid rules on two window inputs: visit 2 x 2 cells
+    #: "e [N], de [N], du [mm]" when any variable has units, else "" (as the table's header)
+    units_line: str = ""
+    input_units: tuple[str, ...] = ()  # " [N]" or "" per input
+    output_units: tuple[str, ...] = ()
 
 
 def unsupported_reason(rb: RuleBase, number_type: str = "double") -> str | None:
@@ -737,6 +743,9 @@ def build_exact_spec(
         implication=ops.implication,
         aggregation=ops.aggregation,
         clamp=rb.out_of_range == "clamp",
+        units_line=units_line(rb),
+        input_units=tuple(units_comment(v.units) for v in rb.inputs),
+        output_units=tuple(units_comment(v.units) for v in rb.outputs),
         libm=tuple(sorted(libm)),
         bound_note=tuple(textwrap.wrap(_bound_note(number_type, tg), 88)),
         has_fpi=has_fpi,

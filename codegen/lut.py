@@ -41,6 +41,13 @@ NumberType = Literal["float", "double", "q15"]
 Evaluator = Callable[[Mapping[str, FloatArray]], Mapping[str, FloatArray]]
 
 NUMBER_TYPES: tuple[NumberType, ...] = ("float", "double", "q15")
+
+
+def percent(fraction: float) -> str:
+    """A share of an output's range as people write it: ``0.001`` -> ``0.1 %``."""
+    return f"{100.0 * fraction:.3g} %"
+
+
 #: Default tolerance, as a fraction of each output's range.
 DEFAULT_TOLERANCE = 1e-3
 #: The check grid has this many sub-intervals per table cell and axis (>= 4 by contract).
@@ -208,16 +215,28 @@ class LookupTable:
         """True when the breakpoints of ``axis`` are evenly spaced (indexed without a search)."""
         return _is_uniform(self.breakpoints[axis])
 
+    def bound_summary(self) -> str:
+        """Each output's verified bound and tolerance, absolute and as a share of its range:
+        ``du: 0.00186 = 0.093 % of range (tolerance 0.002 = 0.1 %)``. The generated files'
+        headers and ``fuzzkit compile`` print this same text."""
+        parts = []
+        ranges = self.output_ranges
+        for k, (name, b, (lo, hi)) in enumerate(
+            zip(self.output_names, self.bound, ranges, strict=True)
+        ):
+            text = f"{name}: {b:.3g} = {percent(b / (hi - lo))} of range"
+            if self.tolerance:
+                tol = self.tolerance[k]
+                text += f" (tolerance {tol:.3g} = {percent(tol / (hi - lo))})"
+            parts.append(text)
+        return ", ".join(parts)
+
     def describe(self) -> str:
         """One line for humans: grid, memory and the bound relative to each output range."""
         grid = "x".join(str(n) for n in self.shape)
-        parts = []
-        ranges = self.output_ranges
-        for name, b, (lo, hi) in zip(self.output_names, self.bound, ranges, strict=True):
-            parts.append(f"{name}: {b:.3g} ({b / (hi - lo):.3g} of range)")
         return (
             f"table {grid} ({self.n_points} points, {self.memory_bytes} bytes, "
-            f"{self.number_type}), verified bound " + ", ".join(parts)
+            f"{self.number_type}), verified bound {self.bound_summary()}"
         )
 
     def interpolate(self, inputs: Sequence[npt.ArrayLike]) -> tuple[FloatArray, ...]:

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 from fuzzkit.codegen.emit import FpiDefaults, emit
 from fuzzkit.codegen.exact import emit_exact, unsupported_reason
-from fuzzkit.codegen.lut import DEFAULT_TOLERANCE, LookupTable, NumberType
+from fuzzkit.codegen.lut import DEFAULT_TOLERANCE, LookupTable, NumberType, percent
 from fuzzkit.codegen.table_search import ProgressFn, make_table, table_problem
 from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy.model import RuleBase
@@ -35,6 +35,7 @@ class Compiled:
     method: str
     files: dict[str, str]
     table: LookupTable | None
+    #: why this method, as a clause that follows "because"
     reason: str
     warnings: tuple[str, ...] = ()
 
@@ -67,7 +68,7 @@ def compile_rulebase(
         raise CodegenError(f"--max-bytes must be a positive number of bytes, got {max_bytes}")
     exact_why = unsupported_reason(rb, number_type)
     if method == "exact":
-        return _exact(rb, target, number_type, fpi_defaults, "--method exact")
+        return _exact(rb, target, number_type, fpi_defaults, "you asked for it (--method exact)")
     table_why = table_problem(rb, number_type)
     discontinuous = rb.defuzzifier in DISCONTINUOUS
     if method == "table":
@@ -96,16 +97,18 @@ def compile_rulebase(
                 f"{100 * worst:.3g} % of the output range (--method exact has rounding error only)",
             )
         files = emit(rb, table, target, fpi_defaults=fpi_defaults)
-        return Compiled("table", files, table, "--method table", warnings)
+        return Compiled("table", files, table, "you asked for one (--method table)", warnings)
     # auto
     if exact_why is None:
         if discontinuous:
             return _exact(
                 rb, target, number_type, fpi_defaults,
-                f"{rb.defuzzifier} is discontinuous: a table cannot follow its jumps",
+                f"{rb.defuzzifier} is discontinuous and a table cannot follow its jumps",
             )  # fmt: skip
         if table_why is not None:
-            return _exact(rb, target, number_type, fpi_defaults, f"no table: {table_why}")
+            return _exact(
+                rb, target, number_type, fpi_defaults, f"no table can be made: {table_why}"
+            )
     elif table_why is not None:
         raise CodegenError(
             f"rule base {rb.name!r} cannot be compiled: the exact method: {exact_why}; "
@@ -130,7 +133,7 @@ def compile_rulebase(
                 max_points=max(8, max_bytes // per_point),
                 progress=progress,
             )
-        except CodegenError as exc:
+        except CodegenError:
             if exact_why is not None:
                 # No exact alternative (Q15, say): a table over the budget beats no code; the
                 # reason printed says it is over --max-bytes.
@@ -140,28 +143,30 @@ def compile_rulebase(
                     "table",
                     files,
                     table,
-                    f"a {table.memory_bytes}-byte table meets tolerance {tol:g}, over --max-bytes "
-                    f"{max_bytes}: the exact method cannot be used ({exact_why})",
+                    f"the exact method cannot be used ({exact_why}), so it takes the "
+                    f"{table.memory_bytes}-byte table that meets the tolerance of "
+                    f"{percent(tol)} of the output range, over --max-bytes {max_bytes}",
                 )
             return _exact(
                 rb, target, number_type, fpi_defaults,
-                f"no table within --max-bytes {max_bytes} meets tolerance {tol:g}: "
-                + str(exc).split("; raise --tolerance")[0],
+                f"no table within --max-bytes {max_bytes} meets the tolerance of "
+                f"{percent(tol)} of the output range",
             )  # fmt: skip
     if table.memory_bytes > max_bytes and exact_why is None and resolution is None:
         return _exact(
             rb, target, number_type, fpi_defaults,
-            f"the table meeting tolerance {tol:g} needs {table.memory_bytes} bytes "
-            f"> --max-bytes {max_bytes}",
+            f"the table that meets the tolerance of {percent(tol)} of the output range needs "
+            f"{table.memory_bytes} bytes, more than --max-bytes {max_bytes}",
         )  # fmt: skip
     files = emit(rb, table, target, fpi_defaults=fpi_defaults)
     why = (
-        f"a {table.memory_bytes}-byte table meets tolerance {tol:g} within --max-bytes {max_bytes}"
+        f"a {table.memory_bytes}-byte table meets the tolerance of {percent(tol)} of the "
+        f"output range within --max-bytes {max_bytes}"
         if resolution is None
-        else "--resolution given"
+        else "you chose its size (--resolution)"
     )
     if exact_why is not None:
-        why += f" (the exact method cannot: {exact_why})"
+        why += f", and the exact method cannot be used ({exact_why})"
     return Compiled("table", files, table, why)
 
 

@@ -44,6 +44,7 @@ from fuzzkit.codegen.lut import (
     _is_uniform,
     _locate_float,
     bound_margin,
+    percent,
     quantize_q15,
 )
 from fuzzkit.errors import CodegenError
@@ -884,7 +885,8 @@ def _search(
             # The search chose these breakpoints, not the user: say what cannot be done.
             detail = f"best tried: {last.describe()}; " if last is not None else ""
             raise CodegenError(
-                f"tolerance {tol:g} of the output range cannot be met at Q15 resolution "
+                f"the tolerance of {percent(tol)} of the output range cannot be met at Q15 "
+                "resolution "
                 f"({detail}input {exc.variable} would need {exc.count} breakpoints, closer "
                 f"than the {exc.codes} Q15 codes of its range allow); raise --tolerance or "
                 "use --type float"
@@ -898,7 +900,8 @@ def _search(
     if best is None:
         detail = f"best tried: {last.describe()}" if last is not None else "even the coarsest grid"
         raise CodegenError(
-            f"tolerance {tol:g} of the output range cannot be met within {max_points} table "
+            f"the tolerance of {percent(tol)} of the output range cannot be met within "
+            f"{max_points} table "
             f"points ({detail}); raise --tolerance or give --resolution"
         )
     # Try a few smaller spacings below the first success.

@@ -9,6 +9,7 @@ Quick start::
     rb = fuzzkit.load("macvicar_whelan")              # a shipped name or a path
     fuzzkit.evaluate(rb, {"e": [0.3], "de": [-0.2]})  # {"du": array([...])}
     fuzzkit.evaluate_point(rb, e=0.3, de=-0.2)        # {"du": float}
+    fuzzkit.explain(rb, {"e": 0.3, "de": -0.2})        # memberships, rules fired, output set
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ _EXPORTS = {
     "Engine": "fuzzkit.fuzzy.inference",
     "evaluate": "fuzzkit.fuzzy.inference",
     "evaluate_point": "fuzzkit.fuzzy.inference",
+    "explain": "fuzzkit.fuzzy.explain",
     "load": "fuzzkit.formats.registry",
     "loads": "fuzzkit.formats.registry",
     "available": "fuzzkit.formats.registry",

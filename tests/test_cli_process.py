@@ -217,7 +217,7 @@ def test_python_dash_m_fuzzkit_is_the_fuzzkit_command() -> None:
         [*FUZZKIT, "validate", "macvicar_whelan"], capture_output=True, text=True, timeout=120
     )
     assert res.returncode == 0, res.stderr
-    assert res.stdout.startswith("macvicar_whelan: ok (macvicar_whelan: 2 inputs")
+    assert res.stdout.startswith("macvicar_whelan: ok (rule base macvicar_whelan: 2 inputs")
     bad = subprocess.run([*FUZZKIT, "validate", "no_such_rb"], capture_output=True, text=True)
     assert bad.returncode == 2 and "no_such_rb" in bad.stderr and "Traceback" not in bad.stderr
 

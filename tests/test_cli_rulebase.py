@@ -44,7 +44,7 @@ def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
 def test_validate_accepts_paths_and_names(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, err = run(capsys, "validate", str(GOOD), "paper_table1")
     assert code == 0, err
-    assert f"{GOOD}: ok (macvicar_whelan: 2 inputs, 1 output, 49 rules)" in out
+    assert f"{GOOD}: ok (rule base macvicar_whelan: 2 inputs, 1 output, 49 rules)" in out
     assert "paper_table1: ok" in out
 
 
@@ -64,7 +64,7 @@ def test_validate_lists_every_problem_of_every_file(
     inputs_msg = "expected the inputs (a mapping of name to {range, terms}), got 3"
     assert f"{worse}:2:9: {inputs_msg}" in lines
     assert any(f"{worse}:1:1: missing required key 'outputs'" in line for line in lines)
-    assert lines[-1] == "fuzzkit: error: 2 of 3 rule bases invalid"
+    assert lines[-1] == "fuzzkit: error: 2 of 3 files invalid"
     assert "Traceback" not in err
 
 

@@ -270,7 +270,10 @@ def test_user_rule_base_compiles_with_the_defaults_and_says_why(
         capsys, "compile", "temperature_pd", "--target", "c", "--out", str(out), "--verify"
     )
     assert code == 0, err
-    assert "method: exact (no table within --max-bytes 8192 meets tolerance 0.001" in text
+    assert (
+        "method: the exact inference, no table (rounding error only), because no table within "
+        "--max-bytes 8192 meets the tolerance of 0.1 % of the output range." in text.splitlines()
+    )
     assert "verify c exact (float): ok on 100144 points" in text
     assert sorted(p.name for p in out.iterdir()) == ["temperature_pd.c", "temperature_pd.h"]
     assert "no lookup table" in (out / "temperature_pd.c").read_text()
@@ -285,7 +288,16 @@ def test_auto_takes_a_table_that_fits_and_says_so(
         "--out", str(out),
     )  # fmt: skip
     assert code == 0, err
-    assert "method: table (a " in text and "meets tolerance 0.05 within --max-bytes 8192" in text
+    line = next(ln for ln in text.splitlines() if ln.startswith("method: "))
+    assert line.startswith("method: a lookup table (error within the verified bound above), ")
+    assert "table that meets" not in line and line.endswith(
+        "-byte table meets the tolerance of 5 % of the output range within --max-bytes 8192."
+    )
+    # the tolerance reads the same in the summary line and in the generated header
+    summary = next(ln for ln in text.splitlines() if "verified bound" in ln)
+    bound = summary.split("verified bound ")[1]
+    assert bound.endswith("(tolerance 0.1 = 5 %)")
+    assert bound in (out / "macvicar_whelan.py").read_text()
 
 
 def test_auto_q15_has_no_exact_alternative_so_a_table_over_budget_is_taken_and_said(
@@ -300,10 +312,11 @@ def test_auto_q15_has_no_exact_alternative_so_a_table_over_budget_is_taken_and_s
     )  # fmt: skip
     assert code == 0, err
     line = next(ln for ln in text.splitlines() if ln.startswith("method: "))
-    assert line.startswith("method: table (a ")
-    size = int(line.split("method: table (a ")[1].split("-byte")[0])
+    assert line.startswith("method: a lookup table (error within the verified bound above), ")
+    size = int(line.split("so it takes the ")[1].split("-byte")[0])
     assert size > 4096
-    assert "over --max-bytes 4096: the exact method cannot be used" in line
+    assert "because the exact method cannot be used (" in line
+    assert line.endswith("over --max-bytes 4096.")
     assert sorted(p.name for p in out.iterdir()) == ["macvicar_whelan.c", "macvicar_whelan.h"]
 
 
@@ -314,5 +327,8 @@ def test_exact_python_with_verify(tmp_path: Path, capsys: pytest.CaptureFixture[
         "--out", str(out), "--verify",
     )  # fmt: skip
     assert code == 0, err
-    assert "method: exact (--method exact)" in text
+    assert (
+        "method: the exact inference, no table (rounding error only), because you asked for it "
+        "(--method exact)." in text
+    )
     assert "verify python exact: ok" in text

@@ -333,7 +333,7 @@ def test_q15_search_on_a_narrow_range_names_the_q15_resolution() -> None:
     with pytest.raises(CodegenError) as info:
         make_table(loads(OFFSET_YAML), number_type="q15")
     text = str(info.value)
-    assert "tolerance 0.001 of the output range cannot be met at Q15 resolution" in text
+    assert "the tolerance of 0.1 % of the output range cannot be met at Q15 resolution" in text
     assert "input a would need" in text and "fewer breakpoints" not in text
 
 

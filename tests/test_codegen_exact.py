@@ -324,7 +324,7 @@ def test_auto_takes_a_table_when_it_fits_the_budget_and_says_so() -> None:
     result = compile_rulebase(rb, "c", "float", tolerance=0.05, max_bytes=8192)
     assert result.method == "table" and result.table is not None
     assert result.table.memory_bytes <= 8192
-    assert "meets tolerance" in result.reason
+    assert "meets the tolerance of 5 % of the output range" in result.reason
 
 
 def test_auto_takes_the_exact_method_when_no_table_fits_the_budget() -> None:

@@ -83,10 +83,10 @@ def test_validate_prints_warnings_and_strict_makes_them_errors(
     path.write_text(tipper("coverage: allow_gaps"))
     assert main(["validate", str(path)]) == 0
     out, err = capsys.readouterr()
-    assert f"{path}: ok (tipper: 1 input, 1 output, 2 rules, 1 warning)" in out
+    assert f"{path}: ok (rule base tipper: 1 input, 1 output, 2 rules, 1 warning)" in out
     assert f"{path}:4:33: warning: {GAP}" in err
     assert main(["validate", "--strict", str(path)]) == 2
     out, err = capsys.readouterr()
     assert "ok" not in out
     assert f"{path}:4:33: {GAP}" in err and "(an error under --strict)" in err
-    assert "1 of 1 rule base invalid" in err
+    assert "1 of 1 file invalid" in err

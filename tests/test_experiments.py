@@ -217,7 +217,7 @@ def test_cli_simulate_json(capsys: pytest.CaptureFixture[str]) -> None:
         ("kp: fast\n", "finite number"),
         ("- 1\n- 2\n", "mapping"),
         ("pi: {kp: 1e-5}\npid: {}\n", "unknown controller keys"),
-        ("kp: [1\n", "gains.yaml:2: not valid YAML"),
+        ("kp: [1\n", "gains.yaml:2:1: invalid YAML"),
         ("fuzzy-pi: {kx: 1e-4}\n", "no gains for pi (the file holds: fuzzy-pi)"),
     ],
 )

@@ -109,7 +109,7 @@ def test_validate_info_and_eval_read_foreign_files(
     files = [str(EXAMPLES / n) for n in ("heater.fis", "gripper_iec.fcl", "feed.fll")]
     code, out, err = run(capsys, "validate", *files)
     assert code == 0, err
-    assert "heater.fis: ok (heater: 2 inputs, 1 output, 6 rules)" in out
+    assert "heater.fis: ok (rule base heater: 2 inputs, 1 output, 6 rules)" in out
     code, out, _ = run(capsys, "info", files[0])
     assert code == 0 and "left_shoulder" in out and "out_of_range: extend" in out
     code, out, _ = run(capsys, "eval", files[2], "-i", "roughness=0.5", "-i", "load=5", "--json")
@@ -146,7 +146,7 @@ def test_surface_and_compile_read_foreign_files(
         capsys, "compile", src, "--target", "python", "--out", str(tmp_path / "exact"), "--verify"
     )
     assert code == 0, err
-    assert "method: exact (no table: out_of_range is 'extend'" in out
+    assert "because no table can be made: out_of_range is 'extend'" in out
     src = str(EXAMPLES / "feed.fll")  # lock-range: true, so clamped like the table
     code, _, err = run(
         capsys,

@@ -1,9 +1,15 @@
-"""The safety matrix: every experiment x controller x fault kind x plant over noise seeds.
+"""The safety matrix: every experiment x controller x fault kind x plant over noise seeds, on
+the reference controller and on the generated C controller.
 
-For every run: the *true* contact force stays below the experiment's safety limit, the loop
-does not trip, every force-controlled axis with a set point reaches contact, and the set point
-is held at the end (after the fault). ``make test`` runs 10 seeds per case; ``make verify``
-runs 50 (``FUZZKIT_VERIFY_SEEDS``). Faults at the strength of ``fuzzkit.studies.faults.FAULTS``.
+``reference``: fuzzkit's controller in the Python loop (the exact engine as the fuzzy-PI's
+surface). ``generated-c``: the controller spec of the same settings
+(:func:`~fuzzkit.studies.compiled.generated_controller.run_controller_spec`) generated as C
+(double), compiled, and run whole inside the compiled loop: what ``--controller-impl c``
+runs and what ships. For every run: the *true* contact force stays below the experiment's
+safety limit, the loop does not trip, every force-controlled axis with a set point reaches
+contact, and the set point is held at the end (after the fault). ``make test`` runs 10 seeds
+per case; ``make verify`` runs 50 (``FUZZKIT_VERIFY_SEEDS``). Faults at the strength of
+``fuzzkit.studies.faults.FAULTS``.
 """
 
 from __future__ import annotations
@@ -13,11 +19,18 @@ import os
 
 import numpy as np
 import pytest
+from _codegen_util import needs_cc
 
 from fuzzkit.control.controllers import Surface
+from fuzzkit.studies.compiled.generated_controller import (
+    GeneratedController,
+    load_generated_controller,
+    run_controller_spec,
+)
+from fuzzkit.studies.compiled.loop import run_compiled
 from fuzzkit.studies.experiments import EXPERIMENTS, experiment
 from fuzzkit.studies.faults import FAULTS, fault
-from fuzzkit.studies.runner import load_surface, run
+from fuzzkit.studies.runner import RunResult, load_surface, run
 
 SEEDS = range(int(os.environ.get("FUZZKIT_VERIFY_SEEDS", "10")))
 
@@ -34,17 +47,27 @@ def _surface() -> Surface:
     return load_surface("macvicar_whelan")
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("seed", SEEDS)
-@pytest.mark.parametrize("plant", ["planar", "arm6"])
-@pytest.mark.parametrize("fault_kind", sorted(FAULTS))
-@pytest.mark.parametrize("controller", ["pi", "fuzzy-pi"])
-@pytest.mark.parametrize("name", sorted(EXPERIMENTS))
-def test_faults_never_push_the_true_force_past_the_limit_and_the_task_gets_done(
-    name: str, controller: str, fault_kind: str, plant: str, seed: int
-) -> None:
+@functools.cache
+def _generated(name: str, controller: str) -> GeneratedController:
+    return load_generated_controller(run_controller_spec(experiment(name), controller, None))
+
+
+def _run(
+    impl: str, name: str, controller: str, fault_kind: str, plant: str, seed: int
+) -> RunResult:
     exp = experiment(name)
-    r = run(
+    if impl == "generated-c":
+        r = run_compiled(
+            exp,
+            plant,
+            seed=seed,
+            faults=fault(fault_kind, seed),
+            duration_s=DURATION_S[name],
+            generated_controller=_generated(name, controller),
+        )
+        assert r.controller_impl.startswith("generated C controller (double)")
+        return r
+    return run(
         exp,
         plant,
         controller,
@@ -53,6 +76,20 @@ def test_faults_never_push_the_true_force_past_the_limit_and_the_task_gets_done(
         faults=fault(fault_kind, seed),
         duration_s=DURATION_S[name],
     )
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("plant", ["planar", "arm6"])
+@pytest.mark.parametrize("fault_kind", sorted(FAULTS))
+@pytest.mark.parametrize("controller", ["pi", "fuzzy-pi"])
+@pytest.mark.parametrize("name", sorted(EXPERIMENTS))
+@pytest.mark.parametrize("impl", ["reference", pytest.param("generated-c", marks=needs_cc)])
+def test_faults_never_push_the_true_force_past_the_limit_and_the_task_gets_done(
+    impl: str, name: str, controller: str, fault_kind: str, plant: str, seed: int
+) -> None:
+    exp = experiment(name)
+    r = _run(impl, name, controller, fault_kind, plant, seed)
     peak = float(np.max(np.abs(r.force_true)))
     assert peak < exp.force_limit_n, f"true force {peak:.1f} N"
     assert not r.tripped
@@ -74,11 +111,13 @@ SPEC_EXAMPLES = ("controller.yaml", "controller_pi.yaml")
 @pytest.mark.parametrize("plant", ["planar", "arm6"])
 @pytest.mark.parametrize("fault_kind", sorted(FAULTS))
 @pytest.mark.parametrize("spec_file", SPEC_EXAMPLES)
+@pytest.mark.parametrize("impl", ["reference", pytest.param("generated-c", marks=needs_cc)])
 def test_the_shipped_specs_pass_the_safety_matrix(
-    spec_file: str, fault_kind: str, plant: str
+    impl: str, spec_file: str, fault_kind: str, plant: str
 ) -> None:
     """The example controller specs (E1's task), sensor front end and all, on E1 with every
-    fault kind (seed 0): below the limit, no trip, the set point held."""
+    fault kind (seed 0), as the reference and as generated C in the compiled loop: below the
+    limit, no trip, the set point held."""
     name = "E1"
     from pathlib import Path
 
@@ -87,7 +126,18 @@ def test_the_shipped_specs_pass_the_safety_matrix(
 
     spec = load_spec(Path(__file__).resolve().parent.parent / "docs" / "examples" / spec_file)
     exp = with_spec(experiment(name), spec)
-    r = run(exp, plant, seed=0, faults=fault(fault_kind, 0), duration_s=DURATION_S[name])
+    if impl == "generated-c":
+        r = run_compiled(
+            exp,
+            plant,
+            seed=0,
+            faults=fault(fault_kind, 0),
+            duration_s=DURATION_S[name],
+            generated_controller=load_generated_controller(spec),
+        )
+        assert r.controller_impl.startswith("generated C controller (double)")
+    else:
+        r = run(exp, plant, seed=0, faults=fault(fault_kind, 0), duration_s=DURATION_S[name])
     assert float(np.max(np.abs(r.force_true))) < exp.force_limit_n
     assert not r.tripped
     tail = r.t >= r.t[-1] - 0.5

@@ -141,7 +141,7 @@ def test_sweep_cli_writes_one_row_per_run_and_a_figure(tmp_path: Path) -> None:
         [
             "sweep", "E1", "--controller", "pi,fuzzy-pi", "--stiffness", "10,20",
             "--latency", "0:0,1:1", "--seeds", "2", "--duration", "2.5", "--out", str(out),
-            "--workers", "1", "--no-progress",
+            "--workers", "1", "--quiet",
         ]
     )  # fmt: skip
     assert code == 0
@@ -170,7 +170,7 @@ def test_sweep_cli_writes_one_row_per_run_and_a_figure(tmp_path: Path) -> None:
 def test_sweep_cli_bad_arguments(
     args: list[str], match: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    code = main(["sweep", "E1", "--out", str(tmp_path / "r.csv"), "--no-progress", *args])
+    code = main(["sweep", "E1", "--out", str(tmp_path / "r.csv"), "--quiet", *args])
     assert code == 2
     assert match in capsys.readouterr().err
     assert not (tmp_path / "r.csv").exists()

@@ -45,11 +45,28 @@ COMMAND_MODULES = (
 EXIT_OK = 0
 EXIT_FAILURE = 1
 EXIT_BAD_INPUT = 2
+#: ``--fail-on-trip`` (simulate, compare, sweep): a run tripped the safety limit.
+EXIT_TRIPPED = 3
 #: 128 + SIGINT / SIGPIPE, as a shell reports a command ended by that signal.
 EXIT_INTERRUPTED = 130
 EXIT_BROKEN_PIPE = 141
 #: What a rule-base argument accepts (kept light: the CLI imports no format code to print help).
 RULEBASE_SPEC_HELP = "a shipped name, or a rule-base file (.yaml, .yml, .fis, .fcl, .fll)"
+
+
+def add_controller_impl_argument(parser: argparse.ArgumentParser) -> None:
+    """``--controller-impl python|c``, the same for ``simulate``, ``sweep`` and ``tune``
+    (``fuzzkit.studies.batch.CONTROLLER_IMPLS``)."""
+    parser.add_argument(
+        "--controller-impl",
+        choices=("python", "c"),
+        default="python",
+        help="python (default): fuzzkit's own controller, the reference (in the compiled loop "
+        "its numba twin); c: the run's controller spec (--spec, or built from the controller, "
+        "gains, rule base and scenario) generated as C (double, the exact fuzzy surface) and "
+        "run whole (front end, engagement, spike gate, trip and back-off, limits) inside the "
+        "compiled loop; needs a C compiler",
+    )
 
 
 class CommandModuleError(RuntimeError):

@@ -129,13 +129,22 @@ def _fpi_defaults(path: str | None) -> Any:
     return FpiDefaults(**values, source=path)
 
 
+def method_sentence(method: str, reason: str) -> str:
+    """What ``fuzzkit compile`` chose and why, in one plain sentence."""
+    what = {
+        "table": "a lookup table (error within the verified bound above)",
+        "exact": "the exact inference, no table (rounding error only)",
+    }.get(method, method)
+    return f"{what}, because {reason}."
+
+
 def cmd_compile(args: argparse.Namespace) -> int:
     """Handler of ``fuzzkit compile``."""
     from pathlib import Path
 
-    from fuzzkit.cli.rulebase import _controller_spec_text
+    from fuzzkit.cli.file_kinds import is_kind
 
-    if _controller_spec_text(args.rulebase):
+    if is_kind(args.rulebase, "controller spec"):
         from fuzzkit.cli.controller_compile import compile_spec
 
         return compile_spec(args)
@@ -189,7 +198,7 @@ def cmd_compile(args: argparse.Namespace) -> int:
         print(f"{rb.name}: {table.describe()}")
     else:
         print(f"{rb.name}: exact inference ({number_type}), rounding error only")
-    print(f"method: {result.method} ({result.reason})")
+    print(f"method: {method_sentence(result.method, result.reason)}")
     for line in result.warnings:
         print(line)
     if len(rb.inputs) != 2:

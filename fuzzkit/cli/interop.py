@@ -110,12 +110,25 @@ def cmd_export(args: argparse.Namespace) -> int:
 
     from fuzzkit.fileio import check_output_path, write_atomic
     from fuzzkit.formats import fcl, fis
+    from fuzzkit.formats.foreign import ExportError
     from fuzzkit.formats.registry import dumps, load
 
     check_output_path(args.out, f".{args.fmt} file")
     rb = load(args.rulebase)
-    text = dumps(rb, args.fmt, allow_loss=args.allow_loss, dialect=args.dialect)
     lost = {"fis": fis.losses, "fcl": fcl.losses}.get(args.fmt, lambda _rb: [])(rb)
+    try:
+        text = dumps(rb, args.fmt, allow_loss=args.allow_loss, dialect=args.dialect)
+    except ExportError as exc:
+        if lost and exc.items == tuple(lost):  # only losses: say the option, not the API
+            meaning = {"fis": "MATLAB's", "fcl": "FCL's"}[args.fmt]
+            raise ExportError(
+                args.fmt,
+                rb.name,
+                lost,
+                f"give --allow-loss to export anyway, with {meaning} meaning for these "
+                "(each is then printed as a warning)",
+            ) from None
+        raise
     for item in lost:
         print(f"fuzzkit: warning: {args.out}: {item}", file=sys.stderr)
     write_atomic(args.out, _readable_size(text, args.out))

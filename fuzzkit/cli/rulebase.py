@@ -18,11 +18,12 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from fuzzkit.cli import RULEBASE_SPEC_HELP
-from fuzzkit.errors import EvaluationError, Location, Problem, ProblemsError, RuleBaseError
+from fuzzkit.errors import EvaluationError, FuzzkitError, Location, Problem, ProblemsError
 from fuzzkit.fileio import check_output_path
 from fuzzkit.fuzzy.describe import num as _num
 from fuzzkit.fuzzy.describe import range_text, rule_grid, rule_sentence
 from fuzzkit.fuzzy.model import SHAPE_PARAMS, RuleBase, Variable
+from fuzzkit.viz.figures import figure_format
 
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2
@@ -32,23 +33,25 @@ def register(sub: Any) -> None:
     """Add the rule-base subcommands to the ``fuzzkit`` parser."""
     p = sub.add_parser(
         "validate",
-        help="check rule-base files and controller specs; list every problem",
-        description="Check rule-base YAML files (paths or shipped names) and controller "
-        "specs (YAML files with axes and a controller kind; docs/controller.md), each "
-        "recognised by its content. Exit 0 "
-        "when all are valid, 2 listing every problem otherwise. Warnings (input ranges no "
-        "term covers, in rule bases with coverage: allow_gaps) are printed and do not fail "
-        "unless --strict is given.",
+        help="check any file fuzzkit reads (rule bases, scenarios, controller specs); list every "
+        "problem",
+        description="Check files fuzzkit reads, each recognised by its content: rule bases "
+        "(YAML, .fis, .fcl, .fll), scenario files and controller specs (docs/controller.md); "
+        "paths, shipped rule-base names or E1, E2, E3. Exit 0 when all are valid, 2 listing "
+        "every problem (file:line:col) otherwise. "
+        "Warnings (input ranges no term covers, in rule bases with coverage: allow_gaps) are "
+        "printed and do not fail unless --strict is given.",
         epilog="examples:\n"
         "  fuzzkit validate rulebases/*.yaml\n"
         "  fuzzkit validate --strict my_controller.yaml macvicar_whelan\n"
+        "  fuzzkit validate my_task.yaml docs/examples/heater.fis E1\n"
         "  fuzzkit validate docs/examples/controller.yaml",
     )
     p.add_argument(
         "files",
         nargs="+",
         metavar="FILE",
-        help="rule-base YAML file, shipped rule-base name or controller spec (any number)",
+        help="a rule-base, scenario or controller-spec file, or a shipped name (any number)",
     )
     p.add_argument("--strict", action="store_true", help="treat warnings (coverage gaps) as errors")
     p.set_defaults(handler=cmd_validate)
@@ -72,7 +75,8 @@ def register(sub: Any) -> None:
         "with the outputs appended). NaN inputs give NaN outputs.",
         epilog="examples:\n"
         "  fuzzkit eval macvicar_whelan -i e=0.25 -i de=-0.1\n"
-        "  fuzzkit eval macvicar_whelan --points points.csv > out.csv",
+        "  fuzzkit eval macvicar_whelan --points points.csv > out.csv\n"
+        "  fuzzkit eval macvicar_whelan -i e=0.25 -i de=-0.1 --explain --png why.png",
     )
     p.add_argument("rulebase", metavar="RULEBASE", help=RULEBASE_SPEC_HELP)
     group = p.add_mutually_exclusive_group(required=True)
@@ -90,6 +94,17 @@ def register(sub: Any) -> None:
         help="CSV file with a header of input names ('-' reads stdin)",
     )
     p.add_argument("--json", action="store_true", help="print the point's outputs as JSON")
+    p.add_argument(
+        "--explain",
+        action="store_true",
+        help="also say why (one --input point): the fuzzified inputs, every rule that fires "
+        "with its strength, and each output's aggregated set (with --json: as data)",
+    )
+    p.add_argument(
+        "--png",
+        metavar="OUT.png",
+        help="with --explain: draw each output's aggregated set and its defuzzified value",
+    )
     p.set_defaults(handler=cmd_eval)
 
     p = sub.add_parser(
@@ -166,56 +181,25 @@ def _count(n: int, noun: str) -> str:
     return f"{n} {noun}{'' if n == 1 else 's'}"
 
 
-def _controller_spec_text(arg: str) -> bool:
-    """True when ``arg`` names a readable YAML file whose content is a controller spec."""
-    from fuzzkit.control.spec_reader import looks_like_spec
-    from fuzzkit.located_yaml import MAX_FILE_BYTES
-
-    path = Path(arg)
-    try:
-        if not path.is_file() or path.stat().st_size > MAX_FILE_BYTES:
-            return False
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError):
-        return False  # the rule-base reader reports it
-    return looks_like_spec(text)
-
-
-def _validate_spec(arg: str) -> bool:
-    """Print ``FILE: ok (...)`` or every problem of a controller spec; True when valid."""
-    from fuzzkit.control.spec_reader import load_spec
-    from fuzzkit.errors import ControllerSpecError
-
-    try:
-        spec = load_spec(arg)
-    except ControllerSpecError as exc:
-        for problem in exc.problems:
-            print(f"{problem}", file=sys.stderr)
-        return False
-    axes = ", ".join(f"{a.axis} {a.setpoint_n:g} N" for a in spec.axes)
-    rb = f" on {spec.rulebase.name}" if spec.rulebase is not None else ""
-    print(f"{arg}: ok (controller spec {spec.name}: {spec.kind}{rb}; {axes})")
-    return True
-
-
 def cmd_validate(args: argparse.Namespace) -> int:
-    """Load every file, print ``FILE: ok`` or every problem; exit 2 if any is invalid."""
-    from fuzzkit.formats.registry import load_with_warnings
+    """Recognise and check every file, print ``FILE: ok (...)`` or every problem; exit 2 if any
+    is invalid (:mod:`fuzzkit.cli.file_kinds` says which kinds and how they are told apart)."""
+    from fuzzkit.cli.file_kinds import check_file
 
     failed = 0
-    noun = "rule base"
     for spec in args.files:
-        if _controller_spec_text(spec):
-            noun = "file"
-            failed += not _validate_spec(spec)
-            continue
         try:
-            rb, warnings = load_with_warnings(spec)
-        except RuleBaseError as exc:
+            checked = check_file(spec)
+        except ProblemsError as exc:
             failed += 1
             for problem in exc.problems:
                 print(f"{problem}", file=sys.stderr)
             continue
+        except FuzzkitError as exc:
+            failed += 1
+            print(f"{spec}: {exc}", file=sys.stderr)
+            continue
+        warnings = checked.warnings
         for warning in warnings:
             if args.strict:
                 print(
@@ -228,13 +212,10 @@ def cmd_validate(args: argparse.Namespace) -> int:
             failed += 1
             continue
         note = f", {_count(len(warnings), 'warning')}" if warnings else ""
-        print(
-            f"{spec}: ok ({rb.name}: {_count(len(rb.inputs), 'input')}, "
-            f"{_count(len(rb.outputs), 'output')}, {_count(len(rb.rules), 'rule')}{note})"
-        )
+        print(f"{spec}: ok ({checked.summary}{note})")
     if failed:
         print(
-            f"fuzzkit: error: {failed} of {_count(len(args.files), noun)} invalid",
+            f"fuzzkit: error: {failed} of {_count(len(args.files), 'file')} invalid",
             file=sys.stderr,
         )
         return EXIT_BAD_INPUT
@@ -443,8 +424,17 @@ def cmd_eval(args: argparse.Namespace) -> int:
 
     from fuzzkit.fuzzy.inference import Engine
 
+    if args.png is not None and not args.explain:
+        raise EvaluationError("--png draws the explanation: give --explain too")
+    if args.explain and args.points is not None:
+        raise EvaluationError("--explain explains one point: give --input NAME=VALUE, not --points")
+    if args.png is not None:
+        figure_format(args.png, "--png")
+        check_output_path(args.png, "--png file")
     rb = _load(args.rulebase)
     engine = Engine(rb)
+    if args.points is None and args.explain:
+        return _explain(rb, _parse_inputs(rb, args.inputs), args.json, args.png)
     if args.points is None:
         point = _parse_inputs(rb, args.inputs)
         result = engine.evaluate_point(point)
@@ -486,6 +476,63 @@ def cmd_eval(args: argparse.Namespace) -> int:
     for i, row in enumerate(rows):
         writer.writerow([*row, *(repr(float(outputs[n][i])) for n in rb.output_names)])
     sys.stdout.write(buf.getvalue())
+    return EXIT_OK
+
+
+_BARS = " ▁▂▃▄▅▆▇█"
+
+
+def _sparkline(mu: Any, width: int = 64) -> str:
+    """The set's membership across the range as one line of block characters."""
+    import numpy as np
+
+    cols = np.array_split(np.asarray(mu, dtype=np.float64), width)
+    return "".join(_BARS[round(float(c.max()) * (len(_BARS) - 1))] for c in cols)
+
+
+def explanation_text(rb: RuleBase, data: Any) -> str:
+    """What ``fuzzkit eval --explain`` prints for an :class:`~fuzzkit.fuzzy.explain.Explanation`."""
+    lines = []
+    for i in data.inputs:
+        fired = [f"{t} {_num(m)}" for t, m in i.memberships.items() if m > 0.0]
+        seen = "" if i.seen == i.value else f" (clamped to {_num(i.seen)})"
+        lines.append(f"{i.name} = {_num(i.value)}{seen}: {', '.join(fired) or 'no term'}")
+    ops = data.operators
+    lines.append(
+        f"rules that fire: {len(data.rules)} of {len(rb.rules)} (strength: and={ops['and']} of "
+        "the memberships, times the weight)"
+    )
+    lines += [f"  {r.strength:.4f}  #{r.index}: {r.text}" for r in data.rules]
+    for o in data.outputs:
+        var = rb.output(o.name)
+        active = ", ".join(f"{t} {_num(a)}" for t, a in o.activations.items() if a > 0.0)
+        if len(o.y):
+            lines.append(
+                f"{o.name}: aggregated set (implication {ops['implication']}, aggregation "
+                f"{ops['aggregation']}); term levels {active or 'none'}"
+            )
+            lines.append(f"  {_num(var.low)} |{_sparkline(o.mu)}| {_num(var.high)}")
+        else:
+            values = ", ".join(f"{t} = {_num(v)}" for t, v in o.term_values.items())
+            lines.append(f"{o.name}: Sugeno terms at this point: {values}; activations {active}")
+        lines.append(f"  {o.name} = {o.value!r} ({o.defuzzifier})")
+    return "\n".join(lines)
+
+
+def _explain(rb: RuleBase, point: dict[str, float], as_json: bool, png: str | None) -> int:
+    from fuzzkit.fuzzy.explain import explain
+
+    data = explain(rb, point)
+    if png is not None:
+        from fuzzkit.viz.explain_plot import write_explanation_png
+
+        write_explanation_png(rb, data, png)
+    if as_json:
+        print(json.dumps(data.as_data(), allow_nan=False))
+    else:
+        print(explanation_text(rb, data))
+        if png is not None:
+            print(f"wrote {png}")
     return EXIT_OK
 
 

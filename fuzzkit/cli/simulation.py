@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from fuzzkit.cli import RULEBASE_SPEC_HELP
+from fuzzkit.cli import EXIT_TRIPPED, RULEBASE_SPEC_HELP, add_controller_impl_argument
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
 
@@ -38,6 +38,11 @@ def _latency(text: str) -> tuple[int, int | None]:
         )
     return values[0], values[1] if len(values) == 2 else None
 
+
+FAIL_ON_TRIP_HELP = (
+    f"exit with status {EXIT_TRIPPED} when a run tripped the safety limit (after printing and "
+    "writing everything; 0 otherwise, 2 for bad input)"
+)
 
 #: ``fuzzkit compare --protocol`` choices (fuzzkit.studies.protocol.PROTOCOLS).
 PROTOCOL_CHOICES = ("matched", "tuned", "default")
@@ -115,8 +120,22 @@ def register(subparsers: Any) -> None:
         "double lookup table (both loops), or the generated C through ctypes (both loops; "
         "needs a C compiler). Default: table when compiled, exact in python",
     )
+    add_controller_impl_argument(sim)
     sim.add_argument("--rrd", metavar="OUT.rrd", help="write a Rerun recording of the run")
+    sim.add_argument(
+        "--png",
+        metavar="RUN.png",
+        help="write a figure of the run: forces against set points per axis, error, correction "
+        "(units on every axis; engagement and a trip marked)",
+    )
+    sim.add_argument(
+        "--csv",
+        metavar="RUN.csv",
+        help="write the run as CSV, one row per period: t, measured and true forces, set points, "
+        "e, de, du, u, status (columns: docs/simulation.md)",
+    )
     sim.add_argument("--json", action="store_true", help="print the metrics as JSON")
+    sim.add_argument("--fail-on-trip", action="store_true", help=FAIL_ON_TRIP_HELP)
     sim.add_argument(
         "--gains",
         metavar="GAINS.yaml",
@@ -184,8 +203,29 @@ def register(subparsers: Any) -> None:
         "(the hand-set defaults, --gains on top); see docs/simulation.md",
     )
     cmp_.add_argument("--json", action="store_true", help="print every run's metrics as JSON")
+    cmp_.add_argument("--fail-on-trip", action="store_true", help=FAIL_ON_TRIP_HELP)
     cmp_.add_argument("--rrd-dir", metavar="DIR", help="write one .rrd per run into DIR")
+    cmp_.add_argument(
+        "--png-dir", metavar="DIR", help="write one figure per run into DIR (as simulate --png)"
+    )
+    cmp_.add_argument(
+        "--csv-dir", metavar="DIR", help="write one CSV per run into DIR (as simulate --csv)"
+    )
     cmp_.set_defaults(handler=_compare)
+
+    scn = subparsers.add_parser(
+        "scenario",
+        help="print a shipped scenario file (E1, E2, E3) to start your own from",
+        description="Print the YAML of a shipped scenario, to copy and edit; the copy runs "
+        "with simulate, compare, sweep and tune as the shipped one does. Without a name, list "
+        "the shipped scenarios.",
+        epilog="examples:\n"
+        "  fuzzkit scenario E1 > my_task.yaml\n"
+        "  fuzzkit validate my_task.yaml\n"
+        "  fuzzkit simulate ./my_task.yaml",
+    )
+    scn.add_argument("name", nargs="?", metavar="NAME", help="E1, E2 or E3")
+    scn.set_defaults(handler=_scenario)
 
 
 def load_gains(path: str | None, controller: str, required: bool = True) -> dict[str, float]:
@@ -233,7 +273,11 @@ def _simulate(args: argparse.Namespace) -> int:
     exp = experiment(args.experiment)  # reject a bad name before loading anything
     if args.rrd:
         check_output_path(args.rrd, ".rrd file")
-    from fuzzkit.studies.batch import RunSpec, experiment_and_plant, gains_items, run_spec
+    from fuzzkit.viz.run_files import check_trace_path, write_run_traces
+
+    png = check_trace_path(args.png, "--png", ".png") if args.png else None
+    csv = check_trace_path(args.csv, "--csv", ".csv") if args.csv else None
+    from fuzzkit.studies.batch import RunSpec, gains_items, resolve, run_spec
 
     latency = None
     if args.latency is not None:
@@ -255,17 +299,26 @@ def _simulate(args: argparse.Namespace) -> int:
         fuzzy_impl=args.fuzzy_impl,
         fault=args.fault,
         controller_spec=args.spec,
+        controller_impl=args.controller_impl,
     )
     result = run_spec(spec)
+    ran, ran_exp, plant = resolve(spec)  # with a controller spec, its controller and rule base
+    gains, source = ran_gains(ran, ran_exp, args.gains)
     if args.rrd:
         from fuzzkit.viz.traces import write_run_rrd
 
-        plant = experiment_and_plant(spec)[1]  # the 3-D E3's floor and wall, for the drawing
-        write_run_rrd(result, args.rrd, None if isinstance(plant, str) else plant)
+        # plant: the 3-D E3's floor and wall, for the drawing
+        write_run_rrd(
+            result, args.rrd, None if isinstance(plant, str) else plant, _fuzzy(ran, gains)
+        )
+    written = write_run_traces(result, png, csv)
     data = summary(result)
+    data["gains"] = gains
+    data["gains_source"] = source
+    status = EXIT_TRIPPED if args.fail_on_trip and result.tripped else 0
     if args.json:
         print(json.dumps(data, indent=2, allow_nan=False))  # never invalid JSON
-        return 0
+        return status
     print(
         f"{data['experiment']} {data['controller']} on {data['plant']}: "
         f"{data['sim_time_s']:.2f} s simulated in {data['wall_time_s']:.2f} s "
@@ -273,6 +326,7 @@ def _simulate(args: argparse.Namespace) -> int:
         f"controller: {data['controller_impl']})"
     )
     print(f"  {result.experiment.title}")
+    print(f"  gains: {_gains_text(gains)} ({source})")
     sensor, command = data["latency_periods"]
     print(
         f"  stiffness {data['stiffness']:g} N/mm, latency {sensor} + {command} periods "
@@ -292,15 +346,50 @@ def _simulate(args: argparse.Namespace) -> int:
         print(f"  sensor faults: {result.faults}, safety trip: {result.tripped}")
     for msg, count in sorted(result.messages.items()):
         print(f"  plant: {msg} ({count} periods)")
-    if args.rrd:
-        print(f"  wrote {args.rrd}")
-    return 0
+    for path in [*([args.rrd] if args.rrd else []), *written]:
+        print(f"  wrote {path}")
+    return status
+
+
+def ran_gains(ran: Any, exp: Any, gains_file: str | None) -> tuple[dict[str, Any], str]:
+    """The complete gains a run used and where they came from: a controller spec's per axis
+    (``{axis: {kp: ..}}``), or the defaults with the gains file's values on top (as the runner
+    builds its controller)."""
+    from fuzzkit.studies.experiments import DEFAULT_GAINS
+
+    cs = exp.controller_spec
+    if cs is not None:
+        per_axis = {
+            a.axis: {k: v for k, v in (("kp", a.kp), ("ki", a.ki), ("kx", a.kx)) if v is not None}
+            for a in cs.axes
+        }
+        return per_axis, f"controller spec {cs.name}"
+    source = f"{gains_file} over the defaults" if gains_file else "the defaults"
+    return {**DEFAULT_GAINS[ran.controller], **dict(ran.gains)}, source
+
+
+def _gains_text(gains: dict[str, Any]) -> str:
+    if all(isinstance(v, dict) for v in gains.values()):
+        return "; ".join(f"{axis}: {_gains_text(g)}" for axis, g in gains.items())
+    return ", ".join(f"{k}={v:.6g}" for k, v in gains.items())
+
+
+def _fuzzy(ran: Any, gains: dict[str, Any]) -> Any:
+    """The rule base and gains of a fuzzy-PI run, for its recording's rule activity."""
+    if ran.controller != "fuzzy-pi":
+        return None
+    from fuzzkit.control.loop_rulebase import load_loop_rulebase
+
+    return load_loop_rulebase(ran.rulebase), gains
 
 
 def comparison_table(rows: list[dict[str, Any]]) -> str:
     """Format PI vs fuzzy-PI summaries (``fuzzkit.studies.experiments.summary``) as a text table."""
+    # the experiment column is as wide as its longest name (a scenario file's name can be long)
+    w = max([3, *(len(str(d["experiment"])) for d in rows)]) + 1
     head = (
-        f"{'exp':<4}{'axis':<5}{'set N':>6}  {'controller':<9}{'contact s':>10}{'overshoot %':>12}"
+        f"{'exp':<{w}}{'axis':<5}{'set N':>6}  {'controller':<9}{'contact s':>10}"
+        f"{'overshoot %':>12}"
         f"{'settle s':>10}"
         f"{'ss mean N':>11}{'ss std N':>10}{'rms move N':>12}{'peak N':>8}{'lost s':>8}"
     )
@@ -308,7 +397,7 @@ def comparison_table(rows: list[dict[str, Any]]) -> str:
     for data in rows:
         for axis, m in data["axes"].items():
             lines.append(
-                f"{data['experiment']:<4}{axis:<5}{m['setpoint']:>6g}  {data['controller']:<9}"
+                f"{data['experiment']:<{w}}{axis:<5}{m['setpoint']:>6g}  {data['controller']:<9}"
                 f"{_fmt(m.get('first_contact_s')):>10}{_fmt(m['overshoot_pct'], 1):>12}"
                 f"{_fmt(m['settling_time_s']):>10}"
                 f"{_fmt(m['steady_state_error_mean']):>11}{_fmt(m['steady_state_error_std']):>10}"
@@ -326,6 +415,11 @@ def _compare(args: argparse.Namespace) -> int:
         experiment(name)  # reject unknown names before any simulation runs
     if args.rrd_dir and not Path(args.rrd_dir).is_dir():
         raise ConfigError(f"{args.rrd_dir}: folder does not exist")
+    from fuzzkit.viz.run_files import check_trace_dir, write_run_traces
+
+    png_dir = check_trace_dir(args.png_dir, "--png-dir")
+    csv_dir = check_trace_dir(args.csv_dir, "--csv-dir")
+    from fuzzkit.control.loop_rulebase import load_loop_rulebase
     from fuzzkit.studies.e3_arm6 import resolve
     from fuzzkit.studies.protocol import format_gains, protocol_gains
     from fuzzkit.studies.runner import run
@@ -351,6 +445,10 @@ def _compare(args: argparse.Namespace) -> int:
     for name in args.experiments:
         for controller in CONTROLLERS:
             exp, plant = resolve(name, args.plant)  # E3 on arm6: the paper's 3-D geometry
+            latency = None
+            if args.latency is not None:  # one number sets the sensor delay only, as simulate
+                sensor, command = args.latency
+                latency = (sensor, exp.latency_periods[1] if command is None else command)
             result = run(
                 exp,
                 plant,
@@ -358,13 +456,23 @@ def _compare(args: argparse.Namespace) -> int:
                 gains=chosen[controller].gains,
                 surface=surface if controller == "fuzzy-pi" else None,
                 seed=args.seed,
+                latency=latency,
             )
+            stem = f"{Path(name).stem.upper()}_{controller}"  # E1_pi, MY_TASK_fuzzy-pi
             if args.rrd_dir:
                 from fuzzkit.viz.traces import write_run_rrd
 
                 write_run_rrd(
-                    result, Path(args.rrd_dir) / f"{name.upper()}_{controller}.rrd", plant
+                    result,
+                    Path(args.rrd_dir) / f"{stem}.rrd",
+                    plant,
+                    (load_loop_rulebase(args.rulebase), chosen[controller].gains),
                 )
+            write_run_traces(
+                result,
+                png_dir / f"{stem}.png" if png_dir else None,
+                csv_dir / f"{stem}.csv" if csv_dir else None,
+            )
             row = summary(result)
             row["protocol"] = args.protocol
             row["gains"] = dict(chosen[controller].gains)
@@ -377,4 +485,20 @@ def _compare(args: argparse.Namespace) -> int:
         for controller in CONTROLLERS:
             print(f"  {format_gains(chosen[controller])}")
         print(comparison_table(rows))
+    return EXIT_TRIPPED if args.fail_on_trip and any(r["tripped"] for r in rows) else 0
+
+
+def _scenario(args: argparse.Namespace) -> int:
+    from fuzzkit.studies.experiments import EXPERIMENTS, experiment
+    from fuzzkit.studies.scenario_file import shipped_scenario_text
+
+    if args.name is None:
+        for name in EXPERIMENTS:
+            print(f"{name}  {experiment(name).title}")
+        return 0
+    if args.name.upper() not in EXPERIMENTS:
+        raise ConfigError(
+            f"no shipped scenario {args.name!r} (expected one of {', '.join(EXPERIMENTS)})"
+        )
+    sys.stdout.write(shipped_scenario_text(args.name.upper()))
     return 0

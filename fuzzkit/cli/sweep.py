@@ -7,7 +7,8 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from fuzzkit.cli import RULEBASE_SPEC_HELP
+from fuzzkit.cli import EXIT_TRIPPED, RULEBASE_SPEC_HELP, add_controller_impl_argument
+from fuzzkit.cli.simulation import FAIL_ON_TRIP_HELP
 from fuzzkit.errors import ConfigError
 
 CONTROLLERS = ("pi", "fuzzy-pi")
@@ -28,9 +29,15 @@ def register(subparsers: Any) -> None:
         ),
         epilog="examples:\n"
         "  fuzzkit sweep E1 E2 --stiffness 5,10,20 --latency 0:0,2:1 --seeds 3 --out runs.csv\n"
-        "  fuzzkit sweep E2 --controller pi --scheduler tcp://127.0.0.1:8786 --out runs.parquet",
+        "  fuzzkit sweep E2 --controller pi --scheduler tcp://127.0.0.1:8786 --out runs.parquet\n"
+        "  fuzzkit sweep ./my_task.yaml --seeds 4 --out runs.csv --png-dir runs/",
     )
-    p.add_argument("experiments", nargs="+", metavar="SCENARIO", help="E1, E2, E3")
+    p.add_argument(
+        "experiments",
+        nargs="+",
+        metavar="EXPERIMENT",
+        help="E1, E2, E3 (shipped scenarios) or scenario files TASK.yaml",
+    )
     p.add_argument("--controller", default="pi,fuzzy-pi", help="comma list (default pi,fuzzy-pi)")
     p.add_argument(
         "--stiffness",
@@ -61,8 +68,8 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--plant",
         choices=sorted(PLANTS),
-        default="arm6",
-        help="simulated robot (both run on the compiled loop)",
+        default="planar",
+        help="simulated robot, as simulate, tune and report (both run on the compiled loop)",
     )
     p.add_argument(
         "--rulebase",
@@ -76,6 +83,7 @@ def register(subparsers: Any) -> None:
         default=None,
         help="default: compiled where the plant supports it",
     )
+    add_controller_impl_argument(p)
     p.add_argument("--duration", type=float, default=None, metavar="S", help="simulated time")
     p.add_argument(
         "--out",
@@ -93,7 +101,16 @@ def register(subparsers: Any) -> None:
         metavar="ADDRESS",
         help="dask.distributed scheduler address (tcp://host:8786): run there instead",
     )
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--png-dir", metavar="DIR", help="write one figure per run into DIR (as simulate --png)"
+    )
+    p.add_argument(
+        "--csv-dir", metavar="DIR", help="write one CSV per run into DIR (as simulate --csv)"
+    )
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--fail-on-trip", action="store_true", help=FAIL_ON_TRIP_HELP)
+    # the old spelling, kept working but no longer shown
+    p.add_argument("--no-progress", action="store_true", dest="quiet", help=argparse.SUPPRESS)
     p.set_defaults(handler=_sweep)
 
 
@@ -128,7 +145,9 @@ def _sweep(args: argparse.Namespace) -> int:
     from fuzzkit.studies.sweep import check_table_path, run_sweep, sweep_specs, write_table
     from fuzzkit.viz.sweep_figure import write_sweep_figure
 
-    names = [experiment(e).name for e in args.experiments]
+    for name in args.experiments:
+        experiment(name)  # a bad name or scenario file fails here, before any run
+    names = list(args.experiments)  # what each run loads: a shipped name or the file
     controllers = [c.strip() for c in args.controller.split(",")]
     for c in controllers:
         if c not in CONTROLLERS:
@@ -138,6 +157,10 @@ def _sweep(args: argparse.Namespace) -> int:
     from fuzzkit.fileio import check_output_path
 
     check_output_path(figure, "figure")
+    from fuzzkit.viz.run_files import check_trace_dir
+
+    png_dir = check_trace_dir(args.png_dir, "--png-dir")
+    csv_dir = check_trace_dir(args.csv_dir, "--csv-dir")
     ks: list[float | None] = (
         [None] if args.stiffness is None else list(_floats(args.stiffness, "--stiffness"))
     )
@@ -159,17 +182,57 @@ def _sweep(args: argparse.Namespace) -> int:
         loop=args.loop or "auto",
         duration_s=args.duration,
         controller_specs=args.spec.split(",") if args.spec else (),
+        controller_impl=args.controller_impl,
     )
     from fuzzkit.progress import progress_bar
 
-    with progress_bar(len(specs), "sweep", quiet=args.no_progress, unit="run") as bar:
+    with progress_bar(len(specs), "sweep", quiet=args.quiet, unit="run") as bar:
 
         def progress(done: int) -> None:
             bar.update(done - bar.n)
 
-        rows = run_sweep(specs, workers=args.workers, scheduler=args.scheduler, progress=progress)
+        if png_dir is None and csv_dir is None:
+            rows = run_sweep(
+                specs, workers=args.workers, scheduler=args.scheduler, progress=progress
+            )
+        else:
+            rows = run_sweep_traced(specs, png_dir, csv_dir, args.workers, args.scheduler, progress)
     write_table(rows, out)
     write_sweep_figure(rows, figure)
     where = args.scheduler or f"{args.workers or 'all'} local cores"
     print(f"{len(rows)} runs ({where}) -> {out}, {figure}")
-    return 0
+    tripped = sum(bool(r.get("tripped")) for r in rows)
+    if tripped:
+        print(f"{tripped} of {len(rows)} runs tripped the safety limit")
+    return EXIT_TRIPPED if args.fail_on_trip and tripped else 0
+
+
+def run_sweep_traced(
+    specs: list[Any],
+    png_dir: Path | None,
+    csv_dir: Path | None,
+    workers: int | None,
+    scheduler: str | None,
+    progress: Any,
+) -> list[dict[str, Any]]:
+    """:func:`fuzzkit.studies.sweep.run_sweep`, also writing each run's figure and CSV as
+    ``run<index>.png``/``.csv`` (the index is the row's ``run`` column); the workers render them,
+    this process writes them (atomically)."""
+    from fuzzkit.studies.batch import map_runs
+    from fuzzkit.viz.run_files import execute_traced, write_traces
+
+    for s in specs:
+        s.resolved_loop()
+    items = [(s, png_dir is not None, csv_dir is not None) for s in specs]
+    done = map_runs(execute_traced, items, workers=workers, scheduler=scheduler, progress=progress)
+    rows = []
+    width = len(str(len(done) - 1))
+    for index, (row, files) in enumerate(done):
+        stem = f"run{index:0{width}d}"
+        write_traces(
+            files,
+            png_dir / f"{stem}.png" if png_dir else None,
+            csv_dir / f"{stem}.csv" if csv_dir else None,
+        )
+        rows.append({"run": stem, **row})
+    return rows

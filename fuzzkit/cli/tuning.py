@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from fuzzkit.cli import EXIT_INTERRUPTED, RULEBASE_SPEC_HELP
+from fuzzkit.cli import EXIT_INTERRUPTED, RULEBASE_SPEC_HELP, add_controller_impl_argument
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
 
@@ -75,6 +75,7 @@ def register(subparsers: Any) -> None:
         default=None,
         help="default: the compiled loop where the plant has one (arm6, planar)",
     )
+    add_controller_impl_argument(tune)
     tune.add_argument(
         "--scheduler",
         default=None,
@@ -134,7 +135,8 @@ def register(subparsers: Any) -> None:
             "the latency map, the comparison table and the paper's claims judged per setting "
             "(default, matched, tuned gains; matched and tuned at every latency and stiffness "
             "of the sweeps), plus one .rrd per run. Tunes both controllers on the same problem "
-            "(E1-E3 on arm6, 5/10/20 N/mm x latency 0+0, 1+1, 3+3) unless --gains-dir holds "
+            "(E1-E3 on the report's plant, planar for --plant both, 5/10/20 N/mm x latency "
+            "0+0, 1+1, 3+3) unless --gains-dir holds "
             "pi.yaml and fuzzy-pi.yaml. The folder appears complete or not at all: "
             "Ctrl-C stops with exit status 130 and leaves no partial report."
         ),
@@ -244,6 +246,7 @@ def _tune(args: argparse.Namespace) -> int:
             latencies=latencies,
             loop=loop,
             scheduler=args.scheduler,
+            controller_impl=args.controller_impl,
             constraint=constraint,
         )
     if constraint is not None:
@@ -446,7 +449,7 @@ def _report(args: argparse.Namespace) -> int:
         rrd=not args.no_rrd,
         log=None if args.quiet else sys.stderr,
         specs=[Path(p) for p in args.spec.split(",")] if args.spec else (),
-        **(quick_options() if args.quick else {}),
+        **(quick_options(plants[0]) if args.quick else {}),
     )
     print(f"wrote {path}")
     return 0

@@ -431,6 +431,18 @@ class HybridForceController:
         self._e_last = self.e.copy()
         return self._output()
 
+    def wait(self) -> Vec:
+        """A period in which no sample can have arrived yet (at start-up, while the sensor's
+        latency queue still holds no measurement): the output is held, as for a missing sample,
+        but it is not counted as a sensor fault."""
+        self._t += self.period_s
+        self.du = np.zeros(3)
+        self.status = st.HELD
+        self._above = 0
+        if self.front_end is not None and self.front_end.taring:
+            self.status |= st.TARING
+        return self._output()
+
     def _tare(self, fe: FrontEnd, force: Vec, rotation: Vec | None) -> Vec:
         """One tare sample: the spike gate keeps spikes out of the bias (a level confirmed
         after ``spike_confirm`` rejections restarts the tare: what came before was the

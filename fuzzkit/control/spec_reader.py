@@ -77,9 +77,6 @@ BACKOFF_KEYS = ("distance_m", "speed_m_s")
 SENSOR_KEYS = ("tare", "tool", "lowpass_hz")
 TARE_KEYS = ("samples",)
 TOOL_KEYS = ("mass_kg", "com_m")
-#: Rule-base references ending so (or holding a path separator) are paths, others names.
-RULEBASE_SUFFIXES = (".yaml", ".yml", ".fis", ".fcl", ".fll")
-
 #: Largest sample count a spec may give (tare, debounce, confirmation): 4000 s at 4 ms.
 MAX_SAMPLES = 1_000_000
 
@@ -225,10 +222,10 @@ class _SpecReader(NodeReader):
                 self.error(node, "a pi controller takes no rule base; remove 'rulebase'")
             self.quiet.add(("rulebase",))
             return None, ref, None
-        from fuzzkit.formats.registry import load
+        from fuzzkit.formats.registry import load, looks_like_path
 
         target: str | Path = ref
-        if ref.lower().endswith(RULEBASE_SUFFIXES) or "/" in ref or os.sep in ref:
+        if looks_like_path(ref):
             path = Path(ref)
             target = path if path.is_absolute() or self.base_dir is None else self.base_dir / path
         try:

@@ -74,7 +74,9 @@ def available() -> list[str]:
     )
 
 
-def _looks_like_path(spec: str) -> bool:
+def looks_like_path(spec: str) -> bool:
+    """True when ``spec`` names a file (a rule-base extension or a path separator), not a
+    shipped rule base."""
     return (
         spec.lower().endswith(_SUFFIXES + tuple(READERS))
         or os.sep in spec
@@ -113,7 +115,7 @@ def load_with_warnings(name_or_path: str | os.PathLike[str]) -> tuple[RuleBase, 
     if isinstance(name_or_path, os.PathLike):
         return _load_path(Path(name_or_path))
     spec = str(name_or_path)
-    if _looks_like_path(spec):
+    if looks_like_path(spec):
         return _load_path(spec)
     names = available()
     if spec not in names:

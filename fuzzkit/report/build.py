@@ -79,14 +79,16 @@ FIGURE_DPI = 80
 # --------------------------------------------------------------------------------------------
 
 
-def quick_options() -> dict[str, Any]:
+def quick_options(plant: str = "planar") -> dict[str, Any]:
     """Keyword arguments of :func:`build_report` for a small, fast report (``fuzzkit report
-    --quick``; the tests): tuning over 10 N/mm x latencies 1+1 and 3+3, the stiffness study
-    and the verdicts at 10 and 1000 N/mm, the latency map for 1x and 8x the gains up to 3
-    periods. Every section is there; only the sweeps are shorter."""
+    --quick``; the tests): tuning on ``plant`` over 10 N/mm x latencies 1+1 and 3+3, the
+    stiffness study and the verdicts at 10 and 1000 N/mm, the latency map for 1x and 8x the gains
+    up to 3 periods. Every section is there; only the sweeps are shorter."""
     return {
         "stiffnesses_n_per_mm": (10.0, 1000.0),
-        "tuning": TuningSetup(stiffnesses_n_per_mm=(10.0,), latencies=((1, 1), (3, 3))),
+        "tuning": TuningSetup(
+            plant=plant, stiffnesses_n_per_mm=(10.0,), latencies=((1, 1), (3, 3))
+        ),
         "verdict_latencies": ((0, 0), (1, 1), (3, 3)),
         "latency_factors": (1.0, 8.0),
         "latency_delays": (0, 1, 2, 3),
@@ -145,7 +147,7 @@ def build_report(
     ConfigError
         Unusable output folder, missing or bad gains files, unknown plant or rule base.
     """
-    from fuzzkit.formats.registry import load
+    from fuzzkit.control.loop_rulebase import load_loop_rulebase
     from fuzzkit.studies.batch import experiment_and_plant, run_spec
     from fuzzkit.studies.experiments import DEFAULT_GAINS, press_experiment
     from fuzzkit.studies.metrics import summary
@@ -165,7 +167,7 @@ def build_report(
 
     for path in specs:
         load_spec(path)  # a bad spec: fail before any work
-    rb = load(rulebase)
+    rb = load_loop_rulebase(rulebase)  # unfit for the loop: fail before any work
     final = out
     # Everything is written into a staging folder that becomes ``out`` only when complete:
     # Ctrl-C or an error at any point leaves no partial report.
@@ -182,7 +184,15 @@ def build_report(
         for ctrl in CONTROLLERS:
             gains[(ctrl, "default")] = dict(DEFAULT_GAINS[ctrl])
             g, prov, setups[ctrl] = gains_for(
-                ctrl, gains_dir, out, tuning or TuningSetup(), budget, rulebase, seed, workers, log
+                ctrl,
+                gains_dir,
+                out,
+                tuning or TuningSetup(plant=plants[0]),  # tuned on the plant the report runs
+                budget,
+                rulebase,
+                seed,
+                workers,
+                log,
             )
             gains[(ctrl, "tuned")] = g
             provenance[ctrl] = prov

@@ -26,9 +26,8 @@ from fuzzkit.studies.tuning_check import CaseComparison, compare_gains
 class TuningSetup:
     """What both controllers are tuned on: experiments, plant, stiffnesses and latencies.
 
-    The plant defaults to ``arm6`` because its closed loop is compiled (about 1,300x real time:
-    a gain set costs a fraction of a second over all 27 cases); the planar plant runs the same
-    problem in its Python loop, some 40 times slower.
+    The report tunes on the plant it runs (``build_report``: the first of its plants); this
+    class's default, ``arm6``, is for callers that name none.
     The per-case table of the report shows where the tuned gains are a compromise.
     """
 

@@ -31,6 +31,9 @@ LOOPS = ("auto", "compiled", "python")
 #: double lookup ``table`` (both loops), the generated ``c`` through ctypes (both loops);
 #: ``auto``: the table in the compiled loop, the exact engine in the Python loop.
 FUZZY_IMPLS = ("auto", "exact", "table", "c")
+#: Which controller runs: ``python``, fuzzkit's own (the reference; in the compiled loop its
+#: numba twin), or ``c``, the whole generated C controller of the run's spec (compiled loop).
+CONTROLLER_IMPLS = ("python", "c")
 
 
 @dataclass(frozen=True, slots=True)
@@ -46,6 +49,8 @@ class RunSpec:
     ``duration_s``: None runs the experiment's whole duration. ``controller_spec``: a
     controller spec file (``docs/controller.md``) whose controller runs instead of
     ``controller`` with ``gains`` (a scenario with a ``controller:`` runs its own).
+    ``controller_impl``: ``python`` (fuzzkit's controller) or ``c`` (the run's controller spec,
+    given or built from the settings, generated as C and run in the compiled loop).
     """
 
     experiment: str
@@ -62,6 +67,7 @@ class RunSpec:
     fuzzy_impl: str = "auto"
     fault: str | None = None
     controller_spec: str | None = None
+    controller_impl: str = "python"
 
     def resolved_loop(self) -> str:
         """``compiled`` or ``python``: what ``auto`` means for this plant."""
@@ -101,6 +107,10 @@ def run_spec(spec: RunSpec) -> RunResult:
     from fuzzkit.studies.faults import fault
 
     spec, exp, plant = resolve(spec)
+    if spec.controller == "fuzzy-pi":
+        from fuzzkit.control.loop_rulebase import load_loop_rulebase
+
+        load_loop_rulebase(spec.rulebase)  # what the loop needs, said before any table search
     if spec.stiffness_n_per_mm is not None:
         k = spec.stiffness_n_per_mm
         if not (math.isfinite(k) and k > 0.0):
@@ -112,6 +122,13 @@ def run_spec(spec: RunSpec) -> RunResult:
     if impl not in FUZZY_IMPLS:
         raise ConfigError(f"unknown fuzzy implementation {impl!r} (expected {FUZZY_IMPLS})")
     loop = spec.resolved_loop()
+    if spec.controller_impl not in CONTROLLER_IMPLS:
+        raise ConfigError(
+            f"unknown controller implementation {spec.controller_impl!r} "
+            f"(expected {', '.join(CONTROLLER_IMPLS)})"
+        )
+    if spec.controller_impl == "c":
+        return _run_generated(spec, exp, plant, faults, loop)
     fallback = ""
     if loop == "compiled":
         if impl == "exact":
@@ -182,6 +199,43 @@ def run_spec(spec: RunSpec) -> RunResult:
     return result
 
 
+def _run_generated(spec: RunSpec, exp: Experiment, plant: Any, faults: Any, loop: str) -> RunResult:
+    """``spec`` with the whole generated C controller in the compiled loop."""
+    from fuzzkit.plants.contract import UnsupportedPlant
+    from fuzzkit.studies.compiled.generated_controller import (
+        load_generated_controller,
+        run_controller_spec,
+    )
+    from fuzzkit.studies.compiled.loop import run_compiled
+
+    if loop != "compiled":
+        raise ConfigError(
+            "--controller-impl c runs the generated controller in the compiled loop (arm6, "
+            "planar); leave out --loop python"
+        )
+    if spec.fuzzy_impl != "auto":
+        raise ConfigError(
+            "--controller-impl c runs the generated controller's own fuzzy surface (the exact "
+            f"method); leave out --fuzzy-impl {spec.fuzzy_impl}"
+        )
+    ctl_spec = run_controller_spec(exp, spec.controller, dict(spec.gains), spec.rulebase)
+    generated = load_generated_controller(ctl_spec)
+    try:
+        return run_compiled(
+            exp,
+            plant,
+            seed=spec.seed,
+            faults=faults,
+            latency=spec.latency,
+            duration_s=spec.duration_s,
+            generated_controller=generated,
+        )
+    except UnsupportedPlant as exc:
+        raise ConfigError(
+            f"--controller-impl c runs only in the compiled loop, which cannot run this: {exc}"
+        ) from exc
+
+
 @lru_cache(maxsize=8)
 def _load_controller_spec(path: str) -> Any:
     from fuzzkit.control.spec_reader import load_spec
@@ -235,9 +289,14 @@ def execute(spec: RunSpec) -> dict[str, Any]:
     Per-axis metrics are flattened as ``<axis>_<metric>`` (``z_overshoot_pct`` ...); axes that
     are not force-controlled are absent (the table fills them with empty cells).
     """
+    return result_row(spec, run_spec(spec))
+
+
+def result_row(spec: RunSpec, result: RunResult) -> dict[str, Any]:
+    """The tidy row of :func:`execute` for a run of ``spec`` that already ran."""
     from fuzzkit.studies.metrics import summary
 
-    data = summary(run_spec(spec))
+    data = summary(result)
     spec = resolve(spec)[0]  # the controller and rule base a controller spec chose
     row: dict[str, Any] = {
         "experiment": spec.experiment,

@@ -77,6 +77,9 @@ class RunResult:
     cpu_time_s: float = 0.0
     #: which controller implementation ran (exact engine, lookup table, generated C ...)
     controller_impl: str = ""
+    #: the controller's status bits per period (fuzzkit.control.status), where it reports them
+    #: (the Python loop's controller, the generated C controller); None otherwise
+    status: npt.NDArray[np.int64] | None = None
 
     @property
     def real_time_factor(self) -> float:
@@ -91,10 +94,10 @@ class RunResult:
 
 def load_surface(rulebase: str = "macvicar_whelan") -> Surface:
     """The control surface of a rule base (shipped name or YAML path), by the exact engine."""
-    from fuzzkit.formats.registry import load
+    from fuzzkit.control.loop_rulebase import load_loop_rulebase
     from fuzzkit.fuzzy.inference import Engine
 
-    rb = load(rulebase)
+    rb = load_loop_rulebase(rulebase)
     return engine_surface(Engine(rb))
 
 
@@ -154,7 +157,8 @@ def run(
 
     Timing of period k: the plant moves with the correction it receives, its measured force
     passes the fault injection into the sensor queue, the controller consumes the sample of
-    ``sensor`` periods ago (the queue starts filled with the reset sample's force), and its
+    ``sensor`` periods ago (the queue starts filled with the reset sample's force: when that is no
+    measurement, those start-up periods wait, uncounted as sensor faults), and its
     correction enters the command queue, whose output (``command`` periods old; zeros at the
     start) the plant receives in period k + 1. ``controller_impl`` is only a label for the
     result.
@@ -171,6 +175,7 @@ def run(
     records: list[tuple[Any, ...]] = []
     arm_points: list[Vec] = []
     contact_points: list[Vec] = []
+    statuses: list[int] = []
     messages: dict[str, int] = {}
     engaged_at: float | None = None
     path_t = 0.0
@@ -184,7 +189,8 @@ def run(
     command_queue: deque[Vec] = deque(np.zeros(3) for _ in range(command_delay))
     wall0 = time.perf_counter()
     cpu0 = time.process_time()
-    for _ in range(n):
+    controlled = np.asarray(exp.selection, dtype=bool)
+    for k in range(n):
         held = ctrl.tripped or (
             exp.hold_path_on_contact and ctrl.engaged and engaged_at is not None
         )
@@ -195,7 +201,10 @@ def run(
         delivered = inject(sample.t_s, sample.force)
         sensor_queue.append((delivered, _rotation(scn, sample)))
         measured, rotation = sensor_queue.popleft()
-        correction_task = ctrl.step(measured, rotation)
+        if k < sensor_delay and not np.all(np.isfinite(measured[controlled])):
+            correction_task = ctrl.wait()  # start-up: no measurement can have arrived yet
+        else:
+            correction_task = ctrl.step(measured, rotation)
         # the correction is along the controller's (the sensor's) axes at that sample
         command_queue.append(rotation @ correction_task)
         applied = command_queue.popleft()
@@ -226,6 +235,7 @@ def run(
             )
         )
         arm_points.append(sample.arm_points)
+        statuses.append(ctrl.status)
         contact_points.append(sample.contact_points)
     wall = time.perf_counter() - wall0
     cpu = time.process_time() - cpu0
@@ -266,6 +276,7 @@ def run(
         loop="python",
         cpu_time_s=cpu,
         controller_impl=controller_impl or _impl_label(exp, controller, hybrid, surface),
+        status=np.asarray(statuses, dtype=np.int64),
     )
 
 

@@ -39,11 +39,13 @@ def sweep_specs(
     loop: str = "auto",
     duration_s: float | None = None,
     controller_specs: Sequence[str] = (),
+    controller_impl: str = "python",
 ) -> list[RunSpec]:
     """Every combination, as run specs.
 
     ``controller_specs``: controller spec files, each a value of the sweep in place of the
     ``controllers`` (a spec holds its controller and gains, so ``gains`` must be None).
+    ``controller_impl``: ``python`` or ``c`` (:class:`~fuzzkit.studies.batch.RunSpec`).
 
     ``gains`` maps a label (a gains file name) to per-controller overrides
     (``{label: {controller: {name: value}}}``); None runs the default gains only.
@@ -90,6 +92,7 @@ def sweep_specs(
                 loop=loop,
                 duration_s=duration_s,
                 controller_spec=cspec,
+                controller_impl=controller_impl,
             )
         )
     return specs

@@ -17,6 +17,7 @@ from typing import Any
 FORCES = "forces"
 ERROR = "control/error"
 CORRECTION = "control/correction"
+RULES = "control/rules"
 JOINTS = "joints"
 WORLD = "world"
 
@@ -56,12 +57,14 @@ def run_blueprint(
     title: str,
     eye: tuple[Vec3, Vec3] | None = None,
     duration_s: float | None = None,
+    rules: bool = False,
 ) -> Any:
     """The layout of a closed-loop run's recording (``controlled_axes``: "x", "z", ...): a
     column per force-controlled axis (force vs set point, error, correction), then the 3-D
-    scene seen from ``eye`` (joint angles in a second tab). Every plot opens on the run's whole
-    ``duration_s`` (0 s to the end), so series that start late (e at engagement) line up with
-    the forces."""
+    scene seen from ``eye`` (joint angles in a second tab; with ``rules``, a fuzzy-PI run that
+    logged its strongest rules under ``control/rules``, two tabs more). Every plot opens on the
+    run's whole ``duration_s`` (0 s to the end), so series that start late (e at engagement)
+    line up with the forces."""
     import rerun as rr
     import rerun.blueprint as rrb
 
@@ -85,10 +88,16 @@ def run_blueprint(
         )
         for axis in controlled_axes
     ]
-    scene = rrb.Tabs(
+    tabs = [
         scene_view(WORLD, f"3-D scene: {title} (m)", eye),
         plot(JOINTS, "joint angles"),
-    )
+    ]
+    if rules:
+        tabs += [
+            rrb.TextLogView(origin=RULES, name="strongest fuzzy rules per period"),
+            plot(RULES, "strongest rule's strength (0-1)"),
+        ]
+    scene = rrb.Tabs(*tabs)
     return rrb.Blueprint(
         rrb.Horizontal(*columns, scene, column_shares=[2] * len(columns) + [3]),
         *_panels(),

@@ -36,7 +36,7 @@ RULE_WRAP = 66
 SAMPLES = 801
 
 
-def _term_curve(var: Variable, index: int) -> tuple[Any, Any]:
+def term_curve(var: Variable, index: int) -> tuple[Any, Any]:
     """``x`` over the range and ``mu(x)``: a piecewise-linear term exactly, by its corners (a
     few points, so SVGs stay small), a smooth one sampled at :data:`SAMPLES` points."""
     term = var.terms[index]
@@ -64,7 +64,7 @@ def _plot_variable(ax: Any, var: Variable, kind: str) -> None:
             ax.plot([value], [1.0], "o", color=colour, ms=4)
             at = value
         else:
-            x, mu = _term_curve(var, k)
+            x, mu = term_curve(var, k)
             ax.plot(x, mu, color=colour, lw=1.6)
             ax.fill_between(x, mu, color=colour, alpha=0.08, lw=0)
             at = _peak(x, mu)

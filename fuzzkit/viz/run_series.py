@@ -140,13 +140,18 @@ def scene_eye(result: RunResult, extra: npt.ArrayLike | None = None) -> tuple[An
 
 
 def run_recording_blueprint(
-    result: RunResult, title: str, extra_scene_points: npt.ArrayLike | None = None
+    result: RunResult,
+    title: str,
+    extra_scene_points: npt.ArrayLike | None = None,
+    rules: bool = False,
 ) -> Any:
     """The default layout of a run's recording: per force-controlled axis its force, error
-    and correction; the 3-D scene (camera on the whole arm) and the joint angles beside."""
+    and correction; the 3-D scene (camera on the whole arm) and the joint angles beside
+    (``rules``: and the fuzzy-PI's strongest rules)."""
     controlled = [a for i, a in enumerate(AXES) if result.experiment.selection[i]]
     end = float(result.t[-1]) if len(result.t) else None
-    return run_blueprint(controlled, title, scene_eye(result, extra_scene_points), end)
+    eye = scene_eye(result, extra_scene_points)
+    return run_blueprint(controlled, title, eye, end, rules=rules)
 
 
 def log_world_axes(rec: Any) -> None:

@@ -40,6 +40,7 @@ from fuzzkit.plants.environment3d import (
 )
 from fuzzkit.studies.runner import RunResult
 from fuzzkit.viz.recording import open_recording
+from fuzzkit.viz.rule_activity import RuleRecording
 from fuzzkit.viz.run_series import (
     ARM_COLOUR,
     TOOL_COLOUR,
@@ -99,6 +100,7 @@ def write_rrd(
     path: str | os.PathLike[str],
     geometry_every: int = 5,
     params: Arm6Parameters | None = None,
+    rules: RuleRecording | None = None,
 ) -> Path:
     """Write an arm6 run as a 3-D Rerun recording at ``path`` (temporary file, then rename).
 
@@ -136,10 +138,12 @@ def write_rrd(
         path,
         f"fuzzkit_{exp.name}_{result.controller}_arm6",
         f"{exp.name}-{result.controller}-arm6",
-        blueprint=run_recording_blueprint(result, title, base_box),
+        blueprint=run_recording_blueprint(result, title, base_box, rules=rules is not None),
     ) as rec:
         times = rr.TimeColumn("sim_time", duration=result.t)
         log_control_series(rec, result, times)
+        if rules is not None:
+            rules.log(rec)
         log_world_axes(rec)
         names = [f"axis {j + 1}" for j in range(6)]
         log_joint_angles(rec, times, np.degrees(result.joint_angles), names, "deg")

@@ -8,6 +8,8 @@ Entity layout (timeline ``sim_time``, a duration in seconds):
 * ``control/error/<axis>/e``, ``/de`` (N) and ``control/correction/<axis>/du`` (mm) from the
   moment the force loop engages, ``control/correction/<axis>/u`` (mm) from the start, for every
   force-controlled axis; every series name ends with its unit
+* ``control/rules/<axis>`` (text: the fuzzy-PI's strongest rules and strengths per controlled
+  period) and ``control/rules/<axis>/strongest`` (0-1), when the writer is given the rule base
 * ``world/axes`` (labelled x, y, z arrows, 0.1 m)
 * ``joints/q<i>`` (rad, one colour each)
 * ``world/arm`` (line strip base -> joints -> tool tip), ``world/tool`` (tool contact disc),
@@ -32,6 +34,7 @@ from fuzzkit.errors import ConfigError
 from fuzzkit.plants.environment import Box, EnvObject, RoughSurface, Table
 from fuzzkit.studies.runner import RunResult
 from fuzzkit.viz.recording import open_recording
+from fuzzkit.viz.rule_activity import RuleRecording
 from fuzzkit.viz.run_series import (
     ARM_COLOUR,
     TOOL_COLOUR,
@@ -69,7 +72,12 @@ def _circle(cx: float, cz: float, r: float, n: int = 24) -> list[list[float]]:
     return [[cx + r * math.cos(t), 0.0, cz + r * math.sin(t)] for t in a]
 
 
-def write_rrd(result: RunResult, path: str | os.PathLike[str], geometry_every: int = 5) -> Path:
+def write_rrd(
+    result: RunResult,
+    path: str | os.PathLike[str],
+    geometry_every: int = 5,
+    rules: RuleRecording | None = None,
+) -> Path:
     """Write ``result`` as a Rerun recording at ``path`` (temporary file, then rename).
 
     ``geometry_every``: log the arm and contacts every that many controller periods (the
@@ -82,10 +90,14 @@ def write_rrd(result: RunResult, path: str | os.PathLike[str], geometry_every: i
         path,
         f"fuzzkit_{exp.name}_{result.controller}",
         f"{exp.name}-{result.controller}",
-        blueprint=run_recording_blueprint(result, f"{exp.name} {result.controller}, planar arm"),
+        blueprint=run_recording_blueprint(
+            result, f"{exp.name} {result.controller}, planar arm", rules=rules is not None
+        ),
     ) as rec:
         times = rr.TimeColumn("sim_time", duration=result.t)
         log_control_series(rec, result, times, PLANAR_AXES)
+        if rules is not None:
+            rules.log(rec)
         log_world_axes(rec)
         names = [f"q{j + 1}" for j in range(result.joint_angles.shape[1])]
         log_joint_angles(rec, times, result.joint_angles, names, "rad")

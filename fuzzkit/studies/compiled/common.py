@@ -16,6 +16,7 @@ from fuzzkit.errors import ConfigError
 from fuzzkit.plants.contract import UnsupportedPlant
 from fuzzkit.studies.compiled import period as P
 from fuzzkit.studies.compiled.generated_c import GeneratedC
+from fuzzkit.studies.compiled.generated_controller import GeneratedController
 from fuzzkit.studies.compiled.table import table_arrays
 from fuzzkit.studies.experiments import DEFAULT_GAINS, Experiment
 from fuzzkit.studies.faults import Faults, fault_name, fault_schedule
@@ -35,6 +36,10 @@ class ControllerArgs:
     setpoints: FloatArray
     table: tuple[FloatArray, FloatArray, FloatArray, IntArray]
     c_eval: Any  # None, or the generated C's NAME_eval (ctypes) that replaces the table
+    #: None, or the generated controller's NAME_controller_step (ctypes) that replaces the
+    #: loop's controller, and its fresh NAME_controller_t
+    c_step: Any
+    c_state: FloatArray
     spike: FloatArray
     nan: BoolArray
     impl: str
@@ -53,9 +58,19 @@ def controller_args(
     duration_s: float | None,
     latency: tuple[int, int] | None,
     generated_c: GeneratedC | None = None,
+    generated_controller: GeneratedController | None = None,
 ) -> ControllerArgs:
     """The controller arguments of a compiled run: gains, safeguards, latency, fault schedule
-    and the fuzzy-PI's table, as ``runner.run`` would set them up."""
+    and the fuzzy-PI's table, as ``runner.run`` would set them up; or, with
+    ``generated_controller``, the generated C controller that replaces the loop's controller
+    (its spec's safeguards set the loop's initial engagement and the path hold's rule)."""
+    if generated_controller is not None:
+        if table is not None or generated_c is not None:
+            raise ConfigError(
+                "the generated controller holds its own fuzzy surface; give no table or "
+                "generated surface with it"
+            )
+        return _generated_args(exp, generated_controller, seed, faults, duration_s, latency)
     if controller not in DEFAULT_GAINS:
         raise ConfigError(f"unknown controller {controller!r} (expected pi or fuzzy-pi)")
     if controller == "fuzzy-pi" and table is None and generated_c is None:
@@ -127,6 +142,8 @@ def controller_args(
         setpoints=np.asarray(exp.setpoints, dtype=np.float64),
         table=arrays,
         c_eval=c_eval,
+        c_step=None,
+        c_state=np.zeros(1),
         spike=spike,
         nan=nan,
         impl=impl,
@@ -134,6 +151,30 @@ def controller_args(
         latency=(sensor_delay, command_delay),
         periods=n,
     )
+
+
+def _generated_args(
+    exp: Experiment,
+    generated: GeneratedController,
+    seed: int,
+    faults: Faults | None,
+    duration_s: float | None,
+    latency: tuple[int, int] | None,
+) -> ControllerArgs:
+    """The compiled run's arguments around a generated controller: the loop's parameter
+    vector carries only what the loop itself does (period, delays, faults, path hold, the
+    initial engagement); the controller's settings are baked into its code."""
+    from dataclasses import replace
+
+    from fuzzkit.studies.task import with_spec
+
+    # the spec's axes, set points and safeguards; the loop's own arguments built without it
+    plain = replace(with_spec(exp, generated.spec), controller_spec=None)
+    ctrl = controller_args(plain, "pi", None, None, seed, faults, duration_s, latency)
+    ctrl.c_step = generated.step_function
+    ctrl.c_state = generated.fresh_state()
+    ctrl.impl = generated.label + " (compiled loop)"
+    return ctrl
 
 
 def _front_end_params(exp: Experiment, cp: FloatArray) -> None:
@@ -227,11 +268,13 @@ def result_from_recording(
         loop="compiled",
         cpu_time_s=cpu,
         controller_impl=ctrl.impl,
+        status=rec["status"] if ctrl.c_step is not None else None,
     )
 
 
-#: Kernel variants already loaded in this process: (kernel name, runs the generated C).
-_WARMED: set[tuple[str, bool]] = set()
+#: Kernel variants already loaded in this process: (kernel name, runs the generated C
+#: surface, runs the generated C controller).
+_WARMED: set[tuple[str, bool, bool]] = set()
 
 
 def warm_up(
@@ -239,17 +282,22 @@ def warm_up(
     args: tuple[Any, ...],
     rec: dict[str, Any],
     scalars: Any,
-    generated_c: bool,
+    ctrl: ControllerArgs,
 ) -> None:
     """Run ``kernel`` over zero periods once per process and variant, with the run's argument
     types.
 
     The first call loads the machine code from numba's on-disk cache (or compiles it after an
-    install); done here, that start-up cost stays out of the loop's CPU time. The table and the
-    generated-C variants are separate specialisations (``c_eval`` is typed ``None`` or by the
-    C function's signature), each compiled and cached once.
+    install); done here, that start-up cost stays out of the loop's CPU time. The table, the
+    generated-surface and the generated-controller variants are separate specialisations
+    (``c_eval`` and ``c_step`` are typed ``None`` or by the C function's signature), each
+    compiled and cached once. Zero periods never call the controller, so its state is untouched.
     """
-    key = (getattr(kernel, "__name__", repr(kernel)), generated_c)
+    key = (
+        getattr(kernel, "__name__", repr(kernel)),
+        ctrl.c_eval is not None,
+        ctrl.c_step is not None,
+    )
     if key in _WARMED:
         return
     state = [np.array(x, copy=True) if isinstance(x, np.ndarray) else x for x in args]

@@ -49,10 +49,10 @@ def load_generated_c(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3)
     """
     from fuzzkit.codegen.emit import emit
     from fuzzkit.codegen.toolchain import CompiledTable
-    from fuzzkit.formats.registry import load
+    from fuzzkit.control.loop_rulebase import load_loop_rulebase
     from fuzzkit.studies.compiled.table import load_table
 
-    rb = load(rulebase)
+    rb = load_loop_rulebase(rulebase)
     table = load_table(rulebase, tolerance)
     files = emit(rb, table, "c")
     lib = CompiledTable(files, rb.name, "double", 2, 1, fpi=False)

@@ -2,7 +2,8 @@
 
 :func:`run_compiled` takes the arguments of :func:`fuzzkit.studies.runner.run` that the compiled
 loop models; :func:`compiled_supports` says when it applies (the ``arm6`` and ``planar``
-plants, PI or fuzzy-PI with a double lookup table, or with the generated C through ctypes). The
+plants, PI or fuzzy-PI with a double lookup table, or with the generated C through ctypes;
+or a spec's whole generated C controller). The
 plant is reset in Python (arm6: the start pose's IK with its seeds; planar: the pymunk space),
 then one compiled call runs every period (the planar one in
 :mod:`fuzzkit.studies.compiled.planar_loop`).
@@ -30,6 +31,7 @@ from fuzzkit.studies.compiled.common import (
     warm_up,
 )
 from fuzzkit.studies.compiled.generated_c import GeneratedC
+from fuzzkit.studies.compiled.generated_controller import GeneratedController
 from fuzzkit.studies.compiled.table import TableArrays, cached_table, load_table
 from fuzzkit.studies.experiments import Experiment
 from fuzzkit.studies.faults import Faults
@@ -63,9 +65,11 @@ def _shared_plant() -> Arm6Plant:
 
 def compiled_table(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3) -> TableArrays:
     """:func:`load_table`'s arrays, from the on-disk cache after the first build."""
-    from fuzzkit.formats.registry import load
+    from fuzzkit.control.loop_rulebase import load_loop_rulebase
 
-    return cached_table(load(rulebase), tolerance, lambda: load_table(rulebase, tolerance))
+    return cached_table(
+        load_loop_rulebase(rulebase), tolerance, lambda: load_table(rulebase, tolerance)
+    )
 
 
 def run_compiled(
@@ -80,6 +84,7 @@ def run_compiled(
     duration_s: float | None = None,
     latency: tuple[int, int] | None = None,
     generated_c: GeneratedC | None = None,
+    generated_controller: GeneratedController | None = None,
 ) -> RunResult:
     """Run ``exp`` on the arm6 or the planar plant with the compiled loop; same semantics as
     ``runner.run``.
@@ -88,8 +93,11 @@ def run_compiled(
     :func:`load_table`, or its :class:`TableArrays`, see :func:`compiled_table`).
     ``generated_c`` (:func:`fuzzkit.studies.compiled.generated_c.load_generated_c`) makes the
     fuzzy-PI call the rule base's generated C instead of the table's arithmetic. One of the two
-    is required for ``fuzzy-pi``. ``faults`` and ``latency`` default to the experiment's, as in
-    ``runner.run``.
+    is required for ``fuzzy-pi``. ``generated_controller``
+    (:func:`fuzzkit.studies.compiled.generated_controller.load_generated_controller`) replaces
+    the loop's whole controller by a spec's generated C controller (``controller``, ``gains``
+    and ``table`` are then not used: its spec holds them). ``faults`` and ``latency`` default
+    to the experiment's, as in ``runner.run``.
 
     Raises
     ------
@@ -109,8 +117,19 @@ def run_compiled(
             )
         plant = _shared_plant() if plant == "arm6" else _planar_plant()
     ctrl = controller_args(
-        exp, controller, gains, table, seed, faults, duration_s, latency, generated_c
+        exp,
+        controller,
+        gains,
+        table,
+        seed,
+        faults,
+        duration_s,
+        latency,
+        generated_c,
+        generated_controller,
     )
+    if generated_controller is not None:
+        controller = generated_controller.spec.kind
     if isinstance(plant, Arm6Plant):
         return _run_arm6(exp, plant, controller, ctrl, seed)
     from fuzzkit.studies.compiled.planar_loop import run_planar_compiled
@@ -155,6 +174,7 @@ def _run_arm6(
         "arm": np.empty((n, dof + 2, 3)),
         "points": np.zeros((n, n_obj, 3)),
         "npoints": np.empty(n, dtype=np.int64),
+        "status": np.empty(n, dtype=np.int64),
     }
     scalars = np.zeros(P.N_RESULTS)
     reset_force = np.asarray(reset.force, dtype=np.float64).copy()
@@ -165,9 +185,9 @@ def _run_arm6(
         a.offset,
         a.params, a.q, a.q_ref, a.q_ik, a.stick, a.state, noise, reset_force,
         ctrl.cp, ctrl.selection, ctrl.setpoints, *ctrl.table, ctrl.c_eval,
-        ctrl.spike, ctrl.nan,
+        ctrl.c_step, ctrl.c_state, ctrl.spike, ctrl.nan,
     )  # fmt: skip
-    warm_up(K.run_arm6, args, rec, scalars, ctrl.c_eval is not None)
+    warm_up(K.run_arm6, args, rec, scalars, ctrl)
     wall0 = time.perf_counter()
     cpu0 = time.process_time()
     K.run_arm6(
@@ -175,7 +195,7 @@ def _run_arm6(
         rec["t"], rec["force"], rec["force_sensor"], rec["force_true"], rec["e"], rec["de"],
         rec["du"], rec["u"], rec["tool"], rec["nominal"], rec["target"], rec["joints"],
         rec["contact"], rec["force_normal"], rec["moving"], rec["ik"], rec["limited"], rec["arm"],
-        rec["points"], rec["npoints"],
+        rec["points"], rec["npoints"], rec["status"],
         scalars,
     )  # fmt: skip
     cpu = time.process_time() - cpu0

@@ -7,7 +7,9 @@ starts filled with the reset sample's force) -> :func:`controller_step` -> :func
 (the plant receives the correction computed ``command_delay`` periods ago; the queue starts with
 zeros). The plant kernels (:mod:`fuzzkit.studies.compiled.arm6_run` for arm6,
 :mod:`fuzzkit.studies.compiled.planar_run` for the pymunk arm) wrap their plant step with
-these.
+these, and call the controller through
+:func:`fuzzkit.studies.compiled.generated_controller.controller_period`: this module's
+controller, or a spec's whole generated C controller (``--controller-impl c``).
 
 The controller is :class:`fuzzkit.control.controllers.HybridForceController` (spike gate,
 debounced engagement, trip rule, back-off, sensor faults; the sensor front end of
@@ -200,7 +202,10 @@ def controller_step(
             all_finite = False
     taring = cs[CS_TARING] > 0.0
     if not valid or (taring and not all_finite):
-        cs[CS_FAULTS] += 1.0
+        # HybridForceController.wait: in the first sensor-delay periods no measurement can
+        # have arrived yet (the queue holds the reset sample): held, but not a sensor fault
+        if round(cs[CS_CTRL_T] / period) > cp[C_SENSOR_DELAY]:
+            cs[CS_FAULTS] += 1.0
         cs[CS_ENGAGE_COUNT] = 0.0
     elif taring:
         _tare_step(cp, consumed, cs, cv)
@@ -329,7 +334,7 @@ def _axes_step(
     cv: FloatArray,
 ) -> None:
     """The axis controllers' incremental steps (``_Incremental.step``) and e, de, du."""
-    u, e, de, du, e_last = cv[V_U], cv[V_E], cv[V_DE], cv[V_DU], cv[V_E_LAST]
+    u, e, du = cv[V_U], cv[V_E], cv[V_DU]
     ax_u, ax_prev, ax_has_prev = cv[V_AX_U], cv[V_AX_PREV], cv[V_AX_HAS_PREV]
     for i in range(3):
         if selection[i] <= 0.0:
@@ -348,6 +353,13 @@ def _axes_step(
         u[i] = ax_u[i]
         du[i] = u[i] - before
         e[i] = setpoints[i] - f[i]
+    error_change(cs, cv)
+
+
+@jit
+def error_change(cs: FloatArray, cv: FloatArray) -> None:
+    """After the axes stepped: ``de = e - e_last`` (0 the first time), then ``e_last = e``."""
+    e, de, e_last = cv[V_E], cv[V_DE], cv[V_E_LAST]
     has_e_last = cs[CS_HAS_E_LAST] > 0.0
     for i in range(3):
         de[i] = e[i] - e_last[i] if has_e_last else 0.0

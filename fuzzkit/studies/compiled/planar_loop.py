@@ -64,15 +64,17 @@ def run_planar_compiled(
         "arm": np.empty((n, 4, 3)),
         "points": np.zeros((n, n_obj, 3)),
         "npoints": np.empty(n, dtype=np.int64),
+        "status": np.empty(n, dtype=np.int64),
     }
     scalars = np.zeros(P.N_RESULTS)
     reset_force = np.asarray(reset.force, dtype=np.float64).copy()
     args = (
         a.path, a.obj_kind, a.obj_p, a.obj_terms, a.obj_nterms, a.rot, a.params, a.functions,
         a.pointers, a.stick, a.state, noise, reset_force,
-        ctrl.cp, ctrl.selection, ctrl.setpoints, *ctrl.table, ctrl.c_eval, ctrl.spike, ctrl.nan,
+        ctrl.cp, ctrl.selection, ctrl.setpoints, *ctrl.table, ctrl.c_eval,
+        ctrl.c_step, ctrl.c_state, ctrl.spike, ctrl.nan,
     )  # fmt: skip
-    warm_up(run_planar, args, rec, scalars, ctrl.c_eval is not None)
+    warm_up(run_planar, args, rec, scalars, ctrl)
     wall0 = time.perf_counter()
     cpu0 = time.process_time()
     kernel: Callable[..., int] = run_planar  # called with the argument list built above

@@ -14,6 +14,7 @@ import numpy.typing as npt
 
 from fuzzkit.jit import jit
 from fuzzkit.planar_sim.arm_period import STEP_OK, arm_pose, nominal_at, plant_step
+from fuzzkit.studies.compiled.generated_controller import controller_period
 from fuzzkit.studies.compiled.period import (
     C_COMMAND_DELAY,
     C_PERIOD,
@@ -23,7 +24,6 @@ from fuzzkit.studies.compiled.period import (
     V_E,
     command_latency,
     controller_state,
-    controller_step,
     credit_normal,
     inject_faults,
     path_held,
@@ -61,6 +61,9 @@ def run_planar(
     tab: FloatArray,
     splits: IntArray,
     c_eval: Any,  # None: the table above; a generated C's NAME_eval (ctypes): that instead
+    # None: the controller above; a generated NAME_controller_step (ctypes) and its state
+    c_step: Any,
+    c_state: FloatArray,
     # faults, one entry per period: spike sign (0: none), NaN sample
     spike_sign: FloatArray,
     nan_flag: BoolArray,
@@ -84,6 +87,7 @@ def run_planar(
     r_arm: FloatArray,
     r_points: FloatArray,
     r_npoints: IntArray,
+    r_status: IntArray,
     out_scalars: FloatArray,
 ) -> int:
     """Run up to ``r_t.shape[0]`` periods, filling the recording arrays and ``out_scalars``;
@@ -103,6 +107,9 @@ def run_planar(
     applied = np.zeros(3)
     c_io = np.empty(3)
     correction = np.zeros(3)
+    c_rot = np.empty(9)  # the tool's rotation, row-major, for the generated controller
+    for j in range(9):
+        c_rot[j] = a_rot[j // 3, j % 3]
     corr_base = np.zeros(3)
     nominal = np.empty(3)
     nominal_before = np.empty(3)
@@ -131,23 +138,12 @@ def run_planar(
             return k
         t_s = state[0]
         inject_faults(cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured)
+        # before the first measurement arrives (k < sd) controller_step waits: no fault counted
         consumed = sensor_latency(k, sd, sensor_q, measured, reset_force)
-        controller_step(
-            cp,
-            selection,
-            setpoints,
-            bp0,
-            bp1,
-            tab,
-            splits,
-            c_eval,
-            c_io,
-            consumed,
-            t_s,
-            cs,
-            cv,
-            correction,
-        )
+        r_status[k] = controller_period(
+            cp, selection, setpoints, bp0, bp1, tab, splits, c_eval, c_io, c_step, c_state,
+            c_rot, consumed, t_s, cs, cv, correction,
+        )  # fmt: skip
         command_latency(k, cd, command_q, correction, applied)
         # ---- recording (PlanarArmPlant._sample and the runner's row) ----
         moving = False

@@ -117,9 +117,9 @@ def load_table(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3) -> An
     --target c --type double --tolerance`` builds it: what the compiled fuzzy-PI evaluates and
     the generated C (:mod:`fuzzkit.studies.compiled.generated_c`) is emitted from."""
     from fuzzkit.codegen.table_search import make_table
-    from fuzzkit.formats.registry import load
+    from fuzzkit.control.loop_rulebase import load_loop_rulebase
 
-    return make_table(load(rulebase), number_type="double", tolerance=tolerance)
+    return make_table(load_loop_rulebase(rulebase), number_type="double", tolerance=tolerance)
 
 
 def cache_dir() -> Path:

@@ -375,6 +375,7 @@ def tune(
     latencies: Sequence[tuple[int, int]] | None = None,
     loop: str = "auto",
     scheduler: str | None = None,
+    controller_impl: str = "python",
     constraint: Callable[[Mapping[str, float]], bool] | None = None,
 ) -> TuneResult:
     """Find the gains of least cost for ``controller`` over experiments and stiffnesses.
@@ -401,6 +402,8 @@ def tune(
         experiment's own).
     loop : ``auto`` (compiled where the plant has a compiled loop), ``compiled`` or ``python``.
     scheduler : a ``dask.distributed`` scheduler address to price the candidates on.
+    controller_impl : ``python`` (fuzzkit's controller) or ``c`` (every candidate generated as
+        C and run whole in the compiled loop).
     constraint : only gain sets it accepts are searched (see :func:`optimise`).
 
     Returns
@@ -431,6 +434,7 @@ def tune(
         noise_seed=noise_seed,
         latencies=latencies,
         loop=loop,
+        controller_impl=controller_impl,
     )
     return optimise(
         problem, budget, seed, workers, callback, baseline, admit, scheduler, constraint

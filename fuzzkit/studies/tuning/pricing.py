@@ -23,7 +23,8 @@ class CaseRunner:
 
     Runs the compiled loop (:mod:`fuzzkit.studies.compiled`) where the plant has one, with the
     rule base's double lookup table as the fuzzy surface; the Python loop otherwise, with a
-    201 x 201 bilinear table.
+    201 x 201 bilinear table. With ``controller_impl == "c"``, each candidate's controller
+    spec is generated as C and run whole in the compiled loop (one compile per candidate).
     """
 
     def __init__(self, problem: TuningProblem) -> None:
@@ -43,14 +44,21 @@ class CaseRunner:
                 f"the compiled loop does not run plant {problem.plant_name} "
                 "(or a surface given as a function); use loop='python'"
             )
-        if self.compiled:
+        if problem.controller_impl == "c" and not self.compiled:
+            raise ConfigError(
+                f"--controller-impl c runs in the compiled loop, which does not run plant "
+                f"{problem.plant_name}"
+            )
+        if self.compiled and problem.controller_impl == "python":
             if isinstance(problem.surface, str):
                 self.table = compiled_table(problem.surface)
         elif isinstance(problem.surface, str):
-            from fuzzkit.formats.registry import load
+            from fuzzkit.control.loop_rulebase import load_loop_rulebase
             from fuzzkit.fuzzy.inference import Engine
 
-            self.surface = engine_table_surface(Engine(load(problem.surface)), n=TABLE_SIZE)
+            self.surface = engine_table_surface(
+                Engine(load_loop_rulebase(problem.surface)), n=TABLE_SIZE
+            )
         elif problem.surface is not None:
             self.surface = tabulated_surface(problem.surface, n=TABLE_SIZE)
 
@@ -65,6 +73,15 @@ class CaseRunner:
         full = p.full_gains(gains)
         exp = p.cases[case]
         own = p.plant_of(case)
+        if p.controller_impl == "c":
+            return run_compiled(
+                exp,
+                own if own is not None else str(p.plant),
+                seed=p.noise_seed,
+                duration_s=duration_s,
+                latency=p.latency_of(case),
+                generated_controller=self._generated(exp, full),
+            )
         if self.compiled:
             return run_compiled(
                 exp,
@@ -86,6 +103,19 @@ class CaseRunner:
             seed=p.noise_seed,
             duration_s=duration_s,
             latency=p.latency_of(case),
+        )
+
+    def _generated(self, exp: Any, gains: Mapping[str, float]) -> Any:
+        """The generated C controller of the candidate ``gains`` on ``exp`` (compiled once
+        per distinct code and process)."""
+        from fuzzkit.studies.compiled.generated_controller import (
+            load_generated_controller,
+            run_controller_spec,
+        )
+
+        rulebase = self.problem.rulebase_name or "macvicar_whelan"
+        return load_generated_controller(
+            run_controller_spec(exp, self.problem.controller, gains, rulebase)
         )
 
     def case_costs(self, gains: Mapping[str, float]) -> tuple[float, ...]:

@@ -74,6 +74,9 @@ class TuningProblem:
     latencies: tuple[tuple[int, int], ...] | None = None
     #: ``auto`` (the compiled loop where the plant has one), ``compiled`` or ``python``
     loop: str = "auto"
+    #: ``python`` (fuzzkit's controller) or ``c`` (each candidate's controller spec generated
+    #: as C and run whole in the compiled loop; ``fuzzkit.studies.batch.CONTROLLER_IMPLS``)
+    controller_impl: str = "python"
     #: what each case is (parallel to ``cases``)
     case_keys: tuple[TuningCase, ...] = ()
     #: cases that run the paper's 3-D E3 on its own arm6 world (:mod:`fuzzkit.studies.e3_arm6`)
@@ -98,6 +101,7 @@ class TuningProblem:
         noise_seed: int = 0,
         latencies: Sequence[tuple[int, int]] | None = None,
         loop: str = "auto",
+        controller_impl: str = "python",
     ) -> TuningProblem:
         """Check the arguments and assemble the problem (arguments as for :func:`tune`).
 
@@ -137,9 +141,9 @@ class TuningProblem:
         surface: SurfaceSpec | None = None
         if controller == "fuzzy-pi":
             if isinstance(rulebase, str):
-                from fuzzkit.formats.registry import load
+                from fuzzkit.control.loop_rulebase import load_loop_rulebase
 
-                load(rulebase)  # a bad rule base fails here, with its own message
+                load_loop_rulebase(rulebase)  # a bad or unfit rule base fails here
             surface = rulebase
         cases: list[Experiment] = []
         labels: list[str] = []
@@ -165,6 +169,15 @@ class TuningProblem:
             raise ConfigError(f"latencies must be (sensor, command) pairs >= 0 (got {lats})")
         if loop not in ("auto", "compiled", "python"):
             raise ConfigError(f"unknown loop {loop!r} (expected auto, compiled or python)")
+        if controller_impl not in ("python", "c"):
+            raise ConfigError(
+                f"unknown controller implementation {controller_impl!r} (expected python or c)"
+            )
+        if controller_impl == "c" and (loop == "python" or not isinstance(surface or "", str)):
+            raise ConfigError(
+                "--controller-impl c runs the generated controller in the compiled loop, on a "
+                "rule base given by name or path; leave out --loop python"
+            )
         case_lats: tuple[tuple[int, int] | None, ...]
         if lats is not None:
             n_cases = len(cases)
@@ -204,6 +217,7 @@ class TuningProblem:
             case_latencies=case_lats,
             latencies=lats,
             loop=loop,
+            controller_impl=controller_impl,
             case_keys=keys,
             paper_e3_cases=paper_cases,
         )

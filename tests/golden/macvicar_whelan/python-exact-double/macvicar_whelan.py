@@ -13,7 +13,7 @@ index = clamp(i_e + i_de, -3, 3) with NL..PL indexed -3..3). Inputs e (force err
 de (its change), output du (the incremental correction), all normalised to [-1, 1];
 min/min/max with centroid defuzzification.
 
-eval(inputs) takes the inputs in declaration order (e, de),
+eval(inputs) takes the inputs in declaration order, or by name as a mapping (e, de),
 clamps each to its range (+-inf clamps to the nearer end) and returns the outputs
 (du) as a tuple. A NaN input makes every output NaN.
 FuzzyPI is the paper's incremental fuzzy-PI with the same semantics as the generated C:
@@ -23,7 +23,7 @@ Ki scales input 0 (e), Kp scales input 1 (de), see FuzzyPI.step.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 N_INPUTS = 2
 N_OUTPUTS = 1
@@ -102,8 +102,30 @@ def _points0(lv: Sequence[float]) -> list[tuple[int, list[float], list[float], l
     return res
 
 
-def eval(inputs: Sequence[float]) -> tuple[float, ...]:
-    """The outputs for ``inputs`` (in declaration order), by exact inference."""
+def _in_order(inputs: Mapping[str, float]) -> list[float]:
+    """Inputs given by name (as fuzzkit's engine takes them), in declaration order."""
+    names = ("e", "de",)
+    missing = [n for n in names if n not in inputs]
+    unknown = sorted(str(n) for n in inputs if n not in names)
+    if missing or unknown:
+        raise ValueError(
+            "expected a value for every input by name (" + ", ".join(names) + "); "
+            + "; ".join(
+                part
+                for part in (
+                    "missing " + ", ".join(missing) if missing else "",
+                    "unknown " + ", ".join(unknown) if unknown else "",
+                )
+                if part
+            )
+        )
+    return [inputs[n] for n in names]
+
+
+def eval(inputs: Sequence[float] | Mapping[str, float]) -> tuple[float, ...]:
+    """The outputs for ``inputs`` (in declaration order, or a mapping by input name), by exact inference."""
+    if isinstance(inputs, Mapping):
+        inputs = _in_order(inputs)
     x0, x1 = inputs
     if x0 != x0 or x1 != x1:
         return (_NAN,)

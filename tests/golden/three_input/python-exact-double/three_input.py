@@ -12,7 +12,7 @@ Three-input, two-output list-form rule base: force error e, its change de and a 
 roughness estimate r (0 = smooth, 1 = very rough) drive the normal correction du and a
 feed-rate change dv. Uses OR, NOT, weights, several outputs, sigmoid and bell terms.
 
-eval(inputs) takes the inputs in declaration order (e, de, r),
+eval(inputs) takes the inputs in declaration order, or by name as a mapping (e, de, r),
 clamps each to its range (+-inf clamps to the nearer end) and returns the outputs
 (du, dv) as a tuple. A NaN input makes every output NaN.
 no fuzzy-PI API: it needs exactly 2 inputs (e, de), this rule base has 3.
@@ -21,7 +21,7 @@ no fuzzy-PI API: it needs exactly 2 inputs (e, de), this rule base has 3.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 N_INPUTS = 3
 N_OUTPUTS = 2
@@ -139,8 +139,30 @@ def _points1(lv: Sequence[float]) -> list[tuple[int, list[float], list[float], l
     return res
 
 
-def eval(inputs: Sequence[float]) -> tuple[float, ...]:
-    """The outputs for ``inputs`` (in declaration order), by exact inference."""
+def _in_order(inputs: Mapping[str, float]) -> list[float]:
+    """Inputs given by name (as fuzzkit's engine takes them), in declaration order."""
+    names = ("e", "de", "r",)
+    missing = [n for n in names if n not in inputs]
+    unknown = sorted(str(n) for n in inputs if n not in names)
+    if missing or unknown:
+        raise ValueError(
+            "expected a value for every input by name (" + ", ".join(names) + "); "
+            + "; ".join(
+                part
+                for part in (
+                    "missing " + ", ".join(missing) if missing else "",
+                    "unknown " + ", ".join(unknown) if unknown else "",
+                )
+                if part
+            )
+        )
+    return [inputs[n] for n in names]
+
+
+def eval(inputs: Sequence[float] | Mapping[str, float]) -> tuple[float, ...]:
+    """The outputs for ``inputs`` (in declaration order, or a mapping by input name), by exact inference."""
+    if isinstance(inputs, Mapping):
+        inputs = _in_order(inputs)
     x0, x1, x2 = inputs
     if x0 != x0 or x1 != x1 or x2 != x2:
         return (_NAN, _NAN,)

@@ -22,7 +22,7 @@ the rule base by exact inference.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 #: The force loop has taken over (the engagement debounce passed); set until reset.
 STATUS_ENGAGED = 1
@@ -131,8 +131,30 @@ def _points0(lv: Sequence[float]) -> list[tuple[int, list[float], list[float], l
     return res
 
 
-def eval(inputs: Sequence[float]) -> tuple[float, ...]:
-    """The outputs for ``inputs`` (in declaration order), by exact inference."""
+def _in_order(inputs: Mapping[str, float]) -> list[float]:
+    """Inputs given by name (as fuzzkit's engine takes them), in declaration order."""
+    names = ("e", "de",)
+    missing = [n for n in names if n not in inputs]
+    unknown = sorted(str(n) for n in inputs if n not in names)
+    if missing or unknown:
+        raise ValueError(
+            "expected a value for every input by name (" + ", ".join(names) + "); "
+            + "; ".join(
+                part
+                for part in (
+                    "missing " + ", ".join(missing) if missing else "",
+                    "unknown " + ", ".join(unknown) if unknown else "",
+                )
+                if part
+            )
+        )
+    return [inputs[n] for n in names]
+
+
+def eval(inputs: Sequence[float] | Mapping[str, float]) -> tuple[float, ...]:
+    """The outputs for ``inputs`` (in declaration order, or a mapping by input name), by exact inference."""
+    if isinstance(inputs, Mapping):
+        inputs = _in_order(inputs)
     x0, x1 = inputs
     if x0 != x0 or x1 != x1:
         return (_NAN,)

@@ -1,0 +1,110 @@
+"""What a rule base must be to run as the fuzzy-PI's surface in the closed loop, checked first.
+
+The fuzzy-PI (:class:`fuzzkit.control.controllers.FuzzyPI`) feeds its surface ``Ki*e`` and
+``Kp*de`` clipped to the normalised universe [-1, 1] and multiplies the answer by ``Kx`` (metres
+per period). So the rule base must have exactly two inputs, ``e`` then ``de`` (the lookup table
+and the generated C take them by position), each on [-1, 1], and one output ``du``, a normalised
+correction: its range contains 0 and lies within [-OUTPUT_SCALE_LIMIT, OUTPUT_SCALE_LIMIT].
+
+A rule base on another scale (say [-100, 100]) is refused, not mapped: the gains already are
+the scaling, and a silent second scaling would multiply the correction (a rule base on
+[-100, 100] drives the arm to 195 N against a 25 N limit). The fix is to rescale the universes
+(divide every term's points by the range's half width) and let Ki, Kp, Kx carry the units.
+"""
+
+from __future__ import annotations
+
+import os
+from functools import lru_cache
+
+from fuzzkit.errors import ConfigError
+from fuzzkit.fuzzy.model import RuleBase, Variable
+
+#: The universe the controller hands the rule base: Ki*e and Kp*de are clipped to it.
+INPUT_RANGE = (-1.0, 1.0)
+#: The largest normalised correction a rule base's output range may reach. A Mamdani output
+#: stays within its range; a Sugeno output is a weighted average of its terms (the shipped
+#: sugeno_pi reaches 1.6 at the corners and declares [-2, 2]). A larger range is another scale.
+OUTPUT_SCALE_LIMIT = 2.0
+_EPS = 1e-9
+
+
+def loop_problems(rb: RuleBase) -> list[str]:
+    """What keeps ``rb`` from running as the fuzzy-PI's surface (empty when it can)."""
+    problems: list[str] = []
+    names = rb.input_names
+    if names != ("e", "de"):
+        problems.append(
+            f"inputs must be e then de (the error and its change), got {_listing(rb.inputs)}"
+        )
+    else:
+        for var in rb.inputs:
+            if abs(var.low - INPUT_RANGE[0]) > _EPS or abs(var.high - INPUT_RANGE[1]) > _EPS:
+                problems.append(
+                    f"input {var.name} must be on [-1, 1] (the controller clips "
+                    f"{'Ki*e' if var.name == 'e' else 'Kp*de'} to it), got {_range(var)}"
+                )
+    if rb.output_names != ("du",):
+        problems.append(f"exactly one output du is needed, got {_listing(rb.outputs)}")
+    else:
+        out = rb.outputs[0]
+        if not (out.low <= 0.0 <= out.high) or max(-out.low, out.high) > OUTPUT_SCALE_LIMIT + _EPS:
+            problems.append(
+                f"output du is a normalised correction (scaled by Kx): its range must contain 0 "
+                f"and lie within [-{OUTPUT_SCALE_LIMIT:g}, {OUTPUT_SCALE_LIMIT:g}], "
+                f"got {_range(out)}"
+            )
+    return problems
+
+
+def check_loop_rulebase(rb: RuleBase, spec: str | os.PathLike[str] | None = None) -> None:
+    """Raise a :class:`~fuzzkit.errors.ConfigError` naming every problem and the fix when ``rb``
+    cannot run as the fuzzy-PI's surface; ``spec`` is how the user named it.
+
+    Raises
+    ------
+    ConfigError
+        Inputs other than ``e``, ``de`` on [-1, 1], or an output other than one ``du``.
+    """
+    problems = loop_problems(rb)
+    if not problems:
+        return
+    where = spec if spec is not None else (rb.source.path if rb.source else rb.name)
+    lines = "\n".join(f"  - {p}" for p in problems)
+    raise ConfigError(
+        f"rule base {where} cannot run as the fuzzy-PI in the closed loop:\n{lines}\n"
+        "  the loop needs two inputs, e then de, each on [-1, 1], and one output du within "
+        f"[-{OUTPUT_SCALE_LIMIT:g}, {OUTPUT_SCALE_LIMIT:g}] (the controller feeds it Ki*e and "
+        "Kp*de clipped to [-1, 1] and multiplies its output by Kx)\n"
+        "  fix: rename the variables, and rescale each universe to [-1, 1] (divide every term's "
+        "points by the range's half width); the gains Ki, Kp, Kx then carry the physical "
+        "scale (see docs/simulation.md, 'Your own rule base in the loop')"
+    )
+
+
+@lru_cache(maxsize=8)
+def load_loop_rulebase(spec: str) -> RuleBase:
+    """Load a rule base (shipped name or file) and check it can run as the fuzzy-PI's surface.
+
+    Raises
+    ------
+    RuleBaseError
+        The file is malformed or the name unknown.
+    ConfigError
+        It is well formed but not a fuzzy-PI surface (:func:`check_loop_rulebase`).
+    """
+    from fuzzkit.formats.registry import load
+
+    rb = load(spec)
+    check_loop_rulebase(rb, spec)
+    return rb
+
+
+def _range(var: Variable) -> str:
+    return f"[{var.low:g}, {var.high:g}]"
+
+
+def _listing(variables: tuple[Variable, ...]) -> str:
+    if not variables:
+        return "none"
+    return ", ".join(f"{v.name} {_range(v)}" for v in variables)

@@ -1,0 +1,237 @@
+"""The whole generated C controller inside the compiled closed loop (``--controller-impl c``).
+
+What ships is what runs: the controller spec of the run (the given one, or
+:func:`run_controller_spec` of the run's settings) goes through ``fuzzkit compile``'s generator
+(:func:`fuzzkit.studies.controller_code.open_generated`, C, double), is compiled with the strict
+flags, and every period the compiled loop calls ``NAME_controller_step`` by its address
+(:func:`generated_step`): the sensor front end, spike gate, engagement, trip and back-off,
+the axis controllers and the correction limits are the generated code's, not the loop's.
+
+The loop still keeps its own run bookkeeping from what the step returns (the correction and
+the status bits): engagement and trip times, the fault count (a sample missing on a
+force-controlled axis, or one the spike gate rejected: what the reference counts), and the
+recorded ``e``, ``de``, ``du``. ``e`` is the set point minus the consumed sample on the periods
+the axis controllers stepped (``ENGAGED`` and neither ``HELD`` nor ``TRIPPED``): the reference's
+own ``e`` without a front end; with one, the reference's uses the compensated, filtered force.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from fuzzkit.control import status as st
+from fuzzkit.control.spec import ControllerSpec, require_valid, with_gains
+from fuzzkit.errors import ConfigError
+from fuzzkit.jit import jit
+from fuzzkit.studies.compiled.period import (
+    C_PERIOD,
+    CS_CTRL_T,
+    CS_ENGAGED,
+    CS_ENGAGED_AT,
+    CS_FAULTS,
+    CS_TRIP_TIME,
+    CS_TRIPPED,
+    V_DU,
+    V_E,
+    V_U,
+    controller_step,
+    error_change,
+)
+from fuzzkit.studies.experiments import DEFAULT_GAINS
+from fuzzkit.studies.task import Experiment, spec_for
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
+#: Compiled controllers stay loaded for the life of the process, by their code's sha256.
+_LOADED: dict[str, GeneratedController] = {}
+
+_ENGAGED, _HELD, _TRIPPED, _REJECTED = st.ENGAGED, st.HELD, st.TRIPPED, st.REJECTED
+
+
+@dataclass(frozen=True, slots=True)
+class GeneratedController:
+    """A spec's generated double C controller, compiled and loaded.
+
+    ``step_function``: ``NAME_controller_step`` as a ctypes function; ``init_function``:
+    ``NAME_controller_init``; ``state_doubles``: the size of ``NAME_controller_t`` in doubles
+    (:meth:`fresh_state` makes one); ``label``: the run's ``controller_impl``.
+    """
+
+    spec: ControllerSpec
+    step_function: Any
+    init_function: Any
+    state_doubles: int
+    label: str
+    library: Any  # keeps the shared library mapped
+
+    def fresh_state(self) -> FloatArray:
+        """A ``NAME_controller_t`` as a double array, through ``NAME_controller_init``."""
+        state = np.zeros(self.state_doubles)
+        self.init_function(state.ctypes.data)
+        return state
+
+
+def load_generated_controller(spec: ControllerSpec) -> GeneratedController:
+    """Generate, compile and load ``spec``'s C controller (double), once per process and code.
+
+    Raises
+    ------
+    ConfigError
+        The spec breaks a rule of :func:`fuzzkit.control.spec.spec_problems`.
+    ToolchainError
+        No C compiler, or the generated code does not compile.
+    """
+    from fuzzkit.studies.controller_code import generate, open_generated
+
+    require_valid(spec)
+    files = generate(spec, "c", "double")
+    digest = hashlib.sha256()
+    for path in sorted(files):
+        digest.update(path.encode() + b"\0" + files[path].encode() + b"\0")
+    sha = digest.hexdigest()
+    if sha not in _LOADED:
+        ctl = open_generated(spec, "c", "double")
+        label = f"generated C controller (double) {spec.name}_controller sha256 {sha[:16]}"
+        _LOADED[sha] = GeneratedController(
+            spec=spec,
+            step_function=ctl.step_function,
+            init_function=ctl.init_function,
+            state_doubles=len(ctl.state),
+            label=label,
+            library=ctl,
+        )
+    return _LOADED[sha]
+
+
+def run_controller_spec(
+    exp: Experiment,
+    controller: str,
+    gains: Mapping[str, float] | None,
+    rulebase: str = "macvicar_whelan",
+) -> ControllerSpec:
+    """The controller spec a run deploys: the experiment's own (``--spec`` or the scenario's)
+    with ``gains``' ``kp``, ``ki``, ``kx`` on every axis, or else one built from the run's
+    settings (``controller``, the default gains updated by ``gains``, ``rulebase``, the
+    experiment's axes, set points, safety limit and engagement): the controller
+    ``fuzzkit.studies.runner.build_controller`` builds for the same run.
+
+    Without a ``rate_limit`` in the gains, the spec's step limit is twice its correction
+    limit, which ``|du|`` cannot exceed once ``|u|`` is clamped: no step limit, as in the
+    run's controller.
+
+    Raises
+    ------
+    ConfigError
+        An unknown controller, or settings no spec can hold (an infinite correction limit,
+        gains that are not finite and positive).
+    """
+    if exp.controller_spec is not None:
+        return require_valid(with_gains(exp.controller_spec, gains or {}))
+    if controller not in DEFAULT_GAINS:
+        raise ConfigError(f"unknown controller {controller!r} (expected pi or fuzzy-pi)")
+    g = dict(DEFAULT_GAINS[controller])
+    g.update(gains or {})
+    bound = min(-g.get("u_min", -math.inf), g.get("u_max", math.inf))
+    if "rate_limit" not in g and math.isfinite(bound):
+        g["rate_limit"] = 2.0 * bound
+    rb = None
+    if controller == "fuzzy-pi":
+        from fuzzkit.formats.registry import load
+
+        rb = load(rulebase)
+    name = re.sub(r"\W", "_", f"{exp.name}_{controller}", flags=re.ASCII)
+    if not name[:1].isalpha():
+        name = "run_" + name
+    return require_valid(spec_for(exp, controller, g, name, rb, rulebase if rb else None))
+
+
+@jit
+def generated_step(
+    c_step: Any,
+    c_state: FloatArray,
+    c_rot: FloatArray,
+    cp: FloatArray,
+    selection: FloatArray,
+    setpoints: FloatArray,
+    consumed: FloatArray,
+    t_s: float,
+    cs: FloatArray,
+    cv: FloatArray,
+    correction: FloatArray,
+) -> int:
+    """One period of the generated controller on the consumed sample; returns its status.
+
+    ``c_step`` is ``NAME_controller_step`` (ctypes: numba reads its address at every call of
+    the kernel), ``c_state`` its ``NAME_controller_t``, ``c_rot`` the tool's rotation
+    (row-major 9). Writes ``correction`` and keeps the loop's bookkeeping in ``cs``, ``cv`` as
+    :func:`fuzzkit.studies.compiled.period.controller_step` does.
+    """
+    cs[CS_CTRL_T] += cp[C_PERIOD]
+    status = int(c_step(c_state.ctypes, consumed.ctypes, c_rot.ctypes, correction.ctypes))
+    u, e, du = cv[V_U], cv[V_E], cv[V_DU]
+    missing = False
+    for i in range(3):
+        if selection[i] > 0.0 and not math.isfinite(consumed[i]):
+            missing = True
+    if missing or status & _REJECTED:
+        cs[CS_FAULTS] += 1.0
+    if status & _TRIPPED and cs[CS_TRIPPED] == 0.0:
+        cs[CS_TRIPPED] = 1.0
+        cs[CS_TRIP_TIME] = cs[CS_CTRL_T]
+    if status & _ENGAGED:
+        cs[CS_ENGAGED] = 1.0
+        if math.isnan(cs[CS_ENGAGED_AT]):
+            cs[CS_ENGAGED_AT] = t_s
+    du[:] = 0.0
+    stepped = status & _ENGAGED and not status & (_HELD | _TRIPPED)
+    if stepped:
+        for i in range(3):
+            if selection[i] > 0.0:
+                du[i] = correction[i] - u[i]
+                u[i] = correction[i]
+                e[i] = setpoints[i] - consumed[i]
+        error_change(cs, cv)
+    return status
+
+
+@jit
+def controller_period(
+    cp: FloatArray,
+    selection: FloatArray,
+    setpoints: FloatArray,
+    bp0: FloatArray,
+    bp1: FloatArray,
+    tab: FloatArray,
+    splits: IntArray,
+    c_eval: Any,
+    c_io: FloatArray,
+    c_step: Any,
+    c_state: FloatArray,
+    c_rot: FloatArray,
+    consumed: FloatArray,
+    t_s: float,
+    cs: FloatArray,
+    cv: FloatArray,
+    correction: FloatArray,
+) -> int:
+    """One period of the run's controller, for every plant's loop: the loop's own
+    (:func:`~fuzzkit.studies.compiled.period.controller_step`; returns -1, it keeps no status)
+    when ``c_step`` is None, else the generated C controller (:func:`generated_step`)."""
+    if c_step is None:  # a compile-time branch: c_step is typed None or a C function
+        controller_step(
+            cp, selection, setpoints, bp0, bp1, tab, splits, c_eval, c_io, consumed, t_s, cs, cv,
+            correction,
+        )  # fmt: skip
+        return -1
+    return generated_step(
+        c_step, c_state, c_rot, cp, selection, setpoints, consumed, t_s, cs, cv, correction
+    )

@@ -1,0 +1,100 @@
+"""A static figure of one closed-loop run, for a look without the Rerun viewer.
+
+One row of panels per force-controlled axis: the measured and true force against the set point
+(N), the force error ``e`` (N), and the correction ``u`` with its per-period step ``du`` (mm,
+``du`` on a second scale). The engagement and a safety trip are marked on every panel.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from fuzzkit.studies.runner import RunResult
+from fuzzkit.viz.figures import new_figure, save_figure
+
+_FORCE = "tab:blue"
+_TRUE = "tab:gray"
+_SETPOINT = "tab:orange"
+_TRIP = "tab:red"
+_ENGAGED = "tab:green"
+
+
+def run_figure(result: RunResult) -> Any:
+    """The run's figure (a matplotlib Figure, no pyplot)."""
+    exp = result.experiment
+    axes_idx = [i for i in (2, 0, 1) if exp.selection[i]]
+    fig = new_figure(12.0, 2.6 * len(axes_idx) + 0.9)
+    grid = fig.subplots(len(axes_idx), 3, squeeze=False, sharex=True)
+    for row, i in enumerate(axes_idx):
+        a = "xyz"[i]
+        ax_f, ax_e, ax_u = grid[row]
+        ax_f.plot(result.t, result.force_true[:, i], color=_TRUE, lw=0.8, label="true")
+        ax_f.plot(result.t, result.force[:, i], color=_FORCE, lw=0.8, label="measured")
+        ax_f.plot(result.t, result.setpoint[:, i], color=_SETPOINT, ls="--", lw=1.2, label="set")
+        ax_f.axhline(exp.force_limit_n, color=_TRIP, lw=0.6, ls=":", label="safety limit")
+        ax_f.set_ylabel(f"f{a} [N]")
+        ax_e.plot(result.t, result.e[:, i], color=_FORCE, lw=0.8)
+        ax_e.axhline(0.0, color="0.4", lw=0.5)
+        ax_e.set_ylabel(f"e{a} = set - measured [N]")
+        ax_u.plot(result.t, result.u[:, i] * 1e3, color=_FORCE, lw=1.0, label=f"u{a}")
+        ax_u.set_ylabel(f"u{a} [mm]", color=_FORCE)
+        ax_du = ax_u.twinx()
+        ax_du.plot(result.t, result.du[:, i] * 1e3, color=_TRUE, lw=0.5, alpha=0.6)
+        ax_u.set_zorder(ax_du.get_zorder() + 1)  # u in front of the noisier du
+        ax_u.patch.set_visible(False)
+        ax_du.set_ylabel(f"du{a} per period [mm]", color=_TRUE)
+        for ax in (ax_f, ax_e, ax_u):
+            ax.grid(alpha=0.3)
+            _mark_events(ax, result)
+        if row == 0:
+            ax_f.set_title("force")
+            ax_e.set_title("force error")
+            ax_u.set_title("correction")
+            ax_f.legend(fontsize=7, loc="best")
+    for ax in grid[-1]:
+        ax.set_xlabel("time [s]")
+    fig.suptitle(_title(result), fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def _mark_events(ax: Any, result: RunResult) -> None:
+    if result.engaged_time_s is not None:
+        ax.axvline(result.engaged_time_s, color=_ENGAGED, lw=0.8, ls="--")
+    if result.trip_time_s is not None:
+        ax.axvline(result.trip_time_s, color=_TRIP, lw=1.5)
+        ax.axvspan(result.trip_time_s, float(result.t[-1]), color=_TRIP, alpha=0.08)
+        ax.annotate(
+            "TRIP",
+            (result.trip_time_s, 1.0),
+            xycoords=("data", "axes fraction"),
+            xytext=(3, -12),
+            textcoords="offset points",
+            color=_TRIP,
+            fontsize=8,
+            fontweight="bold",
+        )
+
+
+def _title(result: RunResult) -> str:
+    exp = result.experiment
+    peak = float(np.nanmax(np.abs(result.force_true))) if len(result.t) else 0.0
+    trip = f"TRIPPED at {result.trip_time_s:.3f} s" if result.trip_time_s is not None else "no trip"
+    engaged = (
+        f"engaged at {result.engaged_time_s:.3f} s (green)"
+        if result.engaged_time_s is not None
+        else "never engaged"
+    )
+    return (
+        f"{exp.name} {result.controller} on {result.plant} ({result.controller_impl})\n"
+        f"{engaged}, {trip}, peak true force {peak:.1f} N (limit {exp.force_limit_n:g} N)"
+    )
+
+
+def write_run_png(result: RunResult, path: str | os.PathLike[str]) -> Path:
+    """Write :func:`run_figure` to ``path`` (.png or .svg), atomically."""
+    return save_figure(run_figure(result), path, dpi=100)
