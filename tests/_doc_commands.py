@@ -207,6 +207,7 @@ def workspace(folder: Path) -> None:
     shutil.copy(ROOT / "rulebases" / "macvicar_whelan.yaml", folder / "my_rules.yaml")
     shutil.copy(ROOT / "fuzzkit" / "studies" / "scenarios" / "E1.yaml", folder / "my_task.yaml")
     (folder / "tank.fis").write_text(TANK_FIS, encoding="utf-8")
+    shutil.copy(ROOT / "docs" / "examples" / "heater.fis", folder / "heater.fis")
     shutil.copy(ROOT / "docs" / "examples" / "controller.yaml", folder / "a.yaml")
     shutil.copy(ROOT / "docs" / "examples" / "controller_pi.yaml", folder / "b.yaml")
     shutil.copy(ROOT / "docs" / "report" / "gains" / "fuzzy-pi.yaml", folder / "gains.yaml")
