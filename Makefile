@@ -26,7 +26,7 @@ PACKAGE_TREE := build/package-tree
 # The repository folders installed inside fuzzkit (codegen planar_sim rulebases), read from setup.py.
 MAPPED_FOLDERS := $(shell sed -n 's/^MAPPED_FOLDERS = (\(.*\))/\1/p' setup.py | tr -d '",')
 
-.PHONY: demo test test-latest verify bench interop interop-refs fuzzylite-program lint typecheck imports golden lock clean package-tree
+.PHONY: demo test test-latest verify bench interop interop-refs fuzzylite-program lint typecheck imports golden lock clean package-tree embedded
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -121,6 +121,25 @@ interop: $(STAMP) $(INTEROP_STAMP) fuzzylite-program
 # Rewrite the peers' committed outputs (tests/peers/refs) that `make test` compares with.
 interop-refs: $(STAMP) $(INTEROP_STAMP) fuzzylite-program
 	FUZZKIT_INTEROP_PYTHON=$(INTEROP_VENV)/bin/python $(BIN)/python tests/peers/make_refs.py
+
+# The generated controller (float, Cortex-M4F) and the Q15 table (Cortex-M3, M0) under QEMU,
+# bit for bit against the host, with flash/RAM and instructions per call (bench/embedded/).
+# Installs the cross toolchain and QEMU when missing and this runs as root (CI); otherwise
+# says what to install.
+EMBEDDED_PACKAGES := gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm
+embedded: $(STAMP)
+	@if ! command -v arm-none-eabi-gcc >/dev/null || ! command -v qemu-system-arm >/dev/null \
+		|| [ ! -e /usr/lib/arm-none-eabi/newlib/libc.a ]; then \
+		if [ "$$(id -u)" = 0 ]; then \
+			apt-get update -qq && DEBIAN_FRONTEND=noninteractive \
+				apt-get install -y -qq --no-install-recommends $(EMBEDDED_PACKAGES); \
+		else \
+			echo "make embedded needs: $(EMBEDDED_PACKAGES)"; \
+			echo "install them as root: apt-get install --no-install-recommends $(EMBEDDED_PACKAGES)"; \
+			exit 2; \
+		fi; \
+	fi
+	$(BIN)/python bench/embedded/run.py --json build/embedded.json
 
 # Rewrite the expected generated files under tests/golden/ after an intended change.
 golden: $(STAMP)

@@ -24,6 +24,8 @@ import hashlib
 import itertools
 import math
 import textwrap
+import uuid
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from fuzzkit.codegen.emit import (
@@ -51,6 +53,76 @@ class StatusBit:
     name: str
     value: int
     doc: str
+
+
+@dataclass(frozen=True)
+class AdaptationDesign:
+    """The spec's adaptation as plain data (``fuzzkit.control.adaptation_spec``, whose
+    arithmetic ``fuzzkit.control.adaptation`` the templates repeat operation for operation).
+
+    ``mode``: ``stiffness-scheduled`` or ``self-tuning``. Schedule: the estimator's ``window``
+    and ``delay`` (periods), ``forgetting``, the excitation thresholds ``min_step_m`` and
+    ``min_force_n``, the initial estimate and its bounds (N/mm), the bands as ``(up_to_n_mm or
+    None, scale)``, the dwell time in periods, the sudden-stiffening factor ``jump`` and the
+    least ``spread`` of the increments the slope needs. Self-tuning: ``alpha_min``, ``alpha_max``,
+    the rule table of alpha (7x7, rows e, columns de) and the input gains per axis.
+    """
+
+    mode: str
+    window: int = 1
+    delay: int = 1
+    forgetting: float = 1.0
+    min_step_m: float = 0.0
+    min_force_n: float = 0.0
+    initial_n_mm: float = 1.0
+    k_min_n_mm: float = 0.0
+    k_max_n_mm: float = 1.0
+    bands: tuple[tuple[float | None, float], ...] = ()
+    dwell_periods: int = 1
+    alpha_min: float = 0.0
+    alpha_max: float = 1.0
+    alpha_table: tuple[tuple[float, ...], ...] = ()
+    ge: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    gde: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    jump: float = 4.0
+    spread: float = 0.05
+
+    def initial_band(self) -> int:
+        """The band of the initial estimate."""
+        for i, (up_to, _) in enumerate(self.bands):
+            if up_to is None or self.initial_n_mm <= up_to:
+                return i
+        return len(self.bands) - 1
+
+
+@dataclass(frozen=True)
+class AdaptationCode:
+    """The adaptation as the templates write it (literals formatted)."""
+
+    mode: str
+    scheduled: bool
+    history: int  # window + delay: the ring's length
+    window: int
+    delay: int
+    forgetting: str
+    min_step: str
+    min_force: str
+    initial: str
+    k_min: str
+    k_max: str
+    band_limits: tuple[str, ...]  # every band's up_to but the last's
+    band_scales: tuple[str, ...]
+    initial_band: int
+    dwell: int
+    alpha_low: str
+    alpha_span: str
+    alpha_table: tuple[tuple[str, ...], ...]
+    ge: tuple[str, str, str]
+    gde: tuple[str, str, str]
+    thousand: str
+    three: str
+    jump: str
+    spread: str
 
 
 @dataclass(frozen=True)
@@ -90,6 +162,7 @@ class ControllerDesign:
     description: str = ""
     source_file: str = "<spec>"
     source_sha256: str = ""
+    adaptation: AdaptationDesign | None = None
 
 
 @dataclass(frozen=True)
@@ -165,6 +238,11 @@ class ControllerCodeSpec:
     #: exact-method spec of the surface (Python embeds it; C renders it as a sibling unit)
     surface: ExactSpec | None
     float_bound_note: tuple[str, ...]
+    #: a stable identifier of this generated controller (same spec, fuzzkit version and
+    #: number type -> same value): the FMU's ``guid``
+    guid: str
+    #: the online adaptation of the output gain (None: fixed gains)
+    adapt: AdaptationCode | None = None
 
 
 def float_step_bound(design: ControllerDesign, force_bound_n: float) -> float:
@@ -218,6 +296,12 @@ def slope_bound(rb: RuleBase) -> float:
 
 
 def _float_note(design: ControllerDesign, number_type: str) -> str:
+    if number_type == "float" and design.adaptation is not None:
+        return (
+            "float (for single-precision FPUs): with adaptation no bound on the distance from "
+            "the double build is stated (the stiffness estimate's band and alpha depend on "
+            "rounding); the double build is the one tested equal to the reference."
+        )
     if number_type == "double":
         return (
             "double: equal to fuzzkit's reference controller (fuzzkit.control) to 1e-9 m per "
@@ -253,6 +337,12 @@ def _surface_rulebase(design: ControllerDesign, surface_name: str) -> RuleBase:
             f"and an output (has {len(rb.inputs)} inputs, {len(rb.outputs)} outputs)"
         )
     return dataclasses.replace(rb, name=surface_name)
+
+
+def _guid(design: ControllerDesign, number_type: str, version: str) -> str:
+    """FMI's ``{8-4-4-4-12}`` identifier of what is generated: a hash of every input to it."""
+    content = f"fuzzkit {version} {number_type} {design!r}"
+    return "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, content)) + "}"
 
 
 def build_controller_spec(
@@ -341,7 +431,11 @@ def build_controller_spec(
     libm = {"sqrt"} | (set(surface.libm) if surface is not None else set())
     desc = tuple(textwrap.wrap(_comment_safe(" ".join(design.description.split())), 88)[:8])
     sha = design.source_sha256 or hashlib.sha256(repr(design).encode("utf-8")).hexdigest()
+    adapt = None
+    if design.adaptation is not None:
+        adapt = _adaptation_code(design, lit)
     return ControllerCodeSpec(
+        adapt=adapt,
         name=name,
         upper=name.upper(),
         module=module,
@@ -385,6 +479,50 @@ def build_controller_spec(
         libm=tuple(sorted(libm)),
         surface=surface,
         float_bound_note=tuple(textwrap.wrap(_float_note(design, nt), 88)),
+        guid=_guid(design, nt, __version__),
+    )
+
+
+def _adaptation_code(design: ControllerDesign, lit: Callable[[float], str]) -> AdaptationCode:
+    ad = design.adaptation
+    if ad is None or ad.mode not in ("stiffness-scheduled", "self-tuning"):
+        raise CodegenError(f"controller {design.name!r}: unknown adaptation")
+    scheduled = ad.mode == "stiffness-scheduled"
+    numbers = [ad.forgetting, ad.min_step_m, ad.min_force_n, ad.initial_n_mm, ad.k_min_n_mm,
+               ad.k_max_n_mm, ad.alpha_min, ad.alpha_max, *ad.ge, *ad.gde]  # fmt: skip
+    numbers += [v for b in ad.bands for v in b if v is not None]
+    numbers += [v for row in ad.alpha_table for v in row]
+    if not all(math.isfinite(v) for v in numbers):
+        raise CodegenError(f"controller {design.name!r}: adaptation parameters must be finite")
+    if scheduled and (not ad.bands or ad.window < 1 or ad.delay < 1 or ad.dwell_periods < 1):
+        raise CodegenError(f"controller {design.name!r}: a schedule needs bands and a window")
+    if not scheduled and (len(ad.alpha_table) != 7 or any(len(r) != 7 for r in ad.alpha_table)):
+        raise CodegenError(f"controller {design.name!r}: alpha's rule table must be 7x7")
+    return AdaptationCode(
+        mode=ad.mode,
+        scheduled=scheduled,
+        history=ad.window + ad.delay,
+        window=ad.window,
+        delay=ad.delay,
+        forgetting=lit(ad.forgetting),
+        min_step=lit(ad.min_step_m),
+        min_force=lit(ad.min_force_n),
+        initial=lit(ad.initial_n_mm),
+        k_min=lit(ad.k_min_n_mm),
+        k_max=lit(ad.k_max_n_mm),
+        band_limits=tuple(lit(up) for up, _ in ad.bands[:-1] if up is not None),
+        band_scales=tuple(lit(scale) for _, scale in ad.bands),
+        initial_band=ad.initial_band() if scheduled else 0,
+        dwell=ad.dwell_periods,
+        alpha_low=lit(ad.alpha_min),
+        alpha_span=lit(ad.alpha_max - ad.alpha_min),
+        alpha_table=tuple(tuple(lit(v) for v in row) for row in ad.alpha_table),
+        ge=(lit(ad.ge[0]), lit(ad.ge[1]), lit(ad.ge[2])),
+        gde=(lit(ad.gde[0]), lit(ad.gde[1]), lit(ad.gde[2])),
+        thousand=lit(1000.0),
+        three=lit(3.0),
+        jump=lit(ad.jump),
+        spread=lit(ad.spread),
     )
 
 
@@ -404,6 +542,7 @@ def emit_controller(
 
 
 __all__ = [
+    "AdaptationDesign",
     "ControllerCodeSpec",
     "ControllerDesign",
     "StatusBit",

@@ -29,6 +29,7 @@ from fuzzkit.codegen.lut import (
     ROUNDING_ALLOWANCE,
     LookupTable,
     bound_margin,
+    q15_fpi_codes,
 )
 from fuzzkit.codegen.target import Target, all_targets, load_target
 from fuzzkit.errors import CodegenError
@@ -184,7 +185,8 @@ def check_module_name(name: str, what: str = "rule base") -> str:
     finds; both break the build far from the cause. Every target is asked (its
     ``module_clash``), so a name is usable whichever target it is compiled to.
     """
-    clashes = [why for t in all_targets() if (why := t.module_clash(name))]
+    # targets that share a language (C and the FMU) give the same reason once
+    clashes = list(dict.fromkeys(why for t in all_targets() if (why := t.module_clash(name))))
     if clashes:
         raise CodegenError(
             f"{what} name {name!r}: " + " and ".join(clashes) + f"; rename the {what}"
@@ -401,6 +403,9 @@ def build_spec(
         if nt in ("float", "q15"):
             _check_float32_gains(gains, fpi_defaults.source)
         defaults = {k: lit(v) for k, v in gains.items()}
+        if table.q15 is not None:  # Q15 bakes the codes: no floating point in the C
+            codes = q15_fpi_codes(table.q15, *(gains[k] for k in FPI_GAIN_KEYS))
+            defaults = {k: str(c) for k, c in zip(FPI_GAIN_KEYS, codes, strict=True)}
     file_name, sha = source_sha256(rb)
     desc = tuple(textwrap.wrap(_comment_safe(" ".join(rb.description.split())), 88)[:8])
     bound_summary = table.bound_summary()  # as fuzzkit compile prints it
@@ -441,7 +446,7 @@ def build_spec(
 def _environment(target: str) -> jinja2.Environment:
     """The one Jinja setup every target's templates are rendered with."""
     return jinja2.Environment(
-        loader=jinja2.FileSystemLoader(str(load_target(target).folder)),
+        loader=jinja2.FileSystemLoader([str(f) for f in load_target(target).template_folders()]),
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,
         lstrip_blocks=True,

@@ -122,6 +122,40 @@ class Q15Layout:
     recip: tuple[IntArray, ...]
 
 
+def _fixed(x: float, scale: float, lo: int, hi: int) -> int:
+    """``round(x * scale)`` (half away from zero) saturated to ``[lo, hi]``; NaN -> 0."""
+    v = x * scale
+    if math.isnan(v):
+        return 0
+    if v >= hi:
+        return hi
+    if v <= lo:
+        return lo
+    return math.floor(abs(v) + 0.5) * (1 if v >= 0 else -1)
+
+
+def q15_fpi_codes(
+    layout: Q15Layout, kp: float, ki: float, kx: float, u_min: float, u_max: float
+) -> tuple[int, int, int, int, int]:
+    """The Q15 fuzzy-PI's gain and limit codes ``NAME_fpi_init`` takes (its header's formulas).
+
+    Gains are rounded to float32 first (as a float gains file states them), then
+    ``KP = round(kp / IN1_FULL_SCALE * 65536)``, ``KI = round(ki / IN0_FULL_SCALE * 65536)``,
+    ``KX = round(kx * OUT0_FULL_SCALE * 65536)`` saturated to int32, and the limits
+    ``round(u * 32768)`` saturated to int16. Done here, at generation time, so the generated
+    Q15 code holds no floating point at all.
+    """
+    big = 2**31 - 1
+    f32 = [float(np.float32(g)) for g in (kp, ki, kx, u_min, u_max)]
+    return (
+        _fixed(f32[0] / layout.in_scale[1], 65536.0, -big, big),
+        _fixed(f32[1] / layout.in_scale[0], 65536.0, -big, big),
+        _fixed(f32[2] * layout.out_scale[0], 65536.0, -big, big),
+        _fixed(f32[3], 32768.0, -32768, 32767),
+        _fixed(f32[4], 32768.0, -32768, 32767),
+    )
+
+
 @dataclass(frozen=True, eq=False)
 class LookupTable:
     """A rule base sampled on a grid, with the verified error bound of its interpolation.

@@ -93,6 +93,19 @@ class Target:
     #: Build and load a generated controller: ``open_controller(files, name, number_type)``
     #: returns an object with ``step(force_n, tool_rotation) -> (correction, status)``.
     open_controller: Callable[[Mapping[str, str], str, str], Any] | None = None
+    #: A target whose templates this one reuses: a template missing from ``folder`` is taken
+    #: from that target's folder (the FMU target lays the C target's controller out as is).
+    extends: str | None = None
+    #: A target whose output is one file rather than a folder: ``bundle(files, name)`` turns
+    #: the rendered files into its bytes (the FMU: compile the binary, zip everything).
+    bundle: Callable[[Mapping[str, str], str], bytes] | None = None
+
+    def template_folders(self) -> list[Path]:
+        """Where this target's templates are looked up: its folder, then the extended one's."""
+        folders = [self.folder]
+        if self.extends is not None:
+            folders.extend(load_target(self.extends).template_folders())
+        return folders
 
     def check_number_type(self, number_type: str, what: str) -> None:
         """Raise CodegenError unless the target computes in ``number_type``."""

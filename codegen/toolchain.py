@@ -70,7 +70,7 @@ void fuzzkit_batch_eval(const {t} *in, {t} *out, long n)
 }}
 """
     if fpi:
-        g = "float" if number_type == "q15" else t  # Q15 fpi_init takes float gains too
+        g = "int32_t" if number_type == "q15" else t  # Q15 fpi_init takes codes
         text += f"""
 void fuzzkit_fpi_run(const {g} *gains, const {t} *sp, const {t} *meas, {t} *u, long n,
                      unsigned long *faults);
@@ -175,7 +175,7 @@ class CompiledTable:
         self._fpi: Any = None
         if fpi:
             self._fpi = self.library.fuzzkit_fpi_run
-            gptr = ctypes.POINTER(ctypes.c_float) if number_type == "q15" else ptr
+            gptr = ctypes.POINTER(ctypes.c_int32) if number_type == "q15" else ptr
             self._fpi.argtypes = [
                 gptr,
                 ptr,
@@ -215,15 +215,18 @@ class CompiledTable:
     def fpi_run(
         self, gains: Sequence[float], setpoints: npt.ArrayLike, measured: npt.ArrayLike
     ) -> tuple[npt.NDArray[Any], npt.NDArray[np.uint64]]:
-        """Run ``NAME_fpi_step`` over the sequences: returns ``(u, faults after each step)``."""
+        """Run ``NAME_fpi_step`` over the sequences: returns ``(u, faults after each step)``.
+
+        ``gains`` are kp, ki, kx, u_min, u_max; for Q15 their codes (``lut.q15_fpi_codes``).
+        """
         if self._fpi is None:
             raise ToolchainError("this library was built without the fuzzy-PI API")
         dtype = _NUMPY[self.number_type]
         sp = np.ascontiguousarray(setpoints, dtype=dtype)
         me = np.ascontiguousarray(measured, dtype=dtype)
         q15 = self.number_type == "q15"
-        g = np.ascontiguousarray(gains, dtype=np.float32 if q15 else dtype)
-        gptr = ctypes.POINTER(ctypes.c_float) if q15 else ctypes.POINTER(_CTYPES[self.number_type])
+        g = np.ascontiguousarray(gains, dtype=np.int32 if q15 else dtype)
+        gptr = ctypes.POINTER(ctypes.c_int32) if q15 else ctypes.POINTER(_CTYPES[self.number_type])
         u = np.empty_like(sp)
         faults = np.zeros(sp.shape, dtype=np.uint64)
         ptr = ctypes.POINTER(_CTYPES[self.number_type])

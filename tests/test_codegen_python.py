@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from _codegen_util import needs_cc, rulebase, skip_no_cc, sources, table
 
-from fuzzkit.codegen.lut import LookupTable
+from fuzzkit.codegen.lut import LookupTable, q15_fpi_codes
 from fuzzkit.codegen.toolchain import CompiledTable
 from fuzzkit.codegen.verify import compare, load_module, python_outputs, verification_points
 from fuzzkit.fuzzy.inference import Engine
@@ -177,19 +177,25 @@ def _fixed(x: float, scale: float, lo: float, hi: float) -> int:
     return math.floor(abs(v) + 0.5) * (1 if v >= 0 else -1)
 
 
+def q15_codes(tab: LookupTable, gains: tuple[float, ...]) -> tuple[int, int, int, int, int]:
+    """The header's formulas for the codes ``NAME_fpi_init`` takes, from float32 gains."""
+    assert tab.q15 is not None
+    kp, ki, kx, u_min, u_max = (float(np.float32(g)) for g in gains)
+    big = 2147483647.0
+    return (
+        _fixed(kp / tab.q15.in_scale[1], 65536.0, -big, big),
+        _fixed(ki / tab.q15.in_scale[0], 65536.0, -big, big),
+        _fixed(kx * tab.q15.out_scale[0], 65536.0, -big, big),
+        _fixed(u_min, 32768.0, -32768.0, 32767.0),
+        _fixed(u_max, 32768.0, -32768.0, 32767.0),
+    )
+
+
 def reference_fpi_q15(
     tab: LookupTable, gains: tuple[float, ...], setpoints: np.ndarray, measured: np.ndarray
 ) -> list[int]:
     """The Q15 fuzzy-PI as the header documents it, with Python integers."""
-    assert tab.q15 is not None
-    f32 = [float(np.float32(g)) for g in gains]
-    kp, ki, kx, u_min, u_max = f32
-    big = 2147483647.0
-    kp_q = _fixed(kp / tab.q15.in_scale[1], 65536.0, -big, big)
-    ki_q = _fixed(ki / tab.q15.in_scale[0], 65536.0, -big, big)
-    kx_q = _fixed(kx * tab.q15.out_scale[0], 65536.0, -big, big)
-    lo = _fixed(u_min, 32768.0, -32768.0, 32767.0)
-    hi = _fixed(u_max, 32768.0, -32768.0, 32767.0)
+    kp_q, ki_q, kx_q, lo, hi = q15_codes(tab, gains)
     u = min(max(0, lo), hi)
     e_prev, first = 0, True
     out = []
@@ -219,8 +225,10 @@ def test_c_q15_fpi_is_bit_exact_with_the_documented_integer_loop() -> None:
     with CompiledTable(
         sources("macvicar_whelan", "c", "q15"), "macvicar_whelan", "q15", 2, 1, fpi=True
     ) as lib:
-        us, faults = lib.fpi_run(gains, sp, me)
+        us, faults = lib.fpi_run(q15_codes(tab, gains), sp, me)
     np.testing.assert_array_equal(us.astype(np.int64), ref)
+    # the generator's conversion (for --gains) is the documented one
+    assert q15_fpi_codes(tab.q15, *gains) == q15_codes(tab, gains)  # type: ignore[arg-type]
     assert not faults.any()
     assert max(ref) == round(0.6 * 32768)  # saturated at u_max
     assert len(set(ref)) > 50  # and it did move

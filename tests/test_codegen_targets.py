@@ -67,7 +67,7 @@ def test_no_shared_module_branches_on_a_target() -> None:
 
 
 def test_targets_are_the_backend_folders() -> None:
-    assert target.TARGETS == ("c", "python")
+    assert target.TARGETS == ("c", "fmu", "python")
     for name in target.TARGETS:
         tg = target.load_target(name)
         assert tg.name == name
@@ -75,7 +75,12 @@ def test_targets_are_the_backend_folders() -> None:
         assert tg.default_number_type in tg.number_types
         for files in tg.files.values():
             for template in files.values():
-                assert (tg.folder / template).is_file()
+                # its own folder first, then the target it extends (the FMU reuses C's)
+                assert any((f / template).is_file() for f in tg.template_folders())
+    assert target.load_target("fmu").template_folders() == [
+        CODEGEN / "backends" / "fmu",
+        CODEGEN / "backends" / "c",
+    ]
 
 
 def test_the_jinja_environment_is_strict_and_keeps_layout() -> None:
@@ -91,8 +96,8 @@ def toy_target(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[targ
     It is the Python target with every number written as ``float.fromhex(...)`` and its own
     reserved word, registered as the folder scan would register it.
     """
-    for template in ("exact.py.jinja", "exact_body.py.jinja"):
-        shutil.copy(CODEGEN / "backends" / "python" / template, tmp_path)
+    for template in (CODEGEN / "backends" / "python").glob("*.jinja"):  # includes included
+        shutil.copy(template, tmp_path)
 
     def hex_literal(value: float, number_type: str) -> str:
         return f"float.fromhex({float(value).hex()!r})"

@@ -27,6 +27,7 @@ from fuzzkit.codegen.backends.c.run import CompiledController
 from fuzzkit.codegen.controller import float_step_bound
 from fuzzkit.codegen.toolchain import SANITIZE_FLAGS, STRICT_FLAGS, run_compiler
 from fuzzkit.control import status as st
+from fuzzkit.control.adaptation_spec import Adaptation
 from fuzzkit.control.reference import Controller
 from fuzzkit.control.spec import AxisSpec, ControllerSpec, Limits, SensorSpec
 from fuzzkit.control.spec_reader import load_spec
@@ -65,10 +66,18 @@ def spec(variant: str) -> ControllerSpec:
             limits=Limits(correction_m=0.003, step_m=2e-4),
             sensor=SensorSpec(tare_samples=10),
         )
+    if variant == "adaptive":
+        return load_spec(EXAMPLES / "controller_adaptive.yaml")
+    if variant == "selftuning":
+        return load_spec(EXAMPLES / "controller_selftuning.yaml")
+    if variant == "selftuning_fuzzy":
+        # self-tuning on the fuzzy-PI's own input scaling, the whole front end, two axes
+        base = spec("fuzzy")
+        return dataclasses.replace(base, name="stf", adaptation=Adaptation(mode="self-tuning"))
     raise KeyError(variant)
 
 
-VARIANTS = ("fuzzy", "pi", "bare_fuzzy", "hot_pi")
+VARIANTS = ("fuzzy", "pi", "bare_fuzzy", "hot_pi", "adaptive", "selftuning", "selftuning_fuzzy")
 
 
 def reference_run(
@@ -191,7 +200,7 @@ def test_float_build_stays_within_the_bound_its_header_states(variant: str) -> N
 
 @needs_cc
 @pytest.mark.parametrize("compiler", ["cc", "clang"])
-@pytest.mark.parametrize("variant", ["fuzzy", "hot_pi"])
+@pytest.mark.parametrize("variant", ["fuzzy", "hot_pi", "adaptive", "selftuning"])
 def test_controller_runs_clean_under_sanitizers(
     tmp_path: Path, compiler: str, variant: str
 ) -> None:
@@ -245,7 +254,7 @@ int main(void)
 
 @needs_cc
 @pytest.mark.parametrize("number_type", ["float", "double"])
-@pytest.mark.parametrize("variant", ["fuzzy", "pi"])
+@pytest.mark.parametrize("variant", ["fuzzy", "pi", "adaptive", "selftuning_fuzzy"])
 def test_objects_use_only_the_libm_symbols_the_header_lists_and_hold_no_writable_data(
     tmp_path: Path, variant: str, number_type: str
 ) -> None:

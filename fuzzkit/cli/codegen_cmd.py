@@ -25,7 +25,7 @@ def register(sub: Any) -> None:
     p = sub.add_parser(
         "compile",
         help="compile a rule base (lookup table or exact inference) or a whole controller "
-        "spec to C or Python",
+        "spec to C or Python (a controller spec also to an FMU)",
         description="Generate C (NAME.h, NAME.c) or Python (NAME.py) for a rule base, either "
         "as a lookup table sampled from the exact engine with a verified error bound "
         "(--method table) or as the exact inference itself, rounding error only "
@@ -37,19 +37,22 @@ def register(sub: Any) -> None:
         "whole outer-loop controller instead: NAME_controller.{h,c} (plus NAME_surface.{h,c}, "
         "a fuzzy-PI's rule base by the exact method) or NAME_controller.py, --type float "
         "(default for C) or double; --verify then runs it on a hostile sensor log against "
-        "fuzzkit's reference controller.",
+        "fuzzkit's reference controller. --target fmu (controller specs only) writes "
+        "--out NAME.fmu, an FMI 2.0 Co-Simulation FMU of the controller (double): "
+        "modelDescription.xml, the C sources and the Linux x86-64 binary (docs/fmu.md).",
         epilog="examples:\n"
         "  fuzzkit compile macvicar_whelan --target c --out gen --verify\n"
         "  fuzzkit compile macvicar_whelan --target c --method exact --out gen_exact --verify\n"
         "  fuzzkit compile macvicar_whelan --target c --type q15 --tolerance 2e-3 --out gen_q15\n"
         "  fuzzkit compile my_controller.yaml --target python --resolution 65 --out gen_py\n"
         "  fuzzkit compile docs/examples/controller.yaml --target c --type double --out fw "
-        "--verify",
+        "--verify\n"
+        "  fuzzkit compile docs/examples/controller.yaml --target fmu --out e1_fuzzy.fmu",
     )
     p.add_argument(
         "rulebase", metavar="RULEBASE|SPEC", help=RULEBASE_SPEC_HELP + ", or a controller spec"
     )
-    p.add_argument("--target", required=True, help="c or python (required)")
+    p.add_argument("--target", required=True, help="c, python or fmu (required)")
     p.add_argument(
         "--type",
         dest="number_type",
@@ -159,6 +162,11 @@ def cmd_compile(args: argparse.Namespace) -> int:
 
     # Cheap checks first, so a typo costs nothing and nothing is written.
     target = load_target(args.target)
+    if not {"table", "exact"} & set(target.files):
+        raise CodegenError(
+            f"the {target.name} target makes whole controllers only: give it a controller "
+            f"spec (a YAML file with axes/controller keys), not the rule base {args.rulebase}"
+        )
     number_type = args.number_type or target.default_number_type
     if number_type not in NUMBER_TYPES:
         raise CodegenError(

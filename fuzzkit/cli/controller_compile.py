@@ -1,8 +1,8 @@
-"""``fuzzkit compile SPEC``: the whole outer-loop controller of a spec as C or Python.
+"""``fuzzkit compile SPEC``: the whole outer-loop controller of a spec as C, Python or an FMU.
 
 Everything is generated (and, with ``--verify``, compiled or imported and run against the
 reference controller) before anything is written; the output folder then gets every file at
-once or none.
+once or none (a one-file target such as the FMU: the file is written atomically).
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ def compile_spec(args: argparse.Namespace) -> int:
     from fuzzkit.codegen.target import load_target
     from fuzzkit.control.spec_reader import load_spec
     from fuzzkit.errors import ConfigError
-    from fuzzkit.fileio import write_tree_atomic
+    from fuzzkit.fileio import write_atomic, write_tree_atomic
     from fuzzkit.studies.controller_code import design_of, generate
     from fuzzkit.studies.replay import SensorLog, replay
     from fuzzkit.studies.sensor_logs import hostile_log
@@ -57,8 +57,10 @@ def compile_spec(args: argparse.Namespace) -> int:
     target = load_target(args.target)
     number_type = args.number_type or target.default_number_type
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
+    if target.bundle is None and out.exists() and not out.is_dir():
         raise ConfigError(f"{out}: exists and is not a directory (expected an output folder)")
+    if target.bundle is not None and out.is_dir():
+        raise ConfigError(f"{out}: is a directory (the {target.name} target writes one file)")
     spec = load_spec(args.rulebase)
     files = generate(spec, target.name, number_type)
     print(f"{spec.name}: {spec.kind} controller, {target.label} ({number_type})")
@@ -85,6 +87,9 @@ def compile_spec(args: argparse.Namespace) -> int:
         if not ok:
             print("nothing written: the generated controller does not match the reference")
             return EXIT_FAILURE
+    if target.bundle is not None:
+        print(f"wrote {write_atomic(out, target.bundle(files, spec.name))}")
+        return EXIT_OK
     for path in write_tree_atomic(out, files):
         print(f"wrote {path}")
     return EXIT_OK

@@ -13,6 +13,9 @@ from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
 
 CONTROLLERS = ("pi", "fuzzy-pi")
+#: What ``simulate --controller`` runs: the two, or either under the kit's default stiffness
+#: schedule (docs/controller.md, "Adaptation").
+RUN_CONTROLLERS = (*CONTROLLERS, "adaptive-pi", "adaptive-fuzzy-pi")
 FAULT_KINDS = ("none", "spike", "nan", "dropout", "delay")  # fuzzkit.studies.faults.FAULTS
 
 
@@ -68,7 +71,10 @@ def register(subparsers: Any) -> None:
         help="E1, E2, E3 (shipped scenarios) or a scenario file TASK.yaml",
     )
     sim.add_argument(
-        "--controller", choices=CONTROLLERS, default="fuzzy-pi", help="force controller"
+        "--controller",
+        choices=RUN_CONTROLLERS,
+        default="fuzzy-pi",
+        help="force controller (adaptive-*: the shipped gains under the kit's stiffness schedule)",
     )
     sim.add_argument(
         "--rulebase",
@@ -292,7 +298,7 @@ def _simulate(args: argparse.Namespace) -> int:
         stiffness_n_per_mm=args.stiffness,
         latency=latency,
         seed=args.seed,
-        gains=gains_items(load_gains(args.gains, args.controller)),
+        gains=gains_items(load_gains(args.gains, args.controller.removeprefix("adaptive-"))),
         gains_label=args.gains or "default",
         rulebase=args.rulebase,
         loop=args.loop or "auto",

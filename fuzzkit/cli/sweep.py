@@ -12,6 +12,7 @@ from fuzzkit.cli.simulation import FAIL_ON_TRIP_HELP
 from fuzzkit.errors import ConfigError
 
 CONTROLLERS = ("pi", "fuzzy-pi")
+RUN_CONTROLLERS = (*CONTROLLERS, "adaptive-pi", "adaptive-fuzzy-pi")
 
 
 def register(subparsers: Any) -> None:
@@ -38,7 +39,11 @@ def register(subparsers: Any) -> None:
         metavar="EXPERIMENT",
         help="E1, E2, E3 (shipped scenarios) or scenario files TASK.yaml",
     )
-    p.add_argument("--controller", default="pi,fuzzy-pi", help="comma list (default pi,fuzzy-pi)")
+    p.add_argument(
+        "--controller",
+        default="pi,fuzzy-pi",
+        help="comma list of pi, fuzzy-pi, adaptive-pi, adaptive-fuzzy-pi (default pi,fuzzy-pi)",
+    )
     p.add_argument(
         "--stiffness",
         default=None,
@@ -150,8 +155,10 @@ def _sweep(args: argparse.Namespace) -> int:
     names = list(args.experiments)  # what each run loads: a shipped name or the file
     controllers = [c.strip() for c in args.controller.split(",")]
     for c in controllers:
-        if c not in CONTROLLERS:
-            raise ConfigError(f"--controller: unknown {c!r} (expected pi, fuzzy-pi)")
+        if c not in RUN_CONTROLLERS:
+            raise ConfigError(
+                f"--controller: unknown {c!r} (expected {', '.join(RUN_CONTROLLERS)})"
+            )
     out = check_table_path(args.out)
     figure = Path(args.figure) if args.figure else out.with_suffix(".png")
     from fuzzkit.fileio import check_output_path
@@ -167,7 +174,7 @@ def _sweep(args: argparse.Namespace) -> int:
     gains = None
     if args.gains:
         gains = {
-            f: {c: read_gains(f, c, required=False) for c in controllers}
+            f: {c: read_gains(f, c.removeprefix("adaptive-"), required=False) for c in controllers}
             for f in args.gains.split(",")
         }
     specs = sweep_specs(

@@ -38,7 +38,10 @@ def register(subparsers: Any) -> None:
     )
     tune.add_argument("experiments", nargs="+", metavar="EXPERIMENT", help="E1, E2, E3")
     tune.add_argument(
-        "--controller", choices=CONTROLLERS, default="fuzzy-pi", help="controller to tune"
+        "--controller",
+        choices=(*CONTROLLERS, "adaptive-pi", "adaptive-fuzzy-pi"),
+        default="fuzzy-pi",
+        help="controller to tune (adaptive-*: the base gains under the kit's stiffness schedule)",
     )
     tune.add_argument(
         "--rulebase",
@@ -290,6 +293,18 @@ def _tuning_target(args: argparse.Namespace) -> tuple[list[Any], str, str, str]:
     """What ``tune`` tunes: ``(experiments, controller, rule base, loop)``; with ``--spec``,
     the experiments carry the spec and its kind and rule base are the controller's."""
     loop = args.loop or "auto"
+    if not args.spec and args.controller.startswith("adaptive-"):
+        from fuzzkit.studies.batch import adaptive_spec_for
+        from fuzzkit.studies.experiments import experiment, with_spec
+
+        exps = [experiment(e) for e in args.experiments]
+        experiments = [
+            with_spec(
+                e, adaptive_spec_for(e, args.controller, args.rulebase, sum(e.latency_periods))
+            )
+            for e in exps
+        ]
+        return experiments, args.controller.removeprefix("adaptive-"), args.rulebase, loop
     if not args.spec:
         return list(args.experiments), args.controller, args.rulebase, loop
     from fuzzkit.control.spec_reader import load_spec

@@ -29,6 +29,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.control import status as st
+from fuzzkit.control.adaptation import StiffnessSchedule
 from fuzzkit.control.frontend import FrontEnd
 from fuzzkit.errors import ConfigError
 
@@ -141,6 +142,9 @@ class _Incremental:
         if rate_limit is not None and not rate_limit > 0.0:
             raise ConfigError(f"rate_limit must be > 0 or None (got {rate_limit})")
         self.u_min, self.u_max, self.rate_limit = u_min, u_max, rate_limit
+        #: Online adaptation: ``(e, de) -> s``, the factor of this period's increment
+        #: (``fuzzkit.control.adaptation``); None: fixed gains.
+        self.adapt: Callable[[float, float], float] | None = None
         self.reset()
 
     def reset(self) -> None:
@@ -175,6 +179,8 @@ class _Incremental:
         de = 0.0 if self._e_prev is None else e - self._e_prev
         self._e_prev = e
         du = self._increment(e, de)
+        if self.adapt is not None:
+            du = self.adapt(e, de) * du
         if not math.isfinite(du):  # a surface that answers NaN must not move the robot
             self.faults += 1
             du = 0.0
@@ -306,6 +312,7 @@ class HybridForceController:
         spike_gate_n: float | None = None,
         spike_confirm: int = 4,
         front_end: FrontEnd | None = None,
+        schedules: Sequence[StiffnessSchedule | None] | None = None,
     ) -> None:
         if len(controllers) != 3 or len(setpoints) != 3:
             raise ConfigError(
@@ -334,6 +341,9 @@ class HybridForceController:
         self.spike_gate_n = 0.5 * force_limit_n if spike_gate_n is None else spike_gate_n
         self.spike_confirm = spike_confirm
         self.front_end = front_end
+        self.schedules = list(schedules) if schedules is not None else [None, None, None]
+        if len(self.schedules) != 3:
+            raise ConfigError("HybridForceController needs 3 schedules (x, y, z) or None")
         self.reset()
 
     def reset(self) -> None:
@@ -344,6 +354,9 @@ class HybridForceController:
                 c.reset()
         if self.front_end is not None:
             self.front_end.reset()
+        for sched in self.schedules:
+            if sched is not None:
+                sched.reset()
         self.status = 0
         self.u = np.zeros(3)
         self.e = np.zeros(3)
@@ -399,6 +412,7 @@ class HybridForceController:
             if self._over >= (self.trip_samples if plausible else self.spike_confirm):
                 self._trip(f)
         if not plausible and not self.tripped:
+            self._observe(None)
             self.faults += 1
             self.rejected += 1
             self._above = 0
@@ -418,6 +432,7 @@ class HybridForceController:
             if self._above < self.engage_samples:
                 return self._output()
             self.engaged = True
+        self._observe(f)
         for i, c in enumerate(self.controllers):
             if c is None:
                 continue
@@ -449,6 +464,7 @@ class HybridForceController:
         outlier), the correction is held."""
         if not bool(np.all(np.isfinite(force))):
             return self._missing()
+        self._observe(None)
         confirmed = self._accepted is not None and self._rejected_run >= self.spike_confirm
         if not self._plausible(force - fe.weight(rotation)):
             self.faults += 1
@@ -465,12 +481,37 @@ class HybridForceController:
 
     def _missing(self) -> Vec:
         """A sample that cannot be used: hold, count it, restart the engagement count."""
+        self._observe(None)
         self.faults += 1
         self._above = 0
         self.status |= st.HELD
         if self.front_end is not None and self.front_end.taring:
             self.status |= st.TARING
         return self._output()
+
+    def _observe(self, f: Vec | None) -> None:
+        """Feed each stiffness schedule one engaged, untripped period: the force its axis
+        controller sees (None: the sample is held) and the correction before the step."""
+        if not self.engaged or self.tripped:
+            return
+        for i, sched in enumerate(self.schedules):
+            if sched is not None:
+                sched.observe(math.nan if f is None else float(f[i]), float(self.u[i]))
+
+    @property
+    def stiffness_n_mm(self) -> Vec:
+        """The stiffness estimate per axis (N/mm; NaN without a schedule)."""
+        return np.array([math.nan if s is None else s.k for s in self.schedules])
+
+    @property
+    def gain_scale(self) -> Vec:
+        """The factor of the output gain per axis in the last step (1 for fixed gains)."""
+        out = np.ones(3)
+        for i, c in enumerate(self.controllers):
+            adapt = getattr(c, "adapt", None)
+            if adapt is not None:
+                out[i] = float(getattr(adapt, "last", 1.0))
+        return out
 
     def _plausible(self, f: Vec) -> bool:
         """Spike gate: accept ``f`` unless it jumps past the gate from the last accepted sample

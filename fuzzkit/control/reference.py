@@ -20,6 +20,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from fuzzkit.control.adaptation import SelfTuning, StiffnessSchedule
 from fuzzkit.control.controllers import (
     PI,
     AxisController,
@@ -29,7 +30,7 @@ from fuzzkit.control.controllers import (
     engine_surface,
 )
 from fuzzkit.control.frontend import FrontEnd
-from fuzzkit.control.spec import AXES, ControllerSpec, require_valid
+from fuzzkit.control.spec import AXES, AxisSpec, ControllerSpec, require_valid
 from fuzzkit.errors import ConfigError
 
 
@@ -84,6 +85,7 @@ def hybrid_from_spec(spec: ControllerSpec, surface: Surface | None = None) -> Hy
                 raise ConfigError("fuzzy-pi needs a surface and kx")
             axes[a.index] = FuzzyPI(surface, a.kp, a.ki, a.kx, **limits)
     s = spec.safety
+    schedules = attach_adaptation(spec, axes)
     return HybridForceController(
         axes,
         spec.setpoints,
@@ -97,7 +99,37 @@ def hybrid_from_spec(spec: ControllerSpec, surface: Surface | None = None) -> Hy
         spike_gate_n=s.spike_gate,
         spike_confirm=s.spike_confirm,
         front_end=front_end_from_spec(spec),
+        schedules=schedules,
     )
+
+
+def input_gains(spec: ControllerSpec, a: AxisSpec) -> tuple[float, float]:
+    """The self-tuning rule base's input gains ``(ge, gde)`` of axis ``a`` (1/N): ``1/error_n``
+    and ``1/change_n``, or a fuzzy-PI's own ``ki`` and ``kp`` when those are not given."""
+    ad = spec.adaptation
+    ge = 1.0 / ad.error_n if ad.error_n is not None else a.ki
+    gde = 1.0 / ad.change_n if ad.change_n is not None else a.kp
+    return ge, gde
+
+
+def attach_adaptation(
+    spec: ControllerSpec, axes: list[AxisController | None]
+) -> list[StiffnessSchedule | None]:
+    """Give each axis controller the spec's adaptation; the stiffness schedules per axis (the
+    hybrid controller feeds them every engaged period), None where there is none."""
+    ad = spec.adaptation
+    schedules: list[StiffnessSchedule | None] = [None, None, None]
+    for a in spec.axes:
+        c = axes[a.index]
+        if not isinstance(c, PI | FuzzyPI) or ad.mode == "none":
+            continue
+        if ad.mode == "stiffness-scheduled":
+            sched = StiffnessSchedule(ad, spec.period_s)
+            schedules[a.index] = sched
+            c.adapt = sched
+        else:
+            c.adapt = SelfTuning(ad, *input_gains(spec, a))
+    return schedules
 
 
 class Controller:

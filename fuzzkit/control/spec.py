@@ -22,6 +22,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
+from fuzzkit.control.adaptation_spec import MODES, NONE, Adaptation, adaptation_problems
 from fuzzkit.errors import ConfigError
 from fuzzkit.fuzzy.model import RuleBase, Source
 from fuzzkit.fuzzy.validation import identifier_problem
@@ -30,8 +31,8 @@ from fuzzkit.fuzzy.validation import identifier_problem
 AXES = ("x", "y", "z")
 #: Controller kinds: incremental PI (eq. 9) and fuzzy-PI (sec. 3.2.4).
 KINDS = ("pi", "fuzzy-pi")
-#: Adaptation modes; only ``none`` today (stiffness schedules and self-tuning are reserved).
-ADAPTATIONS = ("none",)
+#: Adaptation modes (:mod:`fuzzkit.control.adaptation_spec`).
+ADAPTATIONS = MODES
 #: Standard gravity (m/s^2, CGPM 1901), the magnitude of the tool's weight per kilogram.
 STANDARD_GRAVITY_M_S2 = 9.80665
 
@@ -145,7 +146,8 @@ class ControllerSpec:
     ``axes`` lists the force-controlled task axes (the selection matrix S) in x, y, z order;
     the others follow the nominal path. ``rulebase`` is the loaded rule base of a fuzzy-PI
     (``rulebase_ref``: the name or path as written; ``rulebase_source``: the shipped name or
-    the resolved path, what ``fuzzkit.formats.registry.load`` takes; None for PI). ``source``:
+    the resolved path, what ``fuzzkit.formats.registry.load`` takes; None for PI).
+    ``adaptation``: how the scaling factors adapt online (mode none: fixed). ``source``:
     the spec file and the sha256 of its text (None when built in code).
     """
 
@@ -159,7 +161,7 @@ class ControllerSpec:
     rulebase: RuleBase | None = None
     rulebase_ref: str | None = None
     rulebase_source: str | None = None
-    adaptation: str = "none"
+    adaptation: Adaptation = NONE
     description: str = ""
     source: Source | None = None
 
@@ -250,8 +252,7 @@ def spec_problems(spec: ControllerSpec) -> list[tuple[SpecPath, str]]:
         out.append((("rulebase",), "a pi controller takes no rule base"))
     if spec.rulebase is not None:
         out += [(("rulebase",), p) for p in rulebase_problems(spec.rulebase)]
-    if spec.adaptation not in ADAPTATIONS:
-        out.append((("adaptation",), f"unknown adaptation {spec.adaptation!r}; expected none"))
+    out += adaptation_problems(spec.adaptation, spec.kind, spec.period_s)
     _positive(out, ("period_s",), spec.period_s)
     if _finite(spec.period_s) and not MIN_PERIOD_S <= spec.period_s <= MAX_PERIOD_S:
         out.append(

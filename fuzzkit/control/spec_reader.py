@@ -24,6 +24,8 @@ from pathlib import Path
 
 from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 
+from fuzzkit.control.adaptation_reader import read_adaptation
+from fuzzkit.control.adaptation_spec import NONE
 from fuzzkit.control.spec import (
     AXES,
     KINDS,
@@ -202,7 +204,7 @@ class _SpecReader(NodeReader):
             rulebase=rulebase,
             rulebase_ref=ref,
             rulebase_source=target,
-            adaptation=self.word(top, "adaptation", "an adaptation mode (none)", "none"),
+            adaptation=read_adaptation(self, top["adaptation"]) if "adaptation" in top else NONE,
             description=self.text(top["description"], "") or "" if "description" in top else "",
             source=source,
         )

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from fuzzkit.control.adaptation_spec import MAX_HISTORY
 from fuzzkit.control.spec import ADAPTATIONS, AXES, KINDS, MAX_PERIOD_S, MIN_PERIOD_S
 from fuzzkit.control.spec_reader import MAX_SAMPLES, REQUIRED_KEYS
 
@@ -39,6 +40,70 @@ def _object(props: dict[str, Any], required: tuple[str, ...] = (), **extra: Any)
         "required": list(required),
         "additionalProperties": False,
         **extra,
+    }
+
+
+def adaptation_schema() -> dict[str, Any]:
+    """The ``adaptation:`` section: a mode name, or a mapping whose keys depend on the mode."""
+    window = "increments over this many periods"
+    estimator = _object(
+        {
+            "window_periods": {**_count(window, 1), "maximum": MAX_HISTORY - 1},
+            "delay_periods": {
+                **_count("1 + the loop's latency (periods)", 1),
+                "maximum": MAX_HISTORY - 1,
+            },
+            "forgetting": {**_number("weight of the past per update", 0, True), "maximum": 1},
+            "min_step_m": _number("excitation threshold on |du| over the window (m)", 0, True),
+            "min_force_n": _number("excitation threshold on |df| over the window (N)", 0, True),
+            "initial_n_mm": _number("the estimate before the first update (N/mm)", 0, True),
+            "range_n_mm": {
+                "type": "array",
+                "items": {"type": "number", "exclusiveMinimum": 0},
+                "minItems": 2,
+                "maxItems": 2,
+                "description": "[k_min, k_max] (N/mm): the estimate is clamped to it",
+            },
+        }
+    )
+    band = _object(
+        {
+            "up_to_n_mm": _number("the band holds estimates up to this (N/mm)", 0, True),
+            "scale": _number("factor of the output gain in this band", 0, True),
+        },
+        ("scale",),
+    )
+    scheduled = _object(
+        {
+            "mode": {"const": "stiffness-scheduled"},
+            "estimator": estimator,
+            "bands": {"type": "array", "items": band, "minItems": 1},
+            "dwell_s": _number("least time between two band changes that raise the gain", 0),
+        },
+        ("mode", "bands"),
+    )
+    tuning = _object(
+        {
+            "mode": {"const": "self-tuning"},
+            "alpha": _object(
+                {
+                    "min": {**_number("the factor at alpha = 0", 0), "maximum": 1},
+                    "max": {**_number("the factor at alpha = 1", 0, True), "maximum": 1},
+                }
+            ),
+            "error_n": _number("E = clip(e / error_n) (N); a pi needs it", 0, True),
+            "change_n": _number("dE = clip(de / change_n) (N); a pi needs it", 0, True),
+        },
+        ("mode",),
+    )
+    return {
+        "oneOf": [
+            {"enum": list(ADAPTATIONS)},
+            _object({"mode": {"const": "none"}}, ("mode",)),
+            scheduled,
+            tuning,
+        ],
+        "description": "online adaptation of the output scaling factor (docs/controller.md)",
     }
 
 
@@ -162,7 +227,7 @@ def json_schema() -> dict[str, Any]:
                 ),
                 "safety": safety,
                 "sensor": sensor,
-                "adaptation": {"enum": list(ADAPTATIONS)},
+                "adaptation": adaptation_schema(),
             },
             REQUIRED_KEYS,
             allOf=[

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from fuzzkit.control.adaptation_spec import Adaptation
 from fuzzkit.control.spec import ControllerSpec
 
 
@@ -44,8 +45,41 @@ def spec_document(spec: ControllerSpec) -> dict[str, Any]:
         else {"mass_kg": sensor.tool.mass_kg, "com_m": list(sensor.tool.com_m)},
         "lowpass_hz": sensor.lowpass_hz,
     }
-    doc["adaptation"] = spec.adaptation
+    doc["adaptation"] = adaptation_document(spec.adaptation)
     return doc
+
+
+def adaptation_document(ad: Adaptation) -> Any:
+    """The ``adaptation:`` section as plain data (``none`` for fixed gains)."""
+    if ad.mode == "none":
+        return "none"
+    if ad.mode == "self-tuning":
+        doc: dict[str, Any] = {"mode": ad.mode, "alpha": {"min": ad.alpha_min, "max": ad.alpha_max}}
+        if ad.error_n is not None:
+            doc["error_n"] = ad.error_n
+        if ad.change_n is not None:
+            doc["change_n"] = ad.change_n
+        return doc
+    est = ad.estimator
+    return {
+        "mode": ad.mode,
+        "estimator": {
+            "window_periods": est.window_periods,
+            "delay_periods": est.delay_periods,
+            "forgetting": est.forgetting,
+            "min_step_m": est.min_step_m,
+            "min_force_n": est.min_force_n,
+            "initial_n_mm": est.initial_n_mm,
+            "range_n_mm": [est.k_min_n_mm, est.k_max_n_mm],
+        },
+        "bands": [
+            {"scale": b.scale}
+            if b.up_to_n_mm is None
+            else {"up_to_n_mm": b.up_to_n_mm, "scale": b.scale}
+            for b in ad.bands
+        ],
+        "dwell_s": ad.dwell_s,
+    }
 
 
 def dump_spec(spec: ControllerSpec, header: str = "") -> str:

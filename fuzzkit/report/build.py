@@ -328,7 +328,7 @@ def build_report(
             rrd,
             small_signal_ratios(surface),
         )
-        from fuzzkit.report.specs import spec_rows, spec_section
+        from fuzzkit.report.specs import adaptive_rows, adaptive_section, spec_rows, spec_section
 
         with progress_bar(
             len(specs) * len(plants) * len(EXPERIMENT_NAMES),
@@ -339,6 +339,15 @@ def build_report(
         ) as bar:
             spec_runs = spec_rows(specs, plants, EXPERIMENT_NAMES, lambda: bar.update(1))
         text += "\n".join(spec_section(spec_runs))
+        with progress_bar(
+            len(specs) * len(plants) * len(EXPERIMENT_NAMES),
+            "adaptive against fixed",
+            stream=log,
+            quiet=log is None or not specs,
+            unit="pair",
+        ) as bar:
+            pairs = adaptive_rows(specs, plants, EXPERIMENT_NAMES, lambda: bar.update(1))
+        text += "\n".join(adaptive_section(pairs))
         text += _latency_section(
             out,
             surface,

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any, TypeVar
 
+from fuzzkit.control.adaptation_spec import ADAPTIVE_PREFIX
 from fuzzkit.errors import ConfigError
 from fuzzkit.studies.compiled.table import table_arrays
 from fuzzkit.studies.runner import RunResult
@@ -130,6 +131,14 @@ def run_spec(spec: RunSpec) -> RunResult:
     if spec.controller_impl == "c":
         return _run_generated(spec, exp, plant, faults, loop)
     fallback = ""
+    cs = exp.controller_spec
+    if cs is not None and cs.adaptation.mode != "none" and loop == "compiled":
+        if spec.loop == "compiled":
+            raise ConfigError(
+                f"the compiled loop does not run adaptation ({cs.adaptation.mode}); "
+                "use --loop python"
+            )
+        loop, fallback = "python", " (adaptation runs in the python loop)"
     if loop == "compiled":
         if impl == "exact":
             raise ConfigError(
@@ -260,6 +269,9 @@ def resolve(spec: RunSpec) -> tuple[RunSpec, Experiment, Any]:
     exp, plant = experiment_and_plant(spec)
     if spec.controller_spec is not None:
         exp = with_spec(exp, _load_controller_spec(spec.controller_spec))
+    elif spec.controller.startswith(ADAPTIVE_PREFIX):
+        exp = with_spec(exp, adaptive_spec(spec, exp))
+        spec = replace(spec, gains=())
     cs = exp.controller_spec
     if cs is None:
         return spec, exp, plant
@@ -269,6 +281,49 @@ def resolve(spec: RunSpec) -> tuple[RunSpec, Experiment, Any]:
         )
     rulebase = cs.rulebase_source or spec.rulebase
     return replace(spec, controller=cs.kind, rulebase=rulebase), exp, plant
+
+
+def adaptive_spec(spec: RunSpec, exp: Experiment) -> Any:
+    """The spec ``--controller adaptive-pi | adaptive-fuzzy-pi`` runs (:func:`adaptive_spec_for`
+    with the run's gain overrides, rule base and latency)."""
+    from fuzzkit.studies.runner import check_latency
+
+    latency = sum(check_latency(exp.latency_periods if spec.latency is None else spec.latency))
+    return adaptive_spec_for(exp, spec.controller, spec.rulebase, latency, dict(spec.gains))
+
+
+def adaptive_spec_for(
+    exp: Experiment,
+    controller: str,
+    rulebase: str,
+    latency_periods: int,
+    gains: Mapping[str, float] | None = None,
+) -> Any:
+    """The experiment's task on the shipped gains (``gains`` override them) under the kit's
+    default stiffness schedule, its estimator's delay matched to ``latency_periods`` (sensor +
+    command): what ``adaptive-pi`` and ``adaptive-fuzzy-pi`` mean."""
+    from dataclasses import replace
+
+    from fuzzkit.control.adaptation_spec import default_schedule
+    from fuzzkit.formats.registry import load
+    from fuzzkit.studies.experiments import DEFAULT_GAINS
+    from fuzzkit.studies.task import spec_for
+
+    kind = controller.removeprefix(ADAPTIVE_PREFIX)
+    if not controller.startswith(ADAPTIVE_PREFIX) or kind not in DEFAULT_GAINS:
+        raise ConfigError(
+            f"unknown controller {controller!r} (expected adaptive-pi or adaptive-fuzzy-pi)"
+        )
+    merged = dict(DEFAULT_GAINS[kind]) | dict(gains or {})
+    name = controller.replace("-", "_")
+    fuzzy = kind == "fuzzy-pi"
+    cs = spec_for(exp, kind, merged, name, load(rulebase) if fuzzy else None, rulebase)
+    return replace(
+        cs,
+        adaptation=default_schedule(latency_periods),
+        rulebase_source=rulebase if fuzzy else None,
+        description=f"{kind} on the shipped gains, kit's default stiffness schedule",
+    )
 
 
 def experiment_and_plant(spec: RunSpec) -> tuple[Experiment, Any]:
@@ -297,10 +352,11 @@ def result_row(spec: RunSpec, result: RunResult) -> dict[str, Any]:
     from fuzzkit.studies.metrics import summary
 
     data = summary(result)
+    asked = spec.controller  # adaptive-*: the name, not the kind its spec resolves to
     spec = resolve(spec)[0]  # the controller and rule base a controller spec chose
     row: dict[str, Any] = {
         "experiment": spec.experiment,
-        "controller": spec.controller,
+        "controller": asked if asked.startswith(ADAPTIVE_PREFIX) else spec.controller,
         "plant": spec.plant,
         "stiffness_n_per_mm": spec.stiffness_n_per_mm,
         "sensor_delay": data["latency_periods"][0],
@@ -316,6 +372,9 @@ def result_row(spec: RunSpec, result: RunResult) -> dict[str, Any]:
             for axis, metrics in value.items():
                 for name, v in metrics.items():
                     row[f"{axis}_{name}"] = v
+        elif key in ("stiffness_estimate_n_mm", "gain_scale_final"):  # per axis too
+            for axis, v in value.items():
+                row[f"{axis}_{key}"] = v
         elif key not in ("experiment", "controller", "plant"):
             row[key] = value
     return row

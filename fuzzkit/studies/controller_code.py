@@ -13,9 +13,16 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from fuzzkit.codegen.controller import ControllerDesign, StatusBit, emit_controller
+from fuzzkit.codegen.controller import (
+    AdaptationDesign,
+    ControllerDesign,
+    StatusBit,
+    emit_controller,
+)
 from fuzzkit.codegen.target import load_target
 from fuzzkit.control import status as st
+from fuzzkit.control.adaptation import ALPHA_TABLE, JUMP, SPREAD
+from fuzzkit.control.reference import input_gains
 from fuzzkit.control.spec import AXES, STANDARD_GRAVITY_M_S2, ControllerSpec
 
 #: What each status bit means, as the generated header and module document it.
@@ -79,6 +86,39 @@ def design_of(spec: ControllerSpec) -> ControllerDesign:
         description=spec.description,
         source_file=source_file,
         source_sha256=sha,
+        adaptation=adaptation_design(spec),
+    )
+
+
+def adaptation_design(spec: ControllerSpec) -> AdaptationDesign | None:
+    """The spec's adaptation as the generator takes it (None: fixed gains)."""
+    ad = spec.adaptation
+    if ad.mode == "none":
+        return None
+    est = ad.estimator
+    ge = [0.0, 0.0, 0.0]
+    gde = [0.0, 0.0, 0.0]
+    for a in spec.axes:
+        ge[a.index], gde[a.index] = input_gains(spec, a)
+    return AdaptationDesign(
+        mode=ad.mode,
+        window=est.window_periods,
+        delay=est.delay_periods,
+        forgetting=est.forgetting,
+        min_step_m=est.min_step_m,
+        min_force_n=est.min_force_n,
+        initial_n_mm=est.initial_n_mm,
+        k_min_n_mm=est.k_min_n_mm,
+        k_max_n_mm=est.k_max_n_mm,
+        bands=tuple((b.up_to_n_mm, b.scale) for b in ad.bands),
+        dwell_periods=ad.dwell_periods(spec.period_s),
+        alpha_min=ad.alpha_min,
+        alpha_max=ad.alpha_max,
+        alpha_table=ALPHA_TABLE,
+        ge=(ge[0], ge[1], ge[2]),
+        gde=(gde[0], gde[1], gde[2]),
+        jump=JUMP,
+        spread=SPREAD,
     )
 
 

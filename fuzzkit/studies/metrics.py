@@ -253,4 +253,20 @@ def summary(result: RunResult) -> dict[str, Any]:
             round(result.real_time_factor, 1) if math.isfinite(result.real_time_factor) else None
         ),
         "axes": axes,
+        **adaptation_summary(result),
+    }
+
+
+def adaptation_summary(result: RunResult) -> dict[str, Any]:
+    """An adaptive run's final stiffness estimate (N/mm) and gain factor per force-controlled
+    axis (``{}`` for fixed gains; an estimate is None where the axis has no schedule)."""
+    if result.gain_scale is None or result.stiffness_n_mm is None or not len(result.t):
+        return {}
+    chosen = [i for i in (2, 0, 1) if result.experiment.selection[i]]
+    last_k = result.stiffness_n_mm[-1]
+    return {
+        "stiffness_estimate_n_mm": {
+            AXES[i]: (None if math.isnan(last_k[i]) else round(float(last_k[i]), 3)) for i in chosen
+        },
+        "gain_scale_final": {AXES[i]: float(result.gain_scale[-1, i]) for i in chosen},
     }

@@ -77,6 +77,10 @@ class RunResult:
     cpu_time_s: float = 0.0
     #: which controller implementation ran (exact engine, lookup table, generated C ...)
     controller_impl: str = ""
+    #: adaptation (issue 24), per period and task axis: the factor of the output gain (n, 3)
+    #: and the stiffness estimate (N/mm, NaN without a schedule); None for fixed gains
+    gain_scale: Vec | None = None
+    stiffness_n_mm: Vec | None = None
     #: the controller's status bits per period (fuzzkit.control.status), where it reports them
     #: (the Python loop's controller, the generated C controller); None otherwise
     status: npt.NDArray[np.int64] | None = None
@@ -187,6 +191,9 @@ def run(
         (sample.force.copy(), _rotation(scn, sample)) for _ in range(sensor_delay)
     )
     command_queue: deque[Vec] = deque(np.zeros(3) for _ in range(command_delay))
+    adaptive = any(getattr(c, "adapt", None) is not None for c in ctrl.controllers)
+    scales: list[Vec] = []
+    estimates: list[Vec] = []
     wall0 = time.perf_counter()
     cpu0 = time.process_time()
     controlled = np.asarray(exp.selection, dtype=bool)
@@ -234,6 +241,9 @@ def run(
                 moving,
             )
         )
+        if adaptive:
+            scales.append(ctrl.gain_scale)
+            estimates.append(ctrl.stiffness_n_mm)
         arm_points.append(sample.arm_points)
         statuses.append(ctrl.status)
         contact_points.append(sample.contact_points)
@@ -276,6 +286,8 @@ def run(
         loop="python",
         cpu_time_s=cpu,
         controller_impl=controller_impl or _impl_label(exp, controller, hybrid, surface),
+        gain_scale=np.array(scales).reshape(-1, 3) if adaptive else None,
+        stiffness_n_mm=np.array(estimates).reshape(-1, 3) if adaptive else None,
         status=np.asarray(statuses, dtype=np.int64),
     )
 

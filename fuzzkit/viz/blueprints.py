@@ -17,6 +17,7 @@ from typing import Any
 FORCES = "forces"
 ERROR = "control/error"
 CORRECTION = "control/correction"
+ADAPTATION = "adaptation"
 RULES = "control/rules"
 JOINTS = "joints"
 WORLD = "world"
@@ -58,11 +59,14 @@ def run_blueprint(
     eye: tuple[Vec3, Vec3] | None = None,
     duration_s: float | None = None,
     rules: bool = False,
+    adaptive: bool = False,
 ) -> Any:
     """The layout of a closed-loop run's recording (``controlled_axes``: "x", "z", ...): a
     column per force-controlled axis (force vs set point, error, correction), then the 3-D
     scene seen from ``eye`` (joint angles in a second tab; with ``rules``, a fuzzy-PI run that
-    logged its strongest rules under ``control/rules``, two tabs more). Every plot opens on the
+    logged its strongest rules under ``control/rules``, two tabs more; with ``adaptive``, a run
+    with adaptation, its output gain factor and stiffness estimate in two more). Every plot
+    opens on the
     run's whole ``duration_s`` (0 s to the end), so series that start late (e at engagement)
     line up with the forces."""
     import rerun as rr
@@ -96,6 +100,11 @@ def run_blueprint(
         tabs += [
             rrb.TextLogView(origin=RULES, name="strongest fuzzy rules per period"),
             plot(RULES, "strongest rule's strength (0-1)"),
+        ]
+    if adaptive:
+        tabs += [
+            plot(f"{ADAPTATION}/gain_scale", "output gain factor"),
+            plot(f"{ADAPTATION}/stiffness", "stiffness estimate (N/mm)"),
         ]
     scene = rrb.Tabs(*tabs)
     return rrb.Blueprint(

@@ -17,7 +17,15 @@ import numpy.typing as npt
 from fuzzkit.plants.environment import nominal_position
 from fuzzkit.studies.experiments import AXES
 from fuzzkit.studies.runner import RunResult
-from fuzzkit.viz.blueprints import CORRECTION, ERROR, FORCES, JOINTS, WORLD, run_blueprint
+from fuzzkit.viz.blueprints import (
+    ADAPTATION,
+    CORRECTION,
+    ERROR,
+    FORCES,
+    JOINTS,
+    WORLD,
+    run_blueprint,
+)
 from fuzzkit.viz.recording import AXIS_ARROW_COLOURS, log_axes, log_series
 
 Colour = tuple[int, int, int]
@@ -106,6 +114,24 @@ def log_control_series(
                 f"du{axis} (mm)",
                 RATE_COLOUR,
             )
+        log_adaptation(rec, result, times, i)
+
+
+def log_adaptation(rec: Any, result: RunResult, times: Any, i: int) -> None:
+    """An adaptive run's scheduled output-gain factor (``adaptation/gain_scale/<axis>``) and
+    stiffness estimate (``adaptation/stiffness/<axis>``, N/mm) of task axis ``i``."""
+    if result.gain_scale is None or result.stiffness_n_mm is None:
+        return
+    axis, c = AXES[i], AXIS_COLOURS[AXES[i]]
+    log_series(
+        rec, f"{ADAPTATION}/gain_scale/{axis}", times, result.gain_scale[:, i],
+        f"{axis} output gain factor (1)", c,
+    )  # fmt: skip
+    k = result.stiffness_n_mm[:, i]
+    if not np.all(np.isnan(k)):
+        log_series(
+            rec, f"{ADAPTATION}/stiffness/{axis}", times, k, f"{axis} stiffness estimate (N/mm)", c
+        )
 
 
 def log_joint_angles(
@@ -151,7 +177,8 @@ def run_recording_blueprint(
     controlled = [a for i, a in enumerate(AXES) if result.experiment.selection[i]]
     end = float(result.t[-1]) if len(result.t) else None
     eye = scene_eye(result, extra_scene_points)
-    return run_blueprint(controlled, title, eye, end, rules=rules)
+    adaptive = result.gain_scale is not None
+    return run_blueprint(controlled, title, eye, end, rules=rules, adaptive=adaptive)
 
 
 def log_world_axes(rec: Any) -> None:

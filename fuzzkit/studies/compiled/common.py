@@ -196,9 +196,14 @@ def spec_gains(spec: ControllerSpec) -> tuple[str, dict[str, float]]:
     Raises
     ------
     UnsupportedPlant
-        The spec has different gains per axis (the compiled controller runs one set); the
-        Python loop runs it.
+        The spec has different gains per axis (the compiled controller runs one set) or adapts
+        them; the Python loop runs it.
     """
+    if spec.adaptation.mode != "none":
+        raise UnsupportedPlant(
+            f"controller spec {spec.name!r} adapts its gains ({spec.adaptation.mode}); the "
+            "compiled loop runs fixed gains"
+        )
     first = spec.axes[0]
     if any((a.kp, a.ki, a.kx) != (first.kp, first.ki, first.kx) for a in spec.axes):
         raise UnsupportedPlant(

@@ -33,6 +33,7 @@ from fuzzkit.errors import ConfigError
 from fuzzkit.jit import jit
 from fuzzkit.studies.compiled.period import (
     C_PERIOD,
+    C_SENSOR_DELAY,
     CS_CTRL_T,
     CS_ENGAGED,
     CS_ENGAGED_AT,
@@ -182,7 +183,10 @@ def generated_step(
     for i in range(3):
         if selection[i] > 0.0 and not math.isfinite(consumed[i]):
             missing = True
-    if missing or status & _REJECTED:
+    # as the loop's own controller counts them: a missing sample within the first sensor-delay
+    # periods is the start-up wait (no measurement can have arrived yet), not a sensor fault
+    started = round(cs[CS_CTRL_T] / cp[C_PERIOD]) > cp[C_SENSOR_DELAY]
+    if (missing and started) or status & _REJECTED:
         cs[CS_FAULTS] += 1.0
     if status & _TRIPPED and cs[CS_TRIPPED] == 0.0:
         cs[CS_TRIPPED] = 1.0

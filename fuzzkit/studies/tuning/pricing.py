@@ -18,13 +18,21 @@ from fuzzkit.studies.tuning.problem import TuningProblem
 TABLE_SIZE = 201
 
 
+def adapts(exp: Any) -> bool:
+    """True when the experiment's controller spec adapts its gains (the compiled loop runs
+    fixed gains only)."""
+    spec = exp.controller_spec
+    return spec is not None and spec.adaptation.mode != "none"
+
+
 class CaseRunner:
     """Prices gain sets for one problem in this process (the surface table is built once).
 
     Runs the compiled loop (:mod:`fuzzkit.studies.compiled`) where the plant has one, with the
-    rule base's double lookup table as the fuzzy surface; the Python loop otherwise, with a
-    201 x 201 bilinear table. With ``controller_impl == "c"``, each candidate's controller
-    spec is generated as C and run whole in the compiled loop (one compile per candidate).
+    rule base's double lookup table as the fuzzy surface; the Python loop otherwise (or when a
+    controller spec adapts its gains), with a 201 x 201 bilinear table. With
+    ``controller_impl == "c"``, each candidate's controller spec is generated as C and run whole
+    in the compiled loop (one compile per candidate).
     """
 
     def __init__(self, problem: TuningProblem) -> None:
@@ -38,6 +46,7 @@ class CaseRunner:
             and isinstance(problem.plant, str)
             and compiled_supports(problem.plant)
             and (problem.surface is None or isinstance(problem.surface, str))
+            and not any(adapts(exp) for exp in problem.cases)
         )
         if problem.loop == "compiled" and not self.compiled:
             raise ConfigError(

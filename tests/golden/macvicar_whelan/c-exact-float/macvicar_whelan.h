@@ -16,6 +16,8 @@
  * C99, no heap, no recursion, bounded loops (constant worst-case time), every symbol prefixed
  * "macvicar_whelan_"; 284 bytes of locals at most in macvicar_whelan_eval.
  * Uses from <math.h>: NAN.
+ * External functions: memset. (Every function the object may call:
+ * compilers turn the zeroing of local arrays into memset; nothing else from libc or libm.)
  * Do not compile with -ffast-math: it removes the NaN checks this code relies on.
  */
 #ifndef MACVICAR_WHELAN_H

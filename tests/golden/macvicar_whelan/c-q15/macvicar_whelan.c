@@ -232,22 +232,6 @@ void macvicar_whelan_eval(const int16_t in[MACVICAR_WHELAN_N_INPUTS], int16_t ou
 /* The gain products need >> of a negative int64 to be arithmetic too. */
 typedef char macvicar_whelan_static_assert_arithmetic_shift64[((-(int64_t)7 >> 1) == -4) ? 1 : -1];
 
-/* round(x * scale) saturated to [lo, hi]; NaN -> 0. Only fpi_init uses floating point. */
-static int32_t macvicar_whelan_fixed(double x, double scale, double lo, double hi)
-{
-    double v = x * scale;
-    if (v != v) {
-        return 0;
-    }
-    if (v >= hi) {
-        return (int32_t)hi;
-    }
-    if (v <= lo) {
-        return (int32_t)lo;
-    }
-    return (int32_t)(v < 0.0 ? v - 0.5 : v + 0.5);
-}
-
 static int64_t macvicar_whelan_mul_q16(int32_t gain, int32_t x)
 {
     return ((int64_t)gain * x + 32768) >> 16;
@@ -258,13 +242,13 @@ static int16_t macvicar_whelan_sat16_64(int64_t v)
     return (int16_t)(v < -32768 ? -32768 : (v > 32767 ? 32767 : v));
 }
 
-void macvicar_whelan_fpi_init(macvicar_whelan_fpi_t *c, float kp, float ki, float kx, float u_min, float u_max)
+void macvicar_whelan_fpi_init(macvicar_whelan_fpi_t *c, int32_t kp_q, int32_t ki_q, int32_t kx_q, int16_t u_min, int16_t u_max)
 {
-    c->kp_q = macvicar_whelan_fixed((double)kp / MACVICAR_WHELAN_IN1_FULL_SCALE, 65536.0, -2147483647.0, 2147483647.0);
-    c->ki_q = macvicar_whelan_fixed((double)ki / MACVICAR_WHELAN_IN0_FULL_SCALE, 65536.0, -2147483647.0, 2147483647.0);
-    c->kx_q = macvicar_whelan_fixed((double)kx * MACVICAR_WHELAN_OUT0_FULL_SCALE, 65536.0, -2147483647.0, 2147483647.0);
-    c->u_min = macvicar_whelan_fixed((double)u_min, 32768.0, -32768.0, 32767.0);
-    c->u_max = macvicar_whelan_fixed((double)u_max, 32768.0, -32768.0, 32767.0);
+    c->kp_q = kp_q;
+    c->ki_q = ki_q;
+    c->kx_q = kx_q;
+    c->u_min = u_min;
+    c->u_max = u_max;
     macvicar_whelan_fpi_reset(c);
 }
 

@@ -17,8 +17,10 @@
  * min/min/max with centroid defuzzification.
  *
  * C99, no heap, no recursion, constant time, every symbol prefixed "macvicar_whelan_".
- * Needs only <stdint.h>; no floating point except in the one-off gain conversion of
- * macvicar_whelan_fpi_init.
+ * Needs only <stdint.h>: integer arithmetic only, no floating point anywhere (the fuzzy-PI
+ * takes its gains as codes).
+ * External functions: none. (Cortex-M0 has no 32x32->64 multiply: there the fuzzy-PI's
+ * int64 products call libgcc's integer __aeabi_lmul.)
  */
 #ifndef MACVICAR_WHELAN_H
 #define MACVICAR_WHELAN_H
@@ -50,7 +52,7 @@ extern "C" {
  * out[] in declaration order (du). Every int16 input is valid. */
 void macvicar_whelan_eval(const int16_t in[MACVICAR_WHELAN_N_INPUTS], int16_t out[MACVICAR_WHELAN_N_OUTPUTS]);
 
-/* Incremental fuzzy-PI in Q15: integer-only per step (init converts the float gains once).
+/* Incremental fuzzy-PI in Q15, integer only: init takes the gains and limits as codes.
  * setpoint, measured and u are Q15 codes of normalised signals (value = code / 32768: scale
  * your sensor and actuator so their full scale is 1). Per step, ">> 16" rounding to nearest:
  *   e  = setpoint - measured                 (int32)
@@ -59,9 +61,11 @@ void macvicar_whelan_eval(const int16_t in[MACVICAR_WHELAN_N_INPUTS], int16_t ou
  *   in[1] = sat16(KP * de >> 16)   KP = round(kp / MACVICAR_WHELAN_IN1_FULL_SCALE * 65536)   Kp scales de
  *   du = KX * out[0] >> 16         KX = round(kx * MACVICAR_WHELAN_OUT0_FULL_SCALE * 65536)
  *   u  = clamp(u + du, u_min, u_max)         (the clamp is the anti-windup)
- * which is, in real terms, the float fuzzy-PI on the normalised signals. The gain products
- * are int64 (a software multiply on 32-bit MCUs); gains saturate to int32, a NaN gain or
- * limit becomes 0, u_min/u_max (normalised, in [-1, 1)) round to codes. Every int16 sample
+ * which is, in real terms, the float fuzzy-PI on the normalised signals. Compute the codes
+ * KP, KI, KX (int32; round half away from zero, saturated) and u_min, u_max (round(u * 32768),
+ * normalised limits in [-1, 1)) off-line with the formulas above, or let `fuzzkit compile
+ * --gains` bake them in (MACVICAR_WHELAN_FPI_*). The gain products are int64 (a 32x32->64
+ * multiply: inline on Cortex-M3/M4, libgcc's __aeabi_lmul on Cortex-M0). Every int16 sample
  * is valid, so there is no fault path: `faults` stays 0 (kept for parity with the float API).
  * u starts at clamp(0, u_min, u_max); u_min <= u_max is the caller's to ensure. */
 typedef struct {
@@ -76,7 +80,7 @@ typedef struct {
     unsigned long faults;  /* always 0 in Q15 */
 } macvicar_whelan_fpi_t;
 
-void macvicar_whelan_fpi_init(macvicar_whelan_fpi_t *c, float kp, float ki, float kx, float u_min, float u_max);
+void macvicar_whelan_fpi_init(macvicar_whelan_fpi_t *c, int32_t kp_q, int32_t ki_q, int32_t kx_q, int16_t u_min, int16_t u_max);
 /* Forget the history (u, e_prev); keep the gains. */
 void macvicar_whelan_fpi_reset(macvicar_whelan_fpi_t *c);
 /* One control step; returns u_k as a Q15 code. */

@@ -15,6 +15,8 @@
  * C99, no heap, no recursion, bounded loops (constant worst-case time), every symbol prefixed
  * "three_input_"; 216 bytes of locals at most in three_input_eval.
  * Uses from <math.h>: NAN, exp, fabs, pow (link with -lm).
+ * External functions: memset, exp, fabs, pow. (Every function the object may call:
+ * compilers turn the zeroing of local arrays into memset; nothing else from libc or libm.)
  * Do not compile with -ffast-math: it removes the NaN checks this code relies on.
  */
 #ifndef THREE_INPUT_H

@@ -20,6 +20,8 @@
  * C99, no heap, no recursion, constant time, every symbol prefixed "three_input_".
  * Uses only the NAN macro of <math.h> (a constant: nothing to link). Do not compile with
  * -ffast-math: it removes the NaN checks this code relies on.
+ * External functions: memset. (Every function the object may call: compilers turn the
+ * zeroing of local arrays into memset; nothing else from libc or libm.)
  */
 #ifndef THREE_INPUT_H
 #define THREE_INPUT_H

@@ -15,8 +15,10 @@
  * feed-rate change dv. Uses OR, NOT, weights, several outputs, sigmoid and bell terms.
  *
  * C99, no heap, no recursion, constant time, every symbol prefixed "three_input_".
- * Needs only <stdint.h>; no floating point except in the one-off gain conversion of
- * three_input_fpi_init.
+ * Needs only <stdint.h>: integer arithmetic only, no floating point anywhere (the fuzzy-PI
+ * takes its gains as codes).
+ * External functions: none. (Cortex-M0 has no 32x32->64 multiply: there the fuzzy-PI's
+ * int64 products call libgcc's integer __aeabi_lmul.)
  */
 #ifndef THREE_INPUT_H
 #define THREE_INPUT_H

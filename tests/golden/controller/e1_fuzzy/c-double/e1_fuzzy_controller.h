@@ -19,6 +19,8 @@
  * bounded loops (constant worst-case time), `static const` parameters, every symbol
  * prefixed "e1_fuzzy_controller_" or "E1_FUZZY_CONTROLLER_".
  * Uses from <math.h>: isfinite, sqrt (link with -lm); the surface e1_fuzzy_surface.h lists its own.
+ * External functions: memset, sqrt, e1_fuzzy_surface_eval. (Every function the object may
+ * call: compilers turn the zeroing of local arrays into memset; nothing else from libc or libm.)
  * From <stdint.h>: uint32_t. From <stddef.h>: NULL.
  * Do not compile with -ffast-math: it removes the NaN checks this code relies on.
  */

@@ -21,6 +21,8 @@
  * bounded loops (constant worst-case time), `static const` parameters, every symbol
  * prefixed "e1_pi_controller_" or "E1_PI_CONTROLLER_".
  * Uses from <math.h>: isfinite, sqrtf (link with -lm).
+ * External functions: memset, sqrtf. (Every function the object may
+ * call: compilers turn the zeroing of local arrays into memset; nothing else from libc or libm.)
  * From <stdint.h>: uint32_t. From <stddef.h>: NULL.
  * Do not compile with -ffast-math: it removes the NaN checks this code relies on.
  */
