@@ -1,5 +1,6 @@
-"""The README says what the code does: its API tour runs as written, its codegen claims match
-the generated headers."""
+"""The README and docs/ say what the code does: the API tour runs as written, the codegen
+claims match the generated headers, every command of every page runs, links stay inside the
+repository."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ from pathlib import Path
 import pytest
 
 README = Path(__file__).resolve().parent.parent / "README.md"
+COMPILE = README.parent / "docs" / "compile.md"
 
 
 def _section(title: str) -> str:
@@ -44,11 +46,11 @@ def test_codegen_claims_match_the_generated_header() -> None:
     from fuzzkit.codegen.table_search import make_table
     from fuzzkit.formats.registry import load
 
-    claims = " ".join(_section("Code generation").split())
+    claims = " ".join(COMPILE.read_text(encoding="utf-8").split())
     grid = re.search(r"on a grid (\d+)x denser than the table", claims)
     margin = re.search(r"A (\d+) % margin is added", claims)
     refine = re.search(r"resampled (\d+)x per axis", claims)
-    assert grid and margin and refine, "the README no longer states how the bound is measured"
+    assert grid and margin and refine, "docs/compile.md no longer states how the bound is measured"
 
     rb = load("macvicar_whelan")
     table = make_table(rb)  # the default tolerance, as the README's figures
@@ -118,6 +120,15 @@ def test_the_commands_of_the_page_run_as_written(page: Path, tmp_path: Path) -> 
     assert ran > 0
 
 
+def _anchors(page: Path) -> set[str]:
+    """The anchors of a Markdown page's headings, as GitHub makes them."""
+    out = set()
+    for title in re.findall(r"^#+ (.*)$", page.read_text(encoding="utf-8"), re.M):
+        slug = re.sub(r"[^\w\- ]", "", title.strip().lower()).replace(" ", "-")
+        out.add(slug)
+    return out
+
+
 def test_no_page_refers_outside_the_repository() -> None:
     """Links resolve to files in the repository; no page names the authors' working files."""
     from tests._doc_commands import PAGES, ROOT
@@ -128,12 +139,14 @@ def test_no_page_refers_outside_the_repository() -> None:
         for word in ("DESIGN.md", "STYLE.md", "/work/"):
             if word in text:
                 problems.append(f"{page.name}: mentions {word}")
-        for target in re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", text):
+        for target, anchor in re.findall(r"\]\(([^)#\s]*)(?:#([^)\s]*))?\)", text):
             if "://" in target or target.startswith("mailto:"):
                 continue
-            resolved = (page.parent / target).resolve()
+            resolved = (page.parent / target).resolve() if target else page
             if not resolved.is_relative_to(ROOT) or not resolved.exists():
                 problems.append(f"{page.name}: link to {target}")
+            elif anchor and resolved.suffix == ".md" and anchor not in _anchors(resolved):
+                problems.append(f"{page.name}: link to {target}#{anchor}: no such heading")
     assert not problems, problems
 
 
