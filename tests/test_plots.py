@@ -4,6 +4,7 @@ figures, the notebook display of a rule base, and that none of it touches pyplot
 from __future__ import annotations
 
 import html.parser
+import math
 import struct
 import subprocess
 import sys
@@ -295,9 +296,17 @@ def test_surface_figure_has_units_a_colour_bar_and_no_label_collisions(name: str
 # --------------------------------------------------------------------------- report figures
 
 
-def _fake_run(t: np.ndarray, fz: np.ndarray, contact_at: float) -> SimpleNamespace:
+def _fake_run(
+    t: np.ndarray,
+    fz: np.ndarray,
+    contact_at: float,
+    fx: np.ndarray | None = None,
+    trip_at: float | None = None,
+) -> SimpleNamespace:
     force = np.zeros((t.size, 3))
     force[:, 2] = fz
+    if fx is not None:
+        force[:, 0] = fx
     setpoint = np.zeros((t.size, 3))
     setpoint[:, 2] = 10.0
     return SimpleNamespace(
@@ -305,30 +314,67 @@ def _fake_run(t: np.ndarray, fz: np.ndarray, contact_at: float) -> SimpleNamespa
         force_true=force,
         setpoint=setpoint,
         in_contact=t >= contact_at,
+        force_normal=np.full((t.size, 3), np.nan),  # no normal forces: contact is in_contact
+        moving=(t >= 2.5) & (t <= 4.0),
+        tripped=trip_at is not None,
+        trip_time_s=trip_at,
         experiment=SimpleNamespace(selection=(True, False, True)),
     )
 
 
-def _fake_results() -> dict[tuple[str, str], SimpleNamespace]:
+def _fake_results(
+    fx_peak: dict[str, float] | None = None, trip: tuple[str, str] | None = None
+) -> dict[tuple[str, str], SimpleNamespace]:
     t = np.arange(1, 1251) * 0.004
     rise = np.clip(t - 1.9, 0.0, None)
     runs = {}
     for ctrl in ("pi", "fuzzy-pi"):
         for label, tau in (("default", 0.04), ("tuned", 0.02)):
-            runs[(ctrl, label)] = _fake_run(t, 10.0 * (1 - np.exp(-rise / tau)), 1.9)
+            peak = (fx_peak or {}).get(ctrl, 0.0)
+            fx = peak * np.exp(-(((t - 3.0) / 0.2) ** 2))
+            trip_at = 4.5 if trip == (ctrl, label) else None
+            runs[(ctrl, label)] = _fake_run(t, 10.0 * (1 - np.exp(-rise / tau)), 1.9, fx, trip_at)
     return runs
 
 
+def _rgba(colour: Any) -> tuple[float, ...]:
+    from matplotlib.colors import to_rgba
+
+    return tuple(round(c, 3) for c in to_rgba(colour)[:3])
+
+
+def _trace_colours(ax: Any) -> set[tuple[float, ...]]:
+    """Colours of the data lines of ``ax`` (not the black set point, not trip markers)."""
+    return {
+        _rgba(line.get_color())
+        for line in ax.get_lines()
+        if line.get_marker() in ("None", "", None, "o") and _rgba(line.get_color()) != (0, 0, 0)
+    }
+
+
+def _trip_marks(ax: Any) -> list[tuple[float, float]]:
+    from fuzzkit.viz.palette import TRIP_STYLE
+
+    return [
+        (float(x), float(y))
+        for line in ax.get_lines()
+        if line.get_marker() == TRIP_STYLE["marker"]
+        for x, y in zip(line.get_xdata(), line.get_ydata(), strict=True)
+    ]
+
+
 def test_force_figure_shows_both_gains_in_every_panel_and_one_legend() -> None:
+    from fuzzkit.viz.palette import GAINS_STYLE
+
     fig = force_figure(_fake_results(), "E1", zoom_s=0.3)
     panels = fig.axes  # the insets are children of the panels
     assert len(panels) == 4
     for ax in panels:
-        lines = {line.get_label(): line for line in ax.get_lines()}
-        default, tuned = lines["default gains"], lines["tuned gains"]
+        # two runs (default, tuned) and the set point per panel
+        assert len(ax.get_lines()) == 3
+        widths = sorted(line.get_linewidth() for line in ax.get_lines()[:2])
         # The default is drawn under the tuned line and wider, so it shows around it.
-        assert default.get_zorder() < tuned.get_zorder()
-        assert default.get_linewidth() > tuned.get_linewidth()
+        assert widths == sorted((GAINS_STYLE["tuned"][1], GAINS_STYLE["default"][1]))
         assert ax.get_legend() is None
     assert len(fig.legends) == 1
     assert [t.get_text() for t in fig.legends[0].get_texts()] == [
@@ -336,6 +382,55 @@ def test_force_figure_shows_both_gains_in_every_panel_and_one_legend() -> None:
         "tuned gains",
         "set point",
     ]
+
+
+def test_force_figure_rows_share_their_y_scale() -> None:
+    """A 25 N and a 41 N peak side by side must not look alike (E3's x rows)."""
+    fig = force_figure(_fake_results({"pi": 25.0, "fuzzy-pi": 41.0}), "E3")
+    z_row, x_row = fig.axes[0:2], fig.axes[2:4]
+    assert z_row[0].get_ylim() == z_row[1].get_ylim()
+    assert x_row[0].get_ylim() == x_row[1].get_ylim()
+    assert x_row[0].get_ylim()[1] >= 41.0  # the larger peak fits in both panels
+    # the bigger peak is drawn higher on the shared scale (pixels, as a reader sees them)
+    fig.canvas.draw()
+    tops = [
+        ax.transData.transform((3.0, peak))[1] for ax, peak in zip(x_row, (25.0, 41.0), strict=True)
+    ]
+    assert tops[1] > tops[0] + 20
+
+
+def test_force_figure_marks_a_trip_where_it_happened() -> None:
+    from fuzzkit.viz.palette import TRIP_LABEL
+
+    fig = force_figure(_fake_results(trip=("fuzzy-pi", "tuned")), "E1")
+    pi_z, fuzzy_z, pi_x, fuzzy_x = fig.axes
+    assert _trip_marks(pi_z) == [] and _trip_marks(pi_x) == []
+    for ax in (fuzzy_z, fuzzy_x):
+        (mark,) = _trip_marks(ax)
+        assert mark[0] == pytest.approx(4.5, abs=0.004)
+    assert TRIP_LABEL in [t.get_text() for t in fig.legends[0].get_texts()]
+    calm = force_figure(_fake_results(), "E1")
+    assert all(_trip_marks(ax) == [] for ax in calm.axes)
+    assert TRIP_LABEL not in [t.get_text() for t in calm.legends[0].get_texts()]
+
+
+def test_force_figure_error_row_shows_the_window_the_rms_counts() -> None:
+    runs = _fake_results()
+    fig = force_figure(runs, "E2", error_while_moving=True)
+    assert len(fig.axes) == 6  # z, x and the error row, per controller
+    pi_err, fuzzy_err = fig.axes[4], fig.axes[5]
+    assert pi_err.get_ylim() == fuzzy_err.get_ylim()
+    # moving from 2.5 s to 4.0 s, contact at 1.9 s: counted from max(2.5, 1.9 + 0.5)
+    lo, hi = pi_err.get_xlim()
+    assert lo == pytest.approx(2.5, abs=0.005) and hi == pytest.approx(4.0, abs=0.005)
+    run = runs[("pi", "default")]
+    line = pi_err.get_lines()[0]
+    y = np.asarray(line.get_ydata(), dtype=float)
+    inside = (run.t >= 2.5) & (run.t <= 4.0)
+    np.testing.assert_allclose(y[inside], 10.0 - run.force_true[inside, 2])
+    assert np.isnan(y[~inside]).all()
+    rms = math.sqrt(float(np.mean((10.0 - run.force_true[inside, 2]) ** 2)))
+    assert f"default {rms:.2f} N" in pi_err.get_title(loc="left")
 
 
 def test_force_figure_zoom_inset_spans_the_first_contact() -> None:
@@ -349,26 +444,32 @@ def test_force_figure_zoom_inset_spans_the_first_contact() -> None:
     assert not any(ax.child_axes for ax in no_zoom.axes)
 
 
-def _metrics(overshoot: float | None, settling: float | None) -> dict[str, Any]:
-    return {"overshoot_pct": overshoot, "settling_time_s": settling}
+def _metrics(
+    overshoot: float | None, settling: float | None, tripped: bool = False
+) -> dict[str, Any]:
+    return {"overshoot_pct": overshoot, "settling_time_s": settling, "tripped": float(tripped)}
+
+
+def _study() -> dict[tuple[str, str], list[tuple[float, dict[str, Any]]]]:
+    return {
+        ("pi", "default"): [(5.0, _metrics(0.0, 0.2)), (50.0, _metrics(3.0, 0.05)),
+                            (500.0, _metrics(400.0, None)), (1000.0, _metrics(2842.0, None, True))],
+        ("fuzzy-pi", "tuned"): [(5.0, _metrics(1.0, 0.1)), (50.0, _metrics(5.0, None)),
+                                (500.0, _metrics(500.0, None)), (1000.0, _metrics(900, 0.3, True))],
+    }  # fmt: skip
 
 
 def test_stiffness_figure_uses_log_axes_and_a_never_settled_row() -> None:
-    study = {
-        ("pi", "default"): [(5.0, _metrics(0.0, 0.2)), (50.0, _metrics(3.0, 0.05)),
-                            (500.0, _metrics(400.0, None))],
-        ("fuzzy-pi", "tuned"): [(5.0, _metrics(1.0, 0.1)), (50.0, _metrics(5.0, None)),
-                                (500.0, _metrics(500.0, None))],
-    }  # fmt: skip
-    fig = stiffness_figure(study)
-    overshoot, settling, never = fig.axes
+    fig = stiffness_figure(_study())
+    overshoot, settling, _, never = fig.axes
     assert overshoot.get_yscale() == settling.get_yscale() == "log"
     assert overshoot.get_xscale() == settling.get_xscale() == "log"
     # Never-settled runs are not drawn at an invented time on the settling axis...
     for line in settling.get_lines():
         y = np.asarray(line.get_ydata(), dtype=float)
         assert np.nanmax(y) <= 0.2
-    # ... but as x markers in their own row, at exactly their stiffnesses.
+    # ... but as x markers in their own row, at exactly their stiffnesses (tripped runs are
+    # in the trip row, not here).
     marks = {
         i: sorted(np.asarray(line.get_xdata(), dtype=float).tolist())
         for i, line in enumerate(never.get_lines())
@@ -378,7 +479,105 @@ def test_stiffness_figure_uses_log_axes_and_a_never_settled_row() -> None:
     assert "never settled" in never.get_title(loc="left")
     # The zero overshoot sits on the floor, with the note explaining the marker.
     assert any("below 0.1 %" in t.get_text() for t in overshoot.texts)
+    assert "planar plant" in fig.get_suptitle()
     assert figure_bytes(fig)[:8] == PNG_MAGIC
+
+
+def test_stiffness_figure_marks_trips_instead_of_plotting_their_overshoot() -> None:
+    fig = stiffness_figure(_study(), "arm6")
+    overshoot, settling, tripped, _ = fig.axes
+    for ax in (overshoot, settling):
+        for line in ax.get_lines():
+            x = np.asarray(line.get_xdata(), dtype=float)
+            y = np.asarray(line.get_ydata(), dtype=float)
+            assert not np.isfinite(y[x == 1000.0]).any()  # no 2,842 % from a stopped run
+    assert sorted(_trip_marks(tripped)) == [(1000.0, 0.0), (1000.0, 1.0)]
+    assert "tripped" in tripped.get_title(loc="left")
+    assert "arm6 plant" in fig.get_suptitle()
+
+
+def _sweep_rows() -> list[dict[str, Any]]:
+    rows = []
+    for ctrl in ("pi", "fuzzy-pi"):
+        for seed in range(3):
+            never = ctrl == "fuzzy-pi" and seed == 1
+            trip = ctrl == "pi" and seed == 2
+            rows.append({
+                "experiment": "E1", "controller": ctrl, "plant": "arm6", "seed": seed,
+                "stiffness_n_per_mm": 10.0, "sensor_delay": 1, "command_delay": 1,
+                "gains": "default", "tripped": trip,
+                "z_overshoot_pct": 2000.0 if trip else 5.0 + seed,
+                "z_settling_time_s": None if never else 0.2 + 0.1 * seed,
+                "z_steady_state_error_std": 0.1, "z_peak_force": 60.0 if trip else 12.0,
+            })  # fmt: skip
+    return rows
+
+
+def test_sweep_figure_keeps_never_settled_and_tripped_runs_and_names_the_plant() -> None:
+    from fuzzkit.viz.palette import TRIP_LABEL
+    from fuzzkit.viz.sweep_figure import NEVER_SETTLED_LABEL, sweep_figure
+
+    fig = sweep_figure(_sweep_rows())
+    overshoot, settling, _, peak = fig.axes
+    assert "arm6 plant" in fig.get_suptitle()
+    assert [ax.get_ylabel() for ax in fig.axes] == [
+        "overshoot [%]",
+        "settling time [s]",
+        "steady error std [N]",
+        "peak force [N]",
+    ]
+    case = peak.get_xticklabels()[0].get_text()
+    assert "10 N/mm" in case and "latency 1+1 periods" in case
+
+    def dots(ax: Any) -> list[float]:
+        return sorted(
+            float(y) for line in ax.get_lines() if line.get_marker() == "o"
+            for y in line.get_ydata()
+        )  # fmt: skip
+
+    # the tripped PI run's 2,000 % is not a dot; its 60 N peak force is
+    assert 2000.0 not in dots(overshoot) and 60.0 in dots(peak)
+    # the never-settled fuzzy-PI run is a cross on the settling panel, the trip a red X
+    crosses = [line for line in settling.get_lines() if line.get_marker() == "x"]
+    assert len(crosses) == 1 and len(crosses[0].get_xdata()) == 1
+    assert len(_trip_marks(overshoot)) == len(_trip_marks(settling)) == 1
+    assert _trip_marks(peak) == []
+    legend = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert any(NEVER_SETTLED_LABEL in t for t in legend)
+    assert any(TRIP_LABEL in t for t in legend)
+    assert figure_bytes(fig)[:8] == PNG_MAGIC
+
+
+def test_each_controller_keeps_one_colour_in_every_figure() -> None:
+    from fuzzkit.studies.latency_sweep import StabilityMap
+    from fuzzkit.viz.latency import stability_figure
+    from fuzzkit.viz.sweep_figure import sweep_figure
+
+    seen: dict[str, set[tuple[float, ...]]] = {"pi": set(), "fuzzy-pi": set()}
+    force = force_figure(_fake_results(), "E1", zoom_s=0.3)
+    for ax in force.axes:
+        ctrl = "pi" if ax.get_title() == "PI" or ax in force.axes[0::2] else "fuzzy-pi"
+        seen[ctrl] |= _trace_colours(ax)
+        for ins in ax.child_axes:
+            seen[ctrl] |= _trace_colours(ins)
+    study = stiffness_figure(_study())
+    for line in study.axes[0].get_lines() + study.axes[1].get_lines():
+        ctrl = "fuzzy-pi" if line.get_label().startswith("fuzzy") else "pi"
+        if not line.get_label().startswith("_"):
+            seen[ctrl].add(_rgba(line.get_color()))
+    sweep = sweep_figure(_sweep_rows())
+    for patch, ctrl in zip(sweep.legends[0].get_patches(), ("pi", "fuzzy-pi"), strict=True):
+        seen[ctrl].add(_rgba(patch.get_facecolor()))
+    maps = [
+        StabilityMap(c, (1.0, 2.0), (0, 1), ((True, True), (True, False)))
+        for c in ("pi", "fuzzy-pi")
+    ]
+    for line, ctrl in zip(
+        stability_figure(maps).axes[0].get_lines()[:2], ("pi", "fuzzy-pi"), strict=True
+    ):
+        seen[ctrl].add(_rgba(line.get_color()))
+    assert len(seen["pi"]) == 1 and len(seen["fuzzy-pi"]) == 1, seen
+    assert seen["pi"] != seen["fuzzy-pi"]
 
 
 # --------------------------------------------------------------------------- notebooks

@@ -115,6 +115,24 @@ def path_driving(result: RunResult, axis: int) -> npt.NDArray[np.bool_]:
     return driving
 
 
+#: The RMS error while moving counts from this long after the axis's first contact (the
+#: transient of the contact itself is the overshoot's and settling time's business).
+MOVING_AFTER_CONTACT_S = 0.5
+
+
+def moving_window(result: RunResult, axis: int) -> npt.NDArray[np.bool_]:
+    """Per sample: counted in ``rms_error``, the path moving from 0.5 s after the first contact
+    (the axis's own, or the run's with anything when no surface faces the axis)."""
+    i0 = axis_first_contact(result, axis)
+    if i0 is None:
+        contacts = np.nonzero(result.in_contact)[0]
+        if len(contacts) == 0:
+            return np.zeros(len(result.t), dtype=bool)
+        i0 = int(contacts[0])
+    t = result.t
+    return np.asarray(result.moving & (t >= t[i0] + MOVING_AFTER_CONTACT_S), dtype=bool)
+
+
 def axis_metrics(result: RunResult, axis: int) -> dict[str, float | None]:
     """The per-axis figures of a run (keys as in ``fuzzkit simulate --json``).
 
@@ -164,7 +182,6 @@ def axis_metrics(result: RunResult, axis: int) -> dict[str, float | None]:
         touching = None  # no surface faces this axis: count contact with anything
     if touching is None:
         touching = result.in_contact
-    t0 = float(t[i0])
     out["overshoot_pct"] = overshoot_pct(f[i0:], sp)
     driving = path_driving(result, axis)
     i_settle = i0
@@ -176,9 +193,7 @@ def axis_metrics(result: RunResult, axis: int) -> dict[str, float | None]:
     mean, std = steady_state_error(f[steady], sp)
     out["steady_state_error_mean"] = mean
     out["steady_state_error_std"] = std
-    # While the path moves after the transient of first contact (one settling budget of 0.5 s).
-    moving = result.moving & (t >= t0 + 0.5)
-    out["rms_error"] = rms(sp - f[moving])
+    out["rms_error"] = rms(sp - f[moving_window(result, axis)])
     period = float(exp.scenario.period_s)
     out["contact_lost_s"] = float(np.count_nonzero(~touching[i0:]) * period)
     return out

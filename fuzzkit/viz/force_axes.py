@@ -11,14 +11,14 @@ import io
 from collections.abc import Mapping
 
 from fuzzkit.studies.runner import RunResult
-
-_COLOURS = ("tab:gray", "tab:blue", "tab:orange", "tab:green")
+from fuzzkit.viz.palette import controller_colour
 
 
 def force_axes_png(runs: Mapping[str, RunResult], title: str) -> bytes:
     """PNG bytes: true force against time per force-controlled axis, one line per run.
 
-    ``runs`` maps a legend label to a run; all runs must be of the same experiment.
+    ``runs`` maps a legend label to a run; all runs must be of the same experiment. Each run
+    is drawn in its controller's colour (:mod:`fuzzkit.viz.palette`).
     """
     from matplotlib.figure import Figure
 
@@ -26,10 +26,12 @@ def force_axes_png(runs: Mapping[str, RunResult], title: str) -> bytes:
     exp = first.experiment
     axes_idx = [i for i in (2, 0, 1) if exp.selection[i]]
     fig = Figure(figsize=(8.0, 2.3 * len(axes_idx) + 0.6))
+    order = tuple(dict.fromkeys(r.controller for r in runs.values()))
     grid = fig.subplots(len(axes_idx), 1, squeeze=False, sharex=True)
     for row, i in enumerate(axes_idx):
         ax = grid[row][0]
-        for (label, r), colour in zip(runs.items(), _COLOURS, strict=False):
+        for label, r in runs.items():
+            colour = controller_colour(r.controller, order)
             ax.plot(r.t, r.force_true[:, i], color=colour, lw=0.9, label=label)
         ax.plot(first.t, first.setpoint[:, i], "k--", lw=0.8, label="set point")
         ax.set_ylabel(f"true f{'xyz'[i]} (N)")

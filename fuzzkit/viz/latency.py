@@ -1,25 +1,20 @@
-"""The latency stability boundary of each controller as a PNG figure."""
+"""The latency stability boundary of each controller, as a figure and a PNG."""
 
 from __future__ import annotations
 
-import io
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from fuzzkit.fileio import write_atomic
 from fuzzkit.studies.latency_sweep import StabilityMap
+from fuzzkit.viz.figures import figure_bytes, new_figure
+from fuzzkit.viz.palette import controller_colour
 
 
-def write_stability_png(
-    maps: Sequence[StabilityMap], path: str | Path, period_ms: float = 4.0
-) -> Path:
-    """Plot, per controller, the largest stable delay against the gain factor; write a PNG."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(6.4, 4.2), dpi=110)
+def stability_figure(maps: Sequence[StabilityMap], period_ms: float = 4.0) -> Any:
+    """Per controller (in its colour), the largest stable delay against the gain factor."""
+    fig = new_figure(6.4, 4.2, dpi=110)
     ax = fig.add_subplot(1, 1, 1)
     styles = {"pi": ("o-", "PI"), "fuzzy-pi": ("s--", "fuzzy-PI (macvicar_whelan)")}
     top = 0
@@ -29,7 +24,7 @@ def write_stability_png(
         xs = list(bound)
         ys = [-1 if b is None else b for b in bound.values()]
         top = max(top, *m.delays)
-        ax.plot(xs, ys, marker, label=label)
+        ax.plot(xs, ys, marker, label=label, color=controller_colour(m.controller))
     ax.set_xscale("log", base=2)
     factors = sorted({f for m in maps for f in m.factors})
     ax.set_xticks(factors, [f"{f:g}" for f in factors])
@@ -49,6 +44,11 @@ def write_stability_png(
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="lower left")
     fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png")
-    return write_atomic(path, buf.getvalue())
+    return fig
+
+
+def write_stability_png(
+    maps: Sequence[StabilityMap], path: str | Path, period_ms: float = 4.0
+) -> Path:
+    """Write :func:`stability_figure` to a PNG at ``path``, atomically."""
+    return write_atomic(path, figure_bytes(stability_figure(maps, period_ms)))

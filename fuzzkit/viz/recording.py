@@ -67,6 +67,10 @@ def log_series(
     )
 
 
+#: The colours of the scene's axis arrows: x red, y green, z blue.
+AXIS_ARROW_COLOURS = ((230, 80, 60), (60, 170, 80), (60, 110, 230))
+
+
 def log_axes(
     rec: Any,
     entity: str,
@@ -86,7 +90,7 @@ def log_axes(
         rr.Arrows3D(
             origins=[origin] * 3,
             vectors=[(lx, 0.0, 0.0), (0.0, ly, 0.0), (0.0, 0.0, lz)],
-            colors=[(230, 80, 60), (60, 170, 80), (60, 110, 230)],
+            colors=list(AXIS_ARROW_COLOURS),
             labels=list(labels),
             show_labels=True,
         ),

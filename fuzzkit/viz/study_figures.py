@@ -13,22 +13,18 @@ from typing import Any
 import numpy as np
 
 from fuzzkit.viz.figures import new_figure
+from fuzzkit.viz.palette import (
+    SETPOINT_STYLE,
+    TRIP_LABEL,
+    TRIP_STYLE,
+    controller_colour,
+    controller_name,
+    gains_legend,
+    gains_style,
+)
 
-#: How each gains set is drawn: the default as a wide pale band under the tuned line, so both
-#: stay visible where they coincide. (colour, line width, alpha, zorder)
-GAINS_STYLE: dict[str, tuple[str, float, float, int]] = {
-    "default": ("tab:orange", 3.0, 0.55, 2),
-    "matched": ("tab:green", 1.6, 0.8, 3),
-    "tuned": ("tab:blue", 1.1, 1.0, 3),
-}
-SETPOINT_STYLE = {"color": "black", "ls": "--", "lw": 0.9, "zorder": 4}
-CONTROLLER_NAMES = {"pi": "PI", "fuzzy-pi": "fuzzy-PI"}
 #: Overshoots below this (%) are drawn on the floor of the log axis, with their own marker.
 OVERSHOOT_FLOOR_PCT = 0.1
-
-
-def _controller_name(ctrl: str) -> str:
-    return CONTROLLER_NAMES.get(ctrl, ctrl)
 
 
 def _first_contact_s(results: Mapping[tuple[str, str], Any]) -> float | None:
@@ -37,8 +33,26 @@ def _first_contact_s(results: Mapping[tuple[str, str], Any]) -> float | None:
     return min(times) if times else None
 
 
+def _trip_index(r: Any) -> int | None:
+    """The sample at which run ``r`` tripped the safety limit, or None."""
+    trip = getattr(r, "trip_time_s", None)
+    if not getattr(r, "tripped", False) or trip is None:
+        return None
+    return int(np.searchsorted(r.t, trip))
+
+
+def _mark_trip(ax: Any, r: Any, values: Any) -> bool:
+    """A trip marker on ``values`` (one per sample of ``r``) where ``r`` tripped; True if it did."""
+    k = _trip_index(r)
+    if k is None or len(r.t) == 0:
+        return False
+    k = min(k, len(r.t) - 1)
+    ax.plot([r.t[k]], [values[k]], **TRIP_STYLE)
+    return True
+
+
 def _add_zoom(
-    ax: Any, runs: Sequence[tuple[str, Any]], axis: int, window: tuple[float, float]
+    ax: Any, runs: Sequence[tuple[str, Any]], axis: int, window: tuple[float, float], colour: str
 ) -> None:
     """An inset magnifying ``window`` (s), placed where the traces leave room for it."""
     t0, t1 = window
@@ -49,9 +63,8 @@ def _add_zoom(
     ins = ax.inset_axes([0.5, 0.1 if upper else 0.42, 0.47, 0.5])
     ys: list[float] = []
     for label, r in runs:
-        colour, lw, alpha, z = GAINS_STYLE.get(label, ("tab:gray", 1.0, 1.0, 2))
         keep = (r.t >= t0) & (r.t <= t1)
-        ins.plot(r.t[keep], r.force_true[keep, axis], color=colour, lw=lw, alpha=alpha, zorder=z)
+        ins.plot(r.t[keep], r.force_true[keep, axis], color=colour, **gains_style(label))
         ins.plot(r.t[keep], r.setpoint[keep, axis], **SETPOINT_STYLE)
         ys += [
             float(np.nanmin(r.force_true[keep, axis])),
@@ -66,103 +79,170 @@ def _add_zoom(
     ax.indicate_inset_zoom(ins, edgecolor="0.35")
 
 
-def force_figure(
-    results: Mapping[tuple[str, str], Any], title: str, zoom_s: float | None = None
-) -> Any:
-    """Force vs time per controlled axis, one column per controller, both gains sets and the set
-    point in every panel, and one legend for the figure.
+def _error_while_moving(ax: Any, runs: Sequence[tuple[str, Any]], axis: int, colour: str) -> bool:
+    """Plot set point - true force where ``rms_error`` counts it (the path moving, after the
+    contact transient), zoomed to that window; True if a run tripped there."""
+    from fuzzkit.studies.metrics import moving_window
 
-    ``results`` maps ``(controller, gains label)`` to a ``RunResult`` of one experiment. With
-    ``zoom_s``, every panel gets an inset magnifying ``zoom_s`` seconds from just before the
-    first contact, where a short transient (E1's impact) is invisible at the full time scale.
+    tripped = False
+    spans: list[float] = []
+    rms: list[str] = []
+    for label, r in runs:
+        window = moving_window(r, axis)
+        err = np.where(window, r.setpoint[:, axis] - r.force_true[:, axis], np.nan)
+        ax.plot(r.t, err, color=colour, label=f"{label} gains", **gains_style(label))
+        if window.any():
+            rms.append(f"{label} {math.sqrt(float(np.nanmean(err**2))):.2f} N")
+        k = _trip_index(r)
+        if k is not None and k < len(r.t) and window[: k + 1].any():
+            tripped |= _mark_trip(ax, r, np.nan_to_num(err))
+        if window.any():
+            spans += [float(r.t[window][0]), float(r.t[window][-1])]
+    ax.axhline(0.0, **SETPOINT_STYLE)
+    if rms:
+        ax.set_title("RMS error while moving: " + ", ".join(rms), fontsize=8, loc="left")
+    if spans:
+        ax.set_xlim(min(spans), max(spans))
+    return tripped
+
+
+def force_figure(
+    results: Mapping[tuple[str, str], Any],
+    title: str,
+    zoom_s: float | None = None,
+    error_while_moving: bool = False,
+) -> Any:
+    """Force vs time per controlled axis, one column per controller in its own colour, every
+    gains set and the set point in every panel, and one legend for the figure.
+
+    ``results`` maps ``(controller, gains label)`` to a ``RunResult`` of one experiment. The
+    panels of a row share their y scale, so the controllers compare at a glance; a run that
+    tripped the safety limit carries a red cross where it tripped. With ``zoom_s``, every panel
+    gets an inset magnifying ``zoom_s`` seconds from just before the first contact, where a
+    short transient (E1's impact) is invisible at the full time scale. With
+    ``error_while_moving``, a last row shows the first axis's force error where the RMS error
+    while moving counts it (E2's claim), zoomed to that window.
     """
     any_run = next(iter(results.values()))
     exp = any_run.experiment
     axes_idx = [i for i in (2, 0, 1) if exp.selection[i]]
     controllers = list(dict.fromkeys(c for c, _ in results))
-    height = 2.7 * len(axes_idx) + 1.0
+    rows = len(axes_idx) + (1 if error_while_moving else 0)
+    height = 2.7 * rows + 1.0
     fig = new_figure(10.0, height)
-    grid = fig.subplots(len(axes_idx), len(controllers), squeeze=False, sharex=True)
+    grid = fig.subplots(rows, len(controllers), squeeze=False, sharey="row")
+    for row in range(1, len(axes_idx)):  # the force rows share time; the error row zooms
+        for col in range(len(controllers)):
+            grid[row][col].sharex(grid[0][col])
     contact = _first_contact_s(results) if zoom_s else None
+    tripped = False
+    order = tuple(controllers)
     for col, ctrl in enumerate(controllers):
+        colour = controller_colour(ctrl, order)
         runs = [(label, r) for (c, label), r in results.items() if c == ctrl]
         for row, i in enumerate(axes_idx):
             ax = grid[row][col]
             for label, r in runs:
-                colour, lw, alpha, z = GAINS_STYLE.get(label, ("tab:gray", 1.0, 1.0, 2))
-                ax.plot(
-                    r.t,
-                    r.force_true[:, i],
-                    color=colour,
-                    lw=lw,
-                    alpha=alpha,
-                    zorder=z,
-                    label=f"{label} gains",
-                )
-            ax.plot(any_run.t, any_run.setpoint[:, i], label="set point", **SETPOINT_STYLE)
-            ax.set_ylabel(f"f{'xyz'[i]} [N]")
+                ax.plot(r.t, r.force_true[:, i], color=colour, **gains_style(label))
+                tripped |= _mark_trip(ax, r, r.force_true[:, i])
+            ax.plot(any_run.t, any_run.setpoint[:, i], **SETPOINT_STYLE)
+            ax.set_ylabel(f"true f{'xyz'[i]} [N]")
             ax.grid(alpha=0.3)
             if row == 0:
-                ax.set_title(_controller_name(ctrl))
-            if row == len(axes_idx) - 1:
+                ax.set_title(controller_name(ctrl), color=colour, fontweight="bold")
+            if row < len(axes_idx) - 1:
+                ax.tick_params(labelbottom=False)
+            else:
                 ax.set_xlabel("time [s]")
             if contact is not None and zoom_s is not None:
                 start = max(float(any_run.t[0]), contact - 0.2 * zoom_s)
-                _add_zoom(ax, runs, i, (start, start + zoom_s))
-    handles, labels = grid[0][0].get_legend_handles_labels()
+                _add_zoom(ax, runs, i, (start, start + zoom_s), colour)
+        if error_while_moving:
+            ax = grid[-1][col]
+            tripped |= _error_while_moving(ax, runs, axes_idx[0], colour)
+            axis = "xyz"[axes_idx[0]]
+            ax.set_ylabel(f"{axis} error while moving [N]")
+            ax.set_xlabel("time [s] (the RMS error while moving counts this window)")
+            ax.grid(alpha=0.3)
+    for row in range(rows):
+        for col in range(1, len(controllers)):
+            grid[row][col].tick_params(labelleft=True)  # shared scale, but every panel reads
+    labels = list(dict.fromkeys(label for _, label in results))
+    handles, names = gains_legend(labels, tripped)
     # Title, then the legend, then the panels, spaced in inches whatever the figure's height.
     fig.suptitle(title, fontsize=11, y=1 - 0.06 / height)
     fig.legend(
         handles,
-        labels,
+        names,
         loc="upper center",
-        ncol=len(labels),
+        ncol=len(names),
         bbox_to_anchor=(0.5, 1 - 0.3 / height),
     )
     fig.tight_layout(rect=(0, 0, 1, 1 - 0.58 / height))
     return fig
 
 
-def stiffness_figure(study: Mapping[tuple[str, str], Sequence[tuple[float, Any]]]) -> Any:
+def _strip(ax: Any, names: Sequence[str], title: str) -> None:
+    """A row of markers per series under a log-x panel (``x`` at the stiffnesses it names)."""
+    ax.set_yticks(range(len(names)), names)
+    ax.set_ylim(-0.7, len(names) - 0.3)
+    ax.tick_params(axis="y", labelsize=7)
+    ax.set_title(title, fontsize=8, loc="left", pad=3)
+    ax.grid(alpha=0.3, axis="x", which="both")
+    ax.set_xlabel("environment stiffness [N/mm]")
+
+
+def _metric(rows: Sequence[tuple[float, Any]], key: str, tripped: Any) -> Any:
+    """Metric ``key`` of every row, NaN where it is None or the run tripped."""
+    raw = [math.nan if m[key] is None else m[key] for _, m in rows]
+    return np.where(tripped, math.nan, np.array(raw, dtype=float))
+
+
+def stiffness_figure(
+    study: Mapping[tuple[str, str], Sequence[tuple[float, Any]]], plant: str = "planar"
+) -> Any:
     """Overshoot and settling time against environment stiffness, per (controller, gains).
 
-    ``study`` maps ``(controller, label)`` to ``[(stiffness N/mm, z-axis metrics)]``. Both
-    axes are logarithmic; overshoots below :data:`OVERSHOOT_FLOOR_PCT` sit on the floor with a
-    triangle marker, and runs that never settle are shown in a row of their own marked "never
-    settled" instead of at an invented time.
+    ``study`` maps ``(controller, label)`` to ``[(stiffness N/mm, z-axis metrics)]`` (a
+    ``tripped`` entry, when true, marks a run that tripped the safety limit). Both axes are
+    logarithmic; overshoots below :data:`OVERSHOOT_FLOOR_PCT` sit on the floor with a triangle
+    marker. Runs that tripped are not plotted as overshoot or settling time (they describe a
+    stopped controller) but as red crosses in a row of their own under the overshoot; runs
+    that never settle, as crosses in a row under the settling time, not at an invented time.
+    Each controller has its colour (:mod:`fuzzkit.viz.palette`), each gains set its line.
     """
-    colours = {"pi": "tab:orange", "fuzzy-pi": "tab:blue"}
     series = list(study.items())
-    fig = new_figure(10.0, 4.6)
-    spec = fig.add_gridspec(2, 2, height_ratios=(3.2, 1.2), hspace=0.22, wspace=0.3)
-    ax1 = fig.add_subplot(spec[:, 0])
-    ax2 = fig.add_subplot(spec[0, 1])
-    never_ax = fig.add_subplot(spec[1, 1], sharex=ax2)
+    order = tuple(dict.fromkeys(c for c, _ in study))
+    fig = new_figure(10.0, 5.0)
+    spec = fig.add_gridspec(2, 2, height_ratios=(3.2, 1.3), hspace=0.25, wspace=0.3)
+    ax1 = fig.add_subplot(spec[0, 0])
+    ax2 = fig.add_subplot(spec[0, 1], sharex=ax1)
+    trip_ax = fig.add_subplot(spec[1, 0], sharex=ax1)
+    never_ax = fig.add_subplot(spec[1, 1], sharex=ax1)
     floor_used = False
     for row, ((ctrl, label), rows) in enumerate(series):
-        colour = colours.get(ctrl, "tab:gray")
-        ls = {"tuned": "-", "matched": ":"}.get(label, "--")
-        name = f"{_controller_name(ctrl)} {label}"
+        colour = controller_colour(ctrl, order)
+        style = gains_style(label)
+        name = f"{controller_name(ctrl)} {label}"
         ks = np.array([k for k, _ in rows])
-        over = np.array(
-            [math.nan if m["overshoot_pct"] is None else m["overshoot_pct"] for _, m in rows]
-        )
+        tripped = np.array([bool(m.get("tripped", False)) for _, m in rows], dtype=bool)
+        over = _metric(rows, "overshoot_pct", tripped)
         low = over < OVERSHOOT_FLOOR_PCT
         floor_used |= bool(low.any())
-        ax1.plot(ks, np.maximum(over, OVERSHOOT_FLOOR_PCT), ls=ls, color=colour, label=name)
-        ax1.plot(ks[~low], over[~low], "o", ms=3.5, color=colour)
+        ax1.plot(ks, np.maximum(over, OVERSHOOT_FLOOR_PCT), color=colour, label=name, **style)
+        ax1.plot(ks[over >= OVERSHOOT_FLOOR_PCT], over[over >= OVERSHOOT_FLOOR_PCT], "o", ms=3.5,
+                 color=colour)  # fmt: skip
         ax1.plot(ks[low], np.full(int(low.sum()), OVERSHOOT_FLOOR_PCT), "v", ms=6, color=colour)
-        settle = np.array(
-            [math.nan if m["settling_time_s"] is None else m["settling_time_s"] for _, m in rows]
-        )
-        ax2.plot(ks, settle, ls=ls, marker="o", ms=3.5, color=colour, label=name)
-        never = np.isnan(settle)
+        settle = _metric(rows, "settling_time_s", tripped)
+        ax2.plot(ks, settle, marker="o", ms=3.5, color=colour, label=name, **style)
+        never = np.isnan(settle) & ~tripped
         never_ax.plot(ks[never], np.full(int(never.sum()), row), "x", ms=8, mew=2, color=colour)
+        trip_ax.plot(ks[tripped], np.full(int(tripped.sum()), row), **TRIP_STYLE)
     for ax in (ax1, ax2):
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.grid(alpha=0.3, which="both")
-    ax1.set_xlabel("environment stiffness [N/mm]")
+        ax.tick_params(labelbottom=False)
     ax1.set_ylabel("overshoot [%]")
     if floor_used:
         ax1.text(
@@ -173,15 +253,11 @@ def stiffness_figure(study: Mapping[tuple[str, str], Sequence[tuple[float, Any]]
             fontsize=8,
         )
     ax2.set_ylabel("settling time [s]")
-    ax2.tick_params(labelbottom=False)
-    never_ax.set_yticks(range(len(series)), [f"{_controller_name(c)} {g}" for (c, g), _ in series])
-    never_ax.set_ylim(-0.7, len(series) - 0.3)
-    never_ax.tick_params(axis="y", labelsize=7)
-    never_ax.set_title("x = never settled (within the run)", fontsize=8, loc="left", pad=3)
-    never_ax.grid(alpha=0.3, axis="x", which="both")
-    never_ax.set_xlabel("environment stiffness [N/mm]")
+    names = [f"{controller_name(c)} {g}" for (c, g), _ in series]
+    _strip(trip_ax, names, f"red X = {TRIP_LABEL}: stopped, no overshoot to plot")
+    _strip(never_ax, names, "x = never settled (within the run)")
     handles, labels = ax1.get_legend_handles_labels()
     fig.legend(handles, labels, loc="upper center", ncol=len(labels), bbox_to_anchor=(0.5, 0.93))
-    fig.suptitle("press 10 N on the hammer (planar plant)", fontsize=11)
-    fig.subplots_adjust(left=0.07, right=0.98, top=0.84, bottom=0.11)
+    fig.suptitle(f"press 10 N on the hammer ({plant} plant)", fontsize=11)
+    fig.subplots_adjust(left=0.1, right=0.98, top=0.84, bottom=0.1)
     return fig

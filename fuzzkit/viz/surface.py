@@ -256,7 +256,7 @@ def _log_labelled_axes(rec: Any, entity: str, rb: RuleBase, out: Variable, ticks
     """Axis arrows and tick marks for the normalised cube, labelled with raw values."""
     import rerun as rr
 
-    from fuzzkit.viz.recording import log_axes
+    from fuzzkit.viz.recording import AXIS_ARROW_COLOURS, log_axes
 
     vx, vy = rb.inputs
     corner = (-1.0, -1.0, -1.0)
@@ -274,9 +274,11 @@ def _log_labelled_axes(rec: Any, entity: str, rb: RuleBase, out: Variable, ticks
     u = np.linspace(-1.0, 1.0, ticks)
     points: list[tuple[float, float, float]] = []
     labels: list[str] = []
-    # Each axis's ticks run along a different edge of the cube, just outside it, so that no
-    # two axes' end ticks share a corner.
-    edges = ([0.0, -1.15, -1.0], [1.15, 0.0, -1.0], [-1.0, 1.15, 0.0])
+    colours: list[tuple[int, int, int]] = []
+    # The inputs' ticks run beside their arrows (the edges nearest the default camera,
+    # :data:`fuzzkit.viz.blueprints.SURFACE_EYE`), the output's up the back corner, far enough
+    # out that its lowest tick stays clear of the second input's highest.
+    edges = ([0.0, -1.15, -1.0], [-1.15, 0.0, -1.0], [-1.0, 1.45, 0.0])
     for axis, var in enumerate((vx, vy, out)):
         raw = var.low + (u + 1.0) * 0.5 * (var.high - var.low)
         for t, r in zip(u, raw, strict=True):
@@ -284,9 +286,12 @@ def _log_labelled_axes(rec: Any, entity: str, rb: RuleBase, out: Variable, ticks
             p[axis] = float(t)
             points.append((p[0], p[1], p[2]))
             labels.append(f"{var.name}={r:.4g}")
+            colours.append(AXIS_ARROW_COLOURS[axis])
+    # Each tick in its axis's colour (the arrows'): readable on the dark theme and the light
+    # one, and it says which axis a tick belongs to.
     rec.log(
         f"{entity}/ticks",
-        rr.Points3D(points, radii=[0.012], colors=[(200, 200, 200)], labels=labels),
+        rr.Points3D(points, radii=[0.02], colors=colours, labels=labels, show_labels=True),
         static=True,
     )
 
@@ -357,7 +362,7 @@ def write_surface_rrd(
         )
         rec.log(
             f"{entity}/label_peaks",
-            rr.Points3D(peaks_unit, radii=0.03, labels=labels, colors=[(235, 235, 235)]),
+            rr.Points3D(peaks_unit, radii=0.03, labels=labels, colors=[(250, 190, 30)]),
             static=True,
         )
         _log_labelled_axes(rec, entity, rb, out)

@@ -8,7 +8,8 @@ plus the arm in three dimensions. Entity layout (timeline ``sim_time``, a durati
   every force-controlled axis; every series name ends with its unit
 * ``world/axes`` (labelled x, y, z arrows, 0.1 m); the file carries the same blueprint as the
   planar recordings (:mod:`fuzzkit.viz.blueprints`)
-* ``joints/<axis name>`` (degrees): the IRB 140's six axis angles
+* ``joints/axis<i>`` (degrees, one colour each): the IRB 140's six axis angles
+* e, de and du start when the force loop engages, u at the start (as the planar recording)
 * ``world/arm`` (line strip: base, every DH frame origin, flange, TCP), ``world/tool`` (the tool
   axis from flange to tip and its contact sphere), ``world/force`` (arrow at the tool tip: the
   force the tool exerts on the environment, 2 mm per N), ``world/contacts``
@@ -38,10 +39,13 @@ from fuzzkit.plants.environment3d import (
     objects_from_scenario,
 )
 from fuzzkit.studies.runner import RunResult
-from fuzzkit.viz.recording import log_series, open_recording
+from fuzzkit.viz.recording import open_recording
 from fuzzkit.viz.rule_activity import RuleRecording
 from fuzzkit.viz.run_series import (
+    ARM_COLOUR,
+    TOOL_COLOUR,
     log_control_series,
+    log_joint_angles,
     log_paths,
     log_world_axes,
     run_recording_blueprint,
@@ -127,28 +131,22 @@ def write_rrd(
     p = params or Arm6Parameters()
     exp = result.experiment
     scn = exp.scenario
+    base = -np.asarray(p.workspace_offset)
+    base_box = base + np.array([[-0.1, -0.1, 0.0], [0.1, 0.1, 0.1]])
+    title = f"{exp.name} {result.controller}, 6-DOF arm"
     with open_recording(
         path,
         f"fuzzkit_{exp.name}_{result.controller}_arm6",
         f"{exp.name}-{result.controller}-arm6",
-        blueprint=run_recording_blueprint(
-            result, f"{exp.name} {result.controller}, 6-DOF arm", rules=rules is not None
-        ),
+        blueprint=run_recording_blueprint(result, title, base_box, rules=rules is not None),
     ) as rec:
         times = rr.TimeColumn("sim_time", duration=result.t)
         log_control_series(rec, result, times)
         if rules is not None:
             rules.log(rec)
         log_world_axes(rec)
-        for j in range(6):
-            log_series(
-                rec,
-                f"joints/axis{j + 1}",
-                times,
-                np.degrees(result.joint_angles[:, j]),
-                f"axis {j + 1} (deg)",
-                (120, 120, 120),
-            )
+        names = [f"axis {j + 1}" for j in range(6)]
+        log_joint_angles(rec, times, np.degrees(result.joint_angles), names, "deg")
 
         # static world: environment, paths, robot base
         xs = [w.x for w in scn.path] + [float(v) for v in result.tool_position[:, 0]]
@@ -164,13 +162,12 @@ def write_rrd(
             else:
                 rec.log(entity, rr.LineStrips3D(_wire(obj, x_lo, x_hi), colors=[_ENV]), static=True)
         log_paths(rec, result)
-        base = -np.asarray(p.workspace_offset)
         rec.log(
             "world/robot_base",
             rr.Boxes3D(
                 centers=[base + np.array([0.0, 0.0, 0.05])],
                 half_sizes=[[0.1, 0.1, 0.05]],
-                colors=[(230, 120, 20)],
+                colors=[ARM_COLOUR],
             ),
             static=True,
         )
@@ -181,17 +178,15 @@ def write_rrd(
         for k in range(0, len(result.t), max(1, geometry_every)):
             rec.set_time("sim_time", duration=float(result.t[k]))
             arm = result.arm_points[k]
-            rec.log(
-                "world/arm", rr.LineStrips3D([arm[:-1]], colors=[(230, 120, 20)], radii=[0.012])
-            )
+            rec.log("world/arm", rr.LineStrips3D([arm[:-1]], colors=[ARM_COLOUR], radii=[0.012]))
             tip = arm[-1]
             rec.log(
                 "world/tool/axis",
-                rr.LineStrips3D([arm[-2:]], colors=[(40, 40, 40)], radii=[0.006]),
+                rr.LineStrips3D([arm[-2:]], colors=[TOOL_COLOUR], radii=[0.006]),
             )
             rec.log(
                 "world/tool/sphere",
-                rr.Points3D([tip], radii=[radius], colors=[(0, 120, 200, 120)]),
+                rr.Points3D([tip], radii=[radius], colors=[(*TOOL_COLOUR, 120)]),
             )
             f_base = rot @ np.nan_to_num(result.force_true[k])
             rec.log(

@@ -3,20 +3,22 @@ with ``rerun FILE``.
 
 Entity layout (timeline ``sim_time``, a duration in seconds):
 
-* ``forces/<axis>/measured``, ``forces/<axis>/setpoint``, ``forces/<axis>/true`` (N, task frame)
-* ``control/error/<axis>/e``, ``/de`` (N) and ``control/correction/<axis>/du``, ``/u`` (mm)
-  for every force-controlled axis; every series name ends with its unit
+* ``forces/<axis>/measured``, ``forces/<axis>/true`` (N, task frame; x and z: the planar arm
+  has no y) and ``forces/<axis>/setpoint`` for every force-controlled axis
+* ``control/error/<axis>/e``, ``/de`` (N) and ``control/correction/<axis>/du`` (mm) from the
+  moment the force loop engages, ``control/correction/<axis>/u`` (mm) from the start, for every
+  force-controlled axis; every series name ends with its unit
 * ``control/rules/<axis>`` (text: the fuzzy-PI's strongest rules and strengths per controlled
   period) and ``control/rules/<axis>/strongest`` (0-1), when the writer is given the rule base
 * ``world/axes`` (labelled x, y, z arrows, 0.1 m)
-* ``joints/q<i>`` (rad)
+* ``joints/q<i>`` (rad, one colour each)
 * ``world/arm`` (line strip base -> joints -> tool tip), ``world/tool`` (tool contact disc),
   ``world/contacts`` (contact points), ``world/tool_path`` and ``world/nominal_path`` (static),
   ``world/environment/<name>`` (static outlines of the table, hammer, workpiece, wall)
 
 Everything in ``world/`` is in metres, base frame, z up. The file carries a blueprint
 (:mod:`fuzzkit.viz.blueprints`): the viewer opens on force vs set point per axis, the control
-signals and the 3-D scene.
+signals and the 3-D scene (:mod:`fuzzkit.viz.run_series` for the colours and the camera).
 """
 
 from __future__ import annotations
@@ -31,14 +33,20 @@ import numpy.typing as npt
 from fuzzkit.errors import ConfigError
 from fuzzkit.plants.environment import Box, EnvObject, RoughSurface, Table
 from fuzzkit.studies.runner import RunResult
-from fuzzkit.viz.recording import log_series, open_recording
+from fuzzkit.viz.recording import open_recording
 from fuzzkit.viz.rule_activity import RuleRecording
 from fuzzkit.viz.run_series import (
+    ARM_COLOUR,
+    TOOL_COLOUR,
     log_control_series,
+    log_joint_angles,
     log_paths,
     log_world_axes,
     run_recording_blueprint,
 )
+
+#: The task axes of the planar arm (it moves in the x-z plane).
+PLANAR_AXES = ("x", "z")
 
 Vec = npt.NDArray[np.float64]
 
@@ -87,19 +95,12 @@ def write_rrd(
         ),
     ) as rec:
         times = rr.TimeColumn("sim_time", duration=result.t)
-        log_control_series(rec, result, times)
+        log_control_series(rec, result, times, PLANAR_AXES)
         if rules is not None:
             rules.log(rec)
         log_world_axes(rec)
-        for j in range(result.joint_angles.shape[1]):
-            log_series(
-                rec,
-                f"joints/q{j + 1}",
-                times,
-                result.joint_angles[:, j],
-                f"q{j + 1} (rad)",
-                (120, 120, 120),
-            )
+        names = [f"q{j + 1}" for j in range(result.joint_angles.shape[1])]
+        log_joint_angles(rec, times, result.joint_angles, names, "rad")
 
         scn = exp.scenario
         xs = [w.x for w in scn.path] + [float(p[0]) for p in result.tool_position]
@@ -115,12 +116,12 @@ def write_rrd(
         for k in range(0, len(result.t), max(1, geometry_every)):
             rec.set_time("sim_time", duration=float(result.t[k]))
             arm = result.arm_points[k]
-            rec.log("world/arm", rr.LineStrips3D([arm], colors=[(40, 40, 40)], radii=[0.006]))
+            rec.log("world/arm", rr.LineStrips3D([arm], colors=[ARM_COLOUR], radii=[0.006]))
             tip = arm[-1]
             rec.log(
                 "world/tool",
                 rr.LineStrips3D(
-                    [_circle(float(tip[0]), float(tip[2]), radius)], colors=[(0, 120, 200)]
+                    [_circle(float(tip[0]), float(tip[2]), radius)], colors=[TOOL_COLOUR]
                 ),
             )
             pts = result.contact_points[k]
