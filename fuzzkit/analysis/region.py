@@ -33,7 +33,7 @@ NOISE_SHARE = 0.5
 
 METHOD = (
     "common quadratic Lyapunov function over the vertices of the loop's parameter box "
-    "(contact sector, fuzzy gain, inner-loop uncertainty), LMI solved by cvxpy/Clarabel, "
+    "(contact sector, fuzzy gain, inner-loop uncertainty), LMI solved by Clarabel, "
     f"verified in numpy with a decay margin >= {MIN_MARGIN:g} per period"
 )
 
