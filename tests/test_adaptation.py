@@ -14,6 +14,7 @@ import math
 import re
 from pathlib import Path
 
+import jsonschema
 import numpy as np
 import pytest
 from _codegen_util import needs_cc
@@ -137,7 +138,6 @@ def test_a_pi_needs_the_self_tuning_normalisers() -> None:
 
 
 def test_json_schema_accepts_the_examples_and_rejects_a_bad_section() -> None:
-    jsonschema = pytest.importorskip("jsonschema")
     import yaml
 
     validator = jsonschema.Draft202012Validator(json_schema())

@@ -9,6 +9,7 @@ import math
 import shutil
 from pathlib import Path
 
+import jsonschema
 import pytest
 
 from fuzzkit.cli import main
@@ -285,7 +286,6 @@ def test_a_spec_built_in_code_is_checked_too() -> None:
 
 
 def test_json_schema_accepts_the_examples_and_rejects_what_the_reader_rejects() -> None:
-    jsonschema = pytest.importorskip("jsonschema")
     import yaml
 
     schema = json_schema()

@@ -7,18 +7,17 @@ from __future__ import annotations
 import zipfile
 from pathlib import Path
 
+import fmpy
 import numpy as np
 import numpy.typing as npt
 import pytest
 from _codegen_util import needs_cc
+from fmpy.validation import validate_fmu
 from test_replay import read_out, write_log
 
 from fuzzkit.cli import main
 from fuzzkit.control.spec_reader import load_spec
 from fuzzkit.studies.sensor_logs import hostile_log
-
-fmpy = pytest.importorskip("fmpy", reason="FMPy (dev dependency) validates and runs the FMU")
-from fmpy.validation import validate_fmu  # noqa: E402
 
 REPO = Path(__file__).parent.parent
 #: fuzzy-PI with the tool's weight compensated (inputs fx fy fz r11..r33)
@@ -140,15 +139,29 @@ def test_fmu_is_reproducible_and_carries_its_sources(tmp_path: Path) -> None:
     assert np.abs(got["uz"] - want["uz"]).max() <= 1e-12
 
 
-def test_a_step_that_is_not_whole_periods_is_refused(tmp_path: Path) -> None:
+def test_a_step_that_is_not_whole_periods_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     spec = load_spec(SPEC_PLAIN)
     fmu = _compile(SPEC_PLAIN, tmp_path / "p.fmu")
     forces = np.zeros((10, 3))
     with pytest.raises(Exception, match="fmi2DoStep"):
         _simulate(fmu, forces, None, 1.5 * spec.period_s)
-    # two periods per communication step: two controller steps on the held input
-    got = _simulate(fmu, np.full((10, 3), np.nan), None, 2.0 * spec.period_s)
-    assert got.shape[0] == 11
+    # two periods per communication step: two controller steps on the held input, i.e. replay
+    # of the log with every sample repeated, read every second period
+    held = hostile_log(spec)[0][:150]
+    log = tmp_path / "held.csv"
+    write_log(log, np.repeat(held, 2, axis=0), None)
+    out = tmp_path / "ref.csv"
+    assert main(["replay", str(SPEC_PLAIN), "--forces", str(log), "--out", str(out)]) == 0
+    capsys.readouterr()
+    _, ref = read_out(out)
+    got = _simulate(fmu, held, None, 2.0 * spec.period_s)
+    assert got.shape[0] == held.shape[0] + 1
+    u = np.column_stack([got["ux"], got["uy"], got["uz"]])[1:]
+    assert np.abs(u - ref[1::2, 1:4]).max() <= 1e-9
+    np.testing.assert_array_equal(got["status"][1:], ref[1::2, 4].astype(np.int64))
+    assert np.abs(u).max() > 1e-4  # the controller moved: one step per period would differ
 
 
 def test_fmu_refuses_rule_bases_and_folders(

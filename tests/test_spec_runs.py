@@ -7,6 +7,7 @@ import dataclasses
 import json
 from pathlib import Path
 
+import jsonschema
 import numpy as np
 import pytest
 
@@ -114,7 +115,6 @@ def test_with_spec_needs_the_scenarios_period() -> None:
 
 
 def test_scenario_schema_takes_a_spec_path_or_mapping() -> None:
-    jsonschema = pytest.importorskip("jsonschema")
     import yaml
 
     from fuzzkit.studies.scenario_file import json_schema
