@@ -174,3 +174,15 @@ def test_the_direct_clarabel_program_has_the_optimum_of_the_same_program_in_cvxp
     cert = certify(mats)  # no core: one search on all
     assert cert.certified
     assert cert.margin == pytest.approx(float(t.value), rel=1e-4)
+
+
+def test_the_growing_search_adds_the_vertices_the_core_p_fails_on():
+    # on the core {0.5 I} the search finds P = I (t = 0.75), which fails on the second vertex:
+    # that vertex joins the search, and the P of the second round holds on both
+    a = np.array([[0.5, 0.0], [5.0, 0.5]])
+    mats = [0.5 * np.eye(2), a]
+    cert = certify(mats, core=[0.5 * np.eye(2)])
+    assert cert.certified and cert.p is not None
+    assert "(2 of 2 vertices searched)" in cert.solver_status
+    assert verify(cert.p, mats) == pytest.approx(cert.margin)
+    assert cert.margin >= MIN_MARGIN
