@@ -163,6 +163,14 @@ class PolySpec:
     moment: tuple[str, ...]
     low: str
     width: str
+    #: With window inputs (2 x 2 cells fire): the functions that can be non-zero for each
+    #: block of cells, as a set number per block (indexed like the cells by its first cell)
+    #: and per set its function count and up to ``set_width`` function numbers (ascending).
+    block_set: tuple[str, ...] = ()
+    set_count: tuple[str, ...] = ()
+    set_funcs: tuple[str, ...] = ()
+    set_width: int = 0
+    index_type: str = "unsigned char"
 
 
 @dataclass(frozen=True)
@@ -439,6 +447,27 @@ def _windows(rb: RuleBase, lit: _Lit) -> tuple[WindowSpec, ...] | None:
     return tuple(w for w in found if w is not None)
 
 
+def _firing_sets(
+    levels: list[tuple[int, int]], cons: list[int], rows: int, columns: int
+) -> tuple[list[int], list[list[int]]]:
+    """Per block of 2 x 2 cells (first cell (i, j), numbered i * columns + j), the functions
+    whose level can be non-zero there: both of its terms are the consequent of a cell of the
+    block. Every other function has level 0 and adds exactly 0 (its first piece starts at 0
+    with constant coefficient 0). Returns the set number of each block and the distinct sets.
+    """
+    sets: list[list[int]] = []
+    block_set: list[int] = []
+    for i in range(rows):
+        for j in range(columns):
+            cells = [(i + a) * columns + j + b for a in (0, 1) for b in (0, 1)]
+            fired = {cons[c] for c in cells if i + 1 < rows and j + 1 < columns}
+            funcs = [f for f, (a, b) in enumerate(levels) if a in fired and b in fired]
+            if funcs not in sets:
+                sets.append(funcs)
+            block_set.append(sets.index(funcs))
+    return block_set, sets
+
+
 def _poly(
     rb: RuleBase,
     out: Variable,
@@ -446,6 +475,7 @@ def _poly(
     geo: PiecewiseLinearGeometry,
     lit: _Lit,
     wrap: Callable[[list[str]], tuple[str, ...]],
+    cons: list[int] | None,
 ) -> PolySpec | None:
     if rb.defuzzifier != "centroid":
         return None
@@ -473,6 +503,21 @@ def _poly(
             for c in coefs:
                 dest += [lit(v) for v in c]
             dest += [lit(0.0)] * (4 * (p_max - n))
+    firing: dict[str, object] = {}
+    if cons is not None:
+        rows, columns = len(rb.inputs[0].terms) + 1, len(rb.inputs[1].terms) + 1
+        pairs = [(int(a), int(b)) for a, b in zip(level_a, level_b, strict=True)]
+        block_set, sets = _firing_sets(pairs, cons, rows, columns)
+        width = max(1, max(len(f) for f in sets))
+        firing = dict(
+            block_set=_wrap([str(k) for k in block_set], 16),
+            set_count=tuple(str(len(f)) for f in sets),
+            set_funcs=_wrap([str(f) for fs in sets for f in fs + [0] * (width - len(fs))], 16),
+            set_width=width,
+            index_type="unsigned char"
+            if max(len(sets), len(pc.functions)) <= 255
+            else "unsigned short",
+        )
     return PolySpec(
         n_funcs=len(pc.functions),
         pieces=p_max,
@@ -485,6 +530,7 @@ def _poly(
         moment=wrap(moment),
         low=lit(pc.low),
         width=lit(pc.width),
+        **firing,  # type: ignore[arg-type]
     )
 
 
@@ -496,6 +542,7 @@ def _output(
     agg_fmt: dict[str, str],
     wrap: Callable[[list[str]], tuple[str, ...]],
     grid: dict[tuple[int, int], Rule] | None,
+    windows: bool,
 ) -> ExactOutput:
     pieces = OutputPieces(rb, out)
     ops = rb.operators
@@ -506,6 +553,7 @@ def _output(
                 rules_of_term.setdefault(out.term_index(c.term), []).append(r)
     zero = lit(0.0)
     grid_cons: tuple[str, ...] = ()
+    cons: list[int] = []
     if grid is not None:
         # one padding row and column of "no rule" for the window's neighbour past the end
         t0, t1 = len(rb.inputs[0].terms) + 1, len(rb.inputs[1].terms) + 1
@@ -555,7 +603,8 @@ def _output(
         levels = tuple(f"w[{int(r)}]" for r in pieces.inst_rules)
     geo = PiecewiseLinearGeometry(rb, out, pieces)
     # the engine's fast centroid where the target's templates take it, else the general sweep
-    poly = _poly(rb, out, pieces, geo, lit, wrap) if lit.target.fast_centroid else None
+    firing_cons = cons if windows else None
+    poly = _poly(rb, out, pieces, geo, lit, wrap, firing_cons) if lit.target.fast_centroid else None
     if poly is not None:
         return ExactOutput(
             index=k, name=out.name, low=lit(out.low), high=lit(out.high),
@@ -678,7 +727,8 @@ def build_exact_spec(
     grid = grid_rules(rb) if tg.visits_firing_cells else None
     windows = _windows(rb, lit) if grid is not None else None
     outputs = tuple(
-        _output(rb, k, out, lit, agg_fmt, wrap, grid) for k, out in enumerate(rb.outputs)
+        _output(rb, k, out, lit, agg_fmt, wrap, grid, windows is not None)
+        for k, out in enumerate(rb.outputs)
     )
     libm: set[str] = set()
     for var in rb.inputs:

@@ -92,7 +92,7 @@ def test_rule_base_help_names_every_readable_file_kind() -> None:
     from fuzzkit.formats import registry
 
     listed = set(re.findall(r"\.\w+", RULEBASE_SPEC_HELP))
-    assert listed == set(registry._SUFFIXES) | set(registry.READERS)
+    assert listed == set(registry.RULEBASE_SUFFIXES)
 
 
 @pytest.mark.parametrize("name", COMMANDS)

@@ -377,3 +377,13 @@ def test_every_shipped_spec_generates_a_controller_equal_to_its_reference(
     want, want_status = reference_run(s, forces, rotations)
     assert float(np.max(np.abs(got - want))) <= TOLERANCE_M
     np.testing.assert_array_equal(status, want_status)
+
+
+def test_codegen_names_mirror_the_controller_names() -> None:
+    """codegen may not import fuzzkit.control, so it spells the kinds and axes itself: the
+    same names, in the same order, as fuzzkit.control.names (the one definition)."""
+    from fuzzkit.codegen import controller as codegen_controller
+    from fuzzkit.control import names
+
+    assert codegen_controller.KINDS == names.KINDS
+    assert codegen_controller.AXES == names.AXES

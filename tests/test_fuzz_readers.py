@@ -25,7 +25,7 @@ from _mutate import Mutant, mutants
 from fuzzkit.control.gains import read_gains_file
 from fuzzkit.errors import ConfigError, ProblemsError
 from fuzzkit.formats import fcl, fis, fll, registry, yaml_reader
-from fuzzkit.formats.foreign import ExportError
+from fuzzkit.formats.foreign_common import ExportError
 from fuzzkit.fuzzy import membership
 from fuzzkit.fuzzy.inference import evaluate
 from fuzzkit.fuzzy.model import RuleBase

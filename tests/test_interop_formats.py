@@ -11,7 +11,7 @@ import pytest
 from _random_rulebases import MATLAB_SHAPES, random_rulebase
 
 from fuzzkit.formats import fcl, fis, fll
-from fuzzkit.formats.foreign import ExportError
+from fuzzkit.formats.foreign_common import ExportError
 from fuzzkit.formats.registry import available, dumps, load
 from fuzzkit.formats.yaml_reader import loads_rulebase
 from fuzzkit.formats.yaml_writer import dump
@@ -27,7 +27,7 @@ SUGENO_EXAMPLES = ["heater_sugeno.fis", "feed_sugeno.fll"]
 
 def _plain(rb: RuleBase) -> RuleBase:
     """What every format holds: no table layout hint, no source; imported systems always get
-    ``coverage: allow_gaps`` (gaps are warnings, see fuzzkit.formats.foreign.finish)."""
+    ``coverage: allow_gaps`` (gaps are warnings, see fuzzkit.formats.foreign_common.finish)."""
     return replace(rb, table=None, source=None, coverage="allow_gaps")
 
 

@@ -15,7 +15,7 @@ from fuzzkit.codegen.method import compile_rulebase
 from fuzzkit.codegen.verify import load_module
 from fuzzkit.errors import CodegenError, RuleBaseError
 from fuzzkit.formats import fcl, fis, fll
-from fuzzkit.formats.foreign import ExportError
+from fuzzkit.formats.foreign_common import ExportError
 from fuzzkit.formats.registry import dumps, loads
 from fuzzkit.fuzzy import membership
 from fuzzkit.fuzzy.inference import Engine

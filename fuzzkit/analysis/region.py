@@ -13,11 +13,10 @@ from fuzzkit.analysis.certificate import MIN_MARGIN, FloatArray, certify
 from fuzzkit.analysis.fuzzy_bounds import StructureError, gradient_bounds, phi_bounds
 from fuzzkit.analysis.inner_loop import InnerLoop, identify
 from fuzzkit.analysis.loop_model import AxisLoop, noise_std, vertex_matrices
+from fuzzkit.control.names import KINDS as CONTROLLERS
 from fuzzkit.errors import ConfigError
 from fuzzkit.studies.experiments import DEFAULT_GAINS
 from fuzzkit.studies.task import Experiment
-
-CONTROLLERS = ("pi", "fuzzy-pi")
 
 #: Default lower end of the contact sector: the certificate holds while the spring-damper force
 #: the contact would have stays above (1 - 1/SIGMA_MIN) times the set point (docs/stability.md).

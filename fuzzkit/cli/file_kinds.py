@@ -14,9 +14,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fuzzkit.errors import Location, Problem, ProblemsError
+from fuzzkit.formats.registry import (
+    FORMATS,
+    READERS,
+    RULEBASE_SUFFIXES,
+    available,
+    load_with_warnings,
+)
 
-#: Files read as rule bases when their content says nothing (the YAML reader reports why).
-_RULEBASE_SUFFIXES = (".yaml", ".yml", ".fis", ".fcl", ".fll")
 #: How much of a file is read to recognise it (the kind's own reader reads the whole file).
 SNIFF_BYTES = 65536
 
@@ -53,8 +58,6 @@ def _count(n: int, noun: str) -> str:
 
 
 def _check_rulebase(spec: str, suffix: str) -> Checked:
-    from fuzzkit.formats.registry import READERS, load_with_warnings
-
     if suffix and Path(spec).suffix.lower() != suffix:
         rb, warnings = READERS[suffix](Path(spec))  # e.g. a .txt holding a .fis rule base
     else:
@@ -64,12 +67,6 @@ def _check_rulebase(spec: str, suffix: str) -> Checked:
         f"{_count(len(rb.outputs), 'output')}, {_count(len(rb.rules), 'rule')}",
         tuple(warnings),
     )
-
-
-def _shipped_rulebases() -> list[str]:
-    from fuzzkit.formats.registry import available
-
-    return available()
 
 
 def _check_scenario(spec: str, suffix: str) -> Checked:
@@ -113,8 +110,8 @@ KINDS: tuple[FileKind, ...] = (
         "rule base",
         frozenset({"inputs", "outputs", "rules", "operators", "defuzzifier"}),
         _check_rulebase,
-        _shipped_rulebases,
-        first_words=(("[System]", ".fis"), ("FUNCTION_BLOCK", ".fcl"), ("Engine:", ".fll")),
+        available,
+        first_words=tuple((f.first_word, f.suffix) for f in FORMATS.values()),
     ),
     FileKind(
         "scenario",
@@ -167,7 +164,7 @@ def recognise(spec: str) -> tuple[FileKind, str]:
             if text.startswith(word):
                 return kind, suffix
     keys = set(_TOP_KEY.findall(head))
-    if not keys and path.suffix.lower() in _RULEBASE_SUFFIXES:
+    if not keys and path.suffix.lower() in RULEBASE_SUFFIXES:
         return KINDS[0], ""  # no readable top level: the rule-base reader locates what is wrong
     scores = sorted(((len(kind.yaml_keys & keys), i) for i, kind in enumerate(KINDS)), reverse=True)
     best, index = scores[0]

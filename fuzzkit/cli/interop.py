@@ -11,6 +11,9 @@ from pathlib import Path
 from typing import Any
 
 EXIT_OK = 0
+#: ``--format`` choices: ``fuzzkit.formats.registry.EXPORT_FORMATS``, spelt here so that
+#: building the parser imports no reader (a test holds the two equal).
+FORMAT_NAMES = ("fis", "fcl", "fll")
 
 
 def register(sub: Any) -> None:
@@ -45,7 +48,7 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--format",
         required=True,
-        choices=("fis", "fcl", "fll"),
+        choices=FORMAT_NAMES,
         dest="fmt",
         help="MATLAB .fis, IEC 61131-7 FCL or fuzzylite FLL (required)",
     )
@@ -90,8 +93,10 @@ def cmd_import(args: argparse.Namespace) -> int:
 
     suffix = Path(args.file).suffix.lower()
     if suffix not in READERS:
+        *others, last = READERS
+        expected = f"{', '.join(others)} or {last}"
         raise ConfigError(
-            f"{args.file}: expected a .fis, .fcl or .fll file, got {suffix or 'no extension'!r}"
+            f"{args.file}: expected a {expected} file, got {suffix or 'no extension'!r}"
         )
     check_output_path(args.out, "YAML file")
     notes: dict[str, str] = {}
@@ -109,23 +114,22 @@ def cmd_export(args: argparse.Namespace) -> int:
     import sys
 
     from fuzzkit.fileio import check_output_path, write_atomic
-    from fuzzkit.formats import fcl, fis
-    from fuzzkit.formats.foreign import ExportError
-    from fuzzkit.formats.registry import dumps, load
+    from fuzzkit.formats.foreign_common import ExportError
+    from fuzzkit.formats.registry import FORMATS, dumps, load
 
     check_output_path(args.out, f".{args.fmt} file")
     rb = load(args.rulebase)
-    lost = {"fis": fis.losses, "fcl": fcl.losses}.get(args.fmt, lambda _rb: [])(rb)
+    fmt = FORMATS[args.fmt]
+    lost = fmt.losses(rb)
     try:
         text = dumps(rb, args.fmt, allow_loss=args.allow_loss, dialect=args.dialect)
     except ExportError as exc:
         if lost and exc.items == tuple(lost):  # only losses: say the option, not the API
-            meaning = {"fis": "MATLAB's", "fcl": "FCL's"}[args.fmt]
             raise ExportError(
                 args.fmt,
                 rb.name,
                 lost,
-                f"give --allow-loss to export anyway, with {meaning} meaning for these "
+                f"give --allow-loss to export anyway, with {fmt.meaning} meaning for these "
                 "(each is then printed as a warning)",
             ) from None
         raise

@@ -9,13 +9,11 @@ from pathlib import Path
 from typing import Any
 
 from fuzzkit.cli import EXIT_TRIPPED, RULEBASE_SPEC_HELP, add_controller_impl_argument
+from fuzzkit.control.names import KINDS as CONTROLLERS
+from fuzzkit.control.names import RUN_CONTROLLERS
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
 
-CONTROLLERS = ("pi", "fuzzy-pi")
-#: What ``simulate --controller`` runs: the two, or either under the kit's default stiffness
-#: schedule (docs/controller.md, "Adaptation").
-RUN_CONTROLLERS = (*CONTROLLERS, "adaptive-pi", "adaptive-fuzzy-pi")
 FAULT_KINDS = ("none", "spike", "nan", "dropout", "delay")  # fuzzkit.studies.faults.FAULTS
 
 

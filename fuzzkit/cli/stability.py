@@ -8,9 +8,8 @@ import math
 from typing import Any
 
 from fuzzkit.cli import RULEBASE_SPEC_HELP
+from fuzzkit.control.names import KINDS as CONTROLLERS
 from fuzzkit.fileio import check_output_path
-
-CONTROLLERS = ("pi", "fuzzy-pi")
 
 
 def _stiffness_list(text: str) -> list[float]:

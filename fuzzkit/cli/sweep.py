@@ -9,10 +9,8 @@ from typing import Any
 
 from fuzzkit.cli import EXIT_TRIPPED, RULEBASE_SPEC_HELP, add_controller_impl_argument
 from fuzzkit.cli.simulation import FAIL_ON_TRIP_HELP
+from fuzzkit.control.names import RUN_CONTROLLERS
 from fuzzkit.errors import ConfigError
-
-CONTROLLERS = ("pi", "fuzzy-pi")
-RUN_CONTROLLERS = (*CONTROLLERS, "adaptive-pi", "adaptive-fuzzy-pi")
 
 
 def register(subparsers: Any) -> None:

@@ -9,10 +9,9 @@ from pathlib import Path
 from typing import Any
 
 from fuzzkit.cli import EXIT_INTERRUPTED, RULEBASE_SPEC_HELP, add_controller_impl_argument
+from fuzzkit.control.names import RUN_CONTROLLERS
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
-
-CONTROLLERS = ("pi", "fuzzy-pi")
 
 
 def register(subparsers: Any) -> None:
@@ -39,7 +38,7 @@ def register(subparsers: Any) -> None:
     tune.add_argument("experiments", nargs="+", metavar="EXPERIMENT", help="E1, E2, E3")
     tune.add_argument(
         "--controller",
-        choices=(*CONTROLLERS, "adaptive-pi", "adaptive-fuzzy-pi"),
+        choices=RUN_CONTROLLERS,
         default="fuzzy-pi",
         help="controller to tune (adaptive-*: the base gains under the kit's stiffness schedule)",
     )

@@ -238,8 +238,6 @@ DEFAULT_ESTIMATOR = Estimator(
     k_min_n_mm=1.0,
     k_max_n_mm=2000.0,
 )
-#: Prefix of the adaptive controller names: ``adaptive-pi``, ``adaptive-fuzzy-pi``.
-ADAPTIVE_PREFIX = "adaptive-"
 
 
 def default_schedule(latency_periods: int = 0) -> Adaptation:

@@ -17,6 +17,11 @@ Signs and units
 Both accept ``u_min``/``u_max`` (clamping the accumulated correction is the anti-windup of the
 incremental form) and an optional ``rate_limit`` (largest ``|du|`` per step). A NaN measurement
 never becomes a correction: the step is skipped, ``u`` is held and ``faults`` is incremented.
+
+Twins: this is the **reference** copy of the controller; the compiled loop's copy
+(:mod:`fuzzkit.studies.compiled.period`) and the generated controller
+(:mod:`fuzzkit.codegen.controller`) are tested against it (``tests/test_compiled_loop.py``,
+``tests/test_controller_codegen.py``), so it stays a separate implementation on purpose.
 """
 
 from __future__ import annotations

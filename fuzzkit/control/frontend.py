@@ -14,6 +14,11 @@ sample by sample", is the contract every implementation matches):
 
 :class:`~fuzzkit.control.controllers.HybridForceController` calls these in that order around
 its spike gate and trip rule; this module holds the arithmetic and the state.
+
+Twins: this is the **reference** copy of the front end; the compiled loop's copy
+(:mod:`fuzzkit.studies.compiled.period`, ``tests/test_spec_runs.py``) and the generated
+controller's (``tests/test_controller_codegen.py``) are tested against it, so it stays a
+separate implementation on purpose.
 """
 
 from __future__ import annotations

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from fuzzkit.control.names import KINDS as CONTROLLERS
 from fuzzkit.errors import ConfigError, ConfigFileError, Location, Problem
 from fuzzkit.located_yaml import (
     DocumentKind,
@@ -42,9 +43,6 @@ from fuzzkit.located_yaml import (
     read_document,
     to_python,
 )
-
-#: Controller names a gains file may hold, in file order.
-CONTROLLERS = ("pi", "fuzzy-pi")
 
 #: The gain keys each controller accepts.
 GAIN_KEYS: dict[str, tuple[str, ...]] = {

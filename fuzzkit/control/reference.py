@@ -30,7 +30,8 @@ from fuzzkit.control.controllers import (
     engine_surface,
 )
 from fuzzkit.control.frontend import FrontEnd
-from fuzzkit.control.spec import AXES, AxisSpec, ControllerSpec, require_valid
+from fuzzkit.control.names import AXES
+from fuzzkit.control.spec import AxisSpec, ControllerSpec, require_valid
 from fuzzkit.errors import ConfigError
 
 

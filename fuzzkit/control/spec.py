@@ -23,14 +23,11 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 from fuzzkit.control.adaptation_spec import MODES, NONE, Adaptation, adaptation_problems
+from fuzzkit.control.names import AXES, KINDS
 from fuzzkit.errors import ConfigError
 from fuzzkit.fuzzy.model import RuleBase, Source
 from fuzzkit.fuzzy.validation import identifier_problem
 
-#: Task axes in index order.
-AXES = ("x", "y", "z")
-#: Controller kinds: incremental PI (eq. 9) and fuzzy-PI (sec. 3.2.4).
-KINDS = ("pi", "fuzzy-pi")
 #: Adaptation modes (:mod:`fuzzkit.control.adaptation_spec`).
 ADAPTATIONS = MODES
 #: Standard gravity (m/s^2, CGPM 1901), the magnitude of the tool's weight per kilogram.

@@ -26,9 +26,8 @@ from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 
 from fuzzkit.control.adaptation_reader import read_adaptation
 from fuzzkit.control.adaptation_spec import NONE
+from fuzzkit.control.names import AXES, KINDS
 from fuzzkit.control.spec import (
-    AXES,
-    KINDS,
     AxisSpec,
     ControllerSpec,
     Limits,
@@ -383,25 +382,3 @@ def load_spec(path: str | os.PathLike[str]) -> ControllerSpec:
     """Read and parse a controller-spec YAML file (see :func:`loads_spec`)."""
     p = Path(path)
     return loads_spec(read_document(p, SPEC_DOCUMENT), str(path), p.parent)
-
-
-def looks_like_spec(text: str) -> bool:
-    """True when a YAML document's top level reads like a controller spec, not a rule base or
-    a scenario (for ``fuzzkit validate``, which recognises files by their content)."""
-    import yaml
-
-    try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
-    except (yaml.YAMLError, RecursionError):
-        return False
-    if not isinstance(root, MappingNode):
-        return False
-    keys = {k.value for k, _ in root.value if isinstance(k, ScalarNode)}
-    return bool(keys & {"axes", "controller"}) and not keys & {
-        "inputs",
-        "outputs",
-        "rules",
-        "path",
-        "objects",
-        "force_control",
-    }

@@ -11,7 +11,8 @@ from __future__ import annotations
 from typing import Any
 
 from fuzzkit.control.adaptation_spec import MAX_HISTORY
-from fuzzkit.control.spec import ADAPTATIONS, AXES, KINDS, MAX_PERIOD_S, MIN_PERIOD_S
+from fuzzkit.control.names import AXES, KINDS
+from fuzzkit.control.spec import ADAPTATIONS, MAX_PERIOD_S, MIN_PERIOD_S
 from fuzzkit.control.spec_reader import MAX_SAMPLES, REQUIRED_KEYS
 
 

@@ -34,10 +34,11 @@ from typing import Literal
 
 from fuzzkit.errors import Problem
 from fuzzkit.formats.fll import named_term, term_body
-from fuzzkit.formats.foreign import (
+from fuzzkit.formats.foreign_common import (
     SUGENO_DEFUZZIFIERS,
     Collector,
     ExportError,
+    ForeignFormat,
     finish,
     fmt,
     is_sugeno,
@@ -264,7 +265,7 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
     """Parse FCL text (either dialect) into a rule base; ``source`` names it in messages.
 
     Returns the rule base and the warnings (coverage gaps, located; see
-    :func:`fuzzkit.formats.foreign.finish`).
+    :func:`fuzzkit.formats.foreign_common.finish`).
 
     Raises
     ------
@@ -696,3 +697,23 @@ def dumps(rb: RuleBase, *, dialect: Dialect = "named", allow_loss: bool = False)
         lines.append(f"  RULE {k} : {rule_text(rule, upper=dialect == 'iec')};")
     lines += ["END_RULEBLOCK", "", "END_FUNCTION_BLOCK"]
     return "\n".join(lines) + "\n"
+
+
+def _write(rb: RuleBase, allow_loss: bool, dialect: str) -> str:
+    if dialect not in FORMAT.dialects:
+        raise ValueError(f"unknown FCL dialect {dialect!r}; expected named or iec")
+    return dumps(rb, dialect="iec" if dialect == "iec" else "named", allow_loss=allow_loss)
+
+
+#: The format as :data:`fuzzkit.formats.registry.FORMATS` lists it.
+FORMAT = ForeignFormat(
+    name="fcl",
+    suffix=SUFFIX,
+    label="IEC 61131-7 .fcl",
+    first_word="FUNCTION_BLOCK",
+    read=load_with_warnings,
+    write=_write,
+    losses=losses,
+    meaning="FCL's",
+    dialects=("named", "iec"),
+)

@@ -30,10 +30,11 @@ from dataclasses import dataclass
 from pathlib import Path as FsPath
 
 from fuzzkit.errors import Problem
-from fuzzkit.formats.foreign import (
+from fuzzkit.formats.foreign_common import (
     SUGENO_DEFUZZIFIERS,
     Collector,
     ExportError,
+    ForeignFormat,
     combine,
     finish,
     flat_conditions,
@@ -420,7 +421,7 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
     """Parse ``.fis`` text into a rule base; ``source`` names it in messages.
 
     Returns the rule base and the warnings (coverage gaps, located; see
-    :func:`fuzzkit.formats.foreign.finish`).
+    :func:`fuzzkit.formats.foreign_common.finish`).
 
     Raises
     ------
@@ -676,3 +677,20 @@ def dumps(rb: RuleBase, *, allow_loss: bool = False) -> str:
             f"{' '.join(ant)}, {' '.join(cons)} ({fmt(rule.weight)}) : {1 if op == 'and' else 2}"
         )
     return "\n".join(lines) + "\n"
+
+
+def _write(rb: RuleBase, allow_loss: bool, dialect: str) -> str:
+    return dumps(rb, allow_loss=allow_loss)
+
+
+#: The format as :data:`fuzzkit.formats.registry.FORMATS` lists it.
+FORMAT = ForeignFormat(
+    name="fis",
+    suffix=SUFFIX,
+    label="MATLAB .fis",
+    first_word="[System]",
+    read=load_with_warnings,
+    write=_write,
+    losses=losses,
+    meaning="MATLAB's",
+)

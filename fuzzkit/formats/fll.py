@@ -30,10 +30,11 @@ from dataclasses import dataclass, field
 from pathlib import Path as FsPath
 
 from fuzzkit.errors import Problem
-from fuzzkit.formats.foreign import (
+from fuzzkit.formats.foreign_common import (
     SUGENO_DEFUZZIFIERS,
     Collector,
     ExportError,
+    ForeignFormat,
     finish,
     fmt,
     is_sugeno,
@@ -354,7 +355,7 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
     """Parse FLL text into a rule base; ``source`` names it in messages.
 
     Returns the rule base and the warnings (coverage gaps, located; see
-    :func:`fuzzkit.formats.foreign.finish`).
+    :func:`fuzzkit.formats.foreign_common.finish`).
 
     Raises
     ------
@@ -581,3 +582,18 @@ def dumps(rb: RuleBase, *, allow_loss: bool = False) -> str:
     ]
     lines += [f"  rule: {rule_text(r)}" for r in rb.rules]
     return "\n".join(lines) + "\n"
+
+
+def _write(rb: RuleBase, allow_loss: bool, dialect: str) -> str:
+    return dumps(rb, allow_loss=allow_loss)
+
+
+#: The format as :data:`fuzzkit.formats.registry.FORMATS` lists it.
+FORMAT = ForeignFormat(
+    name="fll",
+    suffix=SUFFIX,
+    label="fuzzylite .fll",
+    first_word="Engine:",
+    read=load_with_warnings,
+    write=_write,
+)

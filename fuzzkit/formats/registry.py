@@ -17,20 +17,23 @@ from pathlib import Path
 
 from fuzzkit.errors import Location, Problem, RuleBaseError, did_you_mean
 from fuzzkit.formats import fcl, fis, fll
+from fuzzkit.formats.foreign_common import ForeignFormat
 from fuzzkit.formats.yaml_reader import load_file_with_warnings, loads_rulebase_with_warnings
 from fuzzkit.fuzzy import validation
 from fuzzkit.fuzzy.model import RuleBase
 
 _PACKAGE = "fuzzkit.rulebases"
-_SUFFIXES = (".yaml", ".yml")
+#: fuzzkit's own format: YAML.
+YAML_SUFFIXES = (".yaml", ".yml")
+#: Every foreign format, by name: each module's ``FORMAT`` record (reader, writer, suffix,
+#: first word, losses). Adding a format is its module and one entry here.
+FORMATS: dict[str, ForeignFormat] = {f.name: f for f in (fis.FORMAT, fcl.FORMAT, fll.FORMAT)}
 #: Foreign formats: extension -> reader of a path, returning the rule base and its warnings.
-READERS = {
-    fis.SUFFIX: fis.load_with_warnings,
-    fcl.SUFFIX: fcl.load_with_warnings,
-    fll.SUFFIX: fll.load_with_warnings,
-}
-#: Foreign formats: name -> text of a rule base (``allow_loss``, and for FCL a ``dialect``).
-EXPORT_FORMATS = ("fis", "fcl", "fll")
+READERS = {f.suffix: f.read for f in FORMATS.values()}
+#: Foreign formats: the names :func:`dumps` takes.
+EXPORT_FORMATS = tuple(FORMATS)
+#: Every extension read as a rule base, in help order.
+RULEBASE_SUFFIXES = (*YAML_SUFFIXES, *READERS)
 
 
 def dumps(rb: RuleBase, fmt: str, *, allow_loss: bool = False, dialect: str = "named") -> str:
@@ -47,15 +50,14 @@ def dumps(rb: RuleBase, fmt: str, *, allow_loss: bool = False, dialect: str = "n
     too_deep = validation.depth_problems(rb)
     if too_deep:  # the readers refuse these; the writers must not produce them
         raise RuleBaseError(validation.as_problems(rb, too_deep))
-    if fmt == "fis":
-        return fis.dumps(rb, allow_loss=allow_loss)
-    if fmt == "fll":
-        return fll.dumps(rb, allow_loss=allow_loss)
-    if fmt == "fcl":
-        if dialect not in ("named", "iec"):
-            raise ValueError(f"unknown FCL dialect {dialect!r}; expected named or iec")
-        return fcl.dumps(rb, dialect="iec" if dialect == "iec" else "named", allow_loss=allow_loss)
-    raise ValueError(f"unknown format {fmt!r}; expected one of {', '.join(EXPORT_FORMATS)}")
+    if fmt not in FORMATS:
+        raise ValueError(f"unknown format {fmt!r}; expected one of {', '.join(EXPORT_FORMATS)}")
+    return FORMATS[fmt].write(rb, allow_loss, dialect)
+
+
+def _or(items: tuple[str, ...]) -> str:
+    """``a, b or c``."""
+    return f"{', '.join(items[:-1])} or {items[-1]}" if len(items) > 1 else items[0]
 
 
 def _load_path(path: str | os.PathLike[str]) -> tuple[RuleBase, list[Problem]]:
@@ -70,7 +72,7 @@ def available() -> list[str]:
     return sorted(
         entry.name.rsplit(".", 1)[0]
         for entry in root.iterdir()
-        if entry.is_file() and entry.name.endswith(_SUFFIXES)
+        if entry.is_file() and entry.name.endswith(YAML_SUFFIXES)
     )
 
 
@@ -78,7 +80,7 @@ def looks_like_path(spec: str) -> bool:
     """True when ``spec`` names a file (a rule-base extension or a path separator), not a
     shipped rule base."""
     return (
-        spec.lower().endswith(_SUFFIXES + tuple(READERS))
+        spec.lower().endswith(RULEBASE_SUFFIXES)
         or os.sep in spec
         or "/" in spec
         or (os.altsep is not None and os.altsep in spec)
@@ -127,7 +129,8 @@ def load_with_warnings(name_or_path: str | os.PathLike[str]) -> tuple[RuleBase, 
                     Location(spec),
                     f"no shipped rule base or file called {spec!r}{did_you_mean(spec, names)}; "
                     f"shipped: {', '.join(names)} "
-                    "(or give a path to a .yaml, .fis, .fcl or .fll file)",
+                    f"(or give a path to a {_or((YAML_SUFFIXES[0], *READERS))} "
+                    "file)",
                 )
             ]
         )

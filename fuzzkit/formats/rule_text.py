@@ -19,7 +19,7 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from fuzzkit.formats.foreign import Collector, combine, fmt, parse_number
+from fuzzkit.formats.foreign_common import Collector, combine, fmt, parse_number
 from fuzzkit.fuzzy.model import (
     Compound,
     Consequent,

@@ -21,6 +21,10 @@ damped least squares, IK, rotation error, contact with friction); the Python pla
 :mod:`~fuzzkit.plants.environment3d`) is the independent reference it is tested against, so the
 two are written twice on purpose. Only compiled code is shared between the compiled plants
 (:mod:`fuzzkit.plants.rough_profile`).
+
+Size: about 800 lines, one idea: the whole plant period as one compiled function and the
+helpers it inlines (its rough-floor contact is already apart, in
+:mod:`fuzzkit.plants.arm6_heightfield`).
 """
 
 from __future__ import annotations

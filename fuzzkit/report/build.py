@@ -22,6 +22,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import IO, Any
 
+from fuzzkit.control.names import KINDS as CONTROLLERS
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import staged_folder, write_atomic
 from fuzzkit.progress import progress_bar
@@ -51,7 +52,6 @@ from fuzzkit.report.verdicts import (
 )
 from fuzzkit.studies.tuning_check import CaseComparison
 
-CONTROLLERS = ("pi", "fuzzy-pi")
 #: Gains labels, one per comparison protocol (docs/comparison.md): the hand-set defaults, the
 #: fuzzy-PI matched to the default PI's small-signal gain (the PI runs its defaults), tuned.
 LABELS = ("default", "matched", "tuned")

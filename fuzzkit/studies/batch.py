@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any, TypeVar
 
-from fuzzkit.control.adaptation_spec import ADAPTIVE_PREFIX
+from fuzzkit.control.names import ADAPTIVE_PREFIX
 from fuzzkit.errors import ConfigError
 from fuzzkit.studies.compiled.table import table_arrays
 from fuzzkit.studies.runner import RunResult

@@ -21,8 +21,9 @@ from dataclasses import replace
 import numpy as np
 import numpy.typing as npt
 
+from fuzzkit.control.names import AXES
 from fuzzkit.errors import ConfigError
-from fuzzkit.studies.task import AXES, DEFAULT_LATENCY, Experiment, with_spec
+from fuzzkit.studies.task import DEFAULT_LATENCY, Experiment, with_spec
 
 __all__ = [
     "AXES",

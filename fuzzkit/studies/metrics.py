@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from fuzzkit.studies.experiments import AXES
+from fuzzkit.control.names import AXES
 from fuzzkit.studies.runner import RunResult
 
 Vec = npt.NDArray[np.float64]

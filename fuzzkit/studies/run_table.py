@@ -17,9 +17,9 @@ import math
 
 import numpy as np
 
+from fuzzkit.control.names import AXES
 from fuzzkit.studies.runner import RunResult
 
-AXES = ("x", "y", "z")
 #: What the loop did in a period: ``approach`` (not engaged yet: no correction), ``engaged``
 #: (the force loop runs), ``no sample`` (no valid force reached the controller: held),
 #: ``tripped`` (the safety trip fired: the tool backs off).

@@ -18,6 +18,7 @@ from typing import Any
 
 from yaml.nodes import MappingNode, Node, ScalarNode
 
+from fuzzkit.control.names import AXES
 from fuzzkit.control.spec import ControllerSpec
 from fuzzkit.errors import ConfigError, ControllerSpecError, Location, Problem, ScenarioError
 from fuzzkit.fuzzy.model import Source
@@ -32,7 +33,7 @@ from fuzzkit.plants.contact import ContactModel, SensorModel, ToolModel
 from fuzzkit.plants.contract import Scenario
 from fuzzkit.plants.environment import Box, EnvObject, RoughSurface, Table, Waypoint
 from fuzzkit.studies.faults import FAULTS
-from fuzzkit.studies.task import AXES, Experiment, with_spec
+from fuzzkit.studies.task import Experiment, with_spec
 
 SCENARIO_DOCUMENT = DocumentKind(
     "scenario",

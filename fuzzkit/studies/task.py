@@ -5,12 +5,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+from fuzzkit.control.names import AXES
 from fuzzkit.control.spec import AxisSpec, ControllerSpec, Limits, Safety
 from fuzzkit.errors import ConfigError
 from fuzzkit.fuzzy.model import RuleBase
 from fuzzkit.plants.contract import Scenario
-
-AXES = ("x", "y", "z")
 
 #: Default (sensor, command) latency in periods of 4 ms: one period each way, as on an ABB EGM
 #: cell (docs/simulation.md, "Latency", says why).

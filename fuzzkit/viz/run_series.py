@@ -6,8 +6,8 @@ from typing import Any
 
 import numpy as np
 
+from fuzzkit.control.names import AXES
 from fuzzkit.plants.environment import nominal_position
-from fuzzkit.studies.experiments import AXES
 from fuzzkit.studies.runner import RunResult
 from fuzzkit.viz.blueprints import ADAPTATION, CORRECTION, ERROR, FORCES, WORLD, run_blueprint
 from fuzzkit.viz.recording import log_axes, log_series

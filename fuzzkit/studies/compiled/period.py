@@ -19,6 +19,12 @@ controllers, the fuzzy surface being a double lookup table
 (:mod:`fuzzkit.studies.compiled.table`) or, when ``c_eval`` is a ctypes function, the generated
 C itself (:mod:`fuzzkit.studies.compiled.generated_c`). Its state lives in two arrays made by
 :func:`controller_state`: scalars ``cs`` (``CS_*``) and 3-vectors ``cv`` (rows ``V_*``).
+
+Twins: this is the **compiled copy** of the controller's period (spike gate, engagement, trip
+and back-off, the front end, PI / fuzzy-PI, output limits); :mod:`fuzzkit.control.controllers`
+and :mod:`fuzzkit.control.frontend` are the independent reference that
+``tests/test_compiled_loop.py`` and ``tests/test_spec_runs.py`` hold it to, so the two are
+written twice on purpose.
 """
 
 from __future__ import annotations

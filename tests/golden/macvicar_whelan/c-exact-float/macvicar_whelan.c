@@ -133,6 +133,22 @@ static const float macvicar_whelan_fmoment0[156] = {
     1.11022302e-16f, 0.0f, -1.11022302e-16f, 0.0f, 0.0f, 0.0f,
     0.0f,
 };
+/* Output 0 (du): only the 2 x 2 cells from (i0, j0) fire, so only the functions both of whose
+ * terms they conclude can be non-zero (the others add exactly 0): the set of each block
+ * (i0 * 8 + j0), then per set its function count and functions (ascending). */
+static const unsigned char macvicar_whelan_fset0[64] = {
+    0, 0, 1, 2, 3, 4, 5, 6, 0, 1, 2, 3, 4, 7, 8, 6,
+    1, 2, 3, 4, 7, 9, 10, 6, 2, 3, 4, 7, 9, 10, 11, 6,
+    3, 4, 7, 9, 10, 11, 11, 6, 4, 7, 9, 10, 11, 11, 11, 6,
+    5, 8, 10, 11, 11, 11, 11, 6, 6, 6, 6, 6, 6, 6, 6, 6,
+};
+static const unsigned char macvicar_whelan_fnum0[12] = { 1, 3, 5, 5, 5, 3, 0, 5, 3, 5, 3, 1 };
+static const unsigned char macvicar_whelan_flist0[60] = {
+    0, 0, 0, 0, 0, 0, 1, 7, 0, 0, 0, 1, 2, 7, 8, 1,
+    2, 3, 8, 9, 2, 3, 4, 9, 10, 3, 4, 10, 0, 0, 0, 0,
+    0, 0, 0, 3, 4, 5, 10, 11, 4, 5, 11, 0, 0, 4, 5, 6,
+    11, 12, 5, 6, 12, 0, 0, 6, 0, 0, 0, 0,
+};
 
 /* A piecewise-linear term in trapezoid form p = (b, c, rise, fall):
  * clip(min(1 + (x - b) rise, 1 + (c - x) fall), 0, 1). */
@@ -210,8 +226,12 @@ void macvicar_whelan_eval(const float in[MACVICAR_WHELAN_N_INPUTS], float out[MA
     /* Output 0 (du): centroid. */
     {
         float area = 0.0f, moment = 0.0f;
-        int f;
-        for (f = 0; f < 13; f++) {
+        const int set = macvicar_whelan_fset0[i0 * 8 + j0];
+        const unsigned char *fl = macvicar_whelan_flist0 + 5 * set;
+        const int n_funcs = macvicar_whelan_fnum0[set];
+        int r;
+        for (r = 0; r < n_funcs; r++) {
+            const int f = fl[r];
             float la = lv0[macvicar_whelan_fa0[f]], lb = lv0[macvicar_whelan_fb0[f]];
             float lev = la < lb ? la : lb;
             int k = f * 3;

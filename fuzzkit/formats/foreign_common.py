@@ -16,7 +16,7 @@ from __future__ import annotations
 import hashlib
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path as FsPath
 from typing import NoReturn
@@ -49,6 +49,32 @@ class ExportError(FuzzkitError, ValueError):
             f"{name}: cannot export to {fmt} without changing its meaning:\n{lines}"
             + (f"\n{hint}" if hint else "")
         )
+
+
+@dataclass(frozen=True)
+class ForeignFormat:
+    """One foreign rule-base format, as its module declares it (``FORMAT``) and
+    :data:`fuzzkit.formats.registry.FORMATS` lists it: every command reads and writes it
+    through this record.
+
+    ``name``: ``--format`` and :func:`fuzzkit.fuzzy.shapes.spellings` key it. ``suffix``: the
+    file extension every command reads it by. ``label``: the format in help and messages.
+    ``first_word``: the first word of its text, by which ``fuzzkit validate`` recognises it.
+    ``read(path)``: the rule base and its warnings. ``write(rb, allow_loss, dialect)``: its
+    text (``dialects``: the dialects it writes, the first the default; () when it has none).
+    ``losses(rb)``: what writing it would change (exported only with ``--allow-loss``), and
+    ``meaning``: whose semantics then apply ("MATLAB's").
+    """
+
+    name: str
+    suffix: str
+    label: str
+    first_word: str
+    read: Callable[[FsPath], tuple[RuleBase, list[Problem]]]
+    write: Callable[[RuleBase, bool, str], str]
+    losses: Callable[[RuleBase], list[str]] = lambda _rb: []
+    meaning: str = ""
+    dialects: tuple[str, ...] = ()
 
 
 def is_sugeno(rb: RuleBase) -> bool:
