@@ -19,7 +19,7 @@ TARGET_S = 10.0
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the benchmark and print its table; returns 1 if a target is missed."""
-    from fuzzkit.analysis.certificate import certify  # noqa: F401  (import cvxpy up front)
+    from fuzzkit.analysis.certificate import certify  # noqa: F401  (import the solver up front)
     from fuzzkit.analysis.inner_loop import identify
     from fuzzkit.analysis.region import certify_region, fuzzy_part
     from fuzzkit.analysis.regulation import regulation_experiment

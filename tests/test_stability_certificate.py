@@ -130,3 +130,59 @@ def test_bad_model_parameters_are_all_reported():
 
 def test_noise_std_is_infinite_for_an_unstable_nominal_loop():
     assert noise_std(_loop(stiffness_n_per_m=1e6, phi=(1.0, 1.0)), 0.1) == math.inf
+
+
+def test_a_reused_p_is_accepted_only_after_passing_on_every_vertex():
+    # P = I passes on 0.5 I with the closed-form margin 1 - 0.25 = 0.75, without a solve
+    cert = certify([0.5 * np.eye(2)], reuse=[np.eye(2)])
+    assert cert.certified and cert.solver_status.startswith("reused")
+    assert cert.margin == pytest.approx(0.75)
+    # a new vertex on which I fails (I - A'A has the eigenvalue below 0), though a common P
+    # exists (A is stable): the reused I is not accepted, the certificate is a solved one
+    a = np.array([[0.5, 0.0], [5.0, 0.5]])
+    assert np.linalg.eigvalsh(np.eye(2) - a.T @ a)[0] < 0.0
+    cert = certify([0.5 * np.eye(2), a], reuse=[np.eye(2)])
+    assert not cert.solver_status.startswith("reused")
+    assert cert.certified and cert.p is not None
+    assert not np.allclose(cert.p / cert.p[0, 0], np.eye(2))
+    assert verify(cert.p, [0.5 * np.eye(2), a]) == pytest.approx(cert.margin)
+    # and where no common P exists, a reused one does not make a certificate
+    a1 = np.array([[0.0, 2.0], [0.0, 0.0]])
+    assert not certify([a1, a1.T], reuse=[np.eye(2), np.diag([1.0, 1e-3])]).certified
+
+
+def test_a_product_of_two_vertices_with_radius_one_or_more_refuses_without_the_solver():
+    from fuzzkit.analysis.certificate import pair_radius
+
+    a1 = np.array([[0.0, 2.0], [0.0, 0.0]])
+    # A1 A2 = diag(4, 0)
+    assert pair_radius([a1, a1.T]) == pytest.approx(4.0)
+    cert = certify([a1, a1.T])
+    assert cert.solver_status.startswith("refused: a product")
+    assert cert.margin == pytest.approx(-3.0)
+
+
+def test_the_direct_clarabel_program_has_the_optimum_of_the_same_program_in_cvxpy():
+    # the SDP maximise t s.t. P <= I, P - A'PA >= t I, written independently with cvxpy
+    import cvxpy as cp
+
+    rng = np.random.default_rng(3)
+    mats = [0.55 * np.eye(4) + 0.12 * rng.standard_normal((4, 4)) for _ in range(5)]
+    p, t = cp.Variable((4, 4), symmetric=True), cp.Variable()
+    cons = [p << np.eye(4)] + [p - a.T @ p @ a - t * np.eye(4) >> 0 for a in mats]
+    cp.Problem(cp.Maximize(t), cons).solve(solver=cp.CLARABEL)
+    cert = certify(mats)  # no core: one search on all
+    assert cert.certified
+    assert cert.margin == pytest.approx(float(t.value), rel=1e-4)
+
+
+def test_the_growing_search_adds_the_vertices_the_core_p_fails_on():
+    # on the core {0.5 I} the search finds P = I (t = 0.75), which fails on the second vertex:
+    # that vertex joins the search, and the P of the second round holds on both
+    a = np.array([[0.5, 0.0], [5.0, 0.5]])
+    mats = [0.5 * np.eye(2), a]
+    cert = certify(mats, core=[0.5 * np.eye(2)])
+    assert cert.certified and cert.p is not None
+    assert "(2 of 2 vertices searched)" in cert.solver_status
+    assert verify(cert.p, mats) == pytest.approx(cert.margin)
+    assert cert.margin >= MIN_MARGIN

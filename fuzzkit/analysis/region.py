@@ -4,12 +4,12 @@ model it was certified for (the JSON of ``fuzzkit stability``)."""
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from typing import Any
 
-from fuzzkit.analysis.certificate import MIN_MARGIN, certify
+from fuzzkit.analysis.certificate import MIN_MARGIN, FloatArray, certify
 from fuzzkit.analysis.fuzzy_bounds import StructureError, gradient_bounds, phi_bounds
 from fuzzkit.analysis.inner_loop import InnerLoop, identify
 from fuzzkit.analysis.loop_model import AxisLoop, noise_std, vertex_matrices
@@ -32,7 +32,7 @@ NOISE_SHARE = 0.5
 
 METHOD = (
     "common quadratic Lyapunov function over the vertices of the loop's parameter box "
-    "(contact sector, fuzzy gain, inner-loop uncertainty), LMI solved by cvxpy/Clarabel, "
+    "(contact sector, fuzzy gain, inner-loop uncertainty), LMI solved by Clarabel, "
     f"verified in numpy with a decay margin >= {MIN_MARGIN:g} per period"
 )
 
@@ -100,6 +100,8 @@ class Cell:
     stable: bool = False
     noise_std_n: float = math.nan
     contact_sector: tuple[float, float] | None = None
+    #: the verified Lyapunov matrix (None when none was found); not part of the JSON
+    lyapunov_p: FloatArray | None = field(default=None, repr=False, compare=False)
 
     def as_dict(self) -> dict[str, Any]:
         """JSON form (a NaN or infinite number becomes null)."""
@@ -197,21 +199,26 @@ def certify_cell(
     latency: tuple[int, int],
     sigma_min: float,
     noise_n: float,
+    reuse: FloatArray | None = None,
 ) -> Cell:
     """Certify one cell: with the contact sector ``[sigma_min, 1]`` (contact may be lost), else
     with contact held (``[1, 1]``); ``Cell.contact_sector`` says which one holds.
 
     Contact held is tried first: its vertices are a subset of the wider sector's, so when it
-    fails the wider one fails too and is not tried.
+    fails the wider one fails too and is not tried. ``reuse``: a Lyapunov matrix to try before
+    any solve (a neighbouring cell's); it certifies only if it passes the numpy check on this
+    cell's vertices.
     """
     loop = axis_loop(
         exp, controller, gains, inner, fuzzy, stiffness_n_per_mm * 1e3, latency, sigma_min
     )
     held = replace(loop, sigma_min=1.0)
-    cert = certify(vertex_matrices(held), vertex_matrices(held, nominal_plant=True))
+    cert = certify(vertex_matrices(held), vertex_matrices(held, nominal_plant=True), (reuse,))
     sector = (1.0, 1.0)
     if cert.certified and sigma_min < 1.0:
-        wide = certify(vertex_matrices(loop), vertex_matrices(loop, nominal_plant=True))
+        wide = certify(
+            vertex_matrices(loop), vertex_matrices(loop, nominal_plant=True), (reuse, cert.p)
+        )
         if wide.certified:
             cert, sector = wide, (sigma_min, 1.0)
     noise = noise_std(loop, noise_n)
@@ -225,7 +232,32 @@ def certify_cell(
         cert.certified,
         noise,
         sector if cert.certified else None,
+        cert.p if cert.certified else None,
     )
+
+
+def certify_cells(
+    exp: Experiment,
+    controller: str,
+    gains: Mapping[str, float] | None,
+    inner: InnerLoop,
+    fuzzy: FuzzyPart | None,
+    stiffnesses_n_per_mm: Sequence[float],
+    latencies: Sequence[tuple[int, int]],
+    sigma_min: float,
+    noise_n: float,
+) -> Iterator[Cell]:
+    """Every cell, stiffness by stiffness; each tries first the Lyapunov matrix that last
+    certified the same latency (the same state size), re-verified on its own vertices."""
+    last: dict[tuple[int, int], FloatArray | None] = {}
+    for k in stiffnesses_n_per_mm:
+        for lat in latencies:
+            cell = certify_cell(
+                exp, controller, gains, inner, fuzzy, k, lat, sigma_min, noise_n, last.get(lat)
+            )
+            if cell.lyapunov_p is not None:
+                last[lat] = cell.lyapunov_p
+            yield cell
 
 
 def certify_region(
@@ -245,12 +277,17 @@ def certify_region(
     inner = identify(plant)
     fuzzy = fuzzy_part(rulebase, fuzzy_region) if controller == "fuzzy-pi" else None
     noise_n = exp.scenario.sensor.noise_std_n
-    cells = []
-    for k in stiffnesses_n_per_mm:
-        for lat in latencies:
-            cells.append(
-                certify_cell(exp, controller, gains, inner, fuzzy, k, lat, sigma_min, noise_n)
-            )
+    cells = certify_cells(
+        exp,
+        controller,
+        gains,
+        inner,
+        fuzzy,
+        stiffnesses_n_per_mm,
+        latencies,
+        sigma_min,
+        noise_n,
+    )
     setpoints = [exp.setpoints[i] for i in range(3) if exp.selection[i]]
     model: dict[str, Any] = {
         "scenario": exp.name,
@@ -306,18 +343,15 @@ class CertifiedOver:
         inner = identify(self.plant)
         fuzzy = fuzzy_part(self.rulebase) if self.controller == "fuzzy-pi" else None
         noise_n = self.experiment.scenario.sensor.noise_std_n
-        return all(
-            certify_cell(
-                self.experiment,
-                self.controller,
-                gains,
-                inner,
-                fuzzy,
-                k,
-                lat,
-                self.sigma_min,
-                noise_n,
-            ).certified
-            for k in self.stiffnesses_n_per_mm
-            for lat in self.latencies
+        cells = certify_cells(
+            self.experiment,
+            self.controller,
+            gains,
+            inner,
+            fuzzy,
+            self.stiffnesses_n_per_mm,
+            self.latencies,
+            self.sigma_min,
+            noise_n,
         )
+        return all(cell.certified for cell in cells)
