@@ -72,3 +72,6 @@ def test_macvicar_whelan_phi_bounds_hold_on_the_table_between_its_nodes():
     s = x + y
     nodes = np.abs(s) > 1e-9
     assert np.max(t.values[nodes] / s[nodes]) == pytest.approx(b.high, abs=1e-12)
+    # so is the lower bound (docs/stability.md: phi in [0.444, 1.933]): 4/9, at a node too
+    assert np.min(t.values[nodes] / s[nodes]) == pytest.approx(b.low, abs=1e-12)
+    assert b.low == pytest.approx(4.0 / 9.0, abs=1e-9)
