@@ -94,3 +94,18 @@ def test_cli_tune_certify_refuses_to_write_uncertified_gains(tmp_path: Path, cap
         from fuzzkit.control.gains import read_gains
 
         assert pred(read_gains(str(out), "pi"))
+
+
+def test_cli_tune_certify_writes_nothing_when_no_gain_set_is_certified(
+    tmp_path: Path, capsys, monkeypatch: pytest.MonkeyPatch
+):
+    # the refusal path, made certain: a certificate that holds for no gain set at all
+    from fuzzkit.analysis import region
+
+    monkeypatch.setattr(region.CertifiedOver, "__call__", lambda self, gains: False)
+    out = tmp_path / "g.yaml"
+    code = _tune_certified(out, "10", "10", "1:1")
+    captured = capsys.readouterr()
+    assert code == 1
+    assert "no certified gains" in captured.err
+    assert not out.exists() and list(tmp_path.iterdir()) == []
