@@ -38,11 +38,19 @@ def test_the_same_default_plant_for_every_command_that_runs_the_loop() -> None:
     assert set(plants.values()) == {"planar"}, plants
 
 
-@pytest.mark.parametrize("command", ["sweep", "tune", "report", "compile"])
+@pytest.mark.parametrize(
+    "command", ["sweep", "tune", "report", "compile", "simulate", "compare", "stability"]
+)
 def test_quiet_everywhere_a_progress_bar_is(command: str) -> None:
+    # every command that runs studies takes --quiet, so that scripts can pass it alike
     assert _default(command, "quiet") is False
     opts = {o for a in _subparser(command)._actions for o in a.option_strings}
     assert "--quiet" in opts
+
+
+def test_compare_accepts_quiet_and_prints_its_table(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["compare", "E1", "--quiet"]) == 0
+    assert "E1" in capsys.readouterr().out
 
 
 def test_sweeps_old_no_progress_still_means_quiet() -> None:

@@ -54,6 +54,18 @@ EXIT_BROKEN_PIPE = 141
 RULEBASE_SPEC_HELP = "a shipped name, or a rule-base file (.yaml, .yml, .fis, .fcl, .fll)"
 
 
+def add_quiet_argument(parser: argparse.ArgumentParser, progress: bool = True) -> None:
+    """``--quiet``, accepted by every command that runs studies, so that scripts can pass it
+    alike; ``progress=False`` for the commands that draw no progress bar."""
+    parser.add_argument(
+        "--quiet",
+        action="store_true",
+        help="no progress bar"
+        if progress
+        else "accepted for scripts: this command draws no progress bar",
+    )
+
+
 def add_controller_impl_argument(parser: argparse.ArgumentParser) -> None:
     """``--controller-impl python|c``, the same for ``simulate``, ``sweep`` and ``tune``
     (``fuzzkit.studies.batch.CONTROLLER_IMPLS``)."""

@@ -8,7 +8,12 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from fuzzkit.cli import EXIT_TRIPPED, RULEBASE_SPEC_HELP, add_controller_impl_argument
+from fuzzkit.cli import (
+    EXIT_TRIPPED,
+    RULEBASE_SPEC_HELP,
+    add_controller_impl_argument,
+    add_quiet_argument,
+)
 from fuzzkit.control.names import KINDS as CONTROLLERS
 from fuzzkit.control.names import RUN_CONTROLLERS
 from fuzzkit.errors import ConfigError
@@ -139,6 +144,7 @@ def register(subparsers: Any) -> None:
         "e, de, du, u, status (columns: docs/simulation.md)",
     )
     sim.add_argument("--json", action="store_true", help="print the metrics as JSON")
+    add_quiet_argument(sim, progress=False)
     sim.add_argument("--fail-on-trip", action="store_true", help=FAIL_ON_TRIP_HELP)
     sim.add_argument(
         "--gains",
@@ -207,6 +213,7 @@ def register(subparsers: Any) -> None:
         "(the hand-set defaults, --gains on top); see docs/simulation.md",
     )
     cmp_.add_argument("--json", action="store_true", help="print every run's metrics as JSON")
+    add_quiet_argument(cmp_, progress=False)
     cmp_.add_argument("--fail-on-trip", action="store_true", help=FAIL_ON_TRIP_HELP)
     cmp_.add_argument("--rrd-dir", metavar="DIR", help="write one .rrd per run into DIR")
     cmp_.add_argument(

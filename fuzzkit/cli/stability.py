@@ -7,7 +7,7 @@ import json
 import math
 from typing import Any
 
-from fuzzkit.cli import RULEBASE_SPEC_HELP
+from fuzzkit.cli import RULEBASE_SPEC_HELP, add_quiet_argument
 from fuzzkit.control.names import KINDS as CONTROLLERS
 from fuzzkit.fileio import check_output_path
 
@@ -106,6 +106,7 @@ def register(subparsers: Any) -> None:
         help="fuzzy-pi: bound the surface over |Ki*e|, |Kp*de| <= RHO (1: the whole universe)",
     )
     p.add_argument("--json", action="store_true", help="print the region as JSON")
+    add_quiet_argument(p, progress=False)
     p.add_argument("--png", metavar="region.png", help="draw the region")
     p.add_argument(
         "--simulate",
