@@ -38,7 +38,7 @@ import numpy as np
 import fuzzkit
 from fuzzkit.codegen.emit import emit
 from fuzzkit.codegen.exact import emit_exact
-from fuzzkit.codegen.lut import LookupTable
+from fuzzkit.codegen.lookup_table import LookupTable
 from fuzzkit.codegen.table_search import make_table
 from fuzzkit.codegen.toolchain import STRICT_FLAGS, find_compiler, run_compiler
 from fuzzkit.codegen.verify import load_module

@@ -1,8 +1,9 @@
 """Render a lookup table into source files: ``{relative path: text}``, never written here.
 
 The one object a template sees is a :class:`TableSpec`, built here from the rule base and its
-:class:`~fuzzkit.codegen.lut.LookupTable`: every number is already formatted as a literal of the
-target language and every name already checked, so templates only lay text out. Each target lives in
+:class:`~fuzzkit.codegen.lookup_table.LookupTable`: every number is already formatted as a
+literal of the target language and every name already checked, so templates only lay text out.
+Each target lives in
 ``fuzzkit.codegen/backends/<target>/`` with its templates and a small config (``config.py``, a
 :class:`~fuzzkit.codegen.target.Target`): what differs between targets is asked of it, never
 branched on here. The helpers every artefact's spec builder shares (checked names, comment-safe
@@ -22,7 +23,7 @@ from typing import Any
 import jinja2
 import numpy as np
 
-from fuzzkit.codegen.lut import (
+from fuzzkit.codegen.lookup_table import (
     Q15_RECIP_BITS,
     Q15_T_BITS,
     REFINE_FACTOR,

@@ -1,9 +1,9 @@
 """Table search: place breakpoints, sample the exact engine, fit node values, certify the bound.
 
-:func:`make_table` finds the smallest :class:`~fuzzkit.codegen.lut.LookupTable` meeting a
+:func:`make_table` finds the smallest :class:`~fuzzkit.codegen.lookup_table.LookupTable` meeting a
 tolerance (or builds one at a given resolution); :func:`build_table` builds one table for given
 breakpoints. How breakpoints are placed and the bound measured is described in
-:mod:`fuzzkit.codegen.lut`.
+:mod:`fuzzkit.codegen.lookup_table`.
 
 Size: about 900 lines, one pipeline (breakpoints -> reference samples -> fitted values ->
 certified bound -> search over resolutions) whose stages share private helpers; the reference
@@ -21,7 +21,7 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from fuzzkit.codegen.lut import (
+from fuzzkit.codegen.lookup_table import (
     CHECK_FACTOR,
     DEFAULT_MAX_POINTS,
     DEFAULT_TOLERANCE,

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 from fuzzkit.errors import CodegenError
 
 if TYPE_CHECKING:
-    from fuzzkit.codegen.lut import LookupTable
+    from fuzzkit.codegen.lookup_table import LookupTable
     from fuzzkit.fuzzy.model import RuleBase
 
 BACKENDS = Path(__file__).parent / "backends"

@@ -217,7 +217,8 @@ class CompiledTable:
     ) -> tuple[npt.NDArray[Any], npt.NDArray[np.uint64]]:
         """Run ``NAME_fpi_step`` over the sequences: returns ``(u, faults after each step)``.
 
-        ``gains`` are kp, ki, kx, u_min, u_max; for Q15 their codes (``lut.q15_fpi_codes``).
+        ``gains`` are kp, ki, kx, u_min, u_max; for Q15 their codes
+        (``lookup_table.q15_fpi_codes``).
         """
         if self._fpi is None:
             raise ToolchainError("this library was built without the fuzzy-PI API")

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from fuzzkit.codegen.lut import Q15_ONE, ROUNDING_ALLOWANCE, LookupTable, quantize_q15
+from fuzzkit.codegen.lookup_table import Q15_ONE, ROUNDING_ALLOWANCE, LookupTable, quantize_q15
 from fuzzkit.codegen.toolchain import CompiledTable
 from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy.model import RuleBase
@@ -30,7 +30,7 @@ from fuzzkit.fuzzy.model import RuleBase
 FloatArray = npt.NDArray[np.float64]
 
 #: Rounding allowance on top of the bound, as a fraction of each output's full scale (see
-#: ``lut.ROUNDING_ALLOWANCE``: the bound models float32 and Q15 arithmetic operation for
+#: ``lookup_table.ROUNDING_ALLOWANCE``: the bound models float32 and Q15 arithmetic operation for
 #: operation, so only FMA contraction and double rounding are left; none for Q15).
 ROUNDING = ROUNDING_ALLOWANCE
 DEFAULT_POINTS = 100_000

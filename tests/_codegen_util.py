@@ -12,7 +12,7 @@ import pytest
 
 import fuzzkit
 from fuzzkit.codegen.emit import emit
-from fuzzkit.codegen.lut import LookupTable, NumberType
+from fuzzkit.codegen.lookup_table import LookupTable, NumberType
 from fuzzkit.codegen.table_search import make_table
 from fuzzkit.codegen.toolchain import SANITIZE_FLAGS, find_compiler
 from fuzzkit.fuzzy.model import RuleBase

@@ -7,7 +7,7 @@ import pytest
 from _codegen_util import rulebase
 
 from fuzzkit.codegen.emit import build_spec
-from fuzzkit.codegen.lut import LookupTable
+from fuzzkit.codegen.lookup_table import LookupTable
 from fuzzkit.codegen.table_search import make_table, round_up
 from fuzzkit.fuzzy.inference import Engine
 from fuzzkit.fuzzy.model import RuleBase

@@ -20,7 +20,7 @@ from _codegen_util import (
     table,
 )
 
-from fuzzkit.codegen.lut import Q15_ONE
+from fuzzkit.codegen.lookup_table import Q15_ONE
 from fuzzkit.codegen.toolchain import SANITIZE_FLAGS, STRICT_FLAGS, CompiledTable, run_compiler
 from fuzzkit.codegen.verify import (
     ROUNDING,

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from _codegen_util import needs_cc, rulebase, skip_no_cc, sources, table
 
-from fuzzkit.codegen.lut import LookupTable, q15_fpi_codes
+from fuzzkit.codegen.lookup_table import LookupTable, q15_fpi_codes
 from fuzzkit.codegen.toolchain import CompiledTable
 from fuzzkit.codegen.verify import compare, load_module, python_outputs, verification_points
 from fuzzkit.fuzzy.inference import Engine

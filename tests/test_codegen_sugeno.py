@@ -10,7 +10,7 @@ from _codegen_util import needs_cc, skip_no_cc
 from _sugeno_reference import sugeno_pi_by_hand
 
 from fuzzkit.codegen.emit import emit
-from fuzzkit.codegen.lut import LookupTable
+from fuzzkit.codegen.lookup_table import LookupTable
 from fuzzkit.codegen.table_search import make_table
 from fuzzkit.codegen.verify import (
     load_module,

@@ -280,13 +280,13 @@ def test_any_object_with_step_and_reset_is_an_axis_controller() -> None:
 
 
 def test_codegen_lookup_table_plugs_in_as_a_surface() -> None:
-    lut = pytest.importorskip("fuzzkit.codegen.table_search")
+    from fuzzkit.codegen import table_search
     from fuzzkit.control.controllers import engine_surface, lookup_table_surface
     from fuzzkit.formats.registry import load
     from fuzzkit.fuzzy.inference import Engine
 
     rb = load("macvicar_whelan")
-    table = lut.build_table(rb, [41, 41], check_factor=4)
+    table = table_search.build_table(rb, [41, 41], check_factor=4)
     surf, exact = lookup_table_surface(table), engine_surface(Engine(rb))
     for e, de in [(0.0, 0.0), (0.3, -0.2), (-0.9, 0.55), (1.0, 1.0)]:
         assert surf(e, de) == pytest.approx(exact(e, de), abs=0.02)

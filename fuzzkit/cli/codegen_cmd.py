@@ -152,7 +152,7 @@ def cmd_compile(args: argparse.Namespace) -> int:
 
         return compile_spec(args)
 
-    from fuzzkit.codegen.lut import NUMBER_TYPES
+    from fuzzkit.codegen.lookup_table import NUMBER_TYPES
     from fuzzkit.codegen.method import DEFAULT_MAX_BYTES, compile_rulebase
     from fuzzkit.codegen.target import all_targets, load_target
     from fuzzkit.errors import CodegenError, ConfigError

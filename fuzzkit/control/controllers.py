@@ -78,7 +78,8 @@ def engine_surface(
 
 
 def lookup_table_surface(table: Any) -> Surface:
-    """Wrap a ``fuzzkit.codegen.lut.LookupTable`` (inputs e, de; output du) as a :data:`Surface`.
+    """Wrap a ``fuzzkit.codegen.lookup_table.LookupTable`` (inputs e, de; output du) as a
+    :data:`Surface`.
 
     Uses the table's reference interpolation, which reproduces the generated code's arithmetic.
     """
@@ -93,7 +94,8 @@ def tabulated_surface(surface: Surface, n: int = 201) -> Surface:
     """Sample ``surface`` on an ``n x n`` grid over [-1, 1]^2; answer by bilinear interpolation.
 
     A fast stand-in for the exact engine in long simulations (error of order h^2 * curvature;
-    measure it against the source before trusting it: ``fuzzkit.codegen.lut`` certifies a bound).
+    measure it against the source before trusting it: ``fuzzkit.codegen.lookup_table``
+    certifies a bound).
     """
     if n < 2:
         raise ConfigError(f"tabulated_surface: n must be >= 2 (got {n})")

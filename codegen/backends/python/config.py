@@ -12,7 +12,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from fuzzkit.codegen.backends.python.run import open_controller
-from fuzzkit.codegen.lut import LookupTable
+from fuzzkit.codegen.lookup_table import LookupTable
 from fuzzkit.codegen.target import Target
 from fuzzkit.codegen.verify import Verification, verify_exact_python, verify_python
 from fuzzkit.errors import CodegenError

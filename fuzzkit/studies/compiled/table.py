@@ -1,6 +1,7 @@
 """The generated lookup table's arithmetic in compiled code (double-precision 2-D tables).
 
-The same operations, in the same order, as ``fuzzkit.codegen.lut.LookupTable.interpolate`` for
+The same operations, in the same order, as
+``fuzzkit.codegen.lookup_table.LookupTable.interpolate`` for
 ``number_type="double"`` (bit for bit) and as the generated C: clamp to the breakpoint range,
 locate the cell, then linear interpolation on the cell's triangle (the diagonal each cell's
 ``splits`` names). One difference from the C: it multiplies by a stored reciprocal of the cell
@@ -80,7 +81,8 @@ class TableArrays:
 
 
 def table_arrays(table: Any) -> TableArrays:
-    """The :class:`TableArrays` of a ``fuzzkit.codegen.lut.LookupTable`` (double, 2 inputs).
+    """The :class:`TableArrays` of a ``fuzzkit.codegen.lookup_table.LookupTable`` (double, 2
+    inputs).
 
     Raises
     ------
