@@ -180,3 +180,17 @@ def test_sweep_takes_a_scenario_file_and_writes_traces_named_in_its_table(
     # the two seeds are two different runs (their noise differs)
     a, b = (_read(csvs / f"run{i}.csv")[1]["fz_measured_n"] for i in (0, 1))
     assert not np.array_equal(a[np.isfinite(a)], b[np.isfinite(b)])
+
+
+def test_the_figure_draws_no_error_before_engagement(e1: RunResult) -> None:
+    # before engagement no error is computed: a 0 there would read "no error" while 0 N meets
+    # the set point
+    assert e1.engaged_time_s is not None
+    fig = run_figure(e1)
+    error_axes = [ax for ax in fig.axes if ax.get_ylabel().startswith("e")]
+    assert len(error_axes) == 2  # z and x
+    for ax in error_axes:
+        t, e = ax.lines[0].get_data()
+        before, after = np.asarray(t) < e1.engaged_time_s - 1e-9, np.asarray(t) >= e1.engaged_time_s
+        assert before.any() and np.all(np.isnan(np.asarray(e)[before]))
+        assert np.all(np.isfinite(np.asarray(e)[after]))

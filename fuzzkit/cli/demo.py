@@ -48,6 +48,18 @@ def demo_steps(out: Path) -> list[list[str]]:
             "--verify",
         ],
         ["compare", "E1", "--rrd-dir", str(out)],
+        # what ships is what runs: the whole controller (front end, safety logic, limits)
+        # generated as C and run inside the closed loop
+        [
+            "simulate",
+            "E1",
+            "--controller",
+            "fuzzy-pi",
+            "--controller-impl",
+            "c",
+            "--png",
+            str(out / "E1_fuzzy-pi_generated_c.png"),
+        ],
     ]
 
 

@@ -15,6 +15,7 @@ import numpy as np
 
 from fuzzkit.studies.runner import RunResult
 from fuzzkit.viz.figures import new_figure, save_figure
+from fuzzkit.viz.run_series import engaged_index
 
 _FORCE = "tab:blue"
 _TRUE = "tab:gray"
@@ -29,6 +30,9 @@ def run_figure(result: RunResult) -> Any:
     axes_idx = [i for i in (2, 0, 1) if exp.selection[i]]
     fig = new_figure(12.0, 2.6 * len(axes_idx) + 0.9)
     grid = fig.subplots(len(axes_idx), 3, squeeze=False, sharex=True)
+    # before engagement the loop computes no error: draw none (a 0 would read "no error" while
+    # 0 N meets the set point), as the recordings log none
+    idle = slice(0, engaged_index(result))
     for row, i in enumerate(axes_idx):
         a = "xyz"[i]
         ax_f, ax_e, ax_u = grid[row]
@@ -37,13 +41,17 @@ def run_figure(result: RunResult) -> Any:
         ax_f.plot(result.t, result.setpoint[:, i], color=_SETPOINT, ls="--", lw=1.2, label="set")
         ax_f.axhline(exp.force_limit_n, color=_TRIP, lw=0.6, ls=":", label="safety limit")
         ax_f.set_ylabel(f"f{a} [N]")
-        ax_e.plot(result.t, result.e[:, i], color=_FORCE, lw=0.8)
+        e = result.e[:, i].astype(float)
+        e[idle] = np.nan
+        ax_e.plot(result.t, e, color=_FORCE, lw=0.8)
         ax_e.axhline(0.0, color="0.4", lw=0.5)
         ax_e.set_ylabel(f"e{a} = set - measured [N]")
         ax_u.plot(result.t, result.u[:, i] * 1e3, color=_FORCE, lw=1.0, label=f"u{a}")
         ax_u.set_ylabel(f"u{a} [mm]", color=_FORCE)
         ax_du = ax_u.twinx()
-        ax_du.plot(result.t, result.du[:, i] * 1e3, color=_TRUE, lw=0.5, alpha=0.6)
+        du = result.du[:, i] * 1e3
+        du[idle] = np.nan
+        ax_du.plot(result.t, du, color=_TRUE, lw=0.5, alpha=0.6)
         ax_u.set_zorder(ax_du.get_zorder() + 1)  # u in front of the noisier du
         ax_u.patch.set_visible(False)
         ax_du.set_ylabel(f"du{a} per period [mm]", color=_TRUE)
