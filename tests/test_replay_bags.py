@@ -196,26 +196,36 @@ def _good_bag(tmp_path: Path, storage: str = "sqlite3") -> Path:
 FRAME = ["--frame-rotation", ",".join(repr(v) for v in DOWN)]
 
 
+W = "geometry_msgs/msg/WrenchStamped"
+Q = "geometry_msgs/msg/QuaternionStamped"
+FT = ["--topic", "/ft/wrench"]
+
+
 @pytest.mark.parametrize(
     "make, argv, message",
     [
-        ("good", FRAME, "choose the force topic with --topic NAME (geometry_msgs/msg/WrenchStamped"
-         " topics: /empty (geometry_msgs/msg/WrenchStamped, 0 messages), /ft/wrench"),
-        ("good", ["--topic", "/ft/wrnch", *FRAME], "no topic '/ft/wrnch' in the bag (did you mean '/ft/wrench'?)"),
-        ("good", ["--topic", "/tool/orientation", *FRAME], "topic /tool/orientation holds geometry_msgs/msg/QuaternionStamped, expected geometry_msgs/msg/WrenchStamped"),
+        ("good", FRAME, f"choose the force topic with --topic NAME ({W} topics: /empty ({W}, "
+         f"0 messages), /ft/wrench ({W}, 5 messages))"),
+        ("good", ["--topic", "/ft/wrnch", *FRAME],
+         "no topic '/ft/wrnch' in the bag (did you mean '/ft/wrench'?)"),
+        ("good", ["--topic", "/tool/orientation", *FRAME],
+         f"topic /tool/orientation holds {Q}, expected {W}"),
         ("good", ["--topic", "/empty", *FRAME], "topic /empty has no message"),
-        ("good", ["--topic", "/ft/wrench", "--rotation-topic", "/ft/wrench"], "topic /ft/wrench holds geometry_msgs/msg/WrenchStamped, expected geometry_msgs/msg/QuaternionStamped or"),
-        ("good", ["--topic", "/ft/wrench"], "needs the rotation columns r11,r12,...,r33, --rotation-topic or --frame-rotation"),
-        ("good", ["--topic", "/ft/wrench", "--frame-rotation", "1,0,0,0,1,0,0,0"], "expected nine finite numbers"),
-        ("good", ["--topic", "/ft/wrench", "--frame-rotation", "1,0,0,0,1,0,0,0,-1"], "is not a rotation"),
-        ("good", ["--topic", "/ft/wrench", "--frame-rotation", "nan,0,0,0,1,0,0,0,1"], "expected nine finite numbers"),
-        ("good", ["--topic", "/ft/wrench", "--rotation-topic", "/tool/orientation", *FRAME], "give the tool rotation once"),
-        ("garbage.db3", ["--topic", "/ft", *FRAME], "not a readable rosbag2 bag"),
-        ("garbage.mcap", ["--topic", "/ft", *FRAME], "not a readable rosbag2 bag"),
-        ("truncated.mcap", ["--topic", "/ft/wrench", *FRAME], "not a readable rosbag2 bag"),
-        ("no_metadata", ["--topic", "/ft", *FRAME], "not a readable rosbag2 bag"),
-        ("bad_message", ["--topic", "/ft/wrench", *FRAME], "the bag is damaged"),
-        ("unset_stamp", ["--topic", "/ft/wrench", *FRAME], "is a header.stamp unset?"),
+        ("good", [*FT, "--rotation-topic", "/ft/wrench"],
+         f"topic /ft/wrench holds {W}, expected {Q} or"),
+        ("good", FT, "needs the rotation columns r11,r12,...,r33, --rotation-topic or "
+         "--frame-rotation"),
+        ("good", [*FT, "--frame-rotation", "1,0,0,0,1,0,0,0"], "expected nine finite numbers"),
+        ("good", [*FT, "--frame-rotation", "1,0,0,0,1,0,0,0,-1"], "is not a rotation"),
+        ("good", [*FT, "--frame-rotation", "nan,0,0,0,1,0,0,0,1"], "expected nine finite"),
+        ("good", [*FT, "--rotation-topic", "/tool/orientation", *FRAME],
+         "give the tool rotation once"),
+        ("garbage.db3", [*FT, *FRAME], "not a readable rosbag2 bag"),
+        ("garbage.mcap", [*FT, *FRAME], "not a readable rosbag2 bag"),
+        ("truncated.mcap", [*FT, *FRAME], "not a readable rosbag2 bag"),
+        ("no_metadata", [*FT, *FRAME], "not a readable rosbag2 bag"),
+        ("bad_message", [*FT, *FRAME], "the bag is damaged"),
+        ("unset_stamp", [*FT, *FRAME], "is a header.stamp unset?"),
     ],
 )  # fmt: skip
 def test_malformed_bags_are_clear_errors(
