@@ -74,6 +74,14 @@ def register(sub: Any) -> None:
         "bits' names joined by | (ENGAGED|SATURATED; 0 when none)",
     )
     p.add_argument(
+        "--schedule",
+        default=None,
+        metavar="CHANGES.csv",
+        help="parameter changes during the replay (reference only): CSV period,name,value, "
+        "names as the FMU's tunable parameters (kp_z, ki_z, kx_z, setpoint_z, limit_n) and the "
+        "events tare and reset (value 1) (default: none)",
+    )
+    p.add_argument(
         "--topic",
         default=None,
         metavar="NAME",
@@ -155,6 +163,13 @@ def cmd_replay(args: argparse.Namespace) -> int:
             ]
         )
     n = log.forces.shape[0]
+    schedule = []
+    if args.schedule is not None:
+        from fuzzkit.studies.param_schedule import read_schedule
+
+        if args.compare:
+            raise ConfigError("--schedule changes the reference only: not with --compare")
+        schedule = read_schedule(args.schedule, spec, n)
     if args.compare:
         (out, status), diffs = compare(spec, log, args.number_type)
         print(
@@ -163,7 +178,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
         )
         _print_differences(diffs, args.number_type)
     else:
-        out, status = replay(spec, log, args.impl, args.number_type)
+        out, status = replay(spec, log, args.impl, args.number_type, schedule)
         counts = ", ".join(
             f"{name} {int(np.count_nonzero(status & bit))}" for name, bit in st.BITS.items()
         )

@@ -12,15 +12,19 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.control.spec import ControllerSpec
-from fuzzkit.errors import Location, Problem, ProblemsError
+from fuzzkit.errors import ConfigError, Location, Problem, ProblemsError
+
+if TYPE_CHECKING:
+    from fuzzkit.studies.param_schedule import Change
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -167,24 +171,40 @@ def read_sensor_log(path: str | Path) -> SensorLog:
 
 
 def replay(
-    spec: ControllerSpec, log: SensorLog, impl: str = "python", number_type: str = "double"
+    spec: ControllerSpec,
+    log: SensorLog,
+    impl: str = "python",
+    number_type: str = "double",
+    schedule: Sequence[Change] = (),
 ) -> tuple[FloatArray, npt.NDArray[np.int64]]:
     """Run the controller of ``spec`` on ``log`` from reset: corrections ``(n, 3)`` and status.
 
     ``impl`` (:data:`IMPLS`): ``python`` is fuzzkit's reference controller
     (``fuzzkit.control.reference``), ``python-generated`` the generated Python module
     (``NAME_controller.py``) imported and run, ``c`` the generated C compiled and called
-    through ctypes (``number_type`` float/double).
+    through ctypes (``number_type`` float/double). ``schedule``: parameter changes
+    (:mod:`fuzzkit.studies.param_schedule`), for the reference only.
     """
+    if schedule and impl != "python":
+        raise ConfigError(
+            f"--schedule changes the reference's parameters (--impl python); the generated "
+            f"{impl} has them built in (the FMU's are tunable: docs/fmu.md)"
+        )
     if impl == "python":
         from fuzzkit.control.reference import Controller
+        from fuzzkit.studies.param_schedule import apply
 
         ref = Controller(spec)
         n = log.forces.shape[0]
         out = np.empty((n, 3))
         status = np.zeros(n, dtype=np.int64)
         rot = None if log.rotations is None else log.rotations.tolist()
+        by_period: dict[int, list[Change]] = {}
+        for change in schedule:
+            by_period.setdefault(change.period, []).append(change)
         for k, force in enumerate(log.forces.tolist()):
+            if k in by_period:
+                apply(ref, by_period[k])
             out[k], status[k] = ref.step(force, None if rot is None else rot[k])
         return out, status
     if impl in GENERATED:
