@@ -56,6 +56,17 @@ def write_log(
     path.write_text("\n".join(lines) + "\n")
 
 
+def hostile_csv(
+    tmp_path: Path, n: int, seed: int
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], Path]:
+    """A hostile log for the fuzzy-PI example spec, written as ``log.csv``: forces, rotations,
+    the file."""
+    forces, rotations = hostile_log(load_spec(SPEC), n=n, seed=seed)
+    log = tmp_path / "log.csv"
+    write_log(log, forces, rotations)
+    return forces, rotations, log
+
+
 def read_out(path: Path) -> tuple[list[str], npt.NDArray[np.float64]]:
     lines = path.read_text().splitlines()
     return lines[0].split(","), np.array(
@@ -288,10 +299,7 @@ def test_a_bad_header_lists_every_problem_and_a_bad_body_the_first_20(
 def test_status_names_decode_the_bits(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from fuzzkit.control import status as st
 
-    spec = load_spec(SPEC)
-    forces, rotations = hostile_log(spec, n=120, seed=2)
-    log = tmp_path / "log.csv"
-    write_log(log, forces, rotations)
+    *_, log = hostile_csv(tmp_path, 120, 2)
     outs = {}
     for fmt in ("bits", "names"):
         out = tmp_path / f"u_{fmt}.csv"
@@ -314,9 +322,7 @@ def test_python_generated_runs_the_generated_module(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     spec = load_spec(SPEC)
-    forces, rotations = hostile_log(spec, n=150, seed=5)
-    log = tmp_path / "log.csv"
-    write_log(log, forces, rotations)
+    forces, rotations, log = hostile_csv(tmp_path, 150, 5)
     out = tmp_path / "u.csv"
     code, stdout, err = _run(
         capsys, "replay", str(SPEC), "--forces", str(log), "--out", str(out),
@@ -339,10 +345,7 @@ def test_python_generated_runs_the_generated_module(
 def test_compare_prints_the_largest_difference_per_column(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    spec = load_spec(SPEC)
-    forces, rotations = hostile_log(spec, n=150, seed=7)
-    log = tmp_path / "log.csv"
-    write_log(log, forces, rotations)
+    *_, log = hostile_csv(tmp_path, 150, 7)
     runs = {}
     for impl in ("python", "python-generated", "c"):
         out = tmp_path / f"u_{impl}.csv"
