@@ -276,3 +276,25 @@ def test_topic_options_on_a_csv_log_are_refused(
         "--topic", "/ft",
     )  # fmt: skip
     assert code == 2 and "--topic and --rotation-topic read ROS 2 bags" in err
+
+
+def test_a_frame_rotation_stands_for_the_rotation_columns_of_a_csv_log(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    spec = load_spec(SPEC_PI)
+    forces, _ = hostile_log(spec, n=80, seed=8)
+    with_rot, without = tmp_path / "rot.csv", tmp_path / "plain.csv"
+    write_log(with_rot, forces, np.tile(DOWN, (len(forces), 1)))
+    write_log(without, forces, None)
+    frame = ["--frame-rotation", ",".join(repr(v) for v in DOWN)]
+    outs = []
+    for log, extra in ((with_rot, []), (without, frame)):
+        out = tmp_path / f"u_{log.stem}.csv"
+        argv = ["replay", str(SPEC_PI), "--forces", str(log), "--out", str(out), *extra]
+        assert _run(capsys, *argv)[0] == 0
+        outs.append(read_out(out)[1])
+    np.testing.assert_array_equal(outs[0], outs[1])
+    # a log with its own rotation takes no fixed one
+    argv = ["replay", str(SPEC_PI), "--forces", str(with_rot), "--out", str(tmp_path / "x.csv")]
+    code, _, err = _run(capsys, *argv, *frame)
+    assert code == 2 and "--frame-rotation is for logs without" in err
