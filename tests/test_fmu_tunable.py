@@ -161,7 +161,8 @@ def test_the_model_description_declares_tunable_parameters_and_the_inputs(
 
 @pytest.mark.parametrize(
     "name, value", [("kp_z", -0.1), ("kx_z", 0.0), ("ki_z", math.nan), ("limit_n", 0.0),
-                    ("setpoint_z", math.inf)],
+                    ("setpoint_z", math.inf), ("setpoint_z", 25.0), ("setpoint_x", -30.0),
+                    ("limit_n", 10.0), ("limit_n", 0.9)],
 )  # fmt: skip
 def test_a_value_the_reference_refuses_is_refused_and_kept(
     tmp_path: Path, name: str, value: float
@@ -191,6 +192,9 @@ def test_a_value_the_reference_refuses_is_refused_and_kept(
         ("period,name,value\n1,tare,2\n", ":2:8", "tare is an event: its value is 1"),
         ("period,name,value\n1,kp_z,nan\n", ":2:8", "must be a finite number"),
         ("period,name,value\n1,kp_z\n", ":2:1", "expected 3 cells, got 2"),
+        ("period,name,value\n1,setpoint_z,25\n", ":2", "now 25 N against 25 N"),
+        ("period,name,value\n1,setpoint_z,20\n3,limit_n,18\n", ":3", "now 20 N against 18 N"),
+        ("period,name,value\n1,limit_n,0.5\n", ":2", "now 10 N against 0.5 N"),
     ],
 )
 def test_bad_schedules_are_located_errors(

@@ -7,7 +7,8 @@ The schedule is CSV with the header ``period,name,value``: before the log's samp
 and ``setpoint_A`` (N), and ``limit_n`` (N); and the events ``tare`` and ``reset`` (value 1).
 Within one period the parameters are set first, then ``reset`` (which keeps them), then
 ``tare``, as the FMU's ``fmi2DoStep`` takes them. Values are checked as the reference
-controller checks the spec's: finite, fuzzy-PI gains > 0, PI gains >= 0, the limit > 0.
+controller checks the spec's: finite, fuzzy-PI gains > 0, PI gains >= 0, the limit > 0, and
+every set point's size and the engagement threshold below the limit after each change.
 """
 
 from __future__ import annotations
@@ -80,7 +81,7 @@ def read_schedule(path: str | Path, spec: ControllerSpec, n_samples: int) -> lis
             [Problem(Location(name, 1, 1), "expected the header period,name,value")]
         )
     known = (*parameter_names(spec), *EVENTS)
-    changes: list[tuple[int, int, Change]] = []
+    changes: list[tuple[int, int, int, Change]] = []
     for n, line in enumerate(lines[1:], start=2):
         if not line.strip():
             continue
@@ -123,10 +124,41 @@ def read_schedule(path: str | Path, spec: ControllerSpec, n_samples: int) -> lis
             problems.append(Problem(Location(name, n, cols[2]), why))
             continue
         rank = EVENTS.index(what) + 1 if what in EVENTS else 0
-        changes.append((period, rank, Change(period, what, value)))
+        changes.append((period, rank, n, Change(period, what, value)))
+    ordered = [(line, c) for _, _, line, c in sorted(changes, key=lambda t: t[:3])]
+    problems += _limit_problems(spec, ordered, name)
     if problems:
-        raise ProblemsError(problems)
-    return [c for _, _, c in sorted(changes, key=lambda t: (t[0], t[1]))]
+        raise ProblemsError(sorted(problems, key=lambda p: (p.location.line, p.location.col)))
+    return [c for _, c in ordered]
+
+
+def _limit_problems(
+    spec: ControllerSpec, changes: list[tuple[int, Change]], path: str
+) -> list[Problem]:
+    """The spec's rule kept through the changes: every set point's size and the engagement
+    threshold below the safety limit (else the loop trips at rest; the FMU refuses the same)."""
+    setpoints = {a.axis: a.setpoint_n for a in spec.axes}
+    limit = spec.safety.limit_n
+    floor = spec.safety.engage_threshold_n or 0.0
+    out = []
+    for line, change in changes:
+        if change.name == "limit_n":
+            limit = change.value
+        elif change.name.startswith("setpoint_"):
+            setpoints[change.name.removeprefix("setpoint_")] = change.value
+        else:
+            continue
+        biggest = max([abs(v) for v in setpoints.values()] + [floor])
+        if biggest >= limit:
+            out.append(
+                Problem(
+                    Location(path, line),
+                    f"{change.name} = {change.value:g}: the set points' sizes and the "
+                    f"engagement threshold must stay below the safety limit (now "
+                    f"{biggest:g} N against {limit:g} N)",
+                )
+            )
+    return out
 
 
 def apply(controller: object, changes: Iterable[Change]) -> None:
