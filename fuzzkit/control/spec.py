@@ -450,6 +450,15 @@ def surface_inputs(spec: ControllerSpec, rb: RuleBase) -> tuple[int, int]:
     return (names.index(spec.inputs[0]), names.index(spec.inputs[1]))
 
 
+def role_ordered(spec: ControllerSpec, rb: RuleBase) -> RuleBase:
+    """``rb`` with its inputs in role order (error, change): what a consumer that takes the
+    surface's inputs by position (generated code) evaluates. ``rb`` itself when already so."""
+    i_e, i_de = surface_inputs(spec, rb)
+    if (i_e, i_de) == (0, 1):
+        return rb
+    return replace(rb, inputs=(rb.inputs[i_e], rb.inputs[i_de]))
+
+
 def rulebase_problems(rb: RuleBase) -> list[str]:
     """Why ``rb`` cannot be a fuzzy-PI's surface (empty when it can).
 
