@@ -359,7 +359,7 @@ def test_adaptive_controller_runs_and_reports_its_estimate(
     args = ["simulate", "E1", "--controller", "adaptive-fuzzy-pi", "--stiffness", "20"]
     assert main([*args, "--json", "--rrd", str(rrd)]) == 0
     data = json.loads(capsys.readouterr().out)
-    assert data["loop"].startswith("python (fallback: adaptation")
+    assert data["loop"].startswith("python (fallback: the compiled loop does not run adaptation")
     assert data["controller_impl"].startswith("spec adaptive_fuzzy_pi")
     k = data["stiffness_estimate_n_mm"]["z"]
     assert 1.0 <= k <= 2000.0 and k != 300.0  # it moved off the initial estimate
@@ -407,7 +407,9 @@ def test_tune_tunes_the_base_gains_under_the_schedule(
     assert "tuned pi on E1" in capsys.readouterr().out and out.is_file()
     # an adaptive run is never handed to the compiled loop silently: it says where it ran
     run = run_spec(RunSpec("E1", "adaptive-pi", "planar", duration_s=0.2))
-    assert run.loop == "python (fallback: adaptation (stiffness-scheduled) runs in the python loop)"
+    assert run.loop == (
+        "python (fallback: the compiled loop does not run adaptation (stiffness-scheduled))"
+    )
 
 
 @pytest.mark.parametrize("seed", range(2))
