@@ -85,15 +85,18 @@ class Cosim:
 
 
 def _changes(fuzzy: bool, spec_kp: float, spec_ki: float) -> dict[int, list[tuple[str, float]]]:
+    """Changes at periods of the hostile log's segments (120 samples each): gains in the spike
+    trains, set points in the NaN bursts, reset in the set-point steps, tare in the tilted
+    tool, and the limit lowered before the force rises past it (it trips only then)."""
     first = [("kp_z", 2.5 * spec_kp), ("ki_z", 0.5 * spec_ki)]
     if fuzzy:
         first.append(("kx_z", 0.0003))
     return {
-        120: first,
-        220: [("setpoint_z", 14.0), ("setpoint_x", 1.5)],
-        300: [("limit_n", 40.0)],
-        360: [("reset", 1.0)],
-        430: [("tare", 1.0), ("kp_x", 2.0 * spec_kp)],
+        150: first,
+        300: [("setpoint_z", 14.0), ("setpoint_x", 1.5)],
+        500: [("reset", 1.0)],
+        620: [("tare", 1.0), ("kp_x", 2.0 * spec_kp)],
+        700: [("limit_n", 16.0)],
     }
 
 
@@ -104,7 +107,7 @@ def test_gains_changed_mid_simulation_equal_replay_with_the_same_schedule(
     spec = load_spec(spec_path)
     fmu = _compile(spec_path, tmp_path / f"{spec.name}.fmu")
     assert validate_fmu(str(fmu)) == []
-    forces, rotations = hostile_log(spec, n=80, seed=11)  # 560 samples: spikes, NaN, a trip
+    forces, rotations = hostile_log(spec, n=120, seed=11)  # 840 samples: spikes, NaN, trips
     z = next(a for a in spec.axes if a.axis == "z")
     changes = _changes(spec.kind == "fuzzy-pi", z.kp, z.ki)
     log = tmp_path / "log.csv"
@@ -129,12 +132,15 @@ def test_gains_changed_mid_simulation_equal_replay_with_the_same_schedule(
     np.testing.assert_array_equal(status, ref[:, 4].astype(np.int64))
     # the changes mattered: the same replay without them parts from it at the first change
     fixed = outs["fixed"]
-    np.testing.assert_array_equal(fixed[:120, 1:5], ref[:120, 1:5])
-    assert float(np.max(np.abs(fixed[120:220, 3] - ref[120:220, 3]))) > 1e-6
-    # reset at 360 cleared the correction and restarted the tare; tare at 430 started another
-    taring = 1 << 5
-    assert ref[360, 4].astype(int) & taring and ref[430, 4].astype(int) & taring
-    assert not fixed[430, 4].astype(int) & taring
+    np.testing.assert_array_equal(fixed[:150, 1:5], ref[:150, 1:5])
+    assert float(np.max(np.abs(fixed[150:300, 3] - ref[150:300, 3]))) > 1e-6
+    # reset at 500 cleared the trip latch and restarted the tare; tare at 620 started another;
+    # the limit lowered at 700 trips on the rising force, which the spec's limit does not
+    bits = ref[:, 4].astype(np.int64)
+    tripped, taring = 1 << 2, 1 << 5
+    assert bits[499] & tripped and not bits[500] & tripped
+    assert bits[500] & taring and bits[620] & taring and not fixed[620, 4].astype(int) & taring
+    assert not (bits[500:700] & tripped).any() and (bits[700:] & tripped).any()
 
 
 def test_the_model_description_declares_tunable_parameters_and_the_inputs(
