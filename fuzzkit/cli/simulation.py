@@ -14,35 +14,14 @@ from fuzzkit.cli import (
     add_controller_impl_argument,
     add_quiet_argument,
 )
+from fuzzkit.cli import units as cli_units
 from fuzzkit.control.names import KINDS as CONTROLLERS
 from fuzzkit.control.names import RUN_CONTROLLERS
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
+from fuzzkit.units import latency_text
 
 FAULT_KINDS = ("none", "spike", "nan", "dropout", "delay")  # fuzzkit.studies.faults.FAULTS
-
-
-def _positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (value > 0.0 and value < float("inf")):
-        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
-    return value
-
-
-def _latency(text: str) -> tuple[int, int | None]:
-    parts = text.split(",")
-    try:
-        values = [int(p) for p in parts]
-    except ValueError:
-        values = []
-    if not 1 <= len(values) <= 2 or min(values, default=-1) < 0:
-        raise argparse.ArgumentTypeError(
-            f"expected SENSOR[,COMMAND], whole periods >= 0 (e.g. 2 or 2,1), got {text!r}"
-        )
-    return values[0], values[1] if len(values) == 2 else None
 
 
 FAIL_ON_TRIP_HELP = (
@@ -96,16 +75,17 @@ def register(subparsers: Any) -> None:
     )
     sim.add_argument(
         "--stiffness",
-        type=_positive_float,
-        metavar="N_PER_MM",
-        help="contact stiffness of the environment (N/mm; default: the scenario's)",
+        type=cli_units.stiffness,
+        metavar=cli_units.STIFFNESS_METAVAR,
+        help=f"contact stiffness of the environment ({cli_units.STIFFNESS_HELP}; default: the "
+        "scenario's)",
     )
     sim.add_argument(
         "--latency",
-        type=_latency,
-        metavar="SENSOR[,COMMAND]",
-        help="sensor-to-controller and controller-to-motion delays in periods (default: the "
-        "scenario's; one number sets the sensor delay only)",
+        type=cli_units.latency_or_sensor,
+        metavar=cli_units.LATENCY_METAVAR,
+        help=f"{cli_units.LATENCY_HELP} (default: the scenario's; one number sets the sensor "
+        "delay only)",
     )
     sim.add_argument(
         "--fault",
@@ -150,7 +130,7 @@ def register(subparsers: Any) -> None:
         "--gains",
         metavar="GAINS.yaml",
         help="gains file (fuzzkit.control.gains): flat {kp: .., ki: ..}, or keyed by controller "
-        "as fuzzkit tune writes",
+        "as fuzzkit tune writes (default: the default gains)",
     )
     sim.add_argument(
         "--spec",
@@ -194,14 +174,16 @@ def register(subparsers: Any) -> None:
     cmp_.add_argument("--seed", type=int, default=0, help="sensor-noise seed")
     cmp_.add_argument(
         "--latency",
-        type=_latency,
-        metavar="SENSOR[,COMMAND]",
-        help="sensor and command delays in periods (default: each scenario's)",
+        type=cli_units.latency_or_sensor,
+        metavar=cli_units.LATENCY_METAVAR,
+        help=f"{cli_units.LATENCY_HELP} (default: each scenario's; one number sets the sensor "
+        "delay only)",
     )
     cmp_.add_argument(
         "--gains",
         metavar="GAINS.yaml",
-        help="gains file (fuzzkit.control.gains), e.g. from fuzzkit tune",
+        help="gains file (fuzzkit.control.gains), e.g. from fuzzkit tune (default: the "
+        "protocol's gains)",
     )
     cmp_.add_argument(
         "--protocol",
@@ -261,20 +243,6 @@ def _fmt(v: Any, digits: int = 2) -> str:
     if isinstance(v, float):
         return f"{v:.{digits}f}"
     return str(v)
-
-
-def parse_latency(text: str) -> tuple[int, int]:
-    """``"S,C"`` -> ``(sensor_delay, command_delay)``, integers >= 0 (periods)."""
-    parts = text.split(",")
-    try:
-        values = tuple(int(p) for p in parts)
-    except ValueError:
-        values = ()
-    if len(values) != 2 or min(values) < 0:
-        raise ConfigError(
-            f"--latency: expected SENSOR,COMMAND delays in periods, integers >= 0 (got {text!r})"
-        )
-    return values[0], values[1]
 
 
 def _simulate(args: argparse.Namespace) -> int:
@@ -338,10 +306,9 @@ def _simulate(args: argparse.Namespace) -> int:
     )
     print(f"  {result.experiment.title}")
     print(f"  gains: {_gains_text(gains)} ({source})")
-    sensor, command = data["latency_periods"]
     print(
-        f"  stiffness {data['stiffness']:g} N/mm, latency {sensor} + {command} periods "
-        f"(sensor + command), fault {data['fault']}, seed {data['seed']}, "
+        f"  stiffness {data['stiffness']:g} N/mm, latency {latency_text(data['latency_periods'])} "
+        f"periods (sensor:command), fault {data['fault']}, seed {data['seed']}, "
         f"safety limit {data['safety_limit']:g} N"
     )
     for name, m in data["axes"].items():
@@ -418,7 +385,31 @@ def comparison_table(rows: list[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
+def compare_spec(name: str, controller: str, gains: dict[str, float], args: Any) -> Any:
+    """The run ``fuzzkit compare`` makes of one experiment and controller: the same
+    :class:`~fuzzkit.studies.batch.RunSpec` as ``fuzzkit simulate`` and ``fuzzkit report``
+    (compiled loop where the plant has one), so that one experiment gives one number."""
+    from fuzzkit.studies.batch import RunSpec, gains_items
+    from fuzzkit.studies.experiments import experiment
+
+    latency = None
+    if args.latency is not None:  # one number sets the sensor delay only, as simulate
+        sensor, command = args.latency
+        latency = (sensor, experiment(name).latency_periods[1] if command is None else command)
+    return RunSpec(
+        experiment=name,
+        controller=controller,
+        plant=args.plant,
+        latency=latency,
+        seed=args.seed,
+        gains=gains_items(gains),
+        gains_label=args.protocol,
+        rulebase=args.rulebase,
+    )
+
+
 def _compare(args: argparse.Namespace) -> int:
+    from fuzzkit.studies.batch import experiment_and_plant, run_spec
     from fuzzkit.studies.experiments import experiment
     from fuzzkit.studies.metrics import summary
 
@@ -431,9 +422,7 @@ def _compare(args: argparse.Namespace) -> int:
     png_dir = check_trace_dir(args.png_dir, "--png-dir")
     csv_dir = check_trace_dir(args.csv_dir, "--csv-dir")
     from fuzzkit.control.loop_rulebase import load_loop_rulebase
-    from fuzzkit.studies.e3_arm6 import resolve
     from fuzzkit.studies.protocol import format_gains, protocol_gains
-    from fuzzkit.studies.runner import run
 
     surface = _surface_for("fuzzy-pi", args.rulebase)
     chosen = protocol_gains(args.protocol, surface, args.gains)
@@ -455,28 +444,17 @@ def _compare(args: argparse.Namespace) -> int:
     rows = []
     for name in args.experiments:
         for controller in CONTROLLERS:
-            exp, plant = resolve(name, args.plant)  # E3 on arm6: the paper's 3-D geometry
-            latency = None
-            if args.latency is not None:  # one number sets the sensor delay only, as simulate
-                sensor, command = args.latency
-                latency = (sensor, exp.latency_periods[1] if command is None else command)
-            result = run(
-                exp,
-                plant,
-                controller,
-                gains=chosen[controller].gains,
-                surface=surface if controller == "fuzzy-pi" else None,
-                seed=args.seed,
-                latency=latency,
-            )
+            spec = compare_spec(name, controller, chosen[controller].gains, args)
+            result = run_spec(spec)
             stem = f"{Path(name).stem.upper()}_{controller}"  # E1_pi, MY_TASK_fuzzy-pi
             if args.rrd_dir:
                 from fuzzkit.viz.traces import write_run_rrd
 
+                drawn = experiment_and_plant(spec)[1]  # E3 on arm6: its floor and wall
                 write_run_rrd(
                     result,
                     Path(args.rrd_dir) / f"{stem}.rrd",
-                    plant,
+                    None if isinstance(drawn, str) else drawn,
                     (load_loop_rulebase(args.rulebase), chosen[controller].gains),
                 )
             write_run_traces(

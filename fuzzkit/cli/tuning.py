@@ -3,15 +3,16 @@
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from pathlib import Path
 from typing import Any
 
 from fuzzkit.cli import EXIT_INTERRUPTED, RULEBASE_SPEC_HELP, add_controller_impl_argument
+from fuzzkit.cli import units as cli_units
 from fuzzkit.control.names import RUN_CONTROLLERS
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
+from fuzzkit.units import latencies_text
 
 
 def register(subparsers: Any) -> None:
@@ -53,9 +54,11 @@ def register(subparsers: Any) -> None:
     )
     tune.add_argument(
         "--stiffness",
+        type=cli_units.stiffnesses,
         default="5,10,20",
-        metavar="K1,K2,..",
-        help="environment stiffnesses to tune over at once, N/mm (default 5,10,20)",
+        metavar=cli_units.STIFFNESSES_METAVAR,
+        help=f"environment stiffnesses to tune over at once ({cli_units.STIFFNESS_HELP}; "
+        "default 5,10,20)",
     )
     tune.add_argument(
         "--budget", type=int, default=120, help="most gain sets simulated (default 120)"
@@ -66,10 +69,10 @@ def register(subparsers: Any) -> None:
     )
     tune.add_argument(
         "--latency",
+        type=cli_units.latencies,
         default=None,
-        metavar="S:C[,S:C...]",
-        help="sensor:command delays in periods to tune over at once (default: each "
-        "experiment's own)",
+        metavar=cli_units.LATENCIES_METAVAR,
+        help=f"{cli_units.LATENCY_HELP}, to tune over at once (default: each experiment's own)",
     )
     tune.add_argument(
         "--loop",
@@ -114,16 +117,19 @@ def register(subparsers: Any) -> None:
     )
     tune.add_argument(
         "--certify",
+        type=cli_units.stiffnesses,
         default=None,
-        metavar="K1,K2,...",
+        metavar=cli_units.STIFFNESSES_METAVAR,
         help="search only gains certified stable (fuzzkit stability, docs/stability.md) at "
-        "each of these contact stiffnesses (N/mm), at every --certify-latency",
+        f"each of these contact stiffnesses ({cli_units.STIFFNESS_HELP}), at every "
+        "--certify-latency (default: no certification)",
     )
     tune.add_argument(
         "--certify-latency",
+        type=cli_units.latencies,
         default="0:0,1:1",
-        metavar="S:C[,S:C...]",
-        help="with --certify: the sensor:command delays (periods) to certify at",
+        metavar=cli_units.LATENCIES_METAVAR,
+        help=f"with --certify: the {cli_units.LATENCY_HELP} to certify at",
     )
     tune.add_argument("--quiet", action="store_true", help="no progress bar")
     tune.set_defaults(handler=_tune)
@@ -189,40 +195,14 @@ def register(subparsers: Any) -> None:
     rep.set_defaults(handler=_report)
 
 
-def parse_stiffness(text: str) -> tuple[float, ...]:
-    """Parse ``"10,100,1000"`` (N/mm) into floats.
-
-    Raises
-    ------
-    ConfigError
-        An item that is not a positive finite number, or an empty list.
-    """
-    out: list[float] = []
-    for item in text.split(","):
-        item = item.strip()
-        try:
-            k = float(item)
-        except ValueError:
-            raise ConfigError(
-                f"--stiffness: {item!r} is not a number (expected N/mm values like 5,10,20)"
-            ) from None
-        if not (math.isfinite(k) and k > 0.0):
-            raise ConfigError(f"--stiffness: {item!r} must be a positive stiffness in N/mm")
-        out.append(k)
-    if not out:
-        raise ConfigError("--stiffness: no values (expected N/mm values like 5,10,20)")
-    return tuple(out)
-
-
 def _tune(args: argparse.Namespace) -> int:
-    from fuzzkit.cli.sweep import parse_latencies
     from fuzzkit.control.gains import read_gains_file, write_gains
     from fuzzkit.progress import progress_bar
     from fuzzkit.studies.tuning import progress_callback, tune
     from fuzzkit.studies.tuning_check import compare_cases
 
-    ks = parse_stiffness(args.stiffness)
-    latencies = parse_latencies(args.latency) if args.latency else None
+    ks = tuple(args.stiffness)
+    latencies = args.latency or None
     experiments, controller, rulebase, loop = _tuning_target(args)
     constraint = (
         _certified_over(args, experiments[0], controller, rulebase) if args.certify else None
@@ -363,22 +343,21 @@ def _certified_over(args: argparse.Namespace, first: Any, controller: str, ruleb
     """The ``--certify`` predicate (``fuzzkit.analysis.region.CertifiedOver``) on the first
     tuned experiment (its period, contact damping and sensor)."""
     from fuzzkit.analysis.region import CertifiedOver
-    from fuzzkit.cli.sweep import parse_latencies
     from fuzzkit.studies.experiments import experiment
 
-    ks = parse_stiffness(args.certify)
+    ks = args.certify
     return CertifiedOver(
         experiment(first) if isinstance(first, str) else first,
         controller,
         args.plant,
         tuple(ks),
-        tuple(parse_latencies(args.certify_latency)),
+        tuple(args.certify_latency),
         rulebase,
     )
 
 
 def _latencies(pairs: Any) -> str:
-    return "/".join(f"{a}:{b}" for a, b in pairs)
+    return latencies_text(pairs)
 
 
 def _pct(new: float, old: float) -> str:
