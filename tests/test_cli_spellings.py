@@ -238,3 +238,42 @@ def test_the_check_of_doc_spellings_can_fail() -> None:
     command, options = _options_used("fuzzkit plot macvicar_whelan --out x.png")
     assert command == "plot" and options == ["--out"]
     assert not re.search(r"(?<![\w-])--out(?![\w-])", COMMANDS["plot"].format_help())
+
+
+# ------------------------------------------------------------------ stiffness in scenario files
+
+
+def _scenario_with(tmp_path: object, stiffness: str) -> str:
+    from pathlib import Path
+
+    from fuzzkit.studies.scenario_file import shipped_scenario_text
+
+    text = shipped_scenario_text("E1")
+    assert "stiffness_n_per_m: 10000.0," in text
+    path = Path(str(tmp_path)) / "task.yaml"
+    path.write_text(text.replace("stiffness_n_per_m: 10000.0,", f"stiffness_n_per_m: {stiffness},"))
+    return str(path)
+
+
+@pytest.mark.parametrize("value", ["10 N/mm", "10N/mm", "1e4 N/m", "10 kN/m", "10000.0", "1e4"])
+def test_a_scenario_stiffness_takes_its_keys_unit_or_another_spelled_out(
+    tmp_path: object, value: str
+) -> None:
+    from fuzzkit.studies.scenario_file import load_scenario
+
+    exp = load_scenario(_scenario_with(tmp_path, value))
+    assert exp.scenario.contact.stiffness_n_per_m == pytest.approx(1e4, rel=1e-15)
+
+
+@pytest.mark.parametrize("value", ["10 lbf/in", "ten N/mm", "0 N/mm", "-5 N/m", "10 N"])
+def test_a_bad_scenario_stiffness_is_refused_at_its_line(
+    tmp_path: object, value: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = _scenario_with(tmp_path, value)
+    assert main(["validate", path]) == 2
+    err = capsys.readouterr().err
+    line = next(
+        n for n, t in enumerate(open(path).read().splitlines(), 1) if "stiffness_n_per_m" in t
+    )
+    assert re.search(rf"{re.escape(path)}:{line}:\d+: ", err), err
+    assert "Traceback" not in err
