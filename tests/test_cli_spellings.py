@@ -272,8 +272,9 @@ def test_a_bad_scenario_stiffness_is_refused_at_its_line(
     path = _scenario_with(tmp_path, value)
     assert main(["validate", path]) == 2
     err = capsys.readouterr().err
-    line = next(
-        n for n, t in enumerate(open(path).read().splitlines(), 1) if "stiffness_n_per_m" in t
-    )
+    from pathlib import Path
+
+    lines = Path(path).read_text(encoding="utf-8").splitlines()
+    line = next(n for n, t in enumerate(lines, 1) if "stiffness_n_per_m" in t)
     assert re.search(rf"{re.escape(path)}:{line}:\d+: ", err), err
     assert "Traceback" not in err
