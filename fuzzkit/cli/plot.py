@@ -37,6 +37,7 @@ def register(sub: Any) -> None:
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
+    from fuzzkit.cli.file_kinds import require_rulebase
     from fuzzkit.errors import ConfigError
     from fuzzkit.fileio import check_output_path
     from fuzzkit.formats.registry import load
@@ -47,6 +48,7 @@ def cmd_plot(args: argparse.Namespace) -> int:
         raise ConfigError("plot: give --png FILE.png (or FILE.svg), the figure to write")
     figure_format(args.png, "--png")
     check_output_path(args.png, "--png file")
+    require_rulebase(args.rulebase, "plot")
     rb = load(args.rulebase)
     write_rulebase_plot(rb, args.png)
     print(f"wrote {args.png}")
