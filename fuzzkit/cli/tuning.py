@@ -131,6 +131,12 @@ def register(subparsers: Any) -> None:
         metavar=cli_units.LATENCIES_METAVAR,
         help=f"with --certify: the {cli_units.LATENCY_HELP} to certify at",
     )
+    tune.add_argument(
+        "--force",
+        action="store_true",
+        help="write --out even when the result is worse than the starting gains on the robust "
+        "cost (without it, such a result is reported and not written, exit status 1)",
+    )
     tune.add_argument("--quiet", action="store_true", help="no progress bar")
     tune.set_defaults(handler=_tune)
 
@@ -213,6 +219,7 @@ def _tune(args: argparse.Namespace) -> int:
         check_output_path(args.spec_out, "controller spec")
     if out.is_file() and not args.replace:
         read_gains_file(out)  # an unreadable existing file is reported now, not after tuning
+    start, start_name = _starting_gains(args, controller)
     with progress_bar(args.budget, f"tune {controller}", quiet=args.quiet, unit="gain set") as bar:
         result = tune(
             experiments,
@@ -230,6 +237,7 @@ def _tune(args: argparse.Namespace) -> int:
             scheduler=args.scheduler,
             controller_impl=args.controller_impl,
             constraint=constraint,
+            baseline=start,
         )
     if constraint is not None:
         where = (
@@ -238,13 +246,12 @@ def _tune(args: argparse.Namespace) -> int:
         )
         if not constraint(result.gains):
             print(
-                f"fuzzkit: no certified gains: no candidate certified at {where} beat the "
-                f"defaults, and the defaults are not certified there; {out} not written",
+                f"fuzzkit: no certified gains: no candidate certified at {where} beat "
+                f"{start_name}, and {start_name} are not certified there; {out} not written",
                 file=sys.stderr,
             )
             return 1
         print(f"certified stable at {where}: only certified gains were searched")
-    _, kept = write_gains(out, result.to_entry(), merge=not args.replace)
     print(
         f"tuned {result.controller} on {' '.join(result.experiments)} ({result.plant}, "
         f"{'/'.join(f'{k:g}' for k in ks)} N/mm"
@@ -253,11 +260,22 @@ def _tune(args: argparse.Namespace) -> int:
         f"{result.wall_time_s:.1f} s"
         + (" (interrupted: best so far)" if result.interrupted else "")
     )
-    # the full per-case runs: not after Ctrl-C (the user wants out), not when nothing changed
-    skip = result.kept_defaults or result.interrupted
-    cases = [] if skip else compare_cases(result, seed=0)
-    for line in tune_report_lines(result, cases):
+    # the full per-case runs (what the trip warning counts): not after Ctrl-C (the user wants
+    # out)
+    cases = [] if result.interrupted else compare_cases(result, seed=0)
+    for line in tune_report_lines(result, cases, start_name):
         print(line)
+    warnings = honesty_warnings(result, cases, start_name)
+    for line in warnings:
+        print(line, file=sys.stderr)
+    if is_worse(result) and not args.force:
+        print(
+            f"fuzzkit: {out} not written: the result is worse than {start_name} on the robust "
+            "cost (--force writes it anyway)",
+            file=sys.stderr,
+        )
+        return 1
+    _, kept = write_gains(out, result.to_entry(), merge=not args.replace)
     print(f"wrote {out}" + (f" (kept the {', '.join(kept)} entry)" if kept else ""))
     if args.spec_out:
         _write_spec(args, result)
@@ -266,6 +284,66 @@ def _tune(args: argparse.Namespace) -> int:
         print(f"fuzzkit: interrupted (Ctrl-C); {out} holds the best gains so far", file=sys.stderr)
         return EXIT_INTERRUPTED
     return 0
+
+
+#: A result less than this much cheaper (% of the starting gains' robust cost) is reported
+#: as "not better": the search changed nothing worth a new gains file.
+NOT_BETTER_PCT = 1.0
+
+
+def is_worse(result: Any) -> bool:
+    """True when the result costs more than the starting gains on the robust cost."""
+    return bool(result.cost > result.baseline_cost + 1e-12)
+
+
+def honesty_warnings(result: Any, cases: Any, start: str) -> list[str]:
+    """What ``tune`` warns about after the search (each line starts ``warning:``): the share
+    of the robust grid's cases in which the tuned gains trip the safety limit, and a result
+    that is not better (less than :data:`NOT_BETTER_PCT` % cheaper) or worse than ``start``
+    (the gains the search started from) on the robust cost.
+
+    ``result``: a ``fuzzkit.studies.tuning.TuneResult``; ``cases``: its
+    ``fuzzkit.studies.tuning_check.compare_cases`` (empty: no trip count).
+    """
+    out = []
+    tripped = [c.label for c in cases if c.tuned_tripped]
+    if tripped:
+        start_tripped = sum(bool(c.default_tripped) for c in cases)
+        out.append(
+            f"warning: the tuned gains trip the safety limit in {len(tripped)} of {len(cases)} "
+            f"cases of the robust grid ({100.0 * len(tripped) / len(cases):.0f} %): "
+            f"{', '.join(tripped)}; {start} trip in {start_tripped}"
+        )
+    versus = (
+        f"{result.cost:.6g} vs {result.baseline_cost:.6g}, "
+        f"{_pct(result.cost, result.baseline_cost)}"
+    )
+    if is_worse(result):
+        out.append(f"warning: the result is worse than {start} on the robust cost ({versus})")
+    elif result.cost > result.baseline_cost * (1.0 - NOT_BETTER_PCT / 100.0):
+        out.append(
+            f"warning: the result is not better than {start} on the robust cost ({versus}; "
+            f"less than {NOT_BETTER_PCT:g} % cheaper)"
+        )
+    return out
+
+
+def _starting_gains(args: argparse.Namespace, controller: str) -> tuple[Any, str]:
+    """The gains the search starts from and is judged against: a ``--spec``'s own (when all
+    its axes share them), or None for the defaults; and how to name them."""
+    if not args.spec:
+        return None, "the default gains"
+    from fuzzkit.control.spec_reader import load_spec
+
+    spec = load_spec(args.spec)
+    shared = {(a.kp, a.ki, a.kx) for a in spec.axes}
+    if len(shared) != 1:
+        return None, "the default gains (the spec's axes have different gains)"
+    kp, ki, kx = shared.pop()
+    gains = {"kp": kp, "ki": ki, **({"kx": kx} if controller == "fuzzy-pi" else {})}
+    from fuzzkit.studies.experiments import DEFAULT_GAINS
+
+    return {**DEFAULT_GAINS[controller], **gains}, f"the gains of {args.spec}"
 
 
 def _tuning_target(args: argparse.Namespace) -> tuple[list[Any], str, str, str]:
@@ -368,42 +446,40 @@ def _metric(v: Any, unit: str, digits: int, missing: str = "never") -> str:
     return missing if v is None else f"{v:.{digits}f}{unit}"
 
 
-def tune_report_lines(result: Any, cases: Any) -> list[str]:
+def tune_report_lines(result: Any, cases: Any, start: str = "the default gains") -> list[str]:
     """What ``fuzzkit tune`` prints after the search: the rule, the verdict, per-case numbers.
 
     ``result`` is a ``fuzzkit.studies.tuning.TuneResult``, ``cases`` the
-    ``fuzzkit.studies.tuning_check.compare_cases`` of it.
+    ``fuzzkit.studies.tuning_check.compare_cases`` of it, ``start`` what the search started
+    from and is judged against (the default gains, or a spec's).
     """
     what = "experiment x stiffness x latency" if result.latencies else "experiment x stiffness"
     rule = (
-        f"no worse than the default gains on every case ({what})"
+        f"no worse than {start} on every case ({what})"
         if result.admit == "case"
-        else "no worse than the default gains on each experiment's mean over the stiffnesses"
+        else f"no worse than {start} on each experiment's mean over the stiffnesses"
     )
     lines = [f"  admissible: {rule}"]
     lines.append(
-        f"  cost {result.cost:.6g} vs default gains {result.baseline_cost:.6g} "
+        f"  cost {result.cost:.6g} vs {start} {result.baseline_cost:.6g} "
         f"({_pct(result.cost, result.baseline_cost)})"
     )
     refused = result.refusals()
     if result.kept_defaults and refused:
-        lines.append(
-            "  kept the default gains: every cheaper candidate was worse than them somewhere"
-        )
+        lines.append(f"  kept {start}: every cheaper candidate was worse than them somewhere")
     elif result.kept_defaults:
         lines.append(
-            f"  kept the default gains: none of the {result.evaluations} gain sets tried was "
-            "cheaper"
+            f"  kept {start}: none of the {result.evaluations} gain sets tried was cheaper"
         )
     if refused:
         lines.append(
             f"  the cheapest candidate (cost {result.cheapest_cost:.6g}, "
-            f"{_pct(result.cheapest_cost, result.baseline_cost)} vs the defaults) was refused: "
-            "worse than the defaults on "
+            f"{_pct(result.cheapest_cost, result.baseline_cost)} vs {start}) was refused: "
+            f"worse than {start} on "
             + ", ".join(f"{k} ({c:.4g} vs {b:.4g}, {_pct(c, b)})" for k, c, b in refused)
         )
     if cases:
-        lines.append("  per case, tuning cost and the full run (default -> tuned gains):")
+        lines.append(f"  per case, tuning cost and the full run ({start} -> tuned gains):")
     for c in cases:
         parts = [f"cost {c.default_cost:.4g} -> {c.tuned_cost:.4g} ({c.cost_change_pct:+.1f} %)"]
         for axis, d in c.default_axes.items():
@@ -421,7 +497,7 @@ def tune_report_lines(result: Any, cases: Any) -> list[str]:
     for name, cost in result.experiment_costs.items():
         lines.append(f"  {name}: {cost:.6g} (default {result.baseline_experiment_costs[name]:.6g})")
     gains = ", ".join(f"{k}={v:.6g}" for k, v in result.gains.items())
-    lines.append(f"  gains: {gains}" + (" (the defaults)" if result.kept_defaults else ""))
+    lines.append(f"  gains: {gains}" + (f" ({start})" if result.kept_defaults else ""))
     return lines
 
 

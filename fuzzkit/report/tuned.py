@@ -168,22 +168,31 @@ def _m(axes: Mapping[str, Mapping[str, Any]], metric: str, unit: str, digits: in
 def tuned_vs_default_markdown(cases: Mapping[str, Sequence[CaseComparison]]) -> str:
     """Per controller and case: tuning cost, z overshoot and z settling, default -> tuned."""
     lines = [
-        "| controller | case | cost default -> tuned | change | z overshoot % | z settle s | "
-        "trip |",
-        "|---|---|---|---|---|---|---|",
+        "| controller | case | cost default -> tuned | change | tuned vs defaults | "
+        "z overshoot % | z settle s | trip |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for ctrl, rows in cases.items():
         for c in rows:
             trip = f"{'yes' if c.default_tripped else 'no'} -> {'yes' if c.tuned_tripped else 'no'}"
             lines.append(
                 f"| {ctrl} | {c.label} | {c.default_cost:.4g} -> {c.tuned_cost:.4g} | "
-                f"{c.cost_change_pct:+.1f} % | "
+                f"{c.cost_change_pct:+.1f} % | {case_verdict(c)} | "
                 f"{_m(c.default_axes, 'overshoot_pct', '', 1)} -> "
                 f"{_m(c.tuned_axes, 'overshoot_pct', '', 1)} | "
                 f"{_m(c.default_axes, 'settling_time_s', ' s', 2)} -> "
                 f"{_m(c.tuned_axes, 'settling_time_s', ' s', 2)} | {trip} |"
             )
     return "\n".join(lines)
+
+
+def case_verdict(c: CaseComparison) -> str:
+    """How the tuned gains fare against the defaults on one case, as the per-case table says
+    it: **loses to the defaults** when they cost more (or trip where the defaults do not),
+    better when they cost less, the same otherwise."""
+    if (c.tuned_tripped and not c.default_tripped) or c.tuned_cost > c.default_cost + 1e-12:
+        return "**loses to the defaults**"
+    return "better" if c.tuned_cost < c.default_cost - 1e-12 else "same"
 
 
 def worse_cases(cases: Sequence[CaseComparison]) -> list[CaseComparison]:
