@@ -4,6 +4,7 @@ planar plant, determinism, Ctrl-C, and the gains file (round trip and bad files)
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -633,3 +634,27 @@ def test_tuning_e3_on_arm6_prices_the_papers_3d_e3() -> None:
     assert cost == pytest.approx(run_cost(reference), rel=1e-6)
     shared = run(with_stiffness(experiment("E3"), 10e3), "arm6", "pi", duration_s=h)
     assert abs(run_cost(shared) - cost) > 1e-3 * cost
+
+
+def test_the_report_labels_tuned_gains_that_lose_to_the_defaults_per_case() -> None:
+    from fuzzkit.report.tuned import case_verdict, tuned_vs_default_markdown
+
+    dearer = _case("E1@5N/mm", 0.5, 0.6, False, False)
+    trips = _case("E2@20N/mm", 0.5, 0.4, False, True)  # cheaper, but trips where default holds
+    cheaper = _case("E3@5N/mm", 0.5, 0.4, True, True)
+    same = _case("E3@10N/mm", 0.5, 0.5, False, False)
+    assert [case_verdict(c) for c in (dearer, trips, cheaper, same)] == [  # type: ignore[arg-type]
+        "**loses to the defaults**",
+        "**loses to the defaults**",
+        "better",
+        "same",
+    ]
+    table = tuned_vs_default_markdown({"pi": [dearer, cheaper]})  # type: ignore[list-item]
+    assert "| pi | E1@5N/mm | 0.5 -> 0.6 | +20.0 % | **loses to the defaults** |" in table
+    # the committed report: every dearer case is labelled, and only those
+    report = (Path(__file__).resolve().parent.parent / "docs/report/report.md").read_text()
+    rows = [r for r in report.splitlines() if re.match(r"\| (pi|fuzzy-pi) \| E\d@", r)]
+    assert len(rows) == 54
+    for row in rows:
+        dearer_row = re.search(r"\| \+[0-9.]+ % \|", row) is not None
+        assert ("loses to the defaults" in row) == (dearer_row or "| no -> yes |" in row), row
