@@ -19,6 +19,7 @@ from fuzzkit.control.names import KINDS as CONTROLLERS
 from fuzzkit.control.names import RUN_CONTROLLERS
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
+from fuzzkit.studies.outcome import settling_text
 from fuzzkit.units import latency_text
 
 FAULT_KINDS = ("none", "spike", "nan", "dropout", "delay")  # fuzzkit.studies.faults.FAULTS
@@ -304,17 +305,18 @@ def _simulate(args: argparse.Namespace) -> int:
         f"({data['loop']} loop, {data['real_time_factor']}x real time in CPU time; "
         f"controller: {data['controller_impl']})"
     )
-    print(f"  {result.experiment.title}")
+    print(f"  {task_text(result.experiment)}")
     print(f"  gains: {_gains_text(gains)} ({source})")
     print(
         f"  stiffness {data['stiffness']:g} N/mm, latency {latency_text(data['latency_periods'])} "
         f"periods (sensor:command), fault {data['fault']}, seed {data['seed']}, "
         f"safety limit {data['safety_limit']:g} N"
     )
+    tripped = bool(data["tripped"])
     for name, m in data["axes"].items():
         print(
             f"  {name}: set {m['setpoint']:g} N, first contact {_fmt(m['first_contact_s'])} s, "
-            f"overshoot {_fmt(m['overshoot_pct'], 1)} %, settling {_fmt(m['settling_time_s'])} s, "
+            f"overshoot {_fmt(m['overshoot_pct'], 1)} %, settling {settling_text(m, tripped)}, "
             f"steady error {_fmt(m['steady_state_error_mean'])} +- "
             f"{_fmt(m['steady_state_error_std'])} N, RMS moving {_fmt(m['rms_error'])} N, "
             f"peak {_fmt(m['peak_force_true'], 1)} N true ({_fmt(m['peak_force_measured'], 1)} N "
@@ -327,6 +329,19 @@ def _simulate(args: argparse.Namespace) -> int:
     for path in [*([args.rrd] if args.rrd else []), *written]:
         print(f"  wrote {path}")
     return status
+
+
+def task_text(exp: Any) -> str:
+    """What ran: the scenario's world (its title up to the colon) and the force-controlled
+    axes with their set points as the run had them (a controller spec's, when one ran; not
+    the scenario title's)."""
+    world = exp.title.partition(":")[0].strip() or exp.name
+    axes = ", ".join(
+        f"{exp.setpoints[i]:g} N along {'xyz'[i]}" for i in (2, 0, 1) if exp.selection[i]
+    )
+    spec = exp.controller_spec
+    source = f" (controller spec {spec.name})" if spec is not None else ""
+    return f"{world}: {axes}{source}"
 
 
 def ran_gains(ran: Any, exp: Any, gains_file: str | None) -> tuple[dict[str, Any], str]:
@@ -368,7 +383,7 @@ def comparison_table(rows: list[dict[str, Any]]) -> str:
     head = (
         f"{'exp':<{w}}{'axis':<5}{'set N':>6}  {'controller':<9}{'contact s':>10}"
         f"{'overshoot %':>12}"
-        f"{'settle s':>10}"
+        f"{'settle s':>14}"
         f"{'ss mean N':>11}{'ss std N':>10}{'rms move N':>12}{'peak N':>8}{'lost s':>8}"
     )
     lines = [head, "-" * len(head)]
@@ -377,7 +392,7 @@ def comparison_table(rows: list[dict[str, Any]]) -> str:
             lines.append(
                 f"{data['experiment']:<{w}}{axis:<5}{m['setpoint']:>6g}  {data['controller']:<9}"
                 f"{_fmt(m.get('first_contact_s')):>10}{_fmt(m['overshoot_pct'], 1):>12}"
-                f"{_fmt(m['settling_time_s']):>10}"
+                f"{settling_text(m, bool(data.get('tripped'))).removesuffix(' s'):>14}"
                 f"{_fmt(m['steady_state_error_mean']):>11}{_fmt(m['steady_state_error_std']):>10}"
                 f"{_fmt(m['rms_error']):>12}{_fmt(m['peak_force'], 1):>8}"
                 f"{_fmt(m['contact_lost_s']):>8}"

@@ -12,6 +12,7 @@ from fuzzkit.cli import units as cli_units
 from fuzzkit.control.names import RUN_CONTROLLERS
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
+from fuzzkit.studies.outcome import settling_text
 from fuzzkit.units import latencies_text
 
 
@@ -442,7 +443,7 @@ def _pct(new: float, old: float) -> str:
     return f"{100.0 * (new - old) / old:+.1f} %" if old > 0.0 else "n/a"
 
 
-def _metric(v: Any, unit: str, digits: int, missing: str = "never") -> str:
+def _metric(v: Any, unit: str, digits: int, missing: str) -> str:
     return missing if v is None else f"{v:.{digits}f}{unit}"
 
 
@@ -485,8 +486,8 @@ def tune_report_lines(result: Any, cases: Any, start: str = "the default gains")
         for axis, d in c.default_axes.items():
             t = c.tuned_axes[axis]
             parts.append(
-                f"{axis}: settling {_metric(d['settling_time_s'], ' s', 2)} -> "
-                f"{_metric(t['settling_time_s'], ' s', 2)}, overshoot "
+                f"{axis}: settling {settling_text(d, c.default_tripped)} -> "
+                f"{settling_text(t, c.tuned_tripped)}, overshoot "
                 f"{_metric(d['overshoot_pct'], ' %', 1, 'n/a')} -> "
                 f"{_metric(t['overshoot_pct'], ' %', 1, 'n/a')}"
             )
