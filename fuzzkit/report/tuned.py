@@ -20,6 +20,7 @@ from fuzzkit.errors import ConfigError
 from fuzzkit.progress import progress_bar
 from fuzzkit.studies.tuning import TuningProblem
 from fuzzkit.studies.tuning_check import CaseComparison, compare_gains
+from fuzzkit.units import latency_text
 
 
 @dataclass(frozen=True, slots=True)
@@ -43,7 +44,7 @@ class TuningSetup:
 
     def describe(self) -> str:
         """One line for the report: what the gains were tuned on."""
-        lats = ", ".join(f"{a}+{b}" for a, b in self.latencies)
+        lats = ", ".join(latency_text(p) for p in self.latencies)
         ks = ", ".join(f"{k:g}" for k in self.stiffnesses_n_per_mm)
         n = len(self.experiments) * len(self.stiffnesses_n_per_mm) * len(self.latencies)
         rule = (
