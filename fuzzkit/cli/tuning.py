@@ -496,7 +496,9 @@ def tune_report_lines(result: Any, cases: Any, start: str = "the default gains")
         verdict = "worse" if c.tuned_cost > c.default_cost + 1e-12 else "no worse"
         lines.append(f"    {c.label} ({verdict}): " + "; ".join(parts))
     for name, cost in result.experiment_costs.items():
-        lines.append(f"  {name}: {cost:.6g} (default {result.baseline_experiment_costs[name]:.6g})")
+        lines.append(
+            f"  {name}: {cost:.6g} ({start}: {result.baseline_experiment_costs[name]:.6g})"
+        )
     gains = ", ".join(f"{k}={v:.6g}" for k, v in result.gains.items())
     lines.append(f"  gains: {gains}" + (f" ({start})" if result.kept_defaults else ""))
     return lines
