@@ -1,6 +1,6 @@
 """The options every command spells alike: ``--stiffness``, ``--latency``, and old spellings.
 
-Each is an argparse ``type`` (or an ``add_*`` helper) over :mod:`fuzzkit.units`, so that a
+Each is an argparse ``type`` over :mod:`fuzzkit.units`, so that a
 value copied from one command's output or docs works in every other command: stiffness as
 ``100``, ``100N/mm`` or ``1e5N/m`` (the CLI's own unit is N/mm); latency as ``S:C`` or
 ``S,C``; several latencies as ``0:0,2:1``. A bad value is an argparse error (exit 2, the
