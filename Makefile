@@ -83,7 +83,7 @@ lint: $(STAMP)
 typecheck: $(STAMP) package-tree
 	cd $(PACKAGE_TREE) && $(CURDIR)/$(BIN)/mypy --config-file $(CURDIR)/pyproject.toml fuzzkit
 
-# The layering contract of DESIGN.md ([tool.importlinter] in pyproject.toml).
+# The layering contract of docs/architecture.md ([tool.importlinter] in pyproject.toml).
 imports: $(STAMP) package-tree
 	cd $(PACKAGE_TREE) && PYTHONPATH=$(CURDIR)/$(PACKAGE_TREE) \
 		$(CURDIR)/$(BIN)/lint-imports --no-cache --config $(CURDIR)/pyproject.toml

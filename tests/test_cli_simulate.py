@@ -53,7 +53,7 @@ def test_human_output_prints_the_conditions(capsys: pytest.CaptureFixture[str]) 
     assert main(["simulate", "E1", "--controller", "pi", "--fault", "nan", "--seed", "4"]) == 0
     out = capsys.readouterr().out
     assert (
-        "stiffness 10 N/mm, latency 1 + 1 periods (sensor + command), fault nan, seed 4, "
+        "stiffness 10 N/mm, latency 1:1 periods (sensor:command), fault nan, seed 4, "
         "safety limit 25 N" in out
     )
     assert " N true (" in out and " N measured)" in out
@@ -78,9 +78,9 @@ def test_a_users_scenario_file_runs_on_either_plant(
 @pytest.mark.parametrize(
     "args, match",
     [
-        (["--latency", "1,2,3"], "SENSOR[,COMMAND]"),
-        (["--latency", "-1"], "whole periods >= 0"),
-        (["--stiffness", "0"], "finite number > 0"),
+        (["--latency", "1,2,3"], "SENSOR:COMMAND (or SENSOR,COMMAND)"),
+        (["--latency", "-1"], "integers >= 0"),
+        (["--stiffness", "0"], "expected a stiffness > 0"),
         (["--fault", "spikes"], "invalid choice"),
     ],
 )

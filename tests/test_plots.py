@@ -80,10 +80,10 @@ def test_plot_writes_a_valid_svg_without_a_date(
     ("args", "message"),
     [
         (
-            ["macvicar_whelan", "--out", "x.pdf"],
-            "--out x.pdf: expected a file name ending in .png or .svg",
+            ["macvicar_whelan", "--png", "x.pdf"],
+            "--png x.pdf: expected a file name ending in .png or .svg",
         ),
-        (["macvicar_whelan", "--out", "x"], "got 'no suffix'"),
+        (["macvicar_whelan", "--png", "x"], "got 'no suffix'"),
         (["macvicar_whelan", "--out", "no/such/x.png"], "folder no/such does not exist"),
         (["no_such_rulebase", "--out", "x.png"], "no_such_rulebase"),
     ],
@@ -527,7 +527,7 @@ def test_sweep_figure_keeps_never_settled_and_tripped_runs_and_names_the_plant()
         "peak force [N]",
     ]
     case = peak.get_xticklabels()[0].get_text()
-    assert "10 N/mm" in case and "latency 1+1 periods" in case
+    assert "10 N/mm" in case and "latency 1:1 periods" in case
 
     def dots(ax: Any) -> list[float]:
         return sorted(

@@ -147,7 +147,7 @@ def test_report_writes_markdown_figures_and_recordings(tmp_path: Path) -> None:
         # without delay
         "| 1 | >= 3 | >= 3 |",
         "| 8 | 0 | 0 |",
-        "| claim | gains | nominal | latency 0+0 | latency 3+3 | 1000 N/mm |",
+        "| claim | gains | nominal | latency 0:0 | latency 3:3 | 1000 N/mm |",
         "## Controller specs",
     ):
         assert section in text, section
@@ -236,21 +236,21 @@ def _cr(claim: str, gains: str, condition: str, holds: bool, judged: bool = True
 def test_the_conclusion_covers_latency_and_stiffness() -> None:
     """Verdicts per condition: a claim that fails only at one latency 'depends on the setting'
     and the paragraph says where; tripped settings are left out and counted."""
-    conds = (NOMINAL, "latency 0+0", "latency 3+3", "1000 N/mm")
+    conds = (NOMINAL, "latency 0:0", "latency 3:3", "1000 N/mm")
     results = []
     for gains in ("matched", "tuned"):
         for cond in conds:
             trip = cond == "1000 N/mm"
             results.append(_cr("A", gains, cond, True, judged=not trip))
-            results.append(_cr("B", gains, cond, cond != "latency 3+3", judged=not trip))
+            results.append(_cr("B", gains, cond, cond != "latency 3:3", judged=not trip))
     text = claims_conclusion(results)
     assert "in 8 settings" in text
     assert "1 holds in every setting judged (A)" in text
     assert (
-        '"B" depends on the setting: it holds in 4 of 6 (arm6/matched except at latency 3+3;'
+        '"B" depends on the setting: it holds in 4 of 6 (arm6/matched except at latency 3:3;'
         in text
     )
-    assert "it holds in 2 of its 3 settings" in text  # matched: nominal, 0+0 yes; 3+3 no
+    assert "it holds in 2 of its 3 settings" in text  # matched: nominal, 0:0 yes; 3:3 no
     assert (
         "4 verdicts are not judged because a controller tripped the safety limit (1000 N/mm)"
         in text
@@ -271,10 +271,10 @@ def test_the_conclusion_covers_latency_and_stiffness() -> None:
     )
     summary = claims_summary(results)
     assert "- A: **holds** in every setting judged (6; 2 not judged, as a run tripped)." in summary
-    # flip B at 3+3 with tuned gains: the paragraph follows
+    # flip B at 3:3 with tuned gains: the paragraph follows
     results = [
-        _cr("B", "tuned", "latency 3+3", True)
-        if (r.claim, r.gains, r.condition) == ("B", "tuned", "latency 3+3")
+        _cr("B", "tuned", "latency 3:3", True)
+        if (r.claim, r.gains, r.condition) == ("B", "tuned", "latency 3:3")
         else r
         for r in results
     ]
@@ -301,8 +301,8 @@ def test_conditions_list_the_nominal_once() -> None:
     conds = conditions([(0, 0), (1, 1), (3, 3)], [5.0, 10.0, 1000.0])
     assert conds == [
         Condition(NOMINAL),
-        Condition("latency 0+0", latency=(0, 0)),
-        Condition("latency 3+3", latency=(3, 3)),
+        Condition("latency 0:0", latency=(0, 0)),
+        Condition("latency 3:3", latency=(3, 3)),
         Condition("5 N/mm", stiffness_n_per_mm=5.0),
         Condition("1000 N/mm", stiffness_n_per_mm=1000.0),
     ]

@@ -12,6 +12,7 @@ from fuzzkit.errors import ProblemsError
 from fuzzkit.studies.scenario_file import shipped_scenario_text
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "docs" / "examples"
+SPEC = EXAMPLES / "controller.yaml"
 FOREIGN = ("heater.fis", "heater_sugeno.fis", "gripper_iec.fcl", "gripper_named.fcl", "feed.fll")
 
 
@@ -81,13 +82,14 @@ def test_a_bad_foreign_rule_base_is_located(
 def test_a_file_of_no_known_kind_says_what_each_kind_looks_like(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    other = tmp_path / "gains.yaml"
-    other.write_text("kp: 0.1\nki: 0.2\n", encoding="utf-8")
+    other = tmp_path / "colours.yaml"  # (a gains file was the example here before it was a kind)
+    other.write_text("colour: blue\nsize: 3\n", encoding="utf-8")
     with pytest.raises(ProblemsError, match="not a file fuzzkit reads"):
         recognise(str(other))
     code, _, err = _validate(capsys, str(other), str(tmp_path))
     assert code == 2
-    assert f"{other}:1:1: not a file fuzzkit reads (found ki, kp); expected a rule base (" in err
+    found = "not a file fuzzkit reads (found colour, size); expected a rule base ("
+    assert f"{other}:1:1: {found}" in err
     assert "a scenario (" in err
     assert f"{tmp_path}: is a folder (expected a file)" in err
 
@@ -101,4 +103,84 @@ def test_each_kind_recognises_its_own_shipped_files() -> None:
 def test_a_controller_spec_is_one_more_kind() -> None:
     spec = EXAMPLES / "controller.yaml"
     assert recognise(str(spec))[0].name == "controller spec"
-    assert [k.name for k in KINDS] == ["rule base", "scenario", "controller spec"]
+    assert [k.name for k in KINDS] == ["rule base", "scenario", "controller spec", "gains file"]
+
+
+# ------------------------------------------------------------------ gains files, and wrong kinds
+# (issue 33 item 2: `info` on a spec and `validate` on a gains file reported rule-base errors)
+
+GAINS = "fuzzy-pi:\n  gains: {kp: 0.3, ki: 0.06, kx: 0.0002}\npi:\n  kp: 4.0e-5\n  ki: 1.0e-5\n"
+
+
+def _write(tmp_path: Path, name: str, text: str) -> str:
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    return str(path)
+
+
+@pytest.mark.parametrize(
+    "text, summary",
+    [
+        (GAINS, "gains file: pi (kp=4e-05, ki=1e-05); fuzzy-pi (kp=0.3, ki=0.06, kx=0.0002)"),
+        ("kp: 4.0e-5\nki: 1.0e-5\n", "gains file: any controller (kp=4e-05, ki=1e-05)"),
+    ],
+)
+def test_validate_recognises_a_gains_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str, summary: str
+) -> None:
+    path = _write(tmp_path, "gains.yaml", text)
+    assert main(["validate", path]) == 0
+    assert capsys.readouterr().out.strip() == f"{path}: ok ({summary})"
+
+
+def test_a_bad_gains_file_gets_every_problem_located(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = _write(
+        tmp_path, "gains.yaml", "fuzzy-pi:\n  gains: {kp: -0.3, ki: 0.06, kz: 1}\npi:\n  ki: .nan\n"
+    )
+    assert main(["validate", path]) == 2
+    err = capsys.readouterr().err
+    assert f"{path}:2:" in err and "gain kp must be > 0" in err
+    assert "unknown gain 'kz'" in err
+    assert f"{path}:4:" in err and "finite number" in err
+    assert "rule base" not in err and "defuzzifier" not in err
+
+
+@pytest.mark.parametrize(
+    "argv, kind",
+    [
+        (["eval", "{gains}", "-i", "e=0", "-i", "de=0"], "gains file"),
+        (["eval", str(SPEC), "-i", "e=0"], "controller spec"),
+        (["plot", "E1", "--png", "{png}"], "scenario"),
+        (["surface", "{gains}", "--png", "{png}"], "gains file"),
+    ],
+)
+def test_a_rule_base_command_given_another_kind_says_what_it_got(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], argv: list[str], kind: str
+) -> None:
+    gains = _write(tmp_path, "gains.yaml", GAINS)
+    png = tmp_path / "x.png"
+    args = [a.format(gains=gains, png=png) for a in argv]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert f"is a {kind}, not a rule base (fuzzkit {args[0]} reads rule bases" in err
+    assert "did you mean" not in err and "Traceback" not in err
+    assert not png.exists()
+    if kind == "controller spec":
+        assert "its rule base is macvicar_whelan: fuzzkit eval macvicar_whelan" in err
+
+
+def test_info_names_and_summarises_every_kind(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    gains = _write(tmp_path, "gains.yaml", GAINS)
+    assert main(["info", gains]) == 0
+    assert capsys.readouterr().out.startswith(f"{gains}: gains file: pi (kp=4e-05")
+    assert main(["info", "E1"]) == 0
+    assert capsys.readouterr().out.startswith("E1: scenario E1: 5 s, force control x 0 N, z 10 N")
+    assert main(["info", str(SPEC)]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith(f"{SPEC}: controller spec e1_fuzzy: fuzzy-pi on macvicar_whelan")
+    assert "macvicar_whelan  (" in out  # its rule base, described
+    assert "unknown key" not in out

@@ -89,9 +89,10 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter):
     """Examples kept as written, descriptions wrapped, every default shown.
 
     Text with line breaks (the epilog's examples) is printed as written; a one-line
-    description is wrapped to the terminal. An option's default is appended as
-    ``(default: X)`` unless its help already says "default"; flags (``store_true``) and
-    options without a default get nothing.
+    description is wrapped to the terminal. An option that takes a value shows its default:
+    appended as ``(default: X)``, ``(default: none)`` for an option left out unless given, or
+    ``(required)``, unless its help already says what the default is; flags (``store_true``)
+    get nothing.
     """
 
     def _fill_text(self, text: str, width: int, indent: str) -> str:
@@ -103,15 +104,18 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter):
         text = action.help or ""
         default = action.default
         takes_value = action.nargs != 0
-        if (
-            takes_value
-            and action.option_strings
-            and default not in (None, argparse.SUPPRESS)
-            and "default" not in text
-        ):
-            shown = " ".join(map(str, default)) if isinstance(default, list) else default
-            text = f"{text} (default: {shown})" if text else f"default: {shown}"
-        return text
+        if not (takes_value and action.option_strings) or text == argparse.SUPPRESS:
+            return text
+        if "default" in text.lower():
+            return text  # the help says what the default means
+        if action.required:
+            shown = "required"
+        elif default in (None, argparse.SUPPRESS):
+            shown = "default: none"
+        else:
+            value = " ".join(map(str, default)) if isinstance(default, list) else default
+            shown = f"default: {value}"
+        return f"{text} ({shown})" if text else shown
 
 
 def build_parser() -> argparse.ArgumentParser:

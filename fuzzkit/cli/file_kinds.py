@@ -1,4 +1,6 @@
-"""Every kind of file fuzzkit reads, recognised by its content: what ``fuzzkit validate`` checks.
+"""Every kind of file fuzzkit reads, recognised by its content: what ``fuzzkit validate`` checks,
+and what ``info``, ``eval``, ``plot`` and ``surface`` refuse when given another kind than a
+rule base (:func:`require_rulebase`).
 
 A kind is one :class:`FileKind` entry in :data:`KINDS`: how to recognise it (the top-level
 YAML keys that only it has, or the first word of a foreign rule-base format) and how to check
@@ -13,7 +15,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from fuzzkit.errors import Location, Problem, ProblemsError
+from fuzzkit.errors import ConfigError, FuzzkitError, Location, Problem, ProblemsError
 from fuzzkit.formats.registry import (
     FORMATS,
     READERS,
@@ -100,6 +102,20 @@ def _check_spec(spec: str, suffix: str) -> Checked:
     return Checked(f"controller spec {ctl.name}: {ctl.kind}{rb}; {axes}")
 
 
+def _check_gains(spec: str, suffix: str) -> Checked:
+    from fuzzkit.control.gains import read_gains_file
+
+    entries = read_gains_file(spec)
+    parts = [
+        (entry.controller or "any controller")
+        + " ("
+        + ", ".join(f"{k}={v:g}" for k, v in entry.gains.items())
+        + ")"
+        for entry in entries.values()
+    ]
+    return Checked("gains file: " + "; ".join(parts))
+
+
 def _no_shipped() -> list[str]:
     return []
 
@@ -125,9 +141,23 @@ KINDS: tuple[FileKind, ...] = (
         _check_spec,
         _no_shipped,
     ),
+    FileKind(
+        "gains file",
+        frozenset({"pi", "fuzzy-pi", "kp", "ki", "kx", "u_min", "u_max", "rate_limit"}),
+        _check_gains,
+        _no_shipped,
+    ),
 )
 
-_TOP_KEY = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)\s*:", re.M)
+#: What each kind is for, said when a command is given a kind it does not read.
+READ_BY = {
+    "rule base": "fuzzkit info, eval, plot, surface, compile",
+    "scenario": "fuzzkit simulate, compare, sweep, tune, stability",
+    "controller spec": "fuzzkit simulate --spec, compile, replay, tune --spec",
+    "gains file": "fuzzkit simulate --gains, compare --gains, stability --gains",
+}
+
+_TOP_KEY = re.compile(r"^([A-Za-z_][A-Za-z0-9_-]*)\s*:", re.M)
 _BLOCK_COMMENT = re.compile(r"\(\*.*?\*\)|/\*.*?\*/", re.S)
 _LINE_COMMENT = re.compile(r"^\s*(#|%|//).*$", re.M)
 
@@ -194,6 +224,40 @@ def check_file(spec: str) -> Checked:
     """
     kind, suffix = recognise(spec)
     return kind.check(spec, suffix)
+
+
+def require_rulebase(spec: str, command: str) -> None:
+    """Refuse ``spec`` before the rule-base reader sees it when its content is another kind
+    of file: the error says what it is, what ``fuzzkit COMMAND`` wants, and which commands
+    read it (a rule base, or a file of no known kind, passes: the rule-base reader locates
+    what is wrong with it).
+
+    Raises
+    ------
+    ConfigError
+        ``spec`` is a scenario, a controller spec or a gains file.
+    """
+    try:
+        kind, _ = recognise(spec)
+    except ProblemsError:
+        return
+    if kind is KINDS[0]:
+        return
+    hint = ""
+    if kind.name == "controller spec":
+        try:
+            from fuzzkit.control.spec_reader import load_spec
+
+            source = load_spec(spec).rulebase_source
+        except FuzzkitError:
+            source = None
+        if source:
+            hint = f"; its rule base is {source}: fuzzkit {command} {source}"
+    raise ConfigError(
+        f"{spec}: is a {kind.name}, not a rule base (fuzzkit {command} reads rule bases: "
+        f"YAML, .fis, .fcl, .fll, or a shipped name); a {kind.name} is read by "
+        f"{READ_BY[kind.name]}, and checked by fuzzkit validate{hint}"
+    )
 
 
 def is_kind(spec: str, name: str) -> bool:

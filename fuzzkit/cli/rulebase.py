@@ -33,10 +33,11 @@ def register(sub: Any) -> None:
     """Add the rule-base subcommands to the ``fuzzkit`` parser."""
     p = sub.add_parser(
         "validate",
-        help="check any file fuzzkit reads (rule bases, scenarios, controller specs); list every "
-        "problem",
+        help="check any file fuzzkit reads (rule bases, scenarios, controller specs, gains "
+        "files); list every problem",
         description="Check files fuzzkit reads, each recognised by its content: rule bases "
-        "(YAML, .fis, .fcl, .fll), scenario files and controller specs (docs/controller.md); "
+        "(YAML, .fis, .fcl, .fll), scenario files, controller specs (docs/controller.md) and "
+        "gains files (fuzzkit tune's); "
         "paths, shipped rule-base names or E1, E2, E3. Exit 0 when all are valid, 2 listing "
         "every problem (file:line:col) otherwise. "
         "Warnings (input ranges no term covers, in rule bases with coverage: allow_gaps) are "
@@ -51,19 +52,26 @@ def register(sub: Any) -> None:
         "files",
         nargs="+",
         metavar="FILE",
-        help="a rule-base, scenario or controller-spec file, or a shipped name (any number)",
+        help="a rule-base, scenario, controller-spec or gains file, or a shipped name (any number)",
     )
     p.add_argument("--strict", action="store_true", help="treat warnings (coverage gaps) as errors")
     p.set_defaults(handler=cmd_validate)
 
     p = sub.add_parser(
         "info",
-        help="describe a rule base: variables, terms, rules",
+        help="describe a rule base: variables, terms, rules (or summarise any file fuzzkit reads)",
         description="Print a rule base's variables with ranges, their terms with "
-        "shapes and parameters, and its rules (as a grid for tables).",
-        epilog="examples:\n  fuzzkit info macvicar_whelan\n  fuzzkit info my_controller.yaml",
+        "shapes and parameters, and its rules (as a grid for tables). Any other file fuzzkit "
+        "reads (a scenario, a controller spec, a gains file; told by content) is summarised "
+        "in one line, a controller spec's rule base described after it.",
+        epilog="examples:\n  fuzzkit info macvicar_whelan\n  fuzzkit info my_controller.yaml\n"
+        "  fuzzkit info docs/examples/controller.yaml",
     )
-    p.add_argument("rulebase", metavar="RULEBASE", help=RULEBASE_SPEC_HELP)
+    p.add_argument(
+        "rulebase",
+        metavar="FILE",
+        help=RULEBASE_SPEC_HELP + "; or a scenario, controller-spec or gains file",
+    )
     p.set_defaults(handler=cmd_info)
 
     p = sub.add_parser(
@@ -177,9 +185,13 @@ def register(sub: Any) -> None:
     p.set_defaults(handler=cmd_schema)
 
 
-def _load(spec: str) -> RuleBase:
+def _load(spec: str, command: str) -> RuleBase:
+    """The rule base ``spec``; another kind of file (a scenario, a controller spec, a gains
+    file) is refused with what it is and what reads it."""
+    from fuzzkit.cli.file_kinds import require_rulebase
     from fuzzkit.formats.registry import load
 
+    require_rulebase(spec, command)
     return load(spec)
 
 
@@ -305,7 +317,25 @@ def describe_rulebase(rb: RuleBase) -> str:
 
 
 def cmd_info(args: argparse.Namespace) -> int:
-    print(describe_rulebase(_load(args.rulebase)))
+    """Describe a rule base; any other kind of file fuzzkit reads is named and summarised
+    (a controller spec's rule base described after it)."""
+    from fuzzkit.cli.file_kinds import KINDS, recognise
+
+    try:
+        kind, _ = recognise(args.rulebase)
+    except ProblemsError:
+        kind = KINDS[0]  # the rule-base reader says what is wrong
+    if kind is KINDS[0]:
+        print(describe_rulebase(_load(args.rulebase, "info")))
+        return EXIT_OK
+    checked = kind.check(args.rulebase, "")
+    print(f"{args.rulebase}: {checked.summary}")  # the summary starts with the kind's name
+    if kind.name == "controller spec":
+        from fuzzkit.control.spec_reader import load_spec
+
+        rb = load_spec(args.rulebase).rulebase
+        if rb is not None:
+            print(describe_rulebase(rb))
     return EXIT_OK
 
 
@@ -446,7 +476,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
         raise EvaluationError("--rules N is the number of rules --png draws: give --png too")
     if not 1 <= args.rules <= MAX_RULES:
         raise EvaluationError(f"--rules {args.rules}: expected 1 to {MAX_RULES} rules to draw")
-    rb = _load(args.rulebase)
+    rb = _load(args.rulebase, "eval")
     engine = Engine(rb)
     if args.points is None and args.explain:
         return _explain(rb, _parse_inputs(rb, args.inputs), args.json, args.png, args.rules)
@@ -592,7 +622,7 @@ def cmd_surface(args: argparse.Namespace) -> int:
     for option, path in (("--rrd", args.rrd), ("--png", args.png)):
         if path is not None:
             check_output_path(path, f"{option} file")
-    rb = _load(args.rulebase)
+    rb = _load(args.rulebase, "surface")
     inputs = _surface_inputs(args.inputs)
     fixed = _parse_inputs(rb, args.fix, "--fix", every=False)
     axes = surface_axes(rb, args.output, inputs, fixed)  # every check before any file

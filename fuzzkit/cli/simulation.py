@@ -14,35 +14,15 @@ from fuzzkit.cli import (
     add_controller_impl_argument,
     add_quiet_argument,
 )
+from fuzzkit.cli import units as cli_units
 from fuzzkit.control.names import KINDS as CONTROLLERS
 from fuzzkit.control.names import RUN_CONTROLLERS
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
+from fuzzkit.studies.outcome import settling_text
+from fuzzkit.units import latency_text
 
 FAULT_KINDS = ("none", "spike", "nan", "dropout", "delay")  # fuzzkit.studies.faults.FAULTS
-
-
-def _positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (value > 0.0 and value < float("inf")):
-        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
-    return value
-
-
-def _latency(text: str) -> tuple[int, int | None]:
-    parts = text.split(",")
-    try:
-        values = [int(p) for p in parts]
-    except ValueError:
-        values = []
-    if not 1 <= len(values) <= 2 or min(values, default=-1) < 0:
-        raise argparse.ArgumentTypeError(
-            f"expected SENSOR[,COMMAND], whole periods >= 0 (e.g. 2 or 2,1), got {text!r}"
-        )
-    return values[0], values[1] if len(values) == 2 else None
 
 
 FAIL_ON_TRIP_HELP = (
@@ -96,16 +76,17 @@ def register(subparsers: Any) -> None:
     )
     sim.add_argument(
         "--stiffness",
-        type=_positive_float,
-        metavar="N_PER_MM",
-        help="contact stiffness of the environment (N/mm; default: the scenario's)",
+        type=cli_units.stiffness,
+        metavar=cli_units.STIFFNESS_METAVAR,
+        help=f"contact stiffness of the environment ({cli_units.STIFFNESS_HELP}; default: the "
+        "scenario's)",
     )
     sim.add_argument(
         "--latency",
-        type=_latency,
-        metavar="SENSOR[,COMMAND]",
-        help="sensor-to-controller and controller-to-motion delays in periods (default: the "
-        "scenario's; one number sets the sensor delay only)",
+        type=cli_units.latency_or_sensor,
+        metavar=cli_units.LATENCY_METAVAR,
+        help=f"{cli_units.LATENCY_HELP} (default: the scenario's; one number sets the sensor "
+        "delay only)",
     )
     sim.add_argument(
         "--fault",
@@ -150,7 +131,7 @@ def register(subparsers: Any) -> None:
         "--gains",
         metavar="GAINS.yaml",
         help="gains file (fuzzkit.control.gains): flat {kp: .., ki: ..}, or keyed by controller "
-        "as fuzzkit tune writes",
+        "as fuzzkit tune writes (default: the default gains)",
     )
     sim.add_argument(
         "--spec",
@@ -194,14 +175,16 @@ def register(subparsers: Any) -> None:
     cmp_.add_argument("--seed", type=int, default=0, help="sensor-noise seed")
     cmp_.add_argument(
         "--latency",
-        type=_latency,
-        metavar="SENSOR[,COMMAND]",
-        help="sensor and command delays in periods (default: each scenario's)",
+        type=cli_units.latency_or_sensor,
+        metavar=cli_units.LATENCY_METAVAR,
+        help=f"{cli_units.LATENCY_HELP} (default: each scenario's; one number sets the sensor "
+        "delay only)",
     )
     cmp_.add_argument(
         "--gains",
         metavar="GAINS.yaml",
-        help="gains file (fuzzkit.control.gains), e.g. from fuzzkit tune",
+        help="gains file (fuzzkit.control.gains), e.g. from fuzzkit tune (default: the "
+        "protocol's gains)",
     )
     cmp_.add_argument(
         "--protocol",
@@ -263,20 +246,6 @@ def _fmt(v: Any, digits: int = 2) -> str:
     return str(v)
 
 
-def parse_latency(text: str) -> tuple[int, int]:
-    """``"S,C"`` -> ``(sensor_delay, command_delay)``, integers >= 0 (periods)."""
-    parts = text.split(",")
-    try:
-        values = tuple(int(p) for p in parts)
-    except ValueError:
-        values = ()
-    if len(values) != 2 or min(values) < 0:
-        raise ConfigError(
-            f"--latency: expected SENSOR,COMMAND delays in periods, integers >= 0 (got {text!r})"
-        )
-    return values[0], values[1]
-
-
 def _simulate(args: argparse.Namespace) -> int:
     from fuzzkit.studies.experiments import experiment
     from fuzzkit.studies.metrics import summary
@@ -336,18 +305,18 @@ def _simulate(args: argparse.Namespace) -> int:
         f"({data['loop']} loop, {data['real_time_factor']}x real time in CPU time; "
         f"controller: {data['controller_impl']})"
     )
-    print(f"  {result.experiment.title}")
+    print(f"  {task_text(result.experiment)}")
     print(f"  gains: {_gains_text(gains)} ({source})")
-    sensor, command = data["latency_periods"]
     print(
-        f"  stiffness {data['stiffness']:g} N/mm, latency {sensor} + {command} periods "
-        f"(sensor + command), fault {data['fault']}, seed {data['seed']}, "
+        f"  stiffness {data['stiffness']:g} N/mm, latency {latency_text(data['latency_periods'])} "
+        f"periods (sensor:command), fault {data['fault']}, seed {data['seed']}, "
         f"safety limit {data['safety_limit']:g} N"
     )
+    tripped = bool(data["tripped"])
     for name, m in data["axes"].items():
         print(
             f"  {name}: set {m['setpoint']:g} N, first contact {_fmt(m['first_contact_s'])} s, "
-            f"overshoot {_fmt(m['overshoot_pct'], 1)} %, settling {_fmt(m['settling_time_s'])} s, "
+            f"overshoot {_fmt(m['overshoot_pct'], 1)} %, settling {settling_text(m, tripped)}, "
             f"steady error {_fmt(m['steady_state_error_mean'])} +- "
             f"{_fmt(m['steady_state_error_std'])} N, RMS moving {_fmt(m['rms_error'])} N, "
             f"peak {_fmt(m['peak_force_true'], 1)} N true ({_fmt(m['peak_force_measured'], 1)} N "
@@ -360,6 +329,19 @@ def _simulate(args: argparse.Namespace) -> int:
     for path in [*([args.rrd] if args.rrd else []), *written]:
         print(f"  wrote {path}")
     return status
+
+
+def task_text(exp: Any) -> str:
+    """What ran: the scenario's world (its title up to the colon) and the force-controlled
+    axes with their set points as the run had them (a controller spec's, when one ran; not
+    the scenario title's)."""
+    world = exp.title.partition(":")[0].strip() or exp.name
+    axes = ", ".join(
+        f"{exp.setpoints[i]:g} N along {'xyz'[i]}" for i in (2, 0, 1) if exp.selection[i]
+    )
+    spec = exp.controller_spec
+    source = f" (controller spec {spec.name})" if spec is not None else ""
+    return f"{world}: {axes}{source}"
 
 
 def ran_gains(ran: Any, exp: Any, gains_file: str | None) -> tuple[dict[str, Any], str]:
@@ -401,7 +383,7 @@ def comparison_table(rows: list[dict[str, Any]]) -> str:
     head = (
         f"{'exp':<{w}}{'axis':<5}{'set N':>6}  {'controller':<9}{'contact s':>10}"
         f"{'overshoot %':>12}"
-        f"{'settle s':>10}"
+        f"{'settle s':>14}"
         f"{'ss mean N':>11}{'ss std N':>10}{'rms move N':>12}{'peak N':>8}{'lost s':>8}"
     )
     lines = [head, "-" * len(head)]
@@ -410,7 +392,7 @@ def comparison_table(rows: list[dict[str, Any]]) -> str:
             lines.append(
                 f"{data['experiment']:<{w}}{axis:<5}{m['setpoint']:>6g}  {data['controller']:<9}"
                 f"{_fmt(m.get('first_contact_s')):>10}{_fmt(m['overshoot_pct'], 1):>12}"
-                f"{_fmt(m['settling_time_s']):>10}"
+                f"{settling_text(m, bool(data.get('tripped'))).removesuffix(' s'):>14}"
                 f"{_fmt(m['steady_state_error_mean']):>11}{_fmt(m['steady_state_error_std']):>10}"
                 f"{_fmt(m['rms_error']):>12}{_fmt(m['peak_force'], 1):>8}"
                 f"{_fmt(m['contact_lost_s']):>8}"
@@ -418,7 +400,31 @@ def comparison_table(rows: list[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
+def compare_spec(name: str, controller: str, gains: dict[str, float], args: Any) -> Any:
+    """The run ``fuzzkit compare`` makes of one experiment and controller: the same
+    :class:`~fuzzkit.studies.batch.RunSpec` as ``fuzzkit simulate`` and ``fuzzkit report``
+    (compiled loop where the plant has one), so that one experiment gives one number."""
+    from fuzzkit.studies.batch import RunSpec, gains_items
+    from fuzzkit.studies.experiments import experiment
+
+    latency = None
+    if args.latency is not None:  # one number sets the sensor delay only, as simulate
+        sensor, command = args.latency
+        latency = (sensor, experiment(name).latency_periods[1] if command is None else command)
+    return RunSpec(
+        experiment=name,
+        controller=controller,
+        plant=args.plant,
+        latency=latency,
+        seed=args.seed,
+        gains=gains_items(gains),
+        gains_label=args.protocol,
+        rulebase=args.rulebase,
+    )
+
+
 def _compare(args: argparse.Namespace) -> int:
+    from fuzzkit.studies.batch import experiment_and_plant, run_spec
     from fuzzkit.studies.experiments import experiment
     from fuzzkit.studies.metrics import summary
 
@@ -431,9 +437,7 @@ def _compare(args: argparse.Namespace) -> int:
     png_dir = check_trace_dir(args.png_dir, "--png-dir")
     csv_dir = check_trace_dir(args.csv_dir, "--csv-dir")
     from fuzzkit.control.loop_rulebase import load_loop_rulebase
-    from fuzzkit.studies.e3_arm6 import resolve
     from fuzzkit.studies.protocol import format_gains, protocol_gains
-    from fuzzkit.studies.runner import run
 
     surface = _surface_for("fuzzy-pi", args.rulebase)
     chosen = protocol_gains(args.protocol, surface, args.gains)
@@ -455,28 +459,17 @@ def _compare(args: argparse.Namespace) -> int:
     rows = []
     for name in args.experiments:
         for controller in CONTROLLERS:
-            exp, plant = resolve(name, args.plant)  # E3 on arm6: the paper's 3-D geometry
-            latency = None
-            if args.latency is not None:  # one number sets the sensor delay only, as simulate
-                sensor, command = args.latency
-                latency = (sensor, exp.latency_periods[1] if command is None else command)
-            result = run(
-                exp,
-                plant,
-                controller,
-                gains=chosen[controller].gains,
-                surface=surface if controller == "fuzzy-pi" else None,
-                seed=args.seed,
-                latency=latency,
-            )
+            spec = compare_spec(name, controller, chosen[controller].gains, args)
+            result = run_spec(spec)
             stem = f"{Path(name).stem.upper()}_{controller}"  # E1_pi, MY_TASK_fuzzy-pi
             if args.rrd_dir:
                 from fuzzkit.viz.traces import write_run_rrd
 
+                drawn = experiment_and_plant(spec)[1]  # E3 on arm6: its floor and wall
                 write_run_rrd(
                     result,
                     Path(args.rrd_dir) / f"{stem}.rrd",
-                    plant,
+                    None if isinstance(drawn, str) else drawn,
                     (load_loop_rulebase(args.rulebase), chosen[controller].gains),
                 )
             write_run_traces(

@@ -8,29 +8,10 @@ import math
 from typing import Any
 
 from fuzzkit.cli import RULEBASE_SPEC_HELP, add_quiet_argument
+from fuzzkit.cli import units as cli_units
 from fuzzkit.control.names import KINDS as CONTROLLERS
 from fuzzkit.fileio import check_output_path
-
-
-def _stiffness_list(text: str) -> list[float]:
-    try:
-        values = [float(p) for p in text.split(",")]
-    except ValueError:
-        values = []
-    if not values or not all(math.isfinite(v) and v > 0.0 for v in values):
-        raise argparse.ArgumentTypeError(
-            f"expected stiffnesses in N/mm > 0, comma separated (e.g. 5,10,100), got {text!r}"
-        )
-    return values
-
-
-def _latency_list(text: str) -> list[tuple[int, int]]:
-    from fuzzkit.cli.sweep import parse_latencies
-
-    try:
-        return parse_latencies(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+from fuzzkit.units import latency_text
 
 
 def _unit_interval(text: str) -> float:
@@ -78,17 +59,17 @@ def register(subparsers: Any) -> None:
     p.add_argument("--plant", choices=sorted(PLANTS), default="planar", help="simulated robot")
     p.add_argument(
         "--stiffness",
-        type=_stiffness_list,
+        type=cli_units.stiffnesses,
         required=True,
-        metavar="K1,K2,...",
-        help="contact stiffnesses (N/mm)",
+        metavar=cli_units.STIFFNESSES_METAVAR,
+        help=f"contact stiffnesses ({cli_units.STIFFNESS_HELP}; required)",
     )
     p.add_argument(
         "--latency",
-        type=_latency_list,
+        type=cli_units.latencies,
         required=True,
-        metavar="S:C,...",
-        help="sensor:command delays in periods",
+        metavar=cli_units.LATENCIES_METAVAR,
+        help=f"{cli_units.LATENCY_HELP} (required)",
     )
     p.add_argument(
         "--contact-sector",
@@ -113,7 +94,9 @@ def register(subparsers: Any) -> None:
         action="store_true",
         help="also run each cell in closed loop (compiled loop) and show its outcome",
     )
-    p.add_argument("--workers", type=int, default=None, help="processes for --simulate")
+    p.add_argument(
+        "--workers", type=int, default=None, help="processes for --simulate (default: every core)"
+    )
     p.set_defaults(handler=_stability)
 
 
@@ -203,7 +186,7 @@ def _text(data: dict[str, Any], args: argparse.Namespace) -> str:
             if "simulated" in c:
                 mark += c["simulated"][0]
             row.append(f"{mark:>6}")
-        lines.append(f"{lat[0]}+{lat[1]:<13}" + " ".join(row))
+        lines.append(f"{latency_text(lat):<15}" + " ".join(row))
     certified = sum(c["certified"] for c in data["cells"])
     lines.append(f"certified {certified} of {len(data['cells'])} cells")
     return "\n".join(lines)

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from fuzzkit.cli import EXIT_TRIPPED, RULEBASE_SPEC_HELP, add_controller_impl_argument
+from fuzzkit.cli import units as cli_units
 from fuzzkit.cli.simulation import FAIL_ON_TRIP_HELP
 from fuzzkit.control.names import RUN_CONTROLLERS
 from fuzzkit.errors import ConfigError
@@ -44,15 +45,18 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument(
         "--stiffness",
+        type=cli_units.stiffnesses,
         default=None,
-        metavar="K[,K...]",
-        help="environment stiffnesses in N/mm (default: each experiment's own)",
+        metavar=cli_units.STIFFNESSES_METAVAR,
+        help=f"environment stiffnesses ({cli_units.STIFFNESS_HELP}; default: each "
+        "experiment's own)",
     )
     p.add_argument(
         "--latency",
+        type=cli_units.latencies,
         default=None,
-        metavar="S:C[,S:C...]",
-        help="sensor:command delays in periods (default: each experiment's own)",
+        metavar=cli_units.LATENCIES_METAVAR,
+        help=f"{cli_units.LATENCY_HELP} (default: each experiment's own)",
     )
     p.add_argument("--seeds", type=int, default=1, metavar="N", help="noise seeds 0..N-1")
     p.add_argument(
@@ -87,7 +91,13 @@ def register(subparsers: Any) -> None:
         help="default: compiled where the plant supports it",
     )
     add_controller_impl_argument(p)
-    p.add_argument("--duration", type=float, default=None, metavar="S", help="simulated time")
+    p.add_argument(
+        "--duration",
+        type=float,
+        default=None,
+        metavar="S",
+        help="simulated time (default: each experiment's own)",
+    )
     p.add_argument(
         "--out",
         required=True,
@@ -95,8 +105,12 @@ def register(subparsers: Any) -> None:
         help="the table of runs, one row per run (CSV or Parquet by the suffix)",
     )
     p.add_argument(
-        "--figure", default=None, metavar="PNG", help="summary figure (default: OUT with .png)"
+        "--png",
+        default=None,
+        metavar="FILE.png",
+        help="summary figure (default: OUT with .png)",
     )
+    cli_units.store_alias(p, "--figure", dest="png", default=None)  # the old spelling
     p.add_argument("--workers", type=int, default=None, help="local processes (default: cores)")
     p.add_argument(
         "--scheduler",
@@ -117,31 +131,6 @@ def register(subparsers: Any) -> None:
     p.set_defaults(handler=_sweep)
 
 
-def _floats(text: str, what: str) -> list[float]:
-    try:
-        return [float(v) for v in text.split(",")]
-    except ValueError as exc:
-        raise ConfigError(f"{what}: expected comma-separated numbers (got {text!r})") from exc
-
-
-def parse_latencies(text: str) -> list[tuple[int, int]]:
-    """``"0:0,2:1"`` -> ``[(0, 0), (2, 1)]`` (sensor, command delays in periods)."""
-    out = []
-    for item in text.split(","):
-        parts = item.split(":")
-        try:
-            pair = tuple(int(v) for v in parts)
-        except ValueError:
-            pair = ()
-        if len(pair) != 2 or min(pair) < 0:
-            raise ConfigError(
-                f"--latency: expected SENSOR:COMMAND pairs of integers >= 0, comma-separated "
-                f"(got {item!r} in {text!r})"
-            )
-        out.append((pair[0], pair[1]))
-    return out
-
-
 def _sweep(args: argparse.Namespace) -> int:
     from fuzzkit.control.gains import read_gains
     from fuzzkit.studies.experiments import experiment
@@ -158,7 +147,7 @@ def _sweep(args: argparse.Namespace) -> int:
                 f"--controller: unknown {c!r} (expected {', '.join(RUN_CONTROLLERS)})"
             )
     out = check_table_path(args.out)
-    figure = Path(args.figure) if args.figure else out.with_suffix(".png")
+    figure = Path(args.png) if args.png else out.with_suffix(".png")
     from fuzzkit.fileio import check_output_path
 
     check_output_path(figure, "figure")
@@ -166,9 +155,7 @@ def _sweep(args: argparse.Namespace) -> int:
 
     png_dir = check_trace_dir(args.png_dir, "--png-dir")
     csv_dir = check_trace_dir(args.csv_dir, "--csv-dir")
-    ks: list[float | None] = (
-        [None] if args.stiffness is None else list(_floats(args.stiffness, "--stiffness"))
-    )
+    ks: list[float | None] = [None] if args.stiffness is None else list(args.stiffness)
     gains = None
     if args.gains:
         gains = {
@@ -179,7 +166,7 @@ def _sweep(args: argparse.Namespace) -> int:
         names,
         controllers,
         stiffnesses_n_per_mm=ks,
-        latencies=parse_latencies(args.latency) if args.latency else [None],
+        latencies=list(args.latency) if args.latency else [None],
         seeds=args.seeds,
         gains=gains,
         plant=args.plant,

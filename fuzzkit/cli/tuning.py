@@ -3,15 +3,17 @@
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from pathlib import Path
 from typing import Any
 
 from fuzzkit.cli import EXIT_INTERRUPTED, RULEBASE_SPEC_HELP, add_controller_impl_argument
+from fuzzkit.cli import units as cli_units
 from fuzzkit.control.names import RUN_CONTROLLERS
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
+from fuzzkit.studies.outcome import settling_text
+from fuzzkit.units import latencies_text
 
 
 def register(subparsers: Any) -> None:
@@ -53,9 +55,11 @@ def register(subparsers: Any) -> None:
     )
     tune.add_argument(
         "--stiffness",
+        type=cli_units.stiffnesses,
         default="5,10,20",
-        metavar="K1,K2,..",
-        help="environment stiffnesses to tune over at once, N/mm (default 5,10,20)",
+        metavar=cli_units.STIFFNESSES_METAVAR,
+        help=f"environment stiffnesses to tune over at once ({cli_units.STIFFNESS_HELP}; "
+        "default 5,10,20)",
     )
     tune.add_argument(
         "--budget", type=int, default=120, help="most gain sets simulated (default 120)"
@@ -66,10 +70,10 @@ def register(subparsers: Any) -> None:
     )
     tune.add_argument(
         "--latency",
+        type=cli_units.latencies,
         default=None,
-        metavar="S:C[,S:C...]",
-        help="sensor:command delays in periods to tune over at once (default: each "
-        "experiment's own)",
+        metavar=cli_units.LATENCIES_METAVAR,
+        help=f"{cli_units.LATENCY_HELP}, to tune over at once (default: each experiment's own)",
     )
     tune.add_argument(
         "--loop",
@@ -114,16 +118,25 @@ def register(subparsers: Any) -> None:
     )
     tune.add_argument(
         "--certify",
+        type=cli_units.stiffnesses,
         default=None,
-        metavar="K1,K2,...",
+        metavar=cli_units.STIFFNESSES_METAVAR,
         help="search only gains certified stable (fuzzkit stability, docs/stability.md) at "
-        "each of these contact stiffnesses (N/mm), at every --certify-latency",
+        f"each of these contact stiffnesses ({cli_units.STIFFNESS_HELP}), at every "
+        "--certify-latency (default: no certification)",
     )
     tune.add_argument(
         "--certify-latency",
+        type=cli_units.latencies,
         default="0:0,1:1",
-        metavar="S:C[,S:C...]",
-        help="with --certify: the sensor:command delays (periods) to certify at",
+        metavar=cli_units.LATENCIES_METAVAR,
+        help=f"with --certify: the {cli_units.LATENCY_HELP} to certify at",
+    )
+    tune.add_argument(
+        "--force",
+        action="store_true",
+        help="write --out even when the result is worse than the starting gains on the robust "
+        "cost (without it, such a result is reported and not written, exit status 1)",
     )
     tune.add_argument("--quiet", action="store_true", help="no progress bar")
     tune.set_defaults(handler=_tune)
@@ -189,40 +202,14 @@ def register(subparsers: Any) -> None:
     rep.set_defaults(handler=_report)
 
 
-def parse_stiffness(text: str) -> tuple[float, ...]:
-    """Parse ``"10,100,1000"`` (N/mm) into floats.
-
-    Raises
-    ------
-    ConfigError
-        An item that is not a positive finite number, or an empty list.
-    """
-    out: list[float] = []
-    for item in text.split(","):
-        item = item.strip()
-        try:
-            k = float(item)
-        except ValueError:
-            raise ConfigError(
-                f"--stiffness: {item!r} is not a number (expected N/mm values like 5,10,20)"
-            ) from None
-        if not (math.isfinite(k) and k > 0.0):
-            raise ConfigError(f"--stiffness: {item!r} must be a positive stiffness in N/mm")
-        out.append(k)
-    if not out:
-        raise ConfigError("--stiffness: no values (expected N/mm values like 5,10,20)")
-    return tuple(out)
-
-
 def _tune(args: argparse.Namespace) -> int:
-    from fuzzkit.cli.sweep import parse_latencies
     from fuzzkit.control.gains import read_gains_file, write_gains
     from fuzzkit.progress import progress_bar
     from fuzzkit.studies.tuning import progress_callback, tune
     from fuzzkit.studies.tuning_check import compare_cases
 
-    ks = parse_stiffness(args.stiffness)
-    latencies = parse_latencies(args.latency) if args.latency else None
+    ks = tuple(args.stiffness)
+    latencies = args.latency or None
     experiments, controller, rulebase, loop = _tuning_target(args)
     constraint = (
         _certified_over(args, experiments[0], controller, rulebase) if args.certify else None
@@ -233,6 +220,7 @@ def _tune(args: argparse.Namespace) -> int:
         check_output_path(args.spec_out, "controller spec")
     if out.is_file() and not args.replace:
         read_gains_file(out)  # an unreadable existing file is reported now, not after tuning
+    start, start_name = _starting_gains(args, controller)
     with progress_bar(args.budget, f"tune {controller}", quiet=args.quiet, unit="gain set") as bar:
         result = tune(
             experiments,
@@ -250,6 +238,7 @@ def _tune(args: argparse.Namespace) -> int:
             scheduler=args.scheduler,
             controller_impl=args.controller_impl,
             constraint=constraint,
+            baseline=start,
         )
     if constraint is not None:
         where = (
@@ -258,13 +247,12 @@ def _tune(args: argparse.Namespace) -> int:
         )
         if not constraint(result.gains):
             print(
-                f"fuzzkit: no certified gains: no candidate certified at {where} beat the "
-                f"defaults, and the defaults are not certified there; {out} not written",
+                f"fuzzkit: no certified gains: no candidate certified at {where} beat "
+                f"{start_name}, and {start_name} are not certified there; {out} not written",
                 file=sys.stderr,
             )
             return 1
         print(f"certified stable at {where}: only certified gains were searched")
-    _, kept = write_gains(out, result.to_entry(), merge=not args.replace)
     print(
         f"tuned {result.controller} on {' '.join(result.experiments)} ({result.plant}, "
         f"{'/'.join(f'{k:g}' for k in ks)} N/mm"
@@ -273,11 +261,22 @@ def _tune(args: argparse.Namespace) -> int:
         f"{result.wall_time_s:.1f} s"
         + (" (interrupted: best so far)" if result.interrupted else "")
     )
-    # the full per-case runs: not after Ctrl-C (the user wants out), not when nothing changed
-    skip = result.kept_defaults or result.interrupted
-    cases = [] if skip else compare_cases(result, seed=0)
-    for line in tune_report_lines(result, cases):
+    # the full per-case runs (what the trip warning counts): not after Ctrl-C (the user wants
+    # out)
+    cases = [] if result.interrupted else compare_cases(result, seed=0)
+    for line in tune_report_lines(result, cases, start_name):
         print(line)
+    warnings = honesty_warnings(result, cases, start_name)
+    for line in warnings:
+        print(line, file=sys.stderr)
+    if is_worse(result) and not args.force:
+        print(
+            f"fuzzkit: {out} not written: the result is worse than {start_name} on the robust "
+            "cost (--force writes it anyway)",
+            file=sys.stderr,
+        )
+        return 1
+    _, kept = write_gains(out, result.to_entry(), merge=not args.replace)
     print(f"wrote {out}" + (f" (kept the {', '.join(kept)} entry)" if kept else ""))
     if args.spec_out:
         _write_spec(args, result)
@@ -286,6 +285,66 @@ def _tune(args: argparse.Namespace) -> int:
         print(f"fuzzkit: interrupted (Ctrl-C); {out} holds the best gains so far", file=sys.stderr)
         return EXIT_INTERRUPTED
     return 0
+
+
+#: A result less than this much cheaper (% of the starting gains' robust cost) is reported
+#: as "not better": the search changed nothing worth a new gains file.
+NOT_BETTER_PCT = 1.0
+
+
+def is_worse(result: Any) -> bool:
+    """True when the result costs more than the starting gains on the robust cost."""
+    return bool(result.cost > result.baseline_cost + 1e-12)
+
+
+def honesty_warnings(result: Any, cases: Any, start: str) -> list[str]:
+    """What ``tune`` warns about after the search (each line starts ``warning:``): the share
+    of the robust grid's cases in which the tuned gains trip the safety limit, and a result
+    that is not better (less than :data:`NOT_BETTER_PCT` % cheaper) or worse than ``start``
+    (the gains the search started from) on the robust cost.
+
+    ``result``: a ``fuzzkit.studies.tuning.TuneResult``; ``cases``: its
+    ``fuzzkit.studies.tuning_check.compare_cases`` (empty: no trip count).
+    """
+    out = []
+    tripped = [c.label for c in cases if c.tuned_tripped]
+    if tripped:
+        start_tripped = sum(bool(c.default_tripped) for c in cases)
+        out.append(
+            f"warning: the tuned gains trip the safety limit in {len(tripped)} of {len(cases)} "
+            f"cases of the robust grid ({100.0 * len(tripped) / len(cases):.0f} %): "
+            f"{', '.join(tripped)}; {start} trip in {start_tripped}"
+        )
+    versus = (
+        f"{result.cost:.6g} vs {result.baseline_cost:.6g}, "
+        f"{_pct(result.cost, result.baseline_cost)}"
+    )
+    if is_worse(result):
+        out.append(f"warning: the result is worse than {start} on the robust cost ({versus})")
+    elif result.cost > result.baseline_cost * (1.0 - NOT_BETTER_PCT / 100.0):
+        out.append(
+            f"warning: the result is not better than {start} on the robust cost ({versus}; "
+            f"less than {NOT_BETTER_PCT:g} % cheaper)"
+        )
+    return out
+
+
+def _starting_gains(args: argparse.Namespace, controller: str) -> tuple[Any, str]:
+    """The gains the search starts from and is judged against: a ``--spec``'s own (when all
+    its axes share them), or None for the defaults; and how to name them."""
+    if not args.spec:
+        return None, "the default gains"
+    from fuzzkit.control.spec_reader import load_spec
+
+    spec = load_spec(args.spec)
+    shared = {(a.kp, a.ki, a.kx) for a in spec.axes}
+    if len(shared) != 1:
+        return None, "the default gains (the spec's axes have different gains)"
+    kp, ki, kx = shared.pop()
+    gains = {"kp": kp, "ki": ki, **({"kx": kx} if controller == "fuzzy-pi" else {})}
+    from fuzzkit.studies.experiments import DEFAULT_GAINS
+
+    return {**DEFAULT_GAINS[controller], **gains}, f"the gains of {args.spec}"
 
 
 def _tuning_target(args: argparse.Namespace) -> tuple[list[Any], str, str, str]:
@@ -363,75 +422,72 @@ def _certified_over(args: argparse.Namespace, first: Any, controller: str, ruleb
     """The ``--certify`` predicate (``fuzzkit.analysis.region.CertifiedOver``) on the first
     tuned experiment (its period, contact damping and sensor)."""
     from fuzzkit.analysis.region import CertifiedOver
-    from fuzzkit.cli.sweep import parse_latencies
     from fuzzkit.studies.experiments import experiment
 
-    ks = parse_stiffness(args.certify)
+    ks = args.certify
     return CertifiedOver(
         experiment(first) if isinstance(first, str) else first,
         controller,
         args.plant,
         tuple(ks),
-        tuple(parse_latencies(args.certify_latency)),
+        tuple(args.certify_latency),
         rulebase,
     )
 
 
 def _latencies(pairs: Any) -> str:
-    return "/".join(f"{a}:{b}" for a, b in pairs)
+    return latencies_text(pairs)
 
 
 def _pct(new: float, old: float) -> str:
     return f"{100.0 * (new - old) / old:+.1f} %" if old > 0.0 else "n/a"
 
 
-def _metric(v: Any, unit: str, digits: int, missing: str = "never") -> str:
+def _metric(v: Any, unit: str, digits: int, missing: str) -> str:
     return missing if v is None else f"{v:.{digits}f}{unit}"
 
 
-def tune_report_lines(result: Any, cases: Any) -> list[str]:
+def tune_report_lines(result: Any, cases: Any, start: str = "the default gains") -> list[str]:
     """What ``fuzzkit tune`` prints after the search: the rule, the verdict, per-case numbers.
 
     ``result`` is a ``fuzzkit.studies.tuning.TuneResult``, ``cases`` the
-    ``fuzzkit.studies.tuning_check.compare_cases`` of it.
+    ``fuzzkit.studies.tuning_check.compare_cases`` of it, ``start`` what the search started
+    from and is judged against (the default gains, or a spec's).
     """
     what = "experiment x stiffness x latency" if result.latencies else "experiment x stiffness"
     rule = (
-        f"no worse than the default gains on every case ({what})"
+        f"no worse than {start} on every case ({what})"
         if result.admit == "case"
-        else "no worse than the default gains on each experiment's mean over the stiffnesses"
+        else f"no worse than {start} on each experiment's mean over the stiffnesses"
     )
     lines = [f"  admissible: {rule}"]
     lines.append(
-        f"  cost {result.cost:.6g} vs default gains {result.baseline_cost:.6g} "
+        f"  cost {result.cost:.6g} vs {start} {result.baseline_cost:.6g} "
         f"({_pct(result.cost, result.baseline_cost)})"
     )
     refused = result.refusals()
     if result.kept_defaults and refused:
-        lines.append(
-            "  kept the default gains: every cheaper candidate was worse than them somewhere"
-        )
+        lines.append(f"  kept {start}: every cheaper candidate was worse than them somewhere")
     elif result.kept_defaults:
         lines.append(
-            f"  kept the default gains: none of the {result.evaluations} gain sets tried was "
-            "cheaper"
+            f"  kept {start}: none of the {result.evaluations} gain sets tried was cheaper"
         )
     if refused:
         lines.append(
             f"  the cheapest candidate (cost {result.cheapest_cost:.6g}, "
-            f"{_pct(result.cheapest_cost, result.baseline_cost)} vs the defaults) was refused: "
-            "worse than the defaults on "
+            f"{_pct(result.cheapest_cost, result.baseline_cost)} vs {start}) was refused: "
+            f"worse than {start} on "
             + ", ".join(f"{k} ({c:.4g} vs {b:.4g}, {_pct(c, b)})" for k, c, b in refused)
         )
     if cases:
-        lines.append("  per case, tuning cost and the full run (default -> tuned gains):")
+        lines.append(f"  per case, tuning cost and the full run ({start} -> tuned gains):")
     for c in cases:
         parts = [f"cost {c.default_cost:.4g} -> {c.tuned_cost:.4g} ({c.cost_change_pct:+.1f} %)"]
         for axis, d in c.default_axes.items():
             t = c.tuned_axes[axis]
             parts.append(
-                f"{axis}: settling {_metric(d['settling_time_s'], ' s', 2)} -> "
-                f"{_metric(t['settling_time_s'], ' s', 2)}, overshoot "
+                f"{axis}: settling {settling_text(d, c.default_tripped)} -> "
+                f"{settling_text(t, c.tuned_tripped)}, overshoot "
                 f"{_metric(d['overshoot_pct'], ' %', 1, 'n/a')} -> "
                 f"{_metric(t['overshoot_pct'], ' %', 1, 'n/a')}"
             )
@@ -440,9 +496,11 @@ def tune_report_lines(result: Any, cases: Any) -> list[str]:
         verdict = "worse" if c.tuned_cost > c.default_cost + 1e-12 else "no worse"
         lines.append(f"    {c.label} ({verdict}): " + "; ".join(parts))
     for name, cost in result.experiment_costs.items():
-        lines.append(f"  {name}: {cost:.6g} (default {result.baseline_experiment_costs[name]:.6g})")
+        lines.append(
+            f"  {name}: {cost:.6g} ({start}: {result.baseline_experiment_costs[name]:.6g})"
+        )
     gains = ", ".join(f"{k}={v:.6g}" for k, v in result.gains.items())
-    lines.append(f"  gains: {gains}" + (" (the defaults)" if result.kept_defaults else ""))
+    lines.append(f"  gains: {gains}" + (f" ({start})" if result.kept_defaults else ""))
     return lines
 
 

@@ -81,7 +81,7 @@ FIGURE_DPI = 80
 
 def quick_options(plant: str = "planar") -> dict[str, Any]:
     """Keyword arguments of :func:`build_report` for a small, fast report (``fuzzkit report
-    --quick``; the tests): tuning on ``plant`` over 10 N/mm x latencies 1+1 and 3+3, the
+    --quick``; the tests): tuning on ``plant`` over 10 N/mm x latencies 1:1 and 3:3, the
     stiffness study and the verdicts at 10 and 1000 N/mm, the latency map for 1x and 8x the gains
     up to 3 periods. Every section is there; only the sweeps are shorter."""
     return {
@@ -480,7 +480,7 @@ def _markdown(
         "## Verdicts at a glance",
         "",
         "Each claim is judged per setting: plant x gains (default, matched, tuned) at the "
-        "nominal condition (latency 1 + 1 periods, 10 N/mm), and plant x gains (matched, "
+        "nominal condition (latency 1:1 periods, 10 N/mm), and plant x gains (matched, "
         "tuned) at "
         + ", ".join(c.label for c in conds if c.label != NOMINAL)
         + " (section Verdicts per setting).",
@@ -566,7 +566,7 @@ def _markdown(
         "## Verdicts per setting",
         "",
         "The paper's claims with matched and with tuned gains at each latency (at 10 N/mm) and "
-        "each stiffness of the stiffness study (at latency 1 + 1): **yes** holds, no does not "
+        "each stiffness of the stiffness study (at latency 1:1): **yes** holds, no does not "
         "hold, no (=) no clear difference, trip not judged because that controller (PI, "
         "fuzzy-PI or both) tripped the safety limit and stopped. The numbers behind every cell "
         "follow the tables.",

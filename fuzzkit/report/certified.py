@@ -13,6 +13,7 @@ from fuzzkit.analysis.region import certify_cell, fuzzy_part
 from fuzzkit.analysis.regulation import impact_speed_limit
 from fuzzkit.studies.experiments import press_experiment
 from fuzzkit.studies.latency_sweep import StabilityMap, scaled_default_gains
+from fuzzkit.units import latency_text
 
 #: The plant the report's stiffness study and latency map run on.
 PLANT = "planar"
@@ -51,7 +52,7 @@ def stiffness_lines(
         "",
         f"Each run above against the stability certificate (`fuzzkit stability`, "
         f"[docs/stability.md](../stability.md)) for the same gains, {PLANT} plant, latency "
-        f"{latency[0]}+{latency[1]}: **C** certified, **-** not; then the run: settled, or "
+        f"{latency_text(latency)}: **C** certified, **-** not; then the run: settled, or "
         "tripped. The last column is the approach speed above which the impact alone passes "
         f"the {exp.force_limit_n:g} N limit: stiffness x speed x {1e3 * delay:.0f} ms (the "
         "engagement, the delays and the inner loop's lags) > limit - set point, whatever the "

@@ -1,7 +1,7 @@
 """The report's runs as data: every plant x experiment x controller x gains x condition.
 
 A *condition* is where the claims are judged besides the nominal one (each experiment's own
-latency, 1 + 1 periods, and stiffness, 10 N/mm): another latency at the nominal stiffness, or
+latency, 1:1 periods, and stiffness, 10 N/mm): another latency at the nominal stiffness, or
 another stiffness at the nominal latency. Each run is a :class:`~fuzzkit.studies.batch.RunSpec`
 (the compiled loop where the plant has one, as ``fuzzkit simulate`` runs it), executed once per
 report whatever asks for it (:class:`RunCache`), on local worker processes.
@@ -16,6 +16,7 @@ from typing import Any
 from fuzzkit.report.verdicts import NOMINAL, Key
 from fuzzkit.studies.batch import RunSpec, gains_items, map_runs
 from fuzzkit.studies.experiments import DEFAULT_LATENCY
+from fuzzkit.units import latency_text
 
 #: The stiffness of every shipped experiment (N/mm): the nominal condition's.
 NOMINAL_STIFFNESS_N_PER_MM = 10.0
@@ -38,7 +39,7 @@ def conditions(
     out = [Condition(NOMINAL)]
     for a, b in latencies:
         if (a, b) != DEFAULT_LATENCY:
-            out.append(Condition(f"latency {a}+{b}", latency=(a, b)))
+            out.append(Condition(f"latency {latency_text((a, b))}", latency=(a, b)))
     for k in stiffnesses_n_per_mm:
         if k != NOMINAL_STIFFNESS_N_PER_MM:
             out.append(Condition(f"{k:g} N/mm", stiffness_n_per_mm=float(k)))

@@ -20,6 +20,7 @@ from fuzzkit.errors import ConfigError
 from fuzzkit.progress import progress_bar
 from fuzzkit.studies.tuning import TuningProblem
 from fuzzkit.studies.tuning_check import CaseComparison, compare_gains
+from fuzzkit.units import latency_text
 
 
 @dataclass(frozen=True, slots=True)
@@ -43,7 +44,7 @@ class TuningSetup:
 
     def describe(self) -> str:
         """One line for the report: what the gains were tuned on."""
-        lats = ", ".join(f"{a}+{b}" for a, b in self.latencies)
+        lats = ", ".join(latency_text(p) for p in self.latencies)
         ks = ", ".join(f"{k:g}" for k in self.stiffnesses_n_per_mm)
         n = len(self.experiments) * len(self.stiffnesses_n_per_mm) * len(self.latencies)
         rule = (
@@ -168,22 +169,31 @@ def _m(axes: Mapping[str, Mapping[str, Any]], metric: str, unit: str, digits: in
 def tuned_vs_default_markdown(cases: Mapping[str, Sequence[CaseComparison]]) -> str:
     """Per controller and case: tuning cost, z overshoot and z settling, default -> tuned."""
     lines = [
-        "| controller | case | cost default -> tuned | change | z overshoot % | z settle s | "
-        "trip |",
-        "|---|---|---|---|---|---|---|",
+        "| controller | case | cost default -> tuned | change | tuned vs defaults | "
+        "z overshoot % | z settle s | trip |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for ctrl, rows in cases.items():
         for c in rows:
             trip = f"{'yes' if c.default_tripped else 'no'} -> {'yes' if c.tuned_tripped else 'no'}"
             lines.append(
                 f"| {ctrl} | {c.label} | {c.default_cost:.4g} -> {c.tuned_cost:.4g} | "
-                f"{c.cost_change_pct:+.1f} % | "
+                f"{c.cost_change_pct:+.1f} % | {case_verdict(c)} | "
                 f"{_m(c.default_axes, 'overshoot_pct', '', 1)} -> "
                 f"{_m(c.tuned_axes, 'overshoot_pct', '', 1)} | "
                 f"{_m(c.default_axes, 'settling_time_s', ' s', 2)} -> "
                 f"{_m(c.tuned_axes, 'settling_time_s', ' s', 2)} | {trip} |"
             )
     return "\n".join(lines)
+
+
+def case_verdict(c: CaseComparison) -> str:
+    """How the tuned gains fare against the defaults on one case, as the per-case table says
+    it: **loses to the defaults** when they cost more (or trip where the defaults do not),
+    better when they cost less, the same otherwise."""
+    if (c.tuned_tripped and not c.default_tripped) or c.tuned_cost > c.default_cost + 1e-12:
+        return "**loses to the defaults**"
+    return "better" if c.tuned_cost < c.default_cost - 1e-12 else "same"
 
 
 def worse_cases(cases: Sequence[CaseComparison]) -> list[CaseComparison]:

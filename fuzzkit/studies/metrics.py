@@ -12,6 +12,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.control.names import AXES
+from fuzzkit.studies.outcome import axis_outcome
 from fuzzkit.studies.runner import RunResult
 
 Vec = npt.NDArray[np.float64]
@@ -212,6 +213,7 @@ SUMMARY_AXIS_KEYS = (
     "peak_force_true",
     "peak_force_measured",
     "contact_lost_s",
+    "outcome",  # fuzzkit.studies.outcome: settled, never settled, no contact, tripped
 )
 
 
@@ -226,13 +228,17 @@ def summary(result: RunResult) -> dict[str, Any]:
     ``safety_limit``, ``tripped``), times, and per-axis metrics.
 
     Only force-controlled axes appear under ``axes`` (z first). Values that do not apply (the
-    overshoot of a 0 N set point, the RMS while moving of a held path) are None (JSON null).
+    overshoot of a 0 N set point, the RMS while moving of a held path) are None (JSON null);
+    each axis's ``outcome`` says in words why a settling time is missing
+    (:mod:`fuzzkit.studies.outcome`: settled, never settled, no contact, tripped).
     """
-    axes: dict[str, dict[str, float | None]] = {}
+    axes: dict[str, dict[str, Any]] = {}
     for i in (2, 0, 1):
         if result.experiment.selection[i]:
             m = axis_metrics(result, i)
-            axes[AXES[i]] = {k: m[k] for k in SUMMARY_AXIS_KEYS}
+            row: dict[str, Any] = {k: m.get(k) for k in SUMMARY_AXIS_KEYS}
+            row["outcome"] = axis_outcome(m, result.tripped)
+            axes[AXES[i]] = row
     return {
         "experiment": result.experiment.name,
         "controller": result.controller,

@@ -34,6 +34,7 @@ from fuzzkit.plants.contract import Scenario
 from fuzzkit.plants.environment import Box, EnvObject, RoughSurface, Table, Waypoint
 from fuzzkit.studies.faults import FAULTS
 from fuzzkit.studies.task import Experiment, with_spec
+from fuzzkit.units import parse_stiffness
 
 SCENARIO_DOCUMENT = DocumentKind(
     "scenario",
@@ -81,6 +82,20 @@ MIN_PERIOD_S = 1e-4
 MAX_PERIOD_S = 0.1
 MAX_STEPS = 1_000_000
 MAX_LATENCY_PERIODS = 1000
+
+
+#: Fields whose name ends so are stiffnesses in N/m that also take a value with its unit.
+STIFFNESS_SUFFIX = "stiffness_n_per_m"
+
+
+def _spelled_out(node: Node) -> bool:
+    """A plain string scalar holding letters (a number with its unit, ``10 N/mm``)."""
+    return (
+        isinstance(node, ScalarNode)
+        and node.style is None
+        and any(c.isalpha() for c in node.value)
+        and any(c.isdigit() for c in node.value)
+    )
 
 
 class _ScenarioReader(NodeReader):
@@ -186,6 +201,12 @@ class _ScenarioReader(NodeReader):
                 return None
             nums = [self.finite(n, what) for n in items]
             return None if any(v is None for v in nums) else tuple(nums)
+        if f.name.endswith(STIFFNESS_SUFFIX) and _spelled_out(node):
+            try:  # the key's unit is N/m; another is accepted spelled out ("10 N/mm")
+                return parse_stiffness(node.value, "N/m")
+            except ConfigError as exc:
+                self.error(node, f"{what}: {exc}")
+                return None
         return self.finite(node, what)
 
     def path(self, node: Node) -> tuple[Waypoint, ...] | None:
@@ -502,6 +523,14 @@ def json_schema() -> dict[str, Any]:
                 props[f.name] = {"type": "integer", "minimum": 0}
             elif t.startswith("tuple"):
                 props[f.name] = {"type": "array", "items": number, "minItems": 3, "maxItems": 3}
+            elif f.name.endswith(STIFFNESS_SUFFIX):
+                props[f.name] = {
+                    "oneOf": [
+                        number,
+                        {"type": "string", "pattern": r"^\s*[0-9.eE+-]+\s*(N/mm|N/m|kN/m)\s*$"},
+                    ],
+                    "description": "N/m, or a number with its unit (10 N/mm, 1e4 N/m)",
+                }
             else:
                 props[f.name] = number
             if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:

@@ -2,7 +2,10 @@
 
 One row of panels per force-controlled axis: the measured and true force against the set point
 (N), the force error ``e`` (N), and the correction ``u`` with its per-period step ``du`` (mm,
-``du`` on a second scale). The engagement and a safety trip are marked on every panel.
+``du`` on a second scale). The engagement and a safety trip are marked on every panel. After a
+trip the controller computes no error and no increment (it retreats): those panels draw
+nothing there and say "tripped: retreating", rather than a frozen last value. The title gives
+each axis's outcome in the words of :mod:`fuzzkit.studies.outcome`.
 """
 
 from __future__ import annotations
@@ -13,6 +16,8 @@ from typing import Any
 
 import numpy as np
 
+from fuzzkit.studies.metrics import summary
+from fuzzkit.studies.outcome import TRIPPED, settling_text
 from fuzzkit.studies.runner import RunResult
 from fuzzkit.viz.figures import new_figure, save_figure
 from fuzzkit.viz.run_series import engaged_index
@@ -33,6 +38,7 @@ def run_figure(result: RunResult) -> Any:
     # before engagement the loop computes no error: draw none (a 0 would read "no error" while
     # 0 N meets the set point), as the recordings log none
     idle = slice(0, engaged_index(result))
+    retreat = slice(_trip_index(result), len(result.t))
     for row, i in enumerate(axes_idx):
         a = "xyz"[i]
         ax_f, ax_e, ax_u = grid[row]
@@ -43,6 +49,7 @@ def run_figure(result: RunResult) -> Any:
         ax_f.set_ylabel(f"f{a} [N]")
         e = result.e[:, i].astype(float)
         e[idle] = np.nan
+        e[retreat] = np.nan
         ax_e.plot(result.t, e, color=_FORCE, lw=0.8)
         ax_e.axhline(0.0, color="0.4", lw=0.5)
         ax_e.set_ylabel(f"e{a} = set - measured [N]")
@@ -51,6 +58,7 @@ def run_figure(result: RunResult) -> Any:
         ax_du = ax_u.twinx()
         du = result.du[:, i] * 1e3
         du[idle] = np.nan
+        du[retreat] = np.nan
         ax_du.plot(result.t, du, color=_TRUE, lw=0.5, alpha=0.6)
         ax_u.set_zorder(ax_du.get_zorder() + 1)  # u in front of the noisier du
         ax_u.patch.set_visible(False)
@@ -58,6 +66,17 @@ def run_figure(result: RunResult) -> Any:
         for ax in (ax_f, ax_e, ax_u):
             ax.grid(alpha=0.3)
             _mark_events(ax, result)
+        if result.trip_time_s is not None:
+            for ax, what in ((ax_e, "no error computed"), (ax_u, "u: the back-off")):
+                ax.annotate(
+                    f"{TRIPPED}: retreating,\n{what}",
+                    (0.5 * (result.trip_time_s + float(result.t[-1])), 0.5),
+                    xycoords=("data", "axes fraction"),
+                    ha="center",
+                    va="center",
+                    color=_TRIP,
+                    fontsize=8,
+                )
         if row == 0:
             ax_f.set_title("force")
             ax_e.set_title("force error")
@@ -68,6 +87,13 @@ def run_figure(result: RunResult) -> Any:
     fig.suptitle(_title(result), fontsize=10)
     fig.tight_layout()
     return fig
+
+
+def _trip_index(result: RunResult) -> int:
+    """The first period after the trip (the run's length when it did not trip)."""
+    if result.trip_time_s is None:
+        return len(result.t)
+    return int(np.searchsorted(result.t, result.trip_time_s, side="right"))
 
 
 def _mark_events(ax: Any, result: RunResult) -> None:
@@ -97,9 +123,13 @@ def _title(result: RunResult) -> str:
         if result.engaged_time_s is not None
         else "never engaged"
     )
+    outcomes = ", ".join(
+        f"{axis} {settling_text(m, result.tripped)}" for axis, m in summary(result)["axes"].items()
+    )
     return (
         f"{exp.name} {result.controller} on {result.plant} ({result.controller_impl})\n"
-        f"{engaged}, {trip}, peak true force {peak:.1f} N (limit {exp.force_limit_n:g} N)"
+        f"{engaged}, {trip}, peak true force {peak:.1f} N (limit {exp.force_limit_n:g} N); "
+        f"settling: {outcomes}"
     )
 
 

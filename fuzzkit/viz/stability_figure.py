@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from fuzzkit.analysis.region import Region
+from fuzzkit.units import latency_text
 
 #: Fill colour per verdict, and the marker per simulated outcome.
 _FILL = {
@@ -44,7 +45,7 @@ def region_figure(region: Region, simulated: Sequence[str] | None = None) -> Any
     ax.set_xlim(-0.5, len(ks) - 0.5)
     ax.set_ylim(-0.5, len(lats) - 0.5)
     ax.set_xticks(range(len(ks)), [f"{k:g}" for k in ks])
-    ax.set_yticks(range(len(lats)), [f"{s}+{c}" for s, c in lats])
+    ax.set_yticks(range(len(lats)), [latency_text(lat) for lat in lats])
     period_ms = 1e3 * float(region.model["period_s"])
     ax.set_xlabel("contact stiffness (N/mm)")
     ax.set_ylabel(f"latency sensor+command (periods of {period_ms:g} ms)")

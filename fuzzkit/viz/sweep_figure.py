@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from fuzzkit.units import latency_text
 from fuzzkit.viz.figures import figure_bytes, new_figure
 from fuzzkit.viz.palette import TRIP_LABEL, TRIP_STYLE, controller_colour, controller_name
 
@@ -38,7 +39,7 @@ def case_label(row: Mapping[str, Any]) -> str:
     parts = [
         str(row["experiment"]),
         "own stiffness" if k is None else f"{k:g} N/mm",
-        f"latency {row['sensor_delay']}+{row['command_delay']} periods",
+        f"latency {latency_text((row['sensor_delay'], row['command_delay']))} periods",
     ]
     if row.get("gains", "default") != "default":
         parts.append(Path(str(row["gains"])).stem)

@@ -1,0 +1,75 @@
+"""The options every command spells alike: ``--stiffness``, ``--latency``, and old spellings.
+
+Each is an argparse ``type`` over :mod:`fuzzkit.units`, so that a
+value copied from one command's output or docs works in every other command: stiffness as
+``100``, ``100N/mm`` or ``1e5N/m`` (the CLI's own unit is N/mm); latency as ``S:C`` or
+``S,C``; several latencies as ``0:0,2:1``. A bad value is an argparse error (exit 2, the
+accepted spellings named). ``--png FILE`` is always the figure a command draws and ``--out``
+its main output (a table, a gains file, a folder); an old spelling stays as a hidden alias
+(:func:`store_alias`).
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+from typing import Any, TypeVar
+
+from fuzzkit import units
+from fuzzkit.errors import ConfigError
+
+T = TypeVar("T")
+
+#: Metavars shown in ``--help``, one per option kind.
+STIFFNESS_METAVAR = "K"
+STIFFNESSES_METAVAR = "K[,K...]"
+LATENCY_METAVAR = "S:C"
+LATENCIES_METAVAR = "S:C[,S:C...]"
+#: The spellings, said once in every ``--help`` that takes them.
+STIFFNESS_HELP = "N/mm, or with a unit: 100, 100N/mm, 1e5N/m"
+LATENCY_HELP = "sensor:command delays in periods, S:C or S,C"
+
+
+def _argparse_type(parse: Callable[[str], T], name: str) -> Callable[[str], T]:
+    """``parse`` as an argparse type: a ConfigError becomes argparse's own error."""
+
+    def convert(text: str) -> T:
+        try:
+            return parse(text)
+        except ConfigError as exc:
+            raise argparse.ArgumentTypeError(str(exc).removeprefix("--latency: ")) from None
+
+    convert.__name__ = name
+    return convert
+
+
+def _stiffness_n_per_mm(text: str) -> float:
+    return units.parse_stiffness(text) / 1e3
+
+
+def _stiffnesses_n_per_mm(text: str) -> list[float]:
+    return [k / 1e3 for k in units.parse_stiffnesses(text)]
+
+
+def _latency_pair(text: str) -> tuple[int, int]:
+    sensor, command = units.parse_latency(text)
+    if command is None:  # parse_latency without sensor_only always gives both
+        raise ConfigError(f"expected S:C, got {text!r}")
+    return sensor, command
+
+
+#: One stiffness, in N/mm (``100``, ``100N/mm``, ``1e5N/m``).
+stiffness = _argparse_type(_stiffness_n_per_mm, "stiffness")
+#: Comma-separated stiffnesses, in N/mm.
+stiffnesses = _argparse_type(_stiffnesses_n_per_mm, "stiffnesses")
+#: One latency ``S:C`` / ``S,C`` (``S`` alone: the sensor delay; command None).
+latency_or_sensor = _argparse_type(lambda t: units.parse_latency(t, sensor_only=True), "latency")
+#: One latency pair, ``S:C`` or ``S,C``.
+latency = _argparse_type(_latency_pair, "latency")
+#: Several latencies: ``0:0,2:1`` (or ``0,0;2,1``, ``"0,0 2,1"``).
+latencies = _argparse_type(units.parse_latencies, "latencies")
+
+
+def store_alias(parser: argparse.ArgumentParser, *flags: str, dest: str, **kw: Any) -> None:
+    """An old spelling of an option, kept working and hidden from ``--help``."""
+    parser.add_argument(*flags, dest=dest, help=argparse.SUPPRESS, **kw)
