@@ -40,11 +40,11 @@ import mujoco
 import numpy as np
 import numpy.typing as npt
 
-from fuzzkit.errors import ConfigError
+from fuzzkit.errors import ConfigError, SimulationError
 from fuzzkit.plants.arm6 import Arm6Parameters, Arm6Plant
-from fuzzkit.plants.contact import ContactModel
+from fuzzkit.plants.contact import ContactModel, SensorModel
 from fuzzkit.plants.contract import PlantSample, Scenario, normal_force_by_axis
-from fuzzkit.plants.environment import RoughSurface
+from fuzzkit.plants.environment import RoughSurface, Waypoint
 from fuzzkit.plants.mujoco_model import (
     GAIN_POSE,
     PHYSICS_DT_S,
@@ -150,6 +150,7 @@ class MujocoArmPlant(Arm6Plant):
         self._servo_qpos = np.array(
             [m.jnt_qposadr[m.actuator_trnid[a, 0]] for a in range(m.nu)], dtype=np.int64
         )
+        self._elastic = np.array([dyn.is_elastic(i) for i in range(m.nu)])
         self._tip = m.geom("tip").id
         self._tool_body = m.body("tool").id
         self._set_gains(m, d)
@@ -163,9 +164,8 @@ class MujocoArmPlant(Arm6Plant):
         mujoco.mj_resetData(m, d)
         q0 = np.array(self._q)
         d.qpos[self._link_qpos] = q0
-        if dyn.elastic:
-            d.qpos[self._servo_qpos] = q0
-            d.qpos[self._link_qpos] = 0.0
+        d.qpos[self._servo_qpos] = q0
+        d.qpos[self._link_qpos[self._elastic]] = 0.0
         d.ctrl[:] = q0
         self._ref_prev = q0.copy()
         mujoco.mj_kinematics(m, d)
@@ -182,10 +182,7 @@ class MujocoArmPlant(Arm6Plant):
     def _set_gains(self, m: mujoco.MjModel, d: mujoco.MjData) -> None:
         """PD gains of every servo from its joint's inertia at :data:`GAIN_POSE`."""
         dyn = self.dynamics
-        if dyn.elastic:
-            d.qpos[self._servo_qpos] = GAIN_POSE
-        else:
-            d.qpos[self._link_qpos] = GAIN_POSE
+        d.qpos[self._servo_qpos] = GAIN_POSE
         mujoco.mj_forward(m, d)
         full = np.zeros((m.nv, m.nv))
         mujoco.mj_fullM(m, d, full)
@@ -250,8 +247,11 @@ class MujocoArmPlant(Arm6Plant):
         if saturated.any():
             names = ", ".join(self._robot_base.joints[i].name for i in np.flatnonzero(saturated))
             messages.append(f"servo torque limit on {names}")
-        if not np.all(np.isfinite(d.qpos)):
-            raise ConfigError(f"t={self._t:.3f} s: the MuJoCo simulation diverged")
+        if d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number or not np.all(np.isfinite(d.qpos)):
+            raise SimulationError(
+                f"t={self._t:.3f} s: the MuJoCo simulation diverged (a contact or joint "
+                "stiffness too high for its 1 kHz physics step)"
+            )
         force = self._contact_force()
         if self._tilts:
             self._rot_sensor = np.asarray(matrix_from_quat(quat))
@@ -273,10 +273,16 @@ class MujocoArmPlant(Arm6Plant):
 
     def _link_angles(self) -> FloatArray:
         """The links' joint angles (rad): motor plus spring deflection when elastic."""
-        q = np.array(self.data.qpos[self._link_qpos])
-        if self.dynamics.elastic:
-            q += self.data.qpos[self._servo_qpos]
+        d = self.data
+        q = np.array(d.qpos[self._servo_qpos])
+        q[self._elastic] += d.qpos[self._link_qpos[self._elastic]]
         return q
+
+    def deflection(self) -> FloatArray:
+        """The joint springs' deflections, link minus motor angle (rad); zeros when rigid."""
+        out = np.zeros(len(self._link_qpos))
+        out[self._elastic] = self.data.qpos[self._link_qpos[self._elastic]]
+        return out
 
     def _wrist(self) -> FloatArray:
         """The flange sensor's force (N, sensor frame), in the kit's sign: the force the wrist
@@ -331,3 +337,45 @@ class MujocoArmPlant(Arm6Plant):
             force_normal=normal_force_by_axis(self._normals, self._sensor_rotation()),
             tool_rotation=None if self._rot_sensor is None else self._rot_sensor.copy(),
         )
+
+
+class ElasticMujocoArmPlant(MujocoArmPlant):
+    """The MuJoCo IRB 140 with a spring-damper between motor and link on axes 1-3 (name
+    ``mujoco-elastic``; :class:`~fuzzkit.plants.mujoco_model.ArmDynamics`)."""
+
+    name = "mujoco-elastic"
+
+    def __init__(
+        self, params: Arm6Parameters | None = None, dynamics: ArmDynamics | None = None
+    ) -> None:
+        super().__init__(params, dynamics or ArmDynamics(elastic=True))
+
+
+def servo_step_response(
+    joint: int,
+    step_rad: float,
+    duration_s: float,
+    dynamics: ArmDynamics | None = None,
+) -> tuple[FloatArray, FloatArray]:
+    """One joint's position loop answering a reference step, the arm in free space at rest at
+    E1's start: ``(t, link angle change)`` sampled every physics step (s, rad). The other joints
+    hold their references, so the coupling through the arm's inertia is in the answer."""
+    plant = MujocoArmPlant(dynamics=dynamics)
+    scenario = Scenario(
+        name="servo step",
+        path=(Waypoint(0.0, 0.4, 0.0, -0.19),),
+        objects=(),
+        duration_s=duration_s,
+        sensor=SensorModel(noise_std_n=0.0),
+    )
+    plant.reset(scenario)
+    m, d = plant.model, plant.data
+    start = plant._link_angles()[joint]
+    d.ctrl[joint] += step_rad
+    n = round(duration_s / PHYSICS_DT_S)
+    t: FloatArray = np.arange(1, n + 1, dtype=np.float64) * PHYSICS_DT_S
+    q = np.empty(n)
+    for i in range(n):
+        mujoco.mj_step(m, d)
+        q[i] = plant._link_angles()[joint] - start
+    return t, q

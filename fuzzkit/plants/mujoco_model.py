@@ -53,7 +53,9 @@ class ArmDynamics:
     bandwidth_hz, damping_ratio : the position loop's natural frequency and damping; the gains
         are ``kp = M_ii w^2``, ``kv = 2 zeta w M_ii`` with ``M_ii`` the joint's inertia (links and
         rotor) at :data:`GAIN_POSE`.
-    elastic : a spring-damper between each motor and its link.
+    elastic : a spring-damper between each motor and its link, on the joints whose
+        ``joint_stiffness_n_m_rad`` is not 0 (by default axes 1-3: the wrist's links are so
+        light that a realistic wrist spring would ring above 1 kHz, beyond the physics rate).
     joint_stiffness_n_m_rad, joint_damping_n_m_s : that spring-damper.
     """
 
@@ -67,28 +69,38 @@ class ArmDynamics:
     bandwidth_hz: float = 15.0
     damping_ratio: float = 1.0
     elastic: bool = False
-    joint_stiffness_n_m_rad: tuple[float, ...] = (1.2e5, 1.2e5, 6.0e4, 1.5e4, 1.5e4, 8.0e3)
-    joint_damping_n_m_s: tuple[float, ...] = (60.0, 60.0, 30.0, 5.0, 5.0, 2.0)
+    joint_stiffness_n_m_rad: tuple[float, ...] = (1.2e5, 1.2e5, 6.0e4, 0.0, 0.0, 0.0)
+    joint_damping_n_m_s: tuple[float, ...] = (60.0, 60.0, 30.0, 0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
-        per_joint = (
+        positive = (
             "link_mass_kg",
             "link_radius_m",
             "armature_kg_m2",
             "damping_n_m_s",
             "frictionloss_n_m",
             "torque_limit_n_m",
-            "joint_stiffness_n_m_rad",
-            "joint_damping_n_m_s",
         )
-        problems = [f"{n} needs 6 values" for n in per_joint if len(getattr(self, n)) != 6]
+        springs = ("joint_stiffness_n_m_rad", "joint_damping_n_m_s")
+        problems = [
+            f"{n} needs 6 values" for n in (*positive, *springs) if len(getattr(self, n)) != 6
+        ]
         problems += [
             f"{n} must be > 0"
-            for n in (*per_joint, "bandwidth_hz", "damping_ratio")
+            for n in (*positive, "bandwidth_hz", "damping_ratio")
             if not all(v > 0.0 and math.isfinite(v) for v in _values(getattr(self, n)))
+        ]
+        problems += [
+            f"{n} must be >= 0"
+            for n in springs
+            if not all(v >= 0.0 and math.isfinite(v) for v in getattr(self, n))
         ]
         if problems:
             raise ConfigError("arm dynamics: " + "; ".join(problems))
+
+    def is_elastic(self, joint: int) -> bool:
+        """Whether joint ``joint`` (0-based) has a spring between its motor and its link."""
+        return self.elastic and self.joint_stiffness_n_m_rad[joint] > 0.0
 
     @property
     def total_mass_kg(self) -> float:
@@ -158,7 +170,7 @@ def arm_mjcf(
             f'armature="{_f(dyn.armature_kg_m2[i])}" range="{_vec(lo, hi)}"'
         )
         head = f'<body name="body{i + 1}" pos="{_vec(*pos)}" quat="{_vec(*quat)}" gravcomp="1">'
-        if dyn.elastic:
+        if dyn.is_elastic(i):
             body_open.append(
                 f'<body name="motor{i + 1}" pos="{_vec(*pos)}" quat="{_vec(*quat)}" gravcomp="1">'
                 f'<inertial pos="0 0 0" mass="0.001" diaginertia="1e-6 1e-6 1e-6"/>'
@@ -183,7 +195,7 @@ def arm_mjcf(
         f'mass="{_f(tool_mass_kg)}" contype="1" conaffinity="0" condim="3"/>'
         f"</body>"
     )
-    actuated = [f"motor{i + 1}" if dyn.elastic else j.name for i, j in enumerate(joints)]
+    actuated = [f"motor{i + 1}" if dyn.is_elastic(i) else j.name for i, j in enumerate(joints)]
     actuators = "".join(
         f'<general name="servo{i + 1}" joint="{name}" gaintype="fixed" biastype="affine" '
         f'forcelimited="true" forcerange="{_vec(-tau, tau)}"/>'

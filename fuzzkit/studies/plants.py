@@ -15,6 +15,7 @@ PLANTS: dict[str, str] = {
     "planar": "fuzzkit.planar_sim:PlanarArmPlant",
     "arm6": "fuzzkit.plants.arm6:Arm6Plant",  # 6-DOF IRB 140 kinematic plant (issue 5)
     "mujoco": "fuzzkit.plants.mujoco_arm:MujocoArmPlant",  # the IRB 140 in MuJoCo (issue 30)
+    "mujoco-elastic": "fuzzkit.plants.mujoco_arm:ElasticMujocoArmPlant",  # with joint springs
 }
 
 
