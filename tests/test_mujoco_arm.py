@@ -179,14 +179,19 @@ def test_a_period_off_the_physics_step_and_unknown_objects_are_refused() -> None
         ArmDynamics(link_mass_kg=(1.0,))
 
 
-@pytest.mark.parametrize("controller", ["pi", "fuzzy-pi"])
+@pytest.mark.parametrize(
+    "plant, controller",
+    [("mujoco", "pi"), ("mujoco", "fuzzy-pi"), ("mujoco-elastic", "fuzzy-pi")],
+)
 @pytest.mark.parametrize("name", ["E1", "E2", "E3"])
-def test_the_paper_experiments_hold_their_set_points_on_it(name: str, controller: str) -> None:
-    """E1-E3 with the default gains on the dynamic arm: below the safety limit, no trip, the
-    set points held at the end."""
+def test_the_paper_experiments_hold_their_set_points_on_it(
+    name: str, plant: str, controller: str
+) -> None:
+    """E1-E3 with the default gains on the dynamic arm, rigid and elastic: below the safety
+    limit, no trip, the set points held at the end."""
     exp = experiment(name)
     surface = load_surface("macvicar_whelan") if controller == "fuzzy-pi" else None
-    r = run(exp, "mujoco", controller, surface=surface, seed=0)
+    r = run(exp, plant, controller, surface=surface, seed=0)
     assert not r.tripped
     assert float(np.max(np.abs(r.force_true))) < exp.force_limit_n
     tail = r.t >= r.t[-1] - 0.5
