@@ -199,3 +199,13 @@ def test_the_paper_experiments_hold_their_set_points_on_it(
         assert float(np.mean(r.force_true[tail, axis])) == pytest.approx(
             exp.setpoints[axis], abs=1.5
         )
+
+
+def test_the_servo_figure_draws_every_joint_beside_the_design() -> None:
+    from fuzzkit.viz.servo_step import servo_step_figure
+
+    fig = servo_step_figure(duration_s=0.05)
+    lines = fig.axes[0].get_lines()
+    assert [ln.get_label() for ln in lines] == [f"axis {i}" for i in range(1, 7)] + ["design"]
+    # every joint has started towards the step by 50 ms and none has run away
+    assert all(0.3 < ln.get_ydata()[-1] < 1.1 for ln in lines[:6])

@@ -180,7 +180,8 @@ class MujocoArmPlant(Arm6Plant):
         return self._mj_sample(nominal, nominal, ())
 
     def _set_gains(self, m: mujoco.MjModel, d: mujoco.MjData) -> None:
-        """PD gains of every servo from its joint's inertia at :data:`GAIN_POSE`."""
+        """PD gains of every servo from its joint's inertia at :data:`GAIN_POSE`: ``kp = M w^2``,
+        ``kv = 2 zeta w M`` less the gear's viscous damping (which damps the joint already)."""
         dyn = self.dynamics
         d.qpos[self._servo_qpos] = GAIN_POSE
         mujoco.mj_forward(m, d)
@@ -192,6 +193,8 @@ class MujocoArmPlant(Arm6Plant):
             dof = m.jnt_dofadr[m.actuator_trnid[a, 0]]
             inertia = full[dof, dof]
             kp, kv = inertia * w * w, 2.0 * dyn.damping_ratio * w * inertia
+            # the gear's viscous friction already damps: the servo adds the rest
+            kv = max(kv - dyn.damping_n_m_s[a], 0.0)
             m.actuator_gainprm[a, 0] = kp
             m.actuator_biasprm[a, :3] = (0.0, -kp, -kv)
             self._kv_over_kp[a] = kv / kp
