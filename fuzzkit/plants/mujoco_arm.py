@@ -152,6 +152,7 @@ class MujocoArmPlant(Arm6Plant):
         )
         self._elastic = np.array([dyn.is_elastic(i) for i in range(m.nu)])
         self._tip = m.geom("tip").id
+        self._arm_bodies = [m.body(f"body{i + 1}").id for i in range(m.nu)] + [m.body("tool").id]
         self._tool_body = m.body("tool").id
         self._set_gains(m, d)
         self._set_contact(m, scenario.contact)
@@ -244,9 +245,10 @@ class MujocoArmPlant(Arm6Plant):
                 self._follow_profiles()
             mujoco.mj_step(m, d)
             saturated |= np.abs(d.actuator_force) >= 0.999 * limits
-            self._sensor.update(t0 + s * PHYSICS_DT_S, PHYSICS_DT_S, self._wrist())
         self._ref_prev = ref
         self._t = t0 + self._dt
+        # the sensor model advances once per period on the period's last force, as on arm6
+        self._sensor.update(self._t, self._dt, self._wrist())
         if saturated.any():
             names = ", ".join(self._robot_base.joints[i].name for i in np.flatnonzero(saturated))
             messages.append(f"servo torque limit on {names}")
@@ -321,9 +323,10 @@ class MujocoArmPlant(Arm6Plant):
         self, nominal: FloatArray, target: FloatArray, messages: tuple[str, ...]
     ) -> PlantSample:
         q = self._q
-        ev = self.chain.evaluate(q)
-        arm = self.chain.frames_of(ev) - self._offset_arr
-        tip = np.array(self.data.geom_xpos[self._tip]) - self._offset_arr
+        d = self.data
+        # base, the joints' frame origins, the flange, the tool tip: arm6's polyline
+        tip = d.geom_xpos[self._tip] - self._offset_arr
+        arm = np.vstack((d.xpos[self._arm_bodies] - self._offset_arr, tip))
         pts = np.array(self._contacts) - self._offset_arr if self._contacts else np.zeros((0, 3))
         return PlantSample(
             t_s=self._t,
