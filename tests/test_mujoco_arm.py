@@ -11,7 +11,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from fuzzkit.errors import ConfigError
+from fuzzkit.errors import ConfigError, SimulationError
 from fuzzkit.plants.contact import GRAVITY_M_S2, ContactModel, SensorModel, ToolModel, tool_weight
 from fuzzkit.plants.contract import ContactPlant, Scenario
 from fuzzkit.plants.environment import RoughSurface, Table, Waypoint
@@ -231,3 +231,23 @@ def test_a_dask_cluster_gives_the_in_process_results_on_it() -> None:
     assert [[r[k] for k in keys] for r in remote] == [[r[k] for k in keys] for r in local]
     assert local[0]["plant"] == "mujoco"
     assert local[0]["z_steady_state_error_mean"] != local[1]["z_steady_state_error_mean"]
+
+
+def test_a_diverging_model_is_a_clear_error_and_prints_nothing(
+    capfd: pytest.CaptureFixture[str],
+) -> None:
+    """A wrist spring far too stiff for the 1 kHz step: MuJoCo's instability becomes a
+    SimulationError naming the cause, and MuJoCo's own warning is not printed."""
+    plant = MujocoArmPlant(
+        dynamics=ArmDynamics(
+            elastic=True,
+            joint_stiffness_n_m_rad=(1.2e5, 1.2e5, 6.0e4, 0.0, 0.0, 8.0e3),
+            joint_damping_n_m_s=(60.0, 60.0, 30.0, 0.0, 0.0, 2.0),
+        )
+    )
+    plant.reset(_press_scenario(1e4))
+    with pytest.raises(SimulationError, match="the MuJoCo simulation diverged"):
+        for _ in range(100):
+            plant.step(np.array([0.0, 0.0, -0.003]), 0.0)
+    out, err = capfd.readouterr()
+    assert out == "" and err == ""

@@ -78,6 +78,11 @@ def contact_solref(
     return -model.stiffness_n_per_m * scale, -model.damping_n_s_per_m * scale
 
 
+def _quiet(_message: str) -> None:
+    """MuJoCo's warning printer, silenced: the plant reads MuJoCo's warning counters
+    (``MjData.warning``) after every period and raises a located error instead."""
+
+
 @lru_cache(maxsize=16)
 def _compiled(xml: str) -> mujoco.MjModel:
     """The compiled model of an MJCF document (cached: compiling the height field is slow).
@@ -134,6 +139,7 @@ class MujocoArmPlant(Arm6Plant):
             tool.mass_kg,
             scene_geoms(scenario.objects, self._offset, self.params.object_half_width),
         )
+        mujoco.set_mju_user_warning(_quiet)
         m = _compiled(xml).__copy__()
         d = mujoco.MjData(m)
         self.model, self.data = m, d
