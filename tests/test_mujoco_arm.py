@@ -251,3 +251,16 @@ def test_a_diverging_model_is_a_clear_error_and_prints_nothing(
             plant.step(np.array([0.0, 0.0, -0.003]), 0.0)
     out, err = capfd.readouterr()
     assert out == "" and err == ""
+
+
+def test_the_compiled_ik_gives_the_reference_ik_run() -> None:
+    """The plant's IK through arm6's compiled twin against the Python reference: the same run
+    to within rounding (E1, PI, seed 0)."""
+    exp = experiment("E1")
+    fast, ref = MujocoArmPlant(), MujocoArmPlant()
+    ref.compiled_ik = False
+    a = run(exp, fast, "pi", seed=0)
+    b = run(exp, ref, "pi", seed=0)
+    assert np.max(np.abs(a.force_true - b.force_true)) < 1e-6
+    assert np.max(np.abs(a.joint_angles - b.joint_angles)) < 1e-9
+    assert np.max(np.abs(a.force_true[:, 2])) > 9.0  # the run did press

@@ -60,9 +60,10 @@ from fuzzkit.plants.environment3d import (
     objects_from_scenario,
     translated,
 )
-from fuzzkit.plants.kinematics import ChainEval, IKStatus, SerialChain
+from fuzzkit.plants.kinematics import ChainEval, IKResult, IKStatus, SerialChain
 from fuzzkit.plants.robot_description import RobotDescription, load_robot
 from fuzzkit.plants.rotations import (
+    Mat3,
     Quat,
     Vec3,
     matrix_from_quat,
@@ -555,14 +556,7 @@ class Arm6Plant:
         chain = self.chain
         p = self.params
 
-        res = chain.ik_fast(
-            matrix_from_quat(quat),
-            target_pos,
-            self._q_ik,
-            position_tolerance=p.ik_position_tolerance,
-            orientation_tolerance=p.ik_orientation_tolerance,
-            max_iterations=p.ik_iterations,
-        )
+        res = self._solve_ik(matrix_from_quat(quat), target_pos)
         self._ik_status = res.status
         if res.status is not IKStatus.CONVERGED:
             where = ", ".join(chain.robot.joints[i].name for i in res.at_limit)
@@ -597,6 +591,18 @@ class Arm6Plant:
         if limited:
             messages.append(f"joint speed limit on {', '.join(limited)}")
         return pos, quat, target_pos, messages
+
+    def _solve_ik(self, rotation: Mat3, position: Vec3) -> IKResult:
+        """This period's IK, warm-started from the previous solution (``self._q_ik``)."""
+        p = self.params
+        return self.chain.ik_fast(
+            rotation,
+            position,
+            self._q_ik,
+            position_tolerance=p.ik_position_tolerance,
+            orientation_tolerance=p.ik_orientation_tolerance,
+            max_iterations=p.ik_iterations,
+        )
 
     def _with_weight(self, force: FloatArray) -> FloatArray:
         """The sensor's input: the contact force plus the tool's weight (if it has a mass)."""

@@ -41,10 +41,12 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.errors import ConfigError, SimulationError
+from fuzzkit.plants import arm6_period
 from fuzzkit.plants.arm6 import Arm6Parameters, Arm6Plant
 from fuzzkit.plants.contact import ContactModel, SensorModel
 from fuzzkit.plants.contract import PlantSample, Scenario, normal_force_by_axis
 from fuzzkit.plants.environment import RoughSurface, Waypoint
+from fuzzkit.plants.kinematics import IKResult, IKStatus
 from fuzzkit.plants.mujoco_model import (
     GAIN_POSE,
     PHYSICS_DT_S,
@@ -53,7 +55,7 @@ from fuzzkit.plants.mujoco_model import (
     profile_pose,
     scene_geoms,
 )
-from fuzzkit.plants.rotations import matrix_from_quat
+from fuzzkit.plants.rotations import Mat3, Vec3, matrix_from_quat
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -112,6 +114,9 @@ class MujocoArmPlant(Arm6Plant):
     ) -> None:
         super().__init__(params)
         self.dynamics = dynamics or ArmDynamics()
+        #: IK through arm6's compiled twin (False: the Python reference, for comparison)
+        self.compiled_ik = True
+        self._ik_arrays: tuple[FloatArray, ...] | None = None
 
     # -- world building -------------------------------------------------------------------------
 
@@ -179,6 +184,18 @@ class MujocoArmPlant(Arm6Plant):
         self._follow_profiles()
         mujoco.mj_forward(m, d)
         self._sensor.settle(self._wrist())
+        chain = self.chain
+        self._ik_arrays = (
+            (
+                np.array(chain._links, dtype=np.float64),
+                np.array(chain._tool_r, dtype=np.float64),
+                np.array(chain._tool_p, dtype=np.float64),
+                np.array(chain.lower, dtype=np.float64),
+                np.array(chain.upper, dtype=np.float64),
+            )
+            if self.compiled_ik
+            else None
+        )
         self._true_task = np.zeros(3)
         self._normals: list[tuple[float, float, float]] = []
         self._contacts: list[FloatArray] = []
@@ -216,6 +233,33 @@ class MujocoArmPlant(Arm6Plant):
             m.geom_solref[g] = solref
             m.geom_solimp[g] = (IMPEDANCE, IMPEDANCE, 0.001, 0.5, 2.0)
             m.geom_friction[g, 0] = contact.friction
+
+    def _solve_ik(self, rotation: Mat3, position: Vec3) -> IKResult:
+        """arm6's IK, through its compiled twin (:func:`fuzzkit.plants.arm6_period.ik`, held
+        step for step to ``SerialChain.ik_fast`` by ``tests/test_compiled_loop.py``): a period
+        is mostly Python otherwise. A solve that does not converge is redone by the reference
+        for its errors and the joints at a limit, which the messages name."""
+        if self._ik_arrays is None:
+            return super()._solve_ik(rotation, position)
+        links, tool_r, tool_p, lo, hi = self._ik_arrays
+        q = np.array(self._q_ik, dtype=np.float64)
+        p = self.params
+        status = arm6_period.ik(
+            np.asarray(rotation, dtype=np.float64),
+            np.asarray(position, dtype=np.float64),
+            q,
+            links,
+            tool_r,
+            tool_p,
+            lo,
+            hi,
+            p.ik_position_tolerance,
+            p.ik_orientation_tolerance,
+            p.ik_iterations,
+        )
+        if status != arm6_period.IK_CONVERGED:
+            return super()._solve_ik(rotation, position)
+        return IKResult(q, IKStatus.CONVERGED, 0.0, 0.0, 0)
 
     # -- stepping -------------------------------------------------------------------------------
 
