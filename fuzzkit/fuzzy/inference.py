@@ -439,6 +439,31 @@ class Engine:
         names = self.input_names
         return lambda *values: self.evaluate_point(dict(zip(names, values, strict=True)))[name]
 
+    def centroid_intervals(
+        self, inputs: Mapping[str, npt.ArrayLike]
+    ) -> dict[str, tuple[FloatArray, FloatArray]]:
+        """For an interval type-2 rule base: each output's Karnik-Mendel centroid interval
+        ``(y_l, y_r)`` at every point (flattened; NaN where an input is NaN or nothing fires).
+
+        Raises
+        ------
+        EvaluationError
+            For a type-1 rule base (it has no interval).
+        """
+        if self._type2 is None:
+            raise EvaluationError(
+                f"rule base {self.rulebase.name!r} is type-1: it has no centroid interval"
+            )
+        flat = [a.reshape(-1) for a in self._coerce(inputs)]
+        bad = np.zeros(flat[0].shape, dtype=bool)
+        for a in flat:
+            bad |= np.isnan(a)
+        flat = [np.where(bad, 0.0, a) for a in flat]
+        return {
+            name: (np.where(bad, np.nan, lo), np.where(bad, np.nan, hi))
+            for name, (lo, hi) in self._type2.intervals(flat).items()
+        }
+
     def firing_strengths(self, inputs: Mapping[str, npt.ArrayLike]) -> FloatArray:
         """Weighted firing strength of every rule at every point, shape (points, rules).
 

@@ -133,16 +133,13 @@ class PiecewiseLinearGeometry:
         out: Variable,
         pieces: OutputPieces,
         heights: Sequence[float] | None = None,
-        breaks: Sequence[float] = (),
     ) -> None:
-        """``heights`` scales each term (an IT2 lower set, ``fuzzy.type2_inference``);
-        ``breaks`` adds static breakpoints (to share one cut with another geometry)."""
+        """``heights`` scales each term (an IT2 lower set, ``fuzzy.type2_inference``)."""
         self.implication = rb.operators.implication
         self.aggregation = rb.operators.aggregation
         self.heights = None if heights is None else np.asarray(heights, dtype=np.float64)
         lo, hi = out.low, out.high
         zs = {lo, hi}
-        zs.update(v for v in breaks if lo < v < hi)
         for t in out.terms:
             zs.update(v for v in membership.breakpoints(t) if lo < v < hi)
         z = _merge_close(np.array(sorted(zs)), hi - lo)
@@ -248,6 +245,19 @@ class PiecewiseLinearGeometry:
             cross = pts[..., :-1] + t * (pts[..., 1:] - pts[..., :-1])
             pts = np.sort(np.concatenate([pts, cross], axis=-1), axis=-1)
         return pts, lv
+
+    def values_at(self, y: FloatArray, lv: FloatArray) -> FloatArray:
+        """The aggregated set at any points ``y`` (B, n) of the range, for the slot levels
+        ``lv`` (B, m, K) that :meth:`sample_points` returns."""
+        k = np.clip(np.searchsorted(self.z1, y, side="left"), 0, len(self.z0) - 1)
+        lvk = lv[np.arange(y.shape[0])[:, None], k]
+        ell = np.maximum(self.slope[k] * y[..., None] + self.icpt[k], 0.0)
+        imp = np.minimum(lvk, ell) if self.implication == "min" else lvk * ell
+        if self.aggregation == "max":
+            return cast(FloatArray, imp.max(axis=-1))
+        if self.aggregation == "bounded_sum":
+            return cast(FloatArray, np.minimum(imp.sum(axis=-1), 1.0))
+        return _probabilistic_sum(imp)
 
     def integrals(
         self, levels: FloatArray

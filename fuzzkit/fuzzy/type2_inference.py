@@ -72,19 +72,10 @@ class _Type2Mamdani:
                 [membership.evaluate_term(t, self.grid) for t in low_var.terms]
             )
             return
-        # one static cut shared by both sets, so that both are linear between merged points
-        breaks: set[float] = set()
-        for _ in range(4):
-            upper = PiecewiseLinearGeometry(rb, out, self.pieces, breaks=sorted(breaks))
-            lower = PiecewiseLinearGeometry(
-                rb, low_var, self.pieces, heights=self.heights.tolist(), breaks=sorted(breaks)
-            )
-            if np.array_equal(upper.z0, lower.z0):
-                break
-            breaks.update(upper.z0.tolist() + lower.z0.tolist())
-        else:  # pragma: no cover - the union of two finite cuts is reached in two passes
-            raise RuntimeError(f"output {out.name!r}: upper and lower cuts do not agree")
-        self.upper, self.lower = upper, lower
+        self.upper = PiecewiseLinearGeometry(rb, out, self.pieces)
+        self.lower = PiecewiseLinearGeometry(
+            rb, low_var, self.pieces, heights=self.heights.tolist()
+        )
 
     def sets(
         self, firing_lo: FloatArray, firing_up: FloatArray
@@ -92,11 +83,12 @@ class _Type2Mamdani:
         """Cut points (B, n) and the upper and lower sets there (B, n), continuous mode."""
         pts_u, lv_u = self.upper.sample_points(self.pieces.levels(firing_up))
         pts_l, lv_l = self.lower.sample_points(self.pieces.levels(firing_lo))
-        pts = np.sort(np.concatenate([pts_u, pts_l], axis=-1), axis=-1)
-        up = self.upper._aggregate(pts, lv_u)
-        lo = self.lower._aggregate(pts, lv_l)
-        b = pts.shape[0]
-        return pts.reshape(b, -1), up.reshape(b, -1), np.minimum(lo, up).reshape(b, -1)
+        b = pts_u.shape[0]
+        # both sets are linear between the union of their cut points
+        pts = np.sort(np.concatenate([pts_u.reshape(b, -1), pts_l.reshape(b, -1)], axis=1), axis=1)
+        up = self.upper.values_at(pts, lv_u)
+        lo = self.lower.values_at(pts, lv_l)
+        return pts, up, np.minimum(lo, up)
 
     def sampled(
         self, firing_lo: FloatArray, firing_up: FloatArray
@@ -126,6 +118,20 @@ class _Type2Mamdani:
             up, lo = self.sampled(firing_lo, firing_up)
             value = self._discrete(np.broadcast_to(self.grid, up.shape), up, lo)
         return np.where(np.isnan(value), self.default, value)
+
+    def interval(
+        self, firing_lo: FloatArray, firing_up: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """The Karnik-Mendel centroid interval ``(y_l, y_r)`` (NaN where nothing fires)."""
+        b = firing_up.shape[0]
+        if self.pieces.empty:
+            return np.full(b, np.nan), np.full(b, np.nan)
+        if self.resolution is None:
+            y, up, lo = self.sets(firing_lo, firing_up)
+            y_l, y_r, *_ = type_reduction.continuous_interval(y, up, lo)
+            return y_l, y_r
+        up, lo = self.sampled(firing_lo, firing_up)
+        return type_reduction.discrete_interval(np.broadcast_to(self.grid, up.shape), lo, up)
 
     def _continuous(self, y: FloatArray, up: FloatArray, lo: FloatArray) -> FloatArray:
         y_l, y_r, a_u, m_u, a_l, m_l = type_reduction.continuous_interval(y, up, lo)
@@ -184,18 +190,37 @@ class _Type2Sugeno:
         self.rules = np.array([r for r, _ in inst], dtype=np.intp)
         self.terms = [t for _, t in inst]
 
-    def __call__(
+    def _points(
         self, firing_lo: FloatArray, firing_up: FloatArray, inputs: list[FloatArray]
-    ) -> FloatArray:
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
         b = firing_up.shape[0]
-        if not self.terms:
-            return np.full(b, self.default)
         z = np.stack(
             [np.broadcast_to(membership.sugeno_value(t, inputs), (b,)) for t in self.terms],
             axis=1,
         )
         lo, up = firing_lo[:, self.rules], firing_up[:, self.rules]
-        value = reduce_points(self.method, z, np.minimum(lo, up), up)
+        return z, np.minimum(lo, up), up
+
+    def interval(
+        self, firing_lo: FloatArray, firing_up: FloatArray, inputs: list[FloatArray]
+    ) -> tuple[FloatArray, FloatArray]:
+        """The Karnik-Mendel interval over the rules' consequent values."""
+        if not self.terms:
+            nan = np.full(firing_up.shape[0], np.nan)
+            return nan, nan
+        z, lo, up = self._points(firing_lo, firing_up, inputs)
+        order = np.argsort(z, axis=1, kind="stable")
+        take = np.take_along_axis
+        return type_reduction.discrete_interval(
+            take(z, order, axis=1), take(lo, order, axis=1), take(up, order, axis=1)
+        )
+
+    def __call__(
+        self, firing_lo: FloatArray, firing_up: FloatArray, inputs: list[FloatArray]
+    ) -> FloatArray:
+        if not self.terms:
+            return np.full(firing_up.shape[0], self.default)
+        value = reduce_points(self.method, *self._points(firing_lo, firing_up, inputs))
         return np.where(np.isnan(value), self.default, value)
 
 
@@ -236,6 +261,19 @@ class Type2Engine:
             )
         ]
         return self.firing(mus_lo), self.firing(mus_up)
+
+    def intervals(self, flat: list[FloatArray]) -> dict[str, tuple[FloatArray, FloatArray]]:
+        """The Karnik-Mendel interval ``(y_l, y_r)`` of every output (the Sugeno ones over
+        their rules' consequent values), whatever the rule base's type reduction."""
+        f_lo, f_up = self.firing_intervals(flat)
+        prepared = [fz.prepare(x) for fz, x in zip(self.upper_fuzzifiers, flat, strict=True)]
+        result = {}
+        for out in self.outputs:
+            if isinstance(out, _Type2Sugeno):
+                result[out.name] = out.interval(f_lo, f_up, prepared)
+            else:
+                result[out.name] = out.interval(f_lo, f_up)
+        return result
 
     def evaluate_flat(self, flat: list[FloatArray]) -> dict[str, FloatArray]:
         """Every output at the points of the 1-D arrays ``flat`` (input order, no NaN)."""

@@ -14,8 +14,8 @@ them there). The centroid interval ``[y_l, y_r]`` of all embedded sets is found 
 the signs of ``g_l`` there, and on that piece ``g_l`` is a cubic in ``s`` that Newton's method,
 started at the right end of the piece, approaches monotonically from above. The right end
 ``y_r`` is the root of ``g_r(s) = s (A_U - int_a^s W) - (M_U - int_a^s y W)`` (rising and
-concave: Newton from the left end). A fixed number of Newton steps (``NEWTON_STEPS``) is far more
-than the quadratic convergence needs; the only error is rounding.
+concave: Newton from the left end). A fixed number of Newton steps (``NEWTON_STEPS``) leaves only
+rounding. When the lower set is empty the interval is the upper set's support.
 
 **Discrete** (:func:`discrete_interval`; ``resolution: N``, MATLAB's and pyit2fls's way, and
 IT2 Sugeno on the rule consequents): the interval of the centroids of every embedded set over
@@ -35,8 +35,9 @@ import numpy.typing as npt
 
 FloatArray = npt.NDArray[np.float64]
 
-#: Newton steps on the bracketing piece; convergence from the safe side is monotone and
-#: quadratic, so 40 steps leave only rounding.
+#: Newton steps on the bracketing piece. From the safe side the iterates are monotone, and
+#: the root is simple (``g' = D > 0``) unless the lower set is empty, which is solved apart;
+#: convergence is then quadratic, and 40 steps leave only rounding even from a poor start.
 NEWTON_STEPS = 40
 
 
@@ -119,6 +120,14 @@ def continuous_interval(
     n_r = m_u[:, None] - cmw
     y_l = _root_on_piece(y, w, d_l, n_l, y * d_l - n_l, 1.0)
     y_r = _root_on_piece(y, w, d_r, n_r, y * d_r - n_r, -1.0)
+    # An empty lower set is the one case of a multiple root (g' = D vanishes there), which
+    # rounding would blur to ~1e-8: every sub-support of the upper set is then embedded, and
+    # the interval is the support itself.
+    no_lower = ~(a_l > 0.0)
+    if no_lower.any():
+        first, last = continuous_support(y, upper)
+        y_l = np.where(no_lower, first, y_l)
+        y_r = np.where(no_lower, last, y_r)
     empty = ~(a_u > 1e-300)
     y_l = np.where(empty, np.nan, y_l)
     y_r = np.where(empty, np.nan, y_r)
