@@ -53,6 +53,23 @@ def lower_variable(var: Variable, footprint: Footprint) -> tuple[Variable, Float
     return replace(var, terms=shapes), np.array(scales, dtype=np.float64)
 
 
+def _distinct(pts: FloatArray) -> FloatArray:
+    """Rows of sorted points with repeats dropped, padded with each row's last point.
+
+    The cut candidates repeat a lot (clipped to their interval's ends); a repeated point only
+    adds a zero-width segment, so dropping repeats changes no integral and saves most work.
+    """
+    repeat = np.zeros(pts.shape, dtype=bool)
+    repeat[:, 1:] = pts[:, 1:] == pts[:, :-1]
+    order = np.argsort(repeat, axis=1, kind="stable")
+    kept = np.take_along_axis(pts, order, axis=1)
+    count = pts.shape[1] - repeat.sum(axis=1)
+    width = int(count.max())
+    kept = kept[:, :width]
+    last = kept[np.arange(pts.shape[0]), count - 1]
+    return np.where(np.arange(width)[None, :] < count[:, None], kept, last[:, None])
+
+
 class _Type2Mamdani:
     """Upper and lower output sets of one Mamdani output and their type reduction."""
 
@@ -85,7 +102,9 @@ class _Type2Mamdani:
         pts_l, lv_l = self.lower.sample_points(self.pieces.levels(firing_lo))
         b = pts_u.shape[0]
         # both sets are linear between the union of their cut points
-        pts = np.sort(np.concatenate([pts_u.reshape(b, -1), pts_l.reshape(b, -1)], axis=1), axis=1)
+        pts = _distinct(
+            np.sort(np.concatenate([pts_u.reshape(b, -1), pts_l.reshape(b, -1)], axis=1), axis=1)
+        )
         up = self.upper.values_at(pts, lv_u)
         lo = self.lower.values_at(pts, lv_l)
         return pts, up, np.minimum(lo, up)
