@@ -190,3 +190,25 @@ def test_cli_info_validate_and_explain() -> None:
     why = _cli("eval", "macvicar_whelan_it2", "-i", "e=0.1", "-i", "de=0", "--explain")
     assert why.returncode == 2 and "interval type-2" in why.stderr
     assert "Traceback" not in why.stderr
+
+
+def test_plot_shades_the_footprint(tmp_path: object) -> None:
+    import numpy as np
+    from matplotlib.collections import PolyCollection
+
+    from fuzzkit.viz.rulebase_plot import footprint_curves, plot_rulebase
+
+    rb = load("macvicar_whelan_it2")
+    fp = footprint_of(rb)
+    assert fp is not None
+    low = fp.lower("e", "ZR")
+    assert low is not None
+    x, upper, lower = footprint_curves(rb.input("e"), 3, low)
+    # the curves are exact at the corners: upper triangle [-0.4, 0, 0.4], lower 0.8 [-0.25, 0.25]
+    assert {-0.4, -0.25, 0.0, 0.25, 0.4} <= set(np.round(x, 12))
+    assert upper[x == 0.0][0] == 1.0 and lower[x == 0.0][0] == pytest.approx(0.8)
+    assert (lower <= upper + 1e-15).all()
+    fig = plot_rulebase(rb)
+    shaded = [c for ax in fig.axes[:3] for c in ax.collections if isinstance(c, PolyCollection)]
+    assert len(shaded) == 21  # one footprint per term: 7 labels x 3 variables
+    assert _cli("plot", "macvicar_whelan_it2", "--out", f"{tmp_path}/it2.png").returncode == 0
