@@ -94,7 +94,7 @@ $(BENCH_VENV)/bin/python:
 
 $(BENCH_STAMP): | $(BENCH_VENV)/bin/python
 	$(BENCH_VENV)/bin/python -m pip install --quiet --upgrade pip
-	$(BENCH_VENV)/bin/python -m pip install --quiet "scikit-fuzzy==0.5.0" packaging networkx scipy "pyfuzzylite==8.0.6"
+	$(BENCH_VENV)/bin/python -m pip install --quiet "scikit-fuzzy==0.5.0" packaging networkx scipy "pyfuzzylite==8.0.6" "pyit2fls==0.9.0"
 	touch $@
 
 bench: $(STAMP) $(BENCH_STAMP)

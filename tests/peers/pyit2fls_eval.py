@@ -1,7 +1,11 @@
 """Run by ``make interop-refs`` with the `.venv-interop` Python, where pyit2fls 0.9.0 lives.
 
     python pyit2fls_eval.py eval SYSTEM.json   -> {"y_l": [...], "y_r": [...], "crisp": [...]}
+    python pyit2fls_eval.py time SYSTEM.json   -> {"seconds_per_point": s, "crisp": [...]}
     python pyit2fls_eval.py version            -> pyit2fls's version
+
+``time`` (bench/bench_type2.py) evaluates every point once, after one warm-up call, and
+reports the mean wall time per point.
 
 SYSTEM.json (written by make_it2_refs.py from a fuzzkit IT2 rule base) lists the inputs' and the
 output's terms as ``[shape, points, height]`` pairs (upper, lower), the rules (AND only), the
@@ -15,6 +19,7 @@ from __future__ import annotations
 
 import json
 import sys
+import time
 from importlib.metadata import version
 
 import numpy as np
@@ -74,6 +79,9 @@ def main() -> None:
     names = list(spec["inputs"])
     n = len(spec["points"][names[0]])
     y_l, y_r, crisp = [], [], []
+    if sys.argv[1] == "time":
+        system.evaluate({name: spec["points"][name][0] for name in names})
+        start = time.perf_counter()
     for k in range(n):
         _, tr = system.evaluate({name: spec["points"][name][k] for name in names})
         value = tr[out]
@@ -83,6 +91,10 @@ def main() -> None:
             crisp.append(0.5 * (float(value[0]) + float(value[1])))
         else:
             crisp.append(float(value))
+    if sys.argv[1] == "time":
+        seconds = (time.perf_counter() - start) / n
+        json.dump({"seconds_per_point": seconds, "crisp": crisp}, sys.stdout)
+        return
     json.dump({"y_l": y_l, "y_r": y_r, "crisp": crisp}, sys.stdout)
 
 
