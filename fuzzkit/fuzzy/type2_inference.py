@@ -34,6 +34,7 @@ import numpy.typing as npt
 from fuzzkit.fuzzy import membership, type_reduction
 from fuzzkit.fuzzy.model import RuleBase, Variable
 from fuzzkit.fuzzy.output_geometry import OutputPieces, PiecewiseLinearGeometry
+from fuzzkit.fuzzy.sugeno import SugenoOutput
 from fuzzkit.fuzzy.type2_model import Footprint, Type2RuleBase
 
 FloatArray = npt.NDArray[np.float64]
@@ -200,23 +201,19 @@ class _Type2Sugeno:
         self.name = out.name
         self.default = math.nan if out.default is None else float(out.default)
         self.method = footprint.type_reduction
-        inst = [
-            (r, out.term(c.term))
-            for r, rule in enumerate(rb.rules)
-            for c in rule.consequents
-            if c.variable == out.name
-        ]
-        self.rules = np.array([r for r, _ in inst], dtype=np.intp)
-        self.terms = [t for _, t in inst]
+        # the type-1 Sugeno output's consequent table: one column per rule consequent
+        self.consequents = SugenoOutput(rb, out)
+        self.rules = self.consequents.inst_rules
+        self.empty = self.rules.size == 0
 
     def _points(
         self, firing_lo: FloatArray, firing_up: FloatArray, inputs: list[FloatArray]
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
         b = firing_up.shape[0]
-        z = np.stack(
-            [np.broadcast_to(membership.sugeno_value(t, inputs), (b,)) for t in self.terms],
-            axis=1,
-        )
+        table = self.consequents
+        z = np.broadcast_to(table.constants, (b, self.rules.size))
+        if table.linear:
+            z = np.stack(inputs, axis=1) @ table.slopes + table.constants
         lo, up = firing_lo[:, self.rules], firing_up[:, self.rules]
         return z, np.minimum(lo, up), up
 
@@ -224,7 +221,7 @@ class _Type2Sugeno:
         self, firing_lo: FloatArray, firing_up: FloatArray, inputs: list[FloatArray]
     ) -> tuple[FloatArray, FloatArray]:
         """The Karnik-Mendel interval over the rules' consequent values."""
-        if not self.terms:
+        if self.empty:
             nan = np.full(firing_up.shape[0], np.nan)
             return nan, nan
         z, lo, up = self._points(firing_lo, firing_up, inputs)
@@ -237,7 +234,7 @@ class _Type2Sugeno:
     def __call__(
         self, firing_lo: FloatArray, firing_up: FloatArray, inputs: list[FloatArray]
     ) -> FloatArray:
-        if not self.terms:
+        if self.empty:
             return np.full(firing_up.shape[0], self.default)
         value = reduce_points(self.method, *self._points(firing_lo, firing_up, inputs))
         return np.where(np.isnan(value), self.default, value)
