@@ -230,3 +230,11 @@ def test_exact_codegen_refuses_it2_and_compile_says_so(tmp_path: object) -> None
     )  # fmt: skip
     assert run.returncode == 2 and "interval type-2" in run.stderr
     assert "Traceback" not in run.stderr
+
+
+def test_the_closed_loop_refuses_it2_for_now() -> None:
+    from fuzzkit.control.loop_rulebase import loop_problems
+
+    assert loop_problems(load("macvicar_whelan")) == []
+    (problem,) = loop_problems(load("macvicar_whelan_it2"))
+    assert "interval type-2" in problem
