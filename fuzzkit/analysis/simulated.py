@@ -53,17 +53,16 @@ def outcome(result: RunResult) -> str:
 
 
 def simulate_case(case: SimCase) -> str:
-    """Run one case in the compiled loop (the fuzzy-PI as the rule base's lookup table)."""
-    from fuzzkit.studies.compiled.loop import compiled_table, run_compiled
+    """Run one case in the compiled loop (its controller generated as C)."""
+    from fuzzkit.studies.compiled.loop import run_compiled
 
     exp = with_stiffness(case.experiment, case.stiffness_n_per_mm * 1e3)
-    table = compiled_table(case.rulebase) if case.controller == "fuzzy-pi" else None
     result = run_compiled(
         exp,
         case.plant,
         case.controller,
         gains=dict(case.gains),
-        table=table,
+        rulebase=case.rulebase,
         seed=0,
         latency=case.latency,
     )

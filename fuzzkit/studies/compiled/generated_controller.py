@@ -1,4 +1,4 @@
-"""The whole generated C controller inside the compiled closed loop (``--controller-impl c``).
+"""The generated C controller: the compiled closed loop's only controller.
 
 What ships is what runs: the controller spec of the run (the given one, or
 :func:`run_controller_spec` of the run's settings) goes through ``fuzzkit compile``'s generator
@@ -21,14 +21,15 @@ import hashlib
 import math
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.control import status as st
-from fuzzkit.control.spec import ControllerSpec, require_valid, with_gains
+from fuzzkit.control.names import AXES
+from fuzzkit.control.spec import ControllerSpec, Limits, require_valid, with_gains
 from fuzzkit.errors import ConfigError
 from fuzzkit.jit import jit
 from fuzzkit.studies.compiled.period import (
@@ -43,7 +44,6 @@ from fuzzkit.studies.compiled.period import (
     V_DU,
     V_E,
     V_U,
-    controller_step,
     error_change,
 )
 from fuzzkit.studies.experiments import DEFAULT_GAINS
@@ -63,8 +63,10 @@ class GeneratedController:
     """A spec's generated double C controller, compiled and loaded.
 
     ``step_function``: ``NAME_controller_step`` as a ctypes function; ``init_function``:
-    ``NAME_controller_init``; ``state_doubles``: the size of ``NAME_controller_t`` in doubles
-    (:meth:`fresh_state` makes one); ``label``: the run's ``controller_impl``.
+    ``NAME_controller_init``; ``set_params``: ``NAME_controller_set_params`` (through the
+    loaded controller); ``state_doubles``: the size of ``NAME_controller_t`` in doubles
+    (:meth:`fresh_state` makes one); ``params``: the spec's run-time parameters
+    (:func:`params_of`); ``label``: the run's ``controller_impl``.
     """
 
     spec: ControllerSpec
@@ -72,17 +74,55 @@ class GeneratedController:
     init_function: Any
     state_doubles: int
     label: str
-    library: Any  # keeps the shared library mapped
+    library: Any  # keeps the shared library mapped; its set_params sets the parameters
+    params: tuple[float, ...] = ()
 
     def fresh_state(self) -> FloatArray:
-        """A ``NAME_controller_t`` as a double array, through ``NAME_controller_init``."""
+        """A ``NAME_controller_t`` as a double array: ``NAME_controller_init``, then the spec's
+        run-time parameters through ``NAME_controller_set_params``."""
         state = np.zeros(self.state_doubles)
         self.init_function(state.ctypes.data)
+        if self.params:
+            self.library.set_params(self.params, state.ctypes.data)
         return state
 
 
+def params_of(spec: ControllerSpec) -> tuple[float, ...]:
+    """The run-time parameters of ``spec`` in ``NAME_controller_params_t`` order: set points,
+    kp, ki, kx per task axis x, y, z (0 on motion-only axes; kx 0 for a PI), then the
+    correction and step limits."""
+    by_axis = {a.axis: a for a in spec.axes}
+
+    def per_axis(field: str) -> list[float]:
+        return [float(getattr(by_axis[a], field) or 0.0) if a in by_axis else 0.0 for a in AXES]
+
+    return (
+        *per_axis("setpoint_n"),
+        *per_axis("kp"),
+        *per_axis("ki"),
+        *per_axis("kx"),
+        spec.limits.correction_m,
+        spec.limits.step_m,
+    )
+
+
+def code_spec(spec: ControllerSpec) -> ControllerSpec:
+    """The spec whose code runs ``spec``: the same with its run-time parameters (set points,
+    gains, correction limits) at fixed placeholders, so that every gain set of a tune or a
+    sweep runs one compiled controller, its own values set through
+    ``NAME_controller_set_params``. A spec that adapts its gains keeps them (the self-tuning
+    input gains are baked into its code)."""
+    if spec.adaptation.mode != "none":
+        return spec
+    kx = 1.0 if spec.kind == "fuzzy-pi" else None
+    axes = tuple(replace(a, setpoint_n=0.0, kp=1.0, ki=1.0, kx=kx) for a in spec.axes)
+    return replace(spec, axes=axes, limits=Limits(1.0, 1.0))
+
+
 def load_generated_controller(spec: ControllerSpec) -> GeneratedController:
-    """Generate, compile and load ``spec``'s C controller (double), once per process and code.
+    """Generate, compile and load ``spec``'s C controller (double): the code of
+    :func:`code_spec`, compiled once per process and code (and kept on disk across processes,
+    ``fuzzkit.codegen.toolchain.library_cache_dir``), with ``spec``'s run-time parameters.
 
     Raises
     ------
@@ -94,23 +134,26 @@ def load_generated_controller(spec: ControllerSpec) -> GeneratedController:
     from fuzzkit.studies.controller_code import generate, open_generated
 
     require_valid(spec)
-    files = generate(spec, "c", "double")
+    code = code_spec(spec)
+    files = generate(code, "c", "double")
     digest = hashlib.sha256()
     for path in sorted(files):
         digest.update(path.encode() + b"\0" + files[path].encode() + b"\0")
     sha = digest.hexdigest()
     if sha not in _LOADED:
-        ctl = open_generated(spec, "c", "double")
+        ctl = open_generated(code, "c", "double")
         label = f"generated C controller (double) {spec.name}_controller sha256 {sha[:16]}"
         _LOADED[sha] = GeneratedController(
-            spec=spec,
+            spec=code,
             step_function=ctl.step_function,
             init_function=ctl.init_function,
             state_doubles=len(ctl.state),
             label=label,
             library=ctl,
         )
-    return _LOADED[sha]
+    loaded = _LOADED[sha]
+    params = () if code is spec else params_of(spec)
+    return replace(loaded, spec=spec, params=params)
 
 
 def run_controller_spec(
@@ -173,8 +216,8 @@ def generated_step(
 
     ``c_step`` is ``NAME_controller_step`` (ctypes: numba reads its address at every call of
     the kernel), ``c_state`` its ``NAME_controller_t``, ``c_rot`` the tool's rotation
-    (row-major 9). Writes ``correction`` and keeps the loop's bookkeeping in ``cs``, ``cv`` as
-    :func:`fuzzkit.studies.compiled.period.controller_step` does.
+    (row-major 9). Writes ``correction`` and keeps the loop's bookkeeping in ``cs``, ``cv``
+    (:mod:`fuzzkit.studies.compiled.period`).
     """
     cs[CS_CTRL_T] += cp[C_PERIOD]
     status = int(c_step(c_state.ctypes, consumed.ctypes, c_rot.ctypes, correction.ctypes))
@@ -183,8 +226,8 @@ def generated_step(
     for i in range(3):
         if selection[i] > 0.0 and not math.isfinite(consumed[i]):
             missing = True
-    # as the loop's own controller counts them: a missing sample within the first sensor-delay
-    # periods is the start-up wait (no measurement can have arrived yet), not a sensor fault
+    # as the reference counts them: a missing sample within the first sensor-delay periods is
+    # the start-up wait (no measurement can have arrived yet), not a sensor fault
     started = round(cs[CS_CTRL_T] / cp[C_PERIOD]) > cp[C_SENSOR_DELAY]
     if (missing and started) or status & _REJECTED:
         cs[CS_FAULTS] += 1.0
@@ -205,37 +248,3 @@ def generated_step(
                 e[i] = setpoints[i] - consumed[i]
         error_change(cs, cv)
     return status
-
-
-@jit
-def controller_period(
-    cp: FloatArray,
-    selection: FloatArray,
-    setpoints: FloatArray,
-    bp0: FloatArray,
-    bp1: FloatArray,
-    tab: FloatArray,
-    splits: IntArray,
-    c_eval: Any,
-    c_io: FloatArray,
-    c_step: Any,
-    c_state: FloatArray,
-    c_rot: FloatArray,
-    consumed: FloatArray,
-    t_s: float,
-    cs: FloatArray,
-    cv: FloatArray,
-    correction: FloatArray,
-) -> int:
-    """One period of the run's controller, for every plant's loop: the loop's own
-    (:func:`~fuzzkit.studies.compiled.period.controller_step`; returns -1, it keeps no status)
-    when ``c_step`` is None, else the generated C controller (:func:`generated_step`)."""
-    if c_step is None:  # a compile-time branch: c_step is typed None or a C function
-        controller_step(
-            cp, selection, setpoints, bp0, bp1, tab, splits, c_eval, c_io, consumed, t_s, cs, cv,
-            correction,
-        )  # fmt: skip
-        return -1
-    return generated_step(
-        c_step, c_state, c_rot, cp, selection, setpoints, consumed, t_s, cs, cv, correction
-    )
