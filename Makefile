@@ -13,7 +13,8 @@ LATEST_VENV ?= .venv-latest
 BENCH_VENV ?= .venv-bench
 BENCH_STAMP := $(BENCH_VENV)/.peers-installed
 # The independent implementations the interop tests compare with: pyfuzzylite (own environment,
-# for the same numpy<2 reason) and the fuzzylite 6 program from Debian's fuzzylite package.
+# for the same numpy<2 reason), pyit2fls (interval type-2) and the fuzzylite 6 program from
+# Debian's fuzzylite package.
 INTEROP_VENV ?= .venv-interop
 INTEROP_STAMP := $(INTEROP_VENV)/.peers-installed
 SUDO ?= $(shell [ "$$(id -u)" = 0 ] || echo sudo)
@@ -93,7 +94,7 @@ $(BENCH_VENV)/bin/python:
 
 $(BENCH_STAMP): | $(BENCH_VENV)/bin/python
 	$(BENCH_VENV)/bin/python -m pip install --quiet --upgrade pip
-	$(BENCH_VENV)/bin/python -m pip install --quiet "scikit-fuzzy==0.5.0" packaging networkx scipy "pyfuzzylite==8.0.6"
+	$(BENCH_VENV)/bin/python -m pip install --quiet "scikit-fuzzy==0.5.0" packaging networkx scipy "pyfuzzylite==8.0.6" "pyit2fls==0.9.0"
 	touch $@
 
 bench: $(STAMP) $(BENCH_STAMP)
@@ -104,7 +105,7 @@ $(INTEROP_VENV)/bin/python:
 
 $(INTEROP_STAMP): | $(INTEROP_VENV)/bin/python
 	$(INTEROP_VENV)/bin/python -m pip install --quiet --upgrade pip
-	$(INTEROP_VENV)/bin/python -m pip install --quiet "pyfuzzylite==8.0.6"
+	$(INTEROP_VENV)/bin/python -m pip install --quiet "pyfuzzylite==8.0.6" "pyit2fls==0.9.0"
 	touch $@
 
 fuzzylite-program:
@@ -121,6 +122,7 @@ interop: $(STAMP) $(INTEROP_STAMP) fuzzylite-program
 # Rewrite the peers' committed outputs (tests/peers/refs) that `make test` compares with.
 interop-refs: $(STAMP) $(INTEROP_STAMP) fuzzylite-program
 	FUZZKIT_INTEROP_PYTHON=$(INTEROP_VENV)/bin/python $(BIN)/python tests/peers/make_refs.py
+	FUZZKIT_INTEROP_PYTHON=$(INTEROP_VENV)/bin/python $(BIN)/python tests/peers/make_it2_refs.py
 
 # The generated controller (float, Cortex-M4F) and the Q15 table (Cortex-M3, M0) under QEMU,
 # bit for bit against the host, with flash/RAM and instructions per call (bench/embedded/).

@@ -52,6 +52,7 @@ from fuzzkit.fuzzy.model import (
     Term,
     Variable,
 )
+from fuzzkit.fuzzy.type2_model import Type2RuleBase
 
 #: Number types the exact target computes in (Q15 has no exact inference: use a table).
 EXACT_NUMBER_TYPES = ("float", "double")
@@ -241,6 +242,12 @@ def unsupported_reason(rb: RuleBase, number_type: str = "double") -> str | None:
         return (
             f"the exact method computes in floating point; --type {number_type} is only "
             "available as a lookup table (use --method table)"
+        )
+    if isinstance(rb, Type2RuleBase):
+        return (
+            "interval type-2 rule bases are generated as a lookup table of the exact IT2 "
+            "engine with a certified bound (use --method table); the exact method emits "
+            "type-1 inference only"
         )
     sugeno = [t.name for o in rb.outputs for t in o.terms if t.shape in SUGENO_SHAPES]
     if sugeno or rb.defuzzifier not in EXACT_DEFUZZIFIERS:

@@ -18,7 +18,13 @@ from fuzzkit.codegen.toolchain import SANITIZE_FLAGS, find_compiler
 from fuzzkit.fuzzy.model import RuleBase
 
 #: Small resolutions keep the tests fast; the bound is what is checked, whatever it is.
-RESOLUTION = {"macvicar_whelan": 25, "paper_table1": 25, "gaussian5": 17, "three_input": 9}
+RESOLUTION = {
+    "macvicar_whelan": 25,
+    "macvicar_whelan_it2": 25,
+    "paper_table1": 25,
+    "gaussian5": 17,
+    "three_input": 9,
+}
 
 #: One input far from 0 with a knot float32 cannot hold (float C) and few Q15 codes.
 OFFSET_YAML = """

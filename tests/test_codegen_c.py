@@ -41,6 +41,8 @@ CASES = [
     ("gaussian5", "float"),
     ("three_input", "float"),
     ("three_input", "q15"),
+    ("macvicar_whelan_it2", "float"),
+    ("macvicar_whelan_it2", "double"),
 ]
 
 
@@ -188,6 +190,8 @@ int main(void)
         ("macvicar_whelan", "q15"),
         ("three_input", "double"),
         ("three_input", "q15"),
+        ("macvicar_whelan_it2", "float"),
+        ("macvicar_whelan_it2", "double"),
     ],
 )
 def test_runs_clean_under_address_and_undefined_sanitizers(

@@ -21,7 +21,9 @@ def _exact(name: str, points: np.ndarray) -> np.ndarray:
     return np.column_stack([res[v.name] for v in rb.outputs])
 
 
-@pytest.mark.parametrize("name", ["macvicar_whelan", "gaussian5", "three_input"])
+@pytest.mark.parametrize(
+    "name", ["macvicar_whelan", "gaussian5", "three_input", "macvicar_whelan_it2"]
+)
 def test_generated_python_matches_exact_engine(name: str) -> None:
     rb = rulebase(name)
     tab = table(name, "double")

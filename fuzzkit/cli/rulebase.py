@@ -23,6 +23,7 @@ from fuzzkit.fileio import check_output_path
 from fuzzkit.fuzzy.describe import num as _num
 from fuzzkit.fuzzy.describe import range_text, rule_grid, rule_sentence
 from fuzzkit.fuzzy.model import SHAPE_PARAMS, RuleBase, Variable
+from fuzzkit.fuzzy.type2_model import Footprint, footprint_of
 from fuzzkit.viz.figures import figure_format
 
 EXIT_OK = 0
@@ -246,7 +247,9 @@ def cmd_validate(args: argparse.Namespace) -> int:
 # ---------------------------------------------------------------------------- info
 
 
-def _variable_lines(var: Variable, kind: str, input_names: Sequence[str] = ()) -> list[str]:
+def _variable_lines(
+    var: Variable, kind: str, input_names: Sequence[str] = (), footprint: Footprint | None = None
+) -> list[str]:
     head = f"  {var.name}  {range_text(var)}"
     if kind == "output":
         default = "NaN" if var.default is None else _num(var.default)
@@ -261,6 +264,14 @@ def _variable_lines(var: Variable, kind: str, input_names: Sequence[str] = ()) -
         names = (*input_names, "constant") if t.shape == "linear" else SHAPE_PARAMS[t.shape]
         params = " ".join(f"{n}={_num(v)}" for n, v in zip(names, t.params, strict=False))
         lines.append(f"    {t.name.ljust(width)}  {t.shape:<14} {params}")
+        lower = footprint.lower(var.name, t.name) if footprint is not None else None
+        if lower is not None:
+            lt = lower.shape
+            lparams = " ".join(
+                f"{n}={_num(v)}" for n, v in zip(SHAPE_PARAMS[lt.shape], lt.params, strict=False)
+            )
+            scale = f" scale={_num(lower.scale)}" if lower.scale != 1.0 else ""
+            lines.append(f"    {'':{width}}  lower: {lt.shape:<7} {lparams}{scale}")
     return lines
 
 
@@ -292,14 +303,20 @@ def describe_rulebase(rb: RuleBase) -> str:
         f"aggregation={ops.aggregation}",
         f"defuzzifier: {rb.defuzzifier}    out_of_range: {rb.out_of_range}"
         + (f"    coverage: {rb.coverage}" if rb.coverage != "strict" else ""),
-        "",
-        "inputs:",
     ]
+    fp = footprint_of(rb)
+    if fp is not None:
+        where = "continuous" if fp.resolution is None else f"{fp.resolution} samples"
+        lines.append(
+            f"interval type-2: type_reduction={fp.type_reduction} ({where}); upper terms, "
+            "each lower function under its term"
+        )
+    lines += ["", "inputs:"]
     for var in rb.inputs:
-        lines += _variable_lines(var, "input")
+        lines += _variable_lines(var, "input", footprint=fp)
     lines.append("outputs:")
     for var in rb.outputs:
-        lines += _variable_lines(var, "output", rb.input_names)
+        lines += _variable_lines(var, "output", rb.input_names, fp)
     lines.append("")
     grid = _table_grid(rb)
     if grid is not None and rb.table is not None:

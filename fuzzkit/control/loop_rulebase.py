@@ -20,6 +20,7 @@ from functools import lru_cache
 
 from fuzzkit.errors import ConfigError
 from fuzzkit.fuzzy.model import RuleBase, Variable
+from fuzzkit.fuzzy.type2_model import footprint_of
 
 #: The universe the controller hands the rule base: Ki*e and Kp*de are clipped to it.
 INPUT_RANGE = (-1.0, 1.0)
@@ -33,6 +34,12 @@ _EPS = 1e-9
 def loop_problems(rb: RuleBase) -> list[str]:
     """What keeps ``rb`` from running as the fuzzy-PI's surface (empty when it can)."""
     problems: list[str] = []
+    if footprint_of(rb) is not None:
+        # the generated controllers (exact method) and the compiled loop are type-1 only
+        problems.append(
+            "an interval type-2 rule base does not run in the closed loop yet (docs/type2.md); "
+            "evaluate it, plot it or compile it as a table"
+        )
     if len(rb.inputs) != 2:
         problems.append(
             f"exactly two inputs are needed (the scaled error and its change), got "

@@ -17,10 +17,11 @@ from pathlib import Path
 
 from fuzzkit.errors import Location, Problem, RuleBaseError, did_you_mean
 from fuzzkit.formats import fcl, fis, fll
-from fuzzkit.formats.foreign_common import ForeignFormat
+from fuzzkit.formats.foreign_common import ExportError, ForeignFormat
 from fuzzkit.formats.yaml_reader import load_file_with_warnings, loads_rulebase_with_warnings
 from fuzzkit.fuzzy import validation
 from fuzzkit.fuzzy.model import RuleBase
+from fuzzkit.fuzzy.type2_model import footprint_of
 
 _PACKAGE = "fuzzkit.rulebases"
 #: fuzzkit's own format: YAML.
@@ -52,6 +53,15 @@ def dumps(rb: RuleBase, fmt: str, *, allow_loss: bool = False, dialect: str = "n
         raise RuleBaseError(validation.as_problems(rb, too_deep))
     if fmt not in FORMATS:
         raise ValueError(f"unknown format {fmt!r}; expected one of {', '.join(EXPORT_FORMATS)}")
+    if footprint_of(rb) is not None:
+        # a writer of type-1 terms would drop every lower membership function, even with
+        # allow_loss: the result would be another controller
+        raise ExportError(
+            fmt,
+            rb.name,
+            ["interval type-2 terms (upper/lower functions) and the type reduction"],
+            "fuzzkit writes interval type-2 rule bases as YAML only (docs/type2.md)",
+        )
     return FORMATS[fmt].write(rb, allow_loss, dialect)
 
 

@@ -14,8 +14,10 @@ from fuzzkit.fuzzy.model import (
     OUT_OF_RANGE_POLICIES,
     PIECEWISE_LINEAR_SHAPES,
     SHAPE_PARAMS,
+    SUGENO_SHAPES,
 )
 from fuzzkit.fuzzy.partition import PARTITION_ENDS, PARTITION_KINDS
+from fuzzkit.fuzzy.type2_model import MAX_RESOLUTION, TYPE_REDUCTIONS
 from fuzzkit.fuzzy.validation import MAX_UNITS_CHARS
 
 
@@ -65,6 +67,24 @@ def json_schema() -> dict[str, Any]:
                 "additionalProperties": False,
             }
         )
+    scale = {
+        "type": "number",
+        "exclusiveMinimum": 0,
+        "maximum": 1,
+        "description": "height of the lower membership function (default 1)",
+    }
+    lower_defs = [
+        {**d, "properties": {**d["properties"], "scale": scale}}
+        for d in shape_defs
+        if d["properties"]["shape"]["const"] not in SUGENO_SHAPES
+    ]
+    it2_term = {
+        "type": "object",
+        "description": "interval type-2 term: upper and lower membership functions",
+        "properties": {"upper": {"$ref": "#/$defs/term"}, "lower": {"oneOf": lower_defs}},
+        "required": ["upper", "lower"],
+        "additionalProperties": False,
+    }
     partition = {
         "type": "object",
         "description": "N evenly spaced triangular labels over the range",
@@ -85,7 +105,9 @@ def json_schema() -> dict[str, Any]:
         return {
             "type": "object",
             "propertyNames": {"allOf": [name, {"not": {"const": "partition"}}]},
-            "additionalProperties": {"$ref": "#/$defs/term"},
+            "additionalProperties": {
+                "oneOf": [{"$ref": "#/$defs/term"}, {"$ref": "#/$defs/it2_term"}]
+            },
             "minProperties": 0 if kind == "input" else 1,
         }
 
@@ -210,6 +232,17 @@ def json_schema() -> dict[str, Any]:
                 "description": "strict: an input range no term covers is an error; "
                 "allow_gaps: a warning",
             },
+            "type_reduction": {
+                "enum": list(TYPE_REDUCTIONS),
+                "description": "interval type-2 rule bases: how the output sets are reduced",
+            },
+            "resolution": {
+                "type": ["integer", "null"],
+                "minimum": 2,
+                "maximum": MAX_RESOLUTION,
+                "description": "interval type-2: sample each output range at N points "
+                "(MATLAB, pyit2fls) instead of the exact continuous type reduction",
+            },
             "rules": {
                 "oneOf": [
                     {"type": "array", "items": {"$ref": "#/$defs/rule"}, "minItems": 1},
@@ -226,6 +259,7 @@ def json_schema() -> dict[str, Any]:
         "additionalProperties": False,
         "$defs": {
             "term": {"oneOf": shape_defs},
+            "it2_term": it2_term,
             "partition": partition,
             "condition": condition,
             "rule": rule,

@@ -49,6 +49,13 @@ from fuzzkit.fuzzy.model import (
     Variable,
 )
 from fuzzkit.fuzzy.partition import PARTITION_ENDS, PARTITION_KINDS, partition_terms
+from fuzzkit.fuzzy.type2_model import (
+    DEFAULT_TYPE_REDUCTION,
+    MAX_RESOLUTION,
+    Footprint,
+    LowerTerm,
+    with_footprint,
+)
 from fuzzkit.fuzzy.validation import Path
 from fuzzkit.located_yaml import (
     BOOL_TAG,
@@ -72,8 +79,11 @@ TOP_KEYS = (
     "defuzzifier",
     "out_of_range",
     "coverage",
+    "type_reduction",
+    "resolution",
     "rules",
 )
+IT2_TERM_KEYS = ("upper", "lower")
 OPERATOR_KEYS = ("and", "or", "implication", "aggregation")
 PARTITION_KEYS = ("partition", "labels", "ends")
 TABLE_KEYS = ("rows", "columns", "output", "cells", "row_labels", "column_labels")
@@ -85,6 +95,13 @@ EMPTY_CELL = "-"
 def shape_param_keys(shape: str) -> tuple[str, ...]:
     """The keys holding a shape's parameters in YAML: ``points`` or the parameter names."""
     return ("points",) if shape in PIECEWISE_LINEAR_SHAPES else SHAPE_PARAMS[shape]
+
+
+def _is_it2(node: Node) -> bool:
+    """A term written as ``{upper: ..., lower: ...}`` (either key makes it one)."""
+    return isinstance(node, MappingNode) and any(
+        isinstance(k, ScalarNode) and k.value in IT2_TERM_KEYS for k, _ in node.value
+    )
 
 
 @dataclass
@@ -100,6 +117,8 @@ class _Reader(NodeReader):
     broken_vars: set[str] = field(default_factory=set)
     #: the inputs' names in order, once read (linear Sugeno terms name their coefficients)
     input_names: list[str] = field(default_factory=list)
+    #: the lower functions of interval type-2 terms, as read
+    lowers: list[LowerTerm] = field(default_factory=list)
 
     def choice(self, node: Node, what: str, path: Path) -> str | None:
         """A name whose allowed values validation checks; records where it is."""
@@ -177,6 +196,8 @@ class _Reader(NodeReader):
                 self.choice(entries["coverage"][1], "a coverage policy", ("coverage",)) or coverage
             )
 
+        footprint = self.footprint(entries)
+
         rules: list[Rule] = []
         table: RuleTable | None = None
         if "rules" in entries:
@@ -184,7 +205,7 @@ class _Reader(NodeReader):
         else:
             self.hidden_at.add(("rules",))
 
-        return RuleBase(
+        rb = RuleBase(
             name=name,
             inputs=tuple(inputs),
             outputs=tuple(outputs),
@@ -196,6 +217,31 @@ class _Reader(NodeReader):
             table=table,
             coverage=coverage,
         )
+        if footprint is not None:
+            return with_footprint(rb, footprint)
+        return rb
+
+    def footprint(self, entries: dict[str, tuple[Node, Node]]) -> Footprint | None:
+        """The IT2 part: the lower terms read, ``type_reduction:`` and ``resolution:``."""
+        if not self.lowers and "type_reduction" not in entries and "resolution" not in entries:
+            return None
+        method = DEFAULT_TYPE_REDUCTION
+        if "type_reduction" in entries:
+            method = (
+                self.choice(
+                    entries["type_reduction"][1], "a type-reduction method", ("type_reduction",)
+                )
+                or method
+            )
+        resolution: int | None = None
+        if "resolution" in entries:
+            rnode = entries["resolution"][1]
+            self.marks[("resolution",)] = rnode
+            if not (isinstance(rnode, ScalarNode) and rnode.tag == NULL_TAG):
+                resolution = self.integer(
+                    rnode, "the output resolution (samples per output range)", 2, MAX_RESOLUTION
+                )
+        return Footprint(tuple(self.lowers), method, resolution)
 
     # ------------------------------------------------------------------ variables
 
@@ -321,8 +367,49 @@ class _Reader(NodeReader):
         if "partition" in entries:
             return self.partition(entries, node, base, kind, low, high, range_ok)
         return tuple(
-            self.term(label, kn, vn, (*tpath, label)) for label, (kn, vn) in entries.items()
+            self.it2_term(label, kn, vn, (*tpath, label))
+            if _is_it2(vn)
+            else self.term(label, kn, vn, (*tpath, label))
+            for label, (kn, vn) in entries.items()
         )
+
+    def it2_term(self, label: str, knode: Node, vnode: Node, tpath: Path) -> Term:
+        """An interval type-2 term ``{upper: {...}, lower: {..., scale: s}}``: the upper term
+        is returned, the lower one (with its scale) recorded in :attr:`lowers`."""
+        entries = self.mapping(vnode, f"term {label!r} as a mapping {{upper: ..., lower: ...}}")
+        self.marks[tpath] = knode
+        placeholder = Term(label, "triangle", (0.0, 0.5, 1.0))
+        if entries is None:  # pragma: no cover - _is_it2 saw a mapping
+            return placeholder
+        self.keys(entries, vnode, IT2_TERM_KEYS, IT2_TERM_KEYS, f"interval type-2 term {label!r}")
+        if "upper" not in entries or "lower" not in entries:
+            self.hidden_under.add(tpath)
+            self.hidden_at.add(tpath[:-1])
+            return placeholder
+        upper = self.term(label, *entries["upper"], (*tpath, "upper"))
+        lkey, lnode = entries["lower"]
+        lower_entries = self.mapping(lnode, f"the lower term of {label!r} as a mapping")
+        scale = 1.0
+        if lower_entries is None:
+            self.hidden_under.add(tpath)
+            return upper
+        if "scale" in lower_entries:
+            snode = lower_entries["scale"][1]
+            self.marks[(*tpath, "lower", "scale")] = snode
+            got = self.number(snode, f"the scale (height) of the lower term of {label!r}")
+            if got is None:
+                self.hidden_under.add((*tpath, "lower", "scale"))
+            scale = 1.0 if got is None else got
+        if not isinstance(lnode, MappingNode):  # pragma: no cover - mapping() accepted it
+            return upper
+        kept = [
+            (k, v) for k, v in lnode.value if not (isinstance(k, ScalarNode) and k.value == "scale")
+        ]
+        shape_node = MappingNode(lnode.tag, kept, lnode.start_mark, lnode.end_mark)
+        lower = self.term(label, lkey, shape_node, (*tpath, "lower"))
+        self.marks[tpath] = knode
+        self.lowers.append(LowerTerm(str(tpath[1]), label, lower, scale))
+        return upper
 
     def partition(
         self,

@@ -23,10 +23,12 @@ from fuzzkit.fuzzy.model import (
     Rule,
     RuleBase,
     RuleTable,
+    Term,
     Variable,
 )
 from fuzzkit.fuzzy.partition import PARTITION_ENDS, partition_terms
 from fuzzkit.fuzzy.shapes import shape
+from fuzzkit.fuzzy.type2_model import Footprint, footprint_of
 from fuzzkit.located_yaml import STR_TAG
 
 
@@ -57,9 +59,17 @@ _Dumper.add_representer(
 _Dumper.add_representer(_Literal, lambda d, v: d.represent_scalar(STR_TAG, v, style="|"))
 
 
-def _dump_terms(var: Variable, kind: str, input_names: Sequence[str]) -> dict[str, Any]:
+def _dump_terms(
+    var: Variable, kind: str, input_names: Sequence[str], footprint: Footprint | None = None
+) -> dict[str, Any]:
     labels = var.term_names
-    if len(labels) >= 2 and math.isfinite(var.low) and math.isfinite(var.high):
+    lowers = {t.name: footprint.lower(var.name, t.name) for t in var.terms} if footprint else {}
+    if (
+        len(labels) >= 2
+        and math.isfinite(var.low)
+        and math.isfinite(var.high)
+        and not any(lowers.values())
+    ):
         default_ends = "shoulder" if kind == "input" else "triangle"
         for ends in (default_ends, *(e for e in PARTITION_ENDS if e != default_ends)):
             if partition_terms(labels, var.low, var.high, ends) == var.terms:
@@ -69,18 +79,30 @@ def _dump_terms(var: Variable, kind: str, input_names: Sequence[str]) -> dict[st
                 return _FlowMap(spec)
     out: dict[str, Any] = {}
     for t in var.terms:
-        spec = {"shape": t.shape}
-        if t.shape == "linear" and len(t.params) == len(input_names) + 1:
-            spec["coefficients"] = _FlowMap(
-                zip(input_names, map(float, t.params[:-1]), strict=True)
-            )
-            spec["constant"] = float(t.params[-1])
-        elif shape(t.shape).piecewise_linear:  # an unregistered shape raises
-            spec["points"] = _Flow(float(x) for x in t.params)
-        else:
-            spec.update(zip(shape(t.shape).params, map(float, t.params), strict=True))
-        out[t.name] = _FlowMap(spec)
+        lower = lowers.get(t.name)
+        if lower is None:
+            out[t.name] = _FlowMap(_term_spec(t, input_names))
+            continue
+        lspec = _term_spec(lower.shape, input_names)
+        if lower.scale != 1.0:
+            lspec["scale"] = float(lower.scale)
+        out[t.name] = {
+            "upper": _FlowMap(_term_spec(t, input_names)),
+            "lower": _FlowMap(lspec),
+        }
     return out
+
+
+def _term_spec(t: Term, input_names: Sequence[str]) -> dict[str, Any]:
+    spec: dict[str, Any] = {"shape": t.shape}
+    if t.shape == "linear" and len(t.params) == len(input_names) + 1:
+        spec["coefficients"] = _FlowMap(zip(input_names, map(float, t.params[:-1]), strict=True))
+        spec["constant"] = float(t.params[-1])
+    elif shape(t.shape).piecewise_linear:  # an unregistered shape raises
+        spec["points"] = _Flow(float(x) for x in t.params)
+    else:
+        spec.update(zip(shape(t.shape).params, map(float, t.params), strict=True))
+    return spec
 
 
 def _dump_expression(expr: Expression) -> dict[str, Any]:
@@ -214,7 +236,7 @@ def dump(rb: RuleBase, range_notes: Mapping[str, str] | None = None) -> str:
                 spec["units"] = var.units
             if kind == "output" and var.default is not None:
                 spec["default"] = float(var.default)
-            spec["terms"] = _dump_terms(var, kind, rb.input_names)
+            spec["terms"] = _dump_terms(var, kind, rb.input_names, footprint_of(rb))
             section[var.name] = spec
         doc[kind + "s"] = section
     ops = rb.operators
@@ -230,6 +252,11 @@ def dump(rb: RuleBase, range_notes: Mapping[str, str] | None = None) -> str:
     doc["out_of_range"] = rb.out_of_range
     if rb.coverage != "strict":
         doc["coverage"] = rb.coverage
+    footprint = footprint_of(rb)
+    if footprint is not None:
+        doc["type_reduction"] = footprint.type_reduction
+        if footprint.resolution is not None:
+            doc["resolution"] = footprint.resolution
     table = _dump_table(rb)
     if table is not None:
         doc["rules"] = table

@@ -22,6 +22,7 @@ from fuzzkit.fuzzy import membership
 from fuzzkit.fuzzy.describe import rule_sentence
 from fuzzkit.fuzzy.model import RuleBase, Variable
 from fuzzkit.fuzzy.output_geometry import OutputPieces
+from fuzzkit.fuzzy.type2_model import footprint_of
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -105,9 +106,17 @@ def explain(rb: RuleBase, point: Mapping[str, float]) -> Explanation:
     Raises
     ------
     EvaluationError
-        A missing, unknown or NaN input (a NaN input gives NaN outputs: no rule fires).
+        A missing, unknown or NaN input (a NaN input gives NaN outputs: no rule fires), or an
+        interval type-2 rule base (its explanation would need the firing intervals and both
+        output sets; not written yet).
     """
     from fuzzkit.fuzzy.inference import engine_for
+
+    if footprint_of(rb) is not None:
+        raise EvaluationError(
+            f"rule base {rb.name!r} is interval type-2: the explanation shows type-1 inference "
+            "only (evaluate it without --explain)"
+        )
 
     engine = engine_for(rb)
     values = {n: float(point[n]) for n in rb.input_names if n in point}

@@ -54,6 +54,8 @@ from fuzzkit.fuzzy.output_geometry import (
     partition_centroid,
 )
 from fuzzkit.fuzzy.sugeno import SugenoOutput, SugenoScalarPath, sugeno_scalar_path
+from fuzzkit.fuzzy.type2_inference import Type2Engine
+from fuzzkit.fuzzy.type2_model import Type2RuleBase
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.intp]
@@ -306,14 +308,20 @@ class Engine:
         self.output_names = rulebase.output_names
         self._fuzzifiers = [_Fuzzifier(v, rulebase.out_of_range) for v in rulebase.inputs]
         self._firing = _Firing(rulebase)
-        self._outputs: list[_Output | SugenoOutput] = [
-            SugenoOutput(rulebase, o) if o.is_sugeno else _Output(rulebase, o)
-            for o in rulebase.outputs
-        ]
+        self._type2: Type2Engine | None = None
+        self._outputs: list[_Output | SugenoOutput] = []
+        if isinstance(rulebase, Type2RuleBase):
+            # interval type-2: the engine beside this one (fuzzy.type2_inference)
+            self._type2 = Type2Engine(rulebase, _Fuzzifier, self._firing)
+        else:
+            self._outputs = [
+                SugenoOutput(rulebase, o) if o.is_sugeno else _Output(rulebase, o)
+                for o in rulebase.outputs
+            ]
         self._linear = any(isinstance(o, SugenoOutput) and o.linear for o in self._outputs)
-        self._scalar: ScalarPath | SugenoScalarPath | None = _scalar_path(
-            rulebase, self._outputs
-        ) or sugeno_scalar_path(rulebase)
+        self._scalar: ScalarPath | SugenoScalarPath | None = None
+        if self._type2 is None:
+            self._scalar = _scalar_path(rulebase, self._outputs) or sugeno_scalar_path(rulebase)
 
     def _coerce(self, inputs: Mapping[str, npt.ArrayLike]) -> list[FloatArray]:
         unknown = sorted(set(inputs) - set(self.input_names))
@@ -376,6 +384,9 @@ class Engine:
         any_bad = bool(bad.any())
         if any_bad:
             flat = [np.where(bad, 0.0, a) for a in flat]
+        if self._type2 is not None:
+            got = self._type2.evaluate_flat(flat)
+            return {k: np.where(bad, np.nan, v) if any_bad else v for k, v in got.items()}
         mus = [fz(x) for fz, x in zip(self._fuzzifiers, flat, strict=True)]
         firing = self._firing(mus)
         if self._linear:
@@ -428,8 +439,37 @@ class Engine:
         names = self.input_names
         return lambda *values: self.evaluate_point(dict(zip(names, values, strict=True)))[name]
 
+    def centroid_intervals(
+        self, inputs: Mapping[str, npt.ArrayLike]
+    ) -> dict[str, tuple[FloatArray, FloatArray]]:
+        """For an interval type-2 rule base: each output's Karnik-Mendel centroid interval
+        ``(y_l, y_r)`` at every point (flattened; NaN where an input is NaN or nothing fires).
+
+        Raises
+        ------
+        EvaluationError
+            For a type-1 rule base (it has no interval).
+        """
+        if self._type2 is None:
+            raise EvaluationError(
+                f"rule base {self.rulebase.name!r} is type-1: it has no centroid interval"
+            )
+        flat = [a.reshape(-1) for a in self._coerce(inputs)]
+        bad = np.zeros(flat[0].shape, dtype=bool)
+        for a in flat:
+            bad |= np.isnan(a)
+        flat = [np.where(bad, 0.0, a) for a in flat]
+        return {
+            name: (np.where(bad, np.nan, lo), np.where(bad, np.nan, hi))
+            for name, (lo, hi) in self._type2.intervals(flat).items()
+        }
+
     def firing_strengths(self, inputs: Mapping[str, npt.ArrayLike]) -> FloatArray:
-        """Weighted firing strength of every rule at every point, shape (points, rules)."""
+        """Weighted firing strength of every rule at every point, shape (points, rules).
+
+        For an interval type-2 rule base: the upper ends of the firing intervals
+        (``fuzzy.type2_inference.Type2Engine.firing_intervals`` gives both).
+        """
         flat = [a.reshape(-1) for a in self._coerce(inputs)]
         return self._firing([fz(x) for fz, x in zip(self._fuzzifiers, flat, strict=True)])
 

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Sequence
 from typing import cast
 
 import numpy as np
@@ -126,9 +127,17 @@ def _gauss_legendre(n: int) -> tuple[FloatArray, FloatArray]:
 class PiecewiseLinearGeometry:
     """Closed-form integration of the aggregated set of a piecewise-linear output."""
 
-    def __init__(self, rb: RuleBase, out: Variable, pieces: OutputPieces) -> None:
+    def __init__(
+        self,
+        rb: RuleBase,
+        out: Variable,
+        pieces: OutputPieces,
+        heights: Sequence[float] | None = None,
+    ) -> None:
+        """``heights`` scales each term (an IT2 lower set, ``fuzzy.type2_inference``)."""
         self.implication = rb.operators.implication
         self.aggregation = rb.operators.aggregation
+        self.heights = None if heights is None else np.asarray(heights, dtype=np.float64)
         lo, hi = out.low, out.high
         zs = {lo, hi}
         for t in out.terms:
@@ -138,7 +147,7 @@ class PiecewiseLinearGeometry:
             # edges of different terms crossing inside an interval are static breakpoints
             extra = []
             for z0, z1 in itertools.pairwise(z):
-                s, c = self._lines(out, z0, z1)
+                s, c = self._scaled_lines(out, z0, z1)
                 for i in range(len(s)):
                     for j in range(i + 1, len(s)):
                         if s[i] != s[j]:
@@ -150,7 +159,7 @@ class PiecewiseLinearGeometry:
         m = len(self.z0)
         slots: list[list[tuple[int, float, float]]] = []
         for k in range(m):
-            s, c = self._lines(out, self.z0[k], self.z1[k])
+            s, c = self._scaled_lines(out, self.z0[k], self.z1[k])
             active = [
                 (p, s[t], c[t])
                 for p, t in enumerate(pieces.piece_term)
@@ -169,6 +178,12 @@ class PiecewiseLinearGeometry:
                 self.icpt[k, q] = c_
         self.kmax = kmax
         self.gl = _gauss_legendre(kmax // 2 + 2)
+
+    def _scaled_lines(self, out: Variable, z0: float, z1: float) -> tuple[FloatArray, FloatArray]:
+        s, c = self._lines(out, z0, z1)
+        if self.heights is None:
+            return s, c
+        return s * self.heights, c * self.heights
 
     @staticmethod
     def _lines(out: Variable, z0: float, z1: float) -> tuple[FloatArray, FloatArray]:
@@ -230,6 +245,19 @@ class PiecewiseLinearGeometry:
             cross = pts[..., :-1] + t * (pts[..., 1:] - pts[..., :-1])
             pts = np.sort(np.concatenate([pts, cross], axis=-1), axis=-1)
         return pts, lv
+
+    def values_at(self, y: FloatArray, lv: FloatArray) -> FloatArray:
+        """The aggregated set at any points ``y`` (B, n) of the range, for the slot levels
+        ``lv`` (B, m, K) that :meth:`sample_points` returns."""
+        k = np.clip(np.searchsorted(self.z1, y, side="left"), 0, len(self.z0) - 1)
+        lvk = lv[np.arange(y.shape[0])[:, None], k]
+        ell = np.maximum(self.slope[k] * y[..., None] + self.icpt[k], 0.0)
+        imp = np.minimum(lvk, ell) if self.implication == "min" else lvk * ell
+        if self.aggregation == "max":
+            return cast(FloatArray, imp.max(axis=-1))
+        if self.aggregation == "bounded_sum":
+            return cast(FloatArray, np.minimum(imp.sum(axis=-1), 1.0))
+        return _probabilistic_sum(imp)
 
     def integrals(
         self, levels: FloatArray

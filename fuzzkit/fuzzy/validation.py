@@ -56,6 +56,8 @@ from fuzzkit.fuzzy.model import (
 )
 from fuzzkit.fuzzy.shapes import Piece
 from fuzzkit.fuzzy.shapes import shape as shape_record
+from fuzzkit.fuzzy.type2_model import Type2RuleBase
+from fuzzkit.fuzzy.type2_validation import footprint_problems
 
 PathPart: TypeAlias = str | int
 Path: TypeAlias = tuple[PathPart, ...]
@@ -586,6 +588,8 @@ def _errors(rb: RuleBase) -> list[Issue]:
             )
         )
     out.extend(_check_rules(rb))
+    if isinstance(rb, Type2RuleBase):
+        out.extend(footprint_problems(rb, lambda t, base: _check_term(t, base, len(rb.inputs))))
     return out
 
 

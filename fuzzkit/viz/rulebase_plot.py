@@ -1,7 +1,9 @@
 """One figure of a whole rule base: every variable's membership functions and the rules.
 
 The left column plots the terms of each input, then each output, over the variable's range
-(like MATLAB's ``plotmf``), with units on the axis; the right panel shows the rules: a coloured
+(like MATLAB's ``plotmf``), with units on the axis; an interval type-2 term is drawn as its
+upper (solid) and lower (dashed) functions with the footprint of uncertainty between them
+shaded; the right panel shows the rules: a coloured
 grid for a rule table (rows and columns are the two inputs' labels, each cell the output label),
 or the rules as numbered sentences for list-form rules (what ``fuzzkit info`` prints).
 """
@@ -26,6 +28,7 @@ from fuzzkit.fuzzy.describe import (
 from fuzzkit.fuzzy.membership import breakpoints, evaluate_term
 from fuzzkit.fuzzy.model import RuleBase, Variable
 from fuzzkit.fuzzy.shapes import shape
+from fuzzkit.fuzzy.type2_model import Footprint, LowerTerm, footprint_of
 from fuzzkit.viz.figures import figure_format, new_figure, save_figure
 
 #: Height of one membership-function panel (inches).
@@ -54,11 +57,30 @@ def _peak(x: Any, mu: Any) -> float:
     return float(0.5 * (top[0] + top[-1]))
 
 
-def _plot_variable(ax: Any, var: Variable, kind: str) -> None:
+def footprint_curves(var: Variable, index: int, lower: LowerTerm) -> tuple[Any, Any, Any]:
+    """``x``, the upper and the lower membership of an interval type-2 term: exactly at both
+    shapes' corners when both are piecewise linear, else sampled at :data:`SAMPLES` points."""
+    term = var.terms[index]
+    if term.is_piecewise_linear and lower.shape.is_piecewise_linear:
+        corners = [p for t in (term, lower.shape) for p in breakpoints(t) if var.low < p < var.high]
+        x = np.unique(np.array([var.low, *corners, var.high], dtype=np.float64))
+    else:
+        x = np.linspace(var.low, var.high, SAMPLES)
+    return x, evaluate_term(term, x), lower.scale * evaluate_term(lower.shape, x)
+
+
+def _plot_variable(ax: Any, var: Variable, kind: str, footprint: Footprint | None = None) -> None:
     colours = [colormaps["tab10"](i % 10) for i in range(len(var.terms))]
     for k, term in enumerate(var.terms):
         colour = colours[k]
-        if shape(term.shape).impulse:  # no area: a spike at its value
+        lower = footprint.lower(var.name, term.name) if footprint is not None else None
+        if lower is not None:  # interval type-2: the footprint of uncertainty shaded
+            x, mu, mu_lower = footprint_curves(var, k, lower)
+            ax.plot(x, mu, color=colour, lw=1.6)
+            ax.plot(x, mu_lower, color=colour, lw=1.1, ls="--")
+            ax.fill_between(x, mu_lower, mu, color=colour, alpha=0.28, lw=0)
+            at = _peak(x, mu)
+        elif shape(term.shape).impulse:  # no area: a spike at its value
             value = term.params[0]
             ax.vlines(value, 0.0, 1.0, color=colour, lw=2)
             ax.plot([value], [1.0], "o", color=colour, ms=4)
@@ -164,7 +186,7 @@ def plot_rulebase(rb: RuleBase) -> Any:
     fig = new_figure(12.5, height)
     spec = fig.add_gridspec(len(variables), 2, width_ratios=(1.0, 1.0), wspace=0.16, hspace=0.85)
     for row, (kind, var) in enumerate(variables):
-        _plot_variable(fig.add_subplot(spec[row, 0]), var, kind)
+        _plot_variable(fig.add_subplot(spec[row, 0]), var, kind, footprint_of(rb))
     rules_ax = fig.add_subplot(spec[:, 1])
     if grid is not None:
         _plot_table(rules_ax, rb, grid)
