@@ -243,6 +243,8 @@ class ControllerCodeSpec:
     guid: str
     #: the online adaptation of the output gain (None: fixed gains)
     adapt: AdaptationCode | None = None
+    #: gains, set points and safety limit live in the state (``Target.tunable_parameters``)
+    tunable: bool = False
 
 
 def float_step_bound(design: ControllerDesign, force_bound_n: float) -> float:
@@ -480,6 +482,7 @@ def build_controller_spec(
         surface=surface,
         float_bound_note=tuple(textwrap.wrap(_float_note(design, nt), 88)),
         guid=_guid(design, nt, __version__),
+        tunable=tg.tunable_parameters,
     )
 
 

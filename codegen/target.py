@@ -99,6 +99,10 @@ class Target:
     #: A target whose output is one file rather than a folder: ``bundle(files, name)`` turns
     #: the rendered files into its bytes (the FMU: compile the binary, zip everything).
     bundle: Callable[[Mapping[str, str], str], bytes] | None = None
+    #: The controller keeps its gains, set points and safety limit in the caller's state, set
+    #: from the spec by init and changeable between steps (the FMU's tunable parameters),
+    #: rather than as ``static const`` data.
+    tunable_parameters: bool = False
 
     def template_folders(self) -> list[Path]:
         """Where this target's templates are looked up: its folder, then the extended one's."""

@@ -221,3 +221,27 @@ def workspace(folder: Path) -> None:
         f"{k * 0.004:.3f},0.0,0.0,{min(12.0, 0.05 * k):.3f},{identity}" for k in range(400)
     ]
     (folder / "log.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    write_press_bag(folder / "bag")
+
+
+def write_press_bag(path: Path) -> None:
+    """The press of ``log.csv`` as a ROS 2 bag (sqlite3): a wrench topic ``/ft/wrench`` at
+    1 kHz, as a wrist sensor publishes it (``replay`` resamples it to the spec's period)."""
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.LATEST)
+    t = store.types
+    msgtype = "geometry_msgs/msg/WrenchStamped"
+    with Writer(path, version=9) as writer:
+        conn = writer.add_connection("/ft/wrench", msgtype, typestore=store)
+        for k in range(1600):
+            ns = 1_700_000_000 * 10**9 + k * 1_000_000
+            stamp = t["builtin_interfaces/msg/Time"](sec=ns // 10**9, nanosec=ns % 10**9)
+            zero = t["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=0.0)
+            force = t["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=min(12.0, 0.0125 * k))
+            msg = t[msgtype](
+                header=t["std_msgs/msg/Header"](stamp=stamp, frame_id="ft_sensor"),
+                wrench=t["geometry_msgs/msg/Wrench"](force=force, torque=zero),
+            )
+            writer.write(conn, ns, store.serialize_cdr(msg, msgtype))

@@ -115,6 +115,9 @@ def test_cli_text_json_and_png(tmp_path: Path, capsys: pytest.CaptureFixture[str
         (["--png", "x.png"], "give --explain too"),
         (["--explain", "-i", "e=nan"], "is NaN"),
         (["--explain", "--png", "x.jpg"], "ending in .png"),
+        (["--explain", "--rules", "5"], "give --png too"),
+        (["--explain", "--png", "x.png", "--rules", "0"], "expected 1 to 64 rules"),
+        (["--explain", "--png", "x.png", "--rules", "1000"], "expected 1 to 64 rules"),
     ],
 )
 def test_cli_explain_refusals(
@@ -125,3 +128,105 @@ def test_cli_explain_refusals(
         args += ["-i", "e=0"]
     assert main(args) == 2
     assert match in capsys.readouterr().err
+
+
+# ------------------------------------------------- issue 33 item 6: the rule view (--png)
+
+
+def _fills(ax: object) -> list[float]:
+    """The top of every filled area (fill_between) drawn in ``ax``."""
+    from matplotlib.collections import PolyCollection
+
+    tops = []
+    for art in ax.collections:  # type: ignore[attr-defined]
+        if isinstance(art, PolyCollection):
+            tops.append(float(max(v[:, 1].max() for v in (p.vertices for p in art.get_paths()))))
+    return tops
+
+
+def _fill_area(ax: object) -> float:
+    """The area of the one filled region in ``ax`` (shoelace over its outline)."""
+    from matplotlib.collections import PolyCollection
+
+    (art,) = [a for a in ax.collections if isinstance(a, PolyCollection)]  # type: ignore[attr-defined]
+    total = 0.0
+    for path in art.get_paths():
+        x, y = path.vertices[:, 0], path.vertices[:, 1]
+        total += 0.5 * abs(float(np.dot(x, np.roll(y, 1)) - np.dot(y, np.roll(x, 1))))
+    return total
+
+
+def test_the_rule_view_draws_each_fired_rule_as_computed_by_hand() -> None:
+    from fuzzkit.fuzzy.rule_view import rule_rows
+    from fuzzkit.viz.explain_plot import explanation_figure
+
+    rb = load("macvicar_whelan")
+    x = fuzzkit.explain(rb, POINT)
+    rows = rule_rows(rb, x)
+    # by hand (see above): strongest first, ties by rule number
+    want = [("PS", 0.75, "ZR", 0.7, "PS"), ("PS", 0.75, "NS", 0.3, "ZR"),
+            ("ZR", 0.25, "NS", 0.3, "NS"), ("ZR", 0.25, "ZR", 0.7, "ZR")]  # fmt: skip
+    got = [
+        (r.inputs["e"][0].term, r.inputs["e"][0].truth, r.inputs["de"][0].term,
+         r.inputs["de"][0].truth, r.outputs["du"].term)
+        for r in rows
+    ]  # fmt: skip
+    assert [g[::2] for g in got] == [w[::2] for w in want]
+    assert [g[1::2] for g in got] == [pytest.approx(w[1::2]) for w in want]
+    assert [r.strength for r in rows] == pytest.approx([0.7, 0.3, 0.25, 0.25])
+    fig = explanation_figure(rb, x)
+    axes = np.array(fig.axes).reshape(3, 5).T  # added column by column: e, de, du
+    assert axes.shape == (5, 3)
+    for r, (e_mu, de_mu, w) in enumerate([(0.75, 0.7, 0.7), (0.75, 0.3, 0.3),
+                                          (0.25, 0.3, 0.25), (0.25, 0.7, 0.25)]):  # fmt: skip
+        # each input term filled up to its membership, the consequent cut at the strength
+        assert _fills(axes[r, 0]) == pytest.approx([e_mu])
+        assert _fills(axes[r, 1]) == pytest.approx([de_mu])
+        assert _fills(axes[r, 2]) == pytest.approx([w])
+        # min implication: the triangle (base 2/3) cut flat at w, a trapezoid of area
+        # (1/3) * (1 - (1 - w)^2); a scaled one (product) would be w/3
+        assert _fill_area(axes[r, 2]) == pytest.approx((1 - (1 - w) ** 2) / 3, rel=1e-3)
+        # the input value marked in every input cell
+        assert [ln.get_xdata()[0] for ln in axes[r, 0].lines if ln.get_color() == "tab:red"] == [
+            0.25
+        ]
+    # last row: the aggregated set (its peak is the strongest cut) and the defuzzified value
+    assert _fills(axes[4, 2]) == pytest.approx([0.7])
+    du = evaluate_point(rb, POINT)["du"]
+    assert [ln.get_xdata()[0] for ln in axes[4, 2].lines if ln.get_color() == "tab:red"] == [du]
+    texts = " ".join(t.get_text() for ax in fig.axes for t in ax.texts)
+    assert "PS 0.75" in texts and "w 0.700" in texts and f"du = {du:.6g}" in texts
+
+
+def test_the_rule_view_draws_the_top_n_of_many_firing_rules(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from fuzzkit.viz.explain_plot import explanation_figure
+
+    rb = load("gaussian5")  # gaussian terms: all 25 rules fire
+    x = fuzzkit.explain(rb, {"e": 0.3, "de": -0.2})
+    assert len(x.rules) == 25
+    fig = explanation_figure(rb, x, top=5)
+    assert len(fig.axes) == (5 + 1) * 3
+    assert "the 5 strongest drawn" in fig._suptitle.get_text()
+    labels = [ax.get_ylabel() for ax in fig.axes[:6]]
+    assert labels == [f"rule {r.index}" for r in x.rules[:5]] + ["all"]
+    png = tmp_path / "g5.png"
+    args = ["eval", "gaussian5", "-i", "e=0.3", "-i", "de=-0.2", "--explain", "--png", str(png)]
+    assert main([*args, "--rules", "5"]) == 0 and png.read_bytes().startswith(b"\x89PNG")
+    capsys.readouterr()
+
+
+def test_negated_and_untested_inputs_in_the_rule_view() -> None:
+    from fuzzkit.fuzzy.rule_view import rule_rows
+
+    rb = load("three_input")
+    x = fuzzkit.explain(rb, {"e": 0.3, "de": -0.2, "r": 0.5})
+    rows = {r.index: r for r in rule_rows(rb, x, top=64)}
+    memberships = {i.name: i.memberships for i in x.inputs}
+    negated = [(var, c) for r in rows.values() for var, cells in r.inputs.items()
+               for c in cells if c.negated]  # fmt: skip
+    assert negated
+    for var, cell in negated:
+        assert cell.truth == pytest.approx(1.0 - memberships[var][cell.term])
+    assert any(len(r.inputs) < 3 for r in rows.values())  # a rule that leaves an input out

@@ -75,7 +75,7 @@ def test_fmu_validates_and_equals_replay_on_a_hostile_log(
     assert float(md.defaultExperiment.stepSize) == spec.period_s
     inputs = [v.name for v in md.modelVariables if v.causality == "input"]
     rot = [f"r{i}{j}" for i in range(1, 4) for j in range(1, 4)]
-    assert inputs == ["fx", "fy", "fz", *(rot if gravity else [])]
+    assert inputs == ["fx", "fy", "fz", *(rot if gravity else []), "tare", "reset"]
     outputs = {v.name: v.type for v in md.modelVariables if v.causality == "output"}
     assert outputs == {"ux": "Real", "uy": "Real", "uz": "Real", "status": "Integer"}
 

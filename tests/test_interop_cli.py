@@ -271,3 +271,41 @@ def test_a_coverage_gap_in_an_imported_file_is_a_located_warning(
     from fuzzkit.fuzzy.inference import evaluate_point
 
     assert evaluate_point(rb, food=5.0)["tip"] == 15.0  # the .fis default: mid-range
+
+
+def test_compile_takes_a_fis_file_exactly_and_refuses_only_a_table(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """interop.md: an unclamped (.fis) rule base compiles by the exact method, inputs out of
+    range evaluated where they are (as MATLAB's evalfis); a lookup table, which clamps, is
+    refused."""
+    import importlib.util
+    import math
+
+    from fuzzkit.fuzzy.inference import evaluate_point
+
+    src = str(EXAMPLES / "heater.fis")
+    out = tmp_path / "gen"
+    code, stdout, err = run(
+        capsys, "compile", src, "--target", "python", "--out", str(out), "--verify"
+    )
+    assert code == 0 and "ok" in stdout, err
+    spec = importlib.util.spec_from_file_location("heater_gen", out / "heater.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    rb = load(EXAMPLES / "heater.fis")
+    assert rb.out_of_range == "extend"
+    for err_c, rate in [(14.0, 0.5), (0.0, -2.6), (5.0, 3.0)]:  # outside [-10, 10] x [-2, 2]
+        want = evaluate_point(rb, {"err": err_c, "rate": rate})["power"]
+        (got,) = module.eval({"err": err_c, "rate": rate})
+        assert math.isclose(got, want, rel_tol=0, abs_tol=1e-9)
+    # where extending differs from clamping, the compiled module extends
+    clamped = evaluate_point(rb, {"err": 0.0, "rate": -2.0})["power"]
+    (got,) = module.eval({"err": 0.0, "rate": -2.6})
+    assert abs(got - clamped) > 0.05
+    code, _, err = run(
+        capsys, "compile", src, "--target", "c", "--method", "table", "--out", str(tmp_path / "t")
+    )
+    assert code == 2 and "a lookup table clamps its inputs" in err
+    assert not (tmp_path / "t").exists()

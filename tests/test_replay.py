@@ -56,6 +56,17 @@ def write_log(
     path.write_text("\n".join(lines) + "\n")
 
 
+def hostile_csv(
+    tmp_path: Path, n: int, seed: int
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], Path]:
+    """A hostile log for the fuzzy-PI example spec, written as ``log.csv``: forces, rotations,
+    the file."""
+    forces, rotations = hostile_log(load_spec(SPEC), n=n, seed=seed)
+    log = tmp_path / "log.csv"
+    write_log(log, forces, rotations)
+    return forces, rotations, log
+
+
 def read_out(path: Path) -> tuple[list[str], npt.NDArray[np.float64]]:
     lines = path.read_text().splitlines()
     return lines[0].split(","), np.array(
@@ -234,3 +245,136 @@ def test_compile_of_a_bad_spec_is_a_located_error(
     )
     assert code == 2 and f"{bad}:" in err and "Traceback" not in err
     assert not (tmp_path / "gen").exists()
+
+
+# ------------------------------------------------------------- issue 33 item 3: a readable replay
+
+
+def test_log_problems_are_sorted_by_line_with_plain_numbers(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    log = tmp_path / "log.csv"
+    # row 5 has a cell too few: it is skipped, and the time check must still name lines right
+    log.write_text(
+        GOOD_HEAD + "\n0.0,1,2,3\n0.016,1,2,3\n0.008,1,x,3\n0.024,1,2\n0.02,1,2,3\n0.012,1,2,3\n"
+    )
+    code, _, err = _run(
+        capsys, "replay", str(SPEC_PI), "--forces", str(log), "--out", str(tmp_path / "u.csv")
+    )
+    assert code == 2 and "np.float64" not in err, err
+    lines = [line for line in err.splitlines() if line.startswith(str(log))]
+    assert lines == [
+        f"{log}:4:1: t must increase (got 0.008 s after 0.016 s)",
+        f"{log}:4:9: expected a number, an empty cell or nan, got 'x'",
+        f"{log}:5:10: expected 4 cells (as the header), got 3",
+        f"{log}:7:1: t must increase (got 0.012 s after 0.02 s)",
+    ]
+
+
+def test_a_bad_header_lists_every_problem_and_a_bad_body_the_first_20(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    log = tmp_path / "log.csv"
+    names = [f"w{k}" for k in range(25)]
+    log.write_text("fx," + ",".join(names) + ",fx\n")
+    code, _, err = _run(
+        capsys, "replay", str(SPEC_PI), "--forces", str(log), "--out", str(tmp_path / "u.csv")
+    )
+    assert code == 2
+    located = [line for line in err.splitlines() if line.startswith(f"{log}:1:")]
+    # 25 unknown columns, fx twice, fy and fz missing: all 28, by column
+    assert len(located) == 28 and "28 problems found" in err
+    cols = [int(line.split(":")[2]) for line in located]
+    assert cols == sorted(cols)
+    # a body with 30 bad rows: the first 20 by line, and a word that the reader stopped
+    log.write_text(GOOD_HEAD + "\n" + "".join(f"{k},1,oops,3\n" for k in range(30)))
+    code, _, err = _run(
+        capsys, "replay", str(SPEC_PI), "--forces", str(log), "--out", str(tmp_path / "u.csv")
+    )
+    located = [line for line in err.splitlines() if line.startswith(f"{log}:")]
+    assert code == 2 and "the reader stopped there" in err
+    assert [int(line.split(":")[1]) for line in located] == list(range(2, 22))
+
+
+def test_status_names_decode_the_bits(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from fuzzkit.control import status as st
+
+    *_, log = hostile_csv(tmp_path, 120, 2)
+    outs = {}
+    for fmt in ("bits", "names"):
+        out = tmp_path / f"u_{fmt}.csv"
+        code, _, err = _run(
+            capsys, "replay", str(SPEC), "--forces", str(log), "--out", str(out),
+            "--status", fmt,
+        )  # fmt: skip
+        assert code == 0, err
+        outs[fmt] = [line.split(",")[-1] for line in out.read_text().splitlines()[1:]]
+    seen = set()
+    for bits, names in zip(outs["bits"], outs["names"], strict=True):
+        # decoded independently: each name is set exactly when its bit is
+        want = [name for name, bit in st.BITS.items() if int(bits) & bit]
+        assert names == ("|".join(want) or "0")
+        seen.update(want)
+    assert {"ENGAGED", "HELD", "TRIPPED", "TARING"} <= seen
+
+
+def test_python_generated_runs_the_generated_module(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    spec = load_spec(SPEC)
+    forces, rotations, log = hostile_csv(tmp_path, 150, 5)
+    out = tmp_path / "u.csv"
+    code, stdout, err = _run(
+        capsys, "replay", str(SPEC), "--forces", str(log), "--out", str(out),
+        "--impl", "python-generated",
+    )  # fmt: skip
+    assert code == 0 and "generated Python controller" in stdout, err
+    _, got = read_out(out)
+    # the module that `compile --target python` writes, imported here on its own
+    from fuzzkit.codegen.verify import load_module
+    from fuzzkit.studies.controller_code import generate
+
+    module = load_module(generate(spec, "python"), f"{spec.name}_controller")
+    ctl = module.Controller()
+    want = [ctl.step(list(f), list(r)) for f, r in zip(forces, rotations, strict=True)]
+    np.testing.assert_array_equal(got[:, 1:4], np.array([list(u) for u, _ in want]))
+    np.testing.assert_array_equal(got[:, 4], [s for _, s in want])
+
+
+@needs_cc
+def test_compare_prints_the_largest_difference_per_column(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    *_, log = hostile_csv(tmp_path, 150, 7)
+    runs = {}
+    for impl in ("python", "python-generated", "c"):
+        out = tmp_path / f"u_{impl}.csv"
+        argv = ["--out", str(out), "--impl", impl, "--type", "float"]
+        assert _run(capsys, "replay", str(SPEC), "--forces", str(log), *argv)[0] == 0
+        runs[impl] = read_out(out)[1]
+    code, stdout, err = _run(
+        capsys, "replay", str(SPEC), "--forces", str(log), "--compare", "--type", "float"
+    )
+    assert code == 0, err
+    assert "generated C (float)" in stdout
+    for k, col in enumerate(("ux (m)", "uy (m)", "uz (m)")):
+        gen, c = (float(x) for x in _row(stdout, col))
+        ref = runs["python"][:, 1 + k]
+        # printed to 3 significant digits
+        want_gen = float(np.max(np.abs(runs["python-generated"][:, 1 + k] - ref)))
+        want_c = float(np.max(np.abs(runs["c"][:, 1 + k] - ref)))
+        assert gen == pytest.approx(want_gen, rel=5e-3) and c == pytest.approx(want_c, rel=5e-3)
+    assert float(_row(stdout, "uz (m)")[1]) > 0  # float C does differ from the double reference
+    want_status = [
+        int(np.count_nonzero(runs[i][:, 4] != runs["python"][:, 4]))
+        for i in ("python-generated", "c")
+    ]
+    assert [int(v) for v in _row(stdout, "status (rows differing)")] == want_status
+
+
+def _row(stdout: str, label: str) -> list[str]:
+    """The cells after ``label`` in the printed comparison table."""
+    for line in stdout.splitlines():
+        if line.strip().startswith(label):
+            return line.strip()[len(label) :].split()
+    raise AssertionError(f"no row {label!r} in {stdout}")

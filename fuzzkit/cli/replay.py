@@ -1,4 +1,5 @@
-"""``fuzzkit replay``: a controller spec run on a recorded sensor log (reference or generated C)."""
+"""``fuzzkit replay``: a controller spec run on a recorded sensor log (CSV or a ROS 2 bag) by
+the reference or a generated controller, or by all three to compare them."""
 
 from __future__ import annotations
 
@@ -12,42 +13,130 @@ def register(sub: Any) -> None:
     """Add ``replay`` to the ``fuzzkit`` parser."""
     p = sub.add_parser(
         "replay",
-        help="run a controller spec on a recorded wrist-sensor log (CSV)",
+        help="run a controller spec on a recorded wrist-sensor log (CSV or ROS 2 bag)",
         description="Run the controller of a spec on a sensor log, sample by sample from reset, "
         "and write the correction and status of every row. The log is CSV with a header: "
         "fx,fy,fz (N, task frame) required; t (s) and the tool rotation r11,r12,...,r33 "
         "(row-major, world-from-sensor; needed when the spec compensates gravity) optional. An "
-        "empty cell or nan is a missing sample. The output has [t,]ux,uy,uz (m),status. "
-        "--impl python is fuzzkit's reference controller, --impl c the generated C, compiled "
-        "and run: replay both and compare to check the generated controller on your robot's "
-        "log. A run's CSV (fuzzkit simulate --csv) is read as it is: the sample the controller "
-        "received, and the run's corrections, which the replay is compared with (the largest "
-        "difference is printed).",
+        "empty cell or nan is a missing sample. Or the log is a ROS 2 bag (a rosbag2 folder, "
+        "or its .db3 or .mcap file) with a geometry_msgs/msg/WrenchStamped topic (--topic), "
+        "resampled to the spec's period by the messages' stamps: the last message is held, "
+        "and a period with no new message is a missing sample. The output has "
+        "[t,]ux,uy,uz (m),status. --impl python is fuzzkit's reference controller, "
+        "python-generated the generated Python module, c the generated C, compiled and run; "
+        "--compare runs all three and prints the largest difference per column. A run's CSV "
+        "(fuzzkit simulate --csv) is read as it is: the sample the controller received, and the "
+        "run's corrections, which the replay is compared with (the largest difference is "
+        "printed).",
         epilog="examples:\n"
         "  fuzzkit replay docs/examples/controller.yaml --forces log.csv --out u_ref.csv\n"
         "  fuzzkit replay docs/examples/controller.yaml --forces log.csv --out u_c.csv --impl c\n"
+        "  fuzzkit replay docs/examples/controller.yaml --forces log.csv --compare\n"
+        "  fuzzkit replay docs/examples/controller_pi.yaml --forces bag/ --topic /ft --out u.csv\n"
         "  fuzzkit simulate E1 --spec SPEC --csv run.csv && "
         "fuzzkit replay SPEC --forces run.csv --out u.csv --impl c",
     )
     p.add_argument("spec", metavar="SPEC", help="controller spec (YAML)")
-    p.add_argument("--forces", required=True, metavar="LOG.csv", help="the sensor log")
     p.add_argument(
-        "--out", required=True, metavar="OUT.csv", help="output CSV (written atomically)"
+        "--forces",
+        required=True,
+        metavar="LOG",
+        help="the sensor log: CSV, or a ROS 2 bag (folder, .db3 or .mcap)",
+    )
+    p.add_argument(
+        "--out",
+        metavar="OUT.csv",
+        default=None,
+        help="output CSV, written atomically (default: none; required unless --compare, "
+        "which writes the reference's output there when given)",
     )
     p.add_argument(
         "--impl",
         default="python",
-        choices=("python", "c"),
-        help="python: the reference controller; c: the generated C (needs a C compiler)",
+        choices=("python", "python-generated", "c"),
+        help="python (default): the reference controller; python-generated: the generated "
+        "Python module; c: the generated C (needs a C compiler)",
+    )
+    p.add_argument(
+        "--compare",
+        action="store_true",
+        help="replay through all three implementations and print, per column, the largest "
+        "difference of each generated one from the reference (default: off)",
     )
     p.add_argument(
         "--type",
         dest="number_type",
         default="double",
         choices=("double", "float"),
-        help="number type of the generated C (--impl c)",
+        help="number type of the generated C (--impl c, --compare) (default: double)",
+    )
+    p.add_argument(
+        "--status",
+        dest="status_format",
+        default="bits",
+        choices=("bits", "names"),
+        help="the output's status column: bits (default), the integer bit mask; names, the set "
+        "bits' names joined by | (ENGAGED|SATURATED; 0 when none)",
+    )
+    p.add_argument(
+        "--schedule",
+        default=None,
+        metavar="CHANGES.csv",
+        help="parameter changes during the replay (reference only): CSV period,name,value, "
+        "names as the FMU's tunable parameters (kp_z, ki_z, kx_z, setpoint_z, limit_n) and the "
+        "events tare and reset (value 1) (default: none)",
+    )
+    p.add_argument(
+        "--topic",
+        default=None,
+        metavar="NAME",
+        help="bag logs: the WrenchStamped topic (default: none; when omitted the bag's wrench "
+        "topics are listed)",
+    )
+    p.add_argument(
+        "--rotation-topic",
+        default=None,
+        metavar="NAME",
+        help="bag logs: a QuaternionStamped, PoseStamped or TransformStamped topic with the "
+        "tool rotation, world-from-sensor (default: none)",
+    )
+    p.add_argument(
+        "--frame-rotation",
+        default=None,
+        metavar="R11,...,R33",
+        help="a fixed tool rotation, nine numbers row-major world-from-sensor, for a log "
+        "without one (default: none)",
     )
     p.set_defaults(handler=cmd_replay)
+
+
+def _read_log(args: argparse.Namespace, period_s: float) -> Any:
+    """The log of ``--forces`` (CSV or bag), with ``--frame-rotation`` applied."""
+    import numpy as np
+
+    from fuzzkit.errors import ConfigError
+    from fuzzkit.studies.replay import SensorLog, read_sensor_log
+    from fuzzkit.studies.rosbag_log import is_bag, parse_frame_rotation, read_bag_log
+
+    fixed = None if args.frame_rotation is None else parse_frame_rotation(args.frame_rotation)
+    if args.rotation_topic is not None and fixed is not None:
+        raise ConfigError("give the tool rotation once: --rotation-topic or --frame-rotation")
+    if is_bag(args.forces):
+        return read_bag_log(args.forces, period_s, args.topic, args.rotation_topic, fixed)
+    if args.topic is not None or args.rotation_topic is not None:
+        raise ConfigError(
+            f"{args.forces}: --topic and --rotation-topic read ROS 2 bags (a folder, .db3 or "
+            ".mcap); this log is CSV"
+        )
+    log = read_sensor_log(args.forces)
+    if fixed is None:
+        return log
+    if log.rotations is not None:
+        raise ConfigError(
+            f"{args.forces}: the log has rotation columns; --frame-rotation is for logs without"
+        )
+    rot = np.tile(np.asarray(fixed, dtype=np.float64), (log.forces.shape[0], 1))
+    return SensorLog(log.forces, rot, log.times)
 
 
 def cmd_replay(args: argparse.Namespace) -> int:
@@ -56,33 +145,72 @@ def cmd_replay(args: argparse.Namespace) -> int:
 
     from fuzzkit.control import status as st
     from fuzzkit.control.spec_reader import load_spec
-    from fuzzkit.errors import Location, Problem, ProblemsError
+    from fuzzkit.errors import ConfigError, Location, Problem, ProblemsError
     from fuzzkit.fileio import check_output_path, write_atomic
-    from fuzzkit.studies.replay import read_sensor_log, replay, replay_csv
+    from fuzzkit.studies.replay import compare, replay, replay_csv
+    from fuzzkit.studies.rosbag_log import is_bag
 
-    check_output_path(args.out)
+    if args.out is None and not args.compare:
+        raise ConfigError("replay needs --out OUT.csv (or --compare, which prints a table)")
+    if args.out is not None:
+        check_output_path(args.out)
     spec = load_spec(args.spec)
-    log = read_sensor_log(args.forces)
+    log = _read_log(args, spec.period_s)
     if spec.sensor.tool is not None and log.rotations is None:
         raise ProblemsError(
             [
                 Problem(
-                    Location(args.forces, 1, 1),
+                    Location(args.forces) if is_bag(args.forces) else Location(args.forces, 1, 1),
                     f"the spec {spec.name!r} compensates the tool's weight (sensor.tool): the "
-                    "log needs the rotation columns r11,r12,...,r33",
+                    "log needs the rotation columns r11,r12,...,r33, --rotation-topic or "
+                    "--frame-rotation",
                 )
             ]
         )
-    out, status = replay(spec, log, args.impl, args.number_type)
-    write_atomic(args.out, replay_csv(log, out, status))
-    n = len(status)
-    counts = ", ".join(
-        f"{name} {int(np.count_nonzero(status & bit))}" for name, bit in st.BITS.items()
-    )
-    impl = "reference (python)" if args.impl == "python" else f"generated C ({args.number_type})"
-    print(f"{spec.name}: {n} samples replayed by the {impl} controller; rows with {counts}")
+    n = log.forces.shape[0]
+    schedule = []
+    if args.schedule is not None:
+        from fuzzkit.studies.param_schedule import read_schedule
+
+        if args.compare:
+            raise ConfigError("--schedule changes the reference only: not with --compare")
+        schedule = read_schedule(args.schedule, spec, n)
+    if args.compare:
+        (out, status), diffs = compare(spec, log, args.number_type)
+        print(
+            f"{spec.name}: {n} samples replayed by the reference (python), the generated "
+            f"Python and the generated C ({args.number_type})"
+        )
+        _print_differences(diffs, args.number_type)
+    else:
+        out, status = replay(spec, log, args.impl, args.number_type, schedule)
+        counts = ", ".join(
+            f"{name} {int(np.count_nonzero(status & bit))}" for name, bit in st.BITS.items()
+        )
+        impl = {
+            "python": "reference (python)",
+            "python-generated": "generated Python",
+            "c": f"generated C ({args.number_type})",
+        }[args.impl]
+        print(f"{spec.name}: {n} samples replayed by the {impl} controller; rows with {counts}")
     if log.recorded is not None:
         worst = float(np.max(np.abs(out - log.recorded))) if n else 0.0
         print(f"largest difference from the run's corrections (u<a>_m): {worst:.3g} m")
-    print(f"wrote {args.out}")
+    if args.out is not None:
+        write_atomic(args.out, replay_csv(log.times, out, status, args.status_format == "names"))
+        print(f"wrote {args.out}")
     return EXIT_OK
+
+
+def _print_differences(diffs: Any, number_type: str) -> None:
+    """The largest difference from the reference per column, one column per implementation."""
+    label = {"python-generated": "generated Python", "c": f"generated C ({number_type})"}
+    heads = ["column", *(label[d.impl] for d in diffs)]
+    rows = [
+        [f"u{axis} (m)", *(f"{d.largest_m[i]:.3g}" for d in diffs)] for i, axis in enumerate("xyz")
+    ]
+    rows.append(["status (rows differing)", *(str(d.status_rows) for d in diffs)])
+    widths = [max(len(r[i]) for r in [heads, *rows]) for i in range(len(heads))]
+    print("largest difference from the reference:")
+    for r in [heads, *rows]:
+        print("  " + "  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)).rstrip())

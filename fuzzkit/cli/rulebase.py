@@ -103,7 +103,16 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--png",
         metavar="OUT.png",
-        help="with --explain: draw each output's aggregated set and its defuzzified value",
+        help="with --explain: draw the rule view (as MATLAB's rule viewer): a row per rule "
+        "that fires with its input terms, the input value, the firing strength and the cut "
+        "consequent, then each output's aggregated set and defuzzified value",
+    )
+    p.add_argument(
+        "--rules",
+        type=int,
+        default=12,
+        metavar="N",
+        help="with --png: draw the N strongest rules that fire, 1 to 64 (default: 12)",
     )
     p.set_defaults(handler=cmd_eval)
 
@@ -431,10 +440,16 @@ def cmd_eval(args: argparse.Namespace) -> int:
     if args.png is not None:
         figure_format(args.png, "--png")
         check_output_path(args.png, "--png file")
+    from fuzzkit.fuzzy.rule_view import DEFAULT_RULES, MAX_RULES
+
+    if args.rules != DEFAULT_RULES and args.png is None:
+        raise EvaluationError("--rules N is the number of rules --png draws: give --png too")
+    if not 1 <= args.rules <= MAX_RULES:
+        raise EvaluationError(f"--rules {args.rules}: expected 1 to {MAX_RULES} rules to draw")
     rb = _load(args.rulebase)
     engine = Engine(rb)
     if args.points is None and args.explain:
-        return _explain(rb, _parse_inputs(rb, args.inputs), args.json, args.png)
+        return _explain(rb, _parse_inputs(rb, args.inputs), args.json, args.png, args.rules)
     if args.points is None:
         point = _parse_inputs(rb, args.inputs)
         result = engine.evaluate_point(point)
@@ -519,14 +534,16 @@ def explanation_text(rb: RuleBase, data: Any) -> str:
     return "\n".join(lines)
 
 
-def _explain(rb: RuleBase, point: dict[str, float], as_json: bool, png: str | None) -> int:
+def _explain(
+    rb: RuleBase, point: dict[str, float], as_json: bool, png: str | None, top: int
+) -> int:
     from fuzzkit.fuzzy.explain import explain
 
     data = explain(rb, point)
     if png is not None:
         from fuzzkit.viz.explain_plot import write_explanation_png
 
-        write_explanation_png(rb, data, png)
+        write_explanation_png(rb, data, png, top)
     if as_json:
         print(json.dumps(data.as_data(), allow_nan=False))
     else:

@@ -18,22 +18,28 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.control.spec import ControllerSpec
-from fuzzkit.errors import Location, Problem, ProblemsError
+from fuzzkit.errors import ConfigError, Location, Problem, ProblemsError
+
+if TYPE_CHECKING:
+    from fuzzkit.studies.param_schedule import Change
 
 FloatArray = npt.NDArray[np.float64]
 
 FORCE_COLUMNS = ("fx", "fy", "fz")
 ROTATION_COLUMNS = tuple(f"r{i}{j}" for i in range(1, 4) for j in range(1, 4))
 COLUMNS = ("t", *FORCE_COLUMNS, *ROTATION_COLUMNS)
-IMPLS = ("python", "c")
+#: ``--impl``: the reference, and the generated targets by the name ``--impl`` gives them.
+GENERATED = {"python-generated": "python", "c": "c"}
+IMPLS = ("python", *GENERATED)
 #: A number as the log may write it (no thousands separators, no quotes).
 _NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?|[+-]?inf(?:inity)?", re.I)
 #: Problems listed before the reader stops (a wrong file would list every row).
@@ -68,6 +74,19 @@ def _cells(line: str) -> list[tuple[str, int]]:
         out.append((stripped, col + lead))
         col += len(raw) + 1
     return out
+
+
+def raise_sorted(problems: list[Problem]) -> NoReturn:
+    """Raise the problems sorted by line and column, the first :data:`MAX_PROBLEMS` of them
+    (with a last line saying the reader stopped, when there were more)."""
+    ordered = sorted(problems, key=lambda p: (p.location.line, p.location.col))
+    if len(ordered) <= MAX_PROBLEMS:
+        raise ProblemsError(ordered)
+    shown = ordered[:MAX_PROBLEMS]
+    raise ProblemsError(
+        shown,
+        f"{MAX_PROBLEMS} problems listed (the reader stopped there; fix these and read again)",
+    )
 
 
 def read_sensor_log(path: str | Path) -> SensorLog:
@@ -131,9 +150,10 @@ def read_sensor_log(path: str | Path) -> SensorLog:
     if rot_given and len(rot_given) != 9:
         missing = [c for c in ROTATION_COLUMNS if c not in index]
         bad(1, 1, f"rotation columns incomplete: {', '.join(missing)} missing (all 9 or none)")
-    if problems:
-        raise ProblemsError(problems)
+    if problems:  # every problem of the header, however many: each names one column
+        raise ProblemsError(sorted(problems, key=lambda p: (p.location.line, p.location.col)))
     rows: list[list[float]] = []
+    row_lines: list[int] = []  # the file line of each row kept (rows with problems are not)
     width = len(header)
     for n, line in enumerate(lines[1:], start=2):
         if not line.strip():
@@ -155,7 +175,8 @@ def read_sensor_log(path: str | Path) -> SensorLog:
                 bad(n, col, f"expected a number, an empty cell or nan, got {cell!r}")
                 row.append(math.nan)
         rows.append(row)
-        if len(problems) >= MAX_PROBLEMS:
+        row_lines.append(n)
+        if len(problems) > MAX_PROBLEMS:
             break
     if not rows and not problems:
         bad(2, 1, "the log has a header but no rows")
@@ -163,17 +184,17 @@ def read_sensor_log(path: str | Path) -> SensorLog:
     times = None
     if "t" in index:
         times = values[:, index["t"]]
-        for k in range(len(times)):
-            if not math.isfinite(times[k]):
-                bad(k + 2, header[index["t"]][1], "t must be a finite time (s)")
-            elif k and math.isfinite(times[k - 1]) and times[k] <= times[k - 1]:
-                bad(
-                    k + 2,
-                    header[index["t"]][1],
-                    f"t must increase (got {times[k]!r} after {times[k - 1]!r})",
-                )
+        t_col = header[index["t"]][1]
+        last = math.nan  # the last finite time, on the last row kept
+        for k, t in enumerate(times.tolist()):
+            if not math.isfinite(t):
+                bad(row_lines[k], t_col, "t must be a finite time (s)")
+                continue
+            if math.isfinite(last) and t <= last:
+                bad(row_lines[k], t_col, f"t must increase (got {t:g} s after {last:g} s)")
+            last = t
     if problems:
-        raise ProblemsError(problems[:MAX_PROBLEMS])
+        raise_sorted(problems)
     forces = values[:, [index[c] for c in FORCE_COLUMNS]]
     rotations = values[:, [index[c] for c in ROTATION_COLUMNS]] if rot_given else None
     recorded = None
@@ -183,40 +204,98 @@ def read_sensor_log(path: str | Path) -> SensorLog:
 
 
 def replay(
-    spec: ControllerSpec, log: SensorLog, impl: str = "python", number_type: str = "double"
+    spec: ControllerSpec,
+    log: SensorLog,
+    impl: str = "python",
+    number_type: str = "double",
+    schedule: Sequence[Change] = (),
 ) -> tuple[FloatArray, npt.NDArray[np.int64]]:
     """Run the controller of ``spec`` on ``log`` from reset: corrections ``(n, 3)`` and status.
 
-    ``impl``: ``python`` is fuzzkit's reference controller (``fuzzkit.control.reference``),
-    ``c`` the generated C compiled and called through ctypes (``number_type`` float/double).
+    ``impl`` (:data:`IMPLS`): ``python`` is fuzzkit's reference controller
+    (``fuzzkit.control.reference``), ``python-generated`` the generated Python module
+    (``NAME_controller.py``) imported and run, ``c`` the generated C compiled and called
+    through ctypes (``number_type`` float/double). ``schedule``: parameter changes
+    (:mod:`fuzzkit.studies.param_schedule`), for the reference only.
     """
+    if schedule and impl != "python":
+        raise ConfigError(
+            f"--schedule changes the reference's parameters (--impl python); the generated "
+            f"{impl} has them built in (the FMU's are tunable: docs/fmu.md)"
+        )
     if impl == "python":
         from fuzzkit.control.reference import Controller
+        from fuzzkit.studies.param_schedule import apply
 
         ref = Controller(spec)
         n = log.forces.shape[0]
         out = np.empty((n, 3))
         status = np.zeros(n, dtype=np.int64)
         rot = None if log.rotations is None else log.rotations.tolist()
+        by_period: dict[int, list[Change]] = {}
+        for change in schedule:
+            by_period.setdefault(change.period, []).append(change)
         for k, force in enumerate(log.forces.tolist()):
+            if k in by_period:
+                apply(ref, by_period[k])
             out[k], status[k] = ref.step(force, None if rot is None else rot[k])
         return out, status
-    if impl == "c":
+    if impl in GENERATED:
         from fuzzkit.studies.controller_code import open_generated
 
-        ctl: Any = open_generated(spec, "c", number_type)
+        target = GENERATED[impl]
+        ctl: Any = open_generated(spec, target, number_type if target == "c" else None)
         result: tuple[FloatArray, npt.NDArray[np.int64]] = ctl.run(log.forces, log.rotations)
         return result
     raise ValueError(f"unknown --impl {impl!r} (expected one of {', '.join(IMPLS)})")
 
 
-def replay_csv(log: SensorLog, out: FloatArray, status: npt.NDArray[np.int64]) -> str:
+@dataclass(frozen=True)
+class Difference:
+    """How far one implementation's replay is from the reference's: the largest ``|du|`` per
+    axis (m) and the rows whose status differs."""
+
+    impl: str
+    largest_m: tuple[float, float, float]
+    status_rows: int
+
+
+def compare(
+    spec: ControllerSpec, log: SensorLog, number_type: str = "double"
+) -> tuple[tuple[FloatArray, npt.NDArray[np.int64]], list[Difference]]:
+    """Replay ``log`` through every implementation: the reference's output, and each generated
+    one's :class:`Difference` from it (``fuzzkit replay --compare``)."""
+    ref_out, ref_status = replay(spec, log, "python")
+    diffs = []
+    for impl in GENERATED:
+        out, status = replay(spec, log, impl, number_type)
+        gap = np.abs(out - ref_out).max(axis=0) if out.size else np.zeros(3)
+        diffs.append(
+            Difference(
+                impl,
+                (float(gap[0]), float(gap[1]), float(gap[2])),
+                int(np.count_nonzero(status != ref_status)),
+            )
+        )
+    return (ref_out, ref_status), diffs
+
+
+def replay_csv(
+    times: FloatArray | None,
+    out: FloatArray,
+    status: npt.NDArray[np.int64],
+    status_names: bool = False,
+) -> str:
     """The output CSV: ``[t,]ux,uy,uz,status`` per row (numbers as Python writes them back
-    exactly)."""
-    head = ("t," if log.times is not None else "") + "ux,uy,uz,status"
+    exactly); with ``status_names`` the status column holds the set bits' names joined by
+    ``|`` (``ENGAGED|SATURATED``; ``0`` when none is set) instead of the integer."""
+    from fuzzkit.control.status import describe
+
+    head = ("t," if times is not None else "") + "ux,uy,uz,status"
     lines = [head]
     for k in range(out.shape[0]):
-        t = f"{float(log.times[k])!r}," if log.times is not None else ""
+        t = f"{float(times[k])!r}," if times is not None else ""
         u = ",".join(repr(float(v)) for v in out[k])
-        lines.append(f"{t}{u},{int(status[k])}")
+        code = int(status[k])
+        lines.append(f"{t}{u},{describe(code) if status_names else code}")
     return "\n".join(lines) + "\n"

@@ -39,4 +39,5 @@ TARGET = dataclasses.replace(
     open_controller=open_controller,
     extends="c",
     bundle=bundle,
+    tunable_parameters=True,
 )
