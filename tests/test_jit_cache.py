@@ -36,7 +36,7 @@ def test_the_roots_cover_every_mapped_folder() -> None:
 
 def test_a_kernel_is_stamped_with_the_package_fingerprint() -> None:
     # the run loop calls period.py's functions: its cache must depend on more than arm6_run.py
-    for dispatcher in (arm6_run.run_arm6, period.controller_step):
+    for dispatcher in (arm6_run.run_arm6, period.inject_faults):
         locator = dispatcher._cache._impl.locator
         assert isinstance(locator, jit_module._PackageStamp), type(locator)
         own, package = locator.get_source_stamp()

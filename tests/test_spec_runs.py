@@ -141,7 +141,7 @@ def test_simulate_spec_runs_the_specs_controller(capsys: pytest.CaptureFixture[s
     code = main(["simulate", "E1", "--spec", str(PI), "--json", "--plant", "planar"])
     data = json.loads(capsys.readouterr().out)
     assert code == 0
-    assert data["controller"] == "pi" and "spec e1_pi" in data["controller_impl"]
+    assert data["controller"] == "pi" and "controller (double) e1_pi" in data["controller_impl"]
     assert data["loop"] == "compiled"  # front end and all
     assert abs(data["axes"]["z"]["steady_state_error_mean"]) < 0.1
     assert main(["simulate", "E1", "--spec", str(PI), "--gains", str(PI)]) == 2
@@ -151,16 +151,17 @@ def test_simulate_spec_runs_the_specs_controller(capsys: pytest.CaptureFixture[s
 @pytest.mark.parametrize("fault", ["none", "spike", "nan"])
 @pytest.mark.parametrize("path", [FUZZY, PI], ids=["fuzzy-pi", "pi"])
 def test_a_spec_runs_compiled_as_in_python(path: Path, fault: str) -> None:
-    """The compiled loop runs a spec, sensor front end included (tare screened by the gate,
-    gravity compensation, low-pass), with the spec's gains and limits, and repeats the Python
-    loop's run: the same samples in, the same corrections out."""
+    """The compiled loop runs a spec (its generated C), sensor front end included (tare
+    screened by the gate, gravity compensation, low-pass), with the spec's gains and limits,
+    and repeats the Python loop's run on the reference controller (exact engine): the same
+    samples in, the same corrections out."""
     from fuzzkit.studies.batch import RunSpec, run_spec
 
     kw = {"plant": "arm6", "controller_spec": str(path), "fault": fault, "duration_s": 2.5}
-    impl = "table" if load_spec(path).kind == "fuzzy-pi" else "auto"
-    co = run_spec(RunSpec("E1", loop="compiled", fuzzy_impl=impl, **kw))  # type: ignore[arg-type]
-    py = run_spec(RunSpec("E1", loop="python", fuzzy_impl=impl, **kw))  # type: ignore[arg-type]
-    assert co.loop == "compiled" and f"spec {load_spec(path).name}" in co.controller_impl
+    co = run_spec(RunSpec("E1", loop="compiled", **kw))  # type: ignore[arg-type]
+    py = run_spec(RunSpec("E1", loop="python", **kw))  # type: ignore[arg-type]
+    name = load_spec(path).name
+    assert co.loop == "compiled" and f"generated C controller (double) {name}" in co.controller_impl
     assert np.any(co.in_contact)
     np.testing.assert_array_equal(np.isnan(co.force), np.isnan(py.force))
     np.testing.assert_allclose(co.u, py.u, rtol=0, atol=1e-12)
@@ -168,7 +169,7 @@ def test_a_spec_runs_compiled_as_in_python(path: Path, fault: str) -> None:
     assert (co.faults, co.engaged_time_s) == (py.faults, py.engaged_time_s)
 
 
-def test_a_spec_with_different_gains_per_axis_runs_in_python(tmp_path: Path) -> None:
+def test_a_spec_with_different_gains_per_axis_runs_compiled(tmp_path: Path) -> None:
     from fuzzkit.studies.batch import RunSpec, run_spec
 
     spec = load_spec(PI)
@@ -177,7 +178,7 @@ def test_a_spec_with_different_gains_per_axis_runs_in_python(tmp_path: Path) -> 
     path = tmp_path / "uneven.yaml"
     path.write_text(dump_spec(uneven))
     result = run_spec(RunSpec("E1", plant="arm6", controller_spec=str(path), duration_s=0.5))
-    assert result.loop.startswith("python (fallback:") and "gains per axis" in result.loop
+    assert result.loop == "compiled"  # the generated controller holds per-axis gains
 
 
 def test_sweep_over_specs() -> None:

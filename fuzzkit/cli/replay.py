@@ -24,12 +24,17 @@ def register(sub: Any) -> None:
         "and a period with no new message is a missing sample. The output has "
         "[t,]ux,uy,uz (m),status. --impl python is fuzzkit's reference controller, "
         "python-generated the generated Python module, c the generated C, compiled and run; "
-        "--compare runs all three and prints the largest difference per column.",
+        "--compare runs all three and prints the largest difference per column. A run's CSV "
+        "(fuzzkit simulate --csv) is read as it is: the sample the controller received, and the "
+        "run's corrections, which the replay is compared with (the largest difference is "
+        "printed).",
         epilog="examples:\n"
         "  fuzzkit replay docs/examples/controller.yaml --forces log.csv --out u_ref.csv\n"
         "  fuzzkit replay docs/examples/controller.yaml --forces log.csv --out u_c.csv --impl c\n"
         "  fuzzkit replay docs/examples/controller.yaml --forces log.csv --compare\n"
-        "  fuzzkit replay docs/examples/controller_pi.yaml --forces bag/ --topic /ft --out u.csv",
+        "  fuzzkit replay docs/examples/controller_pi.yaml --forces bag/ --topic /ft --out u.csv\n"
+        "  fuzzkit simulate E1 --spec SPEC --csv run.csv && "
+        "fuzzkit replay SPEC --forces run.csv --out u.csv --impl c",
     )
     p.add_argument("spec", metavar="SPEC", help="controller spec (YAML)")
     p.add_argument(
@@ -188,6 +193,9 @@ def cmd_replay(args: argparse.Namespace) -> int:
             "c": f"generated C ({args.number_type})",
         }[args.impl]
         print(f"{spec.name}: {n} samples replayed by the {impl} controller; rows with {counts}")
+    if log.recorded is not None:
+        worst = float(np.max(np.abs(out - log.recorded))) if n else 0.0
+        print(f"largest difference from the run's corrections (u<a>_m): {worst:.3g} m")
     if args.out is not None:
         write_atomic(args.out, replay_csv(log.times, out, status, args.status_format == "names"))
         print(f"wrote {args.out}")

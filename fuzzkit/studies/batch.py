@@ -130,6 +130,11 @@ def run_spec(spec: RunSpec) -> RunResult:
         )
     loop = spec.resolved_loop()
     fallback = ""
+    if loop == "compiled" and impl != "auto":
+        raise ConfigError(
+            f"--fuzzy-impl {impl} chooses the Python loop's surface; the compiled loop runs the "
+            "generated controller (the spec's surface): leave out --loop compiled"
+        )
     if loop == "compiled":
         try:
             return _run_generated(spec, exp, plant, faults)
