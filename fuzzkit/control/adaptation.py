@@ -128,6 +128,8 @@ class StiffnessSchedule:
         self.s_1 = 0.0
         self.s_uf = 0.0
         self.s_f = 0.0
+        self.x = 0.0  # the inner-loop model's states (Estimator: inner_q, inner_a, inner_g)
+        self.m = 0.0
         self.k = est.initial_n_mm
         self.updates = 0
         self.jumps = 0
@@ -149,14 +151,17 @@ class StiffnessSchedule:
         return self.scale
 
     def observe(self, f: float, u: float) -> None:
-        """One period: record ``(f_k, u_{k-1})``, update the estimate when the window is
-        excited, then move to the estimate's band: at once when that lowers the gain, after
-        the dwell time since the last change when it raises it."""
+        """One period: record ``(f_k, m_{k-1})`` (``m``: the inner-loop model's response to the
+        corrections up to ``u_{k-1}``), update the estimate when the window is excited, then
+        move to the estimate's band: at once when that lowers the gain, after the dwell time
+        since the last change when it raises it."""
         est = self.ad.estimator
         n = self.size
         p = self.pos
+        self.x = est.inner_q * self.x + (1.0 - est.inner_q) * u
+        self.m = est.inner_a * self.m + (1.0 - est.inner_a) * est.inner_g * self.x
         self.f_hist[p] = f
-        self.u_hist[p] = u
+        self.u_hist[p] = self.m
         self.pos = (p + 1) % n
         # f_{k-W}; u_{k-D} is stored with period k-D+1, u_{k-D-W} with period k-D-W+1 = k-n+1
         df = f - self.f_hist[(p + n - self.window) % n]
