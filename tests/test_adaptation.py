@@ -62,6 +62,10 @@ def test_examples_read_and_round_trip_through_the_writer() -> None:
     spec = adaptive()
     assert [b.scale for b in spec.adaptation.bands] == [0.5, 0.2, 0.05, 0.02]
     assert spec.adaptation.bands[-1].up_to_n_mm is None
+    inner = knows_the_loop()
+    text = dump_spec(inner)
+    assert "inner_loop:" in text and "inner_loop:" not in dump_spec(spec)
+    assert loads_spec(text, "inner.yaml").adaptation == inner.adaptation
 
 
 BASE = ADAPTIVE.read_text(encoding="utf-8").split("adaptation:")[0]

@@ -36,8 +36,9 @@ ALPHA_LEVELS = {"ZE": 0.0, "VS": 1.0 / 6.0, "S": 2.0 / 6.0, "SB": 3.0 / 6.0, "M"
                 "B": 5.0 / 6.0, "VB": 1.0}  # fmt: skip
 #: alpha's rule base: rows E = NL .. PL, columns dE = NL .. PL (7 triangular labels on [-1, 1]).
 #: Large when the error is large and growing (e and de of one sign), small near the set point
-#: and when the error is already shrinking fast (the structure of Mudi and Pal's Table for
-#: alpha: more gain to leave a large error, less to avoid overshoot while approaching).
+#: and when the error is already shrinking fast (the rule Mudi and Pal state in words: more gain
+#: to leave a large error, less to avoid overshoot while approaching). The kit's own entries:
+#: not compared with the paper's table.
 ALPHA_RULES = (
     ("VB", "VB", "VB", "B", "SB", "S", "ZE"),
     ("VB", "VB", "B", "B", "M", "S", "VS"),
