@@ -158,7 +158,7 @@ def _slide_scenario() -> Scenario:
     )
 
 
-@pytest.mark.parametrize("plant_name", ["planar", "arm6"])
+@pytest.mark.parametrize("plant_name", ["planar", "arm6", "mujoco"])
 def test_plants_report_normal_force_without_friction(plant_name: str) -> None:
     from fuzzkit.studies.plants import make_plant
 

@@ -33,6 +33,9 @@ from fuzzkit.studies.faults import FAULTS, fault
 from fuzzkit.studies.runner import RunResult, load_surface, run
 
 SEEDS = range(int(os.environ.get("FUZZKIT_VERIFY_SEEDS", "10")))
+#: The MuJoCo plant runs in the Python loop only (about 10x slower than the compiled loops), so
+#: ``make test`` runs it at 2 seeds; ``make verify`` at FUZZKIT_VERIFY_SEEDS like the others.
+MUJOCO_SEEDS = range(int(os.environ.get("FUZZKIT_VERIFY_SEEDS", "2")))
 
 #: Shortest runs that still cover contact, the faults (the dropout is at 2.2-2.3 s) and a
 #: steady stretch after them; None: the experiment's own duration (E3 meets its wall at 4.2 s).
@@ -102,6 +105,21 @@ def test_faults_never_push_the_true_force_past_the_limit_and_the_task_gets_done(
         assert abs(held - setpoint) < HOLD_TOLERANCE_N[name], (axis, held)
     if fault_kind in ("nan", "dropout", "spike"):
         assert r.faults > 0  # the bad samples were seen, counted and held
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", MUJOCO_SEEDS)
+@pytest.mark.parametrize("fault_kind", sorted(FAULTS))
+@pytest.mark.parametrize("controller", ["pi", "fuzzy-pi"])
+@pytest.mark.parametrize("name", sorted(EXPERIMENTS))
+def test_the_dynamic_mujoco_arm_passes_the_same_matrix(
+    name: str, controller: str, fault_kind: str, seed: int
+) -> None:
+    """The same matrix on the IRB 140 in MuJoCo (the reference controller; the compiled loop,
+    hence the generated C controller, does not run this plant)."""
+    test_faults_never_push_the_true_force_past_the_limit_and_the_task_gets_done(
+        "reference", name, controller, fault_kind, "mujoco", seed
+    )
 
 
 SPEC_EXAMPLES = ("controller.yaml", "controller_pi.yaml")

@@ -504,6 +504,46 @@ class Arm6Plant:
         ValueError
             If a correction is not 3 finite numbers.
         """
+        pos, quat, target_pos, messages = self._reference_step(
+            correction_xyz, path_time_s, correction_rotation
+        )
+        q, q_ref, lag = self._q, self._q_ref, self._lag
+        for i in range(len(q)):
+            q[i] += lag * (q_ref[i] - q[i])
+        self._t += self._dt
+
+        # Contact at the actual TCP, velocity by finite difference over the period.
+        tcp = self.chain.evaluate(q)[1]
+        pp = self._p_prev
+        v = ((tcp[0] - pp[0]) / self._dt, (tcp[1] - pp[1]) / self._dt, (tcp[2] - pp[2]) / self._dt)
+        self._p_prev = tcp
+        self._state = self._contact.step(tcp, v, self._dt)
+        f = self._state.force
+        rt = self._rot_task_t
+        true_task = np.array(
+            [
+                rt[0][0] * f[0] + rt[0][1] * f[1] + rt[0][2] * f[2],
+                rt[1][0] * f[0] + rt[1][1] * f[1] + rt[1][2] * f[2],
+                rt[2][0] * f[0] + rt[2][1] * f[1] + rt[2][2] * f[2],
+            ]
+        )
+        if self._tilts:
+            self._rot_sensor = np.asarray(matrix_from_quat(quat))
+            true_task = self._rot_sensor.T @ np.asarray(f, dtype=float)
+        self._sensor.update(self._t, self._dt, self._with_weight(true_task))
+        self._true_task = true_task
+        return self._sample(self._to_scenario(pos), self._to_scenario(target_pos), tuple(messages))
+
+    def _reference_step(
+        self,
+        correction_xyz: FloatArray | Sequence[float],
+        path_time_s: float,
+        correction_rotation: FloatArray | Sequence[float] | None,
+    ) -> tuple[Vec3, Quat, Vec3, list[str]]:
+        """The inner loop's reference for one period: the path pose plus the correction, through
+        IK and the joint speed limit into ``self._q_ref``; returns ``(path position, path
+        orientation, target position, messages)``. Shared with :mod:`fuzzkit.plants.mujoco_arm`,
+        whose servos follow the same reference."""
         if self._scenario is None:
             raise RuntimeError("Arm6Plant.reset(scenario) must be called first")
         cx, cy, cz = _vec3(correction_xyz, "correction_xyz")
@@ -543,7 +583,7 @@ class Arm6Plant:
         # Joint reference: towards the IK solution, the whole step scaled down together when
         # any axis would exceed its speed limit, so the reference keeps its direction (a robot
         # controller slows the path down rather than bending it).
-        q_ref, q, lag = self._q_ref, self._q, self._lag
+        q_ref = self._q_ref
         dq_max = self._dq_max
         d = [q_ik[i] - q_ref[i] for i in range(len(q_ref))]
         scale = 1.0
@@ -554,32 +594,9 @@ class Arm6Plant:
                 limited.append(chain.robot.joints[i].name)
         for i in range(len(q_ref)):
             q_ref[i] += d[i] * scale
-            q[i] += lag * (q_ref[i] - q[i])
         if limited:
             messages.append(f"joint speed limit on {', '.join(limited)}")
-        self._t += self._dt
-
-        # Contact at the actual TCP, velocity by finite difference over the period.
-        tcp = chain.evaluate(q)[1]
-        pp = self._p_prev
-        v = ((tcp[0] - pp[0]) / self._dt, (tcp[1] - pp[1]) / self._dt, (tcp[2] - pp[2]) / self._dt)
-        self._p_prev = tcp
-        self._state = self._contact.step(tcp, v, self._dt)
-        f = self._state.force
-        rt = self._rot_task_t
-        true_task = np.array(
-            [
-                rt[0][0] * f[0] + rt[0][1] * f[1] + rt[0][2] * f[2],
-                rt[1][0] * f[0] + rt[1][1] * f[1] + rt[1][2] * f[2],
-                rt[2][0] * f[0] + rt[2][1] * f[1] + rt[2][2] * f[2],
-            ]
-        )
-        if self._tilts:
-            self._rot_sensor = np.asarray(matrix_from_quat(quat))
-            true_task = self._rot_sensor.T @ np.asarray(f, dtype=float)
-        self._sensor.update(self._t, self._dt, self._with_weight(true_task))
-        self._true_task = true_task
-        return self._sample(self._to_scenario(pos), self._to_scenario(target_pos), tuple(messages))
+        return pos, quat, target_pos, messages
 
     def _with_weight(self, force: FloatArray) -> FloatArray:
         """The sensor's input: the contact force plus the tool's weight (if it has a mass)."""

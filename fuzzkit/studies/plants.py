@@ -1,4 +1,5 @@
-"""The plants a study can run on, by name: ``planar`` (pymunk) and ``arm6`` (6-DOF kinematic)."""
+"""The plants a study can run on, by name: ``planar`` (pymunk), ``arm6`` (6-DOF kinematic) and
+``mujoco`` (6-DOF dynamic, MuJoCo)."""
 
 from __future__ import annotations
 
@@ -13,6 +14,8 @@ from fuzzkit.plants.contract import ContactPlant
 PLANTS: dict[str, str] = {
     "planar": "fuzzkit.planar_sim:PlanarArmPlant",
     "arm6": "fuzzkit.plants.arm6:Arm6Plant",  # 6-DOF IRB 140 kinematic plant (issue 5)
+    "mujoco": "fuzzkit.plants.mujoco_arm:MujocoArmPlant",  # the IRB 140 in MuJoCo (issue 30)
+    "mujoco-elastic": "fuzzkit.plants.mujoco_arm:ElasticMujocoArmPlant",  # with joint springs
 }
 
 
