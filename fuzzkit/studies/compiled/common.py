@@ -146,6 +146,8 @@ def result_from_recording(
         cpu_time_s=cpu,
         controller_impl=ctrl.impl,
         status=rec["status"],
+        # the compiled plants never turn the tool: the scenario's task frame, every period
+        rotation=np.tile(np.asarray(exp.scenario.rotation, dtype=np.float64).reshape(9), (n, 1)),
     )
 
 
