@@ -91,6 +91,22 @@ void fuzzkit_fpi_run(const {g} *gains, const {t} *sp, const {t} *meas, {t} *u, l
     return text
 
 
+def required_compiler(compiler: Sequence[str] | None = None) -> list[str]:
+    """``compiler``, else :func:`find_compiler`'s.
+
+    Raises
+    ------
+    ToolchainError
+        No C compiler found.
+    """
+    cc = list(compiler) if compiler else find_compiler()
+    if cc is None:
+        raise ToolchainError(
+            "no C compiler found (set $CC or install cc, gcc or clang) to compile generated C"
+        )
+    return cc
+
+
 def run_compiler(
     argv: Sequence[str], cwd: Path, what: str = "generated C"
 ) -> subprocess.CompletedProcess[str]:
@@ -128,11 +144,7 @@ def build_library(
     ToolchainError
         No C compiler found, or the code does not compile.
     """
-    cc = list(compiler) if compiler else find_compiler()
-    if cc is None:
-        raise ToolchainError(
-            "no C compiler found (set $CC or install cc, gcc or clang) to compile generated C"
-        )
+    cc = required_compiler(compiler)
     for rel, text in files.items():
         (folder / rel).write_text(text, encoding="utf-8")
     sources = [rel for rel in files if rel.endswith(".c")]
@@ -200,11 +212,7 @@ def cached_library(
     ToolchainError
         No C compiler found, or the code does not compile.
     """
-    cc = list(compiler) if compiler else find_compiler()
-    if cc is None:
-        raise ToolchainError(
-            "no C compiler found (set $CC or install cc, gcc or clang) to compile generated C"
-        )
+    cc = required_compiler(compiler)
     target = library_cache_path(files, name, cc, flags, libs)
     if target.is_file():
         try:
