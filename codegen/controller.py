@@ -65,7 +65,8 @@ class AdaptationDesign:
     ``min_force_n``, the initial estimate and its bounds (N/mm), the bands as ``(up_to_n_mm or
     None, scale)``, the dwell time in periods, the sudden-stiffening factor ``jump`` and the
     least ``spread`` of the increments the slope needs. Self-tuning: ``alpha_min``, ``alpha_max``,
-    the rule table of alpha (7x7, rows e, columns de) and the input gains per axis.
+    the rule table of alpha (7x7, rows e, columns de) and the input gains per axis. The
+    inner-loop model the estimator regresses on: ``inner_q``, ``inner_a``, ``inner_g``.
     """
 
     mode: str
@@ -86,6 +87,9 @@ class AdaptationDesign:
     gde: tuple[float, float, float] = (0.0, 0.0, 0.0)
     jump: float = 4.0
     spread: float = 0.05
+    inner_q: float = 0.0
+    inner_a: float = 0.0
+    inner_g: float = 1.0
 
     def initial_band(self) -> int:
         """The band of the initial estimate."""
@@ -123,6 +127,10 @@ class AdaptationCode:
     three: str
     jump: str
     spread: str
+    inner_q: str  # x = q*x + (1-q)*u; m = a*m + ((1-a)*g)*x, the literals as the reference rounds
+    inner_q1: str
+    inner_a: str
+    inner_ag: str
 
 
 @dataclass(frozen=True)
@@ -492,7 +500,8 @@ def _adaptation_code(design: ControllerDesign, lit: Callable[[float], str]) -> A
         raise CodegenError(f"controller {design.name!r}: unknown adaptation")
     scheduled = ad.mode == "stiffness-scheduled"
     numbers = [ad.forgetting, ad.min_step_m, ad.min_force_n, ad.initial_n_mm, ad.k_min_n_mm,
-               ad.k_max_n_mm, ad.alpha_min, ad.alpha_max, *ad.ge, *ad.gde]  # fmt: skip
+               ad.k_max_n_mm, ad.alpha_min, ad.alpha_max, *ad.ge, *ad.gde, ad.inner_q,
+               ad.inner_a, ad.inner_g]  # fmt: skip
     numbers += [v for b in ad.bands for v in b if v is not None]
     numbers += [v for row in ad.alpha_table for v in row]
     if not all(math.isfinite(v) for v in numbers):
@@ -526,6 +535,10 @@ def _adaptation_code(design: ControllerDesign, lit: Callable[[float], str]) -> A
         three=lit(3.0),
         jump=lit(ad.jump),
         spread=lit(ad.spread),
+        inner_q=lit(ad.inner_q),
+        inner_q1=lit(1.0 - ad.inner_q),
+        inner_a=lit(ad.inner_a),
+        inner_ag=lit((1.0 - ad.inner_a) * ad.inner_g),
     )
 
 

@@ -21,6 +21,7 @@ from _codegen_util import needs_cc
 
 from fuzzkit.control import status as st
 from fuzzkit.control.adaptation import ALPHA_TABLE, StiffnessSchedule, alpha
+from fuzzkit.control.adaptation_spec import IDENTIFIED_INNER_LOOPS as INNER
 from fuzzkit.control.adaptation_spec import NONE, Adaptation, Band, Estimator
 from fuzzkit.control.reference import Controller
 from fuzzkit.control.spec import ControllerSpec, require_valid
@@ -61,6 +62,10 @@ def test_examples_read_and_round_trip_through_the_writer() -> None:
     spec = adaptive()
     assert [b.scale for b in spec.adaptation.bands] == [0.5, 0.2, 0.05, 0.02]
     assert spec.adaptation.bands[-1].up_to_n_mm is None
+    inner = knows_the_loop()
+    text = dump_spec(inner)
+    assert "inner_loop:" in text and "inner_loop:" not in dump_spec(spec)
+    assert loads_spec(text, "inner.yaml").adaptation == inner.adaptation
 
 
 BASE = ADAPTIVE.read_text(encoding="utf-8").split("adaptation:")[0]
@@ -114,6 +119,24 @@ BASE = ADAPTIVE.read_text(encoding="utf-8").split("adaptation:")[0]
             "adaptation:\n  mode: self-tuning\n  alpha: {min: 0.8, max: 0.5}\n",
             3,
             "alpha min 0.8 is above max 0.5",
+        ),
+        (
+            "adaptation:\n  mode: stiffness-scheduled\n  estimator:\n    inner_loop: {q: 0.2, a: 1}"
+            "\n  bands: [{scale: 1}]\n",
+            4,
+            "inner_loop.a (a lag's pole) must be in [0, 1)",
+        ),
+        (
+            "adaptation:\n  mode: stiffness-scheduled\n  estimator:\n    inner_loop: {g: 0}"
+            "\n  bands: [{scale: 1}]\n",
+            4,
+            "inner_loop.g must be a finite number > 0",
+        ),
+        (
+            "adaptation:\n  mode: stiffness-scheduled\n  estimator:\n    inner_loop: {p: 0.5}"
+            "\n  bands: [{scale: 1}]\n",
+            4,
+            "p",
         ),
         ("adaptation:\n  mode: stiffness-scheduled\n  bands: [{scale: -2}]\n", 3, "scale must be"),
         ("adaptation:\n  mode: stiffness-scheduled\n  bands: {scale: 1}\n", 3, "got a mapping"),
@@ -319,27 +342,47 @@ def test_fixed_specs_report_no_estimate_and_unit_scale() -> None:
 # ------------------------------------------------------- generated code on a closed-loop log
 
 
+def knows_the_loop() -> ControllerSpec:
+    """The example's estimator knowing the planar arm's identified inner loop, with bands a
+    factor 2 apart (so that the estimate's path shows in the corrections)."""
+    base = adaptive()
+    q, a, g = INNER["planar"]
+    est = dataclasses.replace(
+        base.adaptation.estimator, inner_q=q, inner_a=a, inner_g=g, initial_n_mm=20.0
+    )
+    edges = (4.0, 8.0, 16.0, 32.0, 64.0, 128.0, 256.0, 512.0)
+    bands = (*(Band(0.5 * 10.0 / e, e) for e in edges), Band(0.005))
+    ad = dataclasses.replace(base.adaptation, estimator=est, bands=bands, dwell_s=0.02)
+    return dataclasses.replace(base, name="inner", adaptation=ad)
+
+
+SPECS = {"example": adaptive, "inner_loop": knows_the_loop}
+
+
 @functools.cache
-def closed_loop_log() -> tuple[np.ndarray, np.ndarray]:
+def closed_loop_log(which: str = "example") -> tuple[np.ndarray, np.ndarray]:
     """The samples the reference saw on the step bench (with spikes and drop-outs), and the
     bands it scheduled: the generated controllers must reproduce it, switches included."""
     bench = dataclasses.replace(STEP, spikes=(300, 1200), drop=(500, 501, 1100))
-    _, (res, bands) = run(adaptive(), bench)
+    _, (res, bands) = run(SPECS[which](), bench)
     forces = np.zeros((len(res.measured_n), 3))
     forces[:, 2] = res.measured_n
     return forces, bands
 
 
+@pytest.mark.parametrize("which", list(SPECS))
 @pytest.mark.parametrize("impl", ["python", pytest.param("c", marks=needs_cc)])
-def test_generated_controller_replays_the_closed_loop_log_equal(impl: str) -> None:
-    forces, bands = closed_loop_log()
-    assert np.count_nonzero(np.diff(bands)) >= 2  # the log makes the schedule switch
+def test_generated_controller_replays_the_closed_loop_log_equal(impl: str, which: str) -> None:
+    forces, bands = closed_loop_log(which)
+    # the log makes the schedule switch (twice: the example; once: on the planar model)
+    assert np.count_nonzero(np.diff(bands)) >= (2 if which == "example" else 1)
     rotations = np.tile(np.eye(3).ravel(), (len(forces), 1))
-    ref = Controller(adaptive())
+    spec = SPECS[which]()
+    ref = Controller(spec)
     want = np.array([ref.step(f.tolist())[0] for f in forces])
     ref.reset()
     want_status = np.array([ref.step(f.tolist())[1] for f in forces])
-    got, status = open_generated(adaptive(), impl, "double").run(forces, rotations)
+    got, status = open_generated(spec, impl, "double").run(forces, rotations)
     assert float(np.max(np.abs(got - want))) <= 1e-9
     np.testing.assert_array_equal(status, want_status)
 

@@ -81,9 +81,19 @@ def _check_scenario(spec: str, suffix: str) -> Checked:
         for axis, sel, sp in zip("xyz", exp.selection, exp.setpoints, strict=True)
         if sel
     )
+    warnings: tuple[Problem, ...] = ()
+    cs = exp.controller_spec
+    if cs is not None:
+        from fuzzkit.control.impact import impact_warning, path_approach_speed
+
+        speed = path_approach_speed(exp.scenario.path, cs.selection)
+        msg = impact_warning(cs, speed, sum(exp.latency_periods), "the path")
+        if msg is not None:
+            warnings = (Problem(Location(spec), msg, "warning"),)
     return Checked(
         f"scenario {exp.name}: {exp.scenario.duration_s:g} s, force control {axes}, "
-        f"safety limit {exp.force_limit_n:g} N"
+        f"safety limit {exp.force_limit_n:g} N",
+        warnings,
     )
 
 
@@ -99,7 +109,18 @@ def _check_spec(spec: str, suffix: str) -> Checked:
     ctl = load_spec(spec)
     axes = ", ".join(f"{a.axis} {a.setpoint_n:g} N" for a in ctl.axes)
     rb = f" on {ctl.rulebase.name}" if ctl.rulebase is not None else ""
-    return Checked(f"controller spec {ctl.name}: {ctl.kind}{rb}; {axes}")
+    from fuzzkit.control.impact import impact_speed
+
+    v = impact_speed(ctl)
+    impact = ""
+    if v is not None:
+        est = ctl.adaptation.estimator
+        impact = (
+            f"; impact speed {v * 1e3:.3g} mm/s (k_max {est.k_max_n_mm:g} N/mm, latency "
+            f"{est.delay_periods - 1} periods: a faster approach passes the safety limit on "
+            "impact alone)"
+        )
+    return Checked(f"controller spec {ctl.name}: {ctl.kind}{rb}; {axes}{impact}")
 
 
 def _check_gains(spec: str, suffix: str) -> Checked:

@@ -295,6 +295,7 @@ def _simulate(args: argparse.Namespace) -> int:
     data = summary(result)
     data["gains"] = gains
     data["gains_source"] = source
+    _warn_impact(ran_exp, sum(data["latency_periods"]))
     status = EXIT_TRIPPED if args.fail_on_trip and result.tripped else 0
     if args.json:
         print(json.dumps(data, indent=2, allow_nan=False))  # never invalid JSON
@@ -342,6 +343,20 @@ def task_text(exp: Any) -> str:
     spec = exp.controller_spec
     source = f" (controller spec {spec.name})" if spec is not None else ""
     return f"{world}: {axes}{source}"
+
+
+def _warn_impact(exp: Any, latency_periods: int) -> None:
+    """Say on stderr when the run's path approaches contact faster than the spec's impact
+    speed (:mod:`fuzzkit.control.impact`)."""
+    from fuzzkit.control.impact import impact_warning, path_approach_speed
+
+    cs = exp.controller_spec
+    if cs is None:
+        return
+    speed = path_approach_speed(exp.scenario.path, cs.selection)
+    msg = impact_warning(cs, speed, latency_periods, f"{exp.name}'s path")
+    if msg is not None:
+        print(f"warning: {msg}", file=sys.stderr)
 
 
 def ran_gains(ran: Any, exp: Any, gains_file: str | None) -> tuple[dict[str, Any], str]:

@@ -36,8 +36,9 @@ ALPHA_LEVELS = {"ZE": 0.0, "VS": 1.0 / 6.0, "S": 2.0 / 6.0, "SB": 3.0 / 6.0, "M"
                 "B": 5.0 / 6.0, "VB": 1.0}  # fmt: skip
 #: alpha's rule base: rows E = NL .. PL, columns dE = NL .. PL (7 triangular labels on [-1, 1]).
 #: Large when the error is large and growing (e and de of one sign), small near the set point
-#: and when the error is already shrinking fast (the structure of Mudi and Pal's Table for
-#: alpha: more gain to leave a large error, less to avoid overshoot while approaching).
+#: and when the error is already shrinking fast (the rule Mudi and Pal state in words: more gain
+#: to leave a large error, less to avoid overshoot while approaching). The kit's own entries:
+#: not compared with the paper's table.
 ALPHA_RULES = (
     ("VB", "VB", "VB", "B", "SB", "S", "ZE"),
     ("VB", "VB", "B", "B", "M", "S", "VS"),
@@ -128,6 +129,8 @@ class StiffnessSchedule:
         self.s_1 = 0.0
         self.s_uf = 0.0
         self.s_f = 0.0
+        self.x = 0.0  # the inner-loop model's states (Estimator: inner_q, inner_a, inner_g)
+        self.m = 0.0
         self.k = est.initial_n_mm
         self.updates = 0
         self.jumps = 0
@@ -149,14 +152,17 @@ class StiffnessSchedule:
         return self.scale
 
     def observe(self, f: float, u: float) -> None:
-        """One period: record ``(f_k, u_{k-1})``, update the estimate when the window is
-        excited, then move to the estimate's band: at once when that lowers the gain, after
-        the dwell time since the last change when it raises it."""
+        """One period: record ``(f_k, m_{k-1})`` (``m``: the inner-loop model's response to the
+        corrections up to ``u_{k-1}``), update the estimate when the window is excited, then
+        move to the estimate's band: at once when that lowers the gain, after the dwell time
+        since the last change when it raises it."""
         est = self.ad.estimator
         n = self.size
         p = self.pos
+        self.x = est.inner_q * self.x + (1.0 - est.inner_q) * u
+        self.m = est.inner_a * self.m + (1.0 - est.inner_a) * est.inner_g * self.x
         self.f_hist[p] = f
-        self.u_hist[p] = u
+        self.u_hist[p] = self.m
         self.pos = (p + 1) % n
         # f_{k-W}; u_{k-D} is stored with period k-D+1, u_{k-D-W} with period k-D-W+1 = k-n+1
         df = f - self.f_hist[(p + n - self.window) % n]

@@ -56,7 +56,9 @@ ESTIMATOR_KEYS = (
     "min_force_n",
     "initial_n_mm",
     "range_n_mm",
+    "inner_loop",
 )
+INNER_KEYS = ("q", "a", "g")
 BAND_KEYS = ("up_to_n_mm", "scale")
 ALPHA_KEYS = ("min", "max")
 BASE = ("adaptation",)
@@ -116,7 +118,13 @@ def _estimator(r: _SpecReader, node: Node | None) -> Estimator:
             if len(items) != 2 and items:
                 r.error(e["range_n_mm"], f"expected 2 numbers [k_min, k_max], got {len(items)}")
             r.quiet.add((*path, "range_n_mm"))
+    inner: dict[str, Node] = {}
+    if "inner_loop" in e:
+        inner = r.section(e["inner_loop"], (*path, "inner_loop"), INNER_KEYS)
     return Estimator(
+        inner_q=r.real(inner, (*path, "inner_loop", "q"), d.inner_q),
+        inner_a=r.real(inner, (*path, "inner_loop", "a"), d.inner_a),
+        inner_g=r.real(inner, (*path, "inner_loop", "g"), d.inner_g),
         window_periods=r.count(e, (*path, "window_periods"), d.window_periods),
         delay_periods=r.count(e, (*path, "delay_periods"), d.delay_periods),
         forgetting=r.real(e, (*path, "forgetting"), d.forgetting),

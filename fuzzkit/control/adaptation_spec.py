@@ -42,6 +42,12 @@ class Estimator:
     ``|du| >= min_step_m`` and ``|df| >= min_force_n`` (the excitation threshold); the
     estimate is clamped to ``[k_min_n_mm, k_max_n_mm]`` and is ``initial_n_mm`` until the first
     update.
+
+    The inner loop: the correction reaches the tool through the plant's motion loop, which
+    ``fuzzkit stability`` identifies as two lags per period (``fuzzkit.analysis.inner_loop``):
+    ``x_k = q*x_{k-1} + (1-q)*u_k``, ``m_k = a*m_{k-1} + (1-a)*g*x_k``. The estimator regresses
+    ``df`` on the increments of ``m`` (the tool motion the corrections cause) instead of ``u``.
+    ``inner_q = inner_a = 0``, ``inner_g = 1`` (the defaults): ``m = u``, no inner loop.
     """
 
     window_periods: int = 8
@@ -52,6 +58,9 @@ class Estimator:
     initial_n_mm: float = 20.0
     k_min_n_mm: float = 1.0
     k_max_n_mm: float = 2000.0
+    inner_q: float = 0.0
+    inner_a: float = 0.0
+    inner_g: float = 1.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -164,6 +173,21 @@ def _estimator_problems(est: Estimator) -> list[tuple[SpecPath, str]]:
         out.append(
             ((*base, "forgetting"), f"forgetting must be in (0, 1] (got {est.forgetting!r})")
         )
+    for key, value in (("q", est.inner_q), ("a", est.inner_a)):
+        if _bad(value, 0.0, 1.0, open_low=False) or value >= 1.0:
+            out.append(
+                (
+                    (*base, "inner_loop", key),
+                    f"inner_loop.{key} (a lag's pole) must be in [0, 1) (got {value!r})",
+                )
+            )
+    if _bad(est.inner_g, 0.0):
+        out.append(
+            (
+                (*base, "inner_loop", "g"),
+                f"inner_loop.g must be a finite number > 0 (got {est.inner_g!r})",
+            )
+        )
     for key in ("min_step_m", "min_force_n"):
         value = getattr(est, key)
         if _bad(value, 0.0):
@@ -238,6 +262,12 @@ DEFAULT_ESTIMATOR = Estimator(
     k_min_n_mm=1.0,
     k_max_n_mm=2000.0,
 )
+
+
+#: The inner loops ``fuzzkit stability`` identifies (``fuzzkit.analysis.inner_loop.identify``),
+#: the middle of each identified range rounded to 3 decimals, as ``(inner_q, inner_a,
+#: inner_g)`` for a spec's ``estimator.inner_loop: {q, a, g}`` (docs/controller.md).
+IDENTIFIED_INNER_LOOPS = {"planar": (0.213, 0.765, 0.986), "arm6": (0.0, 0.607, 1.0)}
 
 
 def default_schedule(latency_periods: int = 0) -> Adaptation:

@@ -72,6 +72,13 @@ def adaptation_schema() -> dict[str, Any]:
                 "maxItems": 2,
                 "description": "[k_min, k_max] (N/mm): the estimate is clamped to it",
             },
+            "inner_loop": _object(
+                {
+                    "q": {**_number("the first lag's pole", 0, False), "exclusiveMaximum": 1},
+                    "a": {**_number("the second lag's pole", 0, False), "exclusiveMaximum": 1},
+                    "g": _number("the inner loop's DC gain", 0, True),
+                }
+            ),
         }
     )
     band = _object(

@@ -77,17 +77,20 @@ def adaptation_document(ad: Adaptation) -> Any:
             doc["change_n"] = ad.change_n
         return doc
     est = ad.estimator
+    estimator: dict[str, object] = {
+        "window_periods": est.window_periods,
+        "delay_periods": est.delay_periods,
+        "forgetting": est.forgetting,
+        "min_step_m": est.min_step_m,
+        "min_force_n": est.min_force_n,
+        "initial_n_mm": est.initial_n_mm,
+        "range_n_mm": [est.k_min_n_mm, est.k_max_n_mm],
+    }
+    if (est.inner_q, est.inner_a, est.inner_g) != (0.0, 0.0, 1.0):
+        estimator["inner_loop"] = {"q": est.inner_q, "a": est.inner_a, "g": est.inner_g}
     return {
         "mode": ad.mode,
-        "estimator": {
-            "window_periods": est.window_periods,
-            "delay_periods": est.delay_periods,
-            "forgetting": est.forgetting,
-            "min_step_m": est.min_step_m,
-            "min_force_n": est.min_force_n,
-            "initial_n_mm": est.initial_n_mm,
-            "range_n_mm": [est.k_min_n_mm, est.k_max_n_mm],
-        },
+        "estimator": estimator,
         "bands": [
             {"scale": b.scale}
             if b.up_to_n_mm is None

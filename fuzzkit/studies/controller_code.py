@@ -120,6 +120,9 @@ def adaptation_design(spec: ControllerSpec) -> AdaptationDesign | None:
         gde=(gde[0], gde[1], gde[2]),
         jump=JUMP,
         spread=SPREAD,
+        inner_q=est.inner_q,
+        inner_a=est.inner_a,
+        inner_g=est.inner_g,
     )
 
 
