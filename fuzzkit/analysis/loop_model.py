@@ -110,6 +110,61 @@ class AxisLoop:
         return out
 
 
+@dataclass(frozen=True, slots=True)
+class StepRows:
+    """Signals of one period as rows ``h`` (the signal is ``h @ x[k]``), in N.
+
+    ``spring_next``: the contact force deviation the spring and damper give at the next plant
+    step, before the clamp ``max(0, .)`` (the sector's argument). ``y_next``, ``y_now``: the
+    samples the controller reads for ``e[k+1] = -y_next`` and ``de[k+1] = -(y_next - y_now)``.
+    ``u_next``: the correction after the step.
+    """
+
+    p_next: FloatArray
+    x_next: FloatArray
+    spring_next: FloatArray
+    w_next: FloatArray
+    y_next: FloatArray
+    y_now: FloatArray
+    u_now: FloatArray
+    u_next: FloatArray
+
+
+def step_rows(
+    loop: AxisLoop,
+    sigma: float,
+    phi: float,
+    a: float,
+    g: float,
+    phi_de: float | None = None,
+    q: float = 0.0,
+    lag: float = 0.0,
+) -> StepRows:
+    """The signals of one period for fixed values of the uncertain parameters."""
+    s, c = loop.sensor_delay, loop.command_delay
+    n = loop.order
+    k = loop.stiffness_n_per_m
+    damp = loop.damping_n_s_per_m / (k * loop.period_s)
+    beta = loop.filter_pole
+    ip, ix, iw, iu = 0, 1, 2, 3 + s  # p, x, first of the w queue, first of the u queue
+
+    def unit(i: int) -> FloatArray:
+        e = np.zeros(n)
+        e[i] = 1.0
+        return e
+
+    x_next = q * unit(ix) + (1.0 - q) * unit(iu + c)
+    p_next = a * unit(ip) + (1.0 - a) * g * x_next
+    spring_next = (1.0 - lag + damp) * p_next + (lag - damp) * unit(ip)
+    w_next = beta * unit(iw) + (1.0 - beta) * sigma * spring_next
+    y_next = w_next if s == 0 else unit(iw + s - 1)
+    y_now = unit(iw + s)
+    kp, ki = loop.kp * k, loop.ki * k  # per newton of force deviation, in newtons of correction
+    pd = phi if phi_de is None else phi_de
+    u_next = unit(iu) - (pd * kp + phi * ki) * y_next + pd * kp * y_now
+    return StepRows(p_next, x_next, spring_next, w_next, y_next, y_now, unit(iu), u_next)
+
+
 def closed_loop_matrix(
     loop: AxisLoop,
     sigma: float,
@@ -124,9 +179,6 @@ def closed_loop_matrix(
     (``phi_de`` None: the same ``phi`` on both terms)."""
     s, c = loop.sensor_delay, loop.command_delay
     n = loop.order
-    k = loop.stiffness_n_per_m
-    damp = loop.damping_n_s_per_m / (k * loop.period_s)
-    beta = loop.filter_pole
     ip, ix, iw, iu = 0, 1, 2, 3 + s  # p, x, first of the w queue, first of the u queue
     a_mat = np.zeros((n, n))
 
@@ -135,15 +187,8 @@ def closed_loop_matrix(
         e[i] = 1.0
         return e
 
-    x_next = q * unit(ix) + (1.0 - q) * unit(iu + c)
-    p_next = a * unit(ip) + (1.0 - a) * g * x_next
-    f_next = sigma * ((1.0 - lag + damp) * p_next + (lag - damp) * unit(ip))
-    w_next = beta * unit(iw) + (1.0 - beta) * f_next
-    y_next = w_next if s == 0 else unit(iw + s - 1)
-    y_now = unit(iw + s)
-    kp, ki = loop.kp * k, loop.ki * k  # per newton of force deviation, in newtons of correction
-    pd = phi if phi_de is None else phi_de
-    u_next = unit(iu) - (pd * kp + phi * ki) * y_next + pd * kp * y_now
+    rows = step_rows(loop, sigma, phi, a, g, phi_de, q, lag)
+    p_next, x_next, w_next, u_next = rows.p_next, rows.x_next, rows.w_next, rows.u_next
     a_mat[ip] = p_next
     a_mat[ix] = x_next
     a_mat[iw] = w_next
@@ -162,6 +207,18 @@ def vertex_matrices(loop: AxisLoop, nominal_plant: bool = False) -> list[FloatAr
     as narrow as the fit error) at their mid-points, the others at their vertices: a smaller
     set to search a Lyapunov function on, before checking it on all.
     """
+    return [closed_loop_matrix(loop, *v) for v in vertices(loop, nominal_plant)]
+
+
+def vertex_rows(loop: AxisLoop) -> list[StepRows]:
+    """:func:`step_rows` at every vertex of the parameter box."""
+    return [step_rows(loop, *v) for v in vertices(loop)]
+
+
+def vertices(
+    loop: AxisLoop, nominal_plant: bool = False
+) -> list[tuple[float, float, float, float, float | None, float, float]]:
+    """``(sigma, phi, a, g, phi_de, q, lag)`` at every vertex of the parameter box."""
 
     def corners(iv: tuple[float, float]) -> list[float]:
         return [0.5 * (iv[0] + iv[1])] if nominal_plant else sorted(set(iv))
@@ -170,7 +227,7 @@ def vertex_matrices(loop: AxisLoop, nominal_plant: bool = False) -> list[FloatAr
     if loop.phi_de is not None:
         des = [*sorted(set(loop.phi_de))]
     return [
-        closed_loop_matrix(loop, sigma, phi, a, g, de, q, lag)
+        (sigma, phi, a, g, de, q, lag)
         for sigma, phi, a, g, de, q, lag in itertools.product(
             sorted({loop.sigma_min, 1.0}),
             sorted(set(loop.phi)),

@@ -10,8 +10,16 @@ from functools import lru_cache
 from typing import Any
 
 from fuzzkit.analysis.certificate import MIN_MARGIN, FloatArray, certify
+from fuzzkit.analysis.equilibrium import (
+    Equilibrium,
+    ZeroSet,
+    fuzzy_equilibrium,
+    pi_equilibrium,
+    zero_set,
+)
 from fuzzkit.analysis.fuzzy_bounds import StructureError, gradient_bounds, phi_bounds
 from fuzzkit.analysis.inner_loop import InnerLoop, identify
+from fuzzkit.analysis.invariant_region import level_set, validity_slabs
 from fuzzkit.analysis.loop_model import AxisLoop, noise_std, vertex_matrices
 from fuzzkit.control.names import KINDS as CONTROLLERS
 from fuzzkit.errors import ConfigError
@@ -40,34 +48,53 @@ METHOD = (
 @dataclass(frozen=True, slots=True)
 class FuzzyPart:
     """How the fuzzy surface enters the linear model: ``phi`` on both terms (PI-like
-    structure) or ``phi`` on the error term and ``phi_de`` on the change of error."""
+    structure), ``phi`` on the error term and ``phi_de`` on the change of error (gradient
+    bounds around the rest point), or ``none`` (no rest point: nothing to certify).
+    ``zeros``: where ``F(x, 0) = 0`` (the rest points, :mod:`fuzzkit.analysis.equilibrium`)."""
 
-    kind: str  # "phi" | "gradient"
+    kind: str  # "phi" | "gradient" | "none"
     phi: tuple[float, float]
     phi_de: tuple[float, float] | None
     rho: float
+    zeros: ZeroSet
     details: dict[str, Any] = field(default_factory=dict)
 
 
 @lru_cache(maxsize=8)
 def fuzzy_part(rulebase: str, rho: float = 1.0) -> FuzzyPart:
-    """The bounds of ``rulebase``'s lookup table over ``[-rho, rho]^2`` (exact, from its
-    triangles): the PI-like factorisation where it holds, else the gradient bounds."""
+    """The bounds of ``rulebase``'s lookup table over a box of half-width ``rho`` around the
+    loop's rest point (exact, from its triangles): the PI-like factorisation where it holds,
+    else the gradient bounds around the rest point nearest the origin."""
+    import numpy as np
+
     from fuzzkit.studies.compiled.loop import compiled_table
+    from fuzzkit.studies.compiled.table import table2
 
     t = compiled_table(rulebase)
+
+    def on_line(xs: FloatArray) -> FloatArray:
+        return np.array([table2(t.bp0, t.bp1, t.values, t.splits, float(x), 0.0) for x in xs])
+
+    zeros = zero_set(on_line, tuple(float(b) for b in t.bp0))
     try:
         b = phi_bounds(t.bp0, t.bp1, t.values, t.splits, rho)
     except StructureError as exc:
-        g = gradient_bounds(t.bp0, t.bp1, t.values, t.splits, rho)
+        centre = zeros.rest_point
+        if centre is None:
+            return FuzzyPart(
+                "none", (0.0, 0.0), None, 0.0, zeros, {"why": str(exc), "table": t.label}
+            )
+        g = gradient_bounds(t.bp0, t.bp1, t.values, t.splits, rho, centre)
         return FuzzyPart(
             "gradient",
             g.a_range,
             g.b_range,
             g.rho,
+            zeros,
             {
                 "method": g.method,
                 "why": str(exc),
+                "around_scaled_error": g.centre,
                 "dF_de": list(g.a_range),
                 "dF_dde": list(g.b_range),
                 "table": t.label,
@@ -78,6 +105,7 @@ def fuzzy_part(rulebase: str, rho: float = 1.0) -> FuzzyPart:
         (b.low, b.high),
         None,
         b.rho,
+        zeros,
         {
             "method": b.method,
             "phi": [b.low, b.high],
@@ -86,6 +114,26 @@ def fuzzy_part(rulebase: str, rho: float = 1.0) -> FuzzyPart:
             "table": t.label,
         },
     )
+
+
+def loop_equilibrium(
+    exp: Experiment,
+    controller: str,
+    gains: Mapping[str, float] | None,
+    fuzzy: FuzzyPart | None,
+) -> Equilibrium:
+    """The loop's rest point for these gains, against the force-controlled set point."""
+    if controller != "fuzzy-pi":
+        return pi_equilibrium()
+    if fuzzy is None:
+        raise ConfigError("fuzzy-pi needs the rule base's bounds")
+    all_gains, _, _ = effective_gains(controller, gains)
+    return fuzzy_equilibrium(fuzzy.zeros, all_gains["ki"], _setpoint(exp))
+
+
+def _setpoint(exp: Experiment) -> float:
+    """The (first) force-controlled axis's set point, in N."""
+    return float(next(exp.setpoints[i] for i in range(3) if exp.selection[i]))
 
 
 @dataclass(frozen=True, slots=True)
@@ -102,6 +150,12 @@ class Cell:
     contact_sector: tuple[float, float] | None = None
     #: the verified Lyapunov matrix (None when none was found); not part of the JSON
     lyapunov_p: FloatArray | None = field(default=None, repr=False, compare=False)
+    #: why the cell is not certified ("" when it is)
+    why_not: str = ""
+    #: the largest force deviation (N) from the rest point for which the certificate holds
+    #: (:mod:`fuzzkit.analysis.invariant_region`; NaN without a Lyapunov function)
+    region_n: float = math.nan
+    region_limited_by: str = ""
 
     def as_dict(self) -> dict[str, Any]:
         """JSON form (a NaN or infinite number becomes null)."""
@@ -114,6 +168,9 @@ class Cell:
             "noise_std_n": _finite(self.noise_std_n),
             "contact_sector": None if self.contact_sector is None else list(self.contact_sector),
             "solver_status": self.solver_status,
+            "why_not_certified": self.why_not or None,
+            "region_n": _finite(self.region_n),
+            "region_limited_by": self.region_limited_by or None,
         }
 
 
@@ -209,30 +266,62 @@ def certify_cell(
     any solve (a neighbouring cell's); it certifies only if it passes the numpy check on this
     cell's vertices.
     """
+    rest = loop_equilibrium(exp, controller, gains, fuzzy)
+    lat = (int(latency[0]), int(latency[1]))
+    if fuzzy is not None and fuzzy.kind == "none":
+        why = f"no rest point: {rest.why}"
+        return Cell(float(stiffness_n_per_mm), lat, False, math.nan, "refused", why_not=why)
     loop = axis_loop(
         exp, controller, gains, inner, fuzzy, stiffness_n_per_mm * 1e3, latency, sigma_min
     )
     held = replace(loop, sigma_min=1.0)
     cert = certify(vertex_matrices(held), vertex_matrices(held, nominal_plant=True), (reuse,))
-    sector = (1.0, 1.0)
+    sector, certified_loop = (1.0, 1.0), held
     if cert.certified and sigma_min < 1.0:
         wide = certify(
             vertex_matrices(loop), vertex_matrices(loop, nominal_plant=True), (reuse, cert.p)
         )
         if wide.certified:
-            cert, sector = wide, (sigma_min, 1.0)
+            cert, sector, certified_loop = wide, (sigma_min, 1.0), loop
+    region_n, limited_by = math.nan, ""
+    if cert.certified and cert.p is not None:
+        box = None
+        if fuzzy is not None:
+            all_gains = effective_gains(controller, gains)[0]
+            box = (fuzzy.rho, all_gains["ki"], all_gains["kp"])
+        # the model is about the rest point: its contact force is the set point's plus the
+        # rest point's offset (0 when they coincide)
+        rest_force = _setpoint(exp) + rest.offset_n
+        if rest_force > 0.0:
+            found = level_set(cert.p, validity_slabs(certified_loop, rest_force, box))
+            region_n, limited_by = found.region_n, found.limited_by
+        else:
+            region_n, limited_by = 0.0, "no contact force at the rest point"
     noise = noise_std(loop, noise_n)
     quiet = noise <= NOISE_SHARE * BAND_N
+    why = ""
+    if not cert.certified:
+        why = f"no common Lyapunov function ({cert.solver_status})"
+    elif not quiet:
+        why = f"the nominal model predicts {noise:.3g} N of noise, above {NOISE_SHARE * BAND_N:g} N"
+    if not rest.at_setpoint:
+        # the model is about the rest point; the set point is not it, so "settles at the set
+        # point" cannot be certified, whatever the Lyapunov function says about the rest point
+        stable = "stable" if cert.certified else "not proven stable"
+        why = f"the set point is not the loop's rest point ({stable} around it): {rest.why}"
     return Cell(
         float(stiffness_n_per_mm),
-        (int(latency[0]), int(latency[1])),
-        cert.certified and quiet,
+        lat,
+        cert.certified and quiet and rest.at_setpoint,
         cert.margin,
         cert.solver_status,
         cert.certified,
         noise,
         sector if cert.certified else None,
         cert.p if cert.certified else None,
+        why,
+        region_n,
+        limited_by,
     )
 
 
@@ -289,6 +378,7 @@ def certify_region(
         noise_n,
     )
     setpoints = [exp.setpoints[i] for i in range(3) if exp.selection[i]]
+    rest = loop_equilibrium(exp, controller, gains, fuzzy)
     model: dict[str, Any] = {
         "scenario": exp.name,
         "controller": controller,
@@ -303,6 +393,7 @@ def certify_region(
         "contact_sector_holds_while_force_above_n": [
             (1.0 - 1.0 / sigma_min) * sp for sp in setpoints
         ],
+        "equilibrium": rest.as_dict(),
         "inner_loop": inner.as_dict(),
         "sensor_noise_std_n": noise_n,
         "certified_means": (
@@ -315,6 +406,7 @@ def certify_region(
         model["fuzzy"] = {
             "rulebase": rulebase,
             "bounds": fuzzy.kind,
+            "zero_set_scaled_error": [list(iv) for iv in fuzzy.zeros.intervals],
             "region": {
                 "abs_ki_e_max": fuzzy.rho,
                 "abs_kp_de_max": fuzzy.rho,

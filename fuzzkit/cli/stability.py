@@ -177,10 +177,14 @@ def _text(data: dict[str, Any], args: argparse.Namespace) -> str:
     ]
     if "fuzzy" in model:
         fz = model["fuzzy"]
-        lines.append(f"fuzzy bounds ({fz['bounds']}, {fz['method']}): {fz.get('phi', '')}")
+        lines.append(f"fuzzy bounds ({fz['bounds']}, {fz.get('method', '')}): {fz.get('phi', '')}")
+    rest = model["equilibrium"]
+    if not rest["at_setpoint"]:
+        lines.append(f"no cell is certified as settling at the set point: {rest['why']}")
     lines.append(
         "C: certified, contact may be lost; c: certified while contact is held; "
-        "n: stable but noise above the band; -: not certified"
+        "n: stable but noise above the band; r: stable around a rest point off the set point; "
+        "-: not certified"
         + (
             "; then the simulated outcome (s settled, o oscillating, t tripped)"
             if args.simulate
@@ -199,7 +203,7 @@ def _text(data: dict[str, Any], args: argparse.Namespace) -> str:
             if c["certified"]:
                 mark = "C" if c["contact_sector"] != [1.0, 1.0] else "c"
             elif c["lyapunov_certificate"]:
-                mark = "n"
+                mark = "n" if model["equilibrium"]["at_setpoint"] else "r"
             if "simulated" in c:
                 mark += c["simulated"][0]
             row.append(f"{mark:>6}")
