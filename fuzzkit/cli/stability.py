@@ -208,6 +208,16 @@ def _text(data: dict[str, Any], args: argparse.Namespace) -> str:
                 mark += c["simulated"][0]
             row.append(f"{mark:>6}")
         lines.append(f"{lat[0]}+{lat[1]:<13}" + " ".join(row))
+    lines.append(
+        "region_n (N): the certificate holds locally, for a force up to this far from the set "
+        "point (the largest level set of V inside the contact sector and the fuzzy bounds)"
+    )
+    for lat in lats:
+        row = []
+        for k in ks:
+            c = by[(k, lat)]
+            row.append(f"{c['region_n']:>6.3g}" if c["certified"] else f"{'-':>6}")
+        lines.append(f"{lat[0]}+{lat[1]:<13}" + " ".join(row))
     certified = sum(c["certified"] for c in data["cells"])
     lines.append(f"certified {certified} of {len(data['cells'])} cells")
     return "\n".join(lines)

@@ -42,6 +42,9 @@ def region_figure(region: Region, simulated: Sequence[str] | None = None) -> Any
     for idx, cell in enumerate(region.cells):
         x, y = ks.index(cell.stiffness_n_per_mm), lats.index(cell.latency)
         ax.add_patch(_rect(x, y, _FILL[_verdict(cell, at_setpoint)]))
+        if cell.certified:
+            # the certificate is local: within region_n of the set point
+            ax.text(x, y - 0.3, f"±{cell.region_n:.3g}", ha="center", va="center", fontsize=7)
         if simulated is not None:
             marker, colour = _MARK[simulated[idx]]
             ax.plot(x, y, marker, color=colour, ms=9, mew=2, mfc="none")
@@ -60,6 +63,7 @@ def region_figure(region: Region, simulated: Sequence[str] | None = None) -> Any
         Patch(facecolor=_FILL["stable, noisy"], label="stable, but noise > band"),
         Patch(facecolor=_FILL["stable, off set point"], label="stable, rest point off set point"),
         Patch(facecolor=_FILL["not certified"], label="not certified"),
+        Patch(facecolor="none", edgecolor="none", label="±x: holds within x N (region_n)"),
     ]
     if simulated is not None:
         from matplotlib.lines import Line2D
