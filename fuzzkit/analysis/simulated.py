@@ -54,12 +54,19 @@ def outcome(result: RunResult) -> str:
 
 
 def simulate_case(case: SimCase) -> str:
-    """Run one case in the compiled loop (the fuzzy-PI as the rule base's lookup table)."""
+    """The outcome of one case (:func:`run_case`)."""
+    return outcome(run_case(case))
+
+
+def run_case(case: SimCase) -> RunResult:
+    """Run one case in the compiled loop (the fuzzy-PI as the rule base's lookup table), as
+    ``fuzzkit simulate SCENARIO --stiffness K --latency S,C --seed N`` runs it: the scenario at
+    that stiffness (``regulate``: its approach speed follows the stiffness)."""
     from fuzzkit.studies.compiled.loop import compiled_table, run_compiled
 
     exp = with_stiffness(case.experiment, case.stiffness_n_per_mm * 1e3)
     table = compiled_table(case.rulebase) if case.controller == "fuzzy-pi" else None
-    result = run_compiled(
+    return run_compiled(
         exp,
         case.plant,
         case.controller,
@@ -68,7 +75,6 @@ def simulate_case(case: SimCase) -> str:
         seed=case.seed,
         latency=case.latency,
     )
-    return outcome(result)
 
 
 def simulate_cells(
