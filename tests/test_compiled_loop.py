@@ -1,8 +1,13 @@
 """The compiled closed loops (fuzzkit.studies.compiled) against the Python reference runner.
 
+The compiled loop's controller is the run's spec generated as C (double, the exact surface);
+the Python loop's is the reference controller on the exact engine. The two surfaces agree to
+rounding (the generated header's bound, ~1e-17 m per period at kx = 2e-4), so the corrections
+agree to ``U_TOL``.
+
 Planar plant: the compiled period makes the same Chipmunk calls in the same order and repeats
-the Python plant's, sensor's and controller's arithmetic operation for operation in double
-precision, so the traces come out bit for bit equal on this machine. The test allows
+the Python plant's and sensor's arithmetic operation for operation in double precision. The
+test allows
 ``PLANAR_FORCE_TOL = 1e-9 N`` (a libm or compiler that rounds a sine differently in the last
 place), seven orders below the sensor noise; messages (torque limits, unreachable targets)
 must agree exactly.
@@ -25,20 +30,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fuzzkit.control.controllers import lookup_table_surface
 from fuzzkit.errors import ConfigError
 from fuzzkit.plants.arm6 import Arm6Parameters, Arm6Plant
 from fuzzkit.plants.arm6_heightfield import height_field_contact, pack_height_field
 from fuzzkit.plants.arm6_period import pack
 from fuzzkit.plants.contract import ContactPlant, UnsupportedPlant
 from fuzzkit.plants.environment3d import HeightField
-from fuzzkit.studies.compiled.generated_c import GeneratedC
 from fuzzkit.studies.compiled.loop import run_compiled
 from fuzzkit.studies.compiled.table import load_table, table2, table_arrays
 from fuzzkit.studies.e3_arm6 import e3_arm6_experiment, make_e3_arm6_plant
 from fuzzkit.studies.experiments import experiment, with_stiffness
 from fuzzkit.studies.faults import FAULTS, FaultInjector, Faults, fault, fault_schedule
-from fuzzkit.studies.runner import RunResult, run
+from fuzzkit.studies.runner import RunResult, load_surface, run
 
 FORCE_TOL = 1e-6  # N (arm6)
 PLANAR_FORCE_TOL = 1e-9  # N
@@ -58,12 +61,11 @@ def _both(
     shared plant of both loops; planar: a fresh one each), or a factory building a fresh plant
     for each loop."""
     exp = kw.pop("exp", None) or experiment(name)
-    table = load_table() if controller == "fuzzy-pi" else None
-    surface = lookup_table_surface(table) if table is not None else None
     py_plant = plant if isinstance(plant, str) else plant()
     co_plant = plant if isinstance(plant, str) else plant()
+    surface = load_surface() if controller == "fuzzy-pi" else None  # the exact engine
     py = run(exp, py_plant, controller, surface=surface, **kw)  # type: ignore[arg-type]
-    co = run_compiled(exp, co_plant, controller, table=table, **kw)  # type: ignore[arg-type]
+    co = run_compiled(exp, co_plant, controller, **kw)  # type: ignore[arg-type]
     return py, co
 
 
@@ -252,8 +254,8 @@ def test_compiled_loop_rejects_what_it_does_not_model() -> None:
     exp = experiment("E1")
     with pytest.raises(ConfigError, match="compiled loop runs on arm6, planar"):
         run_compiled(exp, "moon", "pi")
-    with pytest.raises(ConfigError, match=r"needs a lookup table .* or the generated C"):
-        run_compiled(exp, "arm6", "fuzzy-pi")
+    with pytest.raises(ConfigError, match=r"unknown controller 'pid'"):
+        run_compiled(exp, "arm6", "pid")
     with pytest.raises(ConfigError, match="latency"):
         run_compiled(exp, "arm6", "pi", latency=(-1, 0))
 
@@ -318,115 +320,65 @@ def _needs_a_c_compiler() -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("plant", PLANTS)
-@pytest.mark.parametrize("name", ["E2", "E3"])
-def test_compiled_loop_runs_the_generated_c(name: str, plant: str) -> None:
-    """``--fuzzy-impl c`` in the compiled loop calls the generated C (ctypes) for every sample
-    and gives the force traces of the compiled table and of the Python loop calling the same C.
-
-    Not bit for bit against the table: the generated C finds a cell's fraction by multiplying
-    by the stored reciprocal of the cell's width, the table model (and the compiled table)
-    divides, so a surface value can differ in its last bit (see the next test); the loop is
-    stable, so that stays ~1e-11 N in the force, well inside ``FORCE_TOL``.
-    """
-    _needs_a_c_compiler()
-    from fuzzkit.studies.batch import RunSpec, run_spec
-
-    def spec(**kw: str) -> RunSpec:
-        return RunSpec(name, "fuzzy-pi", plant, seed=4, duration_s=4.0, **kw)  # type: ignore[arg-type]
-
-    c = run_spec(spec(fuzzy_impl="c"))
-    table = run_spec(spec(fuzzy_impl="table"))
-    py_c = run_spec(spec(loop="python", fuzzy_impl="c"))
-    assert c.controller_impl == "generated C macvicar_whelan_eval (double, ctypes) (compiled loop)"
-    assert table.controller_impl.startswith("lookup table macvicar_whelan")
-    assert py_c.controller_impl.endswith("(python loop)") and "generated C" in py_c.controller_impl
-    assert np.count_nonzero(c.in_contact) > 100
-    _assert_same(table, c, reference_loop="compiled")
-    _assert_same(py_c, c)
-
-
-def test_generated_c_and_the_compiled_table_agree_to_the_last_bit() -> None:
-    """The generated C's ``NAME_eval`` against the compiled table's arithmetic on random and
-    knot points: equal within the generated header's stated double allowance (2^-48 of the
-    output's full scale), and mostly bit for bit."""
-    _needs_a_c_compiler()
-    from fuzzkit.studies.compiled.generated_c import c_surface
-
-    surface = c_surface()
-    ta = table_arrays(load_table())
-    rng = np.random.default_rng(1)
-    pts = np.concatenate(
-        [
-            rng.uniform(-1.2, 1.2, (4000, 2)),
-            np.stack(np.meshgrid(ta.bp0[::3], ta.bp1[::4]), axis=-1).reshape(-1, 2),
-        ]
-    )
-    got = np.array([surface(float(a), float(b)) for a, b in pts])
-    ref = np.array([table2(ta.bp0, ta.bp1, ta.values, ta.splits, a, b) for a, b in pts])
-    assert np.max(np.abs(got - ref)) <= 2.0**-48 * 1.0  # full scale of du: 1
-    assert np.count_nonzero(got == ref) > 0.8 * len(pts)
-
-
-@pytest.mark.slow
-def test_compiled_loop_calls_the_c_it_is_given() -> None:
-    """Two rule bases' generated C through the same compiled kernel in one process: each run
-    follows its own rule base (the kernel reads the function's address at every call, it is not
-    frozen into the cached machine code)."""
+def test_compiled_loop_calls_the_controller_it_is_given() -> None:
+    """Two rule bases' generated controllers through the same compiled kernel in one process:
+    each run follows its own rule base (the kernel reads the function's address at every call,
+    it is not frozen into the cached machine code)."""
     _needs_a_c_compiler()
     from fuzzkit.studies.batch import RunSpec, run_spec
 
     runs = {}
     for rb in ("macvicar_whelan", "paper_table1"):
-        c = run_spec(RunSpec("E2", "fuzzy-pi", "arm6", rulebase=rb, duration_s=2.5, fuzzy_impl="c"))
-        table = run_spec(RunSpec("E2", "fuzzy-pi", "arm6", rulebase=rb, duration_s=2.5))
-        assert f"{rb}_eval" in c.controller_impl
-        _assert_same(table, c, reference_loop="compiled")
+        c = run_spec(RunSpec("E2", "fuzzy-pi", "arm6", rulebase=rb, duration_s=2.5))
+        assert c.loop == "compiled" and "generated C controller" in c.controller_impl
         runs[rb] = c
     diff = np.nanmax(np.abs(runs["macvicar_whelan"].force - runs["paper_table1"].force))
     assert diff > 0.1  # N: the two rule bases really drive the arm differently
 
 
-def test_simulate_json_names_the_generated_c(capsys: pytest.CaptureFixture[str]) -> None:
+def test_simulate_json_names_the_generated_controller(capsys: pytest.CaptureFixture[str]) -> None:
     _needs_a_c_compiler()
     import json
 
     from fuzzkit.cli import main
 
     argv = ["simulate", "E1", "--plant", "arm6", "--controller", "fuzzy-pi", "--json"]
-    assert main([*argv, "--fuzzy-impl", "c"]) == 0
+    assert main(argv) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["loop"] == "compiled"
-    assert data["controller_impl"].startswith("generated C macvicar_whelan_eval")
+    assert data["controller_impl"].startswith("generated C controller (double) E1_fuzzy_pi")
     assert data["controller_impl"].endswith("(compiled loop)")
 
 
-def test_generated_c_without_a_compiler_is_a_clear_error(monkeypatch: pytest.MonkeyPatch) -> None:
-    from fuzzkit.errors import ToolchainError
+def test_without_a_compiler_the_reference_runs_and_says_why(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     from fuzzkit.studies.batch import RunSpec, run_spec
+    from fuzzkit.studies.compiled import generated_controller
 
     monkeypatch.setenv("CC", "/nonexistent/cc")
-    # a rule base no other test compiles, so no library is cached in this process
-    spec = RunSpec("E1", "fuzzy-pi", "arm6", rulebase="paper_table1_transposed", fuzzy_impl="c")
-    with pytest.raises(ToolchainError, match="no C compiler found"):
-        run_spec(spec)
+    monkeypatch.setattr(generated_controller, "_LOADED", {})  # nothing compiled in this process
+    monkeypatch.setenv("FUZZKIT_CACHE_DIR", "/nonexistent/cache")  # nor on disk
+    spec = RunSpec("E1", "pi", "arm6", duration_s=0.2)
+    result = run_spec(spec)
+    assert result.loop.startswith("python (fallback: the compiled loop runs the generated C")
+    assert "no C compiler found" in result.loop
+    assert len(result.t) == 50
+    for explicit in (RunSpec("E1", "pi", "arm6", loop="compiled"), RunSpec("E1", controller_impl="c")):
+        with pytest.raises(ConfigError, match="no C compiler found"):
+            run_spec(explicit)
 
 
-def test_fuzzy_implementation_must_fit_the_loop() -> None:
+def test_fuzzy_implementation_is_the_python_loops() -> None:
     from fuzzkit.studies.batch import RunSpec, run_spec
 
-    with pytest.raises(ConfigError, match="compiled loop runs the fuzzy-PI as the lookup table"):
-        run_spec(RunSpec("E1", "fuzzy-pi", "arm6", fuzzy_impl="exact", duration_s=0.1))
+    assert RunSpec("E1", fuzzy_impl="table").resolved_loop() == "python"
+    assert RunSpec("E1", controller_impl="python").resolved_loop() == "python"
+    assert RunSpec("E1").resolved_loop() == "compiled"
     with pytest.raises(ConfigError, match="unknown fuzzy implementation"):
         run_spec(RunSpec("E1", "fuzzy-pi", "arm6", fuzzy_impl="fast", duration_s=0.1))
-    with pytest.raises(ConfigError, match="not both"):
-        run_compiled(
-            experiment("E1"),
-            "arm6",
-            "fuzzy-pi",
-            table=load_table(),
-            generated_c=GeneratedC(None, "-"),
-        )
+    with pytest.raises(ConfigError, match="controller-impl c runs the generated controller"):
+        run_spec(RunSpec("E1", "fuzzy-pi", "arm6", fuzzy_impl="table", controller_impl="c"))
 
 
 def test_table_cache_builds_once_and_rebuilds_a_damaged_file(

@@ -53,8 +53,9 @@ def test_a_rule_base_with_other_variables_is_refused_with_what_the_loop_needs(
     assert "rule base temperature_pd cannot run as the fuzzy-PI in the closed loop" in err
     assert "input e must be on [-1, 1] (the controller clips Ki*e to it), got [-20, 20]" in err
     assert "input de must be on [-1, 1] (the controller clips Kp*de to it), got [-2, 2]" in err
-    assert "exactly one output du is needed, got power [0, 100]" in err
-    assert "fix: rename the variables, and rescale each universe to [-1, 1]" in err
+    assert "output power is a normalised correction (scaled by Kx): its range must contain 0" in err
+    assert "got [0, 100]" in err
+    assert "fix: rescale each universe to [-1, 1]" in err
     # never an option the command does not have (the table search's advice)
     assert "--tolerance" not in err and "--resolution" not in err
 
@@ -92,11 +93,24 @@ def test_the_same_rule_base_rescaled_runs_within_the_safety_limit(
     assert data["axes"]["z"]["peak_force_true"] < data["safety_limit"]
 
 
-def test_inputs_in_the_other_order_are_refused() -> None:
+def test_names_and_order_are_free_but_the_count_is_not() -> None:
     rb = load("macvicar_whelan")
     swapped = dataclasses.replace(rb, inputs=rb.inputs[::-1])
-    with pytest.raises(ConfigError, match=r"inputs must be e then de .*got de \[-1, 1\], e"):
-        check_loop_rulebase(swapped, "swapped.yaml")
+    assert loop_problems(swapped) == []  # roles by position (or a spec's inputs:)
+    renamed = dataclasses.replace(
+        rb,
+        inputs=tuple(
+            dataclasses.replace(v, name=n) for v, n in zip(rb.inputs, ("a", "b"), strict=True)
+        ),
+        outputs=(dataclasses.replace(rb.outputs[0], name="delta_u"),),
+    )
+    assert loop_problems(renamed) == []
+    one = dataclasses.replace(rb, inputs=rb.inputs[:1])
+    with pytest.raises(ConfigError, match=r"exactly two inputs are needed .*got e \[-1, 1\]\n"):
+        check_loop_rulebase(one, "one.yaml")
+    two_out = dataclasses.replace(rb, outputs=rb.outputs * 2)
+    with pytest.raises(ConfigError, match=r"exactly one output is needed, got du"):
+        check_loop_rulebase(two_out, "two.yaml")
 
 
 @pytest.mark.parametrize("name", ["macvicar_whelan", "paper_table1", "gaussian5", "sugeno_pi"])

@@ -82,7 +82,7 @@ def test_the_offset_rule_base_is_certified_nowhere_and_the_output_says_why(capsy
     data = json.loads(capsys.readouterr().out)
     rest = data["model"]["equilibrium"]
     assert rest["at_setpoint"] is False
-    assert rest["offset_n"] == pytest.approx(4.0, abs=1e-6)
+    assert rest["offset_n"] == pytest.approx(4.0, abs=1e-4)  # the surface as tabulated
     assert data["model"]["fuzzy"]["around_scaled_error"] == pytest.approx(-0.2, abs=1e-9)
     assert len(data["cells"]) == 6
     for cell in data["cells"]:
@@ -98,12 +98,10 @@ def test_the_offset_rule_base_is_certified_nowhere_and_the_output_says_why(capsy
 def test_the_offset_loop_settles_where_the_rest_point_says_in_simulation():
     # independent of the certificate: the compiled loop's force, averaged over the last 0.5 s
     from fuzzkit.analysis.regulation import regulation_experiment
-    from fuzzkit.studies.compiled.loop import compiled_table, run_compiled
+    from fuzzkit.studies.compiled.loop import run_compiled
     from fuzzkit.studies.experiments import with_stiffness
 
     exp = with_stiffness(regulation_experiment(), 1.0e4)
-    result = run_compiled(
-        exp, "arm6", "fuzzy-pi", table=compiled_table(str(OFFSET)), latency=(0, 0), seed=0
-    )
+    result = run_compiled(exp, "arm6", "fuzzy-pi", rulebase=str(OFFSET), latency=(0, 0), seed=0)
     tail = result.force_true[result.t >= result.t[-1] - 0.5, 2]
     assert float(np.mean(tail)) == pytest.approx(14.0, abs=0.3)

@@ -59,19 +59,18 @@ def simulate_case(case: SimCase) -> str:
 
 
 def run_case(case: SimCase) -> RunResult:
-    """Run one case in the compiled loop (the fuzzy-PI as the rule base's lookup table), as
-    ``fuzzkit simulate SCENARIO --stiffness K --latency S,C --seed N`` runs it: the scenario at
-    that stiffness (``regulate``: its approach speed follows the stiffness)."""
-    from fuzzkit.studies.compiled.loop import compiled_table, run_compiled
+    """Run one case in the compiled loop (its controller generated as C), as ``fuzzkit
+    simulate SCENARIO --stiffness K --latency S,C --seed N`` runs it: the scenario at that
+    stiffness (``regulate``: its approach speed follows the stiffness)."""
+    from fuzzkit.studies.compiled.loop import run_compiled
 
     exp = with_stiffness(case.experiment, case.stiffness_n_per_mm * 1e3)
-    table = compiled_table(case.rulebase) if case.controller == "fuzzy-pi" else None
     return run_compiled(
         exp,
         case.plant,
         case.controller,
         gains=dict(case.gains),
-        table=table,
+        rulebase=case.rulebase,
         seed=case.seed,
         latency=case.latency,
     )

@@ -67,17 +67,17 @@ def add_quiet_argument(parser: argparse.ArgumentParser, progress: bool = True) -
 
 
 def add_controller_impl_argument(parser: argparse.ArgumentParser) -> None:
-    """``--controller-impl python|c``, the same for ``simulate``, ``sweep`` and ``tune``
+    """``--controller-impl auto|python|c``, the same for ``simulate``, ``sweep`` and ``tune``
     (``fuzzkit.studies.batch.CONTROLLER_IMPLS``)."""
     parser.add_argument(
         "--controller-impl",
-        choices=("python", "c"),
-        default="python",
-        help="python (default): fuzzkit's own controller, the reference (in the compiled loop "
-        "its numba twin); c: the run's controller spec (--spec, or built from the controller, "
-        "gains, rule base and scenario) generated as C (double, the exact fuzzy surface) and "
-        "run whole (front end, engagement, spike gate, trip and back-off, limits) inside the "
-        "compiled loop; needs a C compiler",
+        choices=("auto", "python", "c"),
+        default="auto",
+        help="c: the run's controller spec (--spec, or built from the controller, gains, rule "
+        "base and scenario) generated as C (double, the spec's surface) and run whole inside "
+        "the compiled loop, what `fuzzkit compile` ships; python: fuzzkit's reference "
+        "controller in the Python loop; auto (default): c where the compiled loop runs "
+        "(arm6, planar) and a C compiler exists, else python",
     )
 
 

@@ -2,9 +2,10 @@
 
 The fuzzy-PI (:class:`fuzzkit.control.controllers.FuzzyPI`) feeds its surface ``Ki*e`` and
 ``Kp*de`` clipped to the normalised universe [-1, 1] and multiplies the answer by ``Kx`` (metres
-per period). So the rule base must have exactly two inputs, ``e`` then ``de`` (the lookup table
-and the generated C take them by position), each on [-1, 1], and one output ``du``, a normalised
-correction: its range contains 0 and lies within [-OUTPUT_SCALE_LIMIT, OUTPUT_SCALE_LIMIT].
+per period). So the rule base must have exactly two inputs, each on [-1, 1], whatever their names
+(roles by position, the error first, or by a controller spec's ``inputs:``), and one output, a
+normalised correction: its range contains 0 and lies within
+[-OUTPUT_SCALE_LIMIT, OUTPUT_SCALE_LIMIT].
 
 A rule base on another scale (say [-100, 100]) is refused, not mapped: the gains already are
 the scaling, and a silent second scaling would multiply the correction (a rule base on
@@ -32,26 +33,25 @@ _EPS = 1e-9
 def loop_problems(rb: RuleBase) -> list[str]:
     """What keeps ``rb`` from running as the fuzzy-PI's surface (empty when it can)."""
     problems: list[str] = []
-    names = rb.input_names
-    if names != ("e", "de"):
+    if len(rb.inputs) != 2:
         problems.append(
-            f"inputs must be e then de (the error and its change), got {_listing(rb.inputs)}"
+            f"exactly two inputs are needed (the scaled error and its change), got "
+            f"{_listing(rb.inputs)}"
         )
-    else:
-        for var in rb.inputs:
-            if abs(var.low - INPUT_RANGE[0]) > _EPS or abs(var.high - INPUT_RANGE[1]) > _EPS:
-                problems.append(
-                    f"input {var.name} must be on [-1, 1] (the controller clips "
-                    f"{'Ki*e' if var.name == 'e' else 'Kp*de'} to it), got {_range(var)}"
-                )
-    if rb.output_names != ("du",):
-        problems.append(f"exactly one output du is needed, got {_listing(rb.outputs)}")
+    for role, var in zip(("Ki*e", "Kp*de"), rb.inputs, strict=False):
+        if abs(var.low - INPUT_RANGE[0]) > _EPS or abs(var.high - INPUT_RANGE[1]) > _EPS:
+            problems.append(
+                f"input {var.name} must be on [-1, 1] (the controller clips {role} to it), "
+                f"got {_range(var)}"
+            )
+    if len(rb.outputs) != 1:
+        problems.append(f"exactly one output is needed, got {_listing(rb.outputs)}")
     else:
         out = rb.outputs[0]
         if not (out.low <= 0.0 <= out.high) or max(-out.low, out.high) > OUTPUT_SCALE_LIMIT + _EPS:
             problems.append(
-                f"output du is a normalised correction (scaled by Kx): its range must contain 0 "
-                f"and lie within [-{OUTPUT_SCALE_LIMIT:g}, {OUTPUT_SCALE_LIMIT:g}], "
+                f"output {out.name} is a normalised correction (scaled by Kx): its range must "
+                f"contain 0 and lie within [-{OUTPUT_SCALE_LIMIT:g}, {OUTPUT_SCALE_LIMIT:g}], "
                 f"got {_range(out)}"
             )
     return problems
@@ -64,7 +64,7 @@ def check_loop_rulebase(rb: RuleBase, spec: str | os.PathLike[str] | None = None
     Raises
     ------
     ConfigError
-        Inputs other than ``e``, ``de`` on [-1, 1], or an output other than one ``du``.
+        Not two inputs on [-1, 1], or not one output within the scale limit.
     """
     problems = loop_problems(rb)
     if not problems:
@@ -73,10 +73,11 @@ def check_loop_rulebase(rb: RuleBase, spec: str | os.PathLike[str] | None = None
     lines = "\n".join(f"  - {p}" for p in problems)
     raise ConfigError(
         f"rule base {where} cannot run as the fuzzy-PI in the closed loop:\n{lines}\n"
-        "  the loop needs two inputs, e then de, each on [-1, 1], and one output du within "
+        "  the loop needs two inputs (the error, then its change, unless a spec's inputs: "
+        "maps them), each on [-1, 1], and one output within "
         f"[-{OUTPUT_SCALE_LIMIT:g}, {OUTPUT_SCALE_LIMIT:g}] (the controller feeds it Ki*e and "
         "Kp*de clipped to [-1, 1] and multiplies its output by Kx)\n"
-        "  fix: rename the variables, and rescale each universe to [-1, 1] (divide every term's "
+        "  fix: rescale each universe to [-1, 1] (divide every term's "
         "points by the range's half width); the gains Ki, Kp, Kx then carry the physical "
         "scale (see docs/simulation.md, 'Your own rule base in the loop')"
     )

@@ -31,19 +31,20 @@ from fuzzkit.control.controllers import (
 )
 from fuzzkit.control.frontend import FrontEnd
 from fuzzkit.control.names import AXES
-from fuzzkit.control.spec import AxisSpec, ControllerSpec, require_valid
+from fuzzkit.control.spec import AxisSpec, ControllerSpec, require_valid, surface_inputs
 from fuzzkit.errors import ConfigError
 
 
 def spec_surface(spec: ControllerSpec) -> Surface:
-    """The exact engine's surface of a fuzzy-PI spec's rule base (first input e, second de,
-    first output du)."""
+    """The exact engine's surface of a fuzzy-PI spec's rule base: its error and change inputs
+    as :func:`fuzzkit.control.spec.surface_inputs` maps them, its first output."""
     from fuzzkit.fuzzy.inference import Engine
 
     rb = spec.rulebase
     if rb is None:
         raise ConfigError(f"controller spec {spec.name!r}: a {spec.kind} has no rule base")
-    return engine_surface(Engine(rb), rb.inputs[0].name, rb.inputs[1].name, rb.outputs[0].name)
+    i_e, i_de = surface_inputs(spec, rb)
+    return engine_surface(Engine(rb), rb.inputs[i_e].name, rb.inputs[i_de].name, rb.outputs[0].name)
 
 
 def front_end_from_spec(spec: ControllerSpec) -> FrontEnd | None:

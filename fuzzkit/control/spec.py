@@ -40,6 +40,31 @@ MAX_PERIOD_S = 10.0
 #: A logical position in a spec: the YAML keys leading to a value (``("axes", "z", "kp")``).
 SpecPath = tuple[str, ...]
 
+#: How a fuzzy-PI may evaluate its rule base's surface (``surface.method``).
+SURFACE_METHODS = ("exact", "table")
+#: Breakpoints per input a table may have (``surface.resolution``); the code generator's bounds.
+MIN_RESOLUTION = 2
+MAX_RESOLUTION = 4096
+
+
+@dataclass(frozen=True, slots=True)
+class Surface:
+    """How the fuzzy-PI evaluates its rule base's surface, for every consumer of the spec.
+
+    ``method``: ``exact`` (the default: exact inference, rounding error only) or ``table`` (a
+    lookup table, for targets that need one). A table is sized by ``tolerance`` (the certified
+    largest error, a fraction of the output's range) or by ``resolution`` (breakpoints per
+    input), exactly one of the two.
+    """
+
+    method: str = "exact"
+    tolerance: float | None = None
+    resolution: int | None = None
+
+
+#: The default surface: exact inference.
+EXACT = Surface()
+
 
 @dataclass(frozen=True, slots=True)
 class AxisSpec:
@@ -145,7 +170,9 @@ class ControllerSpec:
     (``rulebase_ref``: the name or path as written; ``rulebase_source``: the shipped name or
     the resolved path, what ``fuzzkit.formats.registry.load`` takes; None for PI).
     ``adaptation``: how the scaling factors adapt online (mode none: fixed). ``source``:
-    the spec file and the sha256 of its text (None when built in code).
+    the spec file and the sha256 of its text (None when built in code). ``surface``: how the
+    rule base's surface is evaluated (:class:`Surface`). ``inputs``: the rule base's input
+    names in role order (error, change of error); None: by position (first input the error).
     """
 
     name: str
@@ -161,6 +188,8 @@ class ControllerSpec:
     adaptation: Adaptation = NONE
     description: str = ""
     source: Source | None = None
+    surface: Surface = EXACT
+    inputs: tuple[str, str] | None = None
 
     @property
     def selection(self) -> tuple[bool, bool, bool]:
@@ -249,6 +278,11 @@ def spec_problems(spec: ControllerSpec) -> list[tuple[SpecPath, str]]:
         out.append((("rulebase",), "a pi controller takes no rule base"))
     if spec.rulebase is not None:
         out += [(("rulebase",), p) for p in rulebase_problems(spec.rulebase)]
+        if spec.inputs is not None:
+            out += [(("inputs",), p) for p in input_problems(spec.inputs, spec.rulebase)]
+    elif spec.kind == "pi" and spec.inputs is not None:
+        out.append((("inputs",), "a pi controller has no rule base to map inputs of"))
+    out += surface_problems(spec.surface, spec.kind)
     out += adaptation_problems(spec.adaptation, spec.kind, spec.period_s)
     _positive(out, ("period_s",), spec.period_s)
     if _finite(spec.period_s) and not MIN_PERIOD_S <= spec.period_s <= MAX_PERIOD_S:
@@ -336,17 +370,107 @@ def _sensor_problems(spec: ControllerSpec) -> list[tuple[SpecPath, str]]:
     return out
 
 
+def surface_problems(surface: Surface, kind: str) -> list[tuple[SpecPath, str]]:
+    """What is wrong with the ``surface:`` section (empty when nothing)."""
+    out: list[tuple[SpecPath, str]] = []
+    path: SpecPath = ("surface",)
+    if surface.method not in SURFACE_METHODS:
+        out.append(
+            (
+                (*path, "method"),
+                f"unknown surface method {surface.method!r}; expected exact or table",
+            )
+        )
+        return out
+    if kind == "pi" and surface != EXACT:
+        out.append((path, "a pi controller has no surface; remove 'surface' (or write exact)"))
+        return out
+    tol, res = surface.tolerance, surface.resolution
+    if surface.method == "exact":
+        if tol is not None or res is not None:
+            out.append((path, "an exact surface takes no tolerance or resolution"))
+        return out
+    if (tol is None) == (res is None):
+        out.append(
+            (path, "a table surface needs exactly one of tolerance (e.g. 0.001) or resolution")
+        )
+    if tol is not None and not (math.isfinite(tol) and 0.0 < tol < 1.0):
+        out.append(
+            (
+                (*path, "tolerance"),
+                f"tolerance is a fraction of the output's range, in (0, 1) (got {tol!r})",
+            )
+        )
+    if res is not None and not MIN_RESOLUTION <= res <= MAX_RESOLUTION:
+        out.append(
+            (
+                (*path, "resolution"),
+                f"resolution must be {MIN_RESOLUTION} to {MAX_RESOLUTION} breakpoints per "
+                f"input (got {res})",
+            )
+        )
+    return out
+
+
+def input_problems(inputs: tuple[str, str], rb: RuleBase) -> list[str]:
+    """Why ``inputs`` (error, change) does not name two distinct inputs of ``rb``."""
+    names = rb.input_names
+    out = [
+        f"{role} input {name!r} is not an input of rule base {rb.name!r} "
+        f"(its inputs: {', '.join(names)})"
+        for role, name in zip(("error", "change"), inputs, strict=True)
+        if name not in names
+    ]
+    if inputs[0] == inputs[1]:
+        out.append(f"the error and change inputs must differ (both {inputs[0]!r})")
+    return out
+
+
+def surface_inputs(spec: ControllerSpec, rb: RuleBase) -> tuple[int, int]:
+    """The positions in ``rb`` of the error and change-of-error inputs under ``spec``'s roles.
+
+    Every consumer (reference controller, code generation, certificate) maps roles through
+    here: by ``spec.inputs`` when given, else by position (first input the error).
+
+    Raises
+    ------
+    ConfigError
+        ``rb`` does not have two inputs, or ``spec.inputs`` does not name them.
+    """
+    if len(rb.inputs) != 2:
+        raise ConfigError(
+            f"rule base {rb.name!r} has {len(rb.inputs)} inputs; a fuzzy-PI needs exactly 2"
+        )
+    if spec.inputs is None:
+        return (0, 1)
+    problems = input_problems(spec.inputs, rb)
+    if problems:
+        raise ConfigError(f"controller spec {spec.name!r}: inputs: " + "; ".join(problems))
+    names = rb.input_names
+    return (names.index(spec.inputs[0]), names.index(spec.inputs[1]))
+
+
+def role_ordered(spec: ControllerSpec, rb: RuleBase) -> RuleBase:
+    """``rb`` with its inputs in role order (error, change): what a consumer that takes the
+    surface's inputs by position (generated code) evaluates. ``rb`` itself when already so."""
+    i_e, i_de = surface_inputs(spec, rb)
+    if (i_e, i_de) == (0, 1):
+        return rb
+    return replace(rb, inputs=(rb.inputs[i_e], rb.inputs[i_de]))
+
+
 def rulebase_problems(rb: RuleBase) -> list[str]:
     """Why ``rb`` cannot be a fuzzy-PI's surface (empty when it can).
 
-    A fuzzy-PI reads its first input as the scaled error, its second as the scaled change of
-    error (both clipped to [-1, 1]) and its first output as ``du`` before ``kx``.
+    A fuzzy-PI reads two inputs, the scaled error and the scaled change of error (both
+    clipped to [-1, 1]; which is which: :func:`surface_inputs`), and its first output as
+    ``du`` before ``kx``.
     """
     out: list[str] = []
     if len(rb.inputs) != 2:
         out.append(
             f"rule base {rb.name!r} has {len(rb.inputs)} inputs; a fuzzy-PI needs exactly 2 "
-            "(the scaled error e, then its change de)"
+            "(the scaled error and its change)"
         )
     for var in rb.inputs[:2]:
         if (var.low, var.high) != (-1.0, 1.0):

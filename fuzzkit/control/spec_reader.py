@@ -28,12 +28,15 @@ from fuzzkit.control.adaptation_reader import read_adaptation
 from fuzzkit.control.adaptation_spec import NONE
 from fuzzkit.control.names import AXES, KINDS
 from fuzzkit.control.spec import (
+    EXACT,
+    MAX_RESOLUTION,
     AxisSpec,
     ControllerSpec,
     Limits,
     Safety,
     SensorSpec,
     SpecPath,
+    Surface,
     ToolSpec,
     spec_problems,
 )
@@ -65,6 +68,8 @@ TOP_KEYS = (
     "safety",
     "sensor",
     "adaptation",
+    "surface",
+    "inputs",
 )
 REQUIRED_KEYS = ("name", "controller", "period_s", "axes", "limits", "safety")
 AXIS_KEYS = ("setpoint_n", "gains")
@@ -78,6 +83,7 @@ BACKOFF_KEYS = ("distance_m", "speed_m_s")
 SENSOR_KEYS = ("tare", "tool", "lowpass_hz")
 TARE_KEYS = ("samples",)
 TOOL_KEYS = ("mass_kg", "com_m")
+SURFACE_KEYS = ("method", "tolerance", "resolution")
 #: Largest sample count a spec may give (tare, debounce, confirmation): 4000 s at 4 ms.
 MAX_SAMPLES = 1_000_000
 
@@ -206,6 +212,8 @@ class _SpecReader(NodeReader):
             adaptation=read_adaptation(self, top["adaptation"]) if "adaptation" in top else NONE,
             description=self.text(top["description"], "") or "" if "description" in top else "",
             source=source,
+            surface=self.surface(top["surface"]) if "surface" in top else EXACT,
+            inputs=self.inputs(top["inputs"]) if "inputs" in top else None,
         )
 
     def rulebase(
@@ -327,6 +335,51 @@ class _SpecReader(NodeReader):
             else:
                 self.quiet.add((*path, "com_m"))
         return ToolSpec(self.real(entries, (*path, "mass_kg")), com)
+
+    def surface(self, node: Node) -> Surface:
+        """``surface: exact`` (or ``table``), or ``{method, tolerance | resolution}``."""
+        path: SpecPath = ("surface",)
+        self.where[path] = node
+        if not isinstance(node, MappingNode):
+            method = self.name(node, "a surface method (exact or table) or a mapping")
+            if method is None:
+                self.quiet.add(path)
+                return EXACT
+            self.where[(*path, "method")] = node
+            return Surface(method)
+        entries = self.section(node, path, SURFACE_KEYS, ("method",))
+        method = "exact"
+        if "method" in entries:
+            method = self.name(entries["method"], "a surface method (exact or table)") or ""
+            if not method:
+                self.quiet.add(path)
+                method = "exact"
+        tolerance = self.optional_real(entries, (*path, "tolerance"), None)
+        resolution = None
+        if "resolution" in entries:
+            resolution = self.integer(
+                entries["resolution"], "surface.resolution", 2, MAX_RESOLUTION
+            )
+            if resolution is None:
+                self.quiet.add((*path, "resolution"))
+                self.quiet_at.add(path)
+                resolution = 2
+        return Surface(method, tolerance, resolution)
+
+    def inputs(self, node: Node) -> tuple[str, str] | None:
+        """``inputs: [error, change]``: the rule base's input names in role order."""
+        self.where[("inputs",)] = node
+        items = self.sequence(node, "inputs: [error input, change input]")
+        if items is not None and len(items) != 2:
+            self.error(
+                node, f"expected 2 input names (the error's, then its change's), got {len(items)}"
+            )
+            items = None
+        names = [self.name(n, "an input name") for n in items or []]
+        if items is None or None in names:
+            self.quiet.add(("inputs",))
+            return None
+        return (str(names[0]), str(names[1]))
 
     # ------------------------------------------------------------------ semantics
 

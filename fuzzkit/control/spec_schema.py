@@ -12,7 +12,14 @@ from typing import Any
 
 from fuzzkit.control.adaptation_spec import MAX_HISTORY
 from fuzzkit.control.names import AXES, KINDS
-from fuzzkit.control.spec import ADAPTATIONS, MAX_PERIOD_S, MIN_PERIOD_S
+from fuzzkit.control.spec import (
+    ADAPTATIONS,
+    MAX_PERIOD_S,
+    MAX_RESOLUTION,
+    MIN_PERIOD_S,
+    MIN_RESOLUTION,
+    SURFACE_METHODS,
+)
 from fuzzkit.control.spec_reader import MAX_SAMPLES, REQUIRED_KEYS
 
 
@@ -105,6 +112,36 @@ def adaptation_schema() -> dict[str, Any]:
             tuning,
         ],
         "description": "online adaptation of the output scaling factor (docs/controller.md)",
+    }
+
+
+def surface_schema() -> dict[str, Any]:
+    """The ``surface:`` section: ``exact``, or a table sized by tolerance or resolution."""
+    table = _object(
+        {
+            "method": {"const": "table"},
+            "tolerance": {
+                **_number("certified largest error, fraction of the output's range", 0, True),
+                "exclusiveMaximum": 1,
+            },
+            "resolution": {
+                "type": "integer",
+                "minimum": MIN_RESOLUTION,
+                "maximum": MAX_RESOLUTION,
+                "description": "breakpoints per input (instead of tolerance)",
+            },
+        },
+        ("method",),
+        oneOf=[{"required": ["tolerance"]}, {"required": ["resolution"]}],
+    )
+    return {
+        "oneOf": [
+            {"enum": [SURFACE_METHODS[0]]},
+            _object({"method": {"const": "exact"}}, ("method",)),
+            table,
+        ],
+        "description": "fuzzy-pi only: how the rule base's surface is evaluated, by every "
+        "command (docs/controller.md)",
     }
 
 
@@ -229,6 +266,15 @@ def json_schema() -> dict[str, Any]:
                 "safety": safety,
                 "sensor": sensor,
                 "adaptation": adaptation_schema(),
+                "surface": surface_schema(),
+                "inputs": {
+                    "type": "array",
+                    "items": {"type": "string"},
+                    "minItems": 2,
+                    "maxItems": 2,
+                    "description": "fuzzy-pi only: the rule base's input names in role order "
+                    "[error, change of error]; absent: by position",
+                },
             },
             REQUIRED_KEYS,
             allOf=[

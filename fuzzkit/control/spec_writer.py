@@ -9,7 +9,7 @@ from __future__ import annotations
 from typing import Any
 
 from fuzzkit.control.adaptation_spec import Adaptation
-from fuzzkit.control.spec import ControllerSpec
+from fuzzkit.control.spec import ControllerSpec, Surface
 
 
 def spec_document(spec: ControllerSpec) -> dict[str, Any]:
@@ -46,6 +46,22 @@ def spec_document(spec: ControllerSpec) -> dict[str, Any]:
         "lowpass_hz": sensor.lowpass_hz,
     }
     doc["adaptation"] = adaptation_document(spec.adaptation)
+    if spec.kind == "fuzzy-pi":
+        doc["surface"] = surface_document(spec.surface)
+    if spec.inputs is not None:
+        doc["inputs"] = list(spec.inputs)
+    return doc
+
+
+def surface_document(surface: Surface) -> Any:
+    """The ``surface:`` section as plain data (``exact``, or the table's mapping)."""
+    if surface.method == "exact":
+        return "exact"
+    doc: dict[str, Any] = {"method": surface.method}
+    if surface.tolerance is not None:
+        doc["tolerance"] = surface.tolerance
+    if surface.resolution is not None:
+        doc["resolution"] = surface.resolution
     return doc
 
 

@@ -20,7 +20,6 @@ from typing import Any, TypeVar
 
 from fuzzkit.control.names import ADAPTIVE_PREFIX
 from fuzzkit.errors import ConfigError
-from fuzzkit.studies.compiled.table import table_arrays
 from fuzzkit.studies.runner import RunResult
 from fuzzkit.studies.task import Experiment
 
@@ -28,13 +27,14 @@ T = TypeVar("T")
 R = TypeVar("R")
 
 LOOPS = ("auto", "compiled", "python")
-#: How a fuzzy-PI's surface is evaluated: ``exact`` engine (Python loop), the generated
-#: double lookup ``table`` (both loops), the generated ``c`` through ctypes (both loops);
-#: ``auto``: the table in the compiled loop, the exact engine in the Python loop.
+#: How the Python loop's reference controller evaluates a fuzzy-PI's surface: the ``exact``
+#: engine (``auto``), the generated double lookup ``table``, or the rule base's generated ``c``
+#: through ctypes. The compiled loop runs the generated controller, whose surface is the spec's.
 FUZZY_IMPLS = ("auto", "exact", "table", "c")
-#: Which controller runs: ``python``, fuzzkit's own (the reference; in the compiled loop its
-#: numba twin), or ``c``, the whole generated C controller of the run's spec (compiled loop).
-CONTROLLER_IMPLS = ("python", "c")
+#: Which controller runs: ``c``, the run's controller spec generated as C and run whole in the
+#: compiled loop; ``python``, fuzzkit's reference controller in the Python loop; ``auto``: C
+#: where the compiled loop runs (arm6, planar) and a C compiler exists, else the reference.
+CONTROLLER_IMPLS = ("auto", "python", "c")
 
 
 @dataclass(frozen=True, slots=True)
@@ -50,8 +50,9 @@ class RunSpec:
     ``duration_s``: None runs the experiment's whole duration. ``controller_spec``: a
     controller spec file (``docs/controller.md``) whose controller runs instead of
     ``controller`` with ``gains`` (a scenario with a ``controller:`` runs its own).
-    ``controller_impl``: ``python`` (fuzzkit's controller) or ``c`` (the run's controller spec,
-    given or built from the settings, generated as C and run in the compiled loop).
+    ``controller_impl``: ``auto``, ``c`` (the run's controller spec, given or built from the
+    settings, generated as C and run in the compiled loop) or ``python`` (the reference
+    controller in the Python loop); :data:`CONTROLLER_IMPLS`.
     """
 
     experiment: str
@@ -68,7 +69,7 @@ class RunSpec:
     fuzzy_impl: str = "auto"
     fault: str | None = None
     controller_spec: str | None = None
-    controller_impl: str = "python"
+    controller_impl: str = "auto"
 
     def resolved_loop(self) -> str:
         """``compiled`` or ``python``: what ``auto`` means for this plant."""
@@ -77,7 +78,8 @@ class RunSpec:
         if self.loop not in LOOPS:
             raise ConfigError(f"unknown loop {self.loop!r} (expected {', '.join(LOOPS)})")
         if self.loop == "auto":
-            return "compiled" if compiled_supports(self.plant) else "python"
+            reference = self.controller_impl == "python" or self.fuzzy_impl != "auto"
+            return "compiled" if compiled_supports(self.plant) and not reference else "python"
         if self.loop == "compiled" and not compiled_supports(self.plant):
             raise ConfigError(
                 f"the compiled loop does not model the {self.plant} plant (it runs on arm6 and "
@@ -97,12 +99,12 @@ def _exact_surface(rulebase: str) -> Any:
 def run_spec(spec: RunSpec) -> RunResult:
     """Run ``spec`` and return the whole :class:`RunResult` (traces included).
 
-    The compiled loop runs the fuzzy-PI as the rule base's double lookup table (the generated
-    code's arithmetic), or with ``fuzzy_impl="c"`` calls the generated C itself; the Python
-    loop runs it on the exact engine (or the table, or the C). A plant the compiled loop
-    does not model (:class:`~fuzzkit.plants.contract.UnsupportedPlant`: the planar plant on a
-    machine other than x86-64 or AArch64) runs in the Python loop, and the result's ``loop``
-    says so: ``python (fallback: ...)``.
+    The compiled loop runs the run's controller spec generated as C (double; one arithmetic
+    with ``fuzzkit compile``); the Python loop runs the reference controller, a fuzzy-PI's
+    surface by the exact engine (or the table, or the rule base's C: ``fuzzy_impl``). A run the
+    compiled loop cannot take (:class:`~fuzzkit.plants.contract.UnsupportedPlant`, an adapting
+    spec, or no C compiler) runs in the Python loop when the loop was left to ``auto``, and the
+    result's ``loop`` says so: ``python (fallback: ...)``.
     """
     from fuzzkit.studies.experiments import with_stiffness
     from fuzzkit.studies.faults import fault
@@ -111,76 +113,58 @@ def run_spec(spec: RunSpec) -> RunResult:
     if spec.controller == "fuzzy-pi":
         from fuzzkit.control.loop_rulebase import load_loop_rulebase
 
-        load_loop_rulebase(spec.rulebase)  # what the loop needs, said before any table search
+        load_loop_rulebase(spec.rulebase)  # what the loop needs, said before anything runs
     if spec.stiffness_n_per_mm is not None:
         k = spec.stiffness_n_per_mm
         if not (math.isfinite(k) and k > 0.0):
             raise ConfigError(f"stiffness must be a positive number of N/mm (got {k})")
         exp = with_stiffness(exp, k * 1e3)
     faults = fault(spec.fault or exp.fault, spec.seed)
-    gains = dict(spec.gains)
     impl = spec.fuzzy_impl
     if impl not in FUZZY_IMPLS:
         raise ConfigError(f"unknown fuzzy implementation {impl!r} (expected {FUZZY_IMPLS})")
-    loop = spec.resolved_loop()
     if spec.controller_impl not in CONTROLLER_IMPLS:
         raise ConfigError(
             f"unknown controller implementation {spec.controller_impl!r} "
             f"(expected {', '.join(CONTROLLER_IMPLS)})"
         )
-    if spec.controller_impl == "c":
-        return _run_generated(spec, exp, plant, faults, loop)
+    loop = spec.resolved_loop()
     fallback = ""
-    cs = exp.controller_spec
-    if cs is not None and cs.adaptation.mode != "none" and loop == "compiled":
-        if spec.loop == "compiled":
-            raise ConfigError(
-                f"the compiled loop does not run adaptation ({cs.adaptation.mode}); "
-                "use --loop python"
-            )
-        loop, fallback = "python", " (adaptation runs in the python loop)"
     if loop == "compiled":
-        if impl == "exact":
-            raise ConfigError(
-                "the compiled loop runs the fuzzy-PI as the lookup table or the generated C, "
-                f"not {impl!r}; use --loop python"
-            )
-        from fuzzkit.plants.contract import UnsupportedPlant
-        from fuzzkit.studies.compiled.generated_c import load_generated_c
-        from fuzzkit.studies.compiled.loop import compiled_table, run_compiled
-
-        table = generated = None
-        if spec.controller == "fuzzy-pi" and impl == "c":
-            generated = load_generated_c(spec.rulebase)
-        elif spec.controller == "fuzzy-pi":
-            table = compiled_table(spec.rulebase)
         try:
-            return run_compiled(
-                exp,
-                plant,
-                spec.controller,
-                gains=gains,
-                table=table,
-                seed=spec.seed,
-                faults=faults,
-                latency=spec.latency,
-                duration_s=spec.duration_s,
-                generated_c=generated,
-            )
-        except UnsupportedPlant as exc:
-            # an object or mode the kernel lacks: the Python loop runs it, and says so
+            return _run_generated(spec, exp, plant, faults)
+        except _Fallback as exc:
+            if spec.loop == "compiled" or spec.controller_impl == "c":
+                raise ConfigError(str(exc)) from exc
             fallback = f" (fallback: {exc})"
+    elif spec.controller_impl == "c":
+        raise ConfigError(
+            "--controller-impl c runs the generated controller in the compiled loop (arm6, "
+            "planar); leave out --loop python and --fuzzy-impl"
+        )
+    return _run_reference(spec, exp, plant, faults, fallback)
+
+
+class _Fallback(Exception):
+    """Why the compiled loop cannot take a run the Python loop can."""
+
+
+def _run_reference(
+    spec: RunSpec, exp: Experiment, plant: Any, faults: Any, fallback: str
+) -> RunResult:
+    """``spec`` in the Python loop, on the reference controller."""
     from fuzzkit.studies.runner import run
 
     surface: Any = None
     label = "pi (python)"
     if spec.controller == "fuzzy-pi":
+        impl = spec.fuzzy_impl
         if impl in ("auto", "exact"):
             surface = _exact_surface(spec.rulebase)
             label = f"exact engine {spec.rulebase} (python)"
         elif impl == "table":
             from fuzzkit.control.controllers import lookup_table_surface
-            from fuzzkit.studies.compiled.table import load_table
+            from fuzzkit.studies.compiled.table import load_table, table_arrays
 
             table = load_table(spec.rulebase)
             surface = lookup_table_surface(table)
@@ -196,7 +180,7 @@ def run_spec(spec: RunSpec) -> RunResult:
         exp,
         plant,
         spec.controller,
-        gains=gains,
+        gains=dict(spec.gains),
         surface=surface,
         seed=spec.seed,
         faults=faults,
@@ -208,8 +192,16 @@ def run_spec(spec: RunSpec) -> RunResult:
     return result
 
 
-def _run_generated(spec: RunSpec, exp: Experiment, plant: Any, faults: Any, loop: str) -> RunResult:
-    """``spec`` with the whole generated C controller in the compiled loop."""
+def _run_generated(spec: RunSpec, exp: Experiment, plant: Any, faults: Any) -> RunResult:
+    """``spec`` with the run's generated C controller in the compiled loop.
+
+    Raises
+    ------
+    _Fallback
+        The compiled loop cannot run it (adaptation, a plant mode the kernel lacks, no C
+        compiler); the caller decides whether the Python loop may.
+    """
+    from fuzzkit.errors import ToolchainError
     from fuzzkit.plants.contract import UnsupportedPlant
     from fuzzkit.studies.compiled.generated_controller import (
         load_generated_controller,
@@ -217,18 +209,17 @@ def _run_generated(spec: RunSpec, exp: Experiment, plant: Any, faults: Any, loop
     )
     from fuzzkit.studies.compiled.loop import run_compiled
 
-    if loop != "compiled":
-        raise ConfigError(
-            "--controller-impl c runs the generated controller in the compiled loop (arm6, "
-            "planar); leave out --loop python"
-        )
-    if spec.fuzzy_impl != "auto":
-        raise ConfigError(
-            "--controller-impl c runs the generated controller's own fuzzy surface (the exact "
-            f"method); leave out --fuzzy-impl {spec.fuzzy_impl}"
-        )
+    cs = exp.controller_spec
+    if cs is not None and cs.adaptation.mode != "none":
+        raise _Fallback(f"adaptation ({cs.adaptation.mode}) runs in the python loop")
     ctl_spec = run_controller_spec(exp, spec.controller, dict(spec.gains), spec.rulebase)
-    generated = load_generated_controller(ctl_spec)
+    try:
+        generated = load_generated_controller(ctl_spec)
+    except ToolchainError as exc:
+        raise _Fallback(
+            f"the compiled loop runs the generated C controller and {exc}; the Python loop "
+            "runs the reference controller"
+        ) from exc
     try:
         return run_compiled(
             exp,
@@ -240,9 +231,7 @@ def _run_generated(spec: RunSpec, exp: Experiment, plant: Any, faults: Any, loop
             generated_controller=generated,
         )
     except UnsupportedPlant as exc:
-        raise ConfigError(
-            f"--controller-impl c runs only in the compiled loop, which cannot run this: {exc}"
-        ) from exc
+        raise _Fallback(str(exc)) from exc
 
 
 @lru_cache(maxsize=8)

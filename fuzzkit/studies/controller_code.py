@@ -24,7 +24,7 @@ from fuzzkit.control import status as st
 from fuzzkit.control.adaptation import ALPHA_TABLE, JUMP, SPREAD
 from fuzzkit.control.names import AXES
 from fuzzkit.control.reference import input_gains
-from fuzzkit.control.spec import STANDARD_GRAVITY_M_S2, ControllerSpec
+from fuzzkit.control.spec import STANDARD_GRAVITY_M_S2, ControllerSpec, role_ordered
 
 #: What each status bit means, as the generated header and module document it.
 STATUS_DOCS: Mapping[str, str] = {
@@ -82,7 +82,7 @@ def design_of(spec: ControllerSpec) -> ControllerDesign:
         mass_kg=None if tool is None else tool.mass_kg,
         gravity_m_s2=STANDARD_GRAVITY_M_S2,
         lowpass_alpha=spec.sensor.lowpass_alpha(spec.period_s),
-        rulebase=spec.rulebase,
+        rulebase=None if spec.rulebase is None else role_ordered(spec, spec.rulebase),
         status_bits=status_bits(),
         description=spec.description,
         source_file=source_file,

@@ -39,13 +39,13 @@ def sweep_specs(
     loop: str = "auto",
     duration_s: float | None = None,
     controller_specs: Sequence[str] = (),
-    controller_impl: str = "python",
+    controller_impl: str = "auto",
 ) -> list[RunSpec]:
     """Every combination, as run specs.
 
     ``controller_specs``: controller spec files, each a value of the sweep in place of the
     ``controllers`` (a spec holds its controller and gains, so ``gains`` must be None).
-    ``controller_impl``: ``python`` or ``c`` (:class:`~fuzzkit.studies.batch.RunSpec`).
+    ``controller_impl``: ``auto``, ``python`` or ``c`` (:class:`~fuzzkit.studies.batch.RunSpec`).
 
     ``gains`` maps a label (a gains file name) to per-controller overrides
     (``{label: {controller: {name: value}}}``); None runs the default gains only.

@@ -1,4 +1,4 @@
-"""The whole generated C controller inside the compiled closed loop (``--controller-impl c``).
+"""The generated C controller: the compiled closed loop's only controller.
 
 What ships is what runs: the controller spec of the run (the given one, or
 :func:`run_controller_spec` of the run's settings) goes through ``fuzzkit compile``'s generator
@@ -43,7 +43,6 @@ from fuzzkit.studies.compiled.period import (
     V_DU,
     V_E,
     V_U,
-    controller_step,
     error_change,
 )
 from fuzzkit.studies.experiments import DEFAULT_GAINS
@@ -173,8 +172,8 @@ def generated_step(
 
     ``c_step`` is ``NAME_controller_step`` (ctypes: numba reads its address at every call of
     the kernel), ``c_state`` its ``NAME_controller_t``, ``c_rot`` the tool's rotation
-    (row-major 9). Writes ``correction`` and keeps the loop's bookkeeping in ``cs``, ``cv`` as
-    :func:`fuzzkit.studies.compiled.period.controller_step` does.
+    (row-major 9). Writes ``correction`` and keeps the loop's bookkeeping in ``cs``, ``cv``
+    (:mod:`fuzzkit.studies.compiled.period`).
     """
     cs[CS_CTRL_T] += cp[C_PERIOD]
     status = int(c_step(c_state.ctypes, consumed.ctypes, c_rot.ctypes, correction.ctypes))
@@ -183,8 +182,8 @@ def generated_step(
     for i in range(3):
         if selection[i] > 0.0 and not math.isfinite(consumed[i]):
             missing = True
-    # as the loop's own controller counts them: a missing sample within the first sensor-delay
-    # periods is the start-up wait (no measurement can have arrived yet), not a sensor fault
+    # as the reference counts them: a missing sample within the first sensor-delay periods is
+    # the start-up wait (no measurement can have arrived yet), not a sensor fault
     started = round(cs[CS_CTRL_T] / cp[C_PERIOD]) > cp[C_SENSOR_DELAY]
     if (missing and started) or status & _REJECTED:
         cs[CS_FAULTS] += 1.0
@@ -205,37 +204,3 @@ def generated_step(
                 e[i] = setpoints[i] - consumed[i]
         error_change(cs, cv)
     return status
-
-
-@jit
-def controller_period(
-    cp: FloatArray,
-    selection: FloatArray,
-    setpoints: FloatArray,
-    bp0: FloatArray,
-    bp1: FloatArray,
-    tab: FloatArray,
-    splits: IntArray,
-    c_eval: Any,
-    c_io: FloatArray,
-    c_step: Any,
-    c_state: FloatArray,
-    c_rot: FloatArray,
-    consumed: FloatArray,
-    t_s: float,
-    cs: FloatArray,
-    cv: FloatArray,
-    correction: FloatArray,
-) -> int:
-    """One period of the run's controller, for every plant's loop: the loop's own
-    (:func:`~fuzzkit.studies.compiled.period.controller_step`; returns -1, it keeps no status)
-    when ``c_step`` is None, else the generated C controller (:func:`generated_step`)."""
-    if c_step is None:  # a compile-time branch: c_step is typed None or a C function
-        controller_step(
-            cp, selection, setpoints, bp0, bp1, tab, splits, c_eval, c_io, consumed, t_s, cs, cv,
-            correction,
-        )  # fmt: skip
-        return -1
-    return generated_step(
-        c_step, c_state, c_rot, cp, selection, setpoints, consumed, t_s, cs, cv, correction
-    )

@@ -2,8 +2,8 @@
 
 :func:`run_compiled` takes the arguments of :func:`fuzzkit.studies.runner.run` that the compiled
 loop models; :func:`compiled_supports` says when it applies (the ``arm6`` and ``planar``
-plants, PI or fuzzy-PI with a double lookup table, or with the generated C through ctypes;
-or a spec's whole generated C controller). The
+plants). Its controller is the run's controller spec generated as C (double) and called by
+address every period. The
 plant is reset in Python (arm6: the start pose's IK with its seeds; planar: the pymunk space),
 then one compiled call runs every period (the planar one in
 :mod:`fuzzkit.studies.compiled.planar_loop`).
@@ -14,7 +14,7 @@ from __future__ import annotations
 import time
 from collections.abc import Mapping
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -30,8 +30,11 @@ from fuzzkit.studies.compiled.common import (
     result_from_recording,
     warm_up,
 )
-from fuzzkit.studies.compiled.generated_c import GeneratedC
-from fuzzkit.studies.compiled.generated_controller import GeneratedController
+from fuzzkit.studies.compiled.generated_controller import (
+    GeneratedController,
+    load_generated_controller,
+    run_controller_spec,
+)
 from fuzzkit.studies.compiled.table import TableArrays, cached_table, load_table
 from fuzzkit.studies.experiments import Experiment
 from fuzzkit.studies.faults import Faults
@@ -78,34 +81,31 @@ def run_compiled(
     controller: str = "pi",
     *,
     gains: Mapping[str, float] | None = None,
-    table: Any = None,
+    rulebase: str = "macvicar_whelan",
     seed: int = 0,
     faults: Faults | None = None,
     duration_s: float | None = None,
     latency: tuple[int, int] | None = None,
-    generated_c: GeneratedC | None = None,
     generated_controller: GeneratedController | None = None,
 ) -> RunResult:
     """Run ``exp`` on the arm6 or the planar plant with the compiled loop; same semantics as
     ``runner.run``.
 
-    ``table`` is the fuzzy-PI's lookup table (``fuzzkit.codegen`` double table, see
-    :func:`load_table`, or its :class:`TableArrays`, see :func:`compiled_table`).
-    ``generated_c`` (:func:`fuzzkit.studies.compiled.generated_c.load_generated_c`) makes the
-    fuzzy-PI call the rule base's generated C instead of the table's arithmetic. One of the two
-    is required for ``fuzzy-pi``. ``generated_controller``
-    (:func:`fuzzkit.studies.compiled.generated_controller.load_generated_controller`) replaces
-    the loop's whole controller by a spec's generated C controller (``controller``, ``gains``
-    and ``table`` are then not used: its spec holds them). ``faults`` and ``latency`` default
-    to the experiment's, as in ``runner.run``.
+    The controller is always generated C: ``generated_controller``
+    (:func:`~fuzzkit.studies.compiled.generated_controller.load_generated_controller`), else
+    the run's controller spec (:func:`~fuzzkit.studies.compiled.generated_controller.
+    run_controller_spec` of ``exp``, ``controller``, ``gains``, ``rulebase``) generated,
+    compiled (cached) and loaded. ``faults`` and ``latency`` default to the experiment's, as in
+    ``runner.run``.
 
     Raises
     ------
     ConfigError
-        For a plant the compiled loop does not model, an unknown controller, fuzzy-PI without
-        a table or generated C, or both. :class:`~fuzzkit.plants.contract.UnsupportedPlant`
-        (a ConfigError) for a plant with objects or modes the kernel lacks (the Python loop
-        runs it).
+        For a plant the compiled loop does not model or an unknown controller.
+        :class:`~fuzzkit.plants.contract.UnsupportedPlant` (a ConfigError) for a plant with
+        objects or modes the kernel lacks (the Python loop runs it).
+    ToolchainError
+        No C compiler to build the controller.
     SimulationError
         When the planar arm's state becomes non-finite, as the Python plant raises it.
     """
@@ -116,20 +116,12 @@ def run_compiled(
                 "use --loop python"
             )
         plant = _shared_plant() if plant == "arm6" else _planar_plant()
-    ctrl = controller_args(
-        exp,
-        controller,
-        gains,
-        table,
-        seed,
-        faults,
-        duration_s,
-        latency,
-        generated_c,
-        generated_controller,
-    )
-    if generated_controller is not None:
-        controller = generated_controller.spec.kind
+    if generated_controller is None:
+        generated_controller = load_generated_controller(
+            run_controller_spec(exp, controller, gains, rulebase)
+        )
+    ctrl = controller_args(exp, generated_controller, seed, faults, duration_s, latency)
+    controller = generated_controller.spec.kind
     if isinstance(plant, Arm6Plant):
         return _run_arm6(exp, plant, controller, ctrl, seed)
     from fuzzkit.studies.compiled.planar_loop import run_planar_compiled
@@ -184,8 +176,7 @@ def _run_arm6(
         a.path_quat, a.obj_kind, a.obj_p, a.obj_terms, a.obj_nterms, a.obj_grid, a.rot_task,
         a.offset,
         a.params, a.q, a.q_ref, a.q_ik, a.stick, a.state, noise, reset_force,
-        ctrl.cp, ctrl.selection, ctrl.setpoints, *ctrl.table, ctrl.c_eval,
-        ctrl.c_step, ctrl.c_state, ctrl.spike, ctrl.nan,
+        ctrl.cp, ctrl.selection, ctrl.setpoints, ctrl.c_step, ctrl.c_state, ctrl.spike, ctrl.nan,
     )  # fmt: skip
     warm_up(K.run_arm6, args, rec, scalars, ctrl)
     wall0 = time.perf_counter()

@@ -71,8 +71,7 @@ def run_planar_compiled(
     args = (
         a.path, a.obj_kind, a.obj_p, a.obj_terms, a.obj_nterms, a.rot, a.params, a.functions,
         a.pointers, a.stick, a.state, noise, reset_force,
-        ctrl.cp, ctrl.selection, ctrl.setpoints, *ctrl.table, ctrl.c_eval,
-        ctrl.c_step, ctrl.c_state, ctrl.spike, ctrl.nan,
+        ctrl.cp, ctrl.selection, ctrl.setpoints, ctrl.c_step, ctrl.c_state, ctrl.spike, ctrl.nan,
     )  # fmt: skip
     warm_up(run_planar, args, rec, scalars, ctrl)
     wall0 = time.perf_counter()

@@ -14,7 +14,7 @@ import numpy.typing as npt
 
 from fuzzkit.jit import jit
 from fuzzkit.planar_sim.arm_period import STEP_OK, arm_pose, nominal_at, plant_step
-from fuzzkit.studies.compiled.generated_controller import controller_period
+from fuzzkit.studies.compiled.generated_controller import generated_step
 from fuzzkit.studies.compiled.period import (
     C_COMMAND_DELAY,
     C_PERIOD,
@@ -56,12 +56,7 @@ def run_planar(
     cp: FloatArray,
     selection: FloatArray,
     setpoints: FloatArray,
-    bp0: FloatArray,
-    bp1: FloatArray,
-    tab: FloatArray,
-    splits: IntArray,
-    c_eval: Any,  # None: the table above; a generated C's NAME_eval (ctypes): that instead
-    # None: the controller above; a generated NAME_controller_step (ctypes) and its state
+    # the generated NAME_controller_step (ctypes) and its state
     c_step: Any,
     c_state: FloatArray,
     # faults, one entry per period: spike sign (0: none), NaN sample
@@ -105,7 +100,6 @@ def run_planar(
         sensor_q[k, :] = reset_force
     command_q = np.zeros((cd + 1, 3))
     applied = np.zeros(3)
-    c_io = np.empty(3)
     correction = np.zeros(3)
     c_rot = np.empty(9)  # the tool's rotation, row-major, for the generated controller
     for j in range(9):
@@ -138,12 +132,11 @@ def run_planar(
             return k
         t_s = state[0]
         inject_faults(cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured)
-        # before the first measurement arrives (k < sd) controller_step waits: no fault counted
+        # before the first measurement arrives (k < sd) the controller waits: no fault counted
         consumed = sensor_latency(k, sd, sensor_q, measured, reset_force)
-        r_status[k] = controller_period(
-            cp, selection, setpoints, bp0, bp1, tab, splits, c_eval, c_io, c_step, c_state,
-            c_rot, consumed, t_s, cs, cv, correction,
-        )  # fmt: skip
+        r_status[k] = generated_step(
+            c_step, c_state, c_rot, cp, selection, setpoints, consumed, t_s, cs, cv, correction
+        )
         command_latency(k, cd, command_q, correction, applied)
         # ---- recording (PlanarArmPlant._sample and the runner's row) ----
         moving = False

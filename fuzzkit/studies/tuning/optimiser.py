@@ -375,7 +375,7 @@ def tune(
     latencies: Sequence[tuple[int, int]] | None = None,
     loop: str = "auto",
     scheduler: str | None = None,
-    controller_impl: str = "python",
+    controller_impl: str = "auto",
     constraint: Callable[[Mapping[str, float]], bool] | None = None,
 ) -> TuneResult:
     """Find the gains of least cost for ``controller`` over experiments and stiffnesses.
@@ -402,8 +402,9 @@ def tune(
         experiment's own).
     loop : ``auto`` (compiled where the plant has a compiled loop), ``compiled`` or ``python``.
     scheduler : a ``dask.distributed`` scheduler address to price the candidates on.
-    controller_impl : ``python`` (fuzzkit's controller) or ``c`` (every candidate generated as
-        C and run whole in the compiled loop).
+    controller_impl : ``auto`` (the generated C controller in the compiled loop where the
+        plant has one), ``c`` (that, or an error) or ``python`` (the reference controller in
+        the Python loop).
     constraint : only gain sets it accepts are searched (see :func:`optimise`).
 
     Returns

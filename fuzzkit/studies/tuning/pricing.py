@@ -28,21 +28,21 @@ def adapts(exp: Any) -> bool:
 class CaseRunner:
     """Prices gain sets for one problem in this process (the surface table is built once).
 
-    Runs the compiled loop (:mod:`fuzzkit.studies.compiled`) where the plant has one, with the
-    rule base's double lookup table as the fuzzy surface; the Python loop otherwise (or when a
-    controller spec adapts its gains), with a 201 x 201 bilinear table. With
-    ``controller_impl == "c"``, each candidate's controller spec is generated as C and run whole
-    in the compiled loop (one compile per candidate).
+    Runs the compiled loop (:mod:`fuzzkit.studies.compiled`) where the plant has one: each
+    candidate's controller spec runs as the generated C controller (what ``fuzzkit compile``
+    emits). The Python loop otherwise (``controller_impl == "python"``, a plant the compiled
+    loop does not model, or a controller spec that adapts its gains), with a 201 x 201
+    bilinear table of the surface.
     """
 
     def __init__(self, problem: TuningProblem) -> None:
-        from fuzzkit.studies.compiled.loop import compiled_supports, compiled_table
+        from fuzzkit.studies.compiled.loop import compiled_supports
 
         self.problem = problem
         self.surface: Surface | None = None
-        self.table: Any = None
         self.compiled = (
             problem.loop != "python"
+            and problem.controller_impl != "python"
             and isinstance(problem.plant, str)
             and compiled_supports(problem.plant)
             and (problem.surface is None or isinstance(problem.surface, str))
@@ -58,9 +58,8 @@ class CaseRunner:
                 f"--controller-impl c runs in the compiled loop, which does not run plant "
                 f"{problem.plant_name}"
             )
-        if self.compiled and problem.controller_impl == "python":
-            if isinstance(problem.surface, str):
-                self.table = compiled_table(problem.surface)
+        if self.compiled:
+            pass  # the generated controller holds the surface
         elif isinstance(problem.surface, str):
             from fuzzkit.control.loop_rulebase import load_loop_rulebase
             from fuzzkit.fuzzy.inference import Engine
@@ -82,7 +81,7 @@ class CaseRunner:
         full = p.full_gains(gains)
         exp = p.cases[case]
         own = p.plant_of(case)
-        if p.controller_impl == "c":
+        if self.compiled:
             return run_compiled(
                 exp,
                 own if own is not None else str(p.plant),
@@ -90,17 +89,6 @@ class CaseRunner:
                 duration_s=duration_s,
                 latency=p.latency_of(case),
                 generated_controller=self._generated(exp, full),
-            )
-        if self.compiled:
-            return run_compiled(
-                exp,
-                own if own is not None else str(p.plant),
-                p.controller,
-                gains=full,
-                table=self.table,
-                seed=p.noise_seed,
-                duration_s=duration_s,
-                latency=p.latency_of(case),
             )
         plant = own or (make_plant(p.plant) if isinstance(p.plant, str) else p.plant())
         return run(

@@ -76,7 +76,7 @@ class TuningProblem:
     loop: str = "auto"
     #: ``python`` (fuzzkit's controller) or ``c`` (each candidate's controller spec generated
     #: as C and run whole in the compiled loop; ``fuzzkit.studies.batch.CONTROLLER_IMPLS``)
-    controller_impl: str = "python"
+    controller_impl: str = "auto"
     #: what each case is (parallel to ``cases``)
     case_keys: tuple[TuningCase, ...] = ()
     #: cases that run the paper's 3-D E3 on its own arm6 world (:mod:`fuzzkit.studies.e3_arm6`)
@@ -101,7 +101,7 @@ class TuningProblem:
         noise_seed: int = 0,
         latencies: Sequence[tuple[int, int]] | None = None,
         loop: str = "auto",
-        controller_impl: str = "python",
+        controller_impl: str = "auto",
     ) -> TuningProblem:
         """Check the arguments and assemble the problem (arguments as for :func:`tune`).
 
@@ -169,9 +169,10 @@ class TuningProblem:
             raise ConfigError(f"latencies must be (sensor, command) pairs >= 0 (got {lats})")
         if loop not in ("auto", "compiled", "python"):
             raise ConfigError(f"unknown loop {loop!r} (expected auto, compiled or python)")
-        if controller_impl not in ("python", "c"):
+        if controller_impl not in ("auto", "python", "c"):
             raise ConfigError(
-                f"unknown controller implementation {controller_impl!r} (expected python or c)"
+                f"unknown controller implementation {controller_impl!r} "
+                "(expected auto, python or c)"
             )
         if controller_impl == "c" and (loop == "python" or not isinstance(surface or "", str)):
             raise ConfigError(
