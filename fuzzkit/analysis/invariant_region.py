@@ -58,21 +58,31 @@ def validity_slabs(
     loop: AxisLoop,
     rest_force_n: float,
     fuzzy_box: tuple[float, float, float] | None = None,
+    limits_m: tuple[float, float] | None = None,
 ) -> list[Slab]:
     """The model's validity conditions as slabs, at every vertex of ``loop``'s box.
 
     ``rest_force_n``: the contact force at the rest point (N, > 0). ``fuzzy_box``:
     ``(rho, ki, kp)`` with the fuzzy-PI's input scaling ``ki``, ``kp`` (per N, per N per
-    period) and the half-width ``rho`` of the box its surface was bounded on.
+    period) and the half-width ``rho`` of the box its surface was bounded on. ``limits_m``:
+    a spec's ``(step_m, correction_m)``: the model holds while no limit clips, ``|du| <=
+    step_m`` and ``|u| <= correction_m`` (the correction at rest taken as at most the rest
+    indentation ``rest_force_n / k``, the path being held once the loop engages).
     """
+    k = loop.stiffness_n_per_m
     slabs: list[Slab] = []
     seen: set[bytes] = set()
     for rows in vertex_rows(loop):
         candidates = [(rows.spring_next, rest_force_n / loop.sigma_min, "contact sector")]
         if fuzzy_box is not None:
             rho, ki, kp = fuzzy_box
-            candidates.append((rows.y_next, rho / ki, "fuzzy region (error)"))
-            candidates.append((rows.y_next - rows.y_now, rho / kp, "fuzzy region (change)"))
+            candidates.append((rows.c_next, rho / ki, "fuzzy region (error)"))
+            candidates.append((rows.c_next - rows.c_now, rho / kp, "fuzzy region (change)"))
+        if limits_m is not None:
+            step_m, correction_m = limits_m
+            candidates.append((rows.u_next - rows.u_now, k * step_m, "step limit"))
+            room = max(k * correction_m - rest_force_n, 0.0)
+            candidates.append((rows.u_now, room, "correction limit"))
         for h, bound, what in candidates:
             key = np.round(h, 15).tobytes() + what.encode()
             if key not in seen:
@@ -90,6 +100,8 @@ def level_set(p: FloatArray, slabs: Sequence[Slab]) -> LevelSet:
         reach = float(slab.h @ p_inv @ slab.h)  # max of (h' x)^2 over x' P x <= 1
         if reach <= 0.0:
             continue
+        if slab.bound <= 0.0:
+            return LevelSet(0.0, 0.0, slab.what)
         g = slab.bound**2 / reach
         if g < best:
             best, limit = g, slab.what

@@ -70,6 +70,9 @@ class AxisLoop:
     sigma_min: float = 0.1
     inner_q: tuple[float, float] = (0.0, 0.0)
     contact_lag: tuple[float, float] = (0.0, 0.0)
+    #: the controller's own front-end low-pass (a spec's ``sensor.lowpass_hz``), after the
+    #: sensor's filter and delay; None: the controller reads the sample as it is
+    frontend_cutoff_hz: float | None = None
 
     def __post_init__(self) -> None:
         problems = []
@@ -87,6 +90,9 @@ class AxisLoop:
             lo, hi = getattr(self, name)
             if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
                 problems.append(f"{name} must be an interval lo <= hi (got {lo}, {hi})")
+        fc = self.frontend_cutoff_hz
+        if fc is not None and not (math.isfinite(fc) and fc > 0.0):
+            problems.append(f"frontend_cutoff_hz must be > 0 (got {fc})")
         if not 0.0 < self.sigma_min <= 1.0:
             problems.append(f"sigma_min must be in (0, 1] (got {self.sigma_min})")
         if problems:
@@ -94,8 +100,15 @@ class AxisLoop:
 
     @property
     def order(self) -> int:
-        """The number of states."""
-        return self.sensor_delay + self.command_delay + 4
+        """The number of states (the front-end filter's, when there is one, is the last)."""
+        return self.sensor_delay + self.command_delay + 4 + (self.frontend_cutoff_hz is not None)
+
+    @property
+    def frontend_pole(self) -> float:
+        """The front-end low-pass's pole per period (0: no filter)."""
+        if self.frontend_cutoff_hz is None:
+            return 0.0
+        return math.exp(-2.0 * math.pi * self.frontend_cutoff_hz * self.period_s)
 
     @property
     def filter_pole(self) -> float:
@@ -117,7 +130,9 @@ class StepRows:
     ``spring_next``: the contact force deviation the spring and damper give at the next plant
     step, before the clamp ``max(0, .)`` (the sector's argument). ``y_next``, ``y_now``: the
     samples the controller reads for ``e[k+1] = -y_next`` and ``de[k+1] = -(y_next - y_now)``.
-    ``u_next``: the correction after the step.
+    ``u_next``: the correction after the step. ``c_next``, ``c_now``: what the controller's
+    law reads, the samples or, with a front-end low-pass, its output:
+    ``e[k+1] = -c_next``, ``de[k+1] = -(c_next - c_now)``.
     """
 
     p_next: FloatArray
@@ -128,6 +143,8 @@ class StepRows:
     y_now: FloatArray
     u_now: FloatArray
     u_next: FloatArray
+    c_next: FloatArray
+    c_now: FloatArray
 
 
 def step_rows(
@@ -159,10 +176,17 @@ def step_rows(
     w_next = beta * unit(iw) + (1.0 - beta) * sigma * spring_next
     y_next = w_next if s == 0 else unit(iw + s - 1)
     y_now = unit(iw + s)
+    c_next, c_now = y_next, y_now
+    if loop.frontend_cutoff_hz is not None:
+        b2 = loop.frontend_pole
+        c_now = unit(n - 1)
+        c_next = b2 * c_now + (1.0 - b2) * y_next
     kp, ki = loop.kp * k, loop.ki * k  # per newton of force deviation, in newtons of correction
     pd = phi if phi_de is None else phi_de
-    u_next = unit(iu) - (pd * kp + phi * ki) * y_next + pd * kp * y_now
-    return StepRows(p_next, x_next, spring_next, w_next, y_next, y_now, unit(iu), u_next)
+    u_next = unit(iu) - (pd * kp + phi * ki) * c_next + pd * kp * c_now
+    return StepRows(
+        p_next, x_next, spring_next, w_next, y_next, y_now, unit(iu), u_next, c_next, c_now
+    )
 
 
 def closed_loop_matrix(
@@ -197,6 +221,8 @@ def closed_loop_matrix(
     a_mat[iu] = u_next
     for i in range(1, c + 1):
         a_mat[iu + i] = unit(iu + i - 1)
+    if loop.frontend_cutoff_hz is not None:
+        a_mat[n - 1] = rows.c_next
     return a_mat
 
 
@@ -262,10 +288,16 @@ def noise_std(loop: AxisLoop, noise_std_n: float) -> float:
     iu = 3 + loop.sensor_delay
     aug = np.zeros((n + 1, n + 1))
     aug[:n, :n] = a_mat
-    aug[iu, n] = pd * loop.kp * k  # + phi Kp n[k]: the previous sample's noise
     b = np.zeros(n + 1)
-    b[iu] = -(pd * loop.kp + mid[0] * loop.ki) * k  # - phi (Kp + Ki) n[k+1]
-    b[n] = 1.0
+    if loop.frontend_cutoff_hz is None:
+        aug[iu, n] = pd * loop.kp * k  # + phi Kp n[k]: the previous sample's noise
+        b[iu] = -(pd * loop.kp + mid[0] * loop.ki) * k  # - phi (Kp + Ki) n[k+1]
+        b[n] = 1.0
+    else:
+        # the noise enters the front-end filter, whose state keeps the past noise
+        gain = 1.0 - loop.frontend_pole
+        b[n - 1] = gain
+        b[iu] = -(pd * loop.kp + mid[0] * loop.ki) * k * gain
     # u[k+1] reads the new noise: propagate it into the state the same period
     cov = solve_discrete_lyapunov(aug, np.outer(b, b) * noise_std_n**2)
     # the true force at the next plant step, from the state (contact held)

@@ -21,8 +21,11 @@ from fuzzkit.analysis.fuzzy_bounds import StructureError, gradient_bounds, phi_b
 from fuzzkit.analysis.inner_loop import InnerLoop, identify
 from fuzzkit.analysis.invariant_region import level_set, validity_slabs
 from fuzzkit.analysis.loop_model import AxisLoop, noise_std, vertex_matrices
+from fuzzkit.analysis.surface_source import SurfaceSource, surface_source
 from fuzzkit.control.names import KINDS as CONTROLLERS
+from fuzzkit.control.spec import EXACT, Surface
 from fuzzkit.errors import ConfigError
+from fuzzkit.fuzzy.model import RuleBase
 from fuzzkit.studies.experiments import DEFAULT_GAINS
 from fuzzkit.studies.task import Experiment
 
@@ -60,29 +63,30 @@ class FuzzyPart:
     details: dict[str, Any] = field(default_factory=dict)
 
 
-@lru_cache(maxsize=8)
-def fuzzy_part(rulebase: str, rho: float = 1.0) -> FuzzyPart:
-    """The bounds of ``rulebase``'s lookup table over a box of half-width ``rho`` around the
-    loop's rest point (exact, from its triangles): the PI-like factorisation where it holds,
-    else the gradient bounds around the rest point nearest the origin."""
-    import numpy as np
+def fuzzy_part(rulebase: str | RuleBase, rho: float = 1.0, surface: Surface = EXACT) -> FuzzyPart:
+    """The bounds of the rule base's surface, evaluated as ``surface`` (its inputs in role
+    order; a name or path: by position), over a box of half-width ``rho`` around the loop's
+    rest point, exact on the table :mod:`fuzzkit.analysis.surface_source` gives: the PI-like
+    factorisation where it holds, else the gradient bounds around the rest point nearest the
+    origin."""
+    from fuzzkit.control.loop_rulebase import load_loop_rulebase
 
-    from fuzzkit.studies.compiled.loop import compiled_table
-    from fuzzkit.studies.compiled.table import table2
+    rb = load_loop_rulebase(rulebase) if isinstance(rulebase, str) else rulebase
+    return _fuzzy_part(rb, rho, surface)
 
-    t = compiled_table(rulebase)
 
-    def on_line(xs: FloatArray) -> FloatArray:
-        return np.array([table2(t.bp0, t.bp1, t.values, t.splits, float(x), 0.0) for x in xs])
-
-    zeros = zero_set(on_line, tuple(float(b) for b in t.bp0))
+@lru_cache(maxsize=16)
+def _fuzzy_part(rb: RuleBase, rho: float, surface: Surface) -> FuzzyPart:
+    source = surface_source(rb, surface)
+    t = source.table
+    zeros = zero_set(source.on_error_axis, tuple(float(b) for b in t.bp0))
     try:
         b = phi_bounds(t.bp0, t.bp1, t.values, t.splits, rho)
     except StructureError as exc:
         centre = zeros.rest_point
         if centre is None:
             return FuzzyPart(
-                "none", (0.0, 0.0), None, 0.0, zeros, {"why": str(exc), "table": t.label}
+                "none", (0.0, 0.0), None, 0.0, zeros, {"why": str(exc), **_surface_details(source)}
             )
         g = gradient_bounds(t.bp0, t.bp1, t.values, t.splits, rho, centre)
         return FuzzyPart(
@@ -97,7 +101,7 @@ def fuzzy_part(rulebase: str, rho: float = 1.0) -> FuzzyPart:
                 "around_scaled_error": g.centre,
                 "dF_de": list(g.a_range),
                 "dF_dde": list(g.b_range),
-                "table": t.label,
+                **_surface_details(source),
             },
         )
     return FuzzyPart(
@@ -111,9 +115,19 @@ def fuzzy_part(rulebase: str, rho: float = 1.0) -> FuzzyPart:
             "phi": [b.low, b.high],
             "small_signal_phi": b.small_signal,
             "rounding_residual": b.residual,
-            "table": t.label,
+            **_surface_details(source),
         },
     )
+
+
+def _surface_details(source: SurfaceSource) -> dict[str, Any]:
+    return {
+        "table": source.table.label,
+        "surface_method": source.method,
+        "bounds_cover_deployed_surface": source.covers_deployed,
+        "surface_error_bound": source.error_bound,
+        "bounds_are": source.describe(),
+    }
 
 
 def loop_equilibrium(
@@ -218,8 +232,10 @@ def axis_loop(
     stiffness_n_per_m: float,
     latency: tuple[int, int],
     sigma_min: float = SIGMA_MIN,
+    frontend_cutoff_hz: float | None = None,
 ) -> AxisLoop:
-    """The linear model of a force axis of ``exp`` at one stiffness and latency."""
+    """The linear model of a force axis of ``exp`` at one stiffness and latency
+    (``frontend_cutoff_hz``: the controller's own low-pass, a spec's)."""
     _, kp, ki = effective_gains(controller, gains)
     scn = exp.scenario
     phi, phi_de = (1.0, 1.0), None
@@ -243,6 +259,7 @@ def axis_loop(
         inner_q=inner.q_range,
         contact_lag=inner.contact_lag,
         sigma_min=sigma_min,
+        frontend_cutoff_hz=frontend_cutoff_hz,
     )
 
 
@@ -257,6 +274,9 @@ def certify_cell(
     sigma_min: float,
     noise_n: float,
     reuse: FloatArray | None = None,
+    *,
+    frontend_cutoff_hz: float | None = None,
+    limits_m: tuple[float, float] | None = None,
 ) -> Cell:
     """Certify one cell: with the contact sector ``[sigma_min, 1]`` (contact may be lost), else
     with contact held (``[1, 1]``); ``Cell.contact_sector`` says which one holds.
@@ -264,7 +284,8 @@ def certify_cell(
     Contact held is tried first: its vertices are a subset of the wider sector's, so when it
     fails the wider one fails too and is not tried. ``reuse``: a Lyapunov matrix to try before
     any solve (a neighbouring cell's); it certifies only if it passes the numpy check on this
-    cell's vertices.
+    cell's vertices. ``frontend_cutoff_hz``, ``limits_m``: a spec's low-pass and its
+    ``(step_m, correction_m)`` limits (the region ``region_n`` keeps them from clipping).
     """
     rest = loop_equilibrium(exp, controller, gains, fuzzy)
     lat = (int(latency[0]), int(latency[1]))
@@ -272,7 +293,15 @@ def certify_cell(
         why = f"no rest point: {rest.why}"
         return Cell(float(stiffness_n_per_mm), lat, False, math.nan, "refused", why_not=why)
     loop = axis_loop(
-        exp, controller, gains, inner, fuzzy, stiffness_n_per_mm * 1e3, latency, sigma_min
+        exp,
+        controller,
+        gains,
+        inner,
+        fuzzy,
+        stiffness_n_per_mm * 1e3,
+        latency,
+        sigma_min,
+        frontend_cutoff_hz,
     )
     held = replace(loop, sigma_min=1.0)
     cert = certify(vertex_matrices(held), vertex_matrices(held, nominal_plant=True), (reuse,))
@@ -293,7 +322,7 @@ def certify_cell(
         # rest point's offset (0 when they coincide)
         rest_force = _setpoint(exp) + rest.offset_n
         if rest_force > 0.0:
-            found = level_set(cert.p, validity_slabs(certified_loop, rest_force, box))
+            found = level_set(cert.p, validity_slabs(certified_loop, rest_force, box, limits_m))
             region_n, limited_by = found.region_n, found.limited_by
         else:
             region_n, limited_by = 0.0, "no contact force at the rest point"
@@ -335,6 +364,9 @@ def certify_cells(
     latencies: Sequence[tuple[int, int]],
     sigma_min: float,
     noise_n: float,
+    *,
+    frontend_cutoff_hz: float | None = None,
+    limits_m: tuple[float, float] | None = None,
 ) -> Iterator[Cell]:
     """Every cell, stiffness by stiffness; each tries first the Lyapunov matrix that last
     certified the same latency (the same state size), re-verified on its own vertices."""
@@ -342,7 +374,18 @@ def certify_cells(
     for k in stiffnesses_n_per_mm:
         for lat in latencies:
             cell = certify_cell(
-                exp, controller, gains, inner, fuzzy, k, lat, sigma_min, noise_n, last.get(lat)
+                exp,
+                controller,
+                gains,
+                inner,
+                fuzzy,
+                k,
+                lat,
+                sigma_min,
+                noise_n,
+                last.get(lat),
+                frontend_cutoff_hz=frontend_cutoff_hz,
+                limits_m=limits_m,
             )
             if cell.lyapunov_p is not None:
                 last[lat] = cell.lyapunov_p
@@ -357,14 +400,24 @@ def certify_region(
     latencies: Sequence[tuple[int, int]],
     *,
     gains: Mapping[str, float] | None = None,
-    rulebase: str = "macvicar_whelan",
+    rulebase: str | RuleBase = "macvicar_whelan",
     fuzzy_region: float = 1.0,
     sigma_min: float = SIGMA_MIN,
+    surface: Surface = EXACT,
+    frontend_cutoff_hz: float | None = None,
+    limits_m: tuple[float, float] | None = None,
+    deployed: dict[str, Any] | None = None,
 ) -> Region:
-    """Certify every (stiffness, latency) cell for ``controller`` on ``plant``'s inner loop."""
+    """Certify every (stiffness, latency) cell for ``controller`` on ``plant``'s inner loop.
+
+    ``surface``: how the fuzzy-PI evaluates ``rulebase`` (inputs in role order).
+    ``frontend_cutoff_hz``, ``limits_m``: a spec's low-pass and ``(step_m, correction_m)``.
+    ``deployed``: what the certified controller is (a spec's name and file, or the defaults
+    assumed), for the JSON.
+    """
     all_gains, kp, ki = effective_gains(controller, gains)
     inner = identify(plant)
-    fuzzy = fuzzy_part(rulebase, fuzzy_region) if controller == "fuzzy-pi" else None
+    fuzzy = fuzzy_part(rulebase, fuzzy_region, surface) if controller == "fuzzy-pi" else None
     noise_n = exp.scenario.sensor.noise_std_n
     cells = certify_cells(
         exp,
@@ -376,6 +429,8 @@ def certify_region(
         latencies,
         sigma_min,
         noise_n,
+        frontend_cutoff_hz=frontend_cutoff_hz,
+        limits_m=limits_m,
     )
     setpoints = [exp.setpoints[i] for i in range(3) if exp.selection[i]]
     rest = loop_equilibrium(exp, controller, gains, fuzzy)
@@ -387,7 +442,12 @@ def certify_region(
         "plant": plant,
         "period_s": exp.scenario.period_s,
         "contact_damping_n_s_per_m": exp.scenario.contact.damping_n_s_per_m,
+        "deployed": deployed or {},
         "sensor_filter_cutoff_hz": exp.scenario.sensor.cutoff_hz,
+        "frontend_lowpass_hz": frontend_cutoff_hz,
+        "limits_m": None
+        if limits_m is None
+        else {"step_m": limits_m[0], "correction_m": limits_m[1]},
         "contact_sector": [sigma_min, 1.0],
         "contact_sector_fallback": [1.0, 1.0],
         "contact_sector_holds_while_force_above_n": [
@@ -400,11 +460,12 @@ def certify_region(
             "the Lyapunov certificate holds and the nominal model predicts a noise-driven "
             f"force standard deviation <= {NOISE_SHARE * BAND_N:g} N"
         ),
-        "not_covered": ["impact", "friction", "joint saturation", "correction and rate limits"],
+        "not_covered": ["impact", "friction", "joint saturation"]
+        + ([] if limits_m else ["correction and rate limits"]),
     }
     if fuzzy is not None:
         model["fuzzy"] = {
-            "rulebase": rulebase,
+            "rulebase": rulebase if isinstance(rulebase, str) else rulebase.name,
             "bounds": fuzzy.kind,
             "zero_set_scaled_error": [list(iv) for iv in fuzzy.zeros.intervals],
             "region": {
