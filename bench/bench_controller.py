@@ -193,16 +193,14 @@ def safety_matrix(seeds: int) -> None:
         load_generated_controller,
         run_controller_spec,
     )
-    from fuzzkit.studies.compiled.loop import compiled_table, run_compiled
+    from fuzzkit.studies.compiled.loop import run_compiled
     from fuzzkit.studies.experiments import EXPERIMENTS, experiment
     from fuzzkit.studies.faults import FAULTS, fault
     from fuzzkit.studies.runner import load_surface, run
 
     durations = {"E1": 3.5, "E2": 5.0, "E3": None}  # tests/test_safety.py's
     surface = load_surface("macvicar_whelan")
-    table = compiled_table("macvicar_whelan")
     totals = {"generated C controller, compiled loop": [0.0, 0.0, 0]}
-    totals["numba controller (table), compiled loop"] = [0.0, 0.0, 0]
     totals["reference controller, Python loop"] = [0.0, 0.0, 0]
     for name in sorted(EXPERIMENTS):
         exp = experiment(name)
@@ -218,13 +216,6 @@ def safety_matrix(seeds: int) -> None:
                     runs = {
                         "generated C controller, compiled loop": run_compiled(
                             exp, "arm6", generated_controller=gen, **common
-                        ),
-                        "numba controller (table), compiled loop": run_compiled(
-                            exp,
-                            "arm6",
-                            controller,
-                            table=table if controller == "fuzzy-pi" else None,
-                            **common,
                         ),
                         "reference controller, Python loop": run(
                             exp,

@@ -8,11 +8,9 @@ Tables
 1. Real-time factors, CPU time (``time.process_time`` of the loop alone, start-up excluded;
    best of 5 compiled, 2 Python runs): E1-E3 on ``arm6`` and on the pymunk ``planar`` arm
    with PI and fuzzy-PI, the Python reference loop (fuzzy-PI on the exact engine, as
-   ``simulate --loop python`` runs it) next to the compiled loop (fuzzy-PI as the rule base's
-   double lookup table). Targets: 500x on arm6, 100x on planar.
-   Then the fuzzy-PI as the rule base's generated C called through ctypes for every sample
-   (``--fuzzy-impl c``), in the Python loop and in the compiled loop; and the first-call cost
-   of each compiled variant in a fresh numba cache (what the first run after an install pays).
+   ``simulate --loop python`` runs it) next to the compiled loop (the run's generated C
+   controller). Targets: 500x on arm6, 100x on planar. Then the first-call cost of each compiled
+   kernel in a fresh numba cache (what the first run after an install pays).
 2. Where the planar period's time goes: in the Python loop, pymunk's step through its Python
    wrapper and through the bare C call, the other pymunk calls of a substep, and the cap they
    put on the real-time factor with 4 substeps per 4 ms period; in the compiled loop, the
@@ -67,43 +65,30 @@ def real_time_factors() -> list[tuple[str, float, float | None, int]]:
                     continue
                 co = _best_rtf(lambda s=spec: run_spec(s).real_time_factor, repeat=5)
                 rows.append((f"{name} {plant} {ctrl}", py, co, target))
-    from fuzzkit.codegen.toolchain import find_compiler
-
-    if find_compiler() is not None:
-        for name in ARM6_CASES:
-            c_spec = RunSpec(name, "fuzzy-pi", plant="arm6", fuzzy_impl="c")
-            c_py = RunSpec(name, "fuzzy-pi", plant="arm6", fuzzy_impl="c", loop="python")
-            run_spec(c_spec)  # compile the C, load the kernel variant
-            py = _best_rtf(lambda s=c_py: run_spec(s).real_time_factor, repeat=2)
-            co = _best_rtf(lambda s=c_spec: run_spec(s).real_time_factor, repeat=5)
-            rows.append((f"{name} arm6 fuzzy-pi C", py, co, 500))
     return rows
 
 
 _FIRST_CALLS = """
 import json, time
 from fuzzkit.studies.batch import RunSpec, run_spec
-from fuzzkit.studies.compiled.generated_c import load_generated_c
-from fuzzkit.studies.compiled.table import load_table
-load_table(); load_generated_c()  # the table and the C library: not numba's cost
+from fuzzkit.studies.compiled import generated_controller as G
+from fuzzkit.studies.experiments import experiment
+G.load_generated_controller(G.run_controller_spec(experiment("E1"), "fuzzy-pi", None))  # not numba
 out = {}
-for label, plant, impl in (
-    ("arm6 table (whole kernel)", "arm6", "table"),
-    ("arm6 generated C (its variant)", "arm6", "c"),
-    ("planar table (its plant and loop)", "planar", "table"),
+for label, plant in (
+    ("arm6 (whole kernel)", "arm6"),
+    ("planar (its plant and loop)", "planar"),
 ):
     c0, w0 = time.process_time(), time.perf_counter()
-    run_spec(RunSpec("E1", "fuzzy-pi", plant, fuzzy_impl=impl, duration_s=0.1))
+    run_spec(RunSpec("E1", "fuzzy-pi", plant, duration_s=0.1))
     out[label] = (time.process_time() - c0, time.perf_counter() - w0)
 print(json.dumps(out))
 """
 
 
 def first_call_costs() -> list[tuple[str, float, float]]:
-    """``(variant, CPU s, wall s)`` of the first compiled run in a fresh numba cache: the table
-    variant compiles the whole kernel, then the generated-C variant compiles its own
-    specialisation of ``run_arm6`` (the plant's functions are already compiled then), then the
-    planar loop compiles its plant and loop (the shared period and table are cached by then)."""
+    """``(variant, CPU s, wall s)`` of the first compiled run in a fresh numba cache: the arm6
+    kernel, then the planar loop's plant and loop (the shared period is cached by then)."""
     import json
     import os
     import subprocess

@@ -8,6 +8,8 @@ not 1e5. Nothing here is part of the generated code.
 from __future__ import annotations
 
 import ctypes
+import functools
+import hashlib
 import os
 import shlex
 import shutil
@@ -137,6 +139,88 @@ def build_library(
     lib = folder / f"lib{name}.so"
     run_compiler([*cc, *flags, "-shared", "-fPIC", "-o", str(lib), *sources, *libs], folder)
     return ctypes.CDLL(str(lib))
+
+
+@functools.cache
+def compiler_identity(cc: tuple[str, ...]) -> str:
+    """``cc --version``'s first line (the compiler's name and version), or ``""``."""
+    try:
+        proc = subprocess.run(
+            [*cc, "--version"], capture_output=True, text=True, timeout=30, check=False
+        )
+    except (OSError, subprocess.TimeoutExpired):
+        return ""
+    return (proc.stdout or proc.stderr).splitlines()[0] if (proc.stdout or proc.stderr) else ""
+
+
+def library_cache_dir() -> Path:
+    """Where compiled controllers are kept: ``$FUZZKIT_CACHE_DIR/controllers``, else
+    ``$XDG_CACHE_HOME/fuzzkit/controllers`` (``~/.cache/fuzzkit/controllers``). Deleting the
+    folder is safe: what is missing is compiled again."""
+    env = os.environ.get("FUZZKIT_CACHE_DIR")
+    base = Path(env) if env else Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return base / "controllers" if env else base / "fuzzkit" / "controllers"
+
+
+def library_cache_path(
+    files: Mapping[str, str],
+    name: str,
+    cc: Sequence[str],
+    flags: Sequence[str],
+    libs: Sequence[str],
+) -> Path:
+    """Where :func:`cached_library` keeps the library of ``files`` built by ``cc``."""
+    from fuzzkit import __version__
+
+    digest = hashlib.sha256(compiler_identity(tuple(cc)).encode() + b"\0")
+    digest.update(f"fuzzkit {__version__}\0{list(cc)!r}\0{list(flags)!r}\0{list(libs)!r}".encode())
+    for rel in sorted(files):
+        digest.update(rel.encode() + b"\0" + files[rel].encode() + b"\0")
+    return library_cache_dir() / f"{name}-{digest.hexdigest()[:32]}.so"
+
+
+def cached_library(
+    files: Mapping[str, str],
+    name: str,
+    *,
+    compiler: Sequence[str] | None = None,
+    flags: Sequence[str] = (*STRICT_FLAGS, "-O2"),
+    libs: Sequence[str] = ("-lm",),
+) -> Any:
+    """:func:`build_library` through an on-disk cache keyed by the sources, the compiler
+    command and its ``--version``, the flags and the fuzzkit version: a second run of the same
+    code pays nothing.
+
+    The library is built in a private folder and renamed into :func:`library_cache_dir` (an
+    interrupted build leaves nothing half-written there). A cache that cannot be written (a
+    read-only home) only costs the build.
+
+    Raises
+    ------
+    ToolchainError
+        No C compiler found, or the code does not compile.
+    """
+    cc = list(compiler) if compiler else find_compiler()
+    if cc is None:
+        raise ToolchainError(
+            "no C compiler found (set $CC or install cc, gcc or clang) to compile generated C"
+        )
+    target = library_cache_path(files, name, cc, flags, libs)
+    if target.is_file():
+        try:
+            return ctypes.CDLL(str(target))
+        except OSError:
+            pass  # a damaged file: built again below
+    with tempfile.TemporaryDirectory(prefix="fuzzkit-lib-") as tmp:
+        library = build_library(Path(tmp), files, name, compiler=cc, flags=flags, libs=libs)
+        try:
+            target.parent.mkdir(parents=True, exist_ok=True)
+            staged = target.with_suffix(f".{os.getpid()}.tmp")
+            shutil.copyfile(Path(tmp) / f"lib{name}.so", staged)
+            os.replace(staged, target)
+        except OSError:
+            pass
+    return library
 
 
 class CompiledTable:

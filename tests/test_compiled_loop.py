@@ -364,7 +364,10 @@ def test_without_a_compiler_the_reference_runs_and_says_why(
     assert result.loop.startswith("python (fallback: the compiled loop runs the generated C")
     assert "no C compiler found" in result.loop
     assert len(result.t) == 50
-    for explicit in (RunSpec("E1", "pi", "arm6", loop="compiled"), RunSpec("E1", controller_impl="c")):
+    for explicit in (
+        RunSpec("E1", "pi", "arm6", loop="compiled"),
+        RunSpec("E1", controller_impl="c"),
+    ):
         with pytest.raises(ConfigError, match="no C compiler found"):
             run_spec(explicit)
 

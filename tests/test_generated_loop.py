@@ -1,18 +1,25 @@
-"""The whole generated C controller in the compiled closed loop (``--controller-impl c``,
-issue 20 item 4).
+"""The generated C controller in the compiled closed loop, its only controller (issue 20
+item 4, issue 28 item 1, issue 29 item 5).
 
 Per period the generated double controller's correction must equal the reference
 controller's (``fuzzkit.control.reference.Controller``, the exact engine as a fuzzy-PI's
 surface) to 1e-9 m, with identical status bits: the reference is driven with the very samples
 the loop fed the generated code (the run's recorded ``force``, the consumed sample, NaN where
-a fault removed it), on both plants, with fault injection. The float build, fed the same
-samples, stays within the per-period bound its header states.
+a fault removed it), on both plants, with spike, NaN, dropout and over-limit faults. The
+float build, fed the same samples, stays within the per-period bound its header states.
+
+The equality is sensitive to every safety parameter: ``tests/data/safety_e1.yaml`` makes
+each act in one of the fault runs (its step and correction limits bind, an over-limit push
+within the spike gate trips after ``trip.samples``, one beyond it after ``spike_gate.confirm``,
+the back-off completes), and a test changes each parameter in the generated C (floats by
+x1.5 and x0.5, counts by +1 and -1) and checks that the comparison fails.
 """
 
 from __future__ import annotations
 
 import functools
 import re
+from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
@@ -25,10 +32,17 @@ from fuzzkit.control.spec import ControllerSpec
 from fuzzkit.control.spec_reader import load_spec
 from fuzzkit.errors import ConfigError
 from fuzzkit.studies.batch import RunSpec, execute, run_spec
-from fuzzkit.studies.compiled.generated_controller import run_controller_spec
+from fuzzkit.studies.compiled.generated_controller import (
+    GeneratedController,
+    load_generated_controller,
+    run_controller_spec,
+)
+from fuzzkit.studies.compiled.loop import run_compiled
 from fuzzkit.studies.controller_code import generate, open_generated
 from fuzzkit.studies.experiments import experiment
+from fuzzkit.studies.faults import FAULTS, Faults, fault
 from fuzzkit.studies.runner import RunResult
+from fuzzkit.studies.task import with_spec
 
 pytestmark = needs_cc
 
@@ -112,19 +126,6 @@ def test_a_spec_with_a_front_end_runs_its_generated_controller_in_the_loop(plant
     assert r.status[0] & st.TARING and r.status[-1] & st.ENGAGED
 
 
-def test_pi_generated_controller_follows_the_loops_own_controller() -> None:
-    # two implementations of the same settings: the generated C and the loop's numba controller
-    c = _run("arm6", "pi", "dropout")
-    numba = run_spec(RunSpec("E1", "pi", "arm6", seed=3, fault="dropout", duration_s=DURATION_S))
-    assert numba.status is None and "compiled" in numba.controller_impl
-    assert float(np.max(np.abs(c.u - numba.u))) <= TOLERANCE_M
-    assert (c.faults, c.tripped, c.engaged_time_s) == (
-        numba.faults,
-        numba.tripped,
-        numba.engaged_time_s,
-    )
-
-
 def test_the_python_loop_records_the_same_status_as_the_generated_controller() -> None:
     # planar: both loops give the same traces bit for bit (test_compiled_loop), so the
     # reference controller in the Python loop must report the generated C's status bits
@@ -184,8 +185,12 @@ def test_simulate_cli_runs_the_generated_controller(capsys: pytest.CaptureFixtur
     data = json.loads(capsys.readouterr().out)
     assert data["controller_impl"].startswith("generated C controller (double) E1_pi_controller")
     assert data["loop"] == "compiled"
-    assert main([*argv, "--json"]) == 0  # the default: fuzzkit's own controller
-    assert "generated" not in json.loads(capsys.readouterr().out)["controller_impl"]
+    assert main([*argv, "--json"]) == 0  # the default: the same, in the compiled loop
+    data = json.loads(capsys.readouterr().out)
+    assert data["controller_impl"].startswith("generated C controller (double) E1_pi_controller")
+    assert main([*argv, "--controller-impl", "python", "--json"]) == 0  # the reference
+    data = json.loads(capsys.readouterr().out)
+    assert "generated" not in data["controller_impl"] and data["loop"] == "python"
 
 
 def test_sweep_and_tune_pass_the_choice_on() -> None:
@@ -200,3 +205,131 @@ def test_sweep_and_tune_pass_the_choice_on() -> None:
     assert r.controller_impl.startswith("generated C controller (double) E1_pi_controller")
     with pytest.raises(ConfigError, match="compiled loop"):
         TuningProblem.build(["E1"], "pi", plant="planar", loop="python", controller_impl="c")
+
+
+# --------------------------------------------------------------------------- safety parameters
+
+SAFETY_SPEC = str(Path(__file__).resolve().parent / "data" / "safety_e1.yaml")
+#: The fault runs of the safety spec: the kinds of ``FAULTS``; two over-limit pushes on z at
+#: 2.5 s (in contact at 10 N) for 0.2 s: 11 N (within the 12.5 N spike gate, 21 N against a
+#: 20 N limit: trips after trip.samples) and 16 N (beyond the gate: trips after
+#: spike_gate.confirm); and two pushes in free air at 1.0 s for 0.1 s: 15 N (beyond the gate,
+#: below the limit: accepted after spike_gate.confirm, engages) and 0.75 N (below the engage
+#: threshold, above half of it).
+SAFETY_FAULTS: dict[str, Faults] = {
+    "spike": fault("spike", 3),
+    "nan": fault("nan", 3),
+    "dropout": fault("dropout", 3),
+    "over-limit within the gate": Faults(offset=(2.5, 0.2, 11.0)),
+    "over-limit beyond the gate": Faults(offset=(2.5, 0.2, 16.0)),
+    "confirmed step in free air": Faults(offset=(1.0, 0.1, 15.0)),
+    "push below the engage threshold": Faults(offset=(1.0, 0.1, 0.75)),
+}
+
+
+def _safety_run(generated: GeneratedController, faults: Faults, plant: str = "arm6") -> RunResult:
+    exp = with_spec(experiment("E1"), generated.spec)
+    return run_compiled(
+        exp, plant, generated_controller=generated, faults=faults, seed=3, duration_s=DURATION_S
+    )
+
+
+def _differences(spec: ControllerSpec, r: RunResult) -> tuple[float, int]:
+    """Largest per-period correction difference from the reference (m), periods whose status
+    bits differ."""
+    want, want_status = _reference(spec, r)
+    assert r.status is not None
+    return float(np.max(np.abs(r.u - want))), int(np.count_nonzero(r.status != want_status))
+
+
+@pytest.mark.parametrize("plant", ["arm6", "planar"])
+@pytest.mark.parametrize("kind", sorted(SAFETY_FAULTS))
+def test_every_safety_parameter_acts_and_the_generated_controller_equals_the_reference(
+    kind: str, plant: str
+) -> None:
+    spec = load_spec(SAFETY_SPEC)
+    r = _safety_run(load_generated_controller(spec), SAFETY_FAULTS[kind], plant)
+    assert r.loop == "compiled" and r.status is not None
+    worst, status_periods = _differences(spec, r)
+    assert worst <= TOLERANCE_M and status_periods == 0, (worst, status_periods)
+    assert np.count_nonzero(r.status & st.SATURATED) > 0  # the step or correction limit acts
+    engaged_at = r.engaged_time_s
+    assert engaged_at is not None
+    if kind.startswith("over-limit"):
+        assert r.tripped and np.count_nonzero(r.status & st.RETREATING) > 0
+        # the back-off completes within the run: its distance decides where u ends
+        assert not r.status[-1] & st.RETREATING
+        return
+    assert not r.tripped
+    if kind == "confirmed step in free air":
+        assert 1.0 < engaged_at < 1.1  # the gate let the level through
+    else:
+        assert engaged_at > 1.8  # at contact (E1 reaches the hammer at about 1.9 s)
+    if kind in FAULTS:
+        assert r.faults > 0
+
+
+def _mutants(spec: ControllerSpec, source: str) -> list[tuple[str, str, str]]:
+    """(name, exact text in the generated C ``source``, its replacement): every safety
+    parameter of the spec changed, floats by x1.5 and x0.5, counts by +1 and -1."""
+    m = f"{spec.name}_controller"
+    s = spec.safety
+    floats = {
+        "limits.correction_m": ("correction", spec.limits.correction_m),
+        "limits.step_m": ("step_limit", spec.limits.step_m),
+        "safety.limit_n": ("limit", s.limit_n),
+        "safety.spike_gate.threshold_n": ("spike_gate", s.spike_gate),
+        "safety.backoff.distance_m": ("backoff", s.backoff_m),
+        "safety.backoff.speed_m_s": ("backoff_step", s.backoff_speed_m_s * spec.period_s),
+        "safety.engage.threshold_n": ("engage_threshold", s.engage_threshold_n or 0.0),
+    }
+    out = []
+    for key, (const, value) in floats.items():
+        found = re.search(rf"static const double {m}_{const} = ([^;]+);", source)
+        assert found is not None and float(found.group(1)) == value, (key, const)
+        for factor in (1.5, 0.5):
+            out.append(
+                (
+                    f"{key} x{factor}",
+                    found.group(0),
+                    f"static const double {m}_{const} = {value * factor!r};",
+                )
+            )
+    n, t, e = s.spike_confirm, s.trip_samples, s.engage_samples
+    for step in (1, -1):
+        out += [
+            (f"safety.spike_gate.confirm {step:+d}", f"< {n}u", f"< {n + step}u"),
+            (f"safety.spike_gate.confirm (trip) {step:+d}", f": {n}u)", f": {n + step}u)"),
+            (f"safety.trip.samples {step:+d}", f"? {t}u :", f"? {t + step}u :"),
+            (f"safety.engage.samples {step:+d}", f"above < {e}u", f"above < {e + step}u"),
+        ]
+    return out
+
+
+@pytest.mark.slow
+def test_changing_any_safety_parameter_of_the_generated_code_fails_the_equality() -> None:
+    """Issue 29 item 5: the equality above is not blind to the safety logic. Each mutant of
+    the generated C (one parameter changed, everything else as generated) runs the same fault
+    runs; in at least one a period's correction or status differs from the reference's."""
+    from fuzzkit.codegen.backends.c.run import CompiledController
+
+    spec = load_spec(SAFETY_SPEC)
+    files = generate(spec, "c", "double")
+    source = f"{spec.name}_controller.c"
+    blind = []
+    for name, old, new in _mutants(spec, files[source]):
+        assert files[source].count(old) >= 1, (name, old)
+        mutated = {**files, source: files[source].replace(old, new)}
+        ctl = CompiledController(mutated, f"{spec.name}_controller", "double")
+        generated = GeneratedController(
+            spec, ctl.step_function, ctl.init_function, len(ctl.state), f"mutant {name}", ctl
+        )
+        caught = False
+        for faults in SAFETY_FAULTS.values():
+            worst, status_periods = _differences(spec, _safety_run(generated, faults))
+            if worst > TOLERANCE_M or status_periods:
+                caught = True
+                break
+        if not caught:
+            blind.append(name)
+    assert blind == [], f"the loop equality does not see these changes: {blind}"

@@ -20,10 +20,14 @@ def register(sub: Any) -> None:
         "empty cell or nan is a missing sample. The output has [t,]ux,uy,uz (m),status. "
         "--impl python is fuzzkit's reference controller, --impl c the generated C, compiled "
         "and run: replay both and compare to check the generated controller on your robot's "
-        "log.",
+        "log. A run's CSV (fuzzkit simulate --csv) is read as it is: the sample the controller "
+        "received, and the run's corrections, which the replay is compared with (the largest "
+        "difference is printed).",
         epilog="examples:\n"
         "  fuzzkit replay docs/examples/controller.yaml --forces log.csv --out u_ref.csv\n"
-        "  fuzzkit replay docs/examples/controller.yaml --forces log.csv --out u_c.csv --impl c",
+        "  fuzzkit replay docs/examples/controller.yaml --forces log.csv --out u_c.csv --impl c\n"
+        "  fuzzkit simulate E1 --spec SPEC --csv run.csv && "
+        "fuzzkit replay SPEC --forces run.csv --out u.csv --impl c",
     )
     p.add_argument("spec", metavar="SPEC", help="controller spec (YAML)")
     p.add_argument("--forces", required=True, metavar="LOG.csv", help="the sensor log")
@@ -77,5 +81,8 @@ def cmd_replay(args: argparse.Namespace) -> int:
     )
     impl = "reference (python)" if args.impl == "python" else f"generated C ({args.number_type})"
     print(f"{spec.name}: {n} samples replayed by the {impl} controller; rows with {counts}")
+    if log.recorded is not None:
+        worst = float(np.max(np.abs(out - log.recorded))) if n else 0.0
+        print(f"largest difference from the run's corrections (u<a>_m): {worst:.3g} m")
     print(f"wrote {args.out}")
     return EXIT_OK

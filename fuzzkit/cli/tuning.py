@@ -338,9 +338,16 @@ def _write_spec(args: argparse.Namespace, result: Any) -> None:
     )
     gains = dict(result.to_entry().gains)
     if args.spec:
-        write_atomic(
-            Path(args.spec_out), dump_spec(with_gains(load_spec(args.spec), gains), header)
-        )
+        import dataclasses
+        import os
+
+        tuned = with_gains(load_spec(args.spec), gains)
+        if tuned.rulebase_source is not None and Path(tuned.rulebase_source).exists():
+            # a rule base file given relative to the input spec: relative to the new one
+            out_dir = Path(args.spec_out).resolve().parent
+            ref = os.path.relpath(Path(tuned.rulebase_source).resolve(), out_dir)
+            tuned = dataclasses.replace(tuned, rulebase_ref=ref)
+        write_atomic(Path(args.spec_out), dump_spec(tuned, header))
         return
     exp = experiment(args.experiments[0])
     name = re.sub(r"\W", "_", Path(args.spec_out).stem) or "tuned"

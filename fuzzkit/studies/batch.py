@@ -135,7 +135,7 @@ def run_spec(spec: RunSpec) -> RunResult:
             return _run_generated(spec, exp, plant, faults)
         except _Fallback as exc:
             if spec.loop == "compiled" or spec.controller_impl == "c":
-                raise ConfigError(str(exc)) from exc
+                raise ConfigError(f"{exc}; use --loop python") from exc
             fallback = f" (fallback: {exc})"
     elif spec.controller_impl == "c":
         raise ConfigError(
@@ -211,7 +211,7 @@ def _run_generated(spec: RunSpec, exp: Experiment, plant: Any, faults: Any) -> R
 
     cs = exp.controller_spec
     if cs is not None and cs.adaptation.mode != "none":
-        raise _Fallback(f"adaptation ({cs.adaptation.mode}) runs in the python loop")
+        raise _Fallback(f"the compiled loop does not run adaptation ({cs.adaptation.mode})")
     ctl_spec = run_controller_spec(exp, spec.controller, dict(spec.gains), spec.rulebase)
     try:
         generated = load_generated_controller(ctl_spec)

@@ -24,7 +24,9 @@ class Faults:
     length_s)`` during which every sample is missing (NaN). ``spike_probability`` /
     ``spike_n``: a sample gets a random-signed spike of this size on x and z (the plane of the
     experiments). ``delay_steps``: extra sensor-to-controller delay (periods), added to the
-    run's sensor latency. Seeded by ``seed``, deterministic.
+    run's sensor latency. ``offset``: ``(start_s, length_s, force_n)``, a force added on z
+    during that window (a sensor step, or a real push past the safety limit: the over-limit
+    fault). Seeded by ``seed``, deterministic.
     """
 
     nan_probability: float = 0.0
@@ -33,6 +35,7 @@ class Faults:
     spike_n: float = 0.0
     delay_steps: int = 0
     seed: int = 0
+    offset: tuple[float, float, float] | None = None
 
     def __post_init__(self) -> None:
         problems = []
@@ -44,6 +47,10 @@ class Faults:
             problems.append(f"spike_n must be >= 0 (got {self.spike_n})")
         if self.dropout is not None and not (self.dropout[0] >= 0.0 and self.dropout[1] >= 0.0):
             problems.append(f"dropout start and length must be >= 0 (got {self.dropout})")
+        if self.offset is not None and not (
+            self.offset[0] >= 0.0 and self.offset[1] >= 0.0 and np.isfinite(self.offset[2])
+        ):
+            problems.append(f"offset start and length must be >= 0, force finite ({self.offset})")
         if self.delay_steps < 0:
             problems.append(f"delay_steps must be >= 0 (got {self.delay_steps})")
         if problems:
@@ -87,6 +94,8 @@ class FaultInjector:
         out = force.copy()
         if f.spike_probability > 0.0 and self.rng.random() < f.spike_probability:
             out = out + self.rng.choice([-1.0, 1.0]) * f.spike_n * np.array([1.0, 0.0, 1.0])
+        if f.offset is not None and f.offset[0] <= t_s < f.offset[0] + f.offset[1]:
+            out = out + np.array([0.0, 0.0, f.offset[2]])
         if f.nan_probability > 0.0 and self.rng.random() < f.nan_probability:
             out = np.full(3, np.nan)
         if f.dropout is not None and f.dropout[0] <= t_s < f.dropout[0] + f.dropout[1]:

@@ -6,6 +6,12 @@ rotation entries ``r11,r12,...,r33`` (row-major, world-from-sensor) optional, in
 empty cell or ``nan`` is a missing sample. Reading is strict: every problem is reported as
 ``file:line:col`` at once (:class:`~fuzzkit.errors.ProblemsError`). The output CSV has
 ``t`` (when the log has it), ``ux,uy,uz`` (m) and ``status`` per row.
+
+A run's CSV (``fuzzkit simulate --csv``, :mod:`fuzzkit.studies.run_table`) is read as it is:
+its ``t_s`` is the time, ``f<a>_measured_n`` the sample the controller received (after the
+sensor's latency; NaN when none), its rotation columns when it has them, and its ``u<a>_m``
+the corrections the run's controller returned, which the replay is compared with
+(:attr:`SensorLog.recorded`).
 """
 
 from __future__ import annotations
@@ -34,13 +40,22 @@ _NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?|[+-]?inf(?:
 MAX_PROBLEMS = 20
 
 
+#: A run CSV's columns (``fuzzkit.studies.run_table``) and what they are to the replay.
+RUN_TIME = "t_s"
+RUN_FORCES = tuple(f"f{a}_measured_n" for a in "xyz")
+RUN_CORRECTIONS = tuple(f"u{a}_m" for a in "xyz")
+_RUN_OTHER = re.compile(r"f[xyz]_(true|setpoint)_n|d?e[xyz]_n|du[xyz]_m|status")
+
+
 @dataclass(frozen=True)
 class SensorLog:
-    """A log read from CSV: forces ``(n, 3)``, rotations ``(n, 9)`` or None, times or None."""
+    """A log read from CSV: forces ``(n, 3)``, rotations ``(n, 9)`` or None, times or None;
+    ``recorded``: a run CSV's corrections ``(n, 3)`` (m), None for a plain sensor log."""
 
     forces: FloatArray
     rotations: FloatArray | None
     times: FloatArray | None
+    recorded: FloatArray | None = None
 
 
 def _cells(line: str) -> list[tuple[str, int]]:
@@ -85,9 +100,24 @@ def read_sensor_log(path: str | Path) -> SensorLog:
             [Problem(Location(name, 1, 1), "expected a header row (fx,fy,fz[,t][,r11..r33])")]
         )
     header = _cells(lines[0])
+    keys = [cell.lower() for cell, _ in header]
+    run = RUN_TIME in keys and all(c in keys for c in RUN_FORCES)
     index: dict[str, int] = {}
+    recorded_at: dict[int, int] = {}  # axis -> column of a run's u<a>_m
+    ignored: set[int] = set()  # a run's other columns (text in status)
     for k, (cell, col) in enumerate(header):
         key = cell.lower()
+        if run:
+            if key == RUN_TIME:
+                key = "t"
+            elif key in RUN_FORCES:
+                key = FORCE_COLUMNS[RUN_FORCES.index(key)]
+            elif key in RUN_CORRECTIONS and RUN_CORRECTIONS.index(key) not in recorded_at:
+                recorded_at[RUN_CORRECTIONS.index(key)] = k
+                continue
+            elif _RUN_OTHER.fullmatch(key):
+                ignored.add(k)
+                continue
         if key not in COLUMNS:
             bad(1, col, f"unknown column {cell!r} (expected {', '.join(COLUMNS)})")
         elif key in index:
@@ -116,8 +146,8 @@ def read_sensor_log(path: str | Path) -> SensorLog:
             bad(n, len(line) + 1, f"expected {width} cells (as the header), got {len(cells)}")
             continue
         row = []
-        for cell, col in cells:
-            if not cell or cell.lower() == "nan":
+        for k, (cell, col) in enumerate(cells):
+            if k in ignored or not cell or cell.lower() == "nan":
                 row.append(math.nan)
             elif _NUMBER.fullmatch(cell):
                 row.append(float(cell))
@@ -146,7 +176,10 @@ def read_sensor_log(path: str | Path) -> SensorLog:
         raise ProblemsError(problems[:MAX_PROBLEMS])
     forces = values[:, [index[c] for c in FORCE_COLUMNS]]
     rotations = values[:, [index[c] for c in ROTATION_COLUMNS]] if rot_given else None
-    return SensorLog(np.ascontiguousarray(forces), rotations, times)
+    recorded = None
+    if run and len(recorded_at) == 3:
+        recorded = np.ascontiguousarray(values[:, [recorded_at[i] for i in range(3)]])
+    return SensorLog(np.ascontiguousarray(forces), rotations, times, recorded)
 
 
 def replay(

@@ -5,8 +5,12 @@ The columns, in order (units in the names; ``<a>`` is x, y, z):
 and ``f<a>_true_n`` (the contact force) for every axis; for each force-controlled axis
 ``f<a>_setpoint_n``, ``e<a>_n`` (``setpoint - measured``), ``de<a>_n`` (change of ``e`` since
 the last controlled period), ``du<a>_m`` (correction this period) and ``u<a>_m`` (the correction
-the controller commands: the sum of ``du``, plus the back-off after a trip); then ``status``
-(:data:`STATUSES`). Numbers are written with ``repr``, so they read back bit for bit.
+the controller commands: the sum of ``du``, plus the back-off after a trip); for each
+motion-only axis ``u<a>_m`` (the back-off after a trip, else 0); when the run's controller spec
+compensates the tool's weight, the tool rotation the controller received with each sample,
+``r11`` .. ``r33`` (row-major, world-from-sensor); then ``status`` (:data:`STATUSES`). Numbers
+are written with ``repr``, so they read back bit for bit: ``fuzzkit replay SPEC --forces
+RUN.csv`` reads the file as it is and reproduces the ``u<a>_m`` columns.
 """
 
 from __future__ import annotations
@@ -53,7 +57,17 @@ def run_columns(result: RunResult) -> list[str]:
     for i, a in enumerate(AXES):
         if result.experiment.selection[i]:
             cols += [f"f{a}_setpoint_n", f"e{a}_n", f"de{a}_n", f"du{a}_m", f"u{a}_m"]
+    cols += [f"u{a}_m" for i, a in enumerate(AXES) if not result.experiment.selection[i]]
+    if _writes_rotation(result):
+        cols += [f"r{i}{j}" for i in range(1, 4) for j in range(1, 4)]
     return [*cols, "status"]
+
+
+def _writes_rotation(result: RunResult) -> bool:
+    """The controller needs the tool's rotation (its spec compensates gravity) and the run
+    recorded it."""
+    spec = result.experiment.controller_spec
+    return spec is not None and spec.sensor.tool is not None and result.rotation is not None
 
 
 def run_csv(result: RunResult) -> str:
@@ -62,6 +76,7 @@ def run_csv(result: RunResult) -> str:
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(run_columns(result))
     controlled = [i for i in range(3) if result.experiment.selection[i]]
+    rotation = result.rotation if _writes_rotation(result) else None
     for k, status in enumerate(period_status(result)):
         row = [repr(float(result.t[k]))]
         for i in range(3):
@@ -77,5 +92,8 @@ def run_csv(result: RunResult) -> str:
                     result.u[k, i],
                 )
             ]
+        row += [repr(float(result.u[k, i])) for i in range(3) if i not in controlled]
+        if rotation is not None:
+            row += [repr(float(v)) for v in rotation[k]]
         writer.writerow([*row, status])
     return buf.getvalue()

@@ -84,6 +84,9 @@ class RunResult:
     #: the controller's status bits per period (fuzzkit.control.status), where it reports them
     #: (the Python loop's controller, the generated C controller); None otherwise
     status: npt.NDArray[np.int64] | None = None
+    #: the tool's rotation (world-from-sensor, row-major, (n, 9)) the controller received with
+    #: each consumed sample; None where not recorded
+    rotation: Vec | None = None
 
     @property
     def real_time_factor(self) -> float:
@@ -239,6 +242,7 @@ def run(
                 sample.in_contact,
                 _NO_NORMAL if sample.force_normal is None else sample.force_normal,
                 moving,
+                rotation.reshape(9),
             )
         )
         if adaptive:
@@ -289,6 +293,7 @@ def run(
         gain_scale=np.array(scales).reshape(-1, 3) if adaptive else None,
         stiffness_n_mm=np.array(estimates).reshape(-1, 3) if adaptive else None,
         status=np.asarray(statuses, dtype=np.int64),
+        rotation=arr["rotation"].astype(np.float64).reshape(-1, 9),
     )
 
 
@@ -358,6 +363,7 @@ _SERIES = (
     "in_contact",
     "force_normal",
     "moving",
+    "rotation",
 )
 
 _NO_NORMAL = np.full(3, np.nan)

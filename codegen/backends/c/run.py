@@ -13,15 +13,13 @@ buffer of the right size), so a compiled loop can call the controller by address
 from __future__ import annotations
 
 import ctypes
-import tempfile
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
-from fuzzkit.codegen.toolchain import STRICT_FLAGS, build_library
+from fuzzkit.codegen.toolchain import STRICT_FLAGS, cached_library
 
 _CTYPE = {"float": ctypes.c_float, "double": ctypes.c_double}
 _NUMPY = {"float": np.float32, "double": np.float64}
@@ -71,10 +69,9 @@ class CompiledController:
         self.number_type = number_type
         ctype = _CTYPE[number_type]
         harness = {"fuzzkit_controller_harness.c": harness_source(module, number_type)}
-        with tempfile.TemporaryDirectory(prefix="fuzzkit-ctl-") as tmp:
-            self.library: Any = build_library(
-                Path(tmp), {**files, **harness}, module, compiler=compiler, flags=flags
-            )
+        self.library: Any = cached_library(
+            {**files, **harness}, module, compiler=compiler, flags=flags
+        )
         ptr = ctypes.POINTER(ctype)
         size = self.library.fuzzkit_controller_size
         size.restype = ctypes.c_size_t
@@ -91,6 +88,10 @@ class CompiledController:
         self.step_function: Any = getattr(self.library, f"{module}_step")
         self.step_function.argtypes = [ctypes.c_void_p, ptr, ptr, ptr]
         self.step_function.restype = ctypes.c_uint32
+        #: ``int NAME_controller_set_params(state *, const NAME_controller_params_t *)``
+        self.set_params_function: Any = getattr(self.library, f"{module}_set_params")
+        self.set_params_function.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
+        self.set_params_function.restype = ctypes.c_int
         self._run = self.library.fuzzkit_controller_run
         self._run.argtypes = [
             ctypes.c_void_p,
@@ -109,6 +110,19 @@ class CompiledController:
     def reset(self) -> None:
         """``NAME_controller_reset`` on the state."""
         self.reset_function(self.state)
+
+    def set_params(self, params: Sequence[float], state: Any = None) -> None:
+        """``NAME_controller_set_params`` on ``state`` (default: this controller's) with
+        ``params`` in :func:`params_vector` order.
+
+        Raises
+        ------
+        ValueError
+            The generated code refused them (a value it does not accept, see its header).
+        """
+        values = params_vector(params, self.number_type)
+        if self.set_params_function(self.state if state is None else state, values) != 0:
+            raise ValueError(f"the generated controller refused the parameters {list(params)}")
 
     def step(
         self, force_n: Sequence[float], tool_rotation: Sequence[float] | None = None
@@ -156,6 +170,18 @@ class CompiledController:
             n,
         )
         return out.astype(np.float64), status.astype(np.int64)
+
+
+#: The fields of ``NAME_controller_params_t`` in order: set points (3), kp (3), ki (3), kx (3),
+#: correction_m, step_m.
+PARAMS_LENGTH = 14
+
+
+def params_vector(params: Sequence[float], number_type: str) -> Any:
+    """``params`` (:data:`PARAMS_LENGTH` numbers) as a ``NAME_controller_params_t``."""
+    if len(params) != PARAMS_LENGTH:
+        raise ValueError(f"expected {PARAMS_LENGTH} parameters, got {len(params)}")
+    return (_CTYPE[number_type] * PARAMS_LENGTH)(*params)
 
 
 def open_controller(files: Mapping[str, str], module: str, number_type: str) -> CompiledController:

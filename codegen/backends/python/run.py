@@ -22,6 +22,24 @@ class ImportedController:
         """``Controller.reset``."""
         self.controller.reset()
 
+    def set_params(self, params: Sequence[float]) -> None:
+        """``Controller.set_params`` with ``params`` in the C runner's order (set points, kp,
+        ki, kx per axis, correction_m, step_m).
+
+        Raises
+        ------
+        ValueError
+            The generated code refused them.
+        """
+        if len(params) != 14:
+            raise ValueError(f"expected 14 parameters, got {len(params)}")
+        p = [float(v) for v in params]
+        ok = self.controller.set_params(
+            setpoint_n=p[0:3], kp=p[3:6], ki=p[6:9], kx=p[9:12], correction_m=p[12], step_m=p[13]
+        )
+        if not ok:
+            raise ValueError(f"the generated controller refused the parameters {p}")
+
     def step(
         self, force_n: Sequence[float], tool_rotation: Sequence[float] | None = None
     ) -> tuple[list[float], int]:

@@ -75,6 +75,10 @@ def controller_args(
     cp[P.C_DROPOUT_START] = math.nan if faults.dropout is None else faults.dropout[0]
     cp[P.C_DROPOUT_LENGTH] = 0.0 if faults.dropout is None else faults.dropout[1]
     cp[P.C_SPIKE_N] = faults.spike_n
+    off = faults.offset
+    cp[P.C_OFFSET_START] = math.nan if off is None else off[0]
+    cp[P.C_OFFSET_LENGTH] = 0.0 if off is None else off[1]
+    cp[P.C_OFFSET_N] = 0.0 if off is None else off[2]
     return ControllerArgs(
         cp=cp,
         selection=np.array([1.0 if s else 0.0 for s in task.selection]),
@@ -142,6 +146,8 @@ def result_from_recording(
         cpu_time_s=cpu,
         controller_impl=ctrl.impl,
         status=rec["status"],
+        # the compiled plants never turn the tool: the scenario's task frame, every period
+        rotation=np.tile(np.asarray(exp.scenario.rotation, dtype=np.float64).reshape(9), (n, 1)),
     )
 
 

@@ -21,14 +21,15 @@ import hashlib
 import math
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.control import status as st
-from fuzzkit.control.spec import ControllerSpec, require_valid, with_gains
+from fuzzkit.control.names import AXES
+from fuzzkit.control.spec import ControllerSpec, Limits, require_valid, with_gains
 from fuzzkit.errors import ConfigError
 from fuzzkit.jit import jit
 from fuzzkit.studies.compiled.period import (
@@ -62,8 +63,10 @@ class GeneratedController:
     """A spec's generated double C controller, compiled and loaded.
 
     ``step_function``: ``NAME_controller_step`` as a ctypes function; ``init_function``:
-    ``NAME_controller_init``; ``state_doubles``: the size of ``NAME_controller_t`` in doubles
-    (:meth:`fresh_state` makes one); ``label``: the run's ``controller_impl``.
+    ``NAME_controller_init``; ``set_params``: ``NAME_controller_set_params`` (through the
+    loaded controller); ``state_doubles``: the size of ``NAME_controller_t`` in doubles
+    (:meth:`fresh_state` makes one); ``params``: the spec's run-time parameters
+    (:func:`params_of`); ``label``: the run's ``controller_impl``.
     """
 
     spec: ControllerSpec
@@ -71,17 +74,55 @@ class GeneratedController:
     init_function: Any
     state_doubles: int
     label: str
-    library: Any  # keeps the shared library mapped
+    library: Any  # keeps the shared library mapped; its set_params sets the parameters
+    params: tuple[float, ...] = ()
 
     def fresh_state(self) -> FloatArray:
-        """A ``NAME_controller_t`` as a double array, through ``NAME_controller_init``."""
+        """A ``NAME_controller_t`` as a double array: ``NAME_controller_init``, then the spec's
+        run-time parameters through ``NAME_controller_set_params``."""
         state = np.zeros(self.state_doubles)
         self.init_function(state.ctypes.data)
+        if self.params:
+            self.library.set_params(self.params, state.ctypes.data)
         return state
 
 
+def params_of(spec: ControllerSpec) -> tuple[float, ...]:
+    """The run-time parameters of ``spec`` in ``NAME_controller_params_t`` order: set points,
+    kp, ki, kx per task axis x, y, z (0 on motion-only axes; kx 0 for a PI), then the
+    correction and step limits."""
+    by_axis = {a.axis: a for a in spec.axes}
+
+    def per_axis(field: str) -> list[float]:
+        return [float(getattr(by_axis[a], field) or 0.0) if a in by_axis else 0.0 for a in AXES]
+
+    return (
+        *per_axis("setpoint_n"),
+        *per_axis("kp"),
+        *per_axis("ki"),
+        *per_axis("kx"),
+        spec.limits.correction_m,
+        spec.limits.step_m,
+    )
+
+
+def code_spec(spec: ControllerSpec) -> ControllerSpec:
+    """The spec whose code runs ``spec``: the same with its run-time parameters (set points,
+    gains, correction limits) at fixed placeholders, so that every gain set of a tune or a
+    sweep runs one compiled controller, its own values set through
+    ``NAME_controller_set_params``. A spec that adapts its gains keeps them (the self-tuning
+    input gains are baked into its code)."""
+    if spec.adaptation.mode != "none":
+        return spec
+    kx = 1.0 if spec.kind == "fuzzy-pi" else None
+    axes = tuple(replace(a, setpoint_n=0.0, kp=1.0, ki=1.0, kx=kx) for a in spec.axes)
+    return replace(spec, axes=axes, limits=Limits(1.0, 1.0))
+
+
 def load_generated_controller(spec: ControllerSpec) -> GeneratedController:
-    """Generate, compile and load ``spec``'s C controller (double), once per process and code.
+    """Generate, compile and load ``spec``'s C controller (double): the code of
+    :func:`code_spec`, compiled once per process and code (and kept on disk across processes,
+    ``fuzzkit.codegen.toolchain.library_cache_dir``), with ``spec``'s run-time parameters.
 
     Raises
     ------
@@ -93,23 +134,26 @@ def load_generated_controller(spec: ControllerSpec) -> GeneratedController:
     from fuzzkit.studies.controller_code import generate, open_generated
 
     require_valid(spec)
-    files = generate(spec, "c", "double")
+    code = code_spec(spec)
+    files = generate(code, "c", "double")
     digest = hashlib.sha256()
     for path in sorted(files):
         digest.update(path.encode() + b"\0" + files[path].encode() + b"\0")
     sha = digest.hexdigest()
     if sha not in _LOADED:
-        ctl = open_generated(spec, "c", "double")
+        ctl = open_generated(code, "c", "double")
         label = f"generated C controller (double) {spec.name}_controller sha256 {sha[:16]}"
         _LOADED[sha] = GeneratedController(
-            spec=spec,
+            spec=code,
             step_function=ctl.step_function,
             init_function=ctl.init_function,
             state_doubles=len(ctl.state),
             label=label,
             library=ctl,
         )
-    return _LOADED[sha]
+    loaded = _LOADED[sha]
+    params = () if code is spec else params_of(spec)
+    return replace(loaded, spec=spec, params=params)
 
 
 def run_controller_spec(

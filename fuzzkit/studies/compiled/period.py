@@ -34,7 +34,8 @@ BoolArray = npt.NDArray[np.bool_]
 C_ENGAGE_THR, C_HOLD, C_PERIOD = 0, 1, 2  # engage threshold NaN: engaged from the start
 C_SENSOR_DELAY, C_COMMAND_DELAY = 3, 4  # the fault's delay included in the sensor delay
 C_DROPOUT_START, C_DROPOUT_LENGTH, C_SPIKE_N = 5, 6, 7
-N_CP = 8
+C_OFFSET_START, C_OFFSET_LENGTH, C_OFFSET_N = 8, 9, 10  # the offset fault (start NaN: none)
+N_CP = 11
 
 # Scalar results (``out_scalars``)
 R_FAULTS, R_TRIPPED, R_TRIP_TIME, R_ENGAGED_TIME = 0, 1, 2, 3
@@ -77,7 +78,8 @@ def inject_faults(
     f_meas: FloatArray,
     measured: FloatArray,
 ) -> None:
-    """``FaultInjector``: ``measured`` = ``f_meas`` with this period's spike, NaN or dropout."""
+    """``FaultInjector``: ``measured`` = ``f_meas`` with this period's spike, offset, NaN or
+    dropout."""
     for j in range(3):
         measured[j] = f_meas[j]
     if spike_sign != 0.0:
@@ -85,6 +87,9 @@ def inject_faults(
         measured[0] += s * 1.0
         measured[1] += s * 0.0
         measured[2] += s * 1.0
+    start = cp[C_OFFSET_START]
+    if not math.isnan(start) and start <= t_s < start + cp[C_OFFSET_LENGTH]:
+        measured[2] += cp[C_OFFSET_N]
     if nan_sample:
         measured[:] = np.nan
     start = cp[C_DROPOUT_START]

@@ -13,15 +13,16 @@
 #include <math.h>
 #include <stddef.h>
 
-/* Per task axis x, y, z: force controlled (S), set point (N), gains. */
+/* Per task axis x, y, z: force controlled (S); the spec's set points (N) and gains, which
+ * e1_fuzzy_controller_init loads into the run-time parameters. */
 static const unsigned char e1_fuzzy_controller_selected[3] = { 1, 0, 1 };
 static const double e1_fuzzy_controller_setpoint[3] = { 0.0, 0.0, 10.0 };
 static const double e1_fuzzy_controller_kp[3] = { 0.20000000000000001, 0.0, 0.20000000000000001 };
 static const double e1_fuzzy_controller_ki[3] = { 0.050000000000000003, 0.0, 0.050000000000000003 };
 static const double e1_fuzzy_controller_kx[3] = { 0.00020000000000000001, 0.0, 0.00020000000000000001 };
 
-static const double e1_fuzzy_controller_correction = 0.050000000000000003;    /* largest |u| (m) */
-static const double e1_fuzzy_controller_step_limit = 0.001;    /* largest |du| per period (m) */
+static const double e1_fuzzy_controller_correction = 0.050000000000000003;    /* spec: largest |u| (m) */
+static const double e1_fuzzy_controller_step_limit = 0.001;    /* spec: largest |du| per period (m) */
 static const double e1_fuzzy_controller_limit = 25.0;    /* force safety limit (N) */
 static const double e1_fuzzy_controller_spike_gate = 12.5;    /* N */
 static const double e1_fuzzy_controller_backoff = 0.0050000000000000001;    /* back-off distance (m) */
@@ -90,7 +91,64 @@ void e1_fuzzy_controller_reset(e1_fuzzy_controller_t *c)
 
 void e1_fuzzy_controller_init(e1_fuzzy_controller_t *c)
 {
+    int i;
+    for (i = 0; i < 3; i++) {
+        c->p.setpoint_n[i] = e1_fuzzy_controller_setpoint[i];
+        c->p.kp[i] = e1_fuzzy_controller_kp[i];
+        c->p.ki[i] = e1_fuzzy_controller_ki[i];
+        c->p.kx[i] = e1_fuzzy_controller_kx[i];
+    }
+    c->p.correction_m = e1_fuzzy_controller_correction;
+    c->p.step_m = e1_fuzzy_controller_step_limit;
     e1_fuzzy_controller_reset(c);
+}
+
+/* Field by field, unrolled: a struct assignment or a copying loop may become a call to
+ * memcpy or memmove, which the object must not need. */
+static void e1_fuzzy_controller_copy_params(e1_fuzzy_controller_params_t *to, const e1_fuzzy_controller_params_t *from)
+{
+    to->setpoint_n[0] = from->setpoint_n[0];
+    to->kp[0] = from->kp[0];
+    to->ki[0] = from->ki[0];
+    to->kx[0] = from->kx[0];
+    to->setpoint_n[1] = from->setpoint_n[1];
+    to->kp[1] = from->kp[1];
+    to->ki[1] = from->ki[1];
+    to->kx[1] = from->kx[1];
+    to->setpoint_n[2] = from->setpoint_n[2];
+    to->kp[2] = from->kp[2];
+    to->ki[2] = from->ki[2];
+    to->kx[2] = from->kx[2];
+    to->correction_m = from->correction_m;
+    to->step_m = from->step_m;
+}
+
+void e1_fuzzy_controller_get_params(const e1_fuzzy_controller_t *c, e1_fuzzy_controller_params_t *p)
+{
+    e1_fuzzy_controller_copy_params(p, &c->p);
+}
+
+int e1_fuzzy_controller_set_params(e1_fuzzy_controller_t *c, const e1_fuzzy_controller_params_t *p)
+{
+    int i;
+    if (p == NULL || !(isfinite(p->correction_m) && p->correction_m > 0.0)
+        || !(isfinite(p->step_m) && p->step_m > 0.0)) {
+        return 1;
+    }
+    for (i = 0; i < 3; i++) {
+        if (!e1_fuzzy_controller_selected[i]) {
+            continue;
+        }
+        if (!(isfinite(p->setpoint_n[i]) && e1_fuzzy_controller_abs(p->setpoint_n[i]) < e1_fuzzy_controller_limit)) {
+            return 1;
+        }
+        if (!(isfinite(p->kp[i]) && p->kp[i] > 0.0 && isfinite(p->ki[i])
+              && p->ki[i] > 0.0 && isfinite(p->kx[i]) && p->kx[i] > 0.0)) {
+            return 1;
+        }
+    }
+    e1_fuzzy_controller_copy_params(&c->p, p);
+    return 0;
 }
 
 void e1_fuzzy_controller_request_tare(e1_fuzzy_controller_t *c)
@@ -137,28 +195,28 @@ static int e1_fuzzy_controller_axis(e1_fuzzy_controller_t *c, int i, double meas
         e1_fuzzy_controller_count(&c->faults);
         return 0;
     }
-    e = e1_fuzzy_controller_setpoint[i] - measured;
+    e = c->p.setpoint_n[i] - measured;
     de = c->started[i] ? e - c->e_prev[i] : 0.0;
     c->started[i] = 1;
     c->e_prev[i] = e;
     {
         double in[2];
         double out[1];
-        in[0] = e1_fuzzy_controller_clamp(e1_fuzzy_controller_ki[i] * e, -1.0, 1.0);
-        in[1] = e1_fuzzy_controller_clamp(e1_fuzzy_controller_kp[i] * de, -1.0, 1.0);
+        in[0] = e1_fuzzy_controller_clamp(c->p.ki[i] * e, -1.0, 1.0);
+        in[1] = e1_fuzzy_controller_clamp(c->p.kp[i] * de, -1.0, 1.0);
         e1_fuzzy_surface_eval(in, out);
-        du = e1_fuzzy_controller_kx[i] * out[0];
+        du = c->p.kx[i] * out[0];
     }
     if (!isfinite(du)) { /* a surface that answers NaN must not move the robot */
         e1_fuzzy_controller_count(&c->faults);
         du = 0.0;
     }
-    if (e1_fuzzy_controller_abs(du) > e1_fuzzy_controller_step_limit) {
-        du = e1_fuzzy_controller_clamp(du, -e1_fuzzy_controller_step_limit, e1_fuzzy_controller_step_limit);
+    if (e1_fuzzy_controller_abs(du) > c->p.step_m) {
+        du = e1_fuzzy_controller_clamp(du, -c->p.step_m, c->p.step_m);
         saturated = 1;
     }
     sum = c->u[i] + du;
-    u = e1_fuzzy_controller_clamp(sum, -e1_fuzzy_controller_correction, e1_fuzzy_controller_correction);
+    u = e1_fuzzy_controller_clamp(sum, -c->p.correction_m, c->p.correction_m);
     if (u != sum) {
         saturated = 1;
     }

@@ -13,15 +13,16 @@
 #include <math.h>
 #include <stddef.h>
 
-/* Per task axis x, y, z: force controlled (S), set point (N), gains. */
+/* Per task axis x, y, z: force controlled (S); the spec's set points (N) and gains, which
+ * e1_fuzzy_controller_init loads into the run-time parameters. */
 static const unsigned char e1_fuzzy_controller_selected[3] = { 1, 0, 1 };
 static const float e1_fuzzy_controller_setpoint[3] = { 0.0f, 0.0f, 10.0f };
 static const float e1_fuzzy_controller_kp[3] = { 0.200000003f, 0.0f, 0.200000003f };
 static const float e1_fuzzy_controller_ki[3] = { 0.0500000007f, 0.0f, 0.0500000007f };
 static const float e1_fuzzy_controller_kx[3] = { 0.000199999995f, 0.0f, 0.000199999995f };
 
-static const float e1_fuzzy_controller_correction = 0.0500000007f;    /* largest |u| (m) */
-static const float e1_fuzzy_controller_step_limit = 0.00100000005f;    /* largest |du| per period (m) */
+static const float e1_fuzzy_controller_correction = 0.0500000007f;    /* spec: largest |u| (m) */
+static const float e1_fuzzy_controller_step_limit = 0.00100000005f;    /* spec: largest |du| per period (m) */
 static const float e1_fuzzy_controller_limit = 25.0f;    /* force safety limit (N) */
 static const float e1_fuzzy_controller_spike_gate = 12.5f;    /* N */
 static const float e1_fuzzy_controller_backoff = 0.00499999989f;    /* back-off distance (m) */
@@ -90,7 +91,64 @@ void e1_fuzzy_controller_reset(e1_fuzzy_controller_t *c)
 
 void e1_fuzzy_controller_init(e1_fuzzy_controller_t *c)
 {
+    int i;
+    for (i = 0; i < 3; i++) {
+        c->p.setpoint_n[i] = e1_fuzzy_controller_setpoint[i];
+        c->p.kp[i] = e1_fuzzy_controller_kp[i];
+        c->p.ki[i] = e1_fuzzy_controller_ki[i];
+        c->p.kx[i] = e1_fuzzy_controller_kx[i];
+    }
+    c->p.correction_m = e1_fuzzy_controller_correction;
+    c->p.step_m = e1_fuzzy_controller_step_limit;
     e1_fuzzy_controller_reset(c);
+}
+
+/* Field by field, unrolled: a struct assignment or a copying loop may become a call to
+ * memcpy or memmove, which the object must not need. */
+static void e1_fuzzy_controller_copy_params(e1_fuzzy_controller_params_t *to, const e1_fuzzy_controller_params_t *from)
+{
+    to->setpoint_n[0] = from->setpoint_n[0];
+    to->kp[0] = from->kp[0];
+    to->ki[0] = from->ki[0];
+    to->kx[0] = from->kx[0];
+    to->setpoint_n[1] = from->setpoint_n[1];
+    to->kp[1] = from->kp[1];
+    to->ki[1] = from->ki[1];
+    to->kx[1] = from->kx[1];
+    to->setpoint_n[2] = from->setpoint_n[2];
+    to->kp[2] = from->kp[2];
+    to->ki[2] = from->ki[2];
+    to->kx[2] = from->kx[2];
+    to->correction_m = from->correction_m;
+    to->step_m = from->step_m;
+}
+
+void e1_fuzzy_controller_get_params(const e1_fuzzy_controller_t *c, e1_fuzzy_controller_params_t *p)
+{
+    e1_fuzzy_controller_copy_params(p, &c->p);
+}
+
+int e1_fuzzy_controller_set_params(e1_fuzzy_controller_t *c, const e1_fuzzy_controller_params_t *p)
+{
+    int i;
+    if (p == NULL || !(isfinite(p->correction_m) && p->correction_m > 0.0f)
+        || !(isfinite(p->step_m) && p->step_m > 0.0f)) {
+        return 1;
+    }
+    for (i = 0; i < 3; i++) {
+        if (!e1_fuzzy_controller_selected[i]) {
+            continue;
+        }
+        if (!(isfinite(p->setpoint_n[i]) && e1_fuzzy_controller_abs(p->setpoint_n[i]) < e1_fuzzy_controller_limit)) {
+            return 1;
+        }
+        if (!(isfinite(p->kp[i]) && p->kp[i] > 0.0f && isfinite(p->ki[i])
+              && p->ki[i] > 0.0f && isfinite(p->kx[i]) && p->kx[i] > 0.0f)) {
+            return 1;
+        }
+    }
+    e1_fuzzy_controller_copy_params(&c->p, p);
+    return 0;
 }
 
 void e1_fuzzy_controller_request_tare(e1_fuzzy_controller_t *c)
@@ -137,28 +195,28 @@ static int e1_fuzzy_controller_axis(e1_fuzzy_controller_t *c, int i, float measu
         e1_fuzzy_controller_count(&c->faults);
         return 0;
     }
-    e = e1_fuzzy_controller_setpoint[i] - measured;
+    e = c->p.setpoint_n[i] - measured;
     de = c->started[i] ? e - c->e_prev[i] : 0.0f;
     c->started[i] = 1;
     c->e_prev[i] = e;
     {
         float in[2];
         float out[1];
-        in[0] = e1_fuzzy_controller_clamp(e1_fuzzy_controller_ki[i] * e, -1.0f, 1.0f);
-        in[1] = e1_fuzzy_controller_clamp(e1_fuzzy_controller_kp[i] * de, -1.0f, 1.0f);
+        in[0] = e1_fuzzy_controller_clamp(c->p.ki[i] * e, -1.0f, 1.0f);
+        in[1] = e1_fuzzy_controller_clamp(c->p.kp[i] * de, -1.0f, 1.0f);
         e1_fuzzy_surface_eval(in, out);
-        du = e1_fuzzy_controller_kx[i] * out[0];
+        du = c->p.kx[i] * out[0];
     }
     if (!isfinite(du)) { /* a surface that answers NaN must not move the robot */
         e1_fuzzy_controller_count(&c->faults);
         du = 0.0f;
     }
-    if (e1_fuzzy_controller_abs(du) > e1_fuzzy_controller_step_limit) {
-        du = e1_fuzzy_controller_clamp(du, -e1_fuzzy_controller_step_limit, e1_fuzzy_controller_step_limit);
+    if (e1_fuzzy_controller_abs(du) > c->p.step_m) {
+        du = e1_fuzzy_controller_clamp(du, -c->p.step_m, c->p.step_m);
         saturated = 1;
     }
     sum = c->u[i] + du;
-    u = e1_fuzzy_controller_clamp(sum, -e1_fuzzy_controller_correction, e1_fuzzy_controller_correction);
+    u = e1_fuzzy_controller_clamp(sum, -c->p.correction_m, c->p.correction_m);
     if (u != sum) {
         saturated = 1;
     }

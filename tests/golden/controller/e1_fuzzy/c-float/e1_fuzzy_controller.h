@@ -12,8 +12,10 @@
  * hostile logs); a sample within float rounding of a threshold (engagement, spike gate,
  * safety limit) may be decided differently.
  *
- * Every parameter of the spec is baked in: set points, gains, period 0.004 s,
- * |u| <= 0.05 m per axis, |du| <= 0.001 m per period, safety limit 25 N.
+ * The spec's parameters are baked in: period 0.004 s, safety limit 25 N and every safety
+ * setting. Set points, gains and the correction limits (|u| <= 0.05 m per axis,
+ * |du| <= 0.001 m per period in the spec) are run-time parameters: e1_fuzzy_controller_init loads the
+ * spec's, e1_fuzzy_controller_set_params changes them (a tuner, a sweep, an FMU parameter).
  * Force-controlled axes (the selection matrix S): x (0 N) z (10 N).
  * Fuzzy-PI per axis: du = kx * F(clip(ki*e, -1, 1), clip(kp*de, -1, 1)), F the rule base
  * by exact inference in e1_fuzzy_surface.c (compile and link it too).
@@ -55,9 +57,20 @@ extern "C" {
 /* The spike gate rejected this sample (HELD is set too). */
 #define E1_FUZZY_CONTROLLER_REJECTED ((uint32_t)1u << 6)
 
-/* The controller's state: caller-owned (static, on the stack, in a struct of yours). Treat as
- * opaque; e1_fuzzy_controller_init or e1_fuzzy_controller_reset before the first step. */
+/* The run-time parameters, per task axis x, y, z where indexed (motion-only axes: ignored). */
 typedef struct {
+    float setpoint_n[3];   /* force set point f_d (N), |f_d| below the safety limit */
+    float kp[3];           /* pi: gain on de (m/N); fuzzy-pi: scale of de (1/N) */
+    float ki[3];           /* pi: gain on e (m/N); fuzzy-pi: scale of e (1/N) */
+    float kx[3];           /* fuzzy-pi: scale of the surface's output (m per period); pi: unused */
+    float correction_m;    /* largest |u| per axis (m), > 0 */
+    float step_m;          /* largest |du| per period (m), > 0 */
+} e1_fuzzy_controller_params_t;
+
+/* The controller's state: caller-owned (static, on the stack, in a struct of yours). Treat as
+ * opaque; e1_fuzzy_controller_init before the first step. */
+typedef struct {
+    e1_fuzzy_controller_params_t p;      /* run-time parameters (e1_fuzzy_controller_set_params) */
     float u[3];            /* accumulated correction per task axis (m) */
     float e_prev[3];       /* last error per axis (N) */
     float accepted[3];     /* last sample the spike gate accepted (N, compensated) */
@@ -80,13 +93,22 @@ typedef struct {
     unsigned char tripped;
 } e1_fuzzy_controller_t;
 
-/* Set the state for the first step: no correction, not engaged, not
- * tripped, taring the first 25 valid samples. Same as e1_fuzzy_controller_reset. */
+/* Set the state for the first step: the spec's parameters, no correction, not engaged,
+ * not tripped, taring the first 25 valid samples. */
 void e1_fuzzy_controller_init(e1_fuzzy_controller_t *c);
 
-/* Back to the state of e1_fuzzy_controller_init: clears the correction, the trip latch, the engagement,
- * the filter and the tare (the next 25 valid samples are taken as the new tare). */
+/* Back to the state of e1_fuzzy_controller_init, keeping the run-time parameters: clears the correction,
+ * the trip latch, the engagement, the filter and the tare (the next 25 valid samples are taken as the new tare). */
 void e1_fuzzy_controller_reset(e1_fuzzy_controller_t *c);
+
+/* Copy the run-time parameters out (to change some and set them back). */
+void e1_fuzzy_controller_get_params(const e1_fuzzy_controller_t *c, e1_fuzzy_controller_params_t *p);
+
+/* Change the run-time parameters from the next step on; the state (correction, engagement,
+ * trip latch, filter) is kept. Returns 0; or 1, changing nothing, when a value on a
+ * force-controlled axis is not finite, a set point is not below the safety limit, a gain is
+ * negative (not > 0: a fuzzy-PI's scaling factors) or a correction limit is not > 0. */
+int e1_fuzzy_controller_set_params(e1_fuzzy_controller_t *c, const e1_fuzzy_controller_params_t *p);
 
 /* Take the next 25 valid samples as a new tare (the tool must be in free air);
  * does nothing when the spec has no tare. */

@@ -68,10 +68,53 @@ class Controller:
     """One controller's state; :meth:`step` once per period (see the module docstring)."""
 
     def __init__(self) -> None:
+        #: the run-time parameters (:meth:`set_params`), the spec's to start with
+        self.setpoint_n = list(_SETPOINT)
+        self.kp = list(_KP)
+        self.ki = list(_KI)
+        self.kx = [0.0, 0.0, 0.0]
+        self.correction_m = _CORRECTION
+        self.step_m = _STEP_LIMIT
         self.reset()
 
+    def set_params(
+        self,
+        *,
+        setpoint_n: Sequence[float] | None = None,
+        kp: Sequence[float] | None = None,
+        ki: Sequence[float] | None = None,
+        kx: Sequence[float] | None = None,
+        correction_m: float | None = None,
+        step_m: float | None = None,
+    ) -> bool:
+        """Change the run-time parameters given (per axis x, y, z where a sequence) from the
+        next step on; the state is kept. As e1_pi_controller_set_params: False, changing
+        nothing, when a value on a force-controlled axis is not finite, a set point is not below
+        the safety limit, a gain is negative or a correction limit is not > 0."""
+        new_sp = list(self.setpoint_n if setpoint_n is None else setpoint_n)
+        new_kp = list(self.kp if kp is None else kp)
+        new_ki = list(self.ki if ki is None else ki)
+        new_kx = list(self.kx if kx is None else kx)
+        new_corr = self.correction_m if correction_m is None else float(correction_m)
+        new_step = self.step_m if step_m is None else float(step_m)
+        if not all(len(v) == 3 for v in (new_sp, new_kp, new_ki, new_kx)):
+            return False
+        if not (math.isfinite(new_corr) and new_corr > 0.0 and math.isfinite(new_step) and new_step > 0.0):
+            return False
+        for i in range(3):
+            if not _SELECTED[i]:
+                continue
+            if not (math.isfinite(new_sp[i]) and abs(new_sp[i]) < _LIMIT):
+                return False
+            if not all(math.isfinite(g) and g >= 0.0 for g in (new_kp[i], new_ki[i])):
+                return False
+        self.setpoint_n, self.kp, self.ki, self.kx = new_sp, new_kp, new_ki, new_kx
+        self.correction_m, self.step_m = new_corr, new_step
+        return True
+
     def reset(self) -> None:
-        """No correction, not engaged, not tripped, the filter and the tare start again."""
+        """No correction, not engaged, not tripped, the filter and the tare start again; the
+        run-time parameters stay."""
         self.u = [0.0, 0.0, 0.0]
         self.e_prev: list[float | None] = [None, None, None]
         self.accepted: list[float] | None = None
@@ -101,20 +144,20 @@ class Controller:
         if not math.isfinite(measured):
             self.faults += 1
             return False
-        e = _SETPOINT[i] - measured
+        e = self.setpoint_n[i] - measured
         prev = self.e_prev[i]
         de = 0.0 if prev is None else e - prev
         self.e_prev[i] = e
-        du = _KP[i] * de + _KI[i] * e
+        du = self.kp[i] * de + self.ki[i] * e
         if not math.isfinite(du):  # a surface that answers NaN must not move the robot
             self.faults += 1
             du = 0.0
         saturated = False
-        if abs(du) > _STEP_LIMIT:
-            du = _clamp(du, -_STEP_LIMIT, _STEP_LIMIT)
+        if abs(du) > self.step_m:
+            du = _clamp(du, -self.step_m, self.step_m)
             saturated = True
         total = self.u[i] + du
-        u = _clamp(total, -_CORRECTION, _CORRECTION)
+        u = _clamp(total, -self.correction_m, self.correction_m)
         self.u[i] = u
         return saturated or u != total
 
