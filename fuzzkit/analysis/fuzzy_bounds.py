@@ -14,14 +14,16 @@ triangles, with no sampling between them.
   vertices. A triangle that meets the line must be ``F = lam * (x + y)`` on the whole triangle
   (checked: the linear fit's constant and the difference of its slopes vanish to rounding), or
   ``phi`` is unbounded there and the structure does not hold.
-* **Gradient bounds** (:func:`gradient_bounds`), the fallback for any other surface with
-  ``F(0, 0) = 0``: on each triangle the slopes ``dF/dx``, ``dF/dy`` are constants; integrating
-  along the segment from the origin, ``F(x, y) = a*x + b*y`` with ``a`` and ``b`` in the range
-  of the slopes over the triangles the segment crosses (a star-shaped box around the origin
-  contains the segment).
+* **Gradient bounds** (:func:`gradient_bounds`), the fallback for any other surface: on each
+  triangle the slopes ``dF/dx``, ``dF/dy`` are constants; integrating along the segment from
+  the loop's rest point ``(x0, 0)`` (where ``F(x0, 0) = 0``,
+  :mod:`fuzzkit.analysis.equilibrium`), ``F(x0 + dx, dy) = a*dx + b*dy`` with ``a`` and ``b``
+  in the range of the slopes over the triangles the segment crosses (a box around the rest
+  point contains the segment).
 
-Both are taken over a box ``[-rho, rho]^2`` around the origin, enlarged to whole table cells:
-the certificate is local to the errors for which ``|Ki*e| <= rho`` and ``|Kp*de| <= rho``.
+Both are taken over a box of half-width ``rho`` around the rest point, enlarged to whole table
+cells: the certificate is local to the errors for which ``|Ki*(e - e0)| <= rho`` and
+``|Kp*de| <= rho``.
 """
 
 from __future__ import annotations
@@ -68,6 +70,7 @@ class GradientBounds:
     a_range: tuple[float, float]
     b_range: tuple[float, float]
     rho: float
+    centre: float = 0.0
     method: str = "exact: slopes of the lookup table's triangles"
 
 
@@ -76,9 +79,15 @@ class StructureError(ConfigError):
 
 
 def triangles(
-    bp0: FloatArray, bp1: FloatArray, values: FloatArray, splits: IntArray, rho: float
+    bp0: FloatArray,
+    bp1: FloatArray,
+    values: FloatArray,
+    splits: IntArray,
+    rho: float,
+    centre: float = 0.0,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """The table's triangles over the cells meeting ``(-rho, rho)^2``.
+    """The table's triangles over the cells meeting ``(centre - rho, centre + rho) x (-rho,
+    rho)``.
 
     Returns ``xs, ys, fs``, each ``(m, 3)``: the vertices' x, y and F. A cell with
     ``splits == 0`` is cut along its main diagonal (node ``i, j`` to ``i+1, j+1``), else along
@@ -87,7 +96,7 @@ def triangles(
     if not (math.isfinite(rho) and rho > 0.0):
         raise ConfigError(f"the fuzzy region must be a number > 0 (got {rho})")
     r = rho - _BREAKPOINT_ROUNDING * float(bp0[-1] - bp0[0])  # a breakpoint at rho is the edge
-    ci = [i for i in range(len(bp0) - 1) if bp0[i] < r and bp0[i + 1] > -r]
+    ci = [i for i in range(len(bp0) - 1) if bp0[i] < centre + r and bp0[i + 1] > centre - r]
     cj = [j for j in range(len(bp1) - 1) if bp1[j] < r and bp1[j + 1] > -r]
     xs: list[tuple[float, float, float]] = []
     ys: list[tuple[float, float, float]] = []
@@ -120,14 +129,17 @@ def _plane(xs: FloatArray, ys: FloatArray, fs: FloatArray) -> FloatArray:
     return out
 
 
-def covered_rho(bp0: FloatArray, bp1: FloatArray, rho: float) -> float:
-    """The half-width of the box the cells meeting ``(-rho, rho)^2`` cover."""
+def covered_rho(bp0: FloatArray, bp1: FloatArray, rho: float, centre: float = 0.0) -> float:
+    """The half-width of the box (around ``(centre, 0)``) that the cells meeting
+    ``(centre - rho, centre + rho) x (-rho, rho)`` cover, within the universe."""
     r = rho - _BREAKPOINT_ROUNDING * float(bp0[-1] - bp0[0])
-    hi = min(
-        float(np.min(bp0[bp0 >= r])) if np.any(bp0 >= r) else float(bp0[-1]),
-        float(np.min(bp1[bp1 >= r])) if np.any(bp1 >= r) else float(bp1[-1]),
-    )
-    return min(hi, float(bp0[-1]), float(bp1[-1]))
+
+    def reach(bp: FloatArray, c: float) -> float:
+        up = float(np.min(bp[bp >= c + r])) if np.any(bp >= c + r) else float(bp[-1])
+        down = float(np.max(bp[bp <= c - r])) if np.any(bp <= c - r) else float(bp[0])
+        return min(up - c, c - down)
+
+    return min(reach(bp0, centre), reach(bp1, 0.0))
 
 
 def phi_bounds(
@@ -195,15 +207,31 @@ def _origin_phi(bp0: FloatArray, bp1: FloatArray, values: FloatArray, splits: In
 
 
 def gradient_bounds(
-    bp0: FloatArray, bp1: FloatArray, values: FloatArray, splits: IntArray, rho: float = 1.0
+    bp0: FloatArray,
+    bp1: FloatArray,
+    values: FloatArray,
+    splits: IntArray,
+    rho: float = 1.0,
+    centre: float = 0.0,
 ) -> GradientBounds:
-    """Exact ranges of the slopes ``dF/dx``, ``dF/dy`` over the cells meeting ``(-rho, rho)^2``."""
-    xs, ys, fs = triangles(bp0, bp1, values, splits, rho)
+    """Exact ranges of the slopes ``dF/dx``, ``dF/dy`` over the cells meeting the box of
+    half-width ``rho`` around the rest point ``(centre, 0)``.
+
+    ``F(centre + dx, dy) - F(centre, 0) = a*dx + b*dy`` with ``a``, ``b`` in those ranges (the
+    mean-value theorem along the segment from the rest point). The box is narrowed to stay in
+    the universe (beyond it the input clips and the slope is 0, which the ranges need not
+    hold): ``rho`` becomes at most ``1 - |centre|``.
+    """
+    rho = min(rho, float(bp0[-1]) - centre, centre - float(bp0[0]))
+    if not rho > 0.0:
+        raise ConfigError(f"the rest point e = {centre:g} is on the universe's edge")
+    xs, ys, fs = triangles(bp0, bp1, values, splits, rho, centre)
     plane = _plane(xs, ys, fs)
     return GradientBounds(
         a_range=(float(np.min(plane[:, 0])), float(np.max(plane[:, 0]))),
         b_range=(float(np.min(plane[:, 1])), float(np.max(plane[:, 1]))),
-        rho=covered_rho(bp0, bp1, rho),
+        rho=covered_rho(bp0, bp1, rho, centre),
+        centre=centre,
     )
 
 

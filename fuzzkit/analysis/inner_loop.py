@@ -24,9 +24,10 @@ from functools import lru_cache
 import numpy as np
 import numpy.typing as npt
 
-from fuzzkit.analysis.regulation import SURFACE_Z, regulation_experiment
+from fuzzkit.analysis.regulation import regulation_experiment
 from fuzzkit.plants.contract import task_to_base
 from fuzzkit.studies.plants import make_plant
+from fuzzkit.studies.regulation import surface_height
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -101,7 +102,7 @@ def excite(plant_name: str, stiffness_n_per_m: float) -> tuple[FloatArray, Float
     plant = make_plant(plant_name)
     plant.reset(scn, seed=0)
     depth = 10.0 / stiffness_n_per_m  # the set point's indentation
-    gap = float(scn.path[0].z) - (SURFACE_Z + scn.tool.radius_m)
+    gap = float(scn.path[0].z) - (surface_height(exp) + scn.tool.radius_m)
     rng = np.random.default_rng(ID_SEED)
     # a level held for 1 to 8 periods: excites the whole band up to the Nyquist frequency
     holds = rng.integers(1, 9, WARM_UP + ID_PERIODS)

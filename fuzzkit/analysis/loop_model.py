@@ -70,6 +70,9 @@ class AxisLoop:
     sigma_min: float = 0.1
     inner_q: tuple[float, float] = (0.0, 0.0)
     contact_lag: tuple[float, float] = (0.0, 0.0)
+    #: the controller's own front-end low-pass (a spec's ``sensor.lowpass_hz``), after the
+    #: sensor's filter and delay; None: the controller reads the sample as it is
+    frontend_cutoff_hz: float | None = None
 
     def __post_init__(self) -> None:
         problems = []
@@ -87,6 +90,9 @@ class AxisLoop:
             lo, hi = getattr(self, name)
             if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
                 problems.append(f"{name} must be an interval lo <= hi (got {lo}, {hi})")
+        fc = self.frontend_cutoff_hz
+        if fc is not None and not (math.isfinite(fc) and fc > 0.0):
+            problems.append(f"frontend_cutoff_hz must be > 0 (got {fc})")
         if not 0.0 < self.sigma_min <= 1.0:
             problems.append(f"sigma_min must be in (0, 1] (got {self.sigma_min})")
         if problems:
@@ -94,8 +100,15 @@ class AxisLoop:
 
     @property
     def order(self) -> int:
-        """The number of states."""
-        return self.sensor_delay + self.command_delay + 4
+        """The number of states (the front-end filter's, when there is one, is the last)."""
+        return self.sensor_delay + self.command_delay + 4 + (self.frontend_cutoff_hz is not None)
+
+    @property
+    def frontend_pole(self) -> float:
+        """The front-end low-pass's pole per period (0: no filter)."""
+        if self.frontend_cutoff_hz is None:
+            return 0.0
+        return math.exp(-2.0 * math.pi * self.frontend_cutoff_hz * self.period_s)
 
     @property
     def filter_pole(self) -> float:
@@ -108,6 +121,72 @@ class AxisLoop:
         out["filter_pole"] = self.filter_pole
         out["states"] = self.order
         return out
+
+
+@dataclass(frozen=True, slots=True)
+class StepRows:
+    """Signals of one period as rows ``h`` (the signal is ``h @ x[k]``), in N.
+
+    ``spring_next``: the contact force deviation the spring and damper give at the next plant
+    step, before the clamp ``max(0, .)`` (the sector's argument). ``y_next``, ``y_now``: the
+    samples the controller reads for ``e[k+1] = -y_next`` and ``de[k+1] = -(y_next - y_now)``.
+    ``u_next``: the correction after the step. ``c_next``, ``c_now``: what the controller's
+    law reads, the samples or, with a front-end low-pass, its output:
+    ``e[k+1] = -c_next``, ``de[k+1] = -(c_next - c_now)``.
+    """
+
+    p_next: FloatArray
+    x_next: FloatArray
+    spring_next: FloatArray
+    w_next: FloatArray
+    y_next: FloatArray
+    y_now: FloatArray
+    u_now: FloatArray
+    u_next: FloatArray
+    c_next: FloatArray
+    c_now: FloatArray
+
+
+def step_rows(
+    loop: AxisLoop,
+    sigma: float,
+    phi: float,
+    a: float,
+    g: float,
+    phi_de: float | None = None,
+    q: float = 0.0,
+    lag: float = 0.0,
+) -> StepRows:
+    """The signals of one period for fixed values of the uncertain parameters."""
+    s, c = loop.sensor_delay, loop.command_delay
+    n = loop.order
+    k = loop.stiffness_n_per_m
+    damp = loop.damping_n_s_per_m / (k * loop.period_s)
+    beta = loop.filter_pole
+    ip, ix, iw, iu = 0, 1, 2, 3 + s  # p, x, first of the w queue, first of the u queue
+
+    def unit(i: int) -> FloatArray:
+        e = np.zeros(n)
+        e[i] = 1.0
+        return e
+
+    x_next = q * unit(ix) + (1.0 - q) * unit(iu + c)
+    p_next = a * unit(ip) + (1.0 - a) * g * x_next
+    spring_next = (1.0 - lag + damp) * p_next + (lag - damp) * unit(ip)
+    w_next = beta * unit(iw) + (1.0 - beta) * sigma * spring_next
+    y_next = w_next if s == 0 else unit(iw + s - 1)
+    y_now = unit(iw + s)
+    c_next, c_now = y_next, y_now
+    if loop.frontend_cutoff_hz is not None:
+        b2 = loop.frontend_pole
+        c_now = unit(n - 1)
+        c_next = b2 * c_now + (1.0 - b2) * y_next
+    kp, ki = loop.kp * k, loop.ki * k  # per newton of force deviation, in newtons of correction
+    pd = phi if phi_de is None else phi_de
+    u_next = unit(iu) - (pd * kp + phi * ki) * c_next + pd * kp * c_now
+    return StepRows(
+        p_next, x_next, spring_next, w_next, y_next, y_now, unit(iu), u_next, c_next, c_now
+    )
 
 
 def closed_loop_matrix(
@@ -124,9 +203,6 @@ def closed_loop_matrix(
     (``phi_de`` None: the same ``phi`` on both terms)."""
     s, c = loop.sensor_delay, loop.command_delay
     n = loop.order
-    k = loop.stiffness_n_per_m
-    damp = loop.damping_n_s_per_m / (k * loop.period_s)
-    beta = loop.filter_pole
     ip, ix, iw, iu = 0, 1, 2, 3 + s  # p, x, first of the w queue, first of the u queue
     a_mat = np.zeros((n, n))
 
@@ -135,15 +211,8 @@ def closed_loop_matrix(
         e[i] = 1.0
         return e
 
-    x_next = q * unit(ix) + (1.0 - q) * unit(iu + c)
-    p_next = a * unit(ip) + (1.0 - a) * g * x_next
-    f_next = sigma * ((1.0 - lag + damp) * p_next + (lag - damp) * unit(ip))
-    w_next = beta * unit(iw) + (1.0 - beta) * f_next
-    y_next = w_next if s == 0 else unit(iw + s - 1)
-    y_now = unit(iw + s)
-    kp, ki = loop.kp * k, loop.ki * k  # per newton of force deviation, in newtons of correction
-    pd = phi if phi_de is None else phi_de
-    u_next = unit(iu) - (pd * kp + phi * ki) * y_next + pd * kp * y_now
+    rows = step_rows(loop, sigma, phi, a, g, phi_de, q, lag)
+    p_next, x_next, w_next, u_next = rows.p_next, rows.x_next, rows.w_next, rows.u_next
     a_mat[ip] = p_next
     a_mat[ix] = x_next
     a_mat[iw] = w_next
@@ -152,6 +221,8 @@ def closed_loop_matrix(
     a_mat[iu] = u_next
     for i in range(1, c + 1):
         a_mat[iu + i] = unit(iu + i - 1)
+    if loop.frontend_cutoff_hz is not None:
+        a_mat[n - 1] = rows.c_next
     return a_mat
 
 
@@ -162,6 +233,18 @@ def vertex_matrices(loop: AxisLoop, nominal_plant: bool = False) -> list[FloatAr
     as narrow as the fit error) at their mid-points, the others at their vertices: a smaller
     set to search a Lyapunov function on, before checking it on all.
     """
+    return [closed_loop_matrix(loop, *v) for v in vertices(loop, nominal_plant)]
+
+
+def vertex_rows(loop: AxisLoop) -> list[StepRows]:
+    """:func:`step_rows` at every vertex of the parameter box."""
+    return [step_rows(loop, *v) for v in vertices(loop)]
+
+
+def vertices(
+    loop: AxisLoop, nominal_plant: bool = False
+) -> list[tuple[float, float, float, float, float | None, float, float]]:
+    """``(sigma, phi, a, g, phi_de, q, lag)`` at every vertex of the parameter box."""
 
     def corners(iv: tuple[float, float]) -> list[float]:
         return [0.5 * (iv[0] + iv[1])] if nominal_plant else sorted(set(iv))
@@ -170,7 +253,7 @@ def vertex_matrices(loop: AxisLoop, nominal_plant: bool = False) -> list[FloatAr
     if loop.phi_de is not None:
         des = [*sorted(set(loop.phi_de))]
     return [
-        closed_loop_matrix(loop, sigma, phi, a, g, de, q, lag)
+        (sigma, phi, a, g, de, q, lag)
         for sigma, phi, a, g, de, q, lag in itertools.product(
             sorted({loop.sigma_min, 1.0}),
             sorted(set(loop.phi)),
@@ -205,10 +288,16 @@ def noise_std(loop: AxisLoop, noise_std_n: float) -> float:
     iu = 3 + loop.sensor_delay
     aug = np.zeros((n + 1, n + 1))
     aug[:n, :n] = a_mat
-    aug[iu, n] = pd * loop.kp * k  # + phi Kp n[k]: the previous sample's noise
     b = np.zeros(n + 1)
-    b[iu] = -(pd * loop.kp + mid[0] * loop.ki) * k  # - phi (Kp + Ki) n[k+1]
-    b[n] = 1.0
+    if loop.frontend_cutoff_hz is None:
+        aug[iu, n] = pd * loop.kp * k  # + phi Kp n[k]: the previous sample's noise
+        b[iu] = -(pd * loop.kp + mid[0] * loop.ki) * k  # - phi (Kp + Ki) n[k+1]
+        b[n] = 1.0
+    else:
+        # the noise enters the front-end filter, whose state keeps the past noise
+        gain = 1.0 - loop.frontend_pole
+        b[n - 1] = gain
+        b[iu] = -(pd * loop.kp + mid[0] * loop.ki) * k * gain
     # u[k+1] reads the new noise: propagate it into the state the same period
     cov = solve_discrete_lyapunov(aug, np.outer(b, b) * noise_std_n**2)
     # the true force at the next plant step, from the state (contact held)

@@ -10,11 +10,22 @@ from functools import lru_cache
 from typing import Any
 
 from fuzzkit.analysis.certificate import MIN_MARGIN, FloatArray, certify
+from fuzzkit.analysis.equilibrium import (
+    Equilibrium,
+    ZeroSet,
+    fuzzy_equilibrium,
+    pi_equilibrium,
+    zero_set,
+)
 from fuzzkit.analysis.fuzzy_bounds import StructureError, gradient_bounds, phi_bounds
 from fuzzkit.analysis.inner_loop import InnerLoop, identify
+from fuzzkit.analysis.invariant_region import level_set, validity_slabs
 from fuzzkit.analysis.loop_model import AxisLoop, noise_std, vertex_matrices
+from fuzzkit.analysis.surface_source import SurfaceSource, surface_source
 from fuzzkit.control.names import KINDS as CONTROLLERS
+from fuzzkit.control.spec import EXACT, Surface
 from fuzzkit.errors import ConfigError
+from fuzzkit.fuzzy.model import RuleBase
 from fuzzkit.studies.experiments import DEFAULT_GAINS
 from fuzzkit.studies.task import Experiment
 
@@ -40,37 +51,57 @@ METHOD = (
 @dataclass(frozen=True, slots=True)
 class FuzzyPart:
     """How the fuzzy surface enters the linear model: ``phi`` on both terms (PI-like
-    structure) or ``phi`` on the error term and ``phi_de`` on the change of error."""
+    structure), ``phi`` on the error term and ``phi_de`` on the change of error (gradient
+    bounds around the rest point), or ``none`` (no rest point: nothing to certify).
+    ``zeros``: where ``F(x, 0) = 0`` (the rest points, :mod:`fuzzkit.analysis.equilibrium`)."""
 
-    kind: str  # "phi" | "gradient"
+    kind: str  # "phi" | "gradient" | "none"
     phi: tuple[float, float]
     phi_de: tuple[float, float] | None
     rho: float
+    zeros: ZeroSet
     details: dict[str, Any] = field(default_factory=dict)
 
 
-@lru_cache(maxsize=8)
-def fuzzy_part(rulebase: str, rho: float = 1.0) -> FuzzyPart:
-    """The bounds of ``rulebase``'s lookup table over ``[-rho, rho]^2`` (exact, from its
-    triangles): the PI-like factorisation where it holds, else the gradient bounds."""
-    from fuzzkit.studies.compiled.loop import compiled_table
+def fuzzy_part(rulebase: str | RuleBase, rho: float = 1.0, surface: Surface = EXACT) -> FuzzyPart:
+    """The bounds of the rule base's surface, evaluated as ``surface`` (its inputs in role
+    order; a name or path: by position), over a box of half-width ``rho`` around the loop's
+    rest point, exact on the table :mod:`fuzzkit.analysis.surface_source` gives: the PI-like
+    factorisation where it holds, else the gradient bounds around the rest point nearest the
+    origin."""
+    from fuzzkit.control.loop_rulebase import load_loop_rulebase
 
-    t = compiled_table(rulebase)
+    rb = load_loop_rulebase(rulebase) if isinstance(rulebase, str) else rulebase
+    return _fuzzy_part(rb, rho, surface)
+
+
+@lru_cache(maxsize=16)
+def _fuzzy_part(rb: RuleBase, rho: float, surface: Surface) -> FuzzyPart:
+    source = surface_source(rb, surface)
+    t = source.table
+    zeros = zero_set(source.on_error_axis, tuple(float(b) for b in t.bp0))
     try:
         b = phi_bounds(t.bp0, t.bp1, t.values, t.splits, rho)
     except StructureError as exc:
-        g = gradient_bounds(t.bp0, t.bp1, t.values, t.splits, rho)
+        centre = zeros.rest_point
+        if centre is None:
+            return FuzzyPart(
+                "none", (0.0, 0.0), None, 0.0, zeros, {"why": str(exc), **_surface_details(source)}
+            )
+        g = gradient_bounds(t.bp0, t.bp1, t.values, t.splits, rho, centre)
         return FuzzyPart(
             "gradient",
             g.a_range,
             g.b_range,
             g.rho,
+            zeros,
             {
                 "method": g.method,
                 "why": str(exc),
+                "around_scaled_error": g.centre,
                 "dF_de": list(g.a_range),
                 "dF_dde": list(g.b_range),
-                "table": t.label,
+                **_surface_details(source),
             },
         )
     return FuzzyPart(
@@ -78,14 +109,45 @@ def fuzzy_part(rulebase: str, rho: float = 1.0) -> FuzzyPart:
         (b.low, b.high),
         None,
         b.rho,
+        zeros,
         {
             "method": b.method,
             "phi": [b.low, b.high],
             "small_signal_phi": b.small_signal,
             "rounding_residual": b.residual,
-            "table": t.label,
+            **_surface_details(source),
         },
     )
+
+
+def _surface_details(source: SurfaceSource) -> dict[str, Any]:
+    return {
+        "table": source.table.label,
+        "surface_method": source.method,
+        "bounds_cover_deployed_surface": source.covers_deployed,
+        "surface_error_bound": source.error_bound,
+        "bounds_are": source.describe(),
+    }
+
+
+def loop_equilibrium(
+    exp: Experiment,
+    controller: str,
+    gains: Mapping[str, float] | None,
+    fuzzy: FuzzyPart | None,
+) -> Equilibrium:
+    """The loop's rest point for these gains, against the force-controlled set point."""
+    if controller != "fuzzy-pi":
+        return pi_equilibrium()
+    if fuzzy is None:
+        raise ConfigError("fuzzy-pi needs the rule base's bounds")
+    all_gains, _, _ = effective_gains(controller, gains)
+    return fuzzy_equilibrium(fuzzy.zeros, all_gains["ki"], _setpoint(exp))
+
+
+def _setpoint(exp: Experiment) -> float:
+    """The (first) force-controlled axis's set point, in N."""
+    return float(next(exp.setpoints[i] for i in range(3) if exp.selection[i]))
 
 
 @dataclass(frozen=True, slots=True)
@@ -102,6 +164,12 @@ class Cell:
     contact_sector: tuple[float, float] | None = None
     #: the verified Lyapunov matrix (None when none was found); not part of the JSON
     lyapunov_p: FloatArray | None = field(default=None, repr=False, compare=False)
+    #: why the cell is not certified ("" when it is)
+    why_not: str = ""
+    #: the largest force deviation (N) from the rest point for which the certificate holds
+    #: (:mod:`fuzzkit.analysis.invariant_region`; NaN without a Lyapunov function)
+    region_n: float = math.nan
+    region_limited_by: str = ""
 
     def as_dict(self) -> dict[str, Any]:
         """JSON form (a NaN or infinite number becomes null)."""
@@ -114,6 +182,9 @@ class Cell:
             "noise_std_n": _finite(self.noise_std_n),
             "contact_sector": None if self.contact_sector is None else list(self.contact_sector),
             "solver_status": self.solver_status,
+            "why_not_certified": self.why_not or None,
+            "region_n": _finite(self.region_n),
+            "region_limited_by": self.region_limited_by or None,
         }
 
 
@@ -161,8 +232,10 @@ def axis_loop(
     stiffness_n_per_m: float,
     latency: tuple[int, int],
     sigma_min: float = SIGMA_MIN,
+    frontend_cutoff_hz: float | None = None,
 ) -> AxisLoop:
-    """The linear model of a force axis of ``exp`` at one stiffness and latency."""
+    """The linear model of a force axis of ``exp`` at one stiffness and latency
+    (``frontend_cutoff_hz``: the controller's own low-pass, a spec's)."""
     _, kp, ki = effective_gains(controller, gains)
     scn = exp.scenario
     phi, phi_de = (1.0, 1.0), None
@@ -186,6 +259,7 @@ def axis_loop(
         inner_q=inner.q_range,
         contact_lag=inner.contact_lag,
         sigma_min=sigma_min,
+        frontend_cutoff_hz=frontend_cutoff_hz,
     )
 
 
@@ -200,6 +274,9 @@ def certify_cell(
     sigma_min: float,
     noise_n: float,
     reuse: FloatArray | None = None,
+    *,
+    frontend_cutoff_hz: float | None = None,
+    limits_m: tuple[float, float] | None = None,
 ) -> Cell:
     """Certify one cell: with the contact sector ``[sigma_min, 1]`` (contact may be lost), else
     with contact held (``[1, 1]``); ``Cell.contact_sector`` says which one holds.
@@ -207,32 +284,73 @@ def certify_cell(
     Contact held is tried first: its vertices are a subset of the wider sector's, so when it
     fails the wider one fails too and is not tried. ``reuse``: a Lyapunov matrix to try before
     any solve (a neighbouring cell's); it certifies only if it passes the numpy check on this
-    cell's vertices.
+    cell's vertices. ``frontend_cutoff_hz``, ``limits_m``: a spec's low-pass and its
+    ``(step_m, correction_m)`` limits (the region ``region_n`` keeps them from clipping).
     """
+    rest = loop_equilibrium(exp, controller, gains, fuzzy)
+    lat = (int(latency[0]), int(latency[1]))
+    if fuzzy is not None and fuzzy.kind == "none":
+        why = f"no rest point: {rest.why}"
+        return Cell(float(stiffness_n_per_mm), lat, False, math.nan, "refused", why_not=why)
     loop = axis_loop(
-        exp, controller, gains, inner, fuzzy, stiffness_n_per_mm * 1e3, latency, sigma_min
+        exp,
+        controller,
+        gains,
+        inner,
+        fuzzy,
+        stiffness_n_per_mm * 1e3,
+        latency,
+        sigma_min,
+        frontend_cutoff_hz,
     )
     held = replace(loop, sigma_min=1.0)
     cert = certify(vertex_matrices(held), vertex_matrices(held, nominal_plant=True), (reuse,))
-    sector = (1.0, 1.0)
+    sector, certified_loop = (1.0, 1.0), held
     if cert.certified and sigma_min < 1.0:
         wide = certify(
             vertex_matrices(loop), vertex_matrices(loop, nominal_plant=True), (reuse, cert.p)
         )
         if wide.certified:
-            cert, sector = wide, (sigma_min, 1.0)
+            cert, sector, certified_loop = wide, (sigma_min, 1.0), loop
+    region_n, limited_by = math.nan, ""
+    if cert.certified and cert.p is not None:
+        box = None
+        if fuzzy is not None:
+            all_gains = effective_gains(controller, gains)[0]
+            box = (fuzzy.rho, all_gains["ki"], all_gains["kp"])
+        # the model is about the rest point: its contact force is the set point's plus the
+        # rest point's offset (0 when they coincide)
+        rest_force = _setpoint(exp) + rest.offset_n
+        if rest_force > 0.0:
+            found = level_set(cert.p, validity_slabs(certified_loop, rest_force, box, limits_m))
+            region_n, limited_by = found.region_n, found.limited_by
+        else:
+            region_n, limited_by = 0.0, "no contact force at the rest point"
     noise = noise_std(loop, noise_n)
     quiet = noise <= NOISE_SHARE * BAND_N
+    why = ""
+    if not cert.certified:
+        why = f"no common Lyapunov function ({cert.solver_status})"
+    elif not quiet:
+        why = f"the nominal model predicts {noise:.3g} N of noise, above {NOISE_SHARE * BAND_N:g} N"
+    if not rest.at_setpoint:
+        # the model is about the rest point; the set point is not it, so "settles at the set
+        # point" cannot be certified, whatever the Lyapunov function says about the rest point
+        stable = "stable" if cert.certified else "not proven stable"
+        why = f"the set point is not the loop's rest point ({stable} around it): {rest.why}"
     return Cell(
         float(stiffness_n_per_mm),
-        (int(latency[0]), int(latency[1])),
-        cert.certified and quiet,
+        lat,
+        cert.certified and quiet and rest.at_setpoint,
         cert.margin,
         cert.solver_status,
         cert.certified,
         noise,
         sector if cert.certified else None,
         cert.p if cert.certified else None,
+        why,
+        region_n,
+        limited_by,
     )
 
 
@@ -246,6 +364,9 @@ def certify_cells(
     latencies: Sequence[tuple[int, int]],
     sigma_min: float,
     noise_n: float,
+    *,
+    frontend_cutoff_hz: float | None = None,
+    limits_m: tuple[float, float] | None = None,
 ) -> Iterator[Cell]:
     """Every cell, stiffness by stiffness; each tries first the Lyapunov matrix that last
     certified the same latency (the same state size), re-verified on its own vertices."""
@@ -253,7 +374,18 @@ def certify_cells(
     for k in stiffnesses_n_per_mm:
         for lat in latencies:
             cell = certify_cell(
-                exp, controller, gains, inner, fuzzy, k, lat, sigma_min, noise_n, last.get(lat)
+                exp,
+                controller,
+                gains,
+                inner,
+                fuzzy,
+                k,
+                lat,
+                sigma_min,
+                noise_n,
+                last.get(lat),
+                frontend_cutoff_hz=frontend_cutoff_hz,
+                limits_m=limits_m,
             )
             if cell.lyapunov_p is not None:
                 last[lat] = cell.lyapunov_p
@@ -268,14 +400,24 @@ def certify_region(
     latencies: Sequence[tuple[int, int]],
     *,
     gains: Mapping[str, float] | None = None,
-    rulebase: str = "macvicar_whelan",
+    rulebase: str | RuleBase = "macvicar_whelan",
     fuzzy_region: float = 1.0,
     sigma_min: float = SIGMA_MIN,
+    surface: Surface = EXACT,
+    frontend_cutoff_hz: float | None = None,
+    limits_m: tuple[float, float] | None = None,
+    deployed: dict[str, Any] | None = None,
 ) -> Region:
-    """Certify every (stiffness, latency) cell for ``controller`` on ``plant``'s inner loop."""
+    """Certify every (stiffness, latency) cell for ``controller`` on ``plant``'s inner loop.
+
+    ``surface``: how the fuzzy-PI evaluates ``rulebase`` (inputs in role order).
+    ``frontend_cutoff_hz``, ``limits_m``: a spec's low-pass and ``(step_m, correction_m)``.
+    ``deployed``: what the certified controller is (a spec's name and file, or the defaults
+    assumed), for the JSON.
+    """
     all_gains, kp, ki = effective_gains(controller, gains)
     inner = identify(plant)
-    fuzzy = fuzzy_part(rulebase, fuzzy_region) if controller == "fuzzy-pi" else None
+    fuzzy = fuzzy_part(rulebase, fuzzy_region, surface) if controller == "fuzzy-pi" else None
     noise_n = exp.scenario.sensor.noise_std_n
     cells = certify_cells(
         exp,
@@ -287,8 +429,11 @@ def certify_region(
         latencies,
         sigma_min,
         noise_n,
+        frontend_cutoff_hz=frontend_cutoff_hz,
+        limits_m=limits_m,
     )
     setpoints = [exp.setpoints[i] for i in range(3) if exp.selection[i]]
+    rest = loop_equilibrium(exp, controller, gains, fuzzy)
     model: dict[str, Any] = {
         "scenario": exp.name,
         "controller": controller,
@@ -297,24 +442,32 @@ def certify_region(
         "plant": plant,
         "period_s": exp.scenario.period_s,
         "contact_damping_n_s_per_m": exp.scenario.contact.damping_n_s_per_m,
+        "deployed": deployed or {},
         "sensor_filter_cutoff_hz": exp.scenario.sensor.cutoff_hz,
+        "frontend_lowpass_hz": frontend_cutoff_hz,
+        "limits_m": None
+        if limits_m is None
+        else {"step_m": limits_m[0], "correction_m": limits_m[1]},
         "contact_sector": [sigma_min, 1.0],
         "contact_sector_fallback": [1.0, 1.0],
         "contact_sector_holds_while_force_above_n": [
             (1.0 - 1.0 / sigma_min) * sp for sp in setpoints
         ],
+        "equilibrium": rest.as_dict(),
         "inner_loop": inner.as_dict(),
         "sensor_noise_std_n": noise_n,
         "certified_means": (
             "the Lyapunov certificate holds and the nominal model predicts a noise-driven "
             f"force standard deviation <= {NOISE_SHARE * BAND_N:g} N"
         ),
-        "not_covered": ["impact", "friction", "joint saturation", "correction and rate limits"],
+        "not_covered": ["impact", "friction", "joint saturation"]
+        + ([] if limits_m else ["correction and rate limits"]),
     }
     if fuzzy is not None:
         model["fuzzy"] = {
-            "rulebase": rulebase,
+            "rulebase": rulebase if isinstance(rulebase, str) else rulebase.name,
             "bounds": fuzzy.kind,
+            "zero_set_scaled_error": [list(iv) for iv in fuzzy.zeros.intervals],
             "region": {
                 "abs_ki_e_max": fuzzy.rho,
                 "abs_kp_de_max": fuzzy.rho,

@@ -34,6 +34,7 @@ class SimCase:
     stiffness_n_per_mm: float
     latency: tuple[int, int]
     rulebase: str = "macvicar_whelan"
+    seed: int = 0
 
 
 def outcome(result: RunResult) -> str:
@@ -53,20 +54,26 @@ def outcome(result: RunResult) -> str:
 
 
 def simulate_case(case: SimCase) -> str:
-    """Run one case in the compiled loop (its controller generated as C)."""
+    """The outcome of one case (:func:`run_case`)."""
+    return outcome(run_case(case))
+
+
+def run_case(case: SimCase) -> RunResult:
+    """Run one case in the compiled loop (its controller generated as C), as ``fuzzkit
+    simulate SCENARIO --stiffness K --latency S,C --seed N`` runs it: the scenario at that
+    stiffness (``regulate``: its approach speed follows the stiffness)."""
     from fuzzkit.studies.compiled.loop import run_compiled
 
     exp = with_stiffness(case.experiment, case.stiffness_n_per_mm * 1e3)
-    result = run_compiled(
+    return run_compiled(
         exp,
         case.plant,
         case.controller,
         gains=dict(case.gains),
         rulebase=case.rulebase,
-        seed=0,
+        seed=case.seed,
         latency=case.latency,
     )
-    return outcome(result)
 
 
 def simulate_cells(
@@ -79,12 +86,48 @@ def simulate_cells(
     *,
     rulebase: str = "macvicar_whelan",
     workers: int | None = None,
+    seed: int = 0,
 ) -> list[str]:
-    """The outcome of every (stiffness, latency) cell, stiffness-major as the certificate's."""
+    """The outcome of every (stiffness, latency) cell, stiffness-major as the certificate's,
+    with the sensor noise seeded by ``seed``."""
+    return simulate_cells_seeds(
+        exp,
+        plant,
+        controller,
+        gains,
+        stiffnesses_n_per_mm,
+        latencies,
+        (seed,),
+        rulebase=rulebase,
+        workers=workers,
+    )[0]
+
+
+def simulate_cells_seeds(
+    exp: Experiment,
+    plant: str,
+    controller: str,
+    gains: Mapping[str, float],
+    stiffnesses_n_per_mm: Sequence[float],
+    latencies: Sequence[tuple[int, int]],
+    seeds: Sequence[int],
+    *,
+    rulebase: str = "macvicar_whelan",
+    workers: int | None = None,
+) -> list[list[str]]:
+    """Per seed, the outcome of every cell (stiffness-major); all runs in one batch."""
     items = tuple(sorted((str(k), float(v)) for k, v in gains.items()))
     cases = [
-        SimCase(exp, plant, controller, items, float(k), (int(s), int(c)), rulebase)
+        SimCase(exp, plant, controller, items, float(k), (int(s), int(c)), rulebase, int(seed))
+        for seed in seeds
         for k in stiffnesses_n_per_mm
         for s, c in latencies
     ]
-    return map_runs(simulate_case, cases, workers=workers)
+    flat = map_runs(simulate_case, cases, workers=workers)
+    n = len(stiffnesses_n_per_mm) * len(latencies)
+    return [flat[i * n : (i + 1) * n] for i in range(len(seeds))]
+
+
+def worst_outcome(outcomes: Sequence[str]) -> str:
+    """``settled`` only when every seed settled; else the worst seen (tripped over oscillating)."""
+    return max(outcomes, key=OUTCOMES.index)

@@ -209,7 +209,7 @@ def register(subparsers: Any) -> None:
 
     scn = subparsers.add_parser(
         "scenario",
-        help="print a shipped scenario file (E1, E2, E3) to start your own from",
+        help="print a shipped scenario file (E1, E2, E3, regulate) to start your own from",
         description="Print the YAML of a shipped scenario, to copy and edit; the copy runs "
         "with simulate, compare, sweep and tune as the shipped one does. Without a name, list "
         "the shipped scenarios.",
@@ -218,7 +218,12 @@ def register(subparsers: Any) -> None:
         "  fuzzkit validate my_task.yaml\n"
         "  fuzzkit simulate ./my_task.yaml",
     )
-    scn.add_argument("name", nargs="?", metavar="NAME", help="E1, E2 or E3")
+    scn.add_argument(
+        "name",
+        nargs="?",
+        metavar="NAME",
+        help="E1, E2, E3, or regulate (the task fuzzkit stability certifies)",
+    )
     scn.set_defaults(handler=_scenario)
 
 
@@ -508,16 +513,17 @@ def _compare(args: argparse.Namespace) -> int:
 
 
 def _scenario(args: argparse.Namespace) -> int:
-    from fuzzkit.studies.experiments import EXPERIMENTS, experiment
+    from fuzzkit.studies.experiments import SHIPPED_SCENARIOS, experiment, shipped_name
     from fuzzkit.studies.scenario_file import shipped_scenario_text
 
     if args.name is None:
-        for name in EXPERIMENTS:
+        for name in SHIPPED_SCENARIOS:
             print(f"{name}  {experiment(name).title}")
         return 0
-    if args.name.upper() not in EXPERIMENTS:
+    shipped = shipped_name(args.name)
+    if shipped is None:
         raise ConfigError(
-            f"no shipped scenario {args.name!r} (expected one of {', '.join(EXPERIMENTS)})"
+            f"no shipped scenario {args.name!r} (expected one of {', '.join(SHIPPED_SCENARIOS)})"
         )
-    sys.stdout.write(shipped_scenario_text(args.name.upper()))
+    sys.stdout.write(shipped_scenario_text(shipped))
     return 0

@@ -48,12 +48,26 @@ def register(subparsers: Any) -> None:
         help="regulate (guarded approach onto a flat surface, then hold), E1, E2, E3, or a "
         "scenario file TASK.yaml: its period, contact damping, sensor and set points",
     )
-    p.add_argument("--controller", choices=CONTROLLERS, default="pi", help="force controller")
+    p.add_argument(
+        "--spec",
+        metavar="SPEC.yaml",
+        help="certify this controller spec as it ships: its controller, the axis's gains and "
+        "set point, its low-pass, limits and surface method (not with --controller, --gains, "
+        "--rulebase)",
+    )
+    p.add_argument(
+        "--axis",
+        choices=("x", "y", "z"),
+        help="with --spec: the spec's axis to certify (default: z)",
+    )
+    p.add_argument(
+        "--controller", choices=CONTROLLERS, help="force controller without --spec (default: pi)"
+    )
     p.add_argument(
         "--rulebase",
-        default="macvicar_whelan",
         metavar="RB",
-        help="rule base for fuzzy-pi: " + RULEBASE_SPEC_HELP,
+        help="rule base for fuzzy-pi without --spec (default: macvicar_whelan): "
+        + RULEBASE_SPEC_HELP,
     )
     p.add_argument("--gains", metavar="GAINS.yaml", help="gains file (default: the defaults)")
     p.add_argument("--plant", choices=sorted(PLANTS), default="planar", help="simulated robot")
@@ -101,38 +115,27 @@ def register(subparsers: Any) -> None:
 
 
 def _stability(args: argparse.Namespace) -> int:
-    from fuzzkit.analysis.region import certify_region
     from fuzzkit.analysis.regulation import scenario
-    from fuzzkit.cli.simulation import load_gains
 
     if args.png:
         check_output_path(args.png, "PNG file")
     exp = scenario(args.scenario)
-    gains = load_gains(args.gains, args.controller) if args.gains else {}
-    region = certify_region(
-        exp,
-        args.controller,
-        args.plant,
-        args.stiffness,
-        args.latency,
-        gains=gains,
-        rulebase=args.rulebase,
-        fuzzy_region=args.fuzzy_region,
-        sigma_min=args.contact_sector,
-    )
+    if args.spec is not None:
+        region, sim_exp, controller, gains, rulebase = _certify_spec(args, exp)
+    else:
+        region, sim_exp, controller, gains, rulebase = _certify_assumed(args, exp)
     simulated: list[str] | None = None
     if args.simulate:
-        from fuzzkit.analysis.region import effective_gains
         from fuzzkit.analysis.simulated import simulate_cells
 
         simulated = simulate_cells(
-            exp,
+            sim_exp,
             args.plant,
-            args.controller,
-            effective_gains(args.controller, gains)[0],
+            controller,
+            gains,
             args.stiffness,
             args.latency,
-            rulebase=args.rulebase,
+            rulebase=rulebase,
             workers=args.workers,
         )
     if args.png:
@@ -150,20 +153,87 @@ def _stability(args: argparse.Namespace) -> int:
     return 0
 
 
+def _certify_spec(
+    args: argparse.Namespace, exp: Any
+) -> tuple[Any, Any, str, dict[str, float], str]:
+    """The region of ``--spec``, and what ``--simulate`` runs: the spec itself."""
+    from fuzzkit.analysis.spec_certificate import certify_spec, spec_axis, spec_gains
+    from fuzzkit.control.spec_reader import load_spec
+    from fuzzkit.errors import ConfigError
+    from fuzzkit.studies.task import with_spec
+
+    clash = [f"--{n}" for n in ("controller", "gains", "rulebase") if getattr(args, n)]
+    if clash:
+        raise ConfigError(f"--spec gives the controller; {', '.join(clash)} cannot be used with it")
+    spec = load_spec(args.spec)
+    region = certify_spec(
+        exp,
+        spec,
+        args.plant,
+        args.stiffness,
+        args.latency,
+        axis=args.axis,
+        fuzzy_region=args.fuzzy_region,
+        sigma_min=args.contact_sector,
+    )
+    gains = spec_gains(spec, spec_axis(spec, args.axis))
+    rulebase = spec.rulebase_ref or "macvicar_whelan"
+    return region, with_spec(exp, spec), spec.kind, gains, rulebase
+
+
+def _certify_assumed(
+    args: argparse.Namespace, exp: Any
+) -> tuple[Any, Any, str, dict[str, float], str]:
+    """The region of the controller the options describe (defaults where they are silent)."""
+    from fuzzkit.analysis.region import certify_region, effective_gains
+    from fuzzkit.analysis.spec_certificate import assumed
+    from fuzzkit.cli.simulation import load_gains
+    from fuzzkit.errors import ConfigError
+
+    if args.axis is not None:
+        raise ConfigError("--axis chooses an axis of --spec; without --spec z is certified")
+    controller = args.controller or "pi"
+    rulebase = args.rulebase or "macvicar_whelan"
+    gains = load_gains(args.gains, controller) if args.gains else {}
+    region = certify_region(
+        exp,
+        controller,
+        args.plant,
+        args.stiffness,
+        args.latency,
+        gains=gains,
+        rulebase=rulebase,
+        fuzzy_region=args.fuzzy_region,
+        sigma_min=args.contact_sector,
+        deployed=assumed(controller, gains, rulebase),
+    )
+    return region, exp, controller, effective_gains(controller, gains)[0], rulebase
+
+
 def _text(data: dict[str, Any], args: argparse.Namespace) -> str:
     """A grid: one row per latency, one column per stiffness."""
     model = data["model"]
+    deployed = model["deployed"]
     lines = [
+        deployed["text"]
+        if deployed.get("assumed")
+        else f"certified as shipped: controller spec {deployed['spec']} ({deployed['file']}), "
+        f"axis {deployed['axis']}, surface {deployed['surface']}",
         f"{model['scenario']}: {model['controller']} on {model['plant']}, "
         f"inner loop a in [{model['inner_loop']['a'][0]:.4f}, {model['inner_loop']['a'][1]:.4f}]"
         f" (fit error {100 * model['inner_loop']['fit_error_nrmse']:.2g} %)",
     ]
     if "fuzzy" in model:
         fz = model["fuzzy"]
-        lines.append(f"fuzzy bounds ({fz['bounds']}, {fz['method']}): {fz.get('phi', '')}")
+        what = fz.get("phi", [fz.get("dF_de"), fz.get("dF_dde")])
+        lines.append(f"fuzzy bounds ({fz['bounds']}): {what}; {fz['bounds_are']}")
+    rest = model["equilibrium"]
+    if not rest["at_setpoint"]:
+        lines.append(f"no cell is certified as settling at the set point: {rest['why']}")
     lines.append(
         "C: certified, contact may be lost; c: certified while contact is held; "
-        "n: stable but noise above the band; -: not certified"
+        "n: stable but noise above the band; r: stable around a rest point off the set point; "
+        "-: not certified"
         + (
             "; then the simulated outcome (s settled, o oscillating, t tripped)"
             if args.simulate
@@ -182,10 +252,20 @@ def _text(data: dict[str, Any], args: argparse.Namespace) -> str:
             if c["certified"]:
                 mark = "C" if c["contact_sector"] != [1.0, 1.0] else "c"
             elif c["lyapunov_certificate"]:
-                mark = "n"
+                mark = "n" if model["equilibrium"]["at_setpoint"] else "r"
             if "simulated" in c:
                 mark += c["simulated"][0]
             row.append(f"{mark:>6}")
+        lines.append(f"{latency_text(lat):<15}" + " ".join(row))
+    lines.append(
+        "region_n (N): the certificate holds locally, for a force up to this far from the set "
+        "point (the largest level set of V inside the contact sector and the fuzzy bounds)"
+    )
+    for lat in lats:
+        row = []
+        for k in ks:
+            c = by[(k, lat)]
+            row.append(f"{c['region_n']:>6.3g}" if c["certified"] else f"{'-':>6}")
         lines.append(f"{latency_text(lat):<15}" + " ".join(row))
     certified = sum(c["certified"] for c in data["cells"])
     lines.append(f"certified {certified} of {len(data['cells'])} cells")

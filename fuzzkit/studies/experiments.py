@@ -38,6 +38,7 @@ __all__ = [
     "with_stiffness",
 ]
 from fuzzkit.plants.environment import Box, Waypoint
+from fuzzkit.studies.regulation import REGULATION_NAME, is_regulation, regulation_at
 
 Vec = npt.NDArray[np.float64]
 
@@ -53,28 +54,39 @@ DEFAULT_GAINS: dict[str, dict[str, float]] = {
 
 #: The shipped experiments: scenario files ``fuzzkit/studies/scenarios/<name>.yaml``.
 EXPERIMENTS = ("E1", "E2", "E3")
+#: Every shipped scenario: the experiments and the stability certificate's task (``regulate``).
+SHIPPED_SCENARIOS = (*EXPERIMENTS, REGULATION_NAME)
+
+
+def shipped_name(name: str) -> str | None:
+    """The shipped scenario ``name`` stands for (case-insensitive), or None."""
+    return next((s for s in SHIPPED_SCENARIOS if s.lower() == name.lower()), None)
 
 
 def experiment(name: str) -> Experiment:
-    """The experiment called ``name``: a shipped one (E1, E2, E3; case-insensitive) or the path
-    of a scenario file (``.yaml``/``.yml``; see :mod:`fuzzkit.studies.scenario_file`)."""
+    """The experiment called ``name``: a shipped one (E1, E2, E3, regulate; case-insensitive)
+    or the path of a scenario file (``.yaml``/``.yml``; see
+    :mod:`fuzzkit.studies.scenario_file`)."""
     from fuzzkit.studies import scenario_file
 
-    if name.upper() in EXPERIMENTS:
-        shipped = name.upper()
+    shipped = shipped_name(name)
+    if shipped is not None:
         return scenario_file.loads_scenario(
             scenario_file.shipped_scenario_text(shipped), f"{shipped}.yaml"
         )
     if name.lower().endswith((".yaml", ".yml")):
         return scenario_file.load_scenario(name)
     raise ConfigError(
-        f"unknown experiment {name!r} (expected one of {', '.join(EXPERIMENTS)} "
+        f"unknown experiment {name!r} (expected one of {', '.join(SHIPPED_SCENARIOS)} "
         "or a scenario .yaml file)"
     )
 
 
 def with_stiffness(exp: Experiment, stiffness_n_per_m: float) -> Experiment:
-    """The same experiment in an environment of another contact stiffness."""
+    """The same experiment in an environment of another contact stiffness (the regulation
+    task's approach speed follows it: :func:`fuzzkit.studies.regulation.regulation_at`)."""
+    if is_regulation(exp):
+        return regulation_at(exp, stiffness_n_per_m)
     scn = exp.scenario
     return replace(
         exp,

@@ -16,15 +16,18 @@ _FILL = {
     "contact loss": "#2e7d32",
     "contact held": "#9ccc65",
     "stable, noisy": "#fff176",
+    "stable, off set point": "#ffb74d",
     "not certified": "#e0e0e0",
 }
 _MARK = {"settled": ("o", "#1b5e20"), "oscillating": ("^", "#e65100"), "tripped": ("x", "#b71c1c")}
 
 
-def _verdict(cell: Any) -> str:
+def _verdict(cell: Any, at_setpoint: bool) -> str:
     if cell.certified:
         return "contact held" if cell.contact_sector == (1.0, 1.0) else "contact loss"
-    return "stable, noisy" if cell.stable else "not certified"
+    if not cell.stable:
+        return "not certified"
+    return "stable, noisy" if at_setpoint else "stable, off set point"
 
 
 def region_figure(region: Region, simulated: Sequence[str] | None = None) -> Any:
@@ -36,9 +39,13 @@ def region_figure(region: Region, simulated: Sequence[str] | None = None) -> Any
     lats = list(dict.fromkeys(c.latency for c in region.cells))
     fig = Figure(figsize=(1.6 + 0.75 * len(ks), 1.8 + 0.45 * len(lats)), dpi=110)
     ax = fig.add_subplot(1, 1, 1)
+    at_setpoint = bool(region.model["equilibrium"]["at_setpoint"])
     for idx, cell in enumerate(region.cells):
         x, y = ks.index(cell.stiffness_n_per_mm), lats.index(cell.latency)
-        ax.add_patch(_rect(x, y, _FILL[_verdict(cell)]))
+        ax.add_patch(_rect(x, y, _FILL[_verdict(cell, at_setpoint)]))
+        if cell.certified:
+            # the certificate is local: within region_n of the set point
+            ax.text(x, y - 0.3, f"±{cell.region_n:.3g}", ha="center", va="center", fontsize=7)
         if simulated is not None:
             marker, colour = _MARK[simulated[idx]]
             ax.plot(x, y, marker, color=colour, ms=9, mew=2, mfc="none")
@@ -55,7 +62,9 @@ def region_figure(region: Region, simulated: Sequence[str] | None = None) -> Any
         Patch(facecolor=_FILL["contact loss"], label="certified (contact may be lost)"),
         Patch(facecolor=_FILL["contact held"], label="certified while contact is held"),
         Patch(facecolor=_FILL["stable, noisy"], label="stable, but noise > band"),
+        Patch(facecolor=_FILL["stable, off set point"], label="stable, rest point off set point"),
         Patch(facecolor=_FILL["not certified"], label="not certified"),
+        Patch(facecolor="none", edgecolor="none", label="±x: holds within x N (region_n)"),
     ]
     if simulated is not None:
         from matplotlib.lines import Line2D

@@ -1,0 +1,147 @@
+"""``fuzzkit stability --spec``: certify a controller spec as it ships.
+
+From the spec: the controller kind, one axis's gains and set point, the front-end low-pass
+(``sensor.lowpass_hz``, a second filter after the sensor's), the correction and step limits
+(``region_n`` keeps the loop from reaching them), the surface method and the input roles. The
+scenario gives the plant side: period (it must be the spec's), contact damping, the F/T
+sensor's filter and noise. The inner loop is identified along task z and used for the axis
+certified, as for every certificate (docs/stability.md).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import replace
+from typing import Any
+
+from fuzzkit.analysis.region import SIGMA_MIN, Region, certify_region, effective_gains
+from fuzzkit.control.spec import AxisSpec, ControllerSpec, role_ordered
+from fuzzkit.errors import ConfigError
+from fuzzkit.studies.task import Experiment, with_spec
+
+
+def spec_axis(spec: ControllerSpec, axis: str | None) -> AxisSpec:
+    """The axis to certify: ``axis``, else the spec's z axis, else its only axis.
+
+    Raises
+    ------
+    ConfigError
+        ``axis`` is not one of the spec's, or none was given and the spec has several without z.
+    """
+    names = [a.axis for a in spec.axes]
+    if axis is None:
+        if "z" in names:
+            axis = "z"
+        elif len(names) == 1:
+            axis = names[0]
+        else:
+            raise ConfigError(
+                f"controller spec {spec.name!r} has axes {', '.join(names)}: say which one to "
+                "certify with --axis"
+            )
+    for a in spec.axes:
+        if a.axis == axis:
+            return a
+    raise ConfigError(
+        f"controller spec {spec.name!r} has no axis {axis!r} (its axes: {', '.join(names)})"
+    )
+
+
+def spec_gains(spec: ControllerSpec, ax: AxisSpec) -> dict[str, float]:
+    """The axis's gains as the certificate reads them."""
+    gains = {"kp": ax.kp, "ki": ax.ki}
+    if spec.kind == "fuzzy-pi" and ax.kx is not None:
+        gains["kx"] = ax.kx
+    return gains
+
+
+def spec_experiment(exp: Experiment, spec: ControllerSpec, ax: AxisSpec) -> Experiment:
+    """``exp`` with the certified axis's set point on its force-controlled z axis.
+
+    Raises
+    ------
+    ConfigError
+        The periods differ, or ``exp`` does not force-control z.
+    """
+    with_spec(exp, spec)  # checks the periods
+    if not exp.selection[2]:
+        raise ConfigError(f"scenario {exp.name} does not force-control z: nothing to certify on")
+    if not ax.setpoint_n > 0.0:
+        raise ConfigError(
+            f"axis {ax.axis} of {spec.name!r} holds {ax.setpoint_n:g} N: the certificate is "
+            "about a loop in contact, its set point must be > 0 N (choose another --axis)"
+        )
+    return replace(exp, setpoints=(exp.setpoints[0], exp.setpoints[1], ax.setpoint_n))
+
+
+def certify_spec(
+    exp: Experiment,
+    spec: ControllerSpec,
+    plant: str,
+    stiffnesses_n_per_mm: Sequence[float],
+    latencies: Sequence[tuple[int, int]],
+    *,
+    axis: str | None = None,
+    fuzzy_region: float = 1.0,
+    sigma_min: float = SIGMA_MIN,
+) -> Region:
+    """Certify ``spec``'s controller (one axis) on ``plant`` in the task ``exp``.
+
+    Raises
+    ------
+    ConfigError
+        An adaptive spec (its gains change online; not certified), or see :func:`spec_axis`
+        and :func:`spec_experiment`.
+    """
+    if spec.adaptation.mode != "none":
+        raise ConfigError(
+            f"controller spec {spec.name!r} adapts its gains online ({spec.adaptation.mode}): "
+            "the certificate covers fixed gains only"
+        )
+    ax = spec_axis(spec, axis)
+    task = spec_experiment(exp, spec, ax)
+    rulebase: Any = "macvicar_whelan"
+    if spec.kind == "fuzzy-pi":
+        if spec.rulebase is None:
+            raise ConfigError(f"controller spec {spec.name!r}: fuzzy-pi without a rule base")
+        rulebase = role_ordered(spec, spec.rulebase)
+    gains = spec_gains(spec, ax)
+    source = spec.source.path if spec.source is not None else None
+    deployed = {
+        "spec": spec.name,
+        "file": None if source is None else str(source),
+        "axis": ax.axis,
+        "surface": spec.surface.method,
+        "assumed": False,
+    }
+    return certify_region(
+        task,
+        spec.kind,
+        plant,
+        stiffnesses_n_per_mm,
+        latencies,
+        gains=gains,
+        rulebase=rulebase,
+        fuzzy_region=fuzzy_region,
+        sigma_min=sigma_min,
+        surface=spec.surface,
+        frontend_cutoff_hz=spec.sensor.lowpass_hz,
+        limits_m=(spec.limits.step_m, spec.limits.correction_m),
+        deployed=deployed,
+    )
+
+
+def assumed(controller: str, gains: dict[str, float], rulebase: str) -> dict[str, Any]:
+    """What ``fuzzkit stability`` certifies without ``--spec``, for the output."""
+    g = effective_gains(controller, gains)[0]
+    text = ", ".join(f"{k}={v:g}" for k, v in g.items() if k in ("kp", "ki", "kx"))
+    what = f"{controller} ({text})"
+    if controller == "fuzzy-pi":
+        what += f" on {rulebase} (exact surface)"
+    return {
+        "assumed": True,
+        "controller": what,
+        "text": f"assumed controller: {what}, the scenario's set point and sensor filter, no "
+        "front-end low-pass, no correction or step limit; give --spec SPEC to certify a "
+        "controller spec as it ships",
+    }
