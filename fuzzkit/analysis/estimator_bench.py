@@ -18,11 +18,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from fuzzkit.analysis.inner_loop import InnerLoop
-from fuzzkit.analysis.regulation import SURFACE_Z, regulation_experiment
+from fuzzkit.analysis.regulation import regulation_experiment
 from fuzzkit.control.adaptation import StiffnessSchedule
 from fuzzkit.control.adaptation_spec import Adaptation, Band, Estimator
 from fuzzkit.plants.contract import task_to_base
 from fuzzkit.studies.plants import make_plant
+from fuzzkit.studies.regulation import surface_height
 
 #: The set point the contact is held around (N) and the force swing of the excitation.
 SETPOINT_N = 12.0
@@ -99,7 +100,7 @@ def estimate_on_plant(
     plant.reset(scn, seed=seed)
     period = scn.period_s
     sched = StiffnessSchedule(Adaptation("stiffness-scheduled", estimator, (Band(1.0),)), period)
-    gap = float(scn.path[0].z) - (SURFACE_Z + scn.tool.radius_m)
+    gap = float(scn.path[0].z) - (surface_height(exp) + scn.tool.radius_m)
     depth = SETPOINT_N / k
     rng = np.random.default_rng(seed + 1000)
     holds = rng.integers(HOLD[0], HOLD[1] + 1, SETTLE + periods)
