@@ -597,3 +597,26 @@ def test_an_unquoted_boolean_word_as_a_term_name_says_why(word: str) -> None:
         and "reads an unquoted yes/no/on/off/true/false as a boolean; quote it" in m
         for m in messages
     ), messages
+
+
+@pytest.mark.parametrize(
+    "cells",
+    [
+        "      N N N\n      N Z\n      Z PX P\n",  # a short row before the typo
+        "      N N NX\n      N Z\n      Z P P\n",  # ... and after it
+        "      N N N\n      N Z P\n      Z PX P\n      P P P\n",  # a row too many
+        "      N N N\n      Z PX P\n",  # a row too few
+    ],
+)
+def test_a_label_typo_is_reported_even_beside_a_table_of_the_wrong_shape(cells: str) -> None:
+    # issue 29 item 7: the shape error used to hide every label typo of the same table
+    text = doc(rules=TABLE + "    cells: |\n" + cells)
+    found = problems(text)
+    typo = "PX" if "PX" in cells else "NX"
+    line = 11 + next(i for i, row in enumerate(cells.splitlines(), 1) if typo in row)
+    (hit,) = [p for p in found if f"unknown label {typo!r} for output 'du'" in p.message]
+    assert (hit.location.line, hit.location.col) == (
+        line,
+        text.splitlines()[line - 1].index(typo) + 1,
+    )
+    assert any("table" in p.message and "expected" in p.message for p in found if p is not hit)

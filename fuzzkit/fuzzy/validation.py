@@ -612,7 +612,8 @@ def _check_defuzzifier(rb: RuleBase) -> list[Issue]:
             )
         elif not var.is_sugeno and d != "weighted_average":
             for term in var.terms:
-                if shape_record(term.shape).impulse:
+                # an unknown shape is reported by the term's own check, at its place
+                if term.shape in SHAPE_PARAMS and shape_record(term.shape).impulse:
                     out.append(
                         (
                             ("outputs", var.name, "terms", term.name, "shape"),
