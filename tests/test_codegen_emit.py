@@ -197,9 +197,10 @@ def test_bad_names_in_a_model_never_reach_source() -> None:
     # Validation normally stops these; the emitter must not rely on it.
     rb = rulebase("macvicar_whelan")
     tab = table("macvicar_whelan", "float")
-    bad_rb = dataclasses.replace(rb, name="static")
-    with pytest.raises(CodegenError, match="rule base name 'static'"):
-        build_spec(bad_rb, tab, "c")
+    # a keyword is the user's name: mangled (issue 29 item 6), never refused
+    assert build_spec(dataclasses.replace(rb, name="static"), tab, "c").name == "static_"
+    with pytest.raises(CodegenError, match="rule base name 'a-b' is not an identifier"):
+        build_spec(dataclasses.replace(rb, name="a-b"), tab, "c")
     bad_var = dataclasses.replace(rb.inputs[0], name="e); system(1")
     with pytest.raises(CodegenError, match="not an identifier"):
         build_spec(dataclasses.replace(rb, inputs=(bad_var, rb.inputs[1])), tab, "c")

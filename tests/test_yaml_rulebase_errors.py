@@ -254,13 +254,7 @@ CASES = [
         "3d",
         r"expected an identifier matching \[A-Za-z_\]\[A-Za-z0-9_\]\*, got '3d-controller'",
     ),
-    (doc(name="static"), 1, "static", r"'static' is a C keyword"),
-    (
-        doc(e="{partition: triangular, labels: [N, Z, P, lambda]}"),
-        3,
-        "lambda",
-        r"'lambda' is a Python keyword",
-    ),
+    # keywords (static, lambda) are valid names: tests/test_keyword_names.py (issue 29 item 6)
     (
         GOOD.replace("  du: {range", "  e: {range").replace("du:", "e:"),
         6,

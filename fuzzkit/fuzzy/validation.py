@@ -93,8 +93,12 @@ MAX_NAME_CHARS = 64
 MAX_CONDITION_DEPTH = 32
 
 
-def identifier_problem(name: str) -> str | None:
-    """Why ``name`` cannot become a C and Python identifier, or ``None`` when it can."""
+def name_problem(name: str) -> str | None:
+    """Why ``name`` cannot name a rule base, variable or term, or ``None`` when it can.
+
+    Keywords of the target languages are fine (``in``, ``class``): names are the user's, and
+    code generation mangles the one that becomes an identifier (``fuzzkit.codegen.names``).
+    """
     if len(name) > MAX_NAME_CHARS:
         return (
             f"name {name[:20]!r}... is {len(name)} characters long; names are limited to "
@@ -102,6 +106,14 @@ def identifier_problem(name: str) -> str | None:
         )
     if not IDENTIFIER.match(name):
         return f"expected an identifier matching [A-Za-z_][A-Za-z0-9_]*, got {name!r}"
+    return None
+
+
+def identifier_problem(name: str) -> str | None:
+    """Why ``name`` cannot become a C and Python identifier as it is, or ``None`` when it can."""
+    why = name_problem(name)
+    if why is not None:
+        return why
     if name in C_KEYWORDS and name in PYTHON_KEYWORDS:
         return f"{name!r} is a C and Python keyword; choose another name"
     if name in C_KEYWORDS:
@@ -248,7 +260,7 @@ def uncovered(var: Variable) -> list[tuple[float, float]]:
 
 def _check_variable(var: Variable, kind: str, base: Path, rb: RuleBase) -> list[Issue]:
     out: list[Issue] = []
-    why = identifier_problem(var.name)
+    why = name_problem(var.name)
     if why:
         out.append((base, f"{kind} name: {why}"))
     range_ok = math.isfinite(var.low) and math.isfinite(var.high) and var.low < var.high
@@ -276,7 +288,7 @@ def _check_variable(var: Variable, kind: str, base: Path, rb: RuleBase) -> list[
         if term.name in seen:
             out.append((tpath, f"duplicate term {term.name!r} in {kind} {var.name!r}"))
         seen.add(term.name)
-        why = identifier_problem(term.name)
+        why = name_problem(term.name)
         if why:
             out.append((tpath, f"term name: {why}"))
         if kind == "input" and term.is_sugeno:
@@ -517,7 +529,7 @@ def check(rb: RuleBase, allow_gaps: bool | None = None) -> list[Issue]:
 
 def _errors(rb: RuleBase) -> list[Issue]:
     out: list[Issue] = []
-    why = identifier_problem(rb.name)
+    why = name_problem(rb.name)
     if why:
         out.append((("name",), f"rule-base name: {why}"))
     if not rb.inputs:
