@@ -29,7 +29,7 @@ inputs:
   e: {range: [-1, 1]$e_extra, terms: $e}
   de: {range: [-1, 1], terms: {partition: triangular, labels: [N, Z, P]}}
 outputs:
-  du: {range: [-1, 1]$du_extra, terms: $du}
+  du: {range: [-1, 1]$du_default$du_extra, terms: $du}
 $rules$tail"""
 
 
@@ -44,8 +44,17 @@ def doc(
     du_extra: str = "",
 ) -> str:
     """The base document with one part replaced."""
+    # RULES fire on a few label combinations only: the default makes the others warnings
+    du_default = "" if du_extra.startswith(", default") else ", default: 0"
     return Template(TEMPLATE).substitute(
-        name=name, e=e, du=du, rules=rules, tail=tail, e_extra=e_extra, du_extra=du_extra
+        name=name,
+        e=e,
+        du=du,
+        rules=rules,
+        tail=tail,
+        e_extra=e_extra,
+        du_extra=du_extra,
+        du_default=du_default,
     )
 
 

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 from typing import TypeAlias
 
 from fuzzkit.errors import Location, Problem, RuleBaseError, did_you_mean
-from fuzzkit.fuzzy import resolution
+from fuzzkit.fuzzy import resolution, rule_coverage, term_placement
 from fuzzkit.fuzzy.model import (
     AGGREGATIONS,
     AND_OPERATORS,
@@ -502,29 +502,46 @@ class Diagnosis:
     warnings: list[Issue]
 
 
-def diagnose(rb: RuleBase, allow_gaps: bool | None = None) -> Diagnosis:
+def diagnose(
+    rb: RuleBase, allow_gaps: bool | None = None, *, rule_coverage_check: bool = True
+) -> Diagnosis:
     """Every problem of ``rb``, split into errors and warnings.
 
     A coverage gap (part of an input's range where no term is above zero) is a warning when
     ``allow_gaps`` is true, an error when it is false; ``None`` (default) follows
-    ``rb.coverage``. Everything else is an error.
+    ``rb.coverage``. A combination of input labels where no rule concluding an output fires
+    (:mod:`fuzzkit.fuzzy.rule_coverage`) is a warning when that output has a ``default``, else
+    an error; every reader (YAML, .fis, .fcl, .fll) makes this check, and so ``fuzzkit
+    validate``, ``eval``, ``surface`` and ``compile`` do. ``rule_coverage_check=False`` leaves
+    it out, as :func:`check` and :func:`ensure_valid` (which engines call on models built in
+    Python) do: such a model evaluates to the default, or NaN, where no rule fires. A term
+    wholly outside its range is an error, a shoulder that never reaches 1 inside it a warning
+    (:mod:`fuzzkit.fuzzy.term_placement`). Everything else is an error.
     """
     gaps_allowed = rb.coverage == "allow_gaps" if allow_gaps is None else allow_gaps
     errors = _errors(rb)
     gaps = _coverage_gaps(rb)
+    # Rule coverage needs valid terms and references. Where an output has a default, a place
+    # no rule reaches is a warning under either policy; without one it is an error (NaN).
+    check_rules = rule_coverage_check and not errors
+    unfired, defaulted = rule_coverage.rule_gaps(rb) if check_rules else ([], [])
+    outside, cut_short = term_placement.misplaced_terms(rb) if not errors else ([], [])
+    errors = errors + outside + unfired
+    notes = cut_short + defaulted
     if gaps_allowed:
-        return Diagnosis(errors, gaps)
+        return Diagnosis(errors, gaps + notes)
     hint = " (set coverage: allow_gaps to make this a warning)"
-    return Diagnosis(errors + [(path, message + hint) for path, message in gaps], [])
+    return Diagnosis(errors + [(path, message + hint) for path, message in gaps], notes)
 
 
 def check(rb: RuleBase, allow_gaps: bool | None = None) -> list[Issue]:
     """Every error of ``rb`` as ``(path, message)``; empty when it is usable.
 
     Coverage gaps count as errors unless allowed (see :func:`diagnose`, which also returns
-    them as warnings). See the module docstring for the form of the paths.
+    them as warnings). Rule coverage is the readers' check, not this one (see
+    :func:`diagnose`). See the module docstring for the form of the paths.
     """
-    return diagnose(rb, allow_gaps).errors
+    return diagnose(rb, allow_gaps, rule_coverage_check=False).errors
 
 
 def _errors(rb: RuleBase) -> list[Issue]:
