@@ -32,6 +32,7 @@ from fuzzkit.codegen.lookup_table import (
     bound_margin,
     q15_fpi_codes,
 )
+from fuzzkit.codegen.names import names_note, symbol
 from fuzzkit.codegen.target import Target, all_targets, load_target
 from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy.model import RuleBase
@@ -110,6 +111,8 @@ class TableSpec:
     version: str
     source_file: str
     source_sha256: str
+    #: the header's sentence on a mangled rule-base name (codegen.names), or ""
+    names_note: str
     description: tuple[str, ...]
     #: "e [N], de [N], du [mm]" when any variable has units, else ""
     units_line: str
@@ -156,6 +159,19 @@ def _check_note(table: LookupTable) -> str:
     )
 
 
+def check_name(name: str, what: str) -> str:
+    """Return ``name`` if it matches ``[A-Za-z_][A-Za-z0-9_]*`` (keywords included), else raise.
+
+    For the names generated code holds only in strings and comments: a model built in Python
+    skips validation, and ``e); system(1`` must never reach a source file.
+    """
+    if not isinstance(name, str) or not IDENTIFIER.match(name):
+        raise CodegenError(
+            f"{what} {name!r} is not an identifier (expected [A-Za-z_][A-Za-z0-9_]*)"
+        )
+    return name
+
+
 def check_identifier(name: str, what: str) -> str:
     """Return ``name`` if it may appear in the code of every target, else raise CodegenError.
 
@@ -163,10 +179,7 @@ def check_identifier(name: str, what: str) -> str:
     read) comes first, then each target's ``reserved_words``, so a target whose language
     reserves other words refuses them here.
     """
-    if not isinstance(name, str) or not IDENTIFIER.match(name):
-        raise CodegenError(
-            f"{what} {name!r} is not an identifier (expected [A-Za-z_][A-Za-z0-9_]*)"
-        )
+    check_name(name, what)
     why = identifier_problem(name)
     if why is not None:
         raise CodegenError(f"{what} {why}")
@@ -315,9 +328,11 @@ def build_spec(
 
     tg = load_target(target)
     tg.check_number_type(table.number_type, f"a {table.number_type} table")
-    name = check_module_name(check_identifier(rb.name, "rule base name"))
+    # only the rule base's name is an identifier in the code (keywords mangled); variable
+    # names are strings and comments there, so they need only be identifiers, keywords too
+    name = check_module_name(check_identifier(symbol(rb.name), "rule base name"))
     for var in rb.inputs + rb.outputs:
-        check_identifier(var.name, f"variable name ({rb.name})")
+        check_name(var.name, f"variable name ({rb.name})")
     nt = table.number_type
 
     def lit(v: float) -> str:
@@ -419,6 +434,7 @@ def build_spec(
         version=__version__,
         source_file=_comment_safe(file_name),
         source_sha256=sha,
+        names_note=names_note(rb.name),
         description=desc,
         units_line=units_line(rb),
         n_inputs=len(rb.inputs),

@@ -33,11 +33,13 @@ from fuzzkit.codegen.emit import (
     _wrap,
     check_identifier,
     check_module_name,
+    check_name,
     render_files,
     source_sha256,
     units_comment,
     units_line,
 )
+from fuzzkit.codegen.names import names_note, symbol
 from fuzzkit.codegen.target import Target, load_target
 from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy import membership, shapes
@@ -187,6 +189,8 @@ class ExactSpec:
     version: str
     source_file: str
     source_sha256: str
+    #: the header's sentence on a mangled rule-base name (codegen.names), or ""
+    names_note: str
     description: tuple[str, ...]
     n_inputs: int
     n_outputs: int
@@ -692,9 +696,11 @@ def build_exact_spec(
     why = unsupported_reason(rb, number_type)
     if why is not None:
         raise CodegenError(f"rule base {rb.name!r}: --method exact: {why}")
-    name = check_module_name(check_identifier(rb.name, "rule base name"))
+    # only the rule base's name is an identifier in the code (keywords mangled); variable
+    # names are strings and comments there, so they need only be identifiers, keywords too
+    name = check_module_name(check_identifier(symbol(rb.name), "rule base name"))
     for var in rb.inputs + rb.outputs:
-        check_identifier(var.name, f"variable name ({rb.name})")
+        check_name(var.name, f"variable name ({rb.name})")
     lit = _Lit(tg, number_type)
     per_line = tg.values_per_line["exact"]
 
@@ -789,6 +795,7 @@ def build_exact_spec(
         version=__version__,
         source_file=_comment_safe(file_name),
         source_sha256=sha,
+        names_note=names_note(rb.name),
         description=desc,
         n_inputs=len(rb.inputs),
         n_outputs=len(rb.outputs),

@@ -23,6 +23,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.codegen.lookup_table import Q15_ONE, ROUNDING_ALLOWANCE, LookupTable, quantize_q15
+from fuzzkit.codegen.names import symbol
 from fuzzkit.codegen.toolchain import CompiledTable
 from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy.model import RuleBase
@@ -181,7 +182,7 @@ def verify_c(
     fpi = len(rb.inputs) == 2
     with CompiledTable(
         files,
-        rb.name,
+        symbol(rb.name),
         table.number_type,
         len(rb.inputs),
         len(rb.outputs),
@@ -221,7 +222,7 @@ def verify_python(
     rb: RuleBase, table: LookupTable, files: Mapping[str, str], *, n: int = DEFAULT_POINTS
 ) -> Verification:
     """Import the generated module and compare its ``eval`` with the exact engine."""
-    module = load_module(files, rb.name)
+    module = load_module(files, symbol(rb.name))
     points = verification_points(rb, n)
     got = python_outputs(module.eval, points)
     return compare(rb, table, "python", got, _exact(rb, points))
@@ -283,7 +284,7 @@ def verify_exact_c(
     extra = {} if flags is None else {"flags": tuple(flags)}
     with CompiledTable(
         files,
-        rb.name,
+        symbol(rb.name),
         number_type,
         len(rb.inputs),
         len(rb.outputs),
@@ -300,7 +301,7 @@ def verify_exact_python(
     rb: RuleBase, files: Mapping[str, str], *, n: int = DEFAULT_POINTS
 ) -> Verification:
     """Import exact-method Python and compare its ``eval`` with the exact engine."""
-    module = load_module(files, rb.name)
+    module = load_module(files, symbol(rb.name))
     points = verification_points(rb, n)
     got = python_outputs(module.eval, points)
     return compare_exact(rb, "double", "python exact", got, _exact(rb, points))

@@ -3,8 +3,9 @@
 Each mutant is one small edit of a valid file of the kind a hostile or damaged file holds: a
 number replaced by an extreme one (huge, subnormal, NaN, a YAML 1.1 spelling), a line deleted,
 duplicated or swapped, the file truncated, a control or structural character inserted, a
-name replaced by a long or foreign one. :func:`mutants` is deterministic for a seed, and each
-mutant says what was done so a failure can be reproduced by hand.
+name replaced by a long or foreign one, a value replaced by another key of the format.
+:func:`mutants` is deterministic for a seed, and each mutant says what was done so a failure
+can be reproduced by hand.
 """
 
 from __future__ import annotations
@@ -138,6 +139,30 @@ def _replace_word(text: str, rng: random.Random) -> tuple[str, str]:
     return text[: m.start()] + new + text[m.end() :], f"word {m.group()!r} -> {new[:12]!r}"
 
 
+#: ``key: value`` in YAML (and ``key = value`` / ``key := value`` in the foreign formats).
+_KEY_VALUE = re.compile(r"([A-Za-z_]\w*)\s*(?::=|:|=)[ \t]*'?([A-Za-z_]\w*)")
+
+
+def keyword_values(text: str) -> tuple[list[re.Match[str]], list[str]]:
+    """Where ``text`` gives a key a word as value, and the keys it uses (in order, once)."""
+    found = list(_KEY_VALUE.finditer(text))
+    return found, list(dict.fromkeys(m.group(1) for m in found))
+
+
+def replace_value(text: str, m: re.Match[str], new: str) -> str:
+    """``text`` with the value of the ``key: value`` match ``m`` replaced by ``new``."""
+    return text[: m.start(2)] + new + text[m.end(2) :]
+
+
+def _keyword_as_value(text: str, rng: random.Random) -> tuple[str, str]:
+    """A value (``shape: triangle``) replaced by another key of the file (``shape: rules``)."""
+    found, keys = keyword_values(text)
+    if not found:
+        return _replace_word(text, rng)
+    m, new = rng.choice(found), rng.choice(keys)
+    return replace_value(text, m, new), f"value {m.group(2)!r} of {m.group(1)!r} -> {new!r}"
+
+
 _OPERATORS: tuple[Callable[[str, random.Random], tuple[str, str]], ...] = (
     _replace_number,
     _replace_number,
@@ -152,6 +177,7 @@ _OPERATORS: tuple[Callable[[str, random.Random], tuple[str, str]], ...] = (
     _delete_span,
     _replace_word,
     _replace_word,
+    _keyword_as_value,
 )
 
 

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from _mutate import Mutant, mutants
+from _mutate import Mutant, keyword_values, mutants, replace_value
 
 from fuzzkit.control.gains import read_gains_file
 from fuzzkit.errors import ConfigError, ProblemsError
@@ -140,6 +140,28 @@ def test_mutated_rule_bases_give_located_errors_or_finite_outputs(fmt: str) -> N
         if why is not None:
             failures.append(f"{m.origin} ({m.what}): {why}")
     assert not failures, f"{len(failures)} of {MUTANTS} mutants:\n" + "\n".join(failures[:15])
+
+
+@pytest.mark.parametrize("fmt", sorted(READERS))
+def test_a_value_replaced_by_any_keyword_of_the_file_gives_a_located_error(fmt: str) -> None:
+    """Every ``shape:`` (``type``, ``MF``, ``TERM``...) value of one file of each format, and
+    the first value of every other key, replaced by every key the file uses: the class of
+    mutant that once reached the defuzzifier check with an unknown shape (issue 29 item 7)."""
+    origin, text = sorted(_sources(fmt).items())[0]
+    found, keys = keyword_values(text)
+    firsts = {m.group(1): m for m in reversed(found)}  # the first value of each key
+    shapes = [m for m in found if m.group(1).lower() in ("shape", "type", "mf", "term")]
+    targets = list(dict.fromkeys([*shapes, *firsts.values()]))
+    assert targets and keys, f"{origin}: no key: value to replace"
+    failures = []
+    for m in targets:
+        for key in keys:
+            mutant = Mutant(origin, f"{m.group(1)}: {m.group(2)!r} -> {key!r}", "")
+            mutant = dataclasses.replace(mutant, text=replace_value(text, m, key))
+            why = _rule_base_failure(fmt, mutant)
+            if why is not None:
+                failures.append(f"{mutant.what}: {why}")
+    assert not failures, f"{len(failures)} mutants:\n" + "\n".join(failures[:15])
 
 
 def _finite_fields(value: Any) -> bool:

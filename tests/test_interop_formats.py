@@ -104,7 +104,7 @@ def test_fis_trapmf_with_infinite_feet_is_a_shoulder_everywhere() -> None:
     assert "'trapmf',[-inf -inf -0.5 0.5]" in fis.dumps(rb)
 
 
-def _fis_with_input_mf(mf: str) -> str:
+def _fis_with_input_mf(mf: str, input_range: str = "[-1 1]") -> str:
     """A one-input .fis whose input has a covering gaussian and the given MF as its term 2."""
     return f"""[System]
 Name='probe'
@@ -120,7 +120,7 @@ DefuzzMethod='centroid'
 
 [Input1]
 Name='x'
-Range=[-1 1]
+Range={input_range}
 NumMFs=2
 MF1='all':'gaussmf',[1 0]
 MF2='probe':{mf}

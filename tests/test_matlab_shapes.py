@@ -253,7 +253,9 @@ def _file_texts(shape: str) -> dict[str, str]:
     """The test file of every format with the shape in it (input term ``probe`` of ``x``)."""
     terms = _file_terms(shape)
     return {
-        "fis": _fis_with_input_mf(terms["fis"]),
+        # the range of the other formats' files: the terms lie on [0, 10], and a term wholly
+        # outside its input's range is an error (issue 29 item 7)
+        "fis": _fis_with_input_mf(terms["fis"], "[0 10]"),
         "fll": FLL_TEXT.replace("$TERM", terms["fll"]),
         "fcl": FCL_TEXT.replace("$TERM", terms["fcl"]),
     }

@@ -72,6 +72,7 @@ inputs:
 outputs:
   y:
     range: [0, 1]
+    default: 0.5  # one rule: elsewhere none fires
     terms:
       lo: {shape: singleton, value: 0.25}
       hi: {shape: singleton, value: 0.75}
@@ -156,8 +157,8 @@ def test_rule_with_several_outputs() -> None:
 name: two
 inputs: {x: {range: [0, 1], terms: {partition: triangular, labels: [lo, hi]}}}
 outputs:
-  a: {range: [0, 1], terms: {partition: triangular, labels: [lo, hi]}}
-  b: {range: [0, 1], terms: {partition: triangular, labels: [lo, hi]}}
+  a: {range: [0, 1], default: 0, terms: {partition: triangular, labels: [lo, hi]}}
+  b: {range: [0, 1], default: 0, terms: {partition: triangular, labels: [lo, hi]}}
 rules: [{if: {x: hi}, then: {a: lo, b: hi}}]
 """
     (rule,) = loads(text).rules
@@ -236,7 +237,7 @@ def test_quoted_labels_that_yaml_would_read_as_booleans() -> None:
     text = """\
 name: toggle
 inputs: {x: {range: [0, 1], terms: {partition: triangular, labels: ['off', 'on']}}}
-outputs: {y: {range: [0, 1], terms: {partition: triangular, labels: ['no', 'yes']}}}
+outputs: {y: {range: [0, 1], default: 0, terms: {partition: triangular, labels: ['no', 'yes']}}}
 rules: [{if: {x: 'on'}, then: {y: 'yes'}}]
 """
     rb = loads(text)
@@ -245,5 +246,6 @@ rules: [{if: {x: 'on'}, then: {y: 'yes'}}]
 
 
 def test_null_default_means_none() -> None:
-    rb = loads(HEAD.replace("default: 1.5", "default: null") + TABLE)
+    # (without a default, the empty cell of TABLE would be an error: filled here)
+    rb = loads(HEAD.replace("default: 1.5", "default: null") + TABLE.replace("L  -  H", "L  M  H"))
     assert rb.outputs[0].default is None

@@ -778,9 +778,17 @@ class _Reader(NodeReader):
         if grid is None:
             self.hidden_at.add(("rules",))
             return [], table
+        if not grid.ok:
+            # the shape is wrong, so cells cannot be paired with labels; still report every
+            # cell that names no label of the output (a typo beside a short row)
+            self.cell_label_typos(grid.rows, next((v for v in outputs if v.name == out), None))
+            self.hidden_at.add(("rules",))
+            return [], table
         rules: list[Rule] = []
-        for (rlabel, rnode), row in zip(row_labels, grid, strict=True):
+        for (rlabel, rnode), row in zip(row_labels, grid.rows, strict=True):
             for (clabel, cnode), (cell, cell_loc) in zip(col_labels, row, strict=True):
+                # validation reports an empty cell no other rule covers at the cell itself
+                self.marks[("rules", "table", "cells", rlabel, clabel)] = cell_loc
                 if cell == EMPTY_CELL:
                     continue
                 k = len(rules)
@@ -825,10 +833,23 @@ class _Reader(NodeReader):
             labels.append((label, item))
         return labels
 
-    def cells(
-        self, node: Node, nrows: int, ncols: int, rows: str, cols: str
-    ) -> list[list[tuple[str, Node]]] | None:
-        """The table body as rows of (label, node positioned at the cell)."""
+    def cell_label_typos(self, grid: list[list[tuple[str, Node]]], out: Variable | None) -> None:
+        """A located problem for every cell of ``grid`` that is not a label of ``out``."""
+        if out is None or out.name in self.broken_vars:
+            return  # validation reports the unknown or broken output itself
+        for row in grid:
+            for cell, cell_loc in row:
+                if cell != EMPTY_CELL and cell not in out.term_names:
+                    self.error(
+                        cell_loc,
+                        f"unknown label {cell!r} for output {out.name!r}"
+                        f"{did_you_mean(cell, out.term_names)}; expected one of "
+                        f"{', '.join(out.term_names)} or {EMPTY_CELL} (no rule)",
+                    )
+
+    def cells(self, node: Node, nrows: int, ncols: int, rows: str, cols: str) -> _Grid | None:
+        """The table body as rows of (label, node positioned at the cell), and whether its
+        shape fits the labels (``None``: not a table body at all)."""
         lines: list[tuple[str, Callable[[int], Node]]] = []
         if isinstance(node, ScalarNode) and node.tag == STR_TAG:
             lines = self.block_lines(node)
@@ -869,7 +890,7 @@ class _Reader(NodeReader):
                 f"rows input {rows!r}){hint}",
             )
             ok = False
-        return grid if ok else None
+        return _Grid(grid, ok)
 
     def block_lines(self, node: ScalarNode) -> list[tuple[str, Callable[[int], Node]]]:
         """Non-blank lines of a string scalar, each with a function locating a column in it."""
@@ -907,6 +928,14 @@ class _Reader(NodeReader):
             return _At(line, (column or 0) + offset)
 
         return locate
+
+
+@dataclass(frozen=True, slots=True)
+class _Grid:
+    """A rule table's cells as read, row by row, and whether rows and columns fit the labels."""
+
+    rows: list[list[tuple[str, Node]]]
+    ok: bool
 
 
 class _At(Node):

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 from typing import TypeAlias
 
 from fuzzkit.errors import Location, Problem, RuleBaseError, did_you_mean
-from fuzzkit.fuzzy import resolution
+from fuzzkit.fuzzy import resolution, rule_coverage, term_placement
 from fuzzkit.fuzzy.model import (
     AGGREGATIONS,
     AND_OPERATORS,
@@ -95,8 +95,12 @@ MAX_NAME_CHARS = 64
 MAX_CONDITION_DEPTH = 32
 
 
-def identifier_problem(name: str) -> str | None:
-    """Why ``name`` cannot become a C and Python identifier, or ``None`` when it can."""
+def name_problem(name: str) -> str | None:
+    """Why ``name`` cannot name a rule base, variable or term, or ``None`` when it can.
+
+    Keywords of the target languages are fine (``in``, ``class``): names are the user's, and
+    code generation mangles the one that becomes an identifier (``fuzzkit.codegen.names``).
+    """
     if len(name) > MAX_NAME_CHARS:
         return (
             f"name {name[:20]!r}... is {len(name)} characters long; names are limited to "
@@ -104,6 +108,14 @@ def identifier_problem(name: str) -> str | None:
         )
     if not IDENTIFIER.match(name):
         return f"expected an identifier matching [A-Za-z_][A-Za-z0-9_]*, got {name!r}"
+    return None
+
+
+def identifier_problem(name: str) -> str | None:
+    """Why ``name`` cannot become a C and Python identifier as it is, or ``None`` when it can."""
+    why = name_problem(name)
+    if why is not None:
+        return why
     if name in C_KEYWORDS and name in PYTHON_KEYWORDS:
         return f"{name!r} is a C and Python keyword; choose another name"
     if name in C_KEYWORDS:
@@ -250,7 +262,7 @@ def uncovered(var: Variable) -> list[tuple[float, float]]:
 
 def _check_variable(var: Variable, kind: str, base: Path, rb: RuleBase) -> list[Issue]:
     out: list[Issue] = []
-    why = identifier_problem(var.name)
+    why = name_problem(var.name)
     if why:
         out.append((base, f"{kind} name: {why}"))
     range_ok = math.isfinite(var.low) and math.isfinite(var.high) and var.low < var.high
@@ -278,7 +290,7 @@ def _check_variable(var: Variable, kind: str, base: Path, rb: RuleBase) -> list[
         if term.name in seen:
             out.append((tpath, f"duplicate term {term.name!r} in {kind} {var.name!r}"))
         seen.add(term.name)
-        why = identifier_problem(term.name)
+        why = name_problem(term.name)
         if why:
             out.append((tpath, f"term name: {why}"))
         if kind == "input" and term.is_sugeno:
@@ -492,34 +504,51 @@ class Diagnosis:
     warnings: list[Issue]
 
 
-def diagnose(rb: RuleBase, allow_gaps: bool | None = None) -> Diagnosis:
+def diagnose(
+    rb: RuleBase, allow_gaps: bool | None = None, *, rule_coverage_check: bool = True
+) -> Diagnosis:
     """Every problem of ``rb``, split into errors and warnings.
 
     A coverage gap (part of an input's range where no term is above zero) is a warning when
     ``allow_gaps`` is true, an error when it is false; ``None`` (default) follows
-    ``rb.coverage``. Everything else is an error.
+    ``rb.coverage``. A combination of input labels where no rule concluding an output fires
+    (:mod:`fuzzkit.fuzzy.rule_coverage`) is a warning when that output has a ``default``, else
+    an error; every reader (YAML, .fis, .fcl, .fll) makes this check, and so ``fuzzkit
+    validate``, ``eval``, ``surface`` and ``compile`` do. ``rule_coverage_check=False`` leaves
+    it out, as :func:`check` and :func:`ensure_valid` (which engines call on models built in
+    Python) do: such a model evaluates to the default, or NaN, where no rule fires. A term
+    wholly outside its range is an error, a shoulder that never reaches 1 inside it a warning
+    (:mod:`fuzzkit.fuzzy.term_placement`). Everything else is an error.
     """
     gaps_allowed = rb.coverage == "allow_gaps" if allow_gaps is None else allow_gaps
     errors = _errors(rb)
     gaps = _coverage_gaps(rb)
+    # Rule coverage needs valid terms and references. Where an output has a default, a place
+    # no rule reaches is a warning under either policy; without one it is an error (NaN).
+    check_rules = rule_coverage_check and not errors
+    unfired, defaulted = rule_coverage.rule_gaps(rb) if check_rules else ([], [])
+    outside, cut_short = term_placement.misplaced_terms(rb) if not errors else ([], [])
+    errors = errors + outside + unfired
+    notes = cut_short + defaulted
     if gaps_allowed:
-        return Diagnosis(errors, gaps)
+        return Diagnosis(errors, gaps + notes)
     hint = " (set coverage: allow_gaps to make this a warning)"
-    return Diagnosis(errors + [(path, message + hint) for path, message in gaps], [])
+    return Diagnosis(errors + [(path, message + hint) for path, message in gaps], notes)
 
 
 def check(rb: RuleBase, allow_gaps: bool | None = None) -> list[Issue]:
     """Every error of ``rb`` as ``(path, message)``; empty when it is usable.
 
     Coverage gaps count as errors unless allowed (see :func:`diagnose`, which also returns
-    them as warnings). See the module docstring for the form of the paths.
+    them as warnings). Rule coverage is the readers' check, not this one (see
+    :func:`diagnose`). See the module docstring for the form of the paths.
     """
-    return diagnose(rb, allow_gaps).errors
+    return diagnose(rb, allow_gaps, rule_coverage_check=False).errors
 
 
 def _errors(rb: RuleBase) -> list[Issue]:
     out: list[Issue] = []
-    why = identifier_problem(rb.name)
+    why = name_problem(rb.name)
     if why:
         out.append((("name",), f"rule-base name: {why}"))
     if not rb.inputs:
@@ -616,7 +645,8 @@ def _check_defuzzifier(rb: RuleBase) -> list[Issue]:
             )
         elif not var.is_sugeno and d != "weighted_average":
             for term in var.terms:
-                if shape_record(term.shape).impulse:
+                # an unknown shape is reported by the term's own check, at its place
+                if term.shape in SHAPE_PARAMS and shape_record(term.shape).impulse:
                     out.append(
                         (
                             ("outputs", var.name, "terms", term.name, "shape"),

@@ -48,6 +48,7 @@ def load_generated_c(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3)
         If no C compiler is found or the generated code does not compile.
     """
     from fuzzkit.codegen.emit import emit
+    from fuzzkit.codegen.names import symbol
     from fuzzkit.codegen.toolchain import CompiledTable
     from fuzzkit.control.loop_rulebase import load_loop_rulebase
     from fuzzkit.studies.compiled.table import load_table
@@ -55,12 +56,12 @@ def load_generated_c(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3)
     rb = load_loop_rulebase(rulebase)
     table = load_table(rulebase, tolerance)
     files = emit(rb, table, "c")
-    lib = CompiledTable(files, rb.name, "double", 2, 1, fpi=False)
+    lib = CompiledTable(files, symbol(rb.name), "double", 2, 1, fpi=False)
     _LIBRARIES.append(lib)
-    fn = getattr(lib.library, f"{rb.name}_eval")
+    fn = getattr(lib.library, f"{symbol(rb.name)}_eval")
     fn.argtypes = [ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_double)]
     fn.restype = None
-    return GeneratedC(fn, f"generated C {rb.name}_eval (double, ctypes)")
+    return GeneratedC(fn, f"generated C {symbol(rb.name)}_eval (double, ctypes)")
 
 
 @lru_cache(maxsize=4)
