@@ -227,7 +227,9 @@ def replay(
         from fuzzkit.control.reference import Controller
         from fuzzkit.studies.param_schedule import apply
 
-        ref = Controller(spec)
+        from fuzzkit.studies.controller_code import spec_surface
+
+        ref = Controller(spec, spec_surface(spec) if spec.kind == "fuzzy-pi" else None)
         n = log.forces.shape[0]
         out = np.empty((n, 3))
         status = np.zeros(n, dtype=np.int64)
