@@ -29,11 +29,11 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from fuzzkit.codegen.emit import (
+    TableSpec,
     _check_float32_gains,
     _comment_safe,
-    check_identifier,
-    TableSpec,
     build_spec,
+    check_identifier,
     check_module_name,
     render_files,
 )

@@ -65,7 +65,9 @@ def test_the_reference_evaluates_the_specs_table(tmp_path: Path) -> None:
     assert off.max() > 1e-2
 
 
-@pytest.mark.parametrize("surface", ["{method: table, resolution: 17}", "{method: table, tolerance: 0.01}"])
+@pytest.mark.parametrize(
+    "surface", ["{method: table, resolution: 17}", "{method: table, tolerance: 0.01}"]
+)
 def test_a_table_spec_compiles_verified(
     surface: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -81,7 +83,9 @@ def test_a_table_spec_compiles_verified(
     assert "by its lookup table" in module
 
 
-def test_a_table_spec_refuses_a_float_build(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_table_spec_refuses_a_float_build(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     spec = _spec(tmp_path, "{method: table, resolution: 17}")
     argv = ["compile", str(spec), "--target", "c", "--type", "float", "--out", str(tmp_path / "o")]
     assert main(argv) == 2

@@ -23,12 +23,12 @@ from fuzzkit.codegen.controller import (
 from fuzzkit.codegen.target import load_target
 from fuzzkit.control import status as st
 from fuzzkit.control.adaptation import ALPHA_TABLE, JUMP, SPREAD
-from fuzzkit.control.names import AXES
 from fuzzkit.control.controllers import Surface, lookup_table_surface
+from fuzzkit.control.names import AXES
 from fuzzkit.control.reference import input_gains
 from fuzzkit.control.reference import spec_surface as exact_surface
-from fuzzkit.errors import ConfigError
 from fuzzkit.control.spec import STANDARD_GRAVITY_M_S2, ControllerSpec, role_ordered
+from fuzzkit.errors import ConfigError
 
 #: What each status bit means, as the generated header and module document it.
 STATUS_DOCS: Mapping[str, str] = {

@@ -225,9 +225,8 @@ def replay(
         )
     if impl == "python":
         from fuzzkit.control.reference import Controller
-        from fuzzkit.studies.param_schedule import apply
-
         from fuzzkit.studies.controller_code import spec_surface
+        from fuzzkit.studies.param_schedule import apply
 
         ref = Controller(spec, spec_surface(spec) if spec.kind == "fuzzy-pi" else None)
         n = log.forces.shape[0]
