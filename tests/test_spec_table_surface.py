@@ -113,3 +113,20 @@ def test_a_table_run_replays_and_differs_from_the_exact_one(
     # the exact spec's controller on the table run's samples is another controller
     assert _replayed(capsys, EXAMPLE, csv, "c") > 1e-7
     assert float(np.max(np.abs(runs["table"].u - runs["exact"].u))) > 1e-7
+
+
+def test_the_python_loop_runs_the_specs_table(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # --controller-impl python (the reference in the Python loop) evaluates the table too
+    spec = _spec(tmp_path, "{method: table, resolution: 9}")
+    result = run_spec(
+        RunSpec("E1", plant="planar", controller_spec=str(spec), controller_impl="python",
+                seed=2, duration_s=2.0)
+    )  # fmt: skip
+    assert result.loop.startswith("python") and "lookup table" in result.controller_impl
+    csv = tmp_path / "run.csv"
+    csv.write_text(run_csv(result), encoding="utf-8")
+    assert _replayed(capsys, spec, csv, "python") == 0.0
+    assert _replayed(capsys, spec, csv, "c") <= PYTHON_TOLERANCE_M
+    assert _replayed(capsys, EXAMPLE, csv, "python") > 1e-7
