@@ -5,12 +5,12 @@ the same lookup table, so a run replays to 0 m (``--impl c``) and within 1e-12 m
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 import numpy as np
 import pytest
 from _codegen_util import needs_cc
+from test_user_specs import PYTHON_TOLERANCE_M, _replayed
 
 from fuzzkit.cli import main
 from fuzzkit.codegen.controller import surface_table
@@ -22,7 +22,6 @@ from fuzzkit.studies.run_table import run_csv
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLE = ROOT / "docs" / "examples" / "controller.yaml"
-PYTHON_TOLERANCE_M = 1e-12
 
 pytestmark = needs_cc
 
@@ -32,15 +31,6 @@ def _spec(tmp_path: Path, surface: str) -> Path:
     path = tmp_path / "spec.yaml"
     path.write_text(text, encoding="utf-8")
     return path
-
-
-def _replayed(capsys: pytest.CaptureFixture[str], spec: Path, csv: Path, impl: str) -> float:
-    out = csv.with_name(f"u_{impl}.csv")
-    assert main(["replay", str(spec), "--forces", str(csv), "--out", str(out), "--impl", impl]) == 0
-    printed = capsys.readouterr().out
-    found = re.search(r"largest difference from the run's corrections \(u<a>_m\): (\S+) m", printed)
-    assert found is not None, printed
-    return float(found.group(1))
 
 
 def test_the_reference_evaluates_the_specs_table(tmp_path: Path) -> None:
