@@ -29,13 +29,17 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from fuzzkit.codegen.emit import (
+    TableSpec,
     _check_float32_gains,
     _comment_safe,
+    build_spec,
     check_identifier,
     check_module_name,
     render_files,
 )
 from fuzzkit.codegen.exact import ROUNDING_BOUND, ExactSpec, build_exact_spec
+from fuzzkit.codegen.lookup_table import LookupTable
+from fuzzkit.codegen.table_search import make_table
 from fuzzkit.codegen.target import load_target
 from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy.model import RuleBase
@@ -171,6 +175,11 @@ class ControllerDesign:
     source_file: str = "<spec>"
     source_sha256: str = ""
     adaptation: AdaptationDesign | None = None
+    #: how the fuzzy-PI evaluates its surface: ``exact`` or ``table`` (sized by exactly one of
+    #: ``surface_tolerance``, a fraction of the output's range, or ``surface_resolution``)
+    surface_method: str = "exact"
+    surface_tolerance: float | None = None
+    surface_resolution: int | None = None
 
 
 @dataclass(frozen=True)
@@ -243,8 +252,11 @@ class ControllerCodeSpec:
     one: str
     status: tuple[StatusSpec, ...]
     libm: tuple[str, ...]
-    #: exact-method spec of the surface (Python embeds it; C renders it as a sibling unit)
-    surface: ExactSpec | None
+    #: the surface: an exact-method spec, or a lookup table's for a table surface (Python
+    #: embeds it; C renders it as a sibling unit)
+    surface: ExactSpec | TableSpec | None
+    #: the file kind the surface renders as: ``surface`` (exact) or ``surface_table``
+    surface_kind: str
     float_bound_note: tuple[str, ...]
     #: a stable identifier of this generated controller (same spec, fuzzkit version and
     #: number type -> same value): the FMU's ``guid``
@@ -349,6 +361,25 @@ def _surface_rulebase(design: ControllerDesign, surface_name: str) -> RuleBase:
     return dataclasses.replace(rb, name=surface_name)
 
 
+def surface_table(
+    rb: RuleBase, tolerance: float | None, resolution: int | None, what: str = "controller"
+) -> LookupTable:
+    """The double lookup table of a ``table`` surface, found as ``fuzzkit compile --method
+    table`` finds it: the smallest whose verified bound meets ``tolerance`` (a fraction of the
+    output's range), or the one of ``resolution`` breakpoints per input. The generated
+    controller and the reference (``fuzzkit.studies.controller_code.spec_surface``) both
+    evaluate this table.
+
+    Raises
+    ------
+    CodegenError
+        Not exactly one of ``tolerance`` and ``resolution``, or a tolerance no table meets.
+    """
+    if (tolerance is None) == (resolution is None):
+        raise CodegenError(f"{what}: a table surface needs exactly one of tolerance or resolution")
+    return make_table(rb, number_type="double", tolerance=tolerance, resolution=resolution)
+
+
 def _guid(design: ControllerDesign, number_type: str, version: str) -> str:
     """FMI's ``{8-4-4-4-12}`` identifier of what is generated: a hash of every input to it."""
     content = f"fuzzkit {version} {number_type} {design!r}"
@@ -379,9 +410,20 @@ def build_controller_spec(
     module, surface_name = controller_files(design)
     name = design.name
     fuzzy = design.kind == "fuzzy-pi"
-    surface = None
+    surface: ExactSpec | TableSpec | None = None
     if fuzzy:
-        surface = build_exact_spec(_surface_rulebase(design, surface_name), target, nt)
+        srb = _surface_rulebase(design, surface_name)
+        if design.surface_method == "table":
+            if nt != "double":
+                raise CodegenError(
+                    f"controller {name!r}: a table surface's controller computes in double "
+                    f"(got --type {nt})"
+                )
+            what = f"controller {name!r}"
+            table = surface_table(srb, design.surface_tolerance, design.surface_resolution, what)
+            surface = build_spec(srb, table, target)
+        else:
+            surface = build_exact_spec(srb, target, nt)
     weight = 0.0 if design.mass_kg is None else design.mass_kg * design.gravity_m_s2
     backoff_step = design.backoff_speed_m_s * design.period_s
     values = {
@@ -438,7 +480,7 @@ def build_controller_spec(
     missing = sorted(set(STATUS_USED) - {s.name for s in status})
     if missing:
         raise CodegenError(f"controller {name!r}: status bits {', '.join(missing)} not given")
-    libm = {"sqrt"} | (set(surface.libm) if surface is not None else set())
+    libm = {"sqrt"} | (set(surface.libm) if isinstance(surface, ExactSpec) else set())
     desc = tuple(textwrap.wrap(_comment_safe(" ".join(design.description.split())), 88)[:8])
     sha = design.source_sha256 or hashlib.sha256(repr(design).encode("utf-8")).hexdigest()
     adapt = None
@@ -488,6 +530,7 @@ def build_controller_spec(
         status=status,
         libm=tuple(sorted(libm)),
         surface=surface,
+        surface_kind="surface_table" if isinstance(surface, TableSpec) else "surface",
         float_bound_note=tuple(textwrap.wrap(_float_note(design, nt), 88)),
         guid=_guid(design, nt, __version__),
         tunable=tg.tunable_parameters,
@@ -553,7 +596,7 @@ def emit_controller(
     spec = build_controller_spec(design, target, number_type)
     files = render_files(target, spec.module, spec, "controller")
     if spec.fuzzy and "surface" in load_target(target).files:
-        files |= render_files(target, spec.surface_name, spec.surface, "surface")
+        files |= render_files(target, spec.surface_name, spec.surface, spec.surface_kind)
     return files
 
 
@@ -565,4 +608,5 @@ __all__ = [
     "build_controller_spec",
     "emit_controller",
     "float_step_bound",
+    "surface_table",
 ]

@@ -33,8 +33,8 @@ def _refuse_rulebase_options(args: argparse.Namespace) -> None:
     if given:
         raise CodegenError(
             f"{args.rulebase}: {', '.join(given)} applies to rule bases; a controller spec's "
-            "gains are in the spec and its fuzzy-PI surface is always compiled by the exact "
-            "method (a table's error would not let it equal the reference controller)"
+            "gains are in the spec, and so is how its fuzzy-PI surface is evaluated "
+            "(surface: exact, or {method: table, tolerance: T} or {method: table, resolution: N})"
         )
 
 

@@ -37,12 +37,20 @@ from fuzzkit.errors import ConfigError
 
 def spec_surface(spec: ControllerSpec) -> Surface:
     """The exact engine's surface of a fuzzy-PI spec's rule base: its error and change inputs
-    as :func:`fuzzkit.control.spec.surface_inputs` maps them, its first output."""
+    as :func:`fuzzkit.control.spec.surface_inputs` maps them, its first output.
+
+    A ``table`` surface is not this one: its lookup table is built by the code generator
+    (``fuzzkit.studies.controller_code.spec_surface``), which the caller passes on."""
     from fuzzkit.fuzzy.inference import Engine
 
     rb = spec.rulebase
     if rb is None:
         raise ConfigError(f"controller spec {spec.name!r}: a {spec.kind} has no rule base")
+    if spec.surface.method != "exact":
+        raise ConfigError(
+            f"controller spec {spec.name!r}: a {spec.surface.method} surface is evaluated by "
+            "its lookup table (fuzzkit.studies.controller_code.spec_surface), not exactly"
+        )
     i_e, i_de = surface_inputs(spec, rb)
     return engine_surface(Engine(rb), rb.inputs[i_e].name, rb.inputs[i_de].name, rb.outputs[0].name)
 

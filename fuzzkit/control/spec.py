@@ -370,12 +370,6 @@ def _sensor_problems(spec: ControllerSpec) -> list[tuple[SpecPath, str]]:
     return out
 
 
-#: Why a well-formed ``surface: {method: table, ...}`` is refused for now: the generated
-#: controller, the reference controller and replay evaluate the exact surface only, so a table
-#: spec would be read and silently ignored.
-TABLE_REFUSAL = "surface method table is not supported yet by the generated controller; use exact"
-
-
 def surface_problems(surface: Surface, kind: str) -> list[tuple[SpecPath, str]]:
     """What is wrong with the ``surface:`` section (empty when nothing)."""
     out: list[tuple[SpecPath, str]] = []
@@ -415,8 +409,6 @@ def surface_problems(surface: Surface, kind: str) -> list[tuple[SpecPath, str]]:
                 f"input (got {res})",
             )
         )
-    if not out:
-        out.append((path, TABLE_REFUSAL))
     return out
 
 

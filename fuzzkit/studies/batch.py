@@ -164,7 +164,15 @@ def _run_reference(
     label = "pi (python)"
     if spec.controller == "fuzzy-pi":
         impl = spec.fuzzy_impl
-        if impl in ("auto", "exact"):
+        table_spec = (
+            exp.controller_spec is not None and exp.controller_spec.surface.method == "table"
+        )
+        if impl == "auto" and table_spec and exp.controller_spec is not None:
+            from fuzzkit.studies.controller_code import spec_surface
+
+            surface = spec_surface(exp.controller_spec)  # the spec's own lookup table
+            label = "the spec's lookup table (python)"
+        elif impl in ("auto", "exact"):
             surface = _exact_surface(spec.rulebase)
             label = f"exact engine {spec.rulebase} (python)"
         elif impl == "table":

@@ -18,13 +18,17 @@ from fuzzkit.codegen.controller import (
     ControllerDesign,
     StatusBit,
     emit_controller,
+    surface_table,
 )
 from fuzzkit.codegen.target import load_target
 from fuzzkit.control import status as st
 from fuzzkit.control.adaptation import ALPHA_TABLE, JUMP, SPREAD
+from fuzzkit.control.controllers import Surface, lookup_table_surface
 from fuzzkit.control.names import AXES
 from fuzzkit.control.reference import input_gains
+from fuzzkit.control.reference import spec_surface as exact_surface
 from fuzzkit.control.spec import STANDARD_GRAVITY_M_S2, ControllerSpec, role_ordered
+from fuzzkit.errors import ConfigError
 
 #: What each status bit means, as the generated header and module document it.
 STATUS_DOCS: Mapping[str, str] = {
@@ -88,7 +92,27 @@ def design_of(spec: ControllerSpec) -> ControllerDesign:
         source_file=source_file,
         source_sha256=sha,
         adaptation=adaptation_design(spec),
+        surface_method=spec.surface.method,
+        surface_tolerance=spec.surface.tolerance,
+        surface_resolution=spec.surface.resolution,
     )
+
+
+def spec_surface(spec: ControllerSpec) -> Surface:
+    """What a fuzzy-PI spec's controller evaluates, as the generated double C does: the exact
+    engine (``fuzzkit.control.reference.spec_surface``), or for ``surface: {method: table}`` the
+    lookup table the generator builds (``codegen.controller.surface_table``), by its reference
+    interpolation (bit for bit the generated double C's)."""
+    if spec.surface.method != "table":
+        return exact_surface(spec)
+    rb = spec.rulebase
+    if rb is None:
+        raise ConfigError(f"controller spec {spec.name!r}: a {spec.kind} has no rule base")
+    what = f"controller spec {spec.name!r}"
+    table = surface_table(
+        role_ordered(spec, rb), spec.surface.tolerance, spec.surface.resolution, what
+    )
+    return lookup_table_surface(table)
 
 
 def adaptation_design(spec: ControllerSpec) -> AdaptationDesign | None:

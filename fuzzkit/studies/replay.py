@@ -225,9 +225,10 @@ def replay(
         )
     if impl == "python":
         from fuzzkit.control.reference import Controller
+        from fuzzkit.studies.controller_code import spec_surface
         from fuzzkit.studies.param_schedule import apply
 
-        ref = Controller(spec)
+        ref = Controller(spec, spec_surface(spec) if spec.kind == "fuzzy-pi" else None)
         n = log.forces.shape[0]
         out = np.empty((n, 3))
         status = np.zeros(n, dtype=np.int64)

@@ -124,8 +124,12 @@ def build_controller(
     if exp.controller_spec is not None:
         from fuzzkit.control.reference import hybrid_from_spec
         from fuzzkit.control.spec import with_gains
+        from fuzzkit.studies.controller_code import spec_surface
 
-        return hybrid_from_spec(with_gains(exp.controller_spec, gains or {}), surface)
+        spec = exp.controller_spec
+        if surface is None and spec.kind == "fuzzy-pi":
+            surface = spec_surface(spec)
+        return hybrid_from_spec(with_gains(spec, gains or {}), surface)
     if kind not in DEFAULT_GAINS:
         raise ConfigError(f"unknown controller {kind!r} (expected pi or fuzzy-pi)")
     g = dict(DEFAULT_GAINS[kind])

@@ -75,6 +75,8 @@ TARGET = Target(
         "controller": {"{name}.h": "controller.h.jinja", "{name}.c": "controller.c.jinja"},
         # a fuzzy-PI controller's surface: the exact method as a sibling unit NAME_surface
         "surface": {"{name}.h": "exact.h.jinja", "{name}.c": "exact.c.jinja"},
+        # ... or, for a spec's surface: {method: table}, its lookup table
+        "surface_table": {"{name}.h": "header.h.jinja", "{name}.c": "source.c.jinja"},
     },
     visits_firing_cells=True,
     fast_centroid=True,

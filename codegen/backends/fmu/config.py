@@ -35,6 +35,10 @@ TARGET = dataclasses.replace(
             **{f"sources/{h}": h for h in FMI2_HEADERS},
         },
         "surface": {"sources/{name}.h": "exact.h.jinja", "sources/{name}.c": "exact.c.jinja"},
+        "surface_table": {
+            "sources/{name}.h": "header.h.jinja",
+            "sources/{name}.c": "source.c.jinja",
+        },
     },
     open_controller=open_controller,
     extends="c",
