@@ -13,6 +13,7 @@ from _random_rulebases import MATLAB_SHAPES, random_rulebase
 from fuzzkit.formats import fcl, fis, fll
 from fuzzkit.formats.foreign_common import ExportError
 from fuzzkit.formats.registry import available, dumps, load
+from fuzzkit.fuzzy.type2_model import Type2RuleBase
 from fuzzkit.formats.yaml_reader import loads_rulebase
 from fuzzkit.formats.yaml_writer import dump
 from fuzzkit.fuzzy import membership
@@ -23,6 +24,9 @@ ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "docs" / "examples"
 MAMDANI_EXAMPLES = ["heater.fis", "gripper_iec.fcl", "gripper_named.fcl", "feed.fll"]
 SUGENO_EXAMPLES = ["heater_sugeno.fis", "feed_sugeno.fll"]
+# the foreign formats hold type-1 systems: an interval type-2 rule base is refused on export
+# (tests/test_type2_format.py), so the round trip covers the type-1 shipped rule bases
+TYPE1_SHIPPED = [n for n in available() if not isinstance(load(n), Type2RuleBase)]
 
 
 def _plain(rb: RuleBase) -> RuleBase:
@@ -253,7 +257,7 @@ FORMATS = ["fis", "fcl", "fcl-iec", "fll"]
 
 
 @pytest.mark.parametrize("fmt", FORMATS)
-@pytest.mark.parametrize("name", available())
+@pytest.mark.parametrize("name", TYPE1_SHIPPED)
 def test_shipped_rule_bases_round_trip_yaml_to_format_to_yaml(name: str, fmt: str) -> None:
     rb = load(name)
     refused = _exportable(rb, fmt)

@@ -133,8 +133,8 @@ def test_cli_draws_the_region_with_simulated_outcomes(tmp_path: Path, capsys):
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["--latency", "1-1"], "expected SENSOR:COMMAND pairs"),
-        (["--stiffness", "10,-5"], "expected stiffnesses in N/mm > 0"),
+        (["--latency", "1-1"], "expected SENSOR:COMMAND (or SENSOR,COMMAND) delays"),
+        (["--stiffness", "10,-5"], "expected a stiffness > 0: a number in N/mm or with its unit"),
         (["--contact-sector", "0"], "expected a number in (0, 1]"),
     ],
 )
