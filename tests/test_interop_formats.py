@@ -13,12 +13,12 @@ from _random_rulebases import MATLAB_SHAPES, random_rulebase
 from fuzzkit.formats import fcl, fis, fll
 from fuzzkit.formats.foreign_common import ExportError
 from fuzzkit.formats.registry import available, dumps, load
-from fuzzkit.fuzzy.type2_model import Type2RuleBase
 from fuzzkit.formats.yaml_reader import loads_rulebase
 from fuzzkit.formats.yaml_writer import dump
 from fuzzkit.fuzzy import membership
 from fuzzkit.fuzzy.inference import evaluate
 from fuzzkit.fuzzy.model import Compound, RuleBase, Term, Variable
+from fuzzkit.fuzzy.type2_model import Type2RuleBase
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "docs" / "examples"
