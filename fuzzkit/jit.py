@@ -115,3 +115,11 @@ _install_locators()
 def jit(fn: F) -> F:
     """Compile ``fn`` with ``numba.njit(cache=True)``: nopython, cached on disk, errors at call."""
     return cast(F, numba.njit(cache=True)(fn))
+
+
+def has_cached_code(kernel: Any) -> bool:
+    """True when ``kernel`` (a function compiled by :func:`jit`) has machine code in its disk
+    cache for the current sources: its index file is there, current (stamp and numba version)
+    and not empty. The next process to call it with those argument types loads instead of
+    compiling."""
+    return bool(kernel._cache._cache_file._load_index())
