@@ -1,20 +1,29 @@
-"""A compiled kernel's cache key covers its module's import closure, and nothing more.
+"""A compiled kernel's cache key covers its module's import closure, and nothing more; the
+kernels are warmed before the test workers start.
 
 The closure rules are checked on small package trees written here (an edit outside the closure
 keeps the digest, an edit inside it, at any depth, or a move changes it); then the real package's
-kernels are checked to be stamped with their own module's closure.
+kernels are checked to be stamped with their own module's closure. Compiling every kernel from
+an empty cache takes about a minute of CPU, so no test here does it end to end:
+``python -m fuzzkit.studies.compiled.warm`` with an empty ``NUMBA_CACHE_DIR`` does, by hand.
 """
 
 from __future__ import annotations
 
+import importlib
+import sys
 from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
 
 import numba
 import pytest
 from numba.core.registry import CPUDispatcher
 
 from fuzzkit import jit as jit_module
+from fuzzkit.errors import ToolchainError
 from fuzzkit.import_closure import ImportGraph
+from fuzzkit.studies.compiled import warm as warm_module
 
 #: The package's kernel modules: every module that compiles a function with ``fuzzkit.jit``.
 KERNEL_MODULES = (
@@ -107,14 +116,15 @@ def test_an_import_under_if_try_or_class_counts(tree: Path) -> None:
         {
             "pkg/guarded.py": (
                 "import sys\n"
-                "if sys.platform:\n    from pkg import deep\nelse:\n    pass\n"
+                "if sys.platform == 'never':\n    pass\nelse:\n    from pkg import deep\n"
                 "try:\n    pass\nexcept ImportError:\n    from pkg.sub import consts\n"
+                "finally:\n    from pkg.mapped import util\n"
                 "class Holder:\n    from pkg import lazy\n"
             )
         },
     )
     closure = _graph(tree).closure("pkg.guarded")
-    assert {"pkg.deep", "pkg.sub.consts", "pkg.lazy"} <= set(closure)
+    assert {"pkg.deep", "pkg.sub.consts", "pkg.mapped.util", "pkg.lazy"} <= set(closure)
 
 
 @pytest.mark.parametrize(
@@ -245,3 +255,103 @@ def test_code_outside_the_package_keeps_numba_locators() -> None:
     # this test file is not a fuzzkit source: numba's own locator serves it
     locator = dispatcher._cache._impl.locator
     assert not isinstance(locator, jit_module._ClosureStamp)
+
+
+# Warming.
+
+
+def test_every_kernel_module_is_reached_by_a_warming_step() -> None:
+    graph = jit_module.package_graph()
+    reached: set[str] = set()
+    for step in warm_module.STEPS:
+        for kernel in step.kernels():
+            reached.update(graph.closure(kernel.py_func.__module__))
+    assert set(KERNEL_MODULES) <= reached
+
+
+def test_has_cached_code_sees_the_disk_cache(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    source = tmp_path / "tiny_kernel.py"
+    source.write_text("import numba\n@numba.njit(cache=True)\ndef twice(x):\n    return 2.0 * x\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+
+    def fresh() -> Any:
+        sys.modules.pop("tiny_kernel", None)
+        return importlib.import_module("tiny_kernel").twice
+
+    kernel = fresh()
+    assert not jit_module.has_cached_code(kernel)
+    assert kernel(1.5) == 3.0  # compiles and saves
+    assert jit_module.has_cached_code(fresh())  # another import of it would load
+    source.write_text(source.read_text().replace("2.0 *", "3.0 *"))  # the source changed
+    assert not jit_module.has_cached_code(fresh())
+
+
+def _steps(log: list[str], fail: dict[str, Exception]) -> tuple[Any, ...]:
+    """Three warming steps, ``a``, ``b``, ``c``, whose kernel is their name; each logs its run."""
+
+    def step(name: str) -> Any:
+        def run() -> None:
+            log.append(name)
+            if name in fail:
+                raise fail[name]
+
+        return warm_module.Step(name, lambda: (name,), run)
+
+    return tuple(step(name) for name in ("a", "b", "c"))
+
+
+def test_warm_runs_only_what_is_not_cached_and_reports_why(monkeypatch: pytest.MonkeyPatch) -> None:
+    log: list[str] = []
+    steps = _steps(log, {"c": ToolchainError("no C compiler found")})
+    monkeypatch.setattr(warm_module, "STEPS", steps)
+    monkeypatch.setattr(warm_module, "has_cached_code", lambda kernel: kernel == "b")
+    outcomes: dict[str, str] = {}
+    warm_module.warm(lambda name, outcome, seconds: outcomes.__setitem__(name, outcome))
+    assert log == ["a", "c"]  # b's kernel was in the cache: not run
+    assert outcomes == {"a": "compiled", "b": "cached", "c": "not here: no C compiler found"}
+
+
+def test_warm_lets_a_real_failure_through(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(warm_module, "STEPS", _steps([], {"b": ValueError("broken")}))
+    monkeypatch.setattr(warm_module, "has_cached_code", lambda kernel: False)
+    with pytest.raises(ValueError, match="broken"):
+        warm_module.warm()
+
+
+def _conftest(config: pytest.Config) -> Any:
+    for plugin in config.pluginmanager.get_plugins():
+        if Path(getattr(plugin, "__file__", "")) == Path(__file__).with_name("conftest.py"):
+            return plugin
+    raise LookupError("tests/conftest.py is not loaded")
+
+
+@pytest.mark.parametrize(
+    "numprocesses, worker, collect_only, warms",
+    [
+        (2, False, False, True),  # the controller of `-n 2`: before its workers start
+        (2, True, False, False),  # a worker: the controller warmed already
+        (1, False, False, False),  # one worker compiles once anyway
+        (0, False, False, False),  # `-n 0`
+        (None, False, False, False),  # no -n at all (or xdist not loaded)
+        (2, False, True, False),  # --collect-only runs nothing
+    ],
+)
+def test_the_session_hook_warms_only_the_controller_of_several_workers(
+    pytestconfig: pytest.Config,
+    monkeypatch: pytest.MonkeyPatch,
+    numprocesses: int | None,
+    worker: bool,
+    collect_only: bool,
+    warms: bool,
+) -> None:
+    calls: list[None] = []
+    monkeypatch.setattr(warm_module, "warm", lambda: calls.append(None))
+    config: Any = SimpleNamespace(
+        option=SimpleNamespace(numprocesses=numprocesses, collectonly=collect_only)
+    )
+    if worker:
+        config.workerinput = {"workerid": "gw0"}
+    _conftest(pytestconfig).pytest_sessionstart(SimpleNamespace(config=config))
+    assert calls == ([None] if warms else [])
