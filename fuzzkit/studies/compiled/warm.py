@@ -15,6 +15,7 @@ float where an int goes) would be compiled again on the real call, not loaded.
 
 from __future__ import annotations
 
+import importlib
 import sys
 import time
 from collections.abc import Callable
@@ -109,60 +110,50 @@ def _exact_grid_surface() -> None:
 
 @dataclass(frozen=True, slots=True)
 class Step:
-    """One warming call: ``run`` calls ``kernels()`` (the kernels it calls from Python; their
-    callees are compiled into them) with the argument types of the real calls."""
+    """One warming call: ``run`` calls the ``kernels`` (``module:name``; the ones it calls from
+    Python, their callees are compiled into them) with the argument types of the real calls."""
 
     name: str
-    kernels: Callable[[], tuple[Any, ...]]
+    kernels: tuple[str, ...]
     run: Callable[[], None]
 
-
-def _loops() -> tuple[Any, ...]:
-    from fuzzkit.studies.compiled.arm6_run import run_arm6
-
-    return (run_arm6,)
-
-
-def _planar_loops() -> tuple[Any, ...]:
-    from fuzzkit.studies.compiled.planar_run import run_planar
-
-    return (run_planar,)
-
-
-def _height_field_kernels() -> tuple[Any, ...]:
-    from fuzzkit.plants.arm6_heightfield import height_field_contact
-
-    return (height_field_contact,)
-
-
-def _table_kernels() -> tuple[Any, ...]:
-    from fuzzkit.studies.compiled.table import table2
-
-    return (table2,)
-
-
-def _c_surface_kernels() -> tuple[Any, ...]:
-    from fuzzkit.studies.compiled.generated_c import call_c_surface
-
-    return (call_c_surface,)
-
-
-def _grid_kernels() -> tuple[Any, ...]:
-    from fuzzkit.fuzzy.grid_kernel import grid_defuzzify
-
-    return (grid_defuzzify,)
+    def dispatchers(self) -> list[Any]:
+        """The kernels, imported."""
+        found = []
+        for ref in self.kernels:
+            module, _, name = ref.partition(":")
+            found.append(getattr(importlib.import_module(module), name))
+        return found
 
 
 #: What :func:`warm` runs, in order.
 STEPS = (
-    Step("arm6 loop (plant, faults, latency, generated C controller)", _loops, _arm6_loop),
     Step(
-        "planar loop (Chipmunk calls, faults, generated C controller)", _planar_loops, _planar_loop
+        "arm6 loop (plant, faults, latency, generated C controller)",
+        ("fuzzkit.studies.compiled.arm6_run:run_arm6",),
+        _arm6_loop,
     ),
-    Step("height-field contact, called from Python", _height_field_kernels, _height_field),
-    Step("lookup-table surface", _table_kernels, _table_surface),
-    Step("generated C surface through ctypes", _c_surface_kernels, _c_surface),
-    Step("exact engine on a smooth output (grid kernel)", _grid_kernels, _exact_grid_surface),
+    Step(
+        "planar loop (Chipmunk calls, faults, generated C controller)",
+        ("fuzzkit.studies.compiled.planar_run:run_planar",),
+        _planar_loop,
+    ),
+    Step(
+        "height-field contact, called from Python",
+        ("fuzzkit.plants.arm6_heightfield:height_field_contact",),
+        _height_field,
+    ),
+    Step("lookup-table surface", ("fuzzkit.studies.compiled.table:table2",), _table_surface),
+    Step(
+        "generated C surface through ctypes",
+        ("fuzzkit.studies.compiled.generated_c:call_c_surface",),
+        _c_surface,
+    ),
+    Step(
+        "exact engine on a smooth output (grid kernel)",
+        ("fuzzkit.fuzzy.grid_kernel:grid_defuzzify",),
+        _exact_grid_surface,
+    ),
 )
 
 
@@ -178,7 +169,7 @@ def warm(report: Callable[[str, str, float], None] | None = None) -> None:
     """
     for step in STEPS:
         start = time.perf_counter()
-        if all(has_cached_code(kernel) for kernel in step.kernels()):
+        if all(has_cached_code(kernel) for kernel in step.dispatchers()):
             outcome = "cached"
         else:
             try:
