@@ -26,6 +26,11 @@ Two things are deliberately *not* followed, because neither can change what a ke
   fuzzkit.planar_sim import PlanarArmPlant``, is followed. (A package ``__init__`` that
   imported everything would otherwise put the whole package back in every key.)
 
+Parsing is the one cost (a few hundred milliseconds for the run loops' closures); what a file's
+parse found is kept beside its bytecode, ``__pycache__/NAME.imports.json``, keyed by the
+sha256 of its source as a ``.pyc`` is by its stamp, so a process parses only what was edited
+since (:class:`ImportGraph` with ``keep=True``; a folder that cannot be written just parses).
+
 Only modules inside the given roots are followed (the package and the folders mapped into it);
 numpy, numba and the standard library are numba's own business (its cache is per version).
 Names reached by other means (``importlib.import_module``, monkeypatching) are not seen: no
@@ -36,8 +41,35 @@ from __future__ import annotations
 
 import ast
 import hashlib
+import json
 from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
 from pathlib import Path
+
+from fuzzkit.errors import ConfigError
+from fuzzkit.fileio import write_atomic
+
+
+@dataclass(frozen=True, slots=True)
+class ImportStatement:
+    """What decides which modules one import statement binds names from: ``import names``
+    (``aliased``: which of them have an ``as``), or ``from module import names`` at ``level``
+    (the leading dots of a relative import)."""
+
+    is_from: bool
+    level: int
+    module: str
+    names: tuple[str, ...]
+    aliased: tuple[bool, ...]
+
+    @classmethod
+    def of(cls, node: ast.Import | ast.ImportFrom) -> ImportStatement:
+        """The statement of an ``import`` or ``from ... import`` node."""
+        names = tuple(alias.name for alias in node.names)
+        aliased = tuple(alias.asname is not None for alias in node.names)
+        if isinstance(node, ast.Import):
+            return cls(False, 0, "", names, aliased)
+        return cls(True, node.level, node.module or "", names, aliased)
 
 
 class ImportGraph:
@@ -46,15 +78,19 @@ class ImportGraph:
     ``roots`` maps a package name to the folder holding its source: ``{"fuzzkit":
     Path("fuzzkit"), "fuzzkit.codegen": Path("codegen")}`` (the longest name that prefixes a
     module wins). The graph reads files when first asked about them and remembers the answer:
-    make a new graph to see an edited tree.
+    make a new graph to see an edited tree. ``keep``: keep each parse on disk (see the module
+    docstring) and reuse the kept parses whose source is unchanged.
     """
 
-    def __init__(self, roots: Mapping[str, Path]) -> None:
+    def __init__(self, roots: Mapping[str, Path], *, keep: bool = False) -> None:
+        self._keep = keep
         # longest package name first, so that a mapped subpackage wins over its parent
         self._roots = sorted(
             ((name, Path(folder).resolve()) for name, folder in roots.items()),
             key=lambda item: -len(item[0]),
         )
+        self._paths: dict[str, Path | None] = {}
+        self._sources: dict[Path, bytes] = {}
         self._imports: dict[str, frozenset[str]] = {}
         self._closures: dict[str, dict[str, Path]] = {}
         self._digests: dict[str, str] = {}
@@ -62,6 +98,11 @@ class ImportGraph:
     def path_of(self, module: str) -> Path | None:
         """The source file of ``module`` (a package's ``__init__.py``), or None when it is not
         under the roots or has no source file."""
+        if module not in self._paths:
+            self._paths[module] = self._find(module)
+        return self._paths[module]
+
+    def _find(self, module: str) -> Path | None:
         for name, folder in self._roots:
             if module == name or module.startswith(name + "."):
                 base = folder.joinpath(*module[len(name) :].split(".")[1:])
@@ -90,10 +131,9 @@ class ImportGraph:
             path = self.path_of(module)
             found: set[str] = set()
             if path is not None:
-                tree = ast.parse(path.read_bytes(), filename=str(path))
                 package = module if path.name == "__init__.py" else module.rpartition(".")[0]
-                for node in _module_scope(tree):
-                    found.update(self._bound_from(node, package))
+                for statement in self._statements(path):
+                    found.update(self._bound_from(statement, package))
             self._imports[module] = frozenset(found)
         return self._imports[module]
 
@@ -107,7 +147,7 @@ class ImportGraph:
         if module not in self._digests:
             sha = hashlib.sha256()
             for name, path in sorted(self._closure_files(module).items()):
-                sha.update(name.encode("utf-8") + b"\0" + path.read_bytes() + b"\0")
+                sha.update(name.encode("utf-8") + b"\0" + self._source(path) + b"\0")
             self._digests[module] = sha.hexdigest()
         return self._digests[module]
 
@@ -125,31 +165,68 @@ class ImportGraph:
             self._closures[module] = found
         return self._closures[module]
 
-    def _bound_from(self, node: ast.Import | ast.ImportFrom, package: str) -> Iterator[str]:
+    def _bound_from(self, statement: ImportStatement, package: str) -> Iterator[str]:
         """The modules under the roots that one import statement binds names from."""
-        if isinstance(node, ast.Import):
-            for alias in node.names:
-                parts = alias.name.split(".")
+        if not statement.is_from:
+            for name, aliased in zip(statement.names, statement.aliased, strict=True):
+                parts = name.split(".")
                 # `import a.b.c` binds `a`: every prefix is reachable; `as m` binds the last only
-                first = len(parts) if alias.asname else 1
+                first = len(parts) if aliased else 1
                 for end in range(first, len(parts) + 1):
                     yield from self._known(".".join(parts[:end]))
             return
-        base = node.module or ""
-        if node.level:
-            up = package.split(".")[: len(package.split(".")) - (node.level - 1)]
+        base = statement.module
+        if statement.level:
+            up = package.split(".")[: len(package.split(".")) - (statement.level - 1)]
             base = ".".join([*up, base] if base else up)
-        for alias in node.names:
+        for name in statement.names:
             # `from a.b import y` binds the submodule a.b.y if there is one, else a name of a.b
-            submodule = f"{base}.{alias.name}"
-            if alias.name != "*" and self.path_of(submodule) is not None:
+            submodule = f"{base}.{name}"
+            if name != "*" and self.path_of(submodule) is not None:
                 yield submodule
             else:
                 yield from self._known(base)
 
+    def _source(self, path: Path) -> bytes:
+        """The bytes of ``path``, read once: the parse and the digest see the same text."""
+        if path not in self._sources:
+            self._sources[path] = path.read_bytes()
+        return self._sources[path]
+
+    def _statements(self, path: Path) -> tuple[ImportStatement, ...]:
+        """The module-scope import statements of the source file ``path``, parsed or kept."""
+        source = self._source(path)
+        if not self._keep:
+            return _parse(source, path)
+        sha = hashlib.sha256(source).hexdigest()
+        kept = path.parent / "__pycache__" / f"{path.stem}.imports.json"
+        try:
+            data = json.loads(kept.read_bytes())
+            if data["sha256"] == sha:
+                return tuple(
+                    ImportStatement(f, lv, m, tuple(n), tuple(a))
+                    for f, lv, m, n, a in data["statements"]
+                )
+        except (OSError, ValueError, KeyError, TypeError):
+            pass  # none kept yet, or unreadable: parse
+        statements = _parse(source, path)
+        rows = [[s.is_from, s.level, s.module, s.names, s.aliased] for s in statements]
+        try:
+            kept.parent.mkdir(exist_ok=True)
+            write_atomic(kept, json.dumps({"sha256": sha, "statements": rows}))
+        except (OSError, ConfigError):
+            pass  # a read-only install parses in every process: slower, never wrong
+        return statements
+
     def _known(self, module: str) -> Iterator[str]:
         if self.path_of(module) is not None:
             yield module
+
+
+def _parse(source: bytes, path: Path) -> tuple[ImportStatement, ...]:
+    """The module-scope import statements of a module's source."""
+    tree = ast.parse(source, filename=str(path))
+    return tuple(ImportStatement.of(node) for node in _module_scope(tree))
 
 
 def _module_scope(tree: ast.Module) -> Iterator[ast.Import | ast.ImportFrom]:

@@ -71,8 +71,9 @@ def package_roots() -> dict[str, Path]:
 
 @functools.cache
 def package_graph() -> ImportGraph:
-    """The import graph of this installation's sources, shared by every kernel of the process."""
-    return ImportGraph(package_roots())
+    """The import graph of this installation's sources, shared by every kernel of the process
+    (its parses kept on disk for the next process)."""
+    return ImportGraph(package_roots(), keep=True)
 
 
 class _ClosureStamp:

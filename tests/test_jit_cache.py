@@ -11,6 +11,7 @@ an empty cache takes about a minute of CPU, so no test here does it end to end:
 from __future__ import annotations
 
 import importlib
+import json
 import sys
 from pathlib import Path
 from types import SimpleNamespace
@@ -173,6 +174,26 @@ def test_a_move_changes_the_digest_even_with_the_same_text(tree: Path) -> None:
     (tree / "pkg" / "moved.py").rename(tree / "pkg" / "deep.py")
     _write(tree, {"pkg/sub/callee.py": TREE["pkg/sub/callee.py"]})
     assert _graph(tree).digest("pkg.sub.kern") == before
+
+
+def test_a_kept_parse_is_used_while_its_source_is_unchanged(tree: Path) -> None:
+    def graph() -> ImportGraph:
+        return ImportGraph({"pkg": tree / "pkg", "pkg.mapped": tree / "mapped"}, keep=True)
+
+    expected = _graph(tree).closure("pkg.sub.kern")
+    assert graph().closure("pkg.sub.kern") == expected
+    kept = tree / "pkg" / "sub" / "__pycache__" / "callee.imports.json"
+    data = json.loads(kept.read_text())
+    # what the next graph finds comes from the kept parse: make it say `from pkg import lazy`
+    data["statements"] = [[True, 0, "pkg", ["lazy"], [False]]]
+    kept.write_text(json.dumps(data))
+    assert "pkg.lazy" in graph().closure("pkg.sub.kern")
+    # once the source changes, the kept parse is stale: the source is parsed again
+    _write(tree, {"pkg/sub/callee.py": TREE["pkg/sub/callee.py"] + "# edited\n"})
+    assert graph().closure("pkg.sub.kern") == expected
+    kept.write_text("{not json")  # and an unreadable one is parsed over
+    assert graph().closure("pkg.sub.kern") == expected
+    assert json.loads(kept.read_text())["statements"]
 
 
 def test_modules_map_to_their_files_and_back(tree: Path) -> None:
