@@ -379,3 +379,20 @@ def test_the_session_hook_warms_only_the_controller_of_several_workers(
         config.workerinput = {"workerid": "gw0"}
     _conftest(pytestconfig).pytest_sessionstart(SimpleNamespace(config=config))
     assert calls == ([None] if warms else [])
+
+
+def test_a_failing_warm_up_is_reported_and_the_session_goes_on(
+    pytestconfig: pytest.Config, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def broken() -> None:
+        raise ValueError("a kernel does not type")
+
+    lines: list[str] = []
+    reporter = SimpleNamespace(write_line=lines.append)
+    monkeypatch.setattr(warm_module, "warm", broken)
+    config: Any = SimpleNamespace(
+        option=SimpleNamespace(numprocesses=2, collectonly=False),
+        pluginmanager=SimpleNamespace(get_plugin=lambda name: reporter),
+    )
+    _conftest(pytestconfig).pytest_sessionstart(SimpleNamespace(config=config))
+    assert lines == ["kernel warm-up failed (ValueError: a kernel does not type)"]
