@@ -156,6 +156,15 @@ def test_mutated_rule_bases_give_located_errors_or_finite_outputs(fmt: str, coun
     assert not failures, f"{len(failures)} of {count} mutants:\n" + "\n".join(failures[:15])
 
 
+def test_make_tests_mutants_are_the_first_of_make_verifys() -> None:
+    """The covering count proves a part of the full run, not other mutants: the same seeded
+    sequence, cut short."""
+    sources = {f"{name}.yaml": shipped_scenario_text(name) for name in SHIPPED}
+    short = list(mutants(sources, COVER_MUTANTS, SEED))
+    assert short == list(mutants(sources, MUTANTS, SEED))[:COVER_MUTANTS]
+    assert len({m.text for m in short}) > COVER_MUTANTS // 2  # and they differ
+
+
 @pytest.mark.parametrize("fmt", sorted(READERS))
 def test_a_value_replaced_by_any_keyword_of_the_file_gives_a_located_error(fmt: str) -> None:
     """Every ``shape:`` (``type``, ``MF``, ``TERM``...) value of one file of each format, and

@@ -310,6 +310,13 @@ def _cover_mutants() -> list[tuple[str, str]]:
     return [[m for m in MUTANTS if m[0] == cls][i] for i, cls in enumerate(classes)]
 
 
+def test_make_test_changes_one_parameter_per_mutant_class() -> None:
+    cover = _cover_mutants()
+    assert set(cover) <= set(MUTANTS) and len(MUTANTS) == 22
+    assert sorted(cls for cls, _ in cover) == sorted({cls for cls, _ in MUTANTS})  # once each
+    assert len({key for _, key in cover}) == len(cover)  # on distinct parameters
+
+
 def _mutant(spec: ControllerSpec, source: str, cls: str, key: str) -> tuple[str, str]:
     """(exact text in the generated C ``source``, its replacement) for the mutant of class
     ``cls`` of parameter ``key``; checks first that the text holds the spec's value."""

@@ -129,7 +129,9 @@ def _build(release: bool, base: Path) -> tuple[Path, Path]:
         ),
     )
     out = tmp / "dist"
-    how = [] if release else ["--sdist", "--wheel", "--no-isolation"]
+    # the quick build skips the dependency check: build-system.requires names `wheel`, which
+    # setuptools (>= 70.1) no longer needs to build one, and which the lock does not install
+    how = [] if release else ["--sdist", "--wheel", "--no-isolation", "--skip-dependency-check"]
     built = subprocess.run(
         [sys.executable, "-m", "build", *how, "--outdir", str(out), str(src)],
         capture_output=True,

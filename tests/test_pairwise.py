@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Hashable, Sequence
+from typing import Any
 
 import pytest
-from _pairwise import pairwise
+from _pairwise import COVER_SEEDS, VERIFY_SEEDS, matrix_params, pairwise
 
 AXIS_SETS: dict[str, list[list[Hashable]]] = {
     # the safety matrix: impl, experiment, controller, fault, plant
@@ -77,3 +78,26 @@ def test_one_axis_is_its_values_and_an_empty_axis_is_refused() -> None:
     assert pairwise([["a", "b"]]) == [("a",), ("b",)]
     with pytest.raises(ValueError, match="at least one value"):
         pairwise([["a"], []])
+
+
+def _names(case: Any) -> set[str]:
+    return {m.name for m in case.marks}
+
+
+def test_matrix_params_are_the_covering_set_at_two_seeds_and_the_marked_full_product() -> None:
+    axes = AXIS_SETS["safety"]
+    cases = matrix_params(axes, marks={"generated-c": pytest.mark.needs_cc})
+    cover = [c for c in cases if c.id.startswith("cover-")]
+    full = [c for c in cases if c.id.startswith("full-")]
+    assert len(cover) + len(full) == len(cases)
+    assert [tuple(c.values) for c in cover] == [
+        (*row, seed) for row in pairwise(axes) for seed in COVER_SEEDS
+    ]
+    product = set(itertools.product(*axes, VERIFY_SEEDS))
+    assert {tuple(c.values) for c in full} == product and len(full) == len(product)
+    assert len(full) == 120 * 50
+    assert all("verify" in _names(c) for c in full)
+    assert not any("verify" in _names(c) for c in cover)  # make test runs these
+    for c in cases:  # the compiler mark on exactly the cases that need one
+        assert ("needs_cc" in _names(c)) == ("generated-c" in c.values), c.id
+    assert len({c.id for c in cases}) == len(cases)  # ids unique: each case selectable
