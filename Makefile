@@ -58,14 +58,15 @@ test: $(STAMP)
 	$(call timed,lint)
 	$(call timed,typecheck)
 	$(call timed,imports)
-	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) -q -p no:cacheprovider -m "not ($(PEER_MARKS))" \
-		--durations=25
+	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) -q -p no:cacheprovider \
+		-m "not ($(PEER_MARKS)) and not verify" --durations=25
 
-# The safety matrix (tests/test_safety.py) over 50 noise/fault seeds per case instead of the
-# 10 of `make test`: every experiment x controller x fault kind x plant.
+# The deep versions of the matrices that `make test` runs a covering set of (every value and
+# every pair of values of two axes, tests/_pairwise.py): the tests marked `verify`, i.e. the
+# full safety products at 50 seeds, every generated-C mutant, the full fuzz counts, the release
+# build of the sdist and wheel (docs/development.md lists them with their sizes).
 verify: $(STAMP)
-	FUZZKIT_VERIFY_SEEDS=50 $(BIN)/python -m pytest -n $(PYTEST_WORKERS) -q -p no:cacheprovider \
-		tests/test_safety.py
+	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) -q -p no:cacheprovider -m verify --durations=25
 
 # The suite against the newest versions pyproject.toml's ranges allow (not the lock): run it on
 # purpose to catch a dependency drift before the next `make lock` does.
