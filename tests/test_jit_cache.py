@@ -13,6 +13,7 @@ from __future__ import annotations
 import importlib
 import json
 import sys
+import threading
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
@@ -336,6 +337,18 @@ def test_warm_runs_only_what_is_not_cached_and_reports_why(monkeypatch: pytest.M
     assert outcomes == {"a": "compiled", "b": "cached", "c": "not here: no C compiler found"}
 
 
+@pytest.mark.parametrize("part, runs", [((0, 2), ["a", "c"]), ((1, 2), ["b"]), ((2, 3), ["c"])])
+def test_the_parts_of_a_warm_up_share_the_steps(
+    monkeypatch: pytest.MonkeyPatch, part: tuple[int, int], runs: list[str]
+) -> None:
+    log: list[str] = []
+    monkeypatch.setattr(warm_module, "STEPS", _steps(log, {}))
+    monkeypatch.setattr(warm_module.Step, "dispatchers", lambda step: [step.name])
+    monkeypatch.setattr(warm_module, "has_cached_code", lambda kernel: False)
+    warm_module.warm(part=part)
+    assert log == runs
+
+
 def test_warm_lets_a_real_failure_through(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(warm_module, "STEPS", _steps([], {"b": ValueError("broken")}))
     monkeypatch.setattr(warm_module.Step, "dispatchers", lambda step: [step.name])
@@ -354,8 +367,9 @@ def _conftest(config: pytest.Config) -> Any:
 @pytest.mark.parametrize(
     "numprocesses, worker, collect_only, warms",
     [
-        (2, False, False, True),  # the controller of `-n 2`: before its workers start
-        (2, True, False, False),  # a worker: the controller warmed already
+        (2, False, False, True),  # the controller of `-n 2`: in the background, 2 processes
+        (3, False, False, True),
+        (2, True, False, False),  # a worker: the controller warms
         (1, False, False, False),  # one worker compiles once anyway
         (0, False, False, False),  # `-n 0`
         (None, False, False, False),  # no -n at all (or xdist not loaded)
@@ -370,29 +384,140 @@ def test_the_session_hook_warms_only_the_controller_of_several_workers(
     collect_only: bool,
     warms: bool,
 ) -> None:
-    calls: list[None] = []
-    monkeypatch.setattr(warm_module, "warm", lambda: calls.append(None))
+    calls: list[int] = []
+    started = object()
+
+    def background(jobs: int) -> object:
+        calls.append(jobs)
+        return started
+
+    monkeypatch.setattr(warm_module, "warm_in_background", background)
+    monkeypatch.setattr(warm_module, "warm", lambda: pytest.fail("warmed in the foreground"))
     config: Any = SimpleNamespace(
-        option=SimpleNamespace(numprocesses=numprocesses, collectonly=collect_only)
+        option=SimpleNamespace(numprocesses=numprocesses, collectonly=collect_only),
+        stash=pytest.Stash(),
     )
     if worker:
         config.workerinput = {"workerid": "gw0"}
-    _conftest(pytestconfig).pytest_sessionstart(SimpleNamespace(config=config))
-    assert calls == ([None] if warms else [])
+    hooks = _conftest(pytestconfig)
+    hooks.pytest_sessionstart(SimpleNamespace(config=config))
+    assert calls == ([numprocesses] if warms else [])
+    assert (config.stash.get(hooks._WARMING, None) is started) == warms
 
 
-def test_a_failing_warm_up_is_reported_and_the_session_goes_on(
+def _reporting_config(lines: list[str]) -> Any:
+    reporter = SimpleNamespace(write_line=lines.append)
+    return SimpleNamespace(
+        option=SimpleNamespace(numprocesses=2, collectonly=False),
+        pluginmanager=SimpleNamespace(get_plugin=lambda name: reporter),
+        stash=pytest.Stash(),
+    )
+
+
+def test_a_failing_warm_up_is_reported_at_the_end_and_the_session_goes_on(
+    pytestconfig: pytest.Config, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    hooks = _conftest(pytestconfig)
+    lines: list[str] = []
+    config = _reporting_config(lines)
+    failed = SimpleNamespace(finish=lambda: "exit 1: ValueError: a kernel does not type")
+    monkeypatch.setattr(warm_module, "warm_in_background", lambda jobs: failed)
+    hooks.pytest_sessionstart(SimpleNamespace(config=config))
+    assert lines == []  # the session goes on
+    hooks.pytest_sessionfinish(SimpleNamespace(config=config))
+    assert lines == ["kernel warm-up failed (exit 1: ValueError: a kernel does not type)"]
+
+
+def test_without_flock_the_controller_warms_in_the_foreground_and_reports_a_failure(
     pytestconfig: pytest.Config, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     def broken() -> None:
         raise ValueError("a kernel does not type")
 
     lines: list[str] = []
-    reporter = SimpleNamespace(write_line=lines.append)
+    config = _reporting_config(lines)
+    monkeypatch.setattr(warm_module, "warm_in_background", lambda jobs: None)
     monkeypatch.setattr(warm_module, "warm", broken)
-    config: Any = SimpleNamespace(
-        option=SimpleNamespace(numprocesses=2, collectonly=False),
-        pluginmanager=SimpleNamespace(get_plugin=lambda name: reporter),
-    )
     _conftest(pytestconfig).pytest_sessionstart(SimpleNamespace(config=config))
     assert lines == ["kernel warm-up failed (ValueError: a kernel does not type)"]
+
+
+def _waiter() -> tuple[threading.Thread, threading.Event]:
+    done = threading.Event()
+
+    def wait() -> None:
+        warm_module.wait_for_warming()
+        done.set()
+
+    return threading.Thread(target=wait, daemon=True), done
+
+
+def test_a_worker_waits_while_the_warm_up_holds_its_lock(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import fcntl
+
+    lock = tmp_path / "warm.lock"
+    lock.write_text("")
+    monkeypatch.setenv(warm_module.LOCK_ENV, str(lock))
+    with lock.open() as held:
+        fcntl.flock(held, fcntl.LOCK_EX)
+        thread, done = _waiter()
+        thread.start()
+        assert not done.wait(0.5)  # blocked while the lock is held
+    assert done.wait(10)  # released: the worker goes on
+    lock.unlink()
+    thread, done = _waiter()
+    thread.start()
+    assert done.wait(10)  # a lock file already cleaned up: nothing to wait for
+    monkeypatch.delenv(warm_module.LOCK_ENV)
+    warm_module.wait_for_warming()  # no warm-up at all
+
+
+def test_the_background_processes_hold_the_lock_until_the_last_one_exits(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # stand-ins for the warming processes: part k sleeps k/2 s, then says it finished
+    def command(part: int, jobs: int) -> list[str]:
+        flag = tmp_path / f"part{part}of{jobs}"
+        script = (
+            f"import pathlib, time; time.sleep({part} / 2); pathlib.Path({str(flag)!r}).touch()"
+        )
+        return [sys.executable, "-c", script]
+
+    monkeypatch.delenv(warm_module.LOCK_ENV, raising=False)
+    warming = warm_module.warm_in_background(2, command)
+    assert warming is not None
+    try:
+        import os
+
+        assert os.environ[warm_module.LOCK_ENV] == str(warming.lock)  # what workers inherit
+        warm_module.wait_for_warming()
+        assert (tmp_path / "part0of2").exists() and (tmp_path / "part1of2").exists()
+    finally:
+        assert warming.finish() is None
+        monkeypatch.delenv(warm_module.LOCK_ENV)
+    assert not warming.lock.exists() and not warming.log.exists()
+
+
+def test_a_background_process_that_fails_is_reported_with_its_output(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    def command(part: int, jobs: int) -> list[str]:
+        if part == 1:
+            return [sys.executable, "-c", "raise SystemExit('part 1 broke')"]
+        return [sys.executable, "-c", "pass"]
+
+    monkeypatch.delenv(warm_module.LOCK_ENV, raising=False)
+    warming = warm_module.warm_in_background(2, command)
+    assert warming is not None
+    why = warming.finish()
+    monkeypatch.delenv(warm_module.LOCK_ENV)
+    assert why is not None and why.startswith("exit 1: ") and "part 1 broke" in why
+
+
+@pytest.mark.parametrize("text", ["1/1", "x/2", "2", "-1/2"])
+def test_a_bad_part_is_refused(text: str) -> None:
+    with pytest.raises(SystemExit) as exc:
+        warm_module.main(["--part", text])
+    assert exc.value.code == 2

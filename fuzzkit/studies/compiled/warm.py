@@ -15,11 +15,16 @@ float where an int goes) would be compiled again on the real call, not loaded.
 
 from __future__ import annotations
 
+import argparse
 import importlib
+import os
+import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -157,7 +162,9 @@ STEPS = (
 )
 
 
-def warm(report: Callable[[str, str, float], None] | None = None) -> None:
+def warm(
+    report: Callable[[str, str, float], None] | None = None, part: tuple[int, int] = (0, 1)
+) -> None:
     """Run each step of :data:`STEPS` whose kernels are not all in numba's disk cache yet.
 
     ``report(step, outcome, seconds)`` after each one; ``outcome`` is ``"compiled"``,
@@ -165,9 +172,11 @@ def warm(report: Callable[[str, str, float], None] | None = None) -> None:
     or why it could not run here (no C compiler: the compiled loop's controller and the C
     surface are generated C; a machine the planar loop's Chipmunk calls are not lowered for);
     such kernels compile on first use, as without warming. Any other error propagates: the
-    step's call would fail in real use too.
+    step's call would fail in real use too. ``part = (k, n)`` runs only every n-th step from
+    the k-th, so that n processes share the steps (:func:`warm_in_background`).
     """
-    for step in STEPS:
+    index, count = part
+    for step in STEPS[index::count]:
         start = time.perf_counter()
         if all(has_cached_code(kernel) for kernel in step.dispatchers()):
             outcome = "cached"
@@ -181,14 +190,107 @@ def warm(report: Callable[[str, str, float], None] | None = None) -> None:
             report(step.name, outcome, time.perf_counter() - start)
 
 
-def main() -> int:
-    """Warm every kernel, printing each step, what it did and its wall time."""
+#: The environment variable that names the lock of a warm-up running in the background.
+LOCK_ENV = "FUZZKIT_WARM_LOCK"
+
+
+@dataclass(frozen=True, slots=True)
+class Warming:
+    """A warm-up running in the background: its processes, their log and the lock they hold."""
+
+    processes: tuple[subprocess.Popen[bytes], ...]
+    log: Path
+    lock: Path
+
+    def finish(self) -> str | None:
+        """Wait for the processes; why the warm-up failed (the log's last lines), or None."""
+        codes = [p.wait() for p in self.processes]
+        self.lock.unlink(missing_ok=True)
+        text = self.log.read_text(encoding="utf-8", errors="replace")
+        self.log.unlink(missing_ok=True)
+        if all(code == 0 for code in codes):
+            return None
+        return f"exit {max(codes, key=abs)}: " + " | ".join(text.strip().splitlines()[-3:])
+
+
+def _warm_part(part: int, jobs: int) -> list[str]:
+    return [sys.executable, "-m", "fuzzkit.studies.compiled.warm", "--part", f"{part}/{jobs}"]
+
+
+def warm_in_background(
+    jobs: int, command: Callable[[int, int], list[str]] = _warm_part
+) -> Warming | None:
+    """Start ``jobs`` processes that warm the kernels between them, while this process goes
+    on; processes started after it wait for them in :func:`wait_for_warming`. Part ``k`` runs
+    ``command(k, jobs)``: ``python -m fuzzkit.studies.compiled.warm --part k/jobs``.
+
+    The processes share one exclusive ``flock`` on a lock file, taken here before they start
+    and inherited by them, so it is released only when the last of them exits (or dies); the
+    file's path is put in this process's environment (:data:`LOCK_ENV`), which the processes
+    it starts later inherit. None where ``flock`` does not exist (then call :func:`warm`).
+    """
+    try:
+        import fcntl
+    except ImportError:  # not POSIX
+        return None
+    handle, name = tempfile.mkstemp(prefix="fuzzkit-warm-", suffix=".lock")
+    log = Path(name).with_suffix(".log")
+    fcntl.flock(handle, fcntl.LOCK_EX)
+    processes = []
+    with log.open("wb") as out:
+        for k in range(jobs):
+            processes.append(
+                subprocess.Popen(
+                    command(k, jobs), stdout=out, stderr=subprocess.STDOUT, pass_fds=(handle,)
+                )
+            )
+    os.close(handle)  # the lock is the processes' now
+    os.environ[LOCK_ENV] = name
+    return Warming(tuple(processes), log, Path(name))
+
+
+def wait_for_warming() -> None:
+    """Block until the warm-up named by :data:`LOCK_ENV` (if any) has finished."""
+    name = os.environ.get(LOCK_ENV)
+    if not name:
+        return
+    import fcntl
+
+    try:
+        handle = os.open(name, os.O_RDONLY)
+    except FileNotFoundError:  # finished and cleaned up already
+        return
+    try:
+        fcntl.flock(handle, fcntl.LOCK_SH)
+    finally:
+        os.close(handle)
+
+
+def _part(text: str) -> tuple[int, int]:
+    index, _, count = text.partition("/")
+    try:
+        k, n = int(index), int(count)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected K/N, got {text!r}") from None
+    if not 0 <= k < n:
+        raise argparse.ArgumentTypeError(f"expected 0 <= K < N, got {text!r}")
+    return k, n
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Warm every kernel (or one part of the steps), printing each step, what it did and its
+    wall time."""
+    parser = argparse.ArgumentParser(prog="python -m fuzzkit.studies.compiled.warm")
+    parser.add_argument(
+        "--part", type=_part, default=(0, 1), help="K/N: every N-th step from the K-th"
+    )
+    args = parser.parse_args(argv)
     total = time.perf_counter()
 
     def report(name: str, outcome: str, seconds: float) -> None:
         print(f"{seconds:7.2f} s  {name}: {outcome}", flush=True)
 
-    warm(report)
+    warm(report, args.part)
     print(f"{time.perf_counter() - total:7.2f} s  in all")
     return 0
 
