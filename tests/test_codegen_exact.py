@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _c_harness import HARNESS
 from _codegen_util import CC, CLANG, needs_cc, require_sanitizers, rulebase, skip_no_cc
-from test_codegen_c import HARNESS
-from test_codegen_emit import GOLDEN, ULPS, check_golden, full_scale, golden_difference
+from _golden import GOLDEN, ULPS, check_golden, full_scale, golden_difference
 from test_inference_random import random_rulebase
 
 from fuzzkit.codegen.emit import emit
