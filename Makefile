@@ -24,6 +24,9 @@ PYTEST_WORKERS ?= 2
 # codegen/ and planar_sim/ into the one installed package; they read this tree of symlinks,
 # laid out as the wheel installs it (fuzzkit/, fuzzkit/codegen, fuzzkit/planar_sim, ...).
 PACKAGE_TREE := build/package-tree
+# mypy's incremental cache, outside the package tree (which is laid anew on every run): a fresh
+# clone checks cold (about a minute), later runs only re-check what changed (a few seconds).
+MYPY_CACHE := $(CURDIR)/.mypy_cache
 # The repository folders installed inside fuzzkit (codegen planar_sim rulebases), read from setup.py.
 MAPPED_FOLDERS := $(shell sed -n 's/^MAPPED_FOLDERS = (\(.*\))/\1/p' setup.py | tr -d '",')
 
@@ -45,15 +48,25 @@ demo: $(STAMP)
 # The live peer comparisons are `make interop`'s; here fuzzkit is compared with the peers'
 # committed outputs (tests/peers/refs, `make interop-refs`), so no peer need be installed.
 PEER_MARKS := needs_fuzzylite or needs_pyfuzzylite
+# `$(call timed,TARGET)`: runs `make TARGET` and prints how long it took (the static checks'
+# share of `make test` stays visible); a failure stops the recipe with the target's status.
+define timed
+	@start=$$(date +%s%N); $(MAKE) --no-print-directory $(1) VENV=$(VENV) || exit $$?; \
+		echo "$(1): $$(( ($$(date +%s%N) - start) / 1000000 )) ms"
+endef
 test: $(STAMP)
-	$(MAKE) --no-print-directory lint typecheck imports VENV=$(VENV)
-	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) -q -p no:cacheprovider -m "not ($(PEER_MARKS))"
+	$(call timed,lint)
+	$(call timed,typecheck)
+	$(call timed,imports)
+	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) -q -p no:cacheprovider \
+		-m "not ($(PEER_MARKS)) and not verify" --durations=25
 
-# The safety matrix (tests/test_safety.py) over 50 noise/fault seeds per case instead of the
-# 10 of `make test`: every experiment x controller x fault kind x plant.
+# The deep versions of the matrices that `make test` runs a covering set of (every value and
+# every pair of values of two axes, tests/_pairwise.py): the tests marked `verify`, i.e. the
+# full safety products at 50 seeds, every generated-C mutant, the full fuzz counts, the release
+# build of the sdist and wheel (docs/development.md lists them with their sizes).
 verify: $(STAMP)
-	FUZZKIT_VERIFY_SEEDS=50 $(BIN)/python -m pytest -n $(PYTEST_WORKERS) -q -p no:cacheprovider \
-		tests/test_safety.py
+	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) -q -p no:cacheprovider -m verify --durations=25
 
 # The suite against the newest versions pyproject.toml's ranges allow (not the lock): run it on
 # purpose to catch a dependency drift before the next `make lock` does.
@@ -82,7 +95,8 @@ lint: $(STAMP)
 	$(BIN)/ruff format --check fuzzkit $(MAPPED_FOLDERS) tests bench setup.py
 
 typecheck: $(STAMP) package-tree
-	cd $(PACKAGE_TREE) && $(CURDIR)/$(BIN)/mypy --config-file $(CURDIR)/pyproject.toml fuzzkit
+	cd $(PACKAGE_TREE) && $(CURDIR)/$(BIN)/mypy --config-file $(CURDIR)/pyproject.toml \
+		--cache-dir $(MYPY_CACHE) fuzzkit
 
 # The layering contract of docs/architecture.md ([tool.importlinter] in pyproject.toml).
 imports: $(STAMP) package-tree

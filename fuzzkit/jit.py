@@ -6,9 +6,12 @@ Kept typed here so that ``mypy --strict`` sees through the decorator.
 
 numba stamps a cached kernel with the content of the kernel's own source file only, so an edit to
 a compiled function it calls in another module (``studies/compiled/period.py`` called from
-``arm6_run.py``) would silently load the stale kernel. fuzzkit's kernels are therefore stamped
-with a fingerprint of every fuzzkit source file as well (:func:`source_fingerprint`, read once
-per process): any edit to the package recompiles them, and nothing else's cache is touched.
+``arm6_run.py``), or to a constant it reads from one, would silently load the stale kernel.
+fuzzkit's kernels are therefore stamped with the digest of their module's import closure
+instead (:class:`fuzzkit.import_closure.ImportGraph`: every package module the kernel's module
+binds names from, transitively, its own file included): an edit to a module the kernel can
+reach recompiles it, an edit anywhere else (the CLI, the viewers, the docs) does not. The
+closures are computed once per module per process, and nothing else's cache is touched.
 
 Ctrl-C is held while numba compiles or loads a kernel (numba's compiler lock is
 held): a KeyboardInterrupt raised inside the compiler corrupts LLVM's memory. See
@@ -18,16 +21,15 @@ held): a KeyboardInterrupt raised inside the compiler corrupts LLVM's memory. Se
 from __future__ import annotations
 
 import functools
-import hashlib
 import importlib.util
-import os
-from collections.abc import Callable, Iterable
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar, cast
 
 import numba
 from numba.core import caching, event
 
+from fuzzkit.import_closure import ImportGraph
 from fuzzkit.progress import enter_interrupt_shield, leave_interrupt_shield
 
 F = TypeVar("F", bound=Callable[..., Any])
@@ -53,66 +55,58 @@ for _kind in COMPILER_EVENTS:
     event.register(_kind, _SHIELD)  # type: ignore[no-untyped-call]
 
 
-#: The folders of the installed package: ``fuzzkit/`` and the folders mapped into it.
+#: The packages mapped into fuzzkit from their own repository folders (``setup.py``).
 _MAPPED = ("fuzzkit.codegen", "fuzzkit.planar_sim")
 
 
-def package_roots() -> list[Path]:
-    """The source folders of the installed package (``fuzzkit`` and its mapped folders)."""
-    roots = [Path(__file__).resolve().parent]
+def package_roots() -> dict[str, Path]:
+    """The source folder of ``fuzzkit`` and of each package mapped into it, by package name."""
+    roots = {"fuzzkit": Path(__file__).resolve().parent}
     for name in _MAPPED:
         spec = importlib.util.find_spec(name)
         for location in (spec.submodule_search_locations or []) if spec is not None else []:
-            roots.append(Path(location).resolve())
+            roots[name] = Path(location).resolve()
     return roots
 
 
-def fingerprint_of(roots: Iterable[Path]) -> str:
-    """sha256 over the relative path and content of every ``.py`` file under ``roots``."""
-    digest = hashlib.sha256()
-    for root in roots:
-        for path in sorted(root.rglob("*.py")):
-            digest.update(path.relative_to(root).as_posix().encode("utf-8") + b"\0")
-            digest.update(path.read_bytes() + b"\0")
-    return digest.hexdigest()
-
-
 @functools.cache
-def source_fingerprint() -> str:
-    """The fingerprint of this installation's sources (:func:`fingerprint_of` its roots)."""
-    return fingerprint_of(package_roots())
+def package_graph() -> ImportGraph:
+    """The import graph of this installation's sources, shared by every kernel of the process
+    (its parses kept on disk for the next process)."""
+    return ImportGraph(package_roots(), keep=True)
 
 
-def _in_package(py_file: str) -> bool:
-    path = Path(os.path.abspath(py_file))
-    return any(path.is_relative_to(root) for root in package_roots())
+class _ClosureStamp:
+    """Locator mixin: serves a kernel whose source is a package module, stamped with the digest
+    of that module's import closure (in place of numba's stamp of the one file)."""
 
-
-class _PackageStamp:
-    """Locator mixin: valid for a fuzzkit source file, stamped with the whole package's
-    fingerprint besides numba's own stamp of the file."""
+    _fuzzkit_module: str
 
     def get_source_stamp(self) -> Any:
-        return (super().get_source_stamp(), source_fingerprint())  # type: ignore[misc]
+        return package_graph().digest(self._fuzzkit_module)
 
     @classmethod
     def from_function(cls, py_func: Any, py_file: str) -> Any:
-        if not _in_package(py_file):
+        module = package_graph().module_of(Path(py_file))
+        if module is None:
             return None
-        return super().from_function(py_func, py_file)  # type: ignore[misc]
+        locator = super().from_function(py_func, py_file)  # type: ignore[misc]
+        if locator is not None:
+            locator._fuzzkit_module = module
+        return locator
 
 
 def _install_locators() -> None:
-    """Put the package-stamped twins of numba's source-file locators first (once), in numba's
+    """Put the closure-stamped twins of numba's source-file locators first (once), in numba's
     order: a user-provided ``NUMBA_CACHE_DIR``, the module's ``__pycache__``, the user cache."""
     # numba 0.68 made the names public; older releases keep the underscore
     impl: Any = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl")  # noqa: B009
-    if any(issubclass(c, _PackageStamp) for c in impl._locator_classes):
+    if any(issubclass(c, _ClosureStamp) for c in impl._locator_classes):
         return
     ours = []
     for name in ("UserProvidedCacheLocator", "InTreeCacheLocator", "UserWideCacheLocator"):
         base = getattr(caching, name, None) or getattr(caching, "_" + name)
-        ours.append(type("Fuzzkit" + name, (_PackageStamp, base), {}))
+        ours.append(type("Fuzzkit" + name, (_ClosureStamp, base), {}))
     impl._locator_classes = ours + list(impl._locator_classes)
 
 
@@ -122,3 +116,11 @@ _install_locators()
 def jit(fn: F) -> F:
     """Compile ``fn`` with ``numba.njit(cache=True)``: nopython, cached on disk, errors at call."""
     return cast(F, numba.njit(cache=True)(fn))
+
+
+def has_cached_code(kernel: Any) -> bool:
+    """True when ``kernel`` (a function compiled by :func:`jit`) has machine code in its disk
+    cache for the current sources: its index file is there, current (stamp and numba version)
+    and not empty. The next process to call it with those argument types loads instead of
+    compiling."""
+    return bool(kernel._cache._cache_file._load_index())

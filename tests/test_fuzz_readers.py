@@ -1,7 +1,9 @@
 """Mutation fuzzing of every reader (issue 25): a damaged file gives a located error, or a
 rule base (scenario) that the engine evaluates to finite numbers at its label peaks.
 
-Seeded and bounded: :data:`MUTANTS` per format, each given :data:`HUNG_S` seconds. The
+Seeded and bounded: :data:`MUTANTS` per format in ``make verify``, the first
+:data:`COVER_MUTANTS` of the same seeded sequence in ``make test``, each given :data:`HUNG_S`
+seconds. The
 sources are the shipped rule bases, the files of ``docs/examples/`` (and the shipped rule
 bases exported to each foreign format) and the shipped scenarios. Warnings are errors
 throughout: no ``RuntimeWarning`` may escape."""
@@ -21,6 +23,7 @@ from typing import Any
 import numpy as np
 import pytest
 from _mutate import Mutant, keyword_values, mutants, replace_value
+from _pairwise import verify
 
 from fuzzkit.control.gains import read_gains_file
 from fuzzkit.errors import ConfigError, ProblemsError
@@ -33,9 +36,19 @@ from fuzzkit.plants.robot_description import load_robot
 from fuzzkit.studies.scenario_file import SHIPPED, loads_scenario, shipped_scenario_text
 
 ROOT = Path(__file__).resolve().parent.parent
-#: Mutants per format; with the seed, what the test covers (and the issue's closing note).
+#: Mutants per format in ``make verify``; with the seed, what the test covers (and the issue's
+#: closing note).
 MUTANTS = 400
 SEED = 25
+#: Mutants per format in ``make test``: the first of the same sequence (the generator is
+#: sequential, so these are a prefix of the verify run), enough that every operator of
+#: tests/_mutate.py is drawn for every format several times.
+COVER_MUTANTS = 100
+#: The mutant count of a fuzz test: the covering count in ``make test``, all in ``make verify``.
+COUNTS = [
+    pytest.param(COVER_MUTANTS, id="cover"),
+    pytest.param(MUTANTS, marks=verify, id="full"),
+]
 #: Label-peak grids larger than this are sampled (seeded), to bound the time per mutant.
 MAX_POINTS = 343
 
@@ -127,19 +140,29 @@ def _rule_base_failure(fmt: str, m: Mutant) -> str | None:
     return None
 
 
+@pytest.mark.parametrize("count", COUNTS)
 @pytest.mark.parametrize("fmt", sorted(READERS))
-def test_mutated_rule_bases_give_located_errors_or_finite_outputs(fmt: str) -> None:
+def test_mutated_rule_bases_give_located_errors_or_finite_outputs(fmt: str, count: int) -> None:
     sources = _sources(fmt)
     assert len(sources) >= 2
     for origin, text in sources.items():  # compile the engine's kernels outside the timer
         rb = READERS[fmt](text, origin)
         evaluate(rb, _peaks(rb))
     failures = []
-    for m in mutants(sources, MUTANTS, SEED):
+    for m in mutants(sources, count, SEED):
         why = _rule_base_failure(fmt, m)
         if why is not None:
             failures.append(f"{m.origin} ({m.what}): {why}")
-    assert not failures, f"{len(failures)} of {MUTANTS} mutants:\n" + "\n".join(failures[:15])
+    assert not failures, f"{len(failures)} of {count} mutants:\n" + "\n".join(failures[:15])
+
+
+def test_make_tests_mutants_are_the_first_of_make_verifys() -> None:
+    """The covering count proves a part of the full run, not other mutants: the same seeded
+    sequence, cut short."""
+    sources = {f"{name}.yaml": shipped_scenario_text(name) for name in SHIPPED}
+    short = list(mutants(sources, COVER_MUTANTS, SEED))
+    assert short == list(mutants(sources, MUTANTS, SEED))[:COVER_MUTANTS]
+    assert len({m.text for m in short}) > COVER_MUTANTS // 2  # and they differ
 
 
 @pytest.mark.parametrize("fmt", sorted(READERS))
@@ -174,10 +197,11 @@ def _finite_fields(value: Any) -> bool:
     return True
 
 
-def test_mutated_scenarios_give_located_errors_or_finite_experiments() -> None:
+@pytest.mark.parametrize("count", COUNTS)
+def test_mutated_scenarios_give_located_errors_or_finite_experiments(count: int) -> None:
     sources = {f"{name}.yaml": shipped_scenario_text(name) for name in SHIPPED}
     failures = []
-    for m in mutants(sources, MUTANTS, SEED):
+    for m in mutants(sources, count, SEED):
         try:
             with _strict():
                 exp = loads_scenario(m.text, "mutant.yaml")
@@ -189,7 +213,7 @@ def test_mutated_scenarios_give_located_errors_or_finite_experiments() -> None:
             why = None if _finite_fields(exp) else "a non-finite number was accepted"
         if why is not None:
             failures.append(f"{m.origin} ({m.what}): {why}")
-    assert not failures, f"{len(failures)} of {MUTANTS} mutants:\n" + "\n".join(failures[:15])
+    assert not failures, f"{len(failures)} of {count} mutants:\n" + "\n".join(failures[:15])
 
 
 def _config_failure(load: Callable[[Path], Any], path: Path) -> str | None:
@@ -206,9 +230,10 @@ def _config_failure(load: Callable[[Path], Any], path: Path) -> str | None:
     return None if _finite_fields(loaded) else "a non-finite number was accepted"
 
 
+@pytest.mark.parametrize("count", COUNTS)
 @pytest.mark.parametrize("kind", ["gains", "robot"])
 def test_mutated_gains_files_and_robot_descriptions_give_located_errors(
-    tmp_path: Path, kind: str
+    tmp_path: Path, kind: str, count: int
 ) -> None:
     if kind == "gains":
         folder = ROOT / "docs" / "report" / "gains"
@@ -221,15 +246,16 @@ def test_mutated_gains_files_and_robot_descriptions_give_located_errors(
         load = load_robot
     failures = []
     path = tmp_path / "mutant.yaml"
-    for m in mutants(sources, MUTANTS // 2, SEED):
+    for m in mutants(sources, count // 2, SEED):
         path.write_text(m.text, encoding="utf-8", errors="surrogatepass")
         why = _config_failure(load, path)
         if why is not None:
             failures.append(f"{m.origin} ({m.what}): {why}")
-    assert not failures, f"{len(failures)} of {MUTANTS // 2}:\n" + "\n".join(failures[:15])
+    assert not failures, f"{len(failures)} of {count // 2}:\n" + "\n".join(failures[:15])
 
 
-def test_mutated_controller_specs_give_located_errors_or_working_controllers() -> None:
+@pytest.mark.parametrize("count", COUNTS)
+def test_mutated_controller_specs_give_located_errors_or_working_controllers(count: int) -> None:
     """A damaged controller spec is refused at its place, or it is a valid, finite spec whose
     reference controller steps (the rule base is read relative to the examples)."""
     from fuzzkit.control.reference import Controller
@@ -240,7 +266,7 @@ def test_mutated_controller_specs_give_located_errors_or_working_controllers() -
     assert len(sources) >= 4
     down = [1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0]
     failures = []
-    for m in mutants(sources, MUTANTS, SEED):
+    for m in mutants(sources, count, SEED):
         try:
             with _strict():
                 spec = loads_spec(m.text, "mutant.yaml", examples)
@@ -254,4 +280,4 @@ def test_mutated_controller_specs_give_located_errors_or_working_controllers() -
             why = None if finite and all(map(math.isfinite, u)) else "non-finite spec or output"
         if why is not None:
             failures.append(f"{m.origin} ({m.what}): {why}")
-    assert not failures, f"{len(failures)} of {MUTANTS} mutants:\n" + "\n".join(failures[:15])
+    assert not failures, f"{len(failures)} of {count} mutants:\n" + "\n".join(failures[:15])

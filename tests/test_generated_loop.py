@@ -19,12 +19,14 @@ from __future__ import annotations
 
 import functools
 import re
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
 import pytest
 from _codegen_util import needs_cc
+from _pairwise import verify
 
 from fuzzkit.control import status as st
 from fuzzkit.control.reference import Controller
@@ -269,67 +271,95 @@ def test_every_safety_parameter_acts_and_the_generated_controller_equals_the_ref
         assert r.faults > 0
 
 
-def _mutants(spec: ControllerSpec, source: str) -> list[tuple[str, str, str]]:
-    """(name, exact text in the generated C ``source``, its replacement): every safety
-    parameter of the spec changed, floats by x1.5 and x0.5, counts by +1 and -1."""
+#: The safety parameters held as a ``static const double`` in the generated C: spec key ->
+#: (the constant's name after ``NAME_controller_``, its value in the spec).
+FLOAT_PARAMETERS: dict[str, tuple[str, Callable[[ControllerSpec], float]]] = {
+    "limits.correction_m": ("correction", lambda c: c.limits.correction_m),
+    "limits.step_m": ("step_limit", lambda c: c.limits.step_m),
+    "safety.limit_n": ("limit", lambda c: c.safety.limit_n),
+    "safety.spike_gate.threshold_n": ("spike_gate", lambda c: c.safety.spike_gate),
+    "safety.backoff.distance_m": ("backoff", lambda c: c.safety.backoff_m),
+    "safety.backoff.speed_m_s": (
+        "backoff_step",
+        lambda c: c.safety.backoff_speed_m_s * c.period_s,
+    ),
+    "safety.engage.threshold_n": ("engage_threshold", lambda c: c.safety.engage_threshold_n or 0.0),
+}
+#: The sample counts, written as literals in the generated C: name -> (the text around the
+#: count, with ``{}`` for it; the count in the spec).
+COUNT_PARAMETERS: dict[str, tuple[str, Callable[[ControllerSpec], int]]] = {
+    "safety.spike_gate.confirm": ("< {}u", lambda c: c.safety.spike_confirm),
+    "safety.spike_gate.confirm (trip)": (": {}u)", lambda c: c.safety.spike_confirm),
+    "safety.trip.samples": ("? {}u :", lambda c: c.safety.trip_samples),
+    "safety.engage.samples": ("above < {}u", lambda c: c.safety.engage_samples),
+}
+FLOAT_FACTORS = (1.5, 0.5)
+COUNT_STEPS = (1, -1)
+#: Every mutant: (mutation class, the parameter it changes). The class is the change made,
+#: ``float x1.5``, ``float x0.5``, ``count +1`` or ``count -1``: one code path of this test
+#: builds every mutant of a class, so one per class proves that path in ``make test``.
+MUTANTS = [(f"float x{f}", key) for f in FLOAT_FACTORS for key in FLOAT_PARAMETERS] + [
+    (f"count {step:+d}", key) for step in COUNT_STEPS for key in COUNT_PARAMETERS
+]
+
+
+def _cover_mutants() -> list[tuple[str, str]]:
+    """One mutant per class, each class on a different parameter (the i-th class on its i-th
+    parameter), so that ``make test`` changes as many distinct parameters as it has classes."""
+    classes = list(dict.fromkeys(cls for cls, _ in MUTANTS))
+    return [[m for m in MUTANTS if m[0] == cls][i] for i, cls in enumerate(classes)]
+
+
+def test_make_test_changes_one_parameter_per_mutant_class() -> None:
+    cover = _cover_mutants()
+    assert set(cover) <= set(MUTANTS) and len(MUTANTS) == 22
+    assert sorted(cls for cls, _ in cover) == sorted({cls for cls, _ in MUTANTS})  # once each
+    assert len({key for _, key in cover}) == len(cover)  # on distinct parameters
+
+
+def _mutant(spec: ControllerSpec, source: str, cls: str, key: str) -> tuple[str, str]:
+    """(exact text in the generated C ``source``, its replacement) for the mutant of class
+    ``cls`` of parameter ``key``; checks first that the text holds the spec's value."""
     m = f"{spec.name}_controller"
-    s = spec.safety
-    floats = {
-        "limits.correction_m": ("correction", spec.limits.correction_m),
-        "limits.step_m": ("step_limit", spec.limits.step_m),
-        "safety.limit_n": ("limit", s.limit_n),
-        "safety.spike_gate.threshold_n": ("spike_gate", s.spike_gate),
-        "safety.backoff.distance_m": ("backoff", s.backoff_m),
-        "safety.backoff.speed_m_s": ("backoff_step", s.backoff_speed_m_s * spec.period_s),
-        "safety.engage.threshold_n": ("engage_threshold", s.engage_threshold_n or 0.0),
-    }
-    out = []
-    for key, (const, value) in floats.items():
+    if cls.startswith("float"):
+        const, value_of = FLOAT_PARAMETERS[key]
+        value = value_of(spec)
         found = re.search(rf"static const double {m}_{const} = ([^;]+);", source)
         assert found is not None and float(found.group(1)) == value, (key, const)
-        for factor in (1.5, 0.5):
-            out.append(
-                (
-                    f"{key} x{factor}",
-                    found.group(0),
-                    f"static const double {m}_{const} = {value * factor!r};",
-                )
-            )
-    n, t, e = s.spike_confirm, s.trip_samples, s.engage_samples
-    for step in (1, -1):
-        out += [
-            (f"safety.spike_gate.confirm {step:+d}", f"< {n}u", f"< {n + step}u"),
-            (f"safety.spike_gate.confirm (trip) {step:+d}", f": {n}u)", f": {n + step}u)"),
-            (f"safety.trip.samples {step:+d}", f"? {t}u :", f"? {t + step}u :"),
-            (f"safety.engage.samples {step:+d}", f"above < {e}u", f"above < {e + step}u"),
-        ]
-    return out
+        factor = float(cls.removeprefix("float x"))
+        return found.group(0), f"static const double {m}_{const} = {value * factor!r};"
+    pattern, count_of = COUNT_PARAMETERS[key]
+    n, step = count_of(spec), int(cls.removeprefix("count "))
+    return pattern.format(n), pattern.format(n + step)
 
 
 @pytest.mark.slow
-def test_changing_any_safety_parameter_of_the_generated_code_fails_the_equality() -> None:
-    """Issue 29 item 5: the equality above is not blind to the safety logic. Each mutant of
-    the generated C (one parameter changed, everything else as generated) runs the same fault
-    runs; in at least one a period's correction or status differs from the reference's."""
+@pytest.mark.parametrize(
+    "cls, key",
+    [pytest.param(cls, key, id=f"cover-{cls}-{key}") for cls, key in _cover_mutants()]
+    + [pytest.param(cls, key, marks=verify, id=f"full-{cls}-{key}") for cls, key in MUTANTS],
+)
+def test_changing_any_safety_parameter_of_the_generated_code_fails_the_equality(
+    cls: str, key: str
+) -> None:
+    """Issue 29 item 5: the equality above is not blind to the safety logic. A mutant of the
+    generated C (one parameter changed, everything else as generated) runs the same fault
+    runs; in at least one a period's correction or status differs from the reference's.
+    ``make test`` runs one mutant per class, ``make verify`` all 22."""
     from fuzzkit.codegen.backends.c.run import CompiledController
 
     spec = load_spec(SAFETY_SPEC)
     files = generate(spec, "c", "double")
     source = f"{spec.name}_controller.c"
-    blind = []
-    for name, old, new in _mutants(spec, files[source]):
-        assert files[source].count(old) >= 1, (name, old)
-        mutated = {**files, source: files[source].replace(old, new)}
-        ctl = CompiledController(mutated, f"{spec.name}_controller", "double")
-        generated = GeneratedController(
-            spec, ctl.step_function, ctl.init_function, len(ctl.state), f"mutant {name}", ctl
-        )
-        caught = False
-        for faults in SAFETY_FAULTS.values():
-            worst, status_periods = _differences(spec, _safety_run(generated, faults))
-            if worst > TOLERANCE_M or status_periods:
-                caught = True
-                break
-        if not caught:
-            blind.append(name)
-    assert blind == [], f"the loop equality does not see these changes: {blind}"
+    old, new = _mutant(spec, files[source], cls, key)
+    assert files[source].count(old) >= 1, (key, old)
+    mutated = {**files, source: files[source].replace(old, new)}
+    ctl = CompiledController(mutated, f"{spec.name}_controller", "double")
+    generated = GeneratedController(
+        spec, ctl.step_function, ctl.init_function, len(ctl.state), f"mutant {cls} {key}", ctl
+    )
+    for faults in SAFETY_FAULTS.values():
+        worst, status_periods = _differences(spec, _safety_run(generated, faults))
+        if worst > TOLERANCE_M or status_periods:
+            return  # caught by this fault run
+    pytest.fail(f"the loop equality does not see {cls} of {key} in any fault run")

@@ -1,57 +1,398 @@
-"""fuzzkit's compiled kernels are cached against the whole package, not only their own file."""
+"""A compiled kernel's cache key covers its module's import closure, and nothing more; the
+kernels are warmed before the test workers start.
+
+The closure rules are checked on small package trees written here (an edit outside the closure
+keeps the digest, an edit inside it, at any depth, or a move changes it); then the real package's
+kernels are checked to be stamped with their own module's closure. Compiling every kernel from
+an empty cache takes about a minute of CPU, so no test here does it end to end:
+``python -m fuzzkit.studies.compiled.warm`` with an empty ``NUMBA_CACHE_DIR`` does, by hand.
+"""
 
 from __future__ import annotations
 
+import importlib
+import json
+import sys
 from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import numba
+import pytest
+from numba.core.registry import CPUDispatcher
 
 from fuzzkit import jit as jit_module
-from fuzzkit.studies.compiled import arm6_run, period
+from fuzzkit.errors import ToolchainError
+from fuzzkit.import_closure import ImportGraph
+from fuzzkit.studies.compiled import warm as warm_module
+
+#: The package's kernel modules: every module that compiles a function with ``fuzzkit.jit``.
+KERNEL_MODULES = (
+    "fuzzkit.fuzzy.grid_kernel",
+    "fuzzkit.plants.arm6_heightfield",
+    "fuzzkit.plants.arm6_period",
+    "fuzzkit.plants.rough_profile",
+    "fuzzkit.planar_sim.arm_period",
+    "fuzzkit.studies.compiled.arm6_run",
+    "fuzzkit.studies.compiled.generated_c",
+    "fuzzkit.studies.compiled.generated_controller",
+    "fuzzkit.studies.compiled.period",
+    "fuzzkit.studies.compiled.planar_run",
+    "fuzzkit.studies.compiled.table",
+)
+
+#: A package ``pkg`` (with ``pkg.mapped`` in a folder of its own, as fuzzkit.codegen is):
+#: ``kern`` holds the kernel; it calls ``callee``, which calls ``deep``; it reads a constant of
+#: ``consts``; ``other`` imports ``kern`` (the wrong way round: not in kern's closure), and
+#: ``lazy`` is imported inside a Python function only.
+TREE = {
+    "pkg/__init__.py": "",
+    "pkg/sub/__init__.py": "from pkg.other import helper\n",
+    "pkg/sub/kern.py": (
+        "from pkg.sub.callee import step\n"
+        "from . import consts\n"
+        "import pkg.mapped.util as util\n"
+        "def python_only():\n"
+        "    from pkg import lazy\n"
+        "    return lazy\n"
+    ),
+    "pkg/sub/callee.py": "from ..deep import inner\ndef step(x):\n    return inner(x)\n",
+    "pkg/sub/consts.py": "GAIN = 2.0\n",
+    "pkg/deep.py": "def inner(x):\n    return x\n",
+    "pkg/other.py": "from pkg.sub import kern\ndef helper():\n    return kern\n",
+    "pkg/lazy.py": "VALUE = 1\n",
+    "mapped/__init__.py": "",
+    "mapped/util.py": "SCALE = 3\n",
+    "mapped/unused.py": "",
+}
 
 
-def _tree(root: Path, files: dict[str, str]) -> Path:
+def _write(root: Path, files: dict[str, str]) -> None:
     for rel, text in files.items():
         (root / rel).parent.mkdir(parents=True, exist_ok=True)
         (root / rel).write_text(text)
-    return root
 
 
-def test_fingerprint_changes_with_any_source_file(tmp_path: Path) -> None:
-    root = _tree(tmp_path / "pkg", {"a.py": "x = 1\n", "sub/b.py": "y = 2\n", "c.txt": "z"})
-    before = jit_module.fingerprint_of([root])
-    assert jit_module.fingerprint_of([root]) == before  # deterministic
-    (root / "c.txt").write_text("not python")  # only sources count
-    assert jit_module.fingerprint_of([root]) == before
-    (root / "sub" / "b.py").write_text("y = 3\n")  # a callee's edit
-    assert jit_module.fingerprint_of([root]) != before
-    (root / "sub" / "b.py").write_text("y = 2\n")
-    assert jit_module.fingerprint_of([root]) == before
-    (root / "sub" / "b.py").rename(root / "b.py")  # a move is a change
-    assert jit_module.fingerprint_of([root]) != before
+def _graph(root: Path) -> ImportGraph:
+    return ImportGraph({"pkg": root / "pkg", "pkg.mapped": root / "mapped"})
 
 
-def test_the_roots_cover_every_mapped_folder() -> None:
-    names = {p.name for p in jit_module.package_roots()}
-    assert {"fuzzkit", "codegen", "planar_sim"} <= names
+@pytest.fixture
+def tree(tmp_path: Path) -> Path:
+    _write(tmp_path, TREE)
+    return tmp_path
 
 
-def test_a_kernel_is_stamped_with_the_package_fingerprint() -> None:
-    # the run loop calls period.py's functions: its cache must depend on more than arm6_run.py
-    for dispatcher in (arm6_run.run_arm6, period.inject_faults):
+def test_the_closure_follows_module_scope_imports_only(tree: Path) -> None:
+    assert _graph(tree).closure("pkg.sub.kern") == (
+        "pkg.deep",
+        "pkg.mapped.util",
+        "pkg.sub.callee",
+        "pkg.sub.consts",
+        "pkg.sub.kern",
+    )
+
+
+@pytest.mark.parametrize(
+    "statement, reached",
+    [
+        # `import pkg.mapped.util` binds `pkg`: pkg's and pkg.mapped's globals are reachable
+        ("import pkg.mapped.util", {"pkg", "pkg.mapped", "pkg.mapped.util"}),
+        # pkg.sub's __init__ defines `helper` (from pkg.other); `consts` is a submodule
+        ("from pkg.sub import helper, consts", {"pkg.sub", "pkg.other", "pkg.sub.consts"}),
+    ],
+)
+def test_what_an_import_statement_binds_is_followed(
+    tree: Path, statement: str, reached: set[str]
+) -> None:
+    _write(tree, {"pkg/importer.py": statement + "\n"})
+    closure = set(_graph(tree).closure("pkg.importer")) - {"pkg.importer"}
+    # what those modules import comes too; the top package only where the statement binds it
+    assert reached <= closure
+    assert ("pkg" in closure) == ("pkg" in reached)
+
+
+def test_an_import_under_if_try_or_class_counts(tree: Path) -> None:
+    _write(
+        tree,
+        {
+            "pkg/guarded.py": (
+                "import sys\n"
+                "if sys.platform == 'never':\n    pass\nelse:\n    from pkg import deep\n"
+                "try:\n    pass\nexcept ImportError:\n    from pkg.sub import consts\n"
+                "finally:\n    from pkg.mapped import util\n"
+                "class Holder:\n    from pkg import lazy\n"
+            )
+        },
+    )
+    closure = _graph(tree).closure("pkg.guarded")
+    assert {"pkg.deep", "pkg.sub.consts", "pkg.mapped.util", "pkg.lazy"} <= set(closure)
+
+
+@pytest.mark.parametrize(
+    "rel, text",
+    [
+        ("pkg/other.py", "from pkg.sub import kern\ndef helper():\n    return kern  # edited\n"),
+        ("pkg/lazy.py", "VALUE = 2\n"),  # imported only inside a function
+        ("pkg/sub/__init__.py", "X = 1\n"),  # an ancestor package of what kern imports from
+        ("mapped/unused.py", "Y = 1\n"),
+        ("pkg/notes.txt", "not a source file"),
+    ],
+)
+def test_an_edit_outside_the_closure_keeps_the_digest(tree: Path, rel: str, text: str) -> None:
+    before = _graph(tree).digest("pkg.sub.kern")
+    _write(tree, {rel: text})
+    assert _graph(tree).digest("pkg.sub.kern") == before
+
+
+@pytest.mark.parametrize(
+    "rel, text",
+    [
+        ("pkg/sub/kern.py", TREE["pkg/sub/kern.py"] + "# edited\n"),  # the kernel's own file
+        ("pkg/sub/callee.py", "from ..deep import inner\ndef step(x):\n    return -inner(x)\n"),
+        ("pkg/deep.py", "def inner(x):\n    return 2 * x\n"),  # two levels down
+        ("pkg/sub/consts.py", "GAIN = 2.5\n"),  # a constant the kernel reads
+        ("mapped/util.py", "SCALE = 4\n"),  # in a mapped package's folder
+    ],
+)
+def test_an_edit_inside_the_closure_changes_the_digest(tree: Path, rel: str, text: str) -> None:
+    before = _graph(tree).digest("pkg.sub.kern")
+    _write(tree, {rel: text})
+    assert _graph(tree).digest("pkg.sub.kern") != before
+
+
+def test_a_move_changes_the_digest_even_with_the_same_text(tree: Path) -> None:
+    before = _graph(tree).digest("pkg.sub.kern")
+    # deep.py is renamed, its text unchanged; its importer follows
+    (tree / "pkg" / "deep.py").rename(tree / "pkg" / "moved.py")
+    callee = TREE["pkg/sub/callee.py"].replace("..deep", "..moved")
+    _write(tree, {"pkg/sub/callee.py": callee})
+    moved = _graph(tree)
+    assert "pkg.moved" in moved.closure("pkg.sub.kern")
+    assert moved.digest("pkg.sub.kern") != before
+    # and the same texts under the old names give the old digest back
+    (tree / "pkg" / "moved.py").rename(tree / "pkg" / "deep.py")
+    _write(tree, {"pkg/sub/callee.py": TREE["pkg/sub/callee.py"]})
+    assert _graph(tree).digest("pkg.sub.kern") == before
+
+
+def test_a_kept_parse_is_used_while_its_source_is_unchanged(tree: Path) -> None:
+    def graph() -> ImportGraph:
+        return ImportGraph({"pkg": tree / "pkg", "pkg.mapped": tree / "mapped"}, keep=True)
+
+    expected = _graph(tree).closure("pkg.sub.kern")
+    assert graph().closure("pkg.sub.kern") == expected
+    kept = tree / "pkg" / "sub" / "__pycache__" / "callee.imports.json"
+    data = json.loads(kept.read_text())
+    # what the next graph finds comes from the kept parse: make it say `from pkg import lazy`
+    data["statements"] = [[True, 0, "pkg", ["lazy"], [False]]]
+    kept.write_text(json.dumps(data))
+    assert "pkg.lazy" in graph().closure("pkg.sub.kern")
+    # once the source changes, the kept parse is stale: the source is parsed again
+    _write(tree, {"pkg/sub/callee.py": TREE["pkg/sub/callee.py"] + "# edited\n"})
+    assert graph().closure("pkg.sub.kern") == expected
+    kept.write_text("{not json")  # and an unreadable one is parsed over
+    assert graph().closure("pkg.sub.kern") == expected
+    assert json.loads(kept.read_text())["statements"]
+
+
+def test_modules_map_to_their_files_and_back(tree: Path) -> None:
+    graph = _graph(tree)
+    assert graph.path_of("pkg.mapped.util") == (tree / "mapped" / "util.py").resolve()
+    assert graph.path_of("pkg.sub") == (tree / "pkg" / "sub" / "__init__.py").resolve()
+    assert graph.path_of("pkg.missing") is None
+    assert graph.path_of("elsewhere.util") is None
+    assert graph.module_of(tree / "mapped" / "util.py") == "pkg.mapped.util"
+    assert graph.module_of(tree / "pkg" / "sub" / "__init__.py") == "pkg.sub"
+    assert graph.module_of(tree / "outside.py") is None
+
+
+# The real package.
+
+
+def _kernels(module_name: str) -> list[CPUDispatcher]:
+    module = __import__(module_name, fromlist=["_"])
+    return [
+        value
+        for value in vars(module).values()
+        if isinstance(value, CPUDispatcher) and value.py_func.__module__ == module_name
+    ]
+
+
+def test_every_kernel_module_of_the_package_is_listed() -> None:
+    # a new kernel module must be warmed (fuzzkit.studies.compiled.warm) and is checked below
+    graph = jit_module.package_graph()
+    found = set()
+    for root in jit_module.package_roots().values():
+        for path in root.rglob("*.py"):
+            if "from fuzzkit.jit import jit" in path.read_text(encoding="utf-8"):
+                found.add(graph.module_of(path))
+    assert found == set(KERNEL_MODULES)
+
+
+@pytest.mark.parametrize("module_name", KERNEL_MODULES)
+def test_a_real_kernel_is_stamped_with_its_modules_closure(module_name: str) -> None:
+    kernels = _kernels(module_name)
+    assert kernels, f"{module_name} defines no kernel"
+    digest = jit_module.package_graph().digest(module_name)
+    for dispatcher in kernels:
         locator = dispatcher._cache._impl.locator
-        assert isinstance(locator, jit_module._PackageStamp), type(locator)
-        own, package = locator.get_source_stamp()
-        assert package == jit_module.source_fingerprint()
-        assert own  # numba's own stamp of the kernel's file is kept as well
+        assert isinstance(locator, jit_module._ClosureStamp), type(locator)
+        assert locator.get_source_stamp() == digest
+        # what numba writes into and compares with the index file
+        assert dispatcher._cache._cache_file._source_stamp == digest
+
+
+def test_the_run_loops_closure_holds_its_callees_and_not_the_cli() -> None:
+    closure = set(jit_module.package_graph().closure("fuzzkit.studies.compiled.arm6_run"))
+    assert {
+        "fuzzkit.studies.compiled.arm6_run",
+        "fuzzkit.studies.compiled.period",  # faults and latency, called every period
+        "fuzzkit.studies.compiled.generated_controller",  # the controller's period
+        "fuzzkit.plants.arm6_period",  # the plant's period
+        "fuzzkit.plants.rough_profile",  # two levels down: arm6_period's floor
+        "fuzzkit.control.status",  # constants: the status bits
+        "fuzzkit.jit",  # how the kernels are compiled
+    } <= closure
+    # the layers above studies, and the file formats: no kernel reaches them
+    outside = {"cli", "viz", "report", "analysis", "formats", "ros2"}
+    assert not [m for m in closure if m.split(".")[1] in outside]
+
+
+def test_the_planar_loops_closure_reaches_the_mapped_planar_package() -> None:
+    graph = jit_module.package_graph()
+    closure = graph.closure("fuzzkit.studies.compiled.planar_run")
+    assert "fuzzkit.planar_sim.arm_period" in closure
+    assert "fuzzkit.planar_sim.chipmunk_calls" in closure  # the intrinsics it calls
+    from fuzzkit.planar_sim import arm_period
+
+    assert graph.path_of("fuzzkit.planar_sim.arm_period") == Path(arm_period.__file__).resolve()
 
 
 def test_code_outside_the_package_keeps_numba_locators() -> None:
-    import numba
-
     def outside(x: float) -> float:
         return x + 1.0
 
-    outside.__module__ = "elsewhere"
     dispatcher = numba.njit(cache=True)(outside)
     # this test file is not a fuzzkit source: numba's own locator serves it
     locator = dispatcher._cache._impl.locator
-    assert not isinstance(locator, jit_module._PackageStamp)
+    assert not isinstance(locator, jit_module._ClosureStamp)
+
+
+# Warming.
+
+
+def test_every_kernel_module_is_reached_by_a_warming_step() -> None:
+    graph = jit_module.package_graph()
+    reached: set[str] = set()
+    for step in warm_module.STEPS:
+        for kernel in step.dispatchers():
+            reached.update(graph.closure(kernel.py_func.__module__))
+    assert set(KERNEL_MODULES) <= reached
+
+
+def test_has_cached_code_sees_the_disk_cache(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    source = tmp_path / "tiny_kernel.py"
+    source.write_text("import numba\n@numba.njit(cache=True)\ndef twice(x):\n    return 2.0 * x\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+
+    def fresh() -> Any:
+        sys.modules.pop("tiny_kernel", None)
+        return importlib.import_module("tiny_kernel").twice
+
+    kernel = fresh()
+    assert not jit_module.has_cached_code(kernel)
+    assert kernel(1.5) == 3.0  # compiles and saves
+    assert jit_module.has_cached_code(fresh())  # another import of it would load
+    source.write_text(source.read_text().replace("2.0 *", "3.0 *"))  # the source changed
+    assert not jit_module.has_cached_code(fresh())
+
+
+def _steps(log: list[str], fail: dict[str, Exception]) -> tuple[Any, ...]:
+    """Three warming steps, ``a``, ``b``, ``c``, whose kernel is their name; each logs its run."""
+
+    def step(name: str) -> Any:
+        def run() -> None:
+            log.append(name)
+            if name in fail:
+                raise fail[name]
+
+        return warm_module.Step(name, (f"{name}:kernel",), run)
+
+    return tuple(step(name) for name in ("a", "b", "c"))
+
+
+def test_warm_runs_only_what_is_not_cached_and_reports_why(monkeypatch: pytest.MonkeyPatch) -> None:
+    log: list[str] = []
+    steps = _steps(log, {"c": ToolchainError("no C compiler found")})
+    monkeypatch.setattr(warm_module, "STEPS", steps)
+    monkeypatch.setattr(warm_module.Step, "dispatchers", lambda step: [step.name])
+    monkeypatch.setattr(warm_module, "has_cached_code", lambda kernel: kernel == "b")
+    outcomes: dict[str, str] = {}
+    warm_module.warm(lambda name, outcome, seconds: outcomes.__setitem__(name, outcome))
+    assert log == ["a", "c"]  # b's kernel was in the cache: not run
+    assert outcomes == {"a": "compiled", "b": "cached", "c": "not here: no C compiler found"}
+
+
+def test_warm_lets_a_real_failure_through(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(warm_module, "STEPS", _steps([], {"b": ValueError("broken")}))
+    monkeypatch.setattr(warm_module.Step, "dispatchers", lambda step: [step.name])
+    monkeypatch.setattr(warm_module, "has_cached_code", lambda kernel: False)
+    with pytest.raises(ValueError, match="broken"):
+        warm_module.warm()
+
+
+def _conftest(config: pytest.Config) -> Any:
+    for plugin in config.pluginmanager.get_plugins():
+        if Path(getattr(plugin, "__file__", "")) == Path(__file__).with_name("conftest.py"):
+            return plugin
+    raise LookupError("tests/conftest.py is not loaded")
+
+
+@pytest.mark.parametrize(
+    "numprocesses, worker, collect_only, warms",
+    [
+        (2, False, False, True),  # the controller of `-n 2`: before its workers start
+        (2, True, False, False),  # a worker: the controller warmed already
+        (1, False, False, False),  # one worker compiles once anyway
+        (0, False, False, False),  # `-n 0`
+        (None, False, False, False),  # no -n at all (or xdist not loaded)
+        (2, False, True, False),  # --collect-only runs nothing
+    ],
+)
+def test_the_session_hook_warms_only_the_controller_of_several_workers(
+    pytestconfig: pytest.Config,
+    monkeypatch: pytest.MonkeyPatch,
+    numprocesses: int | None,
+    worker: bool,
+    collect_only: bool,
+    warms: bool,
+) -> None:
+    calls: list[None] = []
+    monkeypatch.setattr(warm_module, "warm", lambda: calls.append(None))
+    config: Any = SimpleNamespace(
+        option=SimpleNamespace(numprocesses=numprocesses, collectonly=collect_only)
+    )
+    if worker:
+        config.workerinput = {"workerid": "gw0"}
+    _conftest(pytestconfig).pytest_sessionstart(SimpleNamespace(config=config))
+    assert calls == ([None] if warms else [])
+
+
+def test_a_failing_warm_up_is_reported_and_the_session_goes_on(
+    pytestconfig: pytest.Config, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def broken() -> None:
+        raise ValueError("a kernel does not type")
+
+    lines: list[str] = []
+    reporter = SimpleNamespace(write_line=lines.append)
+    monkeypatch.setattr(warm_module, "warm", broken)
+    config: Any = SimpleNamespace(
+        option=SimpleNamespace(numprocesses=2, collectonly=False),
+        pluginmanager=SimpleNamespace(get_plugin=lambda name: reporter),
+    )
+    _conftest(pytestconfig).pytest_sessionstart(SimpleNamespace(config=config))
+    assert lines == ["kernel warm-up failed (ValueError: a kernel does not type)"]

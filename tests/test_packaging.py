@@ -1,11 +1,17 @@
 """Packaging: one top-level package, the documentation in the sdist, a wheel that runs the demo.
 
-Built from a clean copy of the repository (no build folders, no virtual environments), the way a
-user or a release job builds it, then installed outside the repository.
+Built from a clean copy of the repository (no build folders, no virtual environments). ``make
+test`` builds the sdist and the wheel from it with the environment's own (locked) setuptools
+(``--no-isolation``: seconds, no download) and checks their file lists, which is what catches a
+missing module, template or data file. ``make verify`` builds them as a user or a release job
+does (an isolated build environment, the wheel built from the unpacked sdist, so a file the
+sdist lacks cannot reach the wheel either), checks the same lists and installs the wheel
+outside the repository to run the demo.
 """
 
 from __future__ import annotations
 
+import functools
 import pydoc
 import shutil
 import subprocess
@@ -15,6 +21,7 @@ import zipfile
 from pathlib import Path
 
 import pytest
+from _pairwise import verify
 
 import fuzzkit
 
@@ -103,10 +110,16 @@ def test_make_typecheck_sees_every_mapped_folder(tmp_path: Path) -> None:
         )
 
 
-@pytest.fixture(scope="module")
-def dists(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
-    """(wheel, sdist) built from a clean copy of the repository."""
-    tmp = tmp_path_factory.mktemp("dist")
+#: The two builds: ``make test``'s quick one, ``make verify``'s release build.
+BUILDS = [pytest.param(False, id="cover"), pytest.param(True, marks=verify, id="full")]
+
+
+@functools.cache
+def _build(release: bool, base: Path) -> tuple[Path, Path]:
+    """(wheel, sdist) built from a clean copy of the repository under ``base``: the release
+    build (isolated, the wheel from the sdist) or the quick one (this environment's
+    setuptools, both from the copy). Once per process and kind."""
+    tmp = base / ("release" if release else "quick")
     src = tmp / "src"
     shutil.copytree(
         ROOT,
@@ -116,8 +129,11 @@ def dists(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
         ),
     )
     out = tmp / "dist"
+    # the quick build skips the dependency check: build-system.requires names `wheel`, which
+    # setuptools (>= 70.1) no longer needs to build one, and which the lock does not install
+    how = [] if release else ["--sdist", "--wheel", "--no-isolation", "--skip-dependency-check"]
     built = subprocess.run(
-        [sys.executable, "-m", "build", "--sdist", "--wheel", "--outdir", str(out), str(src)],
+        [sys.executable, "-m", "build", *how, "--outdir", str(out), str(src)],
         capture_output=True,
         text=True,
         timeout=600,
@@ -126,6 +142,14 @@ def dists(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     (wheel,) = out.glob("*.whl")
     (sdist,) = out.glob("*.tar.gz")
     return wheel, sdist
+
+
+@pytest.fixture(scope="module", params=BUILDS)
+def dists(
+    request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
+) -> tuple[Path, Path]:
+    """(wheel, sdist) of one of :data:`BUILDS`."""
+    return _build(request.param, tmp_path_factory.getbasetemp())
 
 
 @pytest.mark.slow
@@ -162,12 +186,13 @@ def test_sdist_carries_license_readme_and_docs(dists: tuple[Path, Path]) -> None
 
 @pytest.mark.slow
 @pytest.mark.needs_cc
+@verify
 def test_wheel_runs_the_demo_outside_the_repository(
-    dists: tuple[Path, Path], tmp_path: Path
+    tmp_path_factory: pytest.TempPathFactory, tmp_path: Path
 ) -> None:
     if shutil.which("cc") is None and shutil.which("gcc") is None:
         pytest.skip("no C compiler: the demo compiles the generated C")
-    wheel, _ = dists
+    wheel, _ = _build(True, tmp_path_factory.getbasetemp())
     target = tmp_path / "site"
     pip = subprocess.run(
         [sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--target", str(target),

@@ -1,0 +1,197 @@
+"""Compile (or load) every numba kernel of the package once, ahead of the processes that use them.
+
+numba compiles a kernel on its first call in a process and caches the machine code on disk;
+processes started later load it. Started together (the test suite's workers, a sweep's
+processes), each of them would compile the same kernels again. :func:`warm` makes that first
+call once, beforehand: ``tests/conftest.py`` runs it in pytest's controller process before the
+xdist workers start, and ``python -m fuzzkit.studies.compiled.warm`` does it by hand (and says
+what it compiled and how long it took).
+
+Each step is a short real call of an entry point that reaches kernels (a few periods of each
+compiled loop, one point of each surface kernel), so that what is compiled has exactly the
+argument types the real calls have: a kernel compiled for other types (another array layout, a
+float where an int goes) would be compiled again on the real call, not loaded.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from fuzzkit.errors import ToolchainError
+from fuzzkit.jit import has_cached_code
+from fuzzkit.plants.contract import UnsupportedPlant
+
+#: Simulated seconds of each warming run: a handful of periods reach every compiled path.
+WARM_DURATION_S = 0.02
+
+#: A rule base whose output term is smooth (gaussian): the exact engine integrates it on a grid,
+#: in :mod:`fuzzkit.fuzzy.grid_kernel` (the shipped rule bases' outputs are piecewise linear).
+_SMOOTH_OUTPUT = """\
+name: warm_smooth
+inputs:
+  e: {range: [-1, 1], terms: {partition: triangular, labels: [N, Z, P]}}
+outputs:
+  du:
+    range: [-1, 1]
+    terms:
+      N: {shape: gaussian, mean: -0.5, sigma: 0.2}
+      Z: {shape: gaussian, mean: 0.0, sigma: 0.2}
+      P: {shape: gaussian, mean: 0.5, sigma: 0.2}
+rules:
+  - {if: {e: N}, then: {du: N}}
+  - {if: {e: Z}, then: {du: Z}}
+  - {if: {e: P}, then: {du: P}}
+"""
+
+
+def _arm6_loop() -> None:
+    from fuzzkit.studies.compiled.loop import run_compiled
+    from fuzzkit.studies.experiments import experiment
+    from fuzzkit.studies.faults import fault
+
+    # PI and fuzzy-PI are the same kernel (the controller is generated C called by address);
+    # both are run so that each one's C controller is built and cached as well
+    run_compiled(experiment("E1"), "arm6", "pi", duration_s=WARM_DURATION_S)
+    run_compiled(
+        experiment("E2"), "arm6", "fuzzy-pi", faults=fault("spike"), duration_s=WARM_DURATION_S
+    )
+
+
+def _planar_loop() -> None:
+    from fuzzkit.studies.compiled.loop import run_compiled
+    from fuzzkit.studies.experiments import experiment
+    from fuzzkit.studies.faults import fault
+
+    run_compiled(experiment("E1"), "planar", "pi", duration_s=WARM_DURATION_S)
+    run_compiled(
+        experiment("E2"), "planar", "fuzzy-pi", faults=fault("nan"), duration_s=WARM_DURATION_S
+    )
+
+
+def _height_field() -> None:
+    from fuzzkit.plants.arm6_heightfield import height_field_contact, pack_height_field
+    from fuzzkit.plants.environment3d import HeightField
+
+    # as the kernel is called from Python (the loop's own call is compiled into the loop)
+    field = HeightField.rough((0.0, 0.1), (0.0, 0.1), 0.0, 0.0001, seed=0)
+    row, heights = pack_height_field(field)
+    params = np.zeros(12)
+    params[: len(row)] = row
+    height_field_contact(params, heights, np.zeros(3), 0.01, np.empty(3), np.empty(3))
+
+
+def _table_surface() -> None:
+    from fuzzkit.studies.compiled.loop import compiled_table
+    from fuzzkit.studies.compiled.table import table2
+
+    t = compiled_table()
+    table2(t.bp0, t.bp1, t.values, t.splits, 0.1, -0.2)
+
+
+def _c_surface() -> None:
+    from fuzzkit.studies.compiled.generated_c import call_c_surface, load_generated_c
+
+    call_c_surface(load_generated_c().function, np.zeros(3), 0.1, -0.2)
+
+
+def _exact_grid_surface() -> None:
+    from fuzzkit.formats.registry import loads
+    from fuzzkit.fuzzy.inference import evaluate
+
+    evaluate(loads(_SMOOTH_OUTPUT, "warm_smooth"), {"e": np.array([0.3])})
+
+
+@dataclass(frozen=True, slots=True)
+class Step:
+    """One warming call: ``run`` calls the ``kernels`` (``module:name``; the ones it calls from
+    Python, their callees are compiled into them) with the argument types of the real calls."""
+
+    name: str
+    kernels: tuple[str, ...]
+    run: Callable[[], None]
+
+    def dispatchers(self) -> list[Any]:
+        """The kernels, imported."""
+        found = []
+        for ref in self.kernels:
+            module, _, name = ref.partition(":")
+            found.append(getattr(importlib.import_module(module), name))
+        return found
+
+
+#: What :func:`warm` runs, in order.
+STEPS = (
+    Step(
+        "arm6 loop (plant, faults, latency, generated C controller)",
+        ("fuzzkit.studies.compiled.arm6_run:run_arm6",),
+        _arm6_loop,
+    ),
+    Step(
+        "planar loop (Chipmunk calls, faults, generated C controller)",
+        ("fuzzkit.studies.compiled.planar_run:run_planar",),
+        _planar_loop,
+    ),
+    Step(
+        "height-field contact, called from Python",
+        ("fuzzkit.plants.arm6_heightfield:height_field_contact",),
+        _height_field,
+    ),
+    Step("lookup-table surface", ("fuzzkit.studies.compiled.table:table2",), _table_surface),
+    Step(
+        "generated C surface through ctypes",
+        ("fuzzkit.studies.compiled.generated_c:call_c_surface",),
+        _c_surface,
+    ),
+    Step(
+        "exact engine on a smooth output (grid kernel)",
+        ("fuzzkit.fuzzy.grid_kernel:grid_defuzzify",),
+        _exact_grid_surface,
+    ),
+)
+
+
+def warm(report: Callable[[str, str, float], None] | None = None) -> None:
+    """Run each step of :data:`STEPS` whose kernels are not all in numba's disk cache yet.
+
+    ``report(step, outcome, seconds)`` after each one; ``outcome`` is ``"compiled"``,
+    ``"cached"`` (nothing to do: the step is not run, so a warm cache costs only the check)
+    or why it could not run here (no C compiler: the compiled loop's controller and the C
+    surface are generated C; a machine the planar loop's Chipmunk calls are not lowered for);
+    such kernels compile on first use, as without warming. Any other error propagates: the
+    step's call would fail in real use too.
+    """
+    for step in STEPS:
+        start = time.perf_counter()
+        if all(has_cached_code(kernel) for kernel in step.dispatchers()):
+            outcome = "cached"
+        else:
+            try:
+                step.run()
+                outcome = "compiled"
+            except (ToolchainError, UnsupportedPlant) as exc:
+                outcome = f"not here: {exc}"
+        if report is not None:
+            report(step.name, outcome, time.perf_counter() - start)
+
+
+def main() -> int:
+    """Warm every kernel, printing each step, what it did and its wall time."""
+    total = time.perf_counter()
+
+    def report(name: str, outcome: str, seconds: float) -> None:
+        print(f"{seconds:7.2f} s  {name}: {outcome}", flush=True)
+
+    warm(report)
+    print(f"{time.perf_counter() - total:7.2f} s  in all")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
