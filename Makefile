@@ -58,7 +58,7 @@ test: $(STAMP)
 	$(call timed,lint)
 	$(call timed,typecheck)
 	$(call timed,imports)
-	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) -q -p no:cacheprovider \
+	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q -p no:cacheprovider \
 		-m "not ($(PEER_MARKS)) and not verify" --durations=25
 
 # The deep versions of the matrices that `make test` runs a covering set of (every value and
@@ -66,7 +66,8 @@ test: $(STAMP)
 # full safety products at 50 seeds, every generated-C mutant, the full fuzz counts, the release
 # build of the sdist and wheel (docs/development.md lists them with their sizes).
 verify: $(STAMP)
-	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) -q -p no:cacheprovider -m verify --durations=25
+	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q -p no:cacheprovider -m verify \
+		--durations=25
 
 # The suite against the newest versions pyproject.toml's ranges allow (not the lock): run it on
 # purpose to catch a dependency drift before the next `make lock` does.

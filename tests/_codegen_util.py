@@ -9,6 +9,7 @@ import tempfile
 from pathlib import Path
 
 import pytest
+from _artefacts import shared
 
 import fuzzkit
 from fuzzkit.codegen.emit import emit
@@ -92,8 +93,11 @@ def rulebase(name: str) -> RuleBase:
 
 @functools.cache
 def table(name: str, number_type: NumberType) -> LookupTable:
-    """A table of a shipped rule base at the test resolution (no tolerance: bound reported)."""
-    return make_table(rulebase(name), number_type=number_type, resolution=RESOLUTION[name])
+    """A table of a shipped rule base at the test resolution (no tolerance: bound reported),
+    built once per test run (a table's search and certification take seconds)."""
+    rb, resolution = rulebase(name), RESOLUTION[name]
+    key = f"lookup table|{rb!r}|{number_type}|{resolution}"
+    return shared(key, lambda: make_table(rb, number_type=number_type, resolution=resolution))
 
 
 def sources(name: str, target: str, number_type: NumberType) -> dict[str, str]:

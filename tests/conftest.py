@@ -1,7 +1,9 @@
-"""Shared set-up of the test suite."""
+"""Shared set-up of the test suite: kernels warmed once, artefacts built once per run."""
 
 from __future__ import annotations
 
+import os
+from collections.abc import Iterator
 from typing import Any
 
 import pytest
@@ -65,3 +67,42 @@ def _report_failure(config: pytest.Config, why: str | None) -> None:
     reporter = config.pluginmanager.get_plugin("terminalreporter")
     if why is not None and reporter is not None:
         reporter.write_line(f"kernel warm-up failed ({why})")
+
+
+# --------------------------------------------------------------------------------------------
+# artefacts built once per run: compiled controllers, lookup tables, one Dask cluster
+
+
+@pytest.fixture(scope="session", autouse=True)
+def run_cache(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
+    """``$FUZZKIT_CACHE_DIR`` for the whole run: one folder shared by the xdist workers.
+
+    The package keeps compiled controllers (``controllers/``, keyed by their sources, the
+    compiler and the version) and loop tables there, and ``_artefacts.shared`` the tables the
+    tests build, so each is built once per run, not once per file and worker; a fresh folder
+    per run means no test ever reads a stale user cache in ``~/.cache``. Tests of the caches
+    themselves monkeypatch the variable to a folder of their own. Subprocesses the tests start
+    (the CLI, doc commands) inherit it.
+    """
+    base = tmp_path_factory.getbasetemp()
+    # a worker's basetemp is popen-gwN inside the controller's, which all workers share
+    worker = os.environ.get("PYTEST_XDIST_WORKER")
+    folder = (base.parent if worker else base) / "fuzzkit-cache"
+    folder.mkdir(exist_ok=True)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("FUZZKIT_CACHE_DIR", str(folder))
+        yield str(folder)
+
+
+@pytest.fixture(scope="session")
+def dask_scheduler() -> Iterator[str]:
+    """The address of one local Dask cluster for the run: two worker processes of one thread
+    each (the tests check that two processes really ran), closed at the end. A session
+    fixture is one per xdist worker: the tests that use it are marked
+    ``xdist_group("dask")``, and ``make test`` runs ``--dist loadgroup``, so that they share
+    one worker and one cluster."""
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:
+        yield cluster.scheduler_address

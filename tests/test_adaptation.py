@@ -18,6 +18,7 @@ import jsonschema
 import numpy as np
 import pytest
 from _codegen_util import needs_cc
+from _rerun import rrd_dump
 
 from fuzzkit.control import status as st
 from fuzzkit.control.adaptation import ALPHA_TABLE, StiffnessSchedule, alpha
@@ -394,7 +395,6 @@ def test_adaptive_controller_runs_and_reports_its_estimate(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     import json
-    import subprocess
 
     from fuzzkit.cli import main
 
@@ -408,11 +408,7 @@ def test_adaptive_controller_runs_and_reports_its_estimate(
     assert 1.0 <= k <= 2000.0 and k != 300.0  # it moved off the initial estimate
     assert data["gain_scale_final"]["z"] in (0.5, 0.2, 0.05, 0.02)
     # the recording carries the factor and the estimate over time
-    from test_recording_layout import _rerun_cli
-
-    dump = subprocess.run(
-        [_rerun_cli(), "rrd", "print", "-vvv", str(rrd)], capture_output=True, text=True
-    ).stdout
+    dump = rrd_dump(rrd, "-vvv")
     assert "/adaptation/gain_scale/z" in dump and "/adaptation/stiffness/z" in dump
     # the compiled loop does not model adaptation: asked for, it is refused (exit 2)
     assert main([*args, "--loop", "compiled"]) == 2

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _c_harness import HARNESS
 from _codegen_util import (
     CC,
     CLANG,
@@ -133,53 +134,6 @@ def test_q15_scaling_is_documented_and_applied() -> None:
         out = lib.eval_batch(np.array([[Q15_ONE // 2, -(Q15_ONE // 4)]], dtype=np.int16))
     exact = Engine(rb).evaluate_point(e=0.5, de=-0.25)["du"]
     assert abs(out[0, 0] / Q15_ONE - exact) <= tab.bound[0]
-
-
-HARNESS = r"""
-#include <stdio.h>
-#include <math.h>
-#include "{name}.h"
-
-/* A few hundred fuzzy-PI steps over extreme samples, so the sanitizers see the step too. */
-static int run_fpi(void)
-{{
-#ifdef WITH_FPI
-    {name}_fpi_t c;
-    long k;
-    {t} meas;
-    {name}_fpi_init(&c, 1e3f, 1e3f, 10.0f, -0.5f, 0.5f);
-    for (k = 0; k < 400; k++) {{
-        meas = ({t})(k % 7 == 0 ? {big} : (k % 5 == 0 ? -{big} : (k % 3)));
-#ifdef WITH_NAN
-        if (k % 11 == 0) {{
-            meas = NAN;
-        }}
-#endif
-        printf("u %.17g\n", (double){name}_fpi_step(&c, ({t})1, meas));
-    }}
-#endif
-    return 0;
-}}
-
-int main(void)
-{{
-    {t} in[{ni}], out[{no}];
-    double x[{ni}];
-    int i;
-    for (;;) {{
-        for (i = 0; i < {ni}; i++) {{
-            if (scanf("{fmt}", &x[i]) != 1) {{
-                return run_fpi();
-            }}
-            in[i] = ({t})x[i];
-        }}
-        {name}_eval(in, out);
-        for (i = 0; i < {no}; i++) {{
-            printf("%.17g%c", (double)out[i], i + 1 < {no} ? ' ' : '\n');
-        }}
-    }}
-}}
-"""
 
 
 @pytest.mark.parametrize(

@@ -16,10 +16,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _c_harness import HARNESS
 from _codegen_util import CC, CLANG, needs_cc, require_sanitizers, rulebase, skip_no_cc
-from test_codegen_c import HARNESS
-from test_codegen_emit import GOLDEN, ULPS, check_golden, full_scale, golden_difference
-from test_inference_random import random_rulebase
+from _golden import GOLDEN, ULPS, check_golden, full_scale, golden_difference
+from _random_rulebases import edged_rulebase
 
 from fuzzkit.codegen.emit import emit
 from fuzzkit.codegen.exact import ROUNDING_BOUND, emit_exact, unsupported_reason
@@ -59,7 +59,7 @@ def random_family(seed: int, count: int) -> list[RuleBase]:
     i = 0
     while len(family) < count:
         lo, hi = [(-1.0, 1.0), (0.0, 30.0), (-1000.0, 1000.0)][i % 3]
-        rb = random_rulebase(rng, lo, hi)
+        rb = edged_rulebase(rng, lo, hi)
         rb = dataclasses.replace(rb, defuzzifier=DEFUZZIFIERS[i % 6], name=f"rnd{seed}_{i}")
         i += 1
         if not check(rb):

@@ -21,7 +21,7 @@ import numpy as np
 import numpy.typing as npt
 import pytest
 from _codegen_util import CC, CLANG, needs_cc, require_sanitizers
-from test_codegen_emit import GOLDEN, check_golden, full_scale
+from _golden import GOLDEN, check_golden, full_scale
 
 from fuzzkit.codegen.backends.c.run import CompiledController
 from fuzzkit.codegen.controller import float_step_bound

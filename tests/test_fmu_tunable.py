@@ -12,9 +12,9 @@ import numpy as np
 import numpy.typing as npt
 import pytest
 from _codegen_util import needs_cc
+from _replay_logs import read_out, write_log
 from fmpy.fmi2 import FMU2Slave
 from fmpy.validation import validate_fmu
-from test_replay import read_out, write_log
 
 from fuzzkit.cli import main
 from fuzzkit.control.spec_reader import load_spec

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _fis_probe import fis_with_input_mf
 from _random_rulebases import MATLAB_SHAPES, random_rulebase
 
 from fuzzkit.formats import fcl, fis, fll
@@ -91,7 +92,7 @@ MATLAB = {
 def test_fis_membership_functions_keep_matlab_parameter_order(
     mf: str, params: tuple[float, ...]
 ) -> None:
-    text = _fis_with_input_mf(f"'{mf}',[{' '.join(map(str, params))}]")
+    text = fis_with_input_mf(f"'{mf}',[{' '.join(map(str, params))}]")
     term = fis.loads(text).inputs[0].terms[1]
     x = np.linspace(-3, 3, 2001)  # beyond the range too: MATLAB does not clamp
     np.testing.assert_allclose(
@@ -100,44 +101,12 @@ def test_fis_membership_functions_keep_matlab_parameter_order(
 
 
 def test_fis_trapmf_with_infinite_feet_is_a_shoulder_everywhere() -> None:
-    rb = fis.loads(_fis_with_input_mf("'trapmf',[-inf -inf -0.5 0.5]"))
+    rb = fis.loads(fis_with_input_mf("'trapmf',[-inf -inf -0.5 0.5]"))
     term = rb.inputs[0].terms[1]
     assert term.shape == "left_shoulder" and term.params == (-0.5, 0.5)
     x = np.array([-1e6, -0.5, 0.0, 0.5, 1e6])
     np.testing.assert_allclose(membership.evaluate_term(term, x), [1, 1, 0.5, 0, 0])
     assert "'trapmf',[-inf -inf -0.5 0.5]" in fis.dumps(rb)
-
-
-def _fis_with_input_mf(mf: str, input_range: str = "[-1 1]") -> str:
-    """A one-input .fis whose input has a covering gaussian and the given MF as its term 2."""
-    return f"""[System]
-Name='probe'
-Type='mamdani'
-NumInputs=1
-NumOutputs=1
-NumRules=1
-AndMethod='min'
-OrMethod='max'
-ImpMethod='min'
-AggMethod='max'
-DefuzzMethod='centroid'
-
-[Input1]
-Name='x'
-Range={input_range}
-NumMFs=2
-MF1='all':'gaussmf',[1 0]
-MF2='probe':{mf}
-
-[Output1]
-Name='y'
-Range=[0 1]
-NumMFs=1
-MF1='a':'trimf',[0 0.5 1]
-
-[Rules]
-1 , 1 (1) : 1
-"""
 
 
 @pytest.mark.parametrize(

@@ -6,9 +6,9 @@ import math
 
 import numpy as np
 import pytest
+from _fis_probe import fis_with_input_mf
 from _mamdani_reference import mu as reference_mu
 from _mamdani_reference import reference, smf, zmf
-from test_interop_formats import _fis_with_input_mf
 
 from fuzzkit.codegen.exact import unsupported_reason
 from fuzzkit.codegen.method import compile_rulebase
@@ -255,7 +255,7 @@ def _file_texts(shape: str) -> dict[str, str]:
     return {
         # the range of the other formats' files: the terms lie on [0, 10], and a term wholly
         # outside its input's range is an error (issue 29 item 7)
-        "fis": _fis_with_input_mf(terms["fis"], "[0 10]"),
+        "fis": fis_with_input_mf(terms["fis"], "[0 10]"),
         "fll": FLL_TEXT.replace("$TERM", terms["fll"]),
         "fcl": FCL_TEXT.replace("$TERM", terms["fcl"]),
     }

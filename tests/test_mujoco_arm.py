@@ -212,10 +212,10 @@ def test_the_servo_figure_draws_every_joint_beside_the_design() -> None:
 
 
 @pytest.mark.slow
-def test_a_dask_cluster_gives_the_in_process_results_on_it() -> None:
+@pytest.mark.xdist_group("dask")
+def test_a_dask_cluster_gives_the_in_process_results_on_it(dask_scheduler: str) -> None:
     """``fuzzkit sweep --plant mujoco --scheduler``: the same rows from two Dask worker
     processes as in this process (the plant is rebuilt from its name in each worker)."""
-    distributed = pytest.importorskip("distributed")
     from fuzzkit.studies.batch import RunSpec, execute
     from fuzzkit.studies.sweep import map_runs
 
@@ -223,10 +223,7 @@ def test_a_dask_cluster_gives_the_in_process_results_on_it() -> None:
         RunSpec("E1", "pi", plant="mujoco", loop="python", seed=s, duration_s=2.5) for s in (0, 1)
     ]
     local = [execute(s) for s in specs]
-    with distributed.LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
-    ) as cluster:
-        remote = map_runs(execute, specs, scheduler=cluster.scheduler_address)
+    remote = map_runs(execute, specs, scheduler=dask_scheduler)
     keys = ("plant", "seed", "z_peak_force_true", "z_steady_state_error_mean", "tripped")
     assert [[r[k] for k in keys] for r in remote] == [[r[k] for k in keys] for r in local]
     assert local[0]["plant"] == "mujoco"

@@ -7,14 +7,12 @@ Read back with ``rerun rrd print -vvv`` (the file as the viewer gets it).
 from __future__ import annotations
 
 import re
-import shutil
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
+from _rerun import rrd_dump
 
 from fuzzkit.formats.registry import loads
 from fuzzkit.studies.experiments import experiment
@@ -22,20 +20,8 @@ from fuzzkit.studies.runner import RunResult, run
 from fuzzkit.viz.traces import write_run_rrd
 
 
-def _rerun_cli() -> str:
-    exe = Path(sys.executable).with_name("rerun")
-    found = str(exe) if exe.exists() else shutil.which("rerun")
-    if found is None:
-        pytest.skip("the rerun CLI (rerun-sdk) is not on PATH")
-    return found
-
-
 def _dump(path: Path) -> str:
-    res = subprocess.run(
-        [_rerun_cli(), "rrd", "print", "-vvv", str(path)], capture_output=True, text=True
-    )
-    assert res.returncode == 0, res.stderr
-    return res.stdout
+    return rrd_dump(path, "-vvv")
 
 
 def _series_styles(text: str) -> dict[str, tuple[str, int]]:

@@ -3,57 +3,17 @@ generated C on one hostile log, strict CSV reading with located errors."""
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
 import pytest
 from _codegen_util import needs_cc
+from _replay_logs import SPEC, SPEC_PI, read_out, run_cli, write_log
 
-from fuzzkit.cli import main
 from fuzzkit.control.reference import Controller
 from fuzzkit.control.spec_reader import load_spec
-from fuzzkit.studies.replay import ROTATION_COLUMNS
 from fuzzkit.studies.sensor_logs import hostile_log
-
-REPO = Path(__file__).parent.parent
-SPEC = REPO / "docs" / "examples" / "controller.yaml"
-SPEC_PI = REPO / "docs" / "examples" / "controller_pi.yaml"
-
-
-def _run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def _cell(v: float) -> str:
-    return "" if math.isnan(v) else repr(float(v))
-
-
-def write_log(
-    path: Path,
-    forces: npt.NDArray[np.float64],
-    rotations: npt.NDArray[np.float64] | None,
-    *,
-    times: bool = True,
-    nan_word: bool = False,
-) -> None:
-    head = (
-        (["t"] if times else [])
-        + ["fx", "fy", "fz"]
-        + (list(ROTATION_COLUMNS) if rotations is not None else [])
-    )
-    lines = [",".join(head)]
-    for k, f in enumerate(forces):
-        cells = ([repr(k * 0.004)] if times else []) + [
-            ("nan" if nan_word and math.isnan(v) else _cell(v)) for v in f
-        ]
-        if rotations is not None:
-            cells += [_cell(v) for v in rotations[k]]
-        lines.append(",".join(cells))
-    path.write_text("\n".join(lines) + "\n")
 
 
 def hostile_csv(
@@ -67,13 +27,6 @@ def hostile_csv(
     return forces, rotations, log
 
 
-def read_out(path: Path) -> tuple[list[str], npt.NDArray[np.float64]]:
-    lines = path.read_text().splitlines()
-    return lines[0].split(","), np.array(
-        [[float(c) for c in line.split(",")] for line in lines[1:]]
-    )
-
-
 @needs_cc
 def test_replay_python_and_c_agree_on_a_hostile_log(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
@@ -85,7 +38,7 @@ def test_replay_python_and_c_agree_on_a_hostile_log(
     outs = {}
     for impl in ("python", "c"):
         out = tmp_path / f"u_{impl}.csv"
-        code, stdout, err = _run(
+        code, stdout, err = run_cli(
             capsys, "replay", str(SPEC), "--forces", str(log), "--out", str(out), "--impl", impl
         )
         assert code == 0, err
@@ -121,7 +74,9 @@ def test_replay_without_time_or_rotation_for_a_spec_without_a_tool(
     text = SPEC_PI.read_text()
     spec_file.write_text(text.split("sensor:")[0] + "adaptation: none\n")
     out = tmp_path / "u.csv"
-    code, _, err = _run(capsys, "replay", str(spec_file), "--forces", str(log), "--out", str(out))
+    code, _, err = run_cli(
+        capsys, "replay", str(spec_file), "--forces", str(log), "--out", str(out)
+    )
     assert code == 0, err
     head, got = read_out(out)
     assert head == ["ux", "uy", "uz", "status"]
@@ -157,7 +112,7 @@ def test_malformed_logs_are_located_errors_and_nothing_is_written(
     log = tmp_path / "log.csv"
     log.write_text(text)
     out = tmp_path / "u.csv"
-    code, _, err = _run(capsys, "replay", str(SPEC_PI), "--forces", str(log), "--out", str(out))
+    code, _, err = run_cli(capsys, "replay", str(SPEC_PI), "--forces", str(log), "--out", str(out))
     assert code == 2
     assert f"{log}{where}: " in err and message in err, err
     assert "Traceback" not in err
@@ -170,7 +125,7 @@ def test_a_log_without_rotation_for_a_spec_with_a_tool_is_refused(
     log = tmp_path / "log.csv"
     log.write_text("fx,fy,fz\n1,2,3\n")
     out = tmp_path / "u.csv"
-    code, _, err = _run(capsys, "replay", str(SPEC), "--forces", str(log), "--out", str(out))
+    code, _, err = run_cli(capsys, "replay", str(SPEC), "--forces", str(log), "--out", str(out))
     assert code == 2 and f"{log}:1:1: " in err and "r11,r12,...,r33" in err
     assert not out.exists()
 
@@ -180,7 +135,7 @@ def test_a_log_that_is_not_utf8_is_a_located_error(
 ) -> None:
     log = tmp_path / "log.csv"
     log.write_bytes(b"fx,fy,fz\n1,2,3\n\xff\xfe,1,2\n")
-    code, _, err = _run(
+    code, _, err = run_cli(
         capsys, "replay", str(SPEC_PI), "--forces", str(log), "--out", str(tmp_path / "u.csv")
     )
     assert code == 2 and f"{log}:3: not UTF-8 text" in err
@@ -208,7 +163,7 @@ def test_compile_spec_verifies_and_writes_the_controller(
     files: list[str],
 ) -> None:
     out = tmp_path / "gen"
-    code, stdout, err = _run(
+    code, stdout, err = run_cli(
         capsys, "compile", str(SPEC), "--target", target, *extra, "--out", str(out), "--verify"
     )
     assert code == 0, err
@@ -230,7 +185,7 @@ def test_compile_spec_refuses_options_it_cannot_honour(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], argv: list[str], message: str
 ) -> None:
     out = tmp_path / "gen"
-    code, _, err = _run(capsys, "compile", str(SPEC), *argv, "--out", str(out))
+    code, _, err = run_cli(capsys, "compile", str(SPEC), *argv, "--out", str(out))
     assert code == 2 and message in err, err
     assert not out.exists()
 
@@ -240,7 +195,7 @@ def test_compile_of_a_bad_spec_is_a_located_error(
 ) -> None:
     bad = tmp_path / "bad.yaml"
     bad.write_text(SPEC_PI.read_text().replace("limit_n: 25.0", "limit_n: 5.0"))
-    code, _, err = _run(
+    code, _, err = run_cli(
         capsys, "compile", str(bad), "--target", "c", "--out", str(tmp_path / "gen")
     )
     assert code == 2 and f"{bad}:" in err and "Traceback" not in err
@@ -258,7 +213,7 @@ def test_log_problems_are_sorted_by_line_with_plain_numbers(
     log.write_text(
         GOOD_HEAD + "\n0.0,1,2,3\n0.016,1,2,3\n0.008,1,x,3\n0.024,1,2\n0.02,1,2,3\n0.012,1,2,3\n"
     )
-    code, _, err = _run(
+    code, _, err = run_cli(
         capsys, "replay", str(SPEC_PI), "--forces", str(log), "--out", str(tmp_path / "u.csv")
     )
     assert code == 2 and "np.float64" not in err, err
@@ -277,7 +232,7 @@ def test_a_bad_header_lists_every_problem_and_a_bad_body_the_first_20(
     log = tmp_path / "log.csv"
     names = [f"w{k}" for k in range(25)]
     log.write_text("fx," + ",".join(names) + ",fx\n")
-    code, _, err = _run(
+    code, _, err = run_cli(
         capsys, "replay", str(SPEC_PI), "--forces", str(log), "--out", str(tmp_path / "u.csv")
     )
     assert code == 2
@@ -288,7 +243,7 @@ def test_a_bad_header_lists_every_problem_and_a_bad_body_the_first_20(
     assert cols == sorted(cols)
     # a body with 30 bad rows: the first 20 by line, and a word that the reader stopped
     log.write_text(GOOD_HEAD + "\n" + "".join(f"{k},1,oops,3\n" for k in range(30)))
-    code, _, err = _run(
+    code, _, err = run_cli(
         capsys, "replay", str(SPEC_PI), "--forces", str(log), "--out", str(tmp_path / "u.csv")
     )
     located = [line for line in err.splitlines() if line.startswith(f"{log}:")]
@@ -303,7 +258,7 @@ def test_status_names_decode_the_bits(tmp_path: Path, capsys: pytest.CaptureFixt
     outs = {}
     for fmt in ("bits", "names"):
         out = tmp_path / f"u_{fmt}.csv"
-        code, _, err = _run(
+        code, _, err = run_cli(
             capsys, "replay", str(SPEC), "--forces", str(log), "--out", str(out),
             "--status", fmt,
         )  # fmt: skip
@@ -324,7 +279,7 @@ def test_python_generated_runs_the_generated_module(
     spec = load_spec(SPEC)
     forces, rotations, log = hostile_csv(tmp_path, 150, 5)
     out = tmp_path / "u.csv"
-    code, stdout, err = _run(
+    code, stdout, err = run_cli(
         capsys, "replay", str(SPEC), "--forces", str(log), "--out", str(out),
         "--impl", "python-generated",
     )  # fmt: skip
@@ -350,9 +305,9 @@ def test_compare_prints_the_largest_difference_per_column(
     for impl in ("python", "python-generated", "c"):
         out = tmp_path / f"u_{impl}.csv"
         argv = ["--out", str(out), "--impl", impl, "--type", "float"]
-        assert _run(capsys, "replay", str(SPEC), "--forces", str(log), *argv)[0] == 0
+        assert run_cli(capsys, "replay", str(SPEC), "--forces", str(log), *argv)[0] == 0
         runs[impl] = read_out(out)[1]
-    code, stdout, err = _run(
+    code, stdout, err = run_cli(
         capsys, "replay", str(SPEC), "--forces", str(log), "--compare", "--type", "float"
     )
     assert code == 0, err

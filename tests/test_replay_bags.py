@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 import pytest
-from test_replay import SPEC, SPEC_PI, _run, read_out, write_log
+from _replay_logs import SPEC, SPEC_PI, read_out, run_cli, write_log
 
 from fuzzkit.control.spec_reader import load_spec
 from fuzzkit.studies.sensor_logs import hostile_log
@@ -109,7 +109,7 @@ def test_a_bag_replays_as_the_same_samples_in_csv(
         ("csv", str(csv), []),
     ):
         out = tmp_path / f"u_{name}.csv"
-        code, stdout, err = _run(
+        code, stdout, err = run_cli(
             capsys, "replay", str(SPEC_PI), "--forces", source, "--out", str(out), *extra
         )
         assert code == 0, err
@@ -121,7 +121,7 @@ def test_a_bag_replays_as_the_same_samples_in_csv(
     (file,) = [p for p in bag.iterdir() if p.suffix in (".db3", ".mcap")]
     out = tmp_path / "u_file.csv"
     argv = ["--topic", "/ft/wrench", "--frame-rotation", frame, "--out", str(out)]
-    assert _run(capsys, "replay", str(SPEC_PI), "--forces", str(file), *argv)[0] == 0
+    assert run_cli(capsys, "replay", str(SPEC_PI), "--forces", str(file), *argv)[0] == 0
     np.testing.assert_array_equal(read_out(out)[1], outs["csv"][1])
 
 
@@ -161,7 +161,7 @@ def test_the_tool_rotation_from_a_second_topic(
         ("csv", str(csv), []),
     ):
         out = tmp_path / f"u_{name}.csv"
-        code, _, err = _run(
+        code, _, err = run_cli(
             capsys, "replay", str(SPEC), "--forces", source, "--out", str(out), *extra
         )
         assert code == 0, err
@@ -256,7 +256,7 @@ def test_malformed_bags_are_clear_errors(
         source = tmp_path / make
         source.write_bytes(b"\x89not a bag at all\x00" * 50)
     out = tmp_path / "u.csv"
-    code, _, err = _run(
+    code, _, err = run_cli(
         capsys, "replay", str(SPEC), "--forces", str(source), "--out", str(out), *argv
     )
     assert code == 2, err
@@ -271,7 +271,7 @@ def test_topic_options_on_a_csv_log_are_refused(
 ) -> None:
     csv = tmp_path / "log.csv"
     csv.write_text("fx,fy,fz\n1,2,3\n")
-    code, _, err = _run(
+    code, _, err = run_cli(
         capsys, "replay", str(SPEC_PI), "--forces", str(csv), "--out", str(tmp_path / "u.csv"),
         "--topic", "/ft",
     )  # fmt: skip
@@ -291,10 +291,10 @@ def test_a_frame_rotation_stands_for_the_rotation_columns_of_a_csv_log(
     for log, extra in ((with_rot, []), (without, frame)):
         out = tmp_path / f"u_{log.stem}.csv"
         argv = ["replay", str(SPEC_PI), "--forces", str(log), "--out", str(out), *extra]
-        assert _run(capsys, *argv)[0] == 0
+        assert run_cli(capsys, *argv)[0] == 0
         outs.append(read_out(out)[1])
     np.testing.assert_array_equal(outs[0], outs[1])
     # a log with its own rotation takes no fixed one
     argv = ["replay", str(SPEC_PI), "--forces", str(with_rot), "--out", str(tmp_path / "x.csv")]
-    code, _, err = _run(capsys, *argv, *frame)
+    code, _, err = run_cli(capsys, *argv, *frame)
     assert code == 2 and "--frame-rotation is for logs without" in err

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from _rerun import rerun_cli
 
 from fuzzkit.formats.registry import load
 from fuzzkit.studies.experiments import DEFAULT_GAINS, experiment
@@ -56,10 +55,7 @@ def test_strongest_rules_are_the_largest_min_of_memberships(e1: RunResult) -> No
 
 
 def test_the_recording_carries_them(e1: RunResult, tmp_path: Path) -> None:
-    exe = Path(sys.executable).with_name("rerun")
-    cli = str(exe) if exe.exists() else shutil.which("rerun")
-    if cli is None:
-        pytest.skip("the rerun CLI (rerun-sdk) is not on PATH")
+    cli = rerun_cli()
     rb = load("macvicar_whelan")
     path = write_run_rrd(e1, tmp_path / "e1.rrd", fuzzy=(rb, {}))
     res = subprocess.run([cli, "rrd", "print", "-vvv", str(path)], capture_output=True, text=True)

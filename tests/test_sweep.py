@@ -92,16 +92,14 @@ def test_process_pool_rows_equal_in_process_rows(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
-def test_dask_local_cluster_gives_the_in_process_results() -> None:
+@pytest.mark.xdist_group("dask")
+def test_dask_local_cluster_gives_the_in_process_results(dask_scheduler: str) -> None:
     distributed = pytest.importorskip("distributed")
     specs = _specs()[:12]
     local = [execute(s) for s in specs]
-    with distributed.LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
-    ) as cluster:
-        remote = map_runs(execute, specs, scheduler=cluster.scheduler_address)
-        with distributed.Client(cluster.scheduler_address) as client:
-            where = client.run(lambda: __import__("os").getpid())
+    remote = map_runs(execute, specs, scheduler=dask_scheduler)
+    with distributed.Client(dask_scheduler) as client:
+        where = client.run(lambda: __import__("os").getpid())
     assert len(set(where.values())) == 2  # two worker processes really ran
     assert _strip(remote) == _strip(local)
 

@@ -3,25 +3,16 @@
 from __future__ import annotations
 
 import re
-import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+from _rerun import rerun_cli
 
 from fuzzkit.errors import ConfigError
 from fuzzkit.studies.experiments import experiment
 from fuzzkit.studies.runner import RunResult, run
 from fuzzkit.viz.traces_planar import write_rrd
-
-
-def _rerun_cli() -> str:
-    exe = Path(sys.executable).with_name("rerun")
-    found = str(exe) if exe.exists() else shutil.which("rerun")
-    if found is None:
-        pytest.skip("the rerun CLI (rerun-sdk) is not on PATH")
-    return found
 
 
 @pytest.fixture(scope="module")
@@ -33,7 +24,7 @@ def test_rrd_is_valid_and_has_every_entity(result: RunResult, tmp_path: Path) ->
     out = write_rrd(result, tmp_path / "e1.rrd")
     assert out.stat().st_size > 0
     assert list(tmp_path.iterdir()) == [out]  # no temporary file left behind
-    cli = _rerun_cli()
+    cli = rerun_cli()
     verify = subprocess.run([cli, "rrd", "verify", str(out)], capture_output=True, text=True)
     assert verify.returncode == 0, verify.stderr
     listing = subprocess.run([cli, "rrd", "print", str(out)], capture_output=True, text=True)

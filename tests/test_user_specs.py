@@ -10,12 +10,12 @@ engine against the generated surface, rounding only).
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 import numpy as np
 import pytest
 from _codegen_util import needs_cc
+from _replay_logs import PYTHON_TOLERANCE_M, replayed_difference
 
 from fuzzkit.cli import main
 from fuzzkit.studies.batch import RunSpec, run_spec
@@ -32,18 +32,8 @@ SHIPPED = {
 }
 #: plant -> (fault, (sensor, command) latency) of the replayed runs
 RUNS = {"arm6": ("spike", (1, 1)), "planar": ("nan", (2, 0))}
-PYTHON_TOLERANCE_M = 1e-12
 
 pytestmark = needs_cc
-
-
-def _replayed(capsys: pytest.CaptureFixture[str], spec: Path, csv: Path, impl: str) -> float:
-    out = csv.with_name(f"u_{impl}.csv")
-    assert main(["replay", str(spec), "--forces", str(csv), "--out", str(out), "--impl", impl]) == 0
-    printed = capsys.readouterr().out
-    found = re.search(r"largest difference from the run's corrections \(u<a>_m\): (\S+) m", printed)
-    assert found is not None, printed
-    return float(found.group(1))
 
 
 @pytest.mark.parametrize("plant", sorted(RUNS))
@@ -63,8 +53,8 @@ def test_a_run_replays_to_its_corrections(
     assert float(np.max(np.abs(result.u))) > 1e-4  # the controller corrected
     csv = tmp_path / "run.csv"
     csv.write_text(run_csv(result), encoding="utf-8")
-    assert _replayed(capsys, spec, csv, "c") == 0.0
-    assert _replayed(capsys, spec, csv, "python") <= PYTHON_TOLERANCE_M
+    assert replayed_difference(capsys, spec, csv, "c") == 0.0
+    assert replayed_difference(capsys, spec, csv, "python") <= PYTHON_TOLERANCE_M
 
 
 def test_replay_of_a_run_sees_a_different_controller(
@@ -76,7 +66,7 @@ def test_replay_of_a_run_sees_a_different_controller(
     )
     csv = tmp_path / "run.csv"
     csv.write_text(run_csv(result), encoding="utf-8")
-    assert _replayed(capsys, USER_SPECS["gauss_prod"], csv, "c") > 1e-6
+    assert replayed_difference(capsys, USER_SPECS["gauss_prod"], csv, "c") > 1e-6
 
 
 @pytest.mark.parametrize("name", sorted(USER_SPECS))

@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import random
 from pathlib import Path
-from typing import Literal
 
 import pytest
 import yaml
+from _random_rulebases import random_rulebase
 
 from fuzzkit.formats import registry
 from fuzzkit.formats.schema import json_schema
@@ -18,15 +17,10 @@ from fuzzkit.fuzzy.model import (
     AGGREGATIONS,
     AND_OPERATORS,
     DEFUZZIFIERS,
-    IMPLICATIONS,
-    OR_OPERATORS,
     OUT_OF_RANGE_POLICIES,
     SHAPE_PARAMS,
-    SUGENO_DEFUZZIFIERS,
     Compound,
     Consequent,
-    Expression,
-    Operators,
     Proposition,
     Rule,
     RuleBase,
@@ -59,121 +53,10 @@ def test_table_is_written_back_as_a_table_in_its_printed_order() -> None:
     assert doc["inputs"]["e"]["terms"]["partition"] == "triangular"
 
 
-def _random_variable(rng: random.Random, name: str, kind: str) -> Variable:
-    low = rng.choice([-1.0, 0.0, -2.5])
-    high = low + rng.choice([1.0, 2.0, 0.3])
-    n = rng.randint(2, 5)
-    labels = [f"{name}_t{i}" for i in range(n)]
-    span = high - low
-    terms: list[Term] = []
-    # A covering backbone of triangles (inputs must be covered), plus assorted shapes.
-    step = span / (n - 1)
-    for i, label in enumerate(labels):
-        c = low + i * step
-        terms.append(Term(label, "triangle", (c - step, c, c + step)))
-    shapes = [
-        "trapezoid",
-        "left_shoulder",
-        "right_shoulder",
-        "gaussian",
-        "bell",
-        "sigmoid",
-        "gaussian_product",
-        "s_shape",
-        "z_shape",
-        "pi_shape",
-        "sigmoid_difference",
-        "sigmoid_product",
-    ]
-    for j in range(rng.randint(0, 3)):
-        shape = rng.choice(shapes)
-        a = low + rng.random() * span * 0.5
-        pts = sorted([a, a + 0.1 * span, a + 0.2 * span, a + 0.3 * span])
-        params = {
-            "trapezoid": tuple(pts),
-            "left_shoulder": tuple(pts[:2]),
-            "right_shoulder": tuple(pts[:2]),
-            "gaussian": (a, 0.05 + rng.random()),
-            "bell": (0.1 + rng.random(), 1.0 + rng.random(), a),
-            "sigmoid": (rng.choice([-1, 1]) * (1 + 10 * rng.random()), a),
-            "gaussian_product": (pts[0], 0.1 + rng.random(), pts[1], 0.1 + rng.random()),
-            "s_shape": tuple(pts[:2]),
-            "z_shape": tuple(pts[:2]),
-            "pi_shape": tuple(pts),
-            "sigmoid_difference": (5.0, pts[0], 3.0 + rng.random(), pts[2]),
-            "sigmoid_product": (5.0, pts[0], -3.0 - rng.random(), pts[2]),
-        }[shape]
-        assert len(params) == len(SHAPE_PARAMS[shape])
-        terms.append(Term(f"{name}_x{j}", shape, tuple(float(p) for p in params)))
-    default = None
-    if kind == "output" and rng.random() < 0.5:
-        default = low + rng.random() * span
-    return Variable(name, low, high, tuple(terms), default)
-
-
-def _random_expression(rng: random.Random, inputs: list[Variable], depth: int) -> Expression:
-    if depth == 0 or rng.random() < 0.4:
-        var = rng.choice(inputs)
-        return Proposition(var.name, rng.choice(var.term_names), rng.random() < 0.2)
-    op: Literal["and", "or"] = "and" if rng.random() < 0.5 else "or"
-    return Compound(
-        op, tuple(_random_expression(rng, inputs, depth - 1) for _ in range(rng.randint(2, 3)))
-    )
-
-
-def _sugeno_output(rng: random.Random, name: str, n_inputs: int) -> Variable:
-    terms = []
-    for j in range(rng.randint(1, 4)):
-        if rng.random() < 0.5:
-            terms.append(Term(f"{name}_c{j}", "constant", (rng.uniform(-5, 5),)))
-        else:
-            params = tuple(rng.choice([0.0, rng.uniform(-3, 3)]) for _ in range(n_inputs + 1))
-            terms.append(Term(f"{name}_l{j}", "linear", params))
-    return Variable(name, -10.0, 10.0, tuple(terms), rng.choice([None, 0.0]))
-
-
 def _random_rulebase(seed: int) -> RuleBase:
-    rng = random.Random(seed)
-    sugeno = seed % 3 == 0
-    inputs = [_random_variable(rng, f"in{i}", "input") for i in range(rng.randint(1, 3))]
-    n_out = rng.randint(1, 2)
-    if sugeno:
-        outputs = [_sugeno_output(rng, f"out{i}", len(inputs)) for i in range(n_out)]
-    else:
-        outputs = [_random_variable(rng, f"out{i}", "output") for i in range(n_out)]
-    rules = []
-    for _ in range(rng.randint(1, 8)):
-        cons = tuple(
-            Consequent(o.name, rng.choice(o.term_names))
-            for o in rng.sample(outputs, rng.randint(1, len(outputs)))
-        )
-        weight = rng.choice([1.0, 0.5, rng.random()])
-        rules.append(Rule(_random_expression(rng, inputs, 2), cons, weight))
-    # a few random rules leave label combinations where none fires: a default makes that a
-    # warning (an output without one would be refused: issue 28 item 5)
-    outputs = [
-        o if o.default is not None else dataclasses.replace(o, default=0.5 * (o.low + o.high))
-        for o in outputs
-    ]
-    return RuleBase(
-        name=f"random_{seed}",
-        inputs=tuple(inputs),
-        outputs=tuple(outputs),
-        rules=tuple(rules),
-        operators=Operators(
-            rng.choice(AND_OPERATORS),
-            rng.choice(OR_OPERATORS),
-            rng.choice(IMPLICATIONS),
-            rng.choice(AGGREGATIONS),
-        ),
-        defuzzifier=rng.choice(
-            SUGENO_DEFUZZIFIERS
-            if sugeno
-            else [d for d in DEFUZZIFIERS if d not in SUGENO_DEFUZZIFIERS]
-        ),
-        out_of_range=rng.choice(OUT_OF_RANGE_POLICIES),
-        coverage=rng.choice(["strict", "allow_gaps"]),
-        description=rng.choice(["", "plain", "with: colon, # hash and 'quotes'\nand a newline"]),
+    """Every third a Sugeno rule base; nested conditions, every shape and file-level option."""
+    return random_rulebase(
+        seed, sugeno=seed % 3 == 0, matlab_shapes=True, depth=2, file_options=True
     )
 
 
@@ -182,6 +65,19 @@ def test_random_python_built_models_round_trip(seed: int) -> None:
     rb = _random_rulebase(seed)
     assert check(rb) == [], check(rb)
     assert registry.loads(dump(rb)) == rb
+
+
+def test_the_random_round_trips_hold_every_shape_and_option() -> None:
+    rbs = [_random_rulebase(seed) for seed in range(40)]
+    shapes = {t.shape for rb in rbs for v in (*rb.inputs, *rb.outputs) for t in v.terms}
+    assert shapes == set(SHAPE_PARAMS) - {"singleton"}, set(SHAPE_PARAMS) - shapes
+    assert {rb.defuzzifier for rb in rbs} == set(DEFUZZIFIERS)
+    assert {rb.out_of_range for rb in rbs} == set(OUT_OF_RANGE_POLICIES)
+    assert {rb.coverage for rb in rbs} == {"strict", "allow_gaps"}
+    assert any(
+        isinstance(op, Compound) for rb in rbs for r in rb.rules
+        if isinstance(r.antecedent, Compound) for op in r.antecedent.operands
+    )  # fmt: skip
 
 
 def test_sugeno_input_without_terms_and_coefficient_list_round_trip() -> None:
