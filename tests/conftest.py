@@ -97,8 +97,8 @@ def run_cache(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
 @pytest.fixture(scope="session")
 def dask_scheduler() -> Iterator[str]:
     """The address of one local Dask cluster for the run: two worker processes of one thread
-    each (the tests check that two processes really ran), on free ports, closed at the end. A session
-    fixture is one per xdist worker: the tests that use it are marked
+    each (the tests check that two processes really ran), on free ports, closed at the end.
+    A session fixture is one per xdist worker: the tests that use it are marked
     ``xdist_group("dask")``, and ``make test`` runs ``--dist loadgroup``, so that they share
     one worker and one cluster."""
     distributed = pytest.importorskip("distributed")
