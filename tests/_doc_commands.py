@@ -2,8 +2,9 @@
 
 A *command block* is a fenced block tagged ``sh``; its lines (backslash continuations joined,
 ``# comments`` dropped) are commands. Output, usage lines and diagrams go in untagged or
-``text`` blocks. ``tests/test_readme.py`` runs every ``fuzzkit`` command of every command block,
-in order, in a scratch folder per page; a command that cannot run here must be listed in
+``text`` blocks. ``tests/test_readme.py`` runs every ``fuzzkit`` command of every command block
+once, with the earlier commands of its page it depends on (``tests/_doc_plan.py``), in a
+scratch folder per group (``tests/_doc_run.py``); a command that cannot run here must be listed in
 :data:`NOT_RUN` with the reason, and a slow one is limited by :data:`LIMITS` (smaller budgets,
 fewer seeds) but still runs.
 """
@@ -29,7 +30,9 @@ class Command:
 
     @property
     def where(self) -> str:
-        return f"{self.page.relative_to(ROOT)}:{self.line}"
+        """``page:line``, the page relative to the repository (a page elsewhere: its name)."""
+        page = self.page.relative_to(ROOT) if self.page.is_relative_to(ROOT) else self.page.name
+        return f"{page}:{self.line}"
 
 
 def commands(page: Path) -> list[Command]:

@@ -1,0 +1,189 @@
+"""Which doc commands depend on which, and the test items that run each distinct one once.
+
+A command *writes* the paths named by its output options (:data:`OUTPUT_OPTIONS`) or a shell
+``>``, and *reads* every other word it names. It depends on the latest earlier command of its
+page that writes a path it reads, or one it writes again (a command may merge into an existing
+output: ``tune --out`` does). A page's commands joined by dependencies form a *group*: run in
+order in one scratch folder, a group needs nothing from any other, so groups run in parallel.
+
+A command's *key* is its text as run (after ``LIMITS``) with the keys of the commands it
+depends on: two places with one key run the same command in the same working-folder state. The
+plan runs every key once, in the first group that holds it, and names all its places.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import shlex
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path, PurePosixPath
+
+from tests._doc_commands import PAGES, Command, commands, limited, not_run_reason
+
+#: The options whose value is a path the command writes (every other word it names is read).
+#: Checked as the commands run: a command that writes a path none of these names fails there.
+OUTPUT_OPTIONS = frozenset(
+    {"--out", "--png", "--rrd", "--csv", "--spec-out", "--rrd-dir", "--png-dir", "--csv-dir"}
+)
+#: Words that start a new shell command or redirect one: what follows ``>`` is written.
+_REDIRECTS = frozenset({">", ">>"})
+
+
+def words(text: str) -> list[str]:
+    """The command's words as a shell splits them (an operator such as ``>`` is a word)."""
+    lexer = shlex.shlex(text, posix=True, punctuation_chars=True)
+    lexer.whitespace_split = True
+    return list(lexer)
+
+
+def _path(word: str) -> PurePosixPath:
+    return PurePosixPath(word.rstrip("/") or "/")
+
+
+def writes(text: str) -> set[PurePosixPath]:
+    """The paths ``text`` writes: its output options' values and its ``>`` target."""
+    ws = words(text)
+    return {_path(ws[i + 1]) for i, w in enumerate(ws[:-1]) if w in OUTPUT_OPTIONS | _REDIRECTS}
+
+
+def reads(text: str) -> set[str]:
+    """Every other word ``text`` names, comma-separated lists split (``--spec a.yaml,b.yaml``):
+    the paths it may read (most are not paths at all, and match nothing a command writes)."""
+    ws = words(text)
+    out: set[str] = set()
+    for i, w in enumerate(ws[2:], start=2):
+        if w.startswith("-") or w in _REDIRECTS or ws[i - 1] in OUTPUT_OPTIONS | _REDIRECTS:
+            continue
+        out.update(part for part in w.split(",") if part)
+    return out
+
+
+def _touches(word: str, written: PurePosixPath) -> bool:
+    """Whether the word (a path or a glob) names ``written`` or a path inside it."""
+    path = _path(word)
+    if any(ch in word for ch in "*?["):
+        return fnmatch.fnmatch(str(written), word) or any(
+            fnmatch.fnmatch(str(p), word) for p in written.parents
+        )
+    return path == written or written in path.parents
+
+
+@dataclass(frozen=True)
+class Step:
+    """One command of a group: its text as run, its key, the place of the page the group
+    comes from, and every place of the docs that runs it (that one included)."""
+
+    text: str
+    key: tuple[object, ...]
+    home: Command
+    places: tuple[Command, ...]
+
+    @property
+    def subcommand(self) -> str:
+        ws = words(self.text)
+        return ws[1] if len(ws) > 1 else ws[0]
+
+    @property
+    def where(self) -> str:
+        """Every place of the command, ``page:line`` joined by commas."""
+        return ", ".join(p.where for p in self.places)
+
+    @property
+    def outputs(self) -> set[PurePosixPath]:
+        return writes(self.text)
+
+
+@dataclass(frozen=True)
+class Group:
+    """Commands that run in order in one scratch folder: a command with the earlier ones of
+    its page that produce the files it names."""
+
+    steps: tuple[Step, ...]
+
+    @property
+    def id(self) -> str:
+        """``page:line-subcommand`` of the first step, ``+N`` for N more (a test id)."""
+        first = self.steps[0]
+        more = f"+{len(self.steps) - 1}" if len(self.steps) > 1 else ""
+        return f"{first.home.page.name}:{first.home.line}-{first.subcommand}{more}"
+
+
+def dependencies(texts: list[str]) -> list[list[int]]:
+    """For each command, the earlier ones (indices) it depends on (module docstring)."""
+    out: list[list[int]] = []
+    written = [writes(text) for text in texts]
+    for i, text in enumerate(texts):
+        named = reads(text) | {str(p) for p in written[i]}
+        deps = set()
+        for word in named:
+            writers = [j for j in range(i) if any(_touches(word, w) for w in written[j])]
+            if writers:
+                deps.add(writers[-1])
+        out.append(sorted(deps))
+    return out
+
+
+def _components(deps: list[list[int]]) -> list[list[int]]:
+    """The commands joined by dependencies, each group in page order."""
+    root = list(range(len(deps)))
+
+    def find(i: int) -> int:
+        while root[i] != i:
+            i = root[i]
+        return i
+
+    for i, ds in enumerate(deps):
+        for j in ds:
+            root[find(i)] = find(j)
+    groups: dict[int, list[int]] = {}
+    for i in range(len(deps)):
+        groups.setdefault(find(i), []).append(i)
+    return sorted(groups.values())
+
+
+def keys(texts: list[str]) -> list[tuple[object, ...]]:
+    """Each command's key, when ``texts`` run in order in one folder (module docstring)."""
+    out: list[tuple[object, ...]] = []
+    for text, deps in zip(texts, dependencies(texts), strict=True):
+        out.append((text, *(out[j] for j in deps)))
+    return out
+
+
+def _page_groups(page: Path) -> list[list[tuple[tuple[object, ...], Command, str]]]:
+    """The page's groups as ``(key, command, text as run)`` triples."""
+    cmds = [c for c in commands(page) if not_run_reason(c.text) is None]
+    texts = [limited(c.text) for c in cmds]
+    ks = keys(texts)
+    return [[(ks[i], cmds[i], texts[i]) for i in comp] for comp in _components(dependencies(texts))]
+
+
+def plan(pages: Iterable[Path] = PAGES) -> list[Group]:
+    """The groups that run every distinct command of ``pages`` once, in the docs' order.
+
+    A page's group whose every key an earlier group runs is dropped (a page repeating
+    another's commands). One that shares a key with an earlier group is appended to it when
+    its own commands, run after that group's, keep their keys (they name nothing the earlier
+    group alone writes); else it is kept whole, running the shared commands again, since
+    its commands need their files."""
+    page_groups = [g for page in pages for g in _page_groups(page)]
+    places: dict[tuple[object, ...], list[Command]] = {}
+    for group in page_groups:
+        for key, cmd, _ in group:
+            places.setdefault(key, []).append(cmd)
+    kept: list[list[Step]] = []
+    for group in page_groups:
+        steps = [Step(text, key, cmd, tuple(places[key])) for key, cmd, text in group]
+        runs = {s.key for g in kept for s in g}
+        new = [s for s in steps if s.key not in runs]
+        if not new:
+            continue
+        shared = {s.key for s in steps} - {s.key for s in new}
+        for earlier in (g for g in kept if shared and shared <= {s.key for s in g}):
+            merged = [*earlier, *new]
+            if keys([s.text for s in merged]) == [s.key for s in merged]:
+                earlier.extend(new)
+                break
+        else:
+            kept.append(steps)
+    return [Group(tuple(g)) for g in kept]
