@@ -72,12 +72,15 @@ def _touches(word: str, written: PurePosixPath) -> bool:
 @dataclass(frozen=True)
 class Step:
     """One command of a group: its text as run, its key, the place of the page the group
-    comes from, and every place of the docs that runs it (that one included)."""
+    comes from, every place of the docs that runs it (that one included), and the paths
+    that earlier commands of those pages write and it does not name (were it to read one,
+    it would depend on a command the plan does not run before it)."""
 
     text: str
     key: tuple[object, ...]
     home: Command
     places: tuple[Command, ...]
+    unnamed: frozenset[PurePosixPath] = frozenset()
 
     @property
     def subcommand(self) -> str:
@@ -150,12 +153,29 @@ def keys(texts: list[str]) -> list[tuple[object, ...]]:
     return out
 
 
-def _page_groups(page: Path) -> list[list[tuple[tuple[object, ...], Command, str]]]:
-    """The page's groups as ``(key, command, text as run)`` triples."""
+@dataclass(frozen=True)
+class _Found:
+    """A command where a page shows it: its key, the command, its text as run, and the
+    paths earlier commands of the page write that it does not name."""
+
+    key: tuple[object, ...]
+    command: Command
+    text: str
+    unnamed: frozenset[PurePosixPath]
+
+
+def _page_groups(page: Path) -> list[list[_Found]]:
+    """The page's commands, in groups."""
     cmds = [c for c in commands(page) if not_run_reason(c.text) is None]
     texts = [limited(c.text) for c in cmds]
     ks = keys(texts)
-    return [[(ks[i], cmds[i], texts[i]) for i in comp] for comp in _components(dependencies(texts))]
+    found = []
+    for i, text in enumerate(texts):
+        named = reads(text) | {str(p) for p in writes(text)}
+        earlier = {w for t in texts[:i] for w in writes(t)}
+        unnamed = {w for w in earlier if not any(_touches(word, w) for word in named)}
+        found.append(_Found(ks[i], cmds[i], text, frozenset(unnamed)))
+    return [[found[i] for i in comp] for comp in _components(dependencies(texts))]
 
 
 def plan(pages: Iterable[Path] = PAGES) -> list[Group]:
@@ -168,12 +188,15 @@ def plan(pages: Iterable[Path] = PAGES) -> list[Group]:
     its commands need their files."""
     page_groups = [g for page in pages for g in _page_groups(page)]
     places: dict[tuple[object, ...], list[Command]] = {}
-    for group in page_groups:
-        for key, cmd, _ in group:
-            places.setdefault(key, []).append(cmd)
+    unnamed: dict[tuple[object, ...], frozenset[PurePosixPath]] = {}
+    for f in (f for group in page_groups for f in group):
+        places.setdefault(f.key, []).append(f.command)
+        unnamed[f.key] = unnamed.get(f.key, frozenset()) | f.unnamed
     kept: list[list[Step]] = []
     for group in page_groups:
-        steps = [Step(text, key, cmd, tuple(places[key])) for key, cmd, text in group]
+        steps = [
+            Step(f.text, f.key, f.command, tuple(places[f.key]), unnamed[f.key]) for f in group
+        ]
         runs = {s.key for g in kept for s in g}
         new = [s for s in steps if s.key not in runs]
         if not new:

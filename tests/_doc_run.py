@@ -57,14 +57,15 @@ def needs_shell(command: str) -> bool:
     return False
 
 
-def run(command: str, folder: Path) -> Outcome:
-    """Run ``command`` (a ``fuzzkit`` command line) in ``folder``, as :func:`needs_shell` says."""
+def run(command: str, folder: Path, opened: list[str] | None = None) -> Outcome:
+    """Run ``command`` (a ``fuzzkit`` command line) in ``folder``, as :func:`needs_shell`
+    says; run in-process, the files it opens for reading are appended to ``opened``."""
     if needs_shell(command):
         return run_in_shell(command, folder)
     argv = words(command)
     if argv[0] != "fuzzkit":
         raise ValueError(f"not a fuzzkit command: {command}")
-    return run_in_process(argv[1:], folder)
+    return run_in_process(argv[1:], folder, opened)
 
 
 def run_in_shell(command: str, folder: Path) -> Outcome:
@@ -78,18 +79,57 @@ def run_in_shell(command: str, folder: Path) -> Outcome:
     return Outcome(res.returncode, res.stdout, res.stderr)
 
 
-def run_in_process(argv: list[str], folder: Path) -> Outcome:
-    """``fuzzkit ARGV`` in this process, in ``folder``, isolated (module docstring)."""
+class _Opened:
+    """The files this process opens for reading while :attr:`paths` is a list (an audit
+    hook: it cannot be removed, so it is installed once and does nothing between runs)."""
+
+    paths: list[str] | None = None
+    installed = False
+
+    @classmethod
+    def hook(cls, event: str, args: tuple[object, ...]) -> None:
+        if event != "open" or cls.paths is None:
+            return
+        path, mode, flags = args
+        reading = (
+            not any(ch in mode for ch in "wax+")
+            if isinstance(mode, str)
+            else isinstance(flags, int) and flags & os.O_ACCMODE == os.O_RDONLY
+        )
+        if reading and isinstance(path, str | os.PathLike):
+            cls.paths.append(os.path.abspath(path))
+
+    @classmethod
+    @contextlib.contextmanager
+    def recording(cls) -> Iterator[list[str]]:
+        if not cls.installed:
+            sys.addaudithook(cls.hook)
+            cls.installed = True
+        cls.paths = paths = []
+        try:
+            yield paths
+        finally:
+            cls.paths = None
+
+
+def run_in_process(argv: list[str], folder: Path, opened: list[str] | None = None) -> Outcome:
+    """``fuzzkit ARGV`` in this process, in ``folder``, isolated (module docstring); the
+    files it opens for reading are appended to ``opened``."""
     from fuzzkit.cli import main
 
     out = io.TextIOWrapper(io.BytesIO(), encoding="utf-8", write_through=True)
     err = io.TextIOWrapper(io.BytesIO(), encoding="utf-8", write_through=True)
-    fresh = _as_a_fresh_process(argv, folder)
-    with fresh, contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+    with contextlib.ExitStack() as stack:
+        stack.enter_context(_as_a_fresh_process(argv, folder))
+        stack.enter_context(contextlib.redirect_stdout(out))
+        stack.enter_context(contextlib.redirect_stderr(err))
+        paths = stack.enter_context(_Opened.recording())
         try:
             code = main(argv)
         except SystemExit as exc:  # argparse's usage errors and --help
             code = _exit_code(exc, err)
+    if opened is not None:
+        opened.extend(paths)
     return Outcome(code, _text(out), _text(err))
 
 
@@ -155,8 +195,8 @@ def _fresh_warning_filters() -> None:
     warnings.resetwarnings()
     warnings.filterwarnings("default", category=DeprecationWarning, module="__main__")
     for category in (DeprecationWarning, PendingDeprecationWarning, ImportWarning):
-        warnings.filterwarnings("ignore", category=category)
-    warnings.filterwarnings("ignore", category=ResourceWarning)
+        warnings.filterwarnings("ignore", category=category, append=True)
+    warnings.filterwarnings("ignore", category=ResourceWarning, append=True)
 
 
 def _matplotlib_settings() -> dict[str, object] | None:
@@ -206,13 +246,26 @@ def _undeclared(
     return [str(p) for p in changed if not any(p == o or o in p.parents for o in outputs)]
 
 
+def _unnamed_reads(step: Step, opened: list[str], folder: Path) -> list[str]:
+    """The files ``step`` opened that an earlier command of its page writes and it does not
+    name: a dependency the plan does not see (it would run without that command before it)."""
+    inside = {
+        PurePosixPath(Path(p).relative_to(folder).as_posix())
+        for p in opened
+        if Path(p).is_relative_to(folder)
+    }
+    return sorted(str(p) for p in inside if any(p == u or u in p.parents for u in step.unnamed))
+
+
 def run_group(group: Group, folder: Path) -> list[str]:
     """Run the group's commands in order in ``folder`` (a workspace); return one message per
     failure, naming every ``page:line`` that shows the command."""
     failures = []
+    folder = folder.resolve()
     for step in group.steps:
         before = _files(folder)
-        outcome = run(step.text, folder)
+        opened: list[str] = []
+        outcome = run(step.text, folder, opened)
         if outcome.code != 0:
             failures.append(
                 f"{step.where}: {step.text}\nexit {outcome.code}\n"
@@ -223,5 +276,11 @@ def run_group(group: Group, folder: Path) -> list[str]:
             failures.append(
                 f"{step.where}: {step.text}\nwrote {', '.join(stray)}, which none of its "
                 "output options names (tests/_doc_plan.py OUTPUT_OPTIONS)"
+            )
+        hidden = _unnamed_reads(step, opened, folder)
+        if hidden:
+            failures.append(
+                f"{step.where}: {step.text}\nread {', '.join(hidden)}, which an earlier "
+                "command of its page writes, without naming it (tests/_doc_plan.py)"
             )
     return failures

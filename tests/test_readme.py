@@ -4,15 +4,22 @@ repository."""
 
 from __future__ import annotations
 
+import contextlib
+import json
+import os
 import re
 import shutil
+import signal
+import subprocess
+import sys
+import warnings
 from pathlib import Path
 
 import pytest
 
 from tests._doc_commands import PAGES, commands, limited, not_run_reason, workspace
-from tests._doc_plan import Group, keys, plan
-from tests._doc_run import run_group
+from tests._doc_plan import Group, keys, plan, words
+from tests._doc_run import run_group, run_in_process, run_in_shell
 
 README = Path(__file__).resolve().parent.parent / "README.md"
 COMPILE = README.parent / "docs" / "compile.md"
@@ -217,6 +224,112 @@ def test_a_file_written_behind_the_plans_back_is_reported(
         "a.md:4: fuzzkit export macvicar_whelan --format fll --out mw.fll\nwrote mw.fll, which "
         "none of its output options names (tests/_doc_plan.py OUTPUT_OPTIONS)"
     ]
+
+
+def test_a_file_read_behind_the_plans_back_is_reported(
+    workspace_template: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import fuzzkit.cli.rulebase
+
+    def info_that_reads_x_fll(args: object) -> int:
+        with contextlib.suppress(FileNotFoundError):
+            Path("x.fll").read_text()
+        return 0
+
+    monkeypatch.setattr(fuzzkit.cli.rulebase, "cmd_info", info_that_reads_x_fll)
+    page = _page(
+        tmp_path,
+        "a.md",
+        "fuzzkit export macvicar_whelan --format fll --out x.fll",
+        "fuzzkit info macvicar_whelan",
+    )
+    shutil.copytree(workspace_template, tmp_path / "w")
+    _export, info = plan([page])
+    assert run_group(info, tmp_path / "w") == [
+        "a.md:5: fuzzkit info macvicar_whelan\nread x.fll, which an earlier command of its "
+        "page writes, without naming it (tests/_doc_plan.py)"
+    ]
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        "fuzzkit info macvicar_whelan",
+        "fuzzkit eval macvicar_whelan -i e=0.3 -i de=-0.2 --json",
+        "fuzzkit info no_such_rule_base",  # the user's error: exit 2, no traceback
+        "fuzzkit eval macvicar_whelan --no-such-option",  # argparse's SystemExit(2)
+        "fuzzkit validate --help",  # SystemExit(0)
+    ],
+)
+def test_a_command_in_process_does_what_the_fuzzkit_process_does(
+    command: str, workspace_template: Path
+) -> None:
+    """Exit code, stdout and stderr as the console script's (the independent reference: a
+    fresh process); and the test's own process as it was before."""
+    state = (os.getcwd(), dict(os.environ), sys.argv[:], warnings.filters[:])
+    sigint = signal.getsignal(signal.SIGINT)
+    ours = run_in_process(words(command)[1:], workspace_template)
+    assert (os.getcwd(), dict(os.environ), sys.argv, warnings.filters) == state
+    assert signal.getsignal(signal.SIGINT) is sigint
+    theirs = run_in_shell(command, workspace_template)
+    assert (ours.code, ours.stdout, ours.stderr) == (theirs.code, theirs.stdout, theirs.stderr)
+
+
+def test_a_command_in_process_runs_under_a_fresh_interpreters_warning_filters(
+    workspace_template: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """pytest's filters (pyproject.toml turns fuzzkit's RuntimeWarnings into errors) are not
+    the ones a user's ``fuzzkit`` runs under."""
+    import fuzzkit.cli.rulebase
+
+    seen: list[object] = []
+    monkeypatch.setattr(
+        fuzzkit.cli.rulebase, "cmd_info", lambda args: seen.append(eval(_FILTERS, {"w": warnings}))
+    )
+    assert run_in_process(["info", "macvicar_whelan"], workspace_template).code == 0
+    fresh = subprocess.run(
+        [sys.executable, "-c", f"import json, warnings as w; print(json.dumps({_FILTERS}))"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    assert json.loads(json.dumps(seen)) == [json.loads(fresh.stdout)]
+
+
+#: The warning filters, comparable across processes: classes by name, regexes as patterns.
+_FILTERS = (
+    "[(a, getattr(m, 'pattern', m), c.__name__, getattr(d, 'pattern', d), n)"
+    " for a, m, c, d, n in w.filters]"
+)
+
+
+@pytest.mark.slow
+def test_a_second_command_in_process_reads_the_file_as_it_is_now(
+    workspace_template: Path, tmp_path: Path
+) -> None:
+    """fuzzkit caches rule bases by their path: a second command in the same process must see
+    a rewritten file, as a second ``fuzzkit`` process does."""
+
+    def simulate() -> dict[str, object]:
+        argv = ["simulate", "E1", "--rulebase", "rb.yaml", "--json"]
+        done = run_in_process(argv, tmp_path)
+        assert done.code == 0, done.stderr
+        return _without_timings(json.loads(done.stdout))
+
+    shutil.copytree(workspace_template, tmp_path, dirs_exist_ok=True)
+    shutil.copy(tmp_path / "rulebases" / "macvicar_whelan.yaml", tmp_path / "rb.yaml")
+    first = simulate()
+    shutil.copy(tmp_path / "rulebases" / "paper_table1.yaml", tmp_path / "rb.yaml")
+    second = simulate()
+    fresh = run_in_shell("fuzzkit simulate E1 --rulebase rb.yaml --json", tmp_path)
+    assert second == _without_timings(json.loads(fresh.stdout))
+    assert second != first
+
+
+def _without_timings(run: dict[str, object]) -> dict[str, object]:
+    return {
+        k: v for k, v in run.items() if k not in ("wall_time_s", "cpu_time_s", "real_time_factor")
+    }
 
 
 def _anchors(page: Path) -> set[str]:
