@@ -111,8 +111,15 @@ def _add_flags(argv: list[str], *flags: str) -> list[str]:
 
 #: How slow commands are limited (they still run): by subcommand.
 LIMITS: dict[str, Callable[[list[str]], list[str]]] = {
+    # one stiffness and one latency: a tune over the 3 x 3 grid on arm6 cost minutes of CPU,
+    # and the command's point (its options, --admit, several experiments) holds on one cell
     "tune": lambda a: _add_flags(
-        _set_option(_set_option(a, "--budget", "10"), "--workers", "1"), "--quiet"
+        _first_of(
+            _set_option(_set_option(a, "--budget", "10"), "--workers", "1"),
+            "--stiffness",
+            "--latency",
+        ),
+        "--quiet",
     ),
     "report": lambda a: _add_flags(
         _set_option(
@@ -124,7 +131,10 @@ LIMITS: dict[str, Callable[[list[str]], list[str]]] = {
         "--no-rrd",
         "--quiet",
     ),
-    "sweep": lambda a: _set_option(_set_option(a, "--seeds", "1"), "--workers", "1"),
+    # one stiffness: 12 runs instead of 36, every other axis of the grid as written
+    "sweep": lambda a: _first_of(
+        _set_option(_set_option(a, "--seeds", "1"), "--workers", "1"), "--stiffness"
+    ),
     "stability": lambda a: _first_of(a, "--stiffness", "--latency"),
 }
 
