@@ -112,13 +112,15 @@ def _add_flags(argv: list[str], *flags: str) -> list[str]:
 #: How slow commands are limited (they still run): by subcommand.
 LIMITS: dict[str, Callable[[list[str]], list[str]]] = {
     # one stiffness and one latency: a tune over the 3 x 3 grid on arm6 cost minutes of CPU,
-    # and the command's point (its options, --admit, several experiments) holds on one cell
+    # and the command's point (its options, --admit, several experiments) holds on one cell;
+    # without --stiffness, the first of tune's default 5,10,20 N/mm
     "tune": lambda a: _add_flags(
         _first_of(
             _set_option(_set_option(a, "--budget", "10"), "--workers", "1"),
             "--stiffness",
             "--latency",
-        ),
+        )
+        + ([] if "--stiffness" in a else ["--stiffness", "5"]),
         "--quiet",
     ),
     "report": lambda a: _add_flags(

@@ -28,6 +28,11 @@ OUTPUT_OPTIONS = frozenset(
 )
 #: Words that start a new shell command or redirect one: what follows ``>`` is written.
 _REDIRECTS = frozenset({">", ">>"})
+#: Outputs a subcommand writes without an option naming them: ``(subcommand, option left
+#: out)`` -> the path it writes, from the argv (``sweep --out runs.csv`` draws ``runs.png``).
+IMPLIED_OUTPUTS = {
+    ("sweep", "--png"): lambda ws: _path(ws[ws.index("--out") + 1]).with_suffix(".png"),
+}
 
 
 def words(text: str) -> list[str]:
@@ -42,9 +47,16 @@ def _path(word: str) -> PurePosixPath:
 
 
 def writes(text: str) -> set[PurePosixPath]:
-    """The paths ``text`` writes: its output options' values and its ``>`` target."""
+    """The paths ``text`` writes: its output options' values, its ``>`` target and what its
+    subcommand writes unasked (:data:`IMPLIED_OUTPUTS`)."""
     ws = words(text)
-    return {_path(ws[i + 1]) for i, w in enumerate(ws[:-1]) if w in OUTPUT_OPTIONS | _REDIRECTS}
+    named = {_path(ws[i + 1]) for i, w in enumerate(ws[:-1]) if w in OUTPUT_OPTIONS | _REDIRECTS}
+    implied = {
+        implied(ws)
+        for (subcommand, option), implied in IMPLIED_OUTPUTS.items()
+        if ws[1:2] == [subcommand] and option not in ws and "--out" in ws
+    }
+    return named | implied
 
 
 def reads(text: str) -> set[str]:
