@@ -2,8 +2,9 @@
 
 A *command block* is a fenced block tagged ``sh``; its lines (backslash continuations joined,
 ``# comments`` dropped) are commands. Output, usage lines and diagrams go in untagged or
-``text`` blocks. ``tests/test_readme.py`` runs every ``fuzzkit`` command of every command block,
-in order, in a scratch folder per page; a command that cannot run here must be listed in
+``text`` blocks. ``tests/test_readme.py`` runs every ``fuzzkit`` command of every command block
+once, with the earlier commands of its page it depends on (``tests/_doc_plan.py``), in a
+scratch folder per group (``tests/_doc_run.py``); a command that cannot run here must be listed in
 :data:`NOT_RUN` with the reason, and a slow one is limited by :data:`LIMITS` (smaller budgets,
 fewer seeds) but still runs.
 """
@@ -29,7 +30,9 @@ class Command:
 
     @property
     def where(self) -> str:
-        return f"{self.page.relative_to(ROOT)}:{self.line}"
+        """``page:line``, the page relative to the repository (a page elsewhere: its name)."""
+        page = self.page.relative_to(ROOT) if self.page.is_relative_to(ROOT) else self.page.name
+        return f"{page}:{self.line}"
 
 
 def commands(page: Path) -> list[Command]:
@@ -108,8 +111,17 @@ def _add_flags(argv: list[str], *flags: str) -> list[str]:
 
 #: How slow commands are limited (they still run): by subcommand.
 LIMITS: dict[str, Callable[[list[str]], list[str]]] = {
+    # one stiffness and one latency: a tune over the 3 x 3 grid on arm6 cost minutes of CPU,
+    # and the command's point (its options, --admit, several experiments) holds on one cell;
+    # without --stiffness, the first of tune's default 5,10,20 N/mm
     "tune": lambda a: _add_flags(
-        _set_option(_set_option(a, "--budget", "10"), "--workers", "1"), "--quiet"
+        _first_of(
+            _set_option(_set_option(a, "--budget", "10"), "--workers", "1"),
+            "--stiffness",
+            "--latency",
+        )
+        + ([] if "--stiffness" in a else ["--stiffness", "5"]),
+        "--quiet",
     ),
     "report": lambda a: _add_flags(
         _set_option(
@@ -121,7 +133,10 @@ LIMITS: dict[str, Callable[[list[str]], list[str]]] = {
         "--no-rrd",
         "--quiet",
     ),
-    "sweep": lambda a: _set_option(_set_option(a, "--seeds", "1"), "--workers", "1"),
+    # one stiffness: 12 runs instead of 36, every other axis of the grid as written
+    "sweep": lambda a: _first_of(
+        _set_option(_set_option(a, "--seeds", "1"), "--workers", "1"), "--stiffness"
+    ),
     "stability": lambda a: _first_of(a, "--stiffness", "--latency"),
 }
 
