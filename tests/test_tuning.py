@@ -127,6 +127,7 @@ def _spring_problem(
     )
 
 
+@pytest.mark.verify  # 686 closed-loop runs of the spring plant: the deep check of the optimiser
 def test_tuning_is_within_a_few_percent_of_a_dense_grid_search() -> None:
     problem = _spring_problem()
     lo, hi = SPRING_SPACE.log_bounds

@@ -21,6 +21,7 @@ Examples
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import math
 import re
@@ -975,6 +976,22 @@ def loads_rulebase_with_warnings(
     text: str, source: str = "<string>"
 ) -> tuple[RuleBase, list[Problem]]:
     """:func:`loads_rulebase`, also returning the warnings (severity ``warning``), located."""
+    rb, warnings = _parsed(text, source)
+    return rb, list(warnings)
+
+
+@functools.lru_cache(maxsize=64)
+def _parsed(text: str, source: str) -> tuple[RuleBase, tuple[Problem, ...]]:
+    """The rule base and warnings of ``text``, parsed once per process for the same text and
+    source: a tuning run or a report builds a controller per candidate and loads its rule base
+    each time (the located, hardened reader costs tens of ms a file). The model and the
+    problems are frozen, so sharing them is safe; a file is still read every time, so an edit
+    is seen. Errors are not cached (``lru_cache`` keeps only returned values)."""
+    rb, warnings = _parse(text, source)
+    return rb, tuple(warnings)
+
+
+def _parse(text: str, source: str) -> tuple[RuleBase, list[Problem]]:
     root = compose_document(text, source, RULE_BASE_DOCUMENT)
     reader = _Reader(source, text.split("\n"))
     try:

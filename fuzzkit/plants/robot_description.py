@@ -5,6 +5,7 @@ robot, loaded from a small YAML file or a shipped name (``load_robot("irb140")``
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -306,6 +307,15 @@ def load_robot(name_or_path: str | Path = "irb140") -> RobotDescription:
             )
         text = resource.read_text(encoding="utf-8")
         source = f"fuzzkit/data/{name_or_path}.yaml"
+    return _parsed(text, source)
+
+
+@functools.lru_cache(maxsize=16)
+def _parsed(text: str, source: str) -> RobotDescription:
+    """The robot of ``text``, parsed once per process for the same text and source: every plant
+    built (one per tuning candidate and case) loads its robot (the located reader costs about
+    0.1 s a file). The description is frozen, so sharing it is safe; the file is still read
+    every time, so an edit is seen."""
     # the hardened reader: size and alias limits, duplicate and boolean keys, located
     data = to_python(compose_document(text, source, ROBOT_DOCUMENT), source, ROBOT_DOCUMENT)
     return robot_from_mapping(data, source=source, text=text)

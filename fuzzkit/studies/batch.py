@@ -390,6 +390,11 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+#: How long a run waits to reach a Dask scheduler before it says it cannot (a scheduler on
+#: another machine may take a few seconds to answer).
+SCHEDULER_TIMEOUT = "10s"
+
+
 class BatchExecutor:
     """Maps a function over items, in order, on a pool that lives as long as the executor.
 
@@ -416,7 +421,7 @@ class BatchExecutor:
 
             client_class: Any = distributed.Client  # untyped library
             try:
-                self._client = client_class(scheduler, timeout="10s")
+                self._client = client_class(scheduler, timeout=SCHEDULER_TIMEOUT)
             except (OSError, TimeoutError) as exc:
                 raise ConfigError(
                     f"cannot reach the dask scheduler at {scheduler} ({exc})"
