@@ -47,6 +47,13 @@ def _call(fn: Any) -> str | None:
     return None
 
 
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """The tests marked ``slow`` first, each group in its own order: xdist hands the tests to
+    the workers in this order, so the long ones are spread over the run and the short ones
+    fill in at the end, instead of one worker finishing a long doc command or report alone."""
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)
+
+
 def pytest_collection_finish(session: pytest.Session) -> None:
     """A worker waits here, after collecting, for the controller's warm-up to finish."""
     if hasattr(session.config, "workerinput"):
