@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -77,7 +78,8 @@ def _report_failure(config: pytest.Config, why: str | None) -> None:
 
 
 # --------------------------------------------------------------------------------------------
-# artefacts built once per run: compiled controllers, lookup tables, one Dask cluster
+# artefacts built once per run: compiled controllers, lookup tables, one Dask cluster, the
+# built wheel and sdist
 
 
 @pytest.fixture(scope="session", autouse=True)
@@ -113,3 +115,18 @@ def dask_scheduler() -> Iterator[str]:
         n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
     ) as cluster:
         yield cluster.scheduler_address
+
+
+@pytest.fixture(scope="session")
+def built_dists() -> Callable[[bool], tuple[Path, Path]]:
+    """``built_dists(release)``: the (wheel, sdist) built from a clean copy of the repository,
+    the release build (isolated) or the quick one; each kind is built once per run, by the
+    first worker that asks, and read by the other (``tests/_dists.py``)."""
+    from _artefacts import run_folder, shared
+    from _dists import build_dists
+
+    def get(release: bool) -> tuple[Path, Path]:
+        kind = "release" if release else "quick"
+        return shared(f"dists:{kind}", lambda: build_dists(release, run_folder() / "dists"))
+
+    return get

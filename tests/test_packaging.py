@@ -11,13 +11,13 @@ outside the repository to run the demo.
 
 from __future__ import annotations
 
-import functools
 import pydoc
 import shutil
 import subprocess
 import sys
 import tarfile
 import zipfile
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -114,42 +114,12 @@ def test_make_typecheck_sees_every_mapped_folder(tmp_path: Path) -> None:
 BUILDS = [pytest.param(False, id="cover"), pytest.param(True, marks=verify, id="full")]
 
 
-@functools.cache
-def _build(release: bool, base: Path) -> tuple[Path, Path]:
-    """(wheel, sdist) built from a clean copy of the repository under ``base``: the release
-    build (isolated, the wheel from the sdist) or the quick one (this environment's
-    setuptools, both from the copy). Once per process and kind."""
-    tmp = base / ("release" if release else "quick")
-    src = tmp / "src"
-    shutil.copytree(
-        ROOT,
-        src,
-        ignore=shutil.ignore_patterns(
-            ".git", ".venv*", "build", "dist", "*.egg-info", "__pycache__", ".*cache", "*-out"
-        ),
-    )
-    out = tmp / "dist"
-    # the quick build skips the dependency check: build-system.requires names `wheel`, which
-    # setuptools (>= 70.1) no longer needs to build one, and which the lock does not install
-    how = [] if release else ["--sdist", "--wheel", "--no-isolation", "--skip-dependency-check"]
-    built = subprocess.run(
-        [sys.executable, "-m", "build", *how, "--outdir", str(out), str(src)],
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
-    assert built.returncode == 0, built.stdout[-3000:] + built.stderr[-3000:]
-    (wheel,) = out.glob("*.whl")
-    (sdist,) = out.glob("*.tar.gz")
-    return wheel, sdist
-
-
 @pytest.fixture(scope="module", params=BUILDS)
 def dists(
-    request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
+    request: pytest.FixtureRequest, built_dists: Callable[[bool], tuple[Path, Path]]
 ) -> tuple[Path, Path]:
-    """(wheel, sdist) of one of :data:`BUILDS`."""
-    return _build(request.param, tmp_path_factory.getbasetemp())
+    """(wheel, sdist) of one of :data:`BUILDS`, built once per run (``tests/conftest.py``)."""
+    return built_dists(request.param)
 
 
 @pytest.mark.slow
@@ -188,11 +158,11 @@ def test_sdist_carries_license_readme_and_docs(dists: tuple[Path, Path]) -> None
 @pytest.mark.needs_cc
 @verify
 def test_wheel_runs_the_demo_outside_the_repository(
-    tmp_path_factory: pytest.TempPathFactory, tmp_path: Path
+    built_dists: Callable[[bool], tuple[Path, Path]], tmp_path: Path
 ) -> None:
     if shutil.which("cc") is None and shutil.which("gcc") is None:
         pytest.skip("no C compiler: the demo compiles the generated C")
-    wheel, _ = _build(True, tmp_path_factory.getbasetemp())
+    wheel, _ = built_dists(True)
     target = tmp_path / "site"
     pip = subprocess.run(
         [sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--target", str(target),
