@@ -54,12 +54,17 @@ define timed
 	@start=$$(date +%s%N); $(MAKE) --no-print-directory $(1) VENV=$(VENV) || exit $$?; \
 		echo "$(1): $$(( ($$(date +%s%N) - start) / 1000000 )) ms"
 endef
+# The numba kernels compile in the background while the static checks run (one process per
+# worker, holding WARM_LOCK); pytest waits for them (tests/conftest.py) and finds them cached.
+WARM_LOCK := build/warm.lock
 test: $(STAMP)
+	$(BIN)/python -m fuzzkit.studies.compiled.warm --background $(WARM_LOCK) --jobs $(PYTEST_WORKERS)
 	$(call timed,lint)
 	$(call timed,typecheck)
 	$(call timed,imports)
-	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q -p no:cacheprovider \
-		-m "not ($(PEER_MARKS)) and not verify" --durations=25
+	FUZZKIT_WARM_LOCK=$(CURDIR)/$(WARM_LOCK) $(BIN)/python -m pytest -n $(PYTEST_WORKERS) \
+		--dist loadgroup -q -p no:cacheprovider -m "not ($(PEER_MARKS)) and not verify" \
+		--durations=25
 
 # The deep versions of the matrices that `make test` runs a covering set of (every value and
 # every pair of values of two axes, tests/_pairwise.py): the tests marked `verify`, i.e. the

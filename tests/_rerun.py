@@ -28,3 +28,21 @@ def rrd_dump(path: Path, *flags: str) -> str:
     )
     assert res.returncode == 0, res.stderr
     return res.stdout
+
+
+def entity_rows(path: Path, entity: str, component: str) -> tuple[list[int], list[object]]:
+    """The temporal rows of ``entity`` in the recording at ``path``, in time order: their
+    ``sim_time`` (ns) and the value of ``component`` (``"LineStrips3D:strips"`` ...) in each, read
+    back with rerun's own reader."""
+    import pyarrow as pa
+    from rerun.chunk import RrdReader
+
+    rows: list[tuple[int, object]] = []
+    for chunk in RrdReader(path).stream():
+        if chunk.entity_path != entity or chunk.is_static:
+            continue
+        batch = chunk.to_record_batch()
+        times = batch.column("sim_time").cast(pa.int64()).to_pylist()
+        rows.extend(zip(times, batch.column(component).to_pylist(), strict=True))
+    rows.sort(key=lambda row: row[0])
+    return [t for t, _ in rows], [v for _, v in rows]

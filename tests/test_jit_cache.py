@@ -521,3 +521,59 @@ def test_a_bad_part_is_refused(text: str) -> None:
     with pytest.raises(SystemExit) as exc:
         warm_module.main(["--part", text])
     assert exc.value.code == 2
+
+
+def test_the_session_hook_waits_for_a_warm_up_started_before_pytest(
+    pytestconfig: pytest.Config, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # `make test` starts the warm-up (`--background LOCK`) before its static checks, and
+    # passes LOCK to pytest: the controller's own warm-up must start only after that one ended
+    flag = tmp_path / "finished"
+
+    def command(part: int, jobs: int) -> list[str]:
+        if part == 0:
+            return [sys.executable, "-c", "pass"]
+        script = f"import pathlib, time; time.sleep(1); pathlib.Path({str(flag)!r}).touch()"
+        return [sys.executable, "-c", script]
+
+    lock = tmp_path / "build" / "warm.lock"
+    monkeypatch.delenv(warm_module.LOCK_ENV, raising=False)
+    before = warm_module.warm_in_background(2, command, lock=lock)
+    assert before is not None and before.lock == lock and lock.exists()
+    seen: list[bool] = []
+
+    def background(jobs: int) -> object:
+        seen.append(flag.exists())
+        return object()
+
+    monkeypatch.setattr(warm_module, "warm_in_background", background)
+    config: Any = SimpleNamespace(
+        option=SimpleNamespace(numprocesses=2, collectonly=False), stash=pytest.Stash()
+    )
+    try:
+        _conftest(pytestconfig).pytest_sessionstart(SimpleNamespace(config=config))
+    finally:
+        assert before.finish() is None
+    assert seen == [True]
+
+
+def test_the_background_option_starts_the_warm_up_and_returns(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    calls: list[tuple[int, Path | None]] = []
+
+    def background(jobs: int, lock: Path | None = None) -> None:
+        calls.append((jobs, lock))
+
+    monkeypatch.setattr(warm_module, "warm_in_background", background)
+    monkeypatch.setattr(warm_module, "warm", lambda *a: pytest.fail("warmed in the foreground"))
+    lock = tmp_path / "warm.lock"
+    assert warm_module.main(["--background", str(lock), "--jobs", "3"]) == 0
+    assert calls == [(3, lock)]
+
+
+@pytest.mark.parametrize("text", ["0", "x", "65"])
+def test_a_bad_number_of_jobs_is_refused(text: str) -> None:
+    with pytest.raises(SystemExit) as exc:
+        warm_module.main(["--background", "warm.lock", "--jobs", text])
+    assert exc.value.code == 2

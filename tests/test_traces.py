@@ -6,8 +6,9 @@ import re
 import subprocess
 from pathlib import Path
 
+import numpy as np
 import pytest
-from _rerun import rerun_cli
+from _rerun import entity_rows, rerun_cli
 
 from fuzzkit.errors import ConfigError
 from fuzzkit.studies.experiments import experiment
@@ -56,6 +57,29 @@ def test_rrd_is_valid_and_has_every_entity(result: RunResult, tmp_path: Path) ->
     # Every controller period of the force series is there (plus the static style row).
     assert rows["/forces/z/measured"] >= len(result.t)
     assert "/control/correction/y/u" not in rows  # y is not force-controlled in E1
+
+
+def test_the_scene_holds_the_arm_and_contacts_of_every_drawn_period(
+    result: RunResult, tmp_path: Path
+) -> None:
+    """Read back: every 5th period's arm (base -> joints -> tool tip) and contact points, at
+    the same instants as that period's force sample."""
+    out = write_rrd(result, tmp_path / "e1.rrd", geometry_every=5)
+    force_times, _ = entity_rows(out, "/forces/z/measured", "Scalars:scalars")
+    times, strips = entity_rows(out, "/world/arm", "LineStrips3D:strips")
+    frames = range(0, len(result.t), 5)
+    assert times == [force_times[k] for k in frames]
+    for k, strip in zip(frames, strips, strict=True):
+        np.testing.assert_array_equal(np.asarray(strip[0]), result.arm_points[k].astype(np.float32))
+    times, contacts = entity_rows(out, "/world/contacts", "Points3D:positions")
+    assert times == [force_times[k] for k in frames]
+    counts = [len(result.contact_points[k].reshape(-1, 3)) for k in frames]
+    assert [len(c) for c in contacts] == counts and 0 < sum(counts) < len(counts) * 10
+    touching = next(i for i, n in enumerate(counts) if n)
+    np.testing.assert_array_equal(
+        np.asarray(contacts[touching]),
+        result.contact_points[frames[touching]].reshape(-1, 3).astype(np.float32),
+    )
 
 
 def test_bad_output_path_writes_nothing(result: RunResult, tmp_path: Path) -> None:

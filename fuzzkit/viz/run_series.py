@@ -202,3 +202,33 @@ def log_paths(rec: Any, result: RunResult) -> None:
         rr.LineStrips3D([result.tool_position], colors=[AXIS_COLOURS["z"]]),
         static=True,
     )
+
+
+def log_geometry(rec: Any, times: npt.ArrayLike, columns: dict[str, Any]) -> None:
+    """Log the moving geometry of a run, one row per entry of ``times`` (s) in each entity:
+    ``columns`` maps an entity to its archetype's columns (``rr.LineStrips3D.columns(...)``,
+    one row per time), sent at once instead of one log call per frame."""
+    import rerun as rr
+
+    index = rr.TimeColumn("sim_time", duration=np.asarray(times, dtype=np.float64))
+    for entity, cols in columns.items():
+        rec.send_columns(entity, indexes=[index], columns=cols)
+
+
+#: The colour and radius (m) of the drawn contact points.
+CONTACT_COLOUR, CONTACT_RADIUS_M = (230, 40, 40), 0.004
+
+
+def contact_columns(result: RunResult, frames: npt.NDArray[np.int_]) -> list[Any]:
+    """The contact points of ``frames`` (indices of ``result.t``) as ``rr.Points3D`` columns:
+    each frame's points in one row (none: an empty row), with their colour and radius."""
+    import rerun as rr
+
+    points = [np.asarray(result.contact_points[k], dtype=np.float64).reshape(-1, 3) for k in frames]
+    counts = [len(p) for p in points]
+    positions = np.concatenate(points) if points else np.empty((0, 3))
+    n = len(frames)
+    return [
+        *rr.Points3D.columns(positions=positions).partition(counts),
+        *rr.Points3D.columns(colors=[CONTACT_COLOUR] * n, radii=[CONTACT_RADIUS_M] * n),
+    ]

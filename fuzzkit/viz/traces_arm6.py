@@ -44,7 +44,9 @@ from fuzzkit.viz.rule_activity import RuleRecording
 from fuzzkit.viz.run_series import (
     ARM_COLOUR,
     TOOL_COLOUR,
+    contact_columns,
     log_control_series,
+    log_geometry,
     log_joint_angles,
     log_paths,
     log_world_axes,
@@ -173,35 +175,33 @@ def write_rrd(
         )
 
         # moving geometry
-        radius = scn.tool.radius_m
-        rot = scn.rotation
-        for k in range(0, len(result.t), max(1, geometry_every)):
-            rec.set_time("sim_time", duration=float(result.t[k]))
-            arm = result.arm_points[k]
-            rec.log("world/arm", rr.LineStrips3D([arm[:-1]], colors=[ARM_COLOUR], radii=[0.012]))
-            tip = arm[-1]
-            rec.log(
-                "world/tool/axis",
-                rr.LineStrips3D([arm[-2:]], colors=[TOOL_COLOUR], radii=[0.006]),
-            )
-            rec.log(
-                "world/tool/sphere",
-                rr.Points3D([tip], radii=[radius], colors=[(*TOOL_COLOUR, 120)]),
-            )
-            f_base = rot @ np.nan_to_num(result.force_true[k])
-            rec.log(
-                "world/force",
-                rr.Arrows3D(
-                    origins=[tip],
-                    vectors=[f_base * FORCE_SCALE_M_PER_N],
-                    colors=[(220, 30, 30)],
-                    radii=[0.003],
+        frames = np.arange(0, len(result.t), max(1, geometry_every))
+        arms = [result.arm_points[k] for k in frames]
+        tips = np.array([arm[-1] for arm in arms]).reshape(-1, 3)
+        forces = np.array([scn.rotation @ np.nan_to_num(result.force_true[k]) for k in frames])
+        n = len(frames)
+        log_geometry(
+            rec,
+            result.t[frames],
+            {
+                "world/arm": rr.LineStrips3D.columns(
+                    strips=[arm[:-1] for arm in arms], colors=[ARM_COLOUR] * n, radii=[0.012] * n
                 ),
-            )
-            rec.log(
-                "world/contacts",
-                rr.Points3D(
-                    result.contact_points[k].reshape(-1, 3), colors=[(230, 40, 40)], radii=[0.004]
+                "world/tool/axis": rr.LineStrips3D.columns(
+                    strips=[arm[-2:] for arm in arms], colors=[TOOL_COLOUR] * n, radii=[0.006] * n
                 ),
-            )
+                "world/tool/sphere": rr.Points3D.columns(
+                    positions=tips,
+                    radii=[scn.tool.radius_m] * n,
+                    colors=[(*TOOL_COLOUR, 120)] * n,
+                ),
+                "world/force": rr.Arrows3D.columns(
+                    origins=tips,
+                    vectors=forces.reshape(-1, 3) * FORCE_SCALE_M_PER_N,
+                    colors=[(220, 30, 30)] * n,
+                    radii=[0.003] * n,
+                ),
+                "world/contacts": contact_columns(result, frames),
+            },
+        )
     return Path(path)

@@ -38,7 +38,9 @@ from fuzzkit.viz.rule_activity import RuleRecording
 from fuzzkit.viz.run_series import (
     ARM_COLOUR,
     TOOL_COLOUR,
+    contact_columns,
     log_control_series,
+    log_geometry,
     log_joint_angles,
     log_paths,
     log_world_axes,
@@ -112,21 +114,21 @@ def write_rrd(
                 static=True,
             )
         log_paths(rec, result)
+        frames = np.arange(0, len(result.t), max(1, geometry_every))
+        arms = [result.arm_points[k] for k in frames]
         radius = scn.tool.radius_m
-        for k in range(0, len(result.t), max(1, geometry_every)):
-            rec.set_time("sim_time", duration=float(result.t[k]))
-            arm = result.arm_points[k]
-            rec.log("world/arm", rr.LineStrips3D([arm], colors=[ARM_COLOUR], radii=[0.006]))
-            tip = arm[-1]
-            rec.log(
-                "world/tool",
-                rr.LineStrips3D(
-                    [_circle(float(tip[0]), float(tip[2]), radius)], colors=[TOOL_COLOUR]
+        tools = [_circle(float(arm[-1][0]), float(arm[-1][2]), radius) for arm in arms]
+        log_geometry(
+            rec,
+            result.t[frames],
+            {
+                "world/arm": rr.LineStrips3D.columns(
+                    strips=arms, colors=[ARM_COLOUR] * len(frames), radii=[0.006] * len(frames)
                 ),
-            )
-            pts = result.contact_points[k]
-            rec.log(
-                "world/contacts",
-                rr.Points3D(pts.reshape(-1, 3), colors=[(230, 40, 40)], radii=[0.004]),
-            )
+                "world/tool": rr.LineStrips3D.columns(
+                    strips=tools, colors=[TOOL_COLOUR] * len(frames)
+                ),
+                "world/contacts": contact_columns(result, frames),
+            },
+        )
     return Path(path)

@@ -5,7 +5,8 @@ processes started later load it. Started together (the test suite's workers, a s
 processes), each of them would compile the same kernels again. :func:`warm` makes that first
 call once, beforehand: ``tests/conftest.py`` runs it in pytest's controller process before the
 xdist workers start, and ``python -m fuzzkit.studies.compiled.warm`` does it by hand (and says
-what it compiled and how long it took).
+what it compiled and how long it took); ``--background LOCK`` starts it and returns at once,
+so that ``make test`` compiles the kernels while its static checks run.
 
 Each step is a short real call of an entry point that reaches kernels (a few periods of each
 compiled loop, one point of each surface kernel), so that what is compiled has exactly the
@@ -218,7 +219,9 @@ def _warm_part(part: int, jobs: int) -> list[str]:
 
 
 def warm_in_background(
-    jobs: int, command: Callable[[int, int], list[str]] = _warm_part
+    jobs: int,
+    command: Callable[[int, int], list[str]] = _warm_part,
+    lock: Path | None = None,
 ) -> Warming | None:
     """Start ``jobs`` processes that warm the kernels between them, while this process goes
     on; processes started after it wait for them in :func:`wait_for_warming`. Part ``k`` runs
@@ -227,13 +230,19 @@ def warm_in_background(
     The processes share one exclusive ``flock`` on a lock file, taken here before they start
     and inherited by them, so it is released only when the last of them exits (or dies); the
     file's path is put in this process's environment (:data:`LOCK_ENV`), which the processes
-    it starts later inherit. None where ``flock`` does not exist (then call :func:`warm`).
+    it starts later inherit. ``lock``: that file instead of a new temporary one (a process that
+    is not this one's child can then wait for it, given the path). None where ``flock`` does
+    not exist (then call :func:`warm`).
     """
     try:
         import fcntl
     except ImportError:  # not POSIX
         return None
-    handle, name = tempfile.mkstemp(prefix="fuzzkit-warm-", suffix=".lock")
+    if lock is None:
+        handle, name = tempfile.mkstemp(prefix="fuzzkit-warm-", suffix=".lock")
+    else:
+        lock.parent.mkdir(parents=True, exist_ok=True)
+        handle, name = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644), str(lock)
     log = Path(name).with_suffix(".log")
     fcntl.flock(handle, fcntl.LOCK_EX)
     processes = []
@@ -277,14 +286,35 @@ def _part(text: str) -> tuple[int, int]:
     return k, n
 
 
+def _jobs(text: str) -> int:
+    try:
+        jobs = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if not 1 <= jobs <= 64:
+        raise argparse.ArgumentTypeError(f"expected 1 to 64 processes, got {jobs}")
+    return jobs
+
+
 def main(argv: list[str] | None = None) -> int:
     """Warm every kernel (or one part of the steps), printing each step, what it did and its
-    wall time."""
+    wall time; or, with ``--background LOCK``, start that in ``--jobs`` processes holding the
+    lock ``LOCK`` and return at once (their output goes to ``LOCK`` with the suffix ``.log``;
+    a process given ``FUZZKIT_WARM_LOCK=LOCK`` waits for them in :func:`wait_for_warming`)."""
     parser = argparse.ArgumentParser(prog="python -m fuzzkit.studies.compiled.warm")
     parser.add_argument(
         "--part", type=_part, default=(0, 1), help="K/N: every N-th step from the K-th"
     )
+    parser.add_argument(
+        "--background", type=Path, metavar="LOCK", help="start it holding LOCK; return"
+    )
+    parser.add_argument(
+        "--jobs", type=_jobs, default=1, help="processes of --background (default: 1)"
+    )
     args = parser.parse_args(argv)
+    if args.background is not None:
+        warm_in_background(args.jobs, lock=args.background)
+        return 0
     total = time.perf_counter()
 
     def report(name: str, outcome: str, seconds: float) -> None:
