@@ -54,11 +54,12 @@ define timed
 	@start=$$(date +%s%N); $(MAKE) --no-print-directory $(1) VENV=$(VENV) || exit $$?; \
 		echo "$(1): $$(( ($$(date +%s%N) - start) / 1000000 )) ms"
 endef
-# The numba kernels compile in the background while the static checks run (one process per
-# worker, holding WARM_LOCK); pytest waits for them (tests/conftest.py) and finds them cached.
+# The numba kernels compile in the background while the static checks run (one process, on
+# the core mypy leaves free, holding WARM_LOCK); pytest's own warm-up waits for it and finds
+# them cached, its workers collect meanwhile (tests/conftest.py).
 WARM_LOCK := build/warm.lock
 test: $(STAMP)
-	$(BIN)/python -m fuzzkit.studies.compiled.warm --background $(WARM_LOCK) --jobs $(PYTEST_WORKERS)
+	$(BIN)/python -m fuzzkit.studies.compiled.warm --background $(WARM_LOCK) --jobs 1
 	$(call timed,lint)
 	$(call timed,typecheck)
 	$(call timed,imports)

@@ -25,17 +25,14 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     """In the controller process of a run with more than one xdist worker, start warming every
     numba kernel in the background, in as many processes as workers (the workers start and
     collect meanwhile, then wait for it in :func:`pytest_collection_finish`): each worker
-    then loads the kernels from numba's disk cache instead of compiling them again. A warm-up
-    started before pytest and named by ``FUZZKIT_WARM_LOCK`` (``make test`` starts one while
-    its static checks run) is waited for first, so this one finds its kernels cached. A run
+    then loads the kernels from numba's disk cache instead of compiling them again. When a warm-up
+    started before pytest is named by ``FUZZKIT_WARM_LOCK`` (``make test`` starts one while its
+    static checks run), these processes wait for it first and find its kernels cached. A run
     without workers (no ``-n``, ``-n 0``) or with one pays nothing here; its first use
     compiles what it needs, as before."""
     config = session.config
     if hasattr(config, "workerinput") or config.option.collectonly:
         return
-    from fuzzkit.studies.compiled.warm import wait_for_warming
-
-    wait_for_warming()  # one started before pytest (`make test` warms during its static checks)
     if _several_workers(config):
         from fuzzkit.studies.compiled.warm import warm, warm_in_background
 

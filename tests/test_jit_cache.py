@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import importlib
 import json
+import os
 import sys
 import threading
 from pathlib import Path
@@ -523,35 +524,27 @@ def test_a_bad_part_is_refused(text: str) -> None:
     assert exc.value.code == 2
 
 
-def test_the_session_hook_waits_for_a_warm_up_started_before_pytest(
-    pytestconfig: pytest.Config, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+def test_a_warm_up_waits_for_one_started_before_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    # `make test` starts the warm-up (`--background LOCK`) before its static checks, and
-    # passes LOCK to pytest: the controller's own warm-up must start only after that one ended
+    # `make test` starts a warm-up (`--background LOCK`) before its static checks and passes
+    # LOCK to pytest, whose controller starts its own: that one's processes compile nothing
+    # until the first has ended (then they find its kernels cached)
     flag = tmp_path / "finished"
 
     def command(part: int, jobs: int) -> list[str]:
-        if part == 0:
-            return [sys.executable, "-c", "pass"]
         script = f"import pathlib, time; time.sleep(1); pathlib.Path({str(flag)!r}).touch()"
         return [sys.executable, "-c", script]
 
     lock = tmp_path / "build" / "warm.lock"
     monkeypatch.delenv(warm_module.LOCK_ENV, raising=False)
-    before = warm_module.warm_in_background(2, command, lock=lock)
+    before = warm_module.warm_in_background(1, command, lock=lock)
     assert before is not None and before.lock == lock and lock.exists()
+    assert os.environ[warm_module.LOCK_ENV] == str(lock)
     seen: list[bool] = []
-
-    def background(jobs: int) -> object:
-        seen.append(flag.exists())
-        return object()
-
-    monkeypatch.setattr(warm_module, "warm_in_background", background)
-    config: Any = SimpleNamespace(
-        option=SimpleNamespace(numprocesses=2, collectonly=False), stash=pytest.Stash()
-    )
+    monkeypatch.setattr(warm_module, "warm", lambda *args: seen.append(flag.exists()))
     try:
-        _conftest(pytestconfig).pytest_sessionstart(SimpleNamespace(config=config))
+        assert warm_module.main(["--part", "0/2"]) == 0
     finally:
         assert before.finish() is None
     assert seen == [True]

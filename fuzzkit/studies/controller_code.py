@@ -9,6 +9,8 @@ compile SPEC``, ``fuzzkit replay --impl c`` and the tests.
 
 from __future__ import annotations
 
+import functools
+
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -151,8 +153,20 @@ def adaptation_design(spec: ControllerSpec) -> AdaptationDesign | None:
 
 
 def generate(spec: ControllerSpec, target: str, number_type: str | None = None) -> dict[str, str]:
-    """The generated controller's sources for ``target``: ``{relative path: text}``."""
-    return emit_controller(design_of(spec), target, number_type)
+    """The generated controller's sources for ``target``: ``{relative path: text}``.
+
+    Emitted once per process for an equal spec, target and number type: a tune, a sweep or a
+    report asks for the same code for every run (the code of
+    :func:`fuzzkit.studies.compiled.generated_controller.code_spec` leaves out the gains), and
+    emitting it costs tens of ms. The spec is frozen; each caller gets its own dict."""
+    return dict(_emitted(spec, target, number_type))
+
+
+@functools.lru_cache(maxsize=64)
+def _emitted(
+    spec: ControllerSpec, target: str, number_type: str | None
+) -> tuple[tuple[str, str], ...]:
+    return tuple(emit_controller(design_of(spec), target, number_type).items())
 
 
 def open_generated(spec: ControllerSpec, target: str, number_type: str | None = None) -> Any:

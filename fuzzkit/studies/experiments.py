@@ -16,6 +16,8 @@ task frame (``fuzzkit.plants.contract`` explains frames and signs). Metrics are 
 
 from __future__ import annotations
 
+import functools
+
 from dataclasses import replace
 
 import numpy as np
@@ -63,6 +65,16 @@ def shipped_name(name: str) -> str | None:
     return next((s for s in SHIPPED_SCENARIOS if s.lower() == name.lower()), None)
 
 
+@functools.lru_cache(maxsize=8)
+def _shipped(text: str, source: str) -> Experiment:
+    """A shipped scenario, parsed once per process for the same text: a tune, a sweep or a
+    report asks for it for every run (the located reader costs about 50 ms a file). It names no
+    other file, and the experiment is frozen, so sharing it is safe."""
+    from fuzzkit.studies import scenario_file
+
+    return scenario_file.loads_scenario(text, source)
+
+
 def experiment(name: str) -> Experiment:
     """The experiment called ``name``: a shipped one (E1, E2, E3, regulate; case-insensitive)
     or the path of a scenario file (``.yaml``/``.yml``; see
@@ -71,9 +83,7 @@ def experiment(name: str) -> Experiment:
 
     shipped = shipped_name(name)
     if shipped is not None:
-        return scenario_file.loads_scenario(
-            scenario_file.shipped_scenario_text(shipped), f"{shipped}.yaml"
-        )
+        return _shipped(scenario_file.shipped_scenario_text(shipped), f"{shipped}.yaml")
     if name.lower().endswith((".yaml", ".yml")):
         return scenario_file.load_scenario(name)
     raise ConfigError(

@@ -298,9 +298,10 @@ def _jobs(text: str) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """Warm every kernel (or one part of the steps), printing each step, what it did and its
-    wall time; or, with ``--background LOCK``, start that in ``--jobs`` processes holding the
-    lock ``LOCK`` and return at once (their output goes to ``LOCK`` with the suffix ``.log``;
-    a process given ``FUZZKIT_WARM_LOCK=LOCK`` waits for them in :func:`wait_for_warming`)."""
+    wall time, after waiting for a warm-up already running (named by :data:`LOCK_ENV`); or,
+    with ``--background LOCK``, start that in ``--jobs`` processes holding the lock ``LOCK``
+    and return at once (their output goes to ``LOCK`` with the suffix ``.log``; a process given
+    ``FUZZKIT_WARM_LOCK=LOCK`` waits for them in :func:`wait_for_warming`)."""
     parser = argparse.ArgumentParser(prog="python -m fuzzkit.studies.compiled.warm")
     parser.add_argument(
         "--part", type=_part, default=(0, 1), help="K/N: every N-th step from the K-th"
@@ -316,6 +317,7 @@ def main(argv: list[str] | None = None) -> int:
         warm_in_background(args.jobs, lock=args.background)
         return 0
     total = time.perf_counter()
+    wait_for_warming()  # one already running: its kernels are then loaded, not compiled again
 
     def report(name: str, outcome: str, seconds: float) -> None:
         print(f"{seconds:7.2f} s  {name}: {outcome}", flush=True)
