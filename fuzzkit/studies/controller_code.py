@@ -10,7 +10,6 @@ compile SPEC``, ``fuzzkit replay --impl c`` and the tests.
 from __future__ import annotations
 
 import functools
-
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any

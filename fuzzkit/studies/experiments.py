@@ -17,7 +17,6 @@ task frame (``fuzzkit.plants.contract`` explains frames and signs). Metrics are 
 from __future__ import annotations
 
 import functools
-
 from dataclasses import replace
 
 import numpy as np
