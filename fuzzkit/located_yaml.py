@@ -191,36 +191,54 @@ def _control_characters(text: str, source: str) -> list[Problem]:
     return problems
 
 
-def _depth_problem(text: str, source: str, kind: DocumentKind) -> Problem | None:
-    """A problem if mappings/lists nest deeper than :data:`MAX_DEPTH` (from the token stream).
+class _TooDeep(Exception):
+    """A collection opened deeper than :data:`MAX_DEPTH`, at ``mark``."""
 
-    Checked on tokens, before composing, because PyYAML's composer recurses once per level.
-    """
+    def __init__(self, mark: yaml.Mark) -> None:
+        super().__init__(mark)
+        self.mark = mark
+
+
+class _DepthLimitedLoader(yaml.SafeLoader):
+    """PyYAML's safe loader, refusing mappings and lists nested deeper than :data:`MAX_DEPTH`
+    as it composes them (its composer recurses once per level: this stops it long before
+    Python's recursion limit), in the same pass that builds the nodes."""
+
     depth = 0
-    opening = (yaml.BlockMappingStartToken, yaml.BlockSequenceStartToken)
-    opening_flow = (yaml.FlowMappingStartToken, yaml.FlowSequenceStartToken)
-    closing = (yaml.BlockEndToken, yaml.FlowMappingEndToken, yaml.FlowSequenceEndToken)
-    for token in yaml.scan(text, Loader=yaml.SafeLoader):
-        if isinstance(token, opening + opening_flow):
-            depth += 1
-            if depth > MAX_DEPTH:
-                mark = token.start_mark
-                return Problem(
-                    Location(source, mark.line + 1, mark.column + 1),
-                    f"mappings and lists nested too deeply (more than {MAX_DEPTH} levels); "
-                    f"{kind.plural} are limited to {MAX_DEPTH} levels",
-                )
-        elif isinstance(token, closing):
-            depth -= 1
-    return None
+
+    def compose_sequence_node(self, anchor: Any) -> SequenceNode:
+        self._open()
+        try:
+            return super().compose_sequence_node(anchor)
+        finally:
+            self.depth -= 1
+
+    def compose_mapping_node(self, anchor: Any) -> MappingNode:
+        self._open()
+        try:
+            return super().compose_mapping_node(anchor)
+        finally:
+            self.depth -= 1
+
+    def _open(self) -> None:
+        self.depth += 1
+        if self.depth > MAX_DEPTH:
+            raise _TooDeep(self.peek_event().start_mark)  # type: ignore[no-untyped-call]
 
 
 def _compose(text: str, source: str, kind: DocumentKind) -> Node | None:
     try:
-        deep = _depth_problem(text, source, kind)
-        if deep is not None:
-            raise kind.error([deep])
-        return yaml.compose(text, Loader=yaml.SafeLoader)
+        return yaml.compose(text, Loader=_DepthLimitedLoader)
+    except _TooDeep as deep:
+        raise kind.error(
+            [
+                Problem(
+                    Location(source, deep.mark.line + 1, deep.mark.column + 1),
+                    f"mappings and lists nested too deeply (more than {MAX_DEPTH} levels); "
+                    f"{kind.plural} are limited to {MAX_DEPTH} levels",
+                )
+            ]
+        ) from None
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         where = Location(source, mark.line + 1, mark.column + 1) if mark else Location(source)

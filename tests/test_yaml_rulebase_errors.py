@@ -13,6 +13,7 @@ from fuzzkit import located_yaml
 from fuzzkit.errors import Problem, RuleBaseError
 from fuzzkit.formats import yaml_reader as dsl
 from fuzzkit.formats.registry import loads
+from fuzzkit.formats.yaml_reader import RULE_BASE_DOCUMENT
 from fuzzkit.fuzzy.model import Compound, Consequent, Proposition, Rule, RuleBase, Term, Variable
 from fuzzkit.fuzzy.validation import check, ensure_valid
 
@@ -507,7 +508,21 @@ def test_huge_file_on_disk_is_refused_without_reading(tmp_path: Path) -> None:
 
 def test_deep_nesting_is_a_message_not_a_crash() -> None:
     (p,) = problems("name: " + "[" * 5000 + "]" * 5000 + "\n")
-    assert "nested too deeply" in p.message
+    # the top mapping is level 1: the 200th list (column 7 + 199) is the first one too deep
+    assert (p.location.line, p.location.col) == (1, 206)
+    assert p.message == (
+        "mappings and lists nested too deeply (more than 200 levels); rule bases are limited "
+        "to 200 levels"
+    )
+
+
+def test_nesting_up_to_the_limit_is_plain_yaml() -> None:
+    # 200 levels of block mappings compose; the reader then judges the content, not the depth
+    text = "".join(f"{'  ' * k}k{k}:\n" for k in range(199)) + "  " * 199 + "k: 1\n"
+    assert located_yaml.compose_document(text, "deep.yaml", RULE_BASE_DOCUMENT) is not None
+    (p,) = problems(text.replace("k: 1", "k: {a: 1}"))  # one more level
+    assert (p.location.line, p.location.col) == (200, 2 * 199 + 4)
+    assert "more than 200 levels" in p.message
 
 
 def test_non_utf8_file_is_a_message(tmp_path: Path) -> None:
