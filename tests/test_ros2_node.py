@@ -237,3 +237,95 @@ def test_the_watchdog_stops_the_output_on_sim_time() -> None:
             rig.until(lambda: len(rig.corrections) == 12, what="the output after reset")
         finally:
             rig.close()
+
+
+def test_the_correction_messages_carry_u_and_du_over_t() -> None:
+    """A pose offset holds ``u``, a twist ``du / T`` (m/s), both stamped with the period's grid
+    time in the wrench's frame; the tool pose's quaternion becomes the rotation the controller
+    takes."""
+    pytest.importorskip("geometry_msgs.msg", reason="the ros2 extra is in the dev lock")
+    from _ros2 import DOWN_QUATERNION, pose
+
+    from fuzzkit.ros2.messages import correction, rotation_of, stamp_ns, stop
+    from fuzzkit.ros2.stepper import Step
+
+    step = Step(7, START_NS + 7 * PERIOD_NS, (1e-4, -2e-4, 3e-3), (4e-6, 0.0, -1e-6), 1)
+    p = correction(step, "pose", 0.004, "ft_sensor")
+    assert (p.pose.position.x, p.pose.position.y, p.pose.position.z) == step.u
+    assert (p.pose.orientation.w, p.pose.orientation.x) == (1.0, 0.0)
+    t = correction(step, "twist", 0.004, "ft_sensor")
+    assert (t.twist.linear.x, t.twist.linear.y, t.twist.linear.z) == (1e-3, 0.0, -2.5e-4)
+    assert (t.twist.angular.x, t.twist.angular.y, t.twist.angular.z) == (0.0, 0.0, 0.0)
+    for msg in (p, t):
+        assert stamp_ns(msg.header) == step.stamp_ns and msg.header.frame_id == "ft_sensor"
+    assert stop("pose", 0, "f") is None
+    assert stop("twist", step.stamp_ns, "f").twist.linear.z == 0.0
+    assert rotation_of(pose(0, DOWN_QUATERNION)) == list(DOWN)
+    assert all(math.isnan(v) for v in rotation_of(pose(0, (0.0, 0.0, 0.0, 0.0))))
+
+
+@needs_cc
+@pytest.mark.verify  # a node start of its own, a few seconds: make verify
+def test_fuzzkit_ros2_runs_the_node_until_ctrl_c() -> None:
+    """The command itself, in its own process: it says what it runs, answers samples with
+    twists (``--output twist``, a ``--param`` applied), and stops on SIGINT with status 0."""
+    import os
+    import signal
+    import subprocess
+    import time
+
+    from _ros2 import DOWN_QUATERNION, ENVIRONMENT, domain_id, pose, ros_context, wrench
+    from geometry_msgs.msg import PoseStamped, TwistStamped, WrenchStamped
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.node import Node
+    from rclpy.qos import QoSProfile
+
+    namespace = f"/cli{os.getpid()}"
+    env = {**os.environ, **ENVIRONMENT, "ROS_DOMAIN_ID": str(domain_id())}
+    argv = ["ros2", str(SPEC_PI), "--output", "twist", "--namespace", namespace]
+    argv += ["--param", "setpoint_z=6", "--watchdog-periods", "100000"]
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "fuzzkit", *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    try:
+        with ros_context() as ctx:
+            tester = Node("tester", namespace=namespace, context=ctx)
+            executor = SingleThreadedExecutor(context=ctx)
+            executor.add_node(tester)
+            qos = QoSProfile(depth=100)
+            got: list = []
+            pub = tester.create_publisher(WrenchStamped, "ft_sensor_wrench", qos)
+            poses = tester.create_publisher(PoseStamped, "current_pose", qos)
+            tester.create_subscription(TwistStamped, "correction", got.append, qos)
+            end = time.monotonic() + 30.0
+            while pub.get_subscription_count() == 0 or not tester.count_publishers(
+                f"{namespace}/correction"
+            ):
+                assert proc.poll() is None, proc.communicate()
+                assert time.monotonic() < end, "the node did not come up"
+                executor.spin_once(timeout_sec=0.05)
+            for _ in range(10):  # no acknowledgement of a pose: give it time to arrive
+                poses.publish(pose(START_NS, DOWN_QUATERNION))
+                executor.spin_once(timeout_sec=0.02)
+            for k in range(40):
+                pub.publish(wrench(START_NS + k * PERIOD_NS, (0.0, 0.0, 2.0 if k < 25 else 9.0)))
+                while len(got) <= k:
+                    assert time.monotonic() < end, f"no correction for period {k}"
+                    executor.spin_once(timeout_sec=0.02)
+            executor.shutdown()
+            tester.destroy_node()
+    finally:
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=20)
+    assert proc.returncode == 0, err
+    assert "e1_pi: the generated C (double) controller at 250 Hz as node e1_pi" in out
+    assert f"{namespace}/ft_sensor_wrench -> {namespace}/correction (twist)" in out
+    assert f"{namespace}/e1_pi/tare" in out
+    assert len(got) == 40
+    # engaged pushing at 9 N against the 6 N set point (after the 2 N tare): the tool moves
+    # back (du < 0 along z)
+    assert all(m.twist.linear.z == 0.0 for m in got[:25]) and got[-1].twist.linear.z < 0.0
