@@ -70,6 +70,21 @@ def _statuses(diagnostics: list, n: int) -> np.ndarray:
     return out
 
 
+def _grid_runs(diagnostics: list) -> list[list]:
+    """The diagnostics split where the period falls back (a reset starts a new grid)."""
+    from _ros2 import values
+
+    runs: list[list] = [[]]
+    last = -1
+    for d in diagnostics:
+        period = int(values(d)["period"])
+        if period < last:
+            runs.append([])
+        runs[-1].append(d)
+        last = period
+    return runs
+
+
 def _feed(rig, forces, arrivals) -> None:
     """Publish the samples in arrival order, each waited for (lockstep): a sample that is not
     late shows as the correction of its period."""
@@ -84,23 +99,37 @@ def _feed(rig, forces, arrivals) -> None:
     rig.settle()
 
 
+#: (spec, impl, output): the fuzzy-PI in C with the pose output in make test; the PI, the
+#: generated Python and the twist output in make verify.
+LOG_CASES = [
+    pytest.param(SPEC, "c", "pose", id="fuzzy-c-pose"),
+    pytest.param(SPEC_PI, "c", "twist", id="pi-c-twist", marks=pytest.mark.verify),
+    pytest.param(SPEC, "python-generated", "twist", id="fuzzy-py-twist", marks=pytest.mark.verify),
+    pytest.param(SPEC_PI, "python-generated", "pose", id="pi-py-pose", marks=pytest.mark.verify),
+]
+
+
 @needs_cc
-def test_a_log_published_through_the_node_gives_replays_corrections() -> None:
+@pytest.mark.parametrize("spec_path, impl, output", LOG_CASES)
+def test_a_log_published_through_the_node_gives_replays_corrections(
+    spec_path: object, impl: str, output: str
+) -> None:
     """NaN, spikes, a trip, gaps, a duplicate and an out-of-order sample, over loopback Fast
-    DDS into the node running the generated C: 0 m from ``replay --impl c`` of the log of the
-    periods the node stepped, every status identical."""
+    DDS into the node running the generated controller: 0 m from ``replay --impl`` of the log
+    of the periods the node stepped (a twist: ``du / T`` of it), every status identical."""
     from _ros2 import DOWN_QUATERNION, Rig, period_of, pose, ros_context
 
     from fuzzkit.ros2.controller import open_node_controller
 
-    spec = load_spec(SPEC)
+    spec = load_spec(spec_path)
     parts = hostile_segments(spec, n=100, seed=5)
     forces = np.vstack(
         [parts[k][0] for k in ("spike_trains", "nan_bursts", "sustained_over_limit")]
     )
     arrivals, used = stream(len(forces), seed=3)
     with ros_context() as ctx:
-        rig = Rig(ctx, open_node_controller(spec, "c"), watchdog_periods=1000)
+        ctl = open_node_controller(spec, impl)
+        rig = Rig(ctx, ctl, watchdog_periods=1000, output=output)
         try:
             rig.give_pose(pose(START_NS, DOWN_QUATERNION))
             _feed(rig, forces, arrivals)
@@ -111,16 +140,87 @@ def test_a_log_published_through_the_node_gives_replays_corrections() -> None:
     n = len(forces)
     assert [period_of(m, START_NS, PERIOD_NS) for m in corrections] == list(range(n))
     assert {m.header.frame_id for m in corrections} == {"ft_sensor"}
-    got = np.array([[m.pose.position.x, m.pose.position.y, m.pose.position.z] for m in corrections])
     log = SensorLog(np.where(used[:, None], forces, math.nan), np.tile(DOWN, (n, 1)), None)
-    want_u, want_status = replay(spec, log, "c")
-    assert float(np.max(np.abs(got - want_u))) == 0.0
+    want_u, want_status = replay(spec, log, impl)
+    if output == "pose":
+        got = np.array(
+            [[m.pose.position.x, m.pose.position.y, m.pose.position.z] for m in corrections]
+        )
+        assert float(np.max(np.abs(got - want_u))) == 0.0
+    else:
+        got = np.array(
+            [[m.twist.linear.x, m.twist.linear.y, m.twist.linear.z] for m in corrections]
+        )
+        want_du = np.diff(np.vstack([np.zeros(3), want_u]), axis=0) / spec.period_s
+        assert float(np.max(np.abs(got - want_du))) == 0.0
     statuses = _statuses(diagnostics, n)
     np.testing.assert_array_equal(statuses, want_status)
     assert all(np.any(statuses & bit) for bit in (st.HELD, st.REJECTED, st.TRIPPED, st.ENGAGED))
     last = {kv.key: kv.value for kv in diagnostics[-1].values}
     assert int(last["late"]) == len(arrivals) - int(used.sum())
     assert set(st.BITS) <= set(last)  # every bit by name
+
+
+@needs_cc
+@pytest.mark.verify  # the same as test_ros2_logic's schedule test, over the middleware
+def test_parameter_changes_over_ros_give_replay_with_a_schedule() -> None:
+    """Gains and a set point changed through the parameter service between samples, a refused
+    change, ``~/tare`` and ``~/reset``: the node's corrections are the reference's replayed
+    with the same changes as ``replay --schedule``, within 1e-9 m, the same status."""
+    from _ros2 import DOWN_QUATERNION, Rig, pose, ros_context, wrench
+    from rcl_interfaces.srv import SetParameters
+    from rclpy.parameter import Parameter
+    from std_srvs.srv import Trigger
+
+    from fuzzkit.ros2.controller import open_node_controller
+    from fuzzkit.studies.param_schedule import Change
+
+    spec = load_spec(SPEC)
+    parts = hostile_segments(spec, n=100, seed=8)
+    forces = np.vstack([parts[k][0] for k in ("random", "setpoint_steps")])
+    changes = {40: {"kx_z": 0.0004, "setpoint_z": 6.0}, 70: {"kp_x": 0.1}, 90: {"ki_z": 0.02}}
+    events = {130: "tare", 160: "reset"}
+    with ros_context() as ctx:
+        rig = Rig(ctx, open_node_controller(spec, "c"), watchdog_periods=100_000)
+        node = f"{rig.namespace}/{spec.name}"
+        try:
+            rig.give_pose(pose(START_NS, DOWN_QUATERNION))
+            for k, f in enumerate(forces):
+                if k in changes:
+                    req = SetParameters.Request()
+                    req.parameters = [
+                        Parameter(n, value=v).to_parameter_msg() for n, v in changes[k].items()
+                    ]
+                    results = rig.call(SetParameters, f"{node}/set_parameters", req).results
+                    assert all(r.successful for r in results)
+                if k == 60:
+                    req = SetParameters.Request()
+                    req.parameters = [Parameter("kx_z", value=-1.0).to_parameter_msg()]
+                    (refused,) = rig.call(SetParameters, f"{node}/set_parameters", req).results
+                    assert not refused.successful and "kx_z must be > 0" in refused.reason
+                if k in events:
+                    assert rig.call(Trigger, f"{node}/{events[k]}", Trigger.Request()).success
+                rig.wrench.publish(wrench(START_NS + k * PERIOD_NS, f))
+                rig.until(lambda k=k: len(rig.corrections) > k, what=f"sample {k}")
+            rig.settle()
+            corrections = list(rig.corrections)
+            diagnostics = list(rig.diagnostics)
+        finally:
+            rig.close()
+    schedule = [Change(k, n, v) for k, c in changes.items() for n, v in c.items()]
+    schedule += [Change(k, e, 1.0) for k, e in events.items()]
+    n = len(forces)
+    log = SensorLog(forces, np.tile(DOWN, (n, 1)), None)
+    want_u, want_status = replay(spec, log, "python", schedule=schedule)
+    got = np.array([[m.pose.position.x, m.pose.position.y, m.pose.position.z] for m in corrections])
+    assert float(np.max(np.abs(got - want_u))) <= 1e-9
+    # the reset restarts the grid: the statuses from there are periods 0, 1, ... again
+    runs = _grid_runs(diagnostics)
+    assert len(runs) == 2
+    before, after = _statuses(runs[0], 160), _statuses(runs[1], n - 160)
+    np.testing.assert_array_equal(np.concatenate([before, after]), want_status)
+    plain_u, _ = replay(spec, log, "python")
+    assert float(np.max(np.abs(plain_u - want_u))) > 1e-4  # the changes mattered
 
 
 @needs_cc
