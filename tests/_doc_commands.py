@@ -82,6 +82,9 @@ NOT_RUN: dict[str, str] = {
     "python bench/": "a benchmark: minutes of machine time, its figures are machine-dependent",
     ".venv/bin/dask ": "starts a Dask scheduler or worker: a long-running server",
     "rerun ": "opens the Rerun viewer",
+    "fuzzkit ros2 ": "starts a ROS 2 node, a long-running server (tests/test_ros2_node.py runs it)",
+    "ros2 ": "the ROS 2 command line (ros2cli) comes with a ROS installation, not with the extra",
+    "pip install ": "installs packages (make test's environment holds the extra already)",
 }
 #: ``fuzzkit`` commands that need a peer the test does not have, by a regex over the command.
 NEEDS_PEER: dict[str, str] = {

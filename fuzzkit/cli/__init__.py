@@ -35,6 +35,7 @@ COMMAND_MODULES = (
     "interop",
     "codegen_cmd",
     "replay",
+    "ros2_node",
     "simulation",
     "tuning",
     "demo",

@@ -43,7 +43,9 @@ class Change:
     value: float
 
 
-def _value_problem(spec: ControllerSpec, name: str, value: float) -> str | None:
+def value_problem(spec: ControllerSpec, name: str, value: float) -> str | None:
+    """Why ``value`` cannot be ``name``'s (finite; a fuzzy-PI's scaling factors > 0, a PI's
+    gains >= 0, the limit > 0, an event 1), or None; ``fuzzkit ros2`` checks its parameters so."""
     if not math.isfinite(value):
         return f"{name} must be a finite number, got {value:g}"
     if name in EVENTS:
@@ -119,7 +121,7 @@ def read_schedule(path: str | Path, spec: ControllerSpec, n_samples: int) -> lis
                 Problem(Location(name, n, cols[2]), f"expected a number, got {value_text!r}")
             )
             continue
-        why = _value_problem(spec, what, value)
+        why = value_problem(spec, what, value)
         if why is not None:
             problems.append(Problem(Location(name, n, cols[2]), why))
             continue
