@@ -13,6 +13,7 @@ from fuzzkit.cli import (
     RULEBASE_SPEC_HELP,
     add_controller_impl_argument,
     add_quiet_argument,
+    numbers,
 )
 from fuzzkit.cli import units as cli_units
 from fuzzkit.control.names import KINDS as CONTROLLERS
@@ -72,7 +73,7 @@ def register(subparsers: Any) -> None:
         help="simulated robot: planar two-link arm or 6-DOF arm",
     )
     sim.add_argument(
-        "--seed", type=int, default=0, help="seed of the sensor noise and of the faults"
+        "--seed", type=numbers.SEED, default=0, help="seed of the sensor noise and of the faults"
     )
     sim.add_argument(
         "--stiffness",
@@ -172,7 +173,7 @@ def register(subparsers: Any) -> None:
         default="planar",
         help="simulated robot: planar two-link arm or 6-DOF arm",
     )
-    cmp_.add_argument("--seed", type=int, default=0, help="sensor-noise seed")
+    cmp_.add_argument("--seed", type=numbers.SEED, default=0, help="sensor-noise seed")
     cmp_.add_argument(
         "--latency",
         type=cli_units.latency_or_sensor,

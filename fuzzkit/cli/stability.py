@@ -4,24 +4,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 from typing import Any
 
-from fuzzkit.cli import RULEBASE_SPEC_HELP, add_quiet_argument
+from fuzzkit.cli import RULEBASE_SPEC_HELP, add_quiet_argument, numbers
 from fuzzkit.cli import units as cli_units
 from fuzzkit.control.names import KINDS as CONTROLLERS
 from fuzzkit.fileio import check_output_path
 from fuzzkit.units import latency_text
-
-
-def _unit_interval(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not 0.0 < value <= 1.0:
-        raise argparse.ArgumentTypeError(f"expected a number in (0, 1], got {text!r}")
-    return value
 
 
 def register(subparsers: Any) -> None:
@@ -87,7 +76,7 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument(
         "--contact-sector",
-        type=_unit_interval,
+        type=numbers.UNIT_FRACTION,
         default=0.1,
         metavar="SIGMA_MIN",
         help="lower end of the loss-of-contact sector [SIGMA_MIN, 1] (a cell that cannot be "
@@ -95,7 +84,7 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument(
         "--fuzzy-region",
-        type=_unit_interval,
+        type=numbers.UNIT_FRACTION,
         default=1.0,
         metavar="RHO",
         help="fuzzy-pi: bound the surface over |Ki*e|, |Kp*de| <= RHO (1: the whole universe)",
@@ -109,7 +98,10 @@ def register(subparsers: Any) -> None:
         help="also run each cell in closed loop (compiled loop) and show its outcome",
     )
     p.add_argument(
-        "--workers", type=int, default=None, help="processes for --simulate (default: every core)"
+        "--workers",
+        type=numbers.WORKERS,
+        default=None,
+        help="processes for --simulate (default: every core)",
     )
     p.set_defaults(handler=_stability)
 

@@ -7,7 +7,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from fuzzkit.cli import EXIT_TRIPPED, RULEBASE_SPEC_HELP, add_controller_impl_argument
+from fuzzkit.cli import EXIT_TRIPPED, RULEBASE_SPEC_HELP, add_controller_impl_argument, numbers
 from fuzzkit.cli import units as cli_units
 from fuzzkit.cli.simulation import FAIL_ON_TRIP_HELP
 from fuzzkit.control.names import RUN_CONTROLLERS
@@ -58,7 +58,7 @@ def register(subparsers: Any) -> None:
         metavar=cli_units.LATENCIES_METAVAR,
         help=f"{cli_units.LATENCY_HELP} (default: each experiment's own)",
     )
-    p.add_argument("--seeds", type=int, default=1, metavar="N", help="noise seeds 0..N-1")
+    p.add_argument("--seeds", type=numbers.SEEDS, default=1, metavar="N", help="noise seeds 0..N-1")
     p.add_argument(
         "--gains",
         default=None,
@@ -93,7 +93,7 @@ def register(subparsers: Any) -> None:
     add_controller_impl_argument(p)
     p.add_argument(
         "--duration",
-        type=float,
+        type=numbers.DURATION_S,
         default=None,
         metavar="S",
         help="simulated time (default: each experiment's own)",
@@ -111,7 +111,9 @@ def register(subparsers: Any) -> None:
         help="summary figure (default: OUT with .png)",
     )
     cli_units.store_alias(p, "--figure", dest="png", default=None)  # the old spelling
-    p.add_argument("--workers", type=int, default=None, help="local processes (default: cores)")
+    p.add_argument(
+        "--workers", type=numbers.WORKERS, default=None, help="local processes (default: cores)"
+    )
     p.add_argument(
         "--scheduler",
         default=None,
