@@ -57,7 +57,8 @@ def register(sub: Any) -> None:
         "--type",
         dest="number_type",
         default=None,
-        help="C number type: float (default), double or q15; python always computes in double",
+        help="C number type: float (default; double for a controller spec whose surface is a "
+        "table), double or q15; python always computes in double",
     )
     size = p.add_mutually_exclusive_group()
     size.add_argument(
