@@ -6,7 +6,7 @@ import argparse
 import json
 from typing import Any
 
-from fuzzkit.cli import RULEBASE_SPEC_HELP, add_quiet_argument, numbers
+from fuzzkit.cli import RULEBASE_SPEC_HELP, add_plant_argument, add_quiet_argument, numbers
 from fuzzkit.cli import units as cli_units
 from fuzzkit.control.names import KINDS as CONTROLLERS
 from fuzzkit.fileio import check_output_path
@@ -15,8 +15,6 @@ from fuzzkit.units import latency_text
 
 def register(subparsers: Any) -> None:
     """Add the ``stability`` subcommand."""
-    from fuzzkit.studies.plants import PLANTS
-
     p = subparsers.add_parser(
         "stability",
         help="certify the force loop's stability over contact stiffness x latency",
@@ -59,7 +57,7 @@ def register(subparsers: Any) -> None:
         + RULEBASE_SPEC_HELP,
     )
     p.add_argument("--gains", metavar="GAINS.yaml", help="gains file (default: the defaults)")
-    p.add_argument("--plant", choices=sorted(PLANTS), default="planar", help="simulated robot")
+    add_plant_argument(p, "simulated robot")
     p.add_argument(
         "--stiffness",
         type=cli_units.stiffnesses,

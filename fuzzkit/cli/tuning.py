@@ -7,7 +7,13 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from fuzzkit.cli import EXIT_INTERRUPTED, RULEBASE_SPEC_HELP, add_controller_impl_argument, numbers
+from fuzzkit.cli import (
+    EXIT_INTERRUPTED,
+    RULEBASE_SPEC_HELP,
+    add_controller_impl_argument,
+    add_plant_argument,
+    numbers,
+)
 from fuzzkit.cli import units as cli_units
 from fuzzkit.control.names import RUN_CONTROLLERS
 from fuzzkit.errors import ConfigError
@@ -18,8 +24,6 @@ from fuzzkit.units import latencies_text
 
 def register(subparsers: Any) -> None:
     """Add the ``tune`` and ``report`` subcommands."""
-    from fuzzkit.studies.plants import PLANTS
-
     tune = subparsers.add_parser(
         "tune",
         help="find optimal gains (Kp, Ki, Kx) by simulation and write a gains file",
@@ -50,9 +54,7 @@ def register(subparsers: Any) -> None:
         metavar="RB",
         help="rule base for fuzzy-pi: " + RULEBASE_SPEC_HELP,
     )
-    tune.add_argument(
-        "--plant", choices=sorted(PLANTS), default="planar", help="simulated robot to tune on"
-    )
+    add_plant_argument(tune, "simulated robot to tune on")
     tune.add_argument(
         "--stiffness",
         type=cli_units.stiffnesses,
@@ -167,12 +169,7 @@ def register(subparsers: Any) -> None:
     rep.add_argument(
         "--out", required=True, metavar="DIR", help="output folder (its parent must exist)"
     )
-    rep.add_argument(
-        "--plant",
-        choices=[*sorted(PLANTS), "both"],
-        default="planar",
-        help="plant(s) to run E1-E3 on",
-    )
+    add_plant_argument(rep, "plant(s) to run E1-E3 on", both=True)
     rep.add_argument(
         "--budget",
         type=numbers.BUDGET,
