@@ -15,6 +15,16 @@ from collections.abc import Sequence
 
 from fuzzkit.errors import ConfigError
 
+#: The longest run a scenario file or ``--duration`` may ask for, in simulated seconds, and
+#: the longest sensor or command delay, in periods (docs/simulation.md, "Scenario files").
+MAX_DURATION_S = 600.0
+MAX_LATENCY_PERIODS = 1000
+
+#: The contact stiffnesses a command line option takes, in N/m: 0.1 N/mm (a foam pad) to
+#: 10,000 N/mm (a steel fixture). The kit's studies span 1 to 1000 N/mm; far outside, the
+#: penalty contact of the plants is no model of anything (1e12 N/mm gives forces of 1e11 N).
+STIFFNESS_RANGE_N_PER_M = (1e2, 1e7)
+
 #: Stiffness units accepted after a number (case-insensitive), as N/m per unit.
 STIFFNESS_UNITS: dict[str, float] = {"n/mm": 1e3, "n/m": 1.0, "kn/m": 1e3}
 
@@ -66,7 +76,19 @@ def stiffness_text(n_per_m: float) -> str:
 
 
 _PAIR = re.compile(r"^\s*(\d+)\s*(?:[:,]\s*(\d+)\s*)?$")
-_LATENCY_HELP = "SENSOR:COMMAND (or SENSOR,COMMAND) delays in periods, integers >= 0"
+_LATENCY_HELP = (
+    f"SENSOR:COMMAND (or SENSOR,COMMAND) delays in periods, integers 0 to {MAX_LATENCY_PERIODS}"
+)
+
+
+def _delays(match: re.Match[str] | None) -> tuple[int, int | None] | None:
+    """The two delays of a matched pair (the second None when not given), or None when
+    there is no match or a delay is above :data:`MAX_LATENCY_PERIODS`."""
+    if match is None:
+        return None
+    sensor, command = int(match.group(1)), match.group(2)
+    pair = sensor, None if command is None else int(command)
+    return None if max(d or 0 for d in pair) > MAX_LATENCY_PERIODS else pair
 
 
 def parse_latency(text: str, sensor_only: bool = False) -> tuple[int, int | None]:
@@ -80,12 +102,11 @@ def parse_latency(text: str, sensor_only: bool = False) -> tuple[int, int | None
     ConfigError
         Anything else (the message shows the accepted spellings).
     """
-    match = _PAIR.match(text)
-    if match is None or (match.group(2) is None and not sensor_only):
+    pair = _delays(_PAIR.match(text))
+    if pair is None or (pair[1] is None and not sensor_only):
         one = " (or one number: the sensor delay alone)" if sensor_only else ""
         raise ConfigError(f"--latency: expected {_LATENCY_HELP}{one}, got {text!r}")
-    command = match.group(2)
-    return int(match.group(1)), None if command is None else int(command)
+    return pair
 
 
 def parse_latencies(text: str) -> list[tuple[int, int]]:
@@ -107,13 +128,13 @@ def parse_latencies(text: str) -> list[tuple[int, int]]:
         items = [stripped]
     out: list[tuple[int, int]] = []
     for item in items:
-        match = _PAIR.match(item)
-        if match is None or match.group(2) is None:
+        pair = _delays(_PAIR.match(item))
+        if pair is None or pair[1] is None:
             raise ConfigError(
                 f"--latency: expected {_LATENCY_HELP}, several as 0:0,2:1 (got {item!r} in "
                 f"{text!r})"
             )
-        out.append((int(match.group(1)), int(match.group(2))))
+        out.append((pair[0], pair[1]))
     return out
 
 

@@ -186,6 +186,7 @@ def test_sigint_on_compile_exits_130_and_writes_nothing(tmp_path: Path) -> None:
     ],
 )
 def test_a_closed_pipe_ends_quietly(command: str) -> None:
+    # head may exit before or after the command has written everything: 0 or 141
     root = Path(__file__).resolve().parent.parent
     fk = " ".join(FUZZKIT)
     script = f"set -o pipefail; {command.format(fk=fk)}"
@@ -195,6 +196,16 @@ def test_a_closed_pipe_ends_quietly(command: str) -> None:
     assert res.stderr == ""  # no "Broken pipe", no traceback
     assert res.returncode in (0, 141)
     assert res.stdout
+
+
+def test_a_pipe_closed_before_the_first_write_is_141() -> None:
+    # docs/cli.md's example: `true` exits before fuzzkit has started, so its first write fails
+    root = Path(__file__).resolve().parent.parent
+    script = f"set -o pipefail; {' '.join(FUZZKIT)} validate rulebases/*.yaml | true"
+    res = subprocess.run(
+        ["bash", "-c", script], cwd=root, capture_output=True, text=True, timeout=120
+    )
+    assert (res.returncode, res.stderr) == (141, "")
 
 
 def test_demo_into_a_closed_pipe_ends_quietly(tmp_path: Path) -> None:

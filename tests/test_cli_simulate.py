@@ -79,7 +79,7 @@ def test_a_users_scenario_file_runs_on_either_plant(
     "args, match",
     [
         (["--latency", "1,2,3"], "SENSOR:COMMAND (or SENSOR,COMMAND)"),
-        (["--latency", "-1"], "integers >= 0"),
+        (["--latency", "-1"], "integers 0 to 1000"),
         (["--stiffness", "0"], "expected a stiffness > 0"),
         (["--fault", "spikes"], "invalid choice"),
     ],

@@ -157,6 +157,8 @@ def test_every_option_shows_its_default_in_help(name: str) -> None:
         text = formatter._get_help_string(action) or ""
         label = "/".join(action.option_strings)
         assert re.search(r"default|required", text, re.I), f"fuzzkit {name} {label}: {text!r}"
+        # said once: not "(required) (default: none)" nor "required) (required)"
+        assert not re.search(r"required\)\s*\((required|default)", text), f"{name} {label}"
 
 
 def test_an_option_without_a_default_says_so() -> None:
@@ -232,6 +234,61 @@ def test_the_docs_use_the_option_spellings_that_help_shows() -> None:
                 wrong.append(f"{where}: fuzzkit {command} {option} (not in its --help)")
     assert seen > 200, "the docs' commands were not found"
     assert not wrong, "\n".join(wrong)
+
+
+def _choice_values(command: str, line: str) -> list[tuple[str, str]]:
+    """``(option, value)`` for every option with choices that ``line`` gives a value."""
+    try:
+        words = shlex.split(re.split(r"\s+(?:>|\||&&|;)\s*", line)[0])
+    except ValueError:
+        words = line.split()
+    choosers = {
+        flag: action
+        for action in COMMANDS[command]._actions
+        if action.choices is not None and action.nargs != 0
+        for flag in action.option_strings
+    }
+    out = []
+    for i, word in enumerate(words):
+        flag, eq, value = word.partition("=")
+        if flag in choosers and (eq or i + 1 < len(words)):
+            out.append((flag, value if eq else words[i + 1]))
+    return out
+
+
+def test_the_docs_give_options_with_choices_a_value_help_lists() -> None:
+    # --loop auto (not a choice) was in docs/mujoco.md; --plant and --loop are the options
+    # whose choices grew and shrank
+    seen = set()
+    wrong = []
+    for where, line in _doc_invocations():
+        command, _ = _options_used(line)
+        if command not in COMMANDS:
+            continue
+        for option, value in _choice_values(command, line):
+            action = next(a for a in COMMANDS[command]._actions if option in a.option_strings)
+            seen.add(option)
+            if value.isupper() or value.startswith(("{", "<", "$")):
+                continue  # a placeholder, not a value
+            if not set(value.split("|")) <= set(action.choices or ()):  # arm6|planar: either
+                wrong.append(f"{where}: fuzzkit {command} {option} {value} (not a choice)")
+    assert {"--loop", "--plant", "--controller"} <= seen
+    assert not wrong, "\n".join(wrong)
+    assert _choice_values("sweep", "fuzzkit sweep E1 --loop auto --plant=arm6") == [
+        ("--loop", "auto"),
+        ("--plant", "arm6"),
+    ]
+
+
+def test_every_plant_help_lists_every_registered_plant() -> None:
+    from fuzzkit.studies.plants import PLANTS
+
+    commands = [n for n, c in COMMANDS.items() if "--plant" in c.format_help()]
+    assert {"simulate", "compare", "sweep", "tune", "report", "stability"} <= set(commands)
+    for name in commands:
+        action = next(a for a in COMMANDS[name]._actions if "--plant" in a.option_strings)
+        for plant, entry in PLANTS.items():
+            assert f"{plant} ({entry.summary})" in (action.help or ""), (name, plant)
 
 
 def test_the_check_of_doc_spellings_can_fail() -> None:

@@ -100,13 +100,13 @@ def test_c_target_with_verify_and_baked_gains(
         (["--target", "fortran"], "unknown target 'fortran'"),
         (["--target", "c", "--type", "int8"], "unknown --type 'int8'"),
         (["--target", "python", "--type", "q15"], "applies to the C target"),
-        (["--target", "c", "--tolerance", "-1"], "positive number"),
+        (["--target", "c", "--tolerance", "-1"], "--tolerance: expected a number in (0, 1]"),
         (["--target", "c", "--method", "table", "--tolerance", "1e-7"], "cannot be met within"),
         (["--target", "c", "--method", "fastest"], "unknown --method 'fastest'"),
-        (["--target", "c", "--max-bytes", "0"], "--max-bytes must be a positive"),
+        (["--target", "c", "--max-bytes", "0"], "--max-bytes: expected an integer from 1"),
         (["--target", "c", "--type", "q15", "--method", "exact"], "only available as a lookup"),
         (["--target", "c", "--tolerance", "1", "--resolution", "5"], "not allowed with"),
-        (["--target", "c", "--resolution", "1"], "between 2 and"),
+        (["--target", "c", "--resolution", "1"], "--resolution: expected an integer from 2 to"),
     ],
 )
 def test_bad_input_is_a_clear_error_and_writes_nothing(

@@ -200,8 +200,10 @@ def test_report_rejects_bad_inputs(tmp_path: Path) -> None:
 def test_cli_report_bad_budget(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     from fuzzkit.cli import main
 
-    assert main(["report", "--out", str(tmp_path / "r"), "--budget", "2"]) == 2
-    assert "--budget must be >= 10" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:
+        main(["report", "--out", str(tmp_path / "r"), "--budget", "2"])
+    assert exc.value.code == 2
+    assert "--budget: expected an integer from 10" in capsys.readouterr().err
 
 
 def test_the_conclusion_follows_from_the_verdicts() -> None:

@@ -166,7 +166,7 @@ def test_sweep_cli_writes_one_row_per_run_and_a_figure(tmp_path: Path) -> None:
         (["--latency", "1"], "SENSOR:COMMAND"),
         (["--controller", "pid"], "unknown 'pid'"),
         (["--stiffness", "ten"], "100, 100N/mm, 1e5N/m"),
-        (["--seeds", "0"], "seeds must be >= 1"),
+        (["--seeds", "0"], "--seeds: expected an integer from 1"),
     ],
 )
 def test_sweep_cli_bad_arguments(

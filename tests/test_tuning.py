@@ -356,7 +356,7 @@ def test_cli_tune_ctrl_c_writes_the_best_so_far(
     [
         (["--stiffness", "10,abc"], "got 'abc'"),
         (["--stiffness", "0"], "expected a stiffness > 0"),
-        (["--budget", "3"], "budget must be >= 10"),
+        (["--budget", "3"], "--budget: expected an integer from 10"),
         (["--out", "/nonexistent/dir/g.yaml"], "does not exist"),
         (["--plant", "planar", "--rulebase", "no_such_rb"], "no_such_rb"),
     ],

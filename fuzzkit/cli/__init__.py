@@ -82,6 +82,20 @@ def add_controller_impl_argument(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def add_plant_argument(parser: argparse.ArgumentParser, what: str, both: bool = False) -> None:
+    """``--plant NAME``, its choices and help listing every plant of the registry
+    (``fuzzkit.studies.plants.PLANTS``), so that a new plant shows in every command; ``both``
+    adds the report's ``both`` (planar and arm6)."""
+    from fuzzkit.studies.plants import PLANTS, plants_text
+
+    parser.add_argument(
+        "--plant",
+        choices=[*sorted(PLANTS), *(["both"] if both else [])],
+        default="planar",
+        help=f"{what}: {plants_text()}" + ("; both: planar and arm6" if both else ""),
+    )
+
+
 class CommandModuleError(RuntimeError):
     """A module of :data:`COMMAND_MODULES` failed to import (a bug, not the user's error)."""
 
@@ -92,8 +106,8 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter):
     Text with line breaks (the epilog's examples) is printed as written; a one-line
     description is wrapped to the terminal. An option that takes a value shows its default:
     appended as ``(default: X)``, ``(default: none)`` for an option left out unless given, or
-    ``(required)``, unless its help already says what the default is; flags (``store_true``)
-    get nothing.
+    ``(required)``, unless its help already says what the default is or that the option is
+    required; flags (``store_true``) get nothing.
     """
 
     def _fill_text(self, text: str, width: int, indent: str) -> str:
@@ -107,8 +121,8 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter):
         takes_value = action.nargs != 0
         if not (takes_value and action.option_strings) or text == argparse.SUPPRESS:
             return text
-        if "default" in text.lower():
-            return text  # the help says what the default means
+        if "default" in text.lower() or "required" in text.lower():
+            return text  # the help says what the default means, or that there is none
         if action.required:
             shown = "required"
         elif default in (None, argparse.SUPPRESS):

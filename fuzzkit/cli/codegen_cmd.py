@@ -10,7 +10,7 @@ import argparse
 import math
 from typing import Any
 
-from fuzzkit.cli import RULEBASE_SPEC_HELP
+from fuzzkit.cli import RULEBASE_SPEC_HELP, numbers
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
@@ -57,19 +57,20 @@ def register(sub: Any) -> None:
         "--type",
         dest="number_type",
         default=None,
-        help="C number type: float (default), double or q15; python always computes in double",
+        help="C number type: float (default; double for a controller spec whose surface is a "
+        "table), double or q15; python always computes in double",
     )
     size = p.add_mutually_exclusive_group()
     size.add_argument(
         "--tolerance",
-        type=float,
+        type=numbers.TOLERANCE,
         default=None,
         metavar="T",
         help="allowed error as a fraction of each output range (default 1e-3)",
     )
     size.add_argument(
         "--resolution",
-        type=int,
+        type=numbers.BREAKPOINTS,
         default=None,
         metavar="N",
         help="breakpoints per input instead of a tolerance search",
@@ -81,7 +82,7 @@ def register(sub: Any) -> None:
     )
     p.add_argument(
         "--max-bytes",
-        type=int,
+        type=numbers.TABLE_BYTES,
         default=None,
         metavar="B",
         help="auto: largest table (constant data bytes) to take before the exact method "
@@ -181,8 +182,6 @@ def cmd_compile(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise ConfigError(f"{out}: exists and is not a directory (expected an output folder)")
-    if args.tolerance is not None and not (math.isfinite(args.tolerance) and args.tolerance > 0):
-        raise CodegenError(f"--tolerance must be a positive number, got {args.tolerance}")
     defaults = _fpi_defaults(args.gains)
 
     max_bytes = DEFAULT_MAX_BYTES if args.max_bytes is None else args.max_bytes

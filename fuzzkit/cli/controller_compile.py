@@ -8,6 +8,7 @@ once or none (a one-file target such as the FMU: the file is written atomically)
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
@@ -38,6 +39,12 @@ def _refuse_rulebase_options(args: argparse.Namespace) -> None:
         )
 
 
+def default_number_type(spec: Any, target_default: str) -> str:
+    """The number type without ``--type``: double for a table surface (its lookup table is
+    stored and interpolated in double, as the closed loop runs it), else the target's."""
+    return "double" if spec.surface.method == "table" else target_default
+
+
 def compile_spec(args: argparse.Namespace) -> int:
     """Generate, optionally verify, then write the controller of the spec ``args.rulebase``."""
     from pathlib import Path
@@ -55,13 +62,13 @@ def compile_spec(args: argparse.Namespace) -> int:
 
     _refuse_rulebase_options(args)
     target = load_target(args.target)
-    number_type = args.number_type or target.default_number_type
     out = Path(args.out)
     if target.bundle is None and out.exists() and not out.is_dir():
         raise ConfigError(f"{out}: exists and is not a directory (expected an output folder)")
     if target.bundle is not None and out.is_dir():
         raise ConfigError(f"{out}: is a directory (the {target.name} target writes one file)")
     spec = load_spec(args.rulebase)
+    number_type = args.number_type or default_number_type(spec, target.default_number_type)
     files = generate(spec, target.name, number_type)
     print(f"{spec.name}: {spec.kind} controller, {target.label} ({number_type})")
     if args.verify:

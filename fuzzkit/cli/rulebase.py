@@ -17,11 +17,11 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any, TextIO
 
-from fuzzkit.cli import RULEBASE_SPEC_HELP
+from fuzzkit.cli import RULEBASE_SPEC_HELP, numbers
 from fuzzkit.errors import EvaluationError, FuzzkitError, Location, Problem, ProblemsError
 from fuzzkit.fileio import check_output_path
 from fuzzkit.fuzzy.describe import num as _num
-from fuzzkit.fuzzy.describe import range_text, rule_grid, rule_sentence
+from fuzzkit.fuzzy.describe import range_text, rule_grid, rule_sentence, shown_output
 from fuzzkit.fuzzy.model import SHAPE_PARAMS, RuleBase, Variable
 from fuzzkit.fuzzy.type2_model import Footprint, footprint_of
 from fuzzkit.viz.figures import figure_format
@@ -118,7 +118,7 @@ def register(sub: Any) -> None:
     )
     p.add_argument(
         "--rules",
-        type=int,
+        type=numbers.RULES_DRAWN,
         default=12,
         metavar="N",
         help="with --png: draw the N strongest rules that fire, 1 to 64 (default: 12)",
@@ -144,7 +144,7 @@ def register(sub: Any) -> None:
     p.add_argument("--png", metavar="OUT.png", help="PNG image to write")
     p.add_argument(
         "--resolution",
-        type=int,
+        type=numbers.SURFACE_RESOLUTION,
         default=101,
         metavar="N",
         help="grid points per input (default 101)",
@@ -487,29 +487,34 @@ def cmd_eval(args: argparse.Namespace) -> int:
     if args.png is not None:
         figure_format(args.png, "--png")
         check_output_path(args.png, "--png file")
-    from fuzzkit.fuzzy.rule_view import DEFAULT_RULES, MAX_RULES
+    from fuzzkit.fuzzy.rule_view import DEFAULT_RULES
 
     if args.rules != DEFAULT_RULES and args.png is None:
         raise EvaluationError("--rules N is the number of rules --png draws: give --png too")
-    if not 1 <= args.rules <= MAX_RULES:
-        raise EvaluationError(f"--rules {args.rules}: expected 1 to {MAX_RULES} rules to draw")
     rb = _load(args.rulebase, "eval")
     engine = Engine(rb)
     if args.points is None and args.explain:
         return _explain(rb, _parse_inputs(rb, args.inputs), args.json, args.png, args.rules)
     if args.points is None:
         point = _parse_inputs(rb, args.inputs)
-        result = engine.evaluate_point(point)
+        result = {k: shown_output(v, rb.output(k)) for k, v in engine.evaluate_point(point).items()}
+        intervals = _centroid_intervals(rb, engine, point)
         if args.json:
             # JSON has no NaN: null stands for "no value" on both sides.
             def clean(values: dict[str, float]) -> dict[str, float | None]:
                 return {k: (None if math.isnan(v) else v) for k, v in values.items()}
 
-            doc = {"inputs": clean(point), "outputs": clean(result)}
+            doc: dict[str, Any] = {"inputs": clean(point), "outputs": clean(result)}
+            if intervals:
+                doc["intervals"] = {
+                    k: [None if math.isnan(x) else x for x in v] for k, v in intervals.items()
+                }
             print(json.dumps(doc, allow_nan=False))
         else:
             for k, v in result.items():
-                print(f"{k} = {v!r}")
+                lr = intervals.get(k)
+                shown = "" if lr is None else f" (centroid interval [{lr[0]!r}, {lr[1]!r}])"
+                print(f"{k} = {v!r}{shown}")
         return EXIT_OK
     if args.json:
         raise EvaluationError("--json applies to --input; --points writes CSV")
@@ -536,9 +541,24 @@ def cmd_eval(args: argparse.Namespace) -> int:
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow([*header, *rb.output_names])
     for i, row in enumerate(rows):
-        writer.writerow([*row, *(repr(float(outputs[n][i])) for n in rb.output_names)])
+        got = [shown_output(float(outputs[n][i]), rb.output(n)) for n in rb.output_names]
+        writer.writerow([*row, *map(repr, got)])
     sys.stdout.write(buf.getvalue())
     return EXIT_OK
+
+
+def _centroid_intervals(
+    rb: RuleBase, engine: Any, point: dict[str, float]
+) -> dict[str, tuple[float, float]]:
+    """An IT2 rule base's Karnik-Mendel interval ``(y_l, y_r)`` per output at ``point``, ends
+    shown as the output is (:func:`~fuzzkit.fuzzy.describe.shown_output`); empty for type-1."""
+    if footprint_of(rb) is None:
+        return {}
+    got = engine.centroid_intervals({k: [v] for k, v in point.items()})
+    return {
+        k: (shown_output(float(lo[0]), rb.output(k)), shown_output(float(hi[0]), rb.output(k)))
+        for k, (lo, hi) in got.items()
+    }
 
 
 _BARS = " ▁▂▃▄▅▆▇█"

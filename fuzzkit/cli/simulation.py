@@ -12,7 +12,9 @@ from fuzzkit.cli import (
     EXIT_TRIPPED,
     RULEBASE_SPEC_HELP,
     add_controller_impl_argument,
+    add_plant_argument,
     add_quiet_argument,
+    numbers,
 )
 from fuzzkit.cli import units as cli_units
 from fuzzkit.control.names import KINDS as CONTROLLERS
@@ -36,8 +38,6 @@ PROTOCOL_CHOICES = ("matched", "tuned", "default")
 
 def register(subparsers: Any) -> None:
     """Add the ``simulate`` and ``compare`` subcommands."""
-    from fuzzkit.studies.plants import PLANTS
-
     sim = subparsers.add_parser(
         "simulate",
         help="run one experiment (E1, E2, E3) in closed loop and print its metrics",
@@ -65,14 +65,9 @@ def register(subparsers: Any) -> None:
         metavar="RB",
         help="rule base for fuzzy-pi: " + RULEBASE_SPEC_HELP,
     )
+    add_plant_argument(sim, "simulated robot")
     sim.add_argument(
-        "--plant",
-        choices=sorted(PLANTS),
-        default="planar",
-        help="simulated robot: planar two-link arm or 6-DOF arm",
-    )
-    sim.add_argument(
-        "--seed", type=int, default=0, help="seed of the sensor noise and of the faults"
+        "--seed", type=numbers.SEED, default=0, help="seed of the sensor noise and of the faults"
     )
     sim.add_argument(
         "--stiffness",
@@ -98,17 +93,21 @@ def register(subparsers: Any) -> None:
         "--loop",
         choices=("compiled", "python"),
         default=None,
-        help="compiled (numba, arm6 and planar; fuzzy-pi runs as the rule base's double lookup "
-        "table, or as its generated C with --fuzzy-impl c) or python (the reference loop; "
-        "fuzzy-pi on the exact engine). Default: compiled where the plant supports it",
+        help="compiled (the whole run as one numba function, arm6 and planar; the controller is "
+        "the run's controller spec generated as C, in double, what `fuzzkit compile` ships) or "
+        "python (the reference loop and controller). Default: compiled where the plant has it "
+        "and a C compiler is found, python otherwise or when --fuzzy-impl or --controller-impl "
+        "python asks for it",
     )
     sim.add_argument(
         "--fuzzy-impl",
         choices=("auto", "exact", "table", "c"),
         default="auto",
-        help="how fuzzy-pi evaluates its surface: exact engine (python loop), the generated "
-        "double lookup table (both loops), or the generated C through ctypes (both loops; "
-        "needs a C compiler). Default: table when compiled, exact in python",
+        help="the fuzzy-pi surface of the Python loop's reference controller: exact (the exact "
+        "engine), table (the rule base's double lookup table) or c (the rule base's generated "
+        "C surface through ctypes; needs a C compiler); each runs the Python loop (not with "
+        "--loop compiled). Default auto: the spec's surface (exact, or the table a spec's "
+        "surface: names), in either loop",
     )
     add_controller_impl_argument(sim)
     sim.add_argument("--rrd", metavar="OUT.rrd", help="write a Rerun recording of the run")
@@ -166,13 +165,8 @@ def register(subparsers: Any) -> None:
         metavar="RB",
         help="rule base for fuzzy-pi: " + RULEBASE_SPEC_HELP,
     )
-    cmp_.add_argument(
-        "--plant",
-        choices=sorted(PLANTS),
-        default="planar",
-        help="simulated robot: planar two-link arm or 6-DOF arm",
-    )
-    cmp_.add_argument("--seed", type=int, default=0, help="sensor-noise seed")
+    add_plant_argument(cmp_, "simulated robot")
+    cmp_.add_argument("--seed", type=numbers.SEED, default=0, help="sensor-noise seed")
     cmp_.add_argument(
         "--latency",
         type=cli_units.latency_or_sensor,

@@ -4,30 +4,17 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 from typing import Any
 
-from fuzzkit.cli import RULEBASE_SPEC_HELP, add_quiet_argument
+from fuzzkit.cli import RULEBASE_SPEC_HELP, add_plant_argument, add_quiet_argument, numbers
 from fuzzkit.cli import units as cli_units
 from fuzzkit.control.names import KINDS as CONTROLLERS
 from fuzzkit.fileio import check_output_path
 from fuzzkit.units import latency_text
 
 
-def _unit_interval(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not 0.0 < value <= 1.0:
-        raise argparse.ArgumentTypeError(f"expected a number in (0, 1], got {text!r}")
-    return value
-
-
 def register(subparsers: Any) -> None:
     """Add the ``stability`` subcommand."""
-    from fuzzkit.studies.plants import PLANTS
-
     p = subparsers.add_parser(
         "stability",
         help="certify the force loop's stability over contact stiffness x latency",
@@ -70,7 +57,7 @@ def register(subparsers: Any) -> None:
         + RULEBASE_SPEC_HELP,
     )
     p.add_argument("--gains", metavar="GAINS.yaml", help="gains file (default: the defaults)")
-    p.add_argument("--plant", choices=sorted(PLANTS), default="planar", help="simulated robot")
+    add_plant_argument(p, "simulated robot")
     p.add_argument(
         "--stiffness",
         type=cli_units.stiffnesses,
@@ -87,7 +74,7 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument(
         "--contact-sector",
-        type=_unit_interval,
+        type=numbers.UNIT_FRACTION,
         default=0.1,
         metavar="SIGMA_MIN",
         help="lower end of the loss-of-contact sector [SIGMA_MIN, 1] (a cell that cannot be "
@@ -95,7 +82,7 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument(
         "--fuzzy-region",
-        type=_unit_interval,
+        type=numbers.UNIT_FRACTION,
         default=1.0,
         metavar="RHO",
         help="fuzzy-pi: bound the surface over |Ki*e|, |Kp*de| <= RHO (1: the whole universe)",
@@ -109,7 +96,10 @@ def register(subparsers: Any) -> None:
         help="also run each cell in closed loop (compiled loop) and show its outcome",
     )
     p.add_argument(
-        "--workers", type=int, default=None, help="processes for --simulate (default: every core)"
+        "--workers",
+        type=numbers.WORKERS,
+        default=None,
+        help="processes for --simulate (default: every core)",
     )
     p.set_defaults(handler=_stability)
 

@@ -7,7 +7,13 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from fuzzkit.cli import EXIT_TRIPPED, RULEBASE_SPEC_HELP, add_controller_impl_argument
+from fuzzkit.cli import (
+    EXIT_TRIPPED,
+    RULEBASE_SPEC_HELP,
+    add_controller_impl_argument,
+    add_plant_argument,
+    numbers,
+)
 from fuzzkit.cli import units as cli_units
 from fuzzkit.cli.simulation import FAIL_ON_TRIP_HELP
 from fuzzkit.control.names import RUN_CONTROLLERS
@@ -16,8 +22,6 @@ from fuzzkit.errors import ConfigError
 
 def register(subparsers: Any) -> None:
     """Add the ``sweep`` subcommand."""
-    from fuzzkit.studies.plants import PLANTS
-
     p = subparsers.add_parser(
         "sweep",
         help="run the cartesian product of experiments and parameters into one table",
@@ -58,7 +62,7 @@ def register(subparsers: Any) -> None:
         metavar=cli_units.LATENCIES_METAVAR,
         help=f"{cli_units.LATENCY_HELP} (default: each experiment's own)",
     )
-    p.add_argument("--seeds", type=int, default=1, metavar="N", help="noise seeds 0..N-1")
+    p.add_argument("--seeds", type=numbers.SEEDS, default=1, metavar="N", help="noise seeds 0..N-1")
     p.add_argument(
         "--gains",
         default=None,
@@ -72,12 +76,7 @@ def register(subparsers: Any) -> None:
         help="controller specs (docs/controller.md) to compare, each a value of the sweep in "
         "place of --controller (a spec holds its gains: not with --gains)",
     )
-    p.add_argument(
-        "--plant",
-        choices=sorted(PLANTS),
-        default="planar",
-        help="simulated robot, as simulate, tune and report (both run on the compiled loop)",
-    )
+    add_plant_argument(p, "simulated robot, as simulate, tune and report")
     p.add_argument(
         "--rulebase",
         default="macvicar_whelan",
@@ -93,7 +92,7 @@ def register(subparsers: Any) -> None:
     add_controller_impl_argument(p)
     p.add_argument(
         "--duration",
-        type=float,
+        type=numbers.DURATION_S,
         default=None,
         metavar="S",
         help="simulated time (default: each experiment's own)",
@@ -111,7 +110,9 @@ def register(subparsers: Any) -> None:
         help="summary figure (default: OUT with .png)",
     )
     cli_units.store_alias(p, "--figure", dest="png", default=None)  # the old spelling
-    p.add_argument("--workers", type=int, default=None, help="local processes (default: cores)")
+    p.add_argument(
+        "--workers", type=numbers.WORKERS, default=None, help="local processes (default: cores)"
+    )
     p.add_argument(
         "--scheduler",
         default=None,

@@ -7,7 +7,13 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from fuzzkit.cli import EXIT_INTERRUPTED, RULEBASE_SPEC_HELP, add_controller_impl_argument
+from fuzzkit.cli import (
+    EXIT_INTERRUPTED,
+    RULEBASE_SPEC_HELP,
+    add_controller_impl_argument,
+    add_plant_argument,
+    numbers,
+)
 from fuzzkit.cli import units as cli_units
 from fuzzkit.control.names import RUN_CONTROLLERS
 from fuzzkit.errors import ConfigError
@@ -18,8 +24,6 @@ from fuzzkit.units import latencies_text
 
 def register(subparsers: Any) -> None:
     """Add the ``tune`` and ``report`` subcommands."""
-    from fuzzkit.studies.plants import PLANTS
-
     tune = subparsers.add_parser(
         "tune",
         help="find optimal gains (Kp, Ki, Kx) by simulation and write a gains file",
@@ -50,9 +54,7 @@ def register(subparsers: Any) -> None:
         metavar="RB",
         help="rule base for fuzzy-pi: " + RULEBASE_SPEC_HELP,
     )
-    tune.add_argument(
-        "--plant", choices=sorted(PLANTS), default="planar", help="simulated robot to tune on"
-    )
+    add_plant_argument(tune, "simulated robot to tune on")
     tune.add_argument(
         "--stiffness",
         type=cli_units.stiffnesses,
@@ -62,11 +64,14 @@ def register(subparsers: Any) -> None:
         "default 5,10,20)",
     )
     tune.add_argument(
-        "--budget", type=int, default=120, help="most gain sets simulated (default 120)"
+        "--budget", type=numbers.BUDGET, default=120, help="most gain sets simulated (default 120)"
     )
-    tune.add_argument("--seed", type=int, default=0, help="optimiser seed (default 0)")
+    tune.add_argument("--seed", type=numbers.SEED, default=0, help="optimiser seed (default 0)")
     tune.add_argument(
-        "--workers", type=int, default=None, help="worker processes (default: every core)"
+        "--workers",
+        type=numbers.WORKERS,
+        default=None,
+        help="worker processes (default: every core)",
     )
     tune.add_argument(
         "--latency",
@@ -164,14 +169,12 @@ def register(subparsers: Any) -> None:
     rep.add_argument(
         "--out", required=True, metavar="DIR", help="output folder (its parent must exist)"
     )
+    add_plant_argument(rep, "plant(s) to run E1-E3 on", both=True)
     rep.add_argument(
-        "--plant",
-        choices=[*sorted(PLANTS), "both"],
-        default="planar",
-        help="plant(s) to run E1-E3 on",
-    )
-    rep.add_argument(
-        "--budget", type=int, default=40, help="tuning budget per controller (default 40)"
+        "--budget",
+        type=numbers.BUDGET,
+        default=40,
+        help="tuning budget per controller (default 40)",
     )
     rep.add_argument("--gains-dir", metavar="DIR", help="folder with pi.yaml and fuzzy-pi.yaml")
     rep.add_argument(
@@ -180,9 +183,12 @@ def register(subparsers: Any) -> None:
         metavar="RB",
         help="rule base for fuzzy-pi: " + RULEBASE_SPEC_HELP,
     )
-    rep.add_argument("--seed", type=int, default=0, help="optimiser seed")
+    rep.add_argument("--seed", type=numbers.SEED, default=0, help="optimiser seed")
     rep.add_argument(
-        "--workers", type=int, default=None, help="tuning worker processes (default: every core)"
+        "--workers",
+        type=numbers.WORKERS,
+        default=None,
+        help="tuning worker processes (default: every core)",
     )
     rep.add_argument("--no-rrd", action="store_true", help="skip the .rrd recordings")
     rep.add_argument(
@@ -514,8 +520,6 @@ def tune_report_lines(result: Any, cases: Any, start: str = "the default gains")
 def _report(args: argparse.Namespace) -> int:
     from fuzzkit.report.build import build_report, quick_options
 
-    if args.budget < 10:
-        raise ConfigError(f"--budget must be >= 10 (got {args.budget})")
     plants = ["planar", "arm6"] if args.plant == "both" else [args.plant]
     path = build_report(
         Path(args.out),

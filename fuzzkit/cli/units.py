@@ -43,12 +43,24 @@ def _argparse_type(parse: Callable[[str], T], name: str) -> Callable[[str], T]:
     return convert
 
 
+def _modelled(n_per_m: float, text: str) -> float:
+    """``n_per_m`` in N/mm, refused outside :data:`fuzzkit.units.STIFFNESS_RANGE_N_PER_M`."""
+    low, high = units.STIFFNESS_RANGE_N_PER_M
+    if not low <= n_per_m <= high:
+        raise ConfigError(
+            f"expected a stiffness from {units.stiffness_text(low)} to "
+            f"{units.stiffness_text(high)}, the contacts the plants model, got {text.strip()!r}"
+        )
+    return n_per_m / 1e3
+
+
 def _stiffness_n_per_mm(text: str) -> float:
-    return units.parse_stiffness(text) / 1e3
+    return _modelled(units.parse_stiffness(text), text)
 
 
 def _stiffnesses_n_per_mm(text: str) -> list[float]:
-    return [k / 1e3 for k in units.parse_stiffnesses(text)]
+    pairs = zip(units.parse_stiffnesses(text), text.split(","), strict=True)
+    return [_modelled(k, t) for k, t in pairs]
 
 
 def _latency_pair(text: str) -> tuple[int, int]:
@@ -68,6 +80,9 @@ latency_or_sensor = _argparse_type(lambda t: units.parse_latency(t, sensor_only=
 latency = _argparse_type(_latency_pair, "latency")
 #: Several latencies: ``0:0,2:1`` (or ``0,0;2,1``, ``"0,0 2,1"``).
 latencies = _argparse_type(units.parse_latencies, "latencies")
+#: Every option type of this module, which ``tests/test_cli_numbers.py`` walks with the
+#: numeric ones of :mod:`fuzzkit.cli.numbers`.
+OPTION_TYPES = (stiffness, stiffnesses, latency_or_sensor, latency, latencies)
 
 
 def store_alias(parser: argparse.ArgumentParser, *flags: str, dest: str, **kw: Any) -> None:

@@ -37,7 +37,8 @@ def loop_problems(rb: RuleBase) -> list[str]:
     if footprint_of(rb) is not None:
         # the generated controllers (exact method) and the compiled loop are type-1 only
         problems.append(
-            "an interval type-2 rule base does not run in the closed loop yet (docs/type2.md); "
+            "an interval type-2 rule base does not run in the closed loop yet (docs/type2.md, "
+            "In the closed loop); "
             "evaluate it, plot it or compile it as a table"
         )
     if len(rb.inputs) != 2:

@@ -9,7 +9,7 @@ that every problem, from an unknown key to an uncovered input range, is reported
 
 Semantic checks live in :mod:`fuzzkit.fuzzy.validation` (shared with the engines); this module
 maps the logical paths that :func:`fuzzkit.fuzzy.validation.check` returns back to YAML
-positions. It is about 900 lines because it is one walker: variables, terms, rules and the rule
+positions. It is about 1,050 lines because it is one walker: variables, terms, rules and the rule
 table all record into the same marks and hidden paths that place every semantic problem, so
 they stay in one class; the generic YAML layer is :mod:`fuzzkit.located_yaml`. The writer is
 :mod:`fuzzkit.formats.yaml_writer`, the schema :mod:`fuzzkit.formats.schema`.

@@ -9,6 +9,7 @@ Formats from the model's fields only.
 from __future__ import annotations
 
 import html
+import math
 from dataclasses import dataclass
 
 from fuzzkit.fuzzy.display import register_renderer
@@ -21,6 +22,26 @@ EMPTY_CELL = "-"
 def num(x: float) -> str:
     """A number as the descriptions show it: 6 significant digits, no trailing zeros."""
     return f"{x:.6g}"
+
+
+#: An output within this many units in the last place of its range's scale of zero is shown
+#: as 0: the rounding noise of a centroid that is 0 by symmetry (``-1.7e-15``), not a value.
+#: 64 ulps is the tolerance the golden files allow the generated code (docs/development.md);
+#: the exact engine's own accuracy claim, 1e-9 of the range, is far coarser.
+ZERO_ULPS = 64
+
+
+def shown_output(value: float, var: Variable) -> float:
+    """``value`` of the output ``var`` as ``eval`` and the rule view show it: exactly 0.0 when
+    ``|value| <= ZERO_ULPS * ulp(max(|low|, |high|))``, else unchanged (NaN included).
+
+    Examples
+    --------
+    For a range [-1, 1] the threshold is 64 * 2.2e-16 = 1.4e-14: ``-1.67e-15`` is shown as
+    0.0, ``1e-13`` as itself.
+    """
+    scale = max(abs(var.low), abs(var.high))
+    return 0.0 if abs(value) <= ZERO_ULPS * math.ulp(scale) else value
 
 
 def axis_label(var: Variable) -> str:

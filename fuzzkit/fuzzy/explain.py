@@ -19,7 +19,7 @@ import numpy.typing as npt
 
 from fuzzkit.errors import EvaluationError
 from fuzzkit.fuzzy import membership
-from fuzzkit.fuzzy.describe import rule_sentence
+from fuzzkit.fuzzy.describe import rule_sentence, shown_output
 from fuzzkit.fuzzy.model import RuleBase, Variable
 from fuzzkit.fuzzy.output_geometry import OutputPieces
 from fuzzkit.fuzzy.type2_model import footprint_of
@@ -141,7 +141,9 @@ def explain(rb: RuleBase, point: Mapping[str, float]) -> Explanation:
         )
     )
     seen = [np.array([i.seen]) for i in inputs]
-    outputs = tuple(_output(rb, out, firing, seen, result[out.name]) for out in rb.outputs)
+    outputs = tuple(
+        _output(rb, out, firing, seen, shown_output(result[out.name], out)) for out in rb.outputs
+    )
     ops = rb.operators
     return Explanation(
         rb.name,

@@ -34,7 +34,7 @@ from fuzzkit.plants.contract import Scenario
 from fuzzkit.plants.environment import Box, EnvObject, RoughSurface, Table, Waypoint
 from fuzzkit.studies.faults import FAULTS
 from fuzzkit.studies.task import Experiment, with_spec
-from fuzzkit.units import parse_stiffness
+from fuzzkit.units import MAX_DURATION_S, MAX_LATENCY_PERIODS, parse_stiffness
 
 SCENARIO_DOCUMENT = DocumentKind(
     "scenario",
@@ -77,11 +77,9 @@ SHIPPED = ("E1", "E2", "E3")
 
 #: Limits that keep a scenario a simulation this machine can run (documented in
 #: docs/simulation.md): simulated time, control period, periods in one run, delays.
-MAX_DURATION_S = 600.0
 MIN_PERIOD_S = 1e-4
 MAX_PERIOD_S = 0.1
 MAX_STEPS = 1_000_000
-MAX_LATENCY_PERIODS = 1000
 
 
 #: Fields whose name ends so are stiffnesses in N/m that also take a value with its unit.

@@ -95,12 +95,48 @@ def _aggregate_cell(ax: Any, var: Variable, out: OutputExplanation) -> None:
     )  # fmt: skip
 
 
+#: Term labels of the last row: font size (points), and the width of one character as a
+#: fraction of it (a generous mean for DejaVu Sans, so that estimated labels never touch).
+_LABEL_PT = 6.0
+_CHAR_EM = 0.65
+
+
+def term_label_layout(
+    peaks: list[float], names: list[str], low: float, high: float, per_char: float
+) -> list[tuple[str, float, str, int]]:
+    """Where each term's label goes above the partition: ``(name, x, ha, level)``.
+
+    ``per_char`` is one character's width in data units. A label is centred on its term's
+    peak, kept inside ``[low, high]`` (a label at an end is aligned to that end, so it is not
+    clipped nor drawn over the next column), and raised one level when it would overlap the
+    label before it on its level (narrow terms side by side), so that no two labels overlap.
+    """
+    out: list[tuple[str, float, str, int]] = []
+    right_end: dict[int, float] = {}  # the rightmost extent used on each level
+    for peak, name in sorted(zip(peaks, names, strict=True)):
+        width = per_char * len(name)
+        left = min(max(peak - width / 2, low), high - width)
+        ha = "left" if left <= low else ("right" if left >= high - width else "center")
+        x = {"left": low, "right": high, "center": peak}[ha]
+        level = 0
+        while right_end.get(level, -np.inf) > left - 0.3 * per_char:
+            level += 1
+        right_end[level] = left + width
+        out.append((name, x, ha, level))
+    return out
+
+
 def _partition_cell(ax: Any, var: Variable, seen: float) -> None:
+    peaks, names = [], []
     for k, term in enumerate(var.terms):
         x, mu = term_curve(var, k)
         ax.plot(x, mu, color=_TERM, lw=0.7)
-        peak = float(x[int(np.argmax(mu))])
-        ax.text(peak, 1.02, term.name, ha="center", va="bottom", fontsize=6)
+        peaks.append(float(x[int(np.argmax(mu))]))
+        names.append(term.name)
+    width_in = ax.get_position().width * ax.figure.get_figwidth()
+    per_char = (var.high - var.low) / width_in * _LABEL_PT * _CHAR_EM / 72.0
+    for name, x, ha, level in term_label_layout(peaks, names, var.low, var.high, per_char):
+        ax.text(x, 1.02 + 0.2 * level, name, ha=ha, va="bottom", fontsize=_LABEL_PT)
     ax.axvline(seen, color=_VALUE, lw=1.5)
 
 

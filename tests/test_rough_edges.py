@@ -1,0 +1,89 @@
+"""What a new user met (issue 41, item 8): exact zeros shown as 0, an IT2 output's interval,
+and the other small things each checked where the user sees them."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+from fuzzkit.cli import main
+from fuzzkit.fuzzy.describe import ZERO_ULPS, shown_output
+from fuzzkit.fuzzy.model import Variable
+
+
+def _eval(capsys: pytest.CaptureFixture[str], *argv: str) -> str:
+    assert main(["eval", *argv]) == 0
+    return capsys.readouterr().out
+
+
+# ------------------------------------------------------------------ exact zeros
+
+
+def test_a_zero_by_symmetry_is_printed_as_0(capsys: pytest.CaptureFixture[str]) -> None:
+    # MacVicar-Whelan is the saturated sum of the label indices: at de = -e the surface is 0
+    # by symmetry (DESIGN.md), whatever the rounding of the centroid's two integrals
+    point = ["macvicar_whelan", "-i", "e=0.3", "-i", "de=-0.3"]
+    assert _eval(capsys, *point) == "du = 0.0\n"
+    assert json.loads(_eval(capsys, *point, "--json"))["outputs"] == {"du": 0.0}
+    explained = _eval(capsys, *point, "--explain")
+    assert "du = 0.0 (" in explained and "e-1" not in explained.splitlines()[-1]
+
+
+def test_the_rule_is_64_ulps_of_the_output_scale() -> None:
+    var = Variable(name="du", low=-20.0, high=10.0, terms=())
+    ulp = math.ulp(20.0)  # the scale is the larger end's magnitude
+    assert shown_output(ZERO_ULPS * ulp, var) == 0.0
+    assert shown_output(-ZERO_ULPS * ulp, var) == 0.0
+    assert shown_output(2 * ZERO_ULPS * ulp, var) == 2 * ZERO_ULPS * ulp
+    assert shown_output(1e-9, var) == 1e-9 and shown_output(-0.25, var) == -0.25
+    assert math.isnan(shown_output(math.nan, var))
+
+
+def test_it2_eval_gives_the_centroid_interval(capsys: pytest.CaptureFixture[str]) -> None:
+    point = ["macvicar_whelan_it2", "-i", "e=0.3", "-i", "de=0.1"]
+    doc = json.loads(_eval(capsys, *point, "--json"))
+    lo, hi = doc["intervals"]["du"]
+    du = doc["outputs"]["du"]
+    # the rule base reduces by Karnik-Mendel: the output is the interval's midpoint
+    assert lo < du < hi and du == pytest.approx(0.5 * (lo + hi), abs=1e-15)
+    assert f"du = {du!r} (centroid interval [{lo!r}, {hi!r}])" in _eval(capsys, *point)
+    type1 = json.loads(_eval(capsys, "macvicar_whelan", "-i", "e=0.3", "-i", "de=0.1", "--json"))
+    assert "intervals" not in type1
+
+
+# ------------------------------------------------------------------ the rule view's labels
+
+
+def _extent(x: float, ha: str, width: float) -> tuple[float, float]:
+    return {
+        "left": (x, x + width),
+        "right": (x - width, x),
+        "center": (x - width / 2, x + width / 2),
+    }[ha]
+
+
+@pytest.mark.parametrize(
+    ("peaks", "names"),
+    [
+        ([-1.0, -0.1, 0.0, 0.1, 1.0], ["NEG_BIG", "NEG", "ZERO", "POS", "POS_BIG"]),
+        ([-1.0, -0.5, 0.0, 0.5, 1.0], ["NL", "NS", "ZR", "PS", "PL"]),
+        ([0.0, 0.01, 0.02, 0.03], ["AAAA", "BBBB", "CCCC", "DDDD"]),
+    ],
+)
+def test_term_labels_stay_inside_and_never_overlap(peaks: list[float], names: list[str]) -> None:
+    from fuzzkit.viz.explain_plot import term_label_layout
+
+    per_char = 0.04  # a 2-unit range 50 characters wide
+    placed = term_label_layout(peaks, names, -1.0, 1.0, per_char)
+    assert sorted(p[0] for p in placed) == sorted(names)
+    boxes = [(level, *_extent(x, ha, per_char * len(n))) for n, x, ha, level in placed]
+    for _level, lo, hi in boxes:
+        assert lo >= -1.0 - 1e-12 and hi <= 1.0 + 1e-12  # not clipped at either end
+    for i, (la, lo_a, hi_a) in enumerate(boxes):
+        for lb, lo_b, hi_b in boxes[i + 1 :]:
+            assert la != lb or hi_a <= lo_b or hi_b <= lo_a, (names, boxes)
+    by_name = {n: (x, ha) for n, x, ha, _ in placed}
+    if peaks[0] == -1.0:  # a term peaking at an end: its label aligned to that end
+        assert by_name[names[0]] == (-1.0, "left") and by_name[names[-1]] == (1.0, "right")
