@@ -36,7 +36,8 @@ def closed_loop_rate(controller: str, surface_kind: str = "exact") -> float:
     if controller == "fuzzy-pi":
         engine = Engine(load("macvicar_whelan"))
         exact = surface_kind == "exact"
-        surface = engine_surface(engine) if exact else engine_table_surface(engine)
+        names = ("e", "de", "du")
+        surface = engine_surface(engine, *names) if exact else engine_table_surface(engine, *names)
     exp = experiment("E1")
 
     def once() -> float:

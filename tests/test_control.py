@@ -251,7 +251,8 @@ def test_engine_table_surface_tracks_the_exact_engine() -> None:
     from fuzzkit.fuzzy.inference import Engine
 
     engine = Engine(load("macvicar_whelan"))
-    exact, table = engine_surface(engine), engine_table_surface(engine, n=201)
+    names = ("e", "de", "du")  # the shipped rule base's own
+    exact, table = engine_surface(engine, *names), engine_table_surface(engine, *names, n=201)
     rng = np.random.default_rng(1)
     pts = rng.uniform(-1.0, 1.0, (300, 2))
     err = max(abs(table(float(a), float(b)) - exact(float(a), float(b))) for a, b in pts)
@@ -287,7 +288,7 @@ def test_codegen_lookup_table_plugs_in_as_a_surface() -> None:
 
     rb = load("macvicar_whelan")
     table = table_search.build_table(rb, [41, 41], check_factor=4)
-    surf, exact = lookup_table_surface(table), engine_surface(Engine(rb))
+    surf, exact = lookup_table_surface(table), engine_surface(Engine(rb), "e", "de", "du")
     for e, de in [(0.0, 0.0), (0.3, -0.2), (-0.9, 0.55), (1.0, 1.0)]:
         assert surf(e, de) == pytest.approx(exact(e, de), abs=0.02)
     f = FuzzyPI(surf, kp=0.2, ki=0.05, kx=2e-4)

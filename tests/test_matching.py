@@ -8,10 +8,10 @@ from pathlib import Path
 import pytest
 
 from fuzzkit.cli import main
-from fuzzkit.control.controllers import FuzzyPI, Surface, engine_surface, saturated_sum_surface
+from fuzzkit.control.controllers import FuzzyPI, Surface, saturated_sum_surface
+from fuzzkit.control.loop_rulebase import exact_surface
 from fuzzkit.errors import ConfigError
 from fuzzkit.formats.registry import load, loads
-from fuzzkit.fuzzy.inference import Engine
 from fuzzkit.studies.experiments import DEFAULT_GAINS
 from fuzzkit.studies.matching import matched_fuzzy_gains, measure_slopes, small_signal_ratios
 from fuzzkit.studies.protocol import protocol_gains
@@ -48,7 +48,7 @@ def mw_closed_form(e: float) -> float:
 
 @pytest.fixture(scope="module")
 def mw_surface() -> Surface:
-    return engine_surface(Engine(load("macvicar_whelan")))
+    return exact_surface(load("macvicar_whelan"))
 
 
 def test_engine_matches_the_closed_form_near_the_origin(mw_surface: Surface) -> None:
@@ -137,7 +137,7 @@ def test_matched_fuzzy_pi_has_more_gain_while_the_error_grows(mw_surface: Surfac
 
 
 def test_paper_table1_cannot_match_ki() -> None:
-    surface = engine_surface(Engine(load("paper_table1")))
+    surface = exact_surface(load("paper_table1"))
     s = measure_slopes(surface)
     assert abs(s.e) < 1e-6  # Table I as printed: no dependence on e at the origin
     assert s.de == pytest.approx(1.5, abs=1e-4)
@@ -231,12 +231,12 @@ def test_small_signal_ratios_follow_the_rule_base_in_use(mw_surface: Surface) ->
     # DEFAULT_GAINS: Kx*Kp = kp and Kx*Ki = ki, so the ratios are the slopes at the origin
     # (proportional along de, integral along e): 1.5 for MacVicar-Whelan (the closed form
     # above: (e/2) / (1/3)), 2 and 0.5 for the hand system, 0 along e for the paper's table
-    hand = engine_surface(Engine(loads(HAND_SLOPES_YAML)))
+    hand = exact_surface(loads(HAND_SLOPES_YAML))
     assert hand(0.01, 0.0) == pytest.approx(0.005, abs=1e-12)  # the hand F = 0.5 e
     cases = [
         (mw_surface, (1.5, 1.5)),
         (hand, (2.0, 0.5)),
-        (engine_surface(Engine(load("paper_table1"))), (1.5, 0.0)),
+        (exact_surface(load("paper_table1")), (1.5, 0.0)),
     ]
     for surface, (p, i) in cases:
         got = small_signal_ratios(surface)

@@ -59,21 +59,23 @@ def simulate_case(case: SimCase) -> str:
 
 
 def run_case(case: SimCase) -> RunResult:
-    """Run one case in the compiled loop (its controller generated as C), as ``fuzzkit
-    simulate SCENARIO --stiffness K --latency S,C --seed N`` runs it: the scenario at that
-    stiffness (``regulate``: its approach speed follows the stiffness)."""
-    from fuzzkit.studies.compiled.loop import run_compiled
+    """Run one case as ``fuzzkit simulate SCENARIO --stiffness K --latency S,C --seed N``
+    runs it (:func:`fuzzkit.studies.batch.run_resolved`: the compiled loop and its generated C
+    controller where the plant has one): the scenario at that stiffness (``regulate``: its
+    approach speed follows the stiffness)."""
+    from fuzzkit.studies.batch import RunSpec, run_resolved
 
     exp = with_stiffness(case.experiment, case.stiffness_n_per_mm * 1e3)
-    return run_compiled(
-        exp,
-        case.plant,
-        case.controller,
-        gains=dict(case.gains),
-        rulebase=case.rulebase,
-        seed=case.seed,
+    spec = RunSpec(
+        experiment=exp.name,
+        controller=case.controller,
+        plant=case.plant,
         latency=case.latency,
+        seed=case.seed,
+        gains=case.gains,
+        rulebase=case.rulebase,
     )
+    return run_resolved(spec, exp, case.plant)
 
 
 def simulate_cells(

@@ -288,7 +288,10 @@ def _simulate(args: argparse.Namespace) -> int:
 
         # plant: the 3-D E3's floor and wall, for the drawing
         write_run_rrd(
-            result, args.rrd, None if isinstance(plant, str) else plant, _fuzzy(ran, gains)
+            result,
+            args.rrd,
+            None if isinstance(plant, str) else plant,
+            _fuzzy(ran, ran_exp, gains),
         )
     written = write_run_traces(result, png, csv)
     data = summary(result)
@@ -381,10 +384,16 @@ def _gains_text(gains: dict[str, Any]) -> str:
     return ", ".join(f"{k}={v:.6g}" for k, v in gains.items())
 
 
-def _fuzzy(ran: Any, gains: dict[str, Any]) -> Any:
-    """The rule base and gains of a fuzzy-PI run, for its recording's rule activity."""
+def _fuzzy(ran: Any, exp: Any, gains: dict[str, Any]) -> Any:
+    """The rule base (its inputs in role order: a controller spec's ``inputs:`` applied) and
+    gains of a fuzzy-PI run, for its recording's rule activity."""
     if ran.controller != "fuzzy-pi":
         return None
+    cs = exp.controller_spec
+    if cs is not None and cs.rulebase is not None:
+        from fuzzkit.control.spec import role_ordered
+
+        return role_ordered(cs, cs.rulebase), gains
     from fuzzkit.control.loop_rulebase import load_loop_rulebase
 
     return load_loop_rulebase(ran.rulebase), gains

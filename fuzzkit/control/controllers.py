@@ -63,10 +63,10 @@ def saturated_sum_surface(e: float, de: float) -> float:
     return min(max(e + de, -1.0), 1.0)
 
 
-def engine_surface(
-    engine: Any, e_name: str = "e", de_name: str = "de", out_name: str = "du"
-) -> Surface:
-    """Wrap an inference engine (``fuzzkit.fuzzy.inference.Engine``) as a :data:`Surface`."""
+def engine_surface(engine: Any, e_name: str, de_name: str, out_name: str) -> Surface:
+    """Wrap an inference engine (``fuzzkit.fuzzy.inference.Engine``) as a :data:`Surface`:
+    ``(e, de) -> out`` with the rule base's own names for the error input, the change input and
+    the output (:func:`fuzzkit.control.loop_rulebase.role_names`)."""
     order = tuple(getattr(engine, "input_names", ()))
     if order == (e_name, de_name) and hasattr(engine, "point_function"):
         return cast(Surface, engine.point_function(out_name))  # the fast per-sample path
@@ -104,7 +104,7 @@ def tabulated_surface(surface: Surface, n: int = 201) -> Surface:
 
 
 def engine_table_surface(
-    engine: Any, n: int = 201, e_name: str = "e", de_name: str = "de", out_name: str = "du"
+    engine: Any, e_name: str, de_name: str, out_name: str, n: int = 201
 ) -> Surface:
     """Like :func:`tabulated_surface` for an inference engine, sampled in one batch call."""
     if n < 2:
@@ -163,10 +163,6 @@ class _Incremental:
         self.faults = 0
         self.saturated = False  # a limit (|du| or u) acted in the last step
         self._e_prev: float | None = None
-
-    def set_output(self, u: float) -> None:
-        """Overwrite the accumulated correction (bumpless take-over, safety back-off)."""
-        self.u = min(max(u, self.u_min), self.u_max)
 
     def _increment(self, e: float, de: float) -> float:
         raise NotImplementedError

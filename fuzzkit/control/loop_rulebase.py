@@ -17,10 +17,14 @@ from __future__ import annotations
 
 import os
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 from fuzzkit.errors import ConfigError
 from fuzzkit.fuzzy.model import RuleBase, Variable
 from fuzzkit.fuzzy.type2_model import footprint_of
+
+if TYPE_CHECKING:
+    from fuzzkit.control.controllers import Surface
 
 #: The universe the controller hands the rule base: Ki*e and Kp*de are clipped to it.
 INPUT_RANGE = (-1.0, 1.0)
@@ -107,6 +111,30 @@ def load_loop_rulebase(spec: str) -> RuleBase:
     rb = load(spec)
     check_loop_rulebase(rb, spec)
     return rb
+
+
+#: The roles of a rule base's inputs when no controller spec maps them: by position, the
+#: error first, its change second (``fuzzkit.control.spec.surface_inputs`` under a spec).
+POSITIONAL_ROLES = (0, 1)
+
+
+def role_names(rb: RuleBase, roles: tuple[int, int] = POSITIONAL_ROLES) -> tuple[str, str, str]:
+    """The rule base's own names of the error input, the change-of-error input and the
+    output, with the inputs at positions ``roles`` (``fuzzkit.control.spec.surface_inputs``
+    under a spec): the only place the loop learns them, so that no code assumes ``e``, ``de``
+    or ``du``."""
+    return rb.inputs[roles[0]].name, rb.inputs[roles[1]].name, rb.outputs[0].name
+
+
+@lru_cache(maxsize=16)
+def exact_surface(rb: RuleBase, roles: tuple[int, int] = POSITIONAL_ROLES) -> Surface:
+    """The exact engine's surface of ``rb`` as the fuzzy-PI calls it, ``(Ki*e, Kp*de) ->
+    output``, its inputs in the roles ``roles`` (:func:`role_names`); built once per rule base
+    and roles."""
+    from fuzzkit.control.controllers import engine_surface
+    from fuzzkit.fuzzy.inference import Engine
+
+    return engine_surface(Engine(rb), *role_names(rb, roles))
 
 
 def _range(var: Variable) -> str:

@@ -27,9 +27,9 @@ from fuzzkit.control.controllers import (
     FuzzyPI,
     HybridForceController,
     Surface,
-    engine_surface,
 )
 from fuzzkit.control.frontend import FrontEnd
+from fuzzkit.control.loop_rulebase import exact_surface
 from fuzzkit.control.names import AXES
 from fuzzkit.control.spec import AxisSpec, ControllerSpec, require_valid, surface_inputs
 from fuzzkit.errors import ConfigError
@@ -41,8 +41,6 @@ def spec_surface(spec: ControllerSpec) -> Surface:
 
     A ``table`` surface is not this one: its lookup table is built by the code generator
     (``fuzzkit.studies.controller_code.spec_surface``), which the caller passes on."""
-    from fuzzkit.fuzzy.inference import Engine
-
     rb = spec.rulebase
     if rb is None:
         raise ConfigError(f"controller spec {spec.name!r}: a {spec.kind} has no rule base")
@@ -51,8 +49,7 @@ def spec_surface(spec: ControllerSpec) -> Surface:
             f"controller spec {spec.name!r}: a {spec.surface.method} surface is evaluated by "
             "its lookup table (fuzzkit.studies.controller_code.spec_surface), not exactly"
         )
-    i_e, i_de = surface_inputs(spec, rb)
-    return engine_surface(Engine(rb), rb.inputs[i_e].name, rb.inputs[i_de].name, rb.outputs[0].name)
+    return exact_surface(rb, surface_inputs(spec, rb))
 
 
 def front_end_from_spec(spec: ControllerSpec) -> FrontEnd | None:

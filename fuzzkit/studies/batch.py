@@ -107,18 +107,30 @@ def run_spec(spec: RunSpec) -> RunResult:
     result's ``loop`` says so: ``python (fallback: ...)``.
     """
     from fuzzkit.studies.experiments import with_stiffness
-    from fuzzkit.studies.faults import fault
 
     spec, exp, plant = resolve(spec)
-    if spec.controller == "fuzzy-pi":
-        from fuzzkit.control.loop_rulebase import load_loop_rulebase
-
-        load_loop_rulebase(spec.rulebase)  # what the loop needs, said before anything runs
     if spec.stiffness_n_per_mm is not None:
         k = spec.stiffness_n_per_mm
         if not (math.isfinite(k) and k > 0.0):
             raise ConfigError(f"stiffness must be a positive number of N/mm (got {k})")
         exp = with_stiffness(exp, k * 1e3)
+    return run_resolved(spec, exp, plant)
+
+
+def run_resolved(spec: RunSpec, exp: Experiment, plant: Any) -> RunResult:
+    """Run ``spec`` on an experiment and plant already resolved (:func:`resolve`, its
+    stiffness applied), choosing the loop as :func:`run_spec` does: for callers that build
+    their own experiment (the stability region's cells)."""
+    from fuzzkit.studies.faults import fault
+
+    if spec.controller == "fuzzy-pi":  # what the loop needs, said before anything runs
+        from fuzzkit.control.loop_rulebase import check_loop_rulebase, load_loop_rulebase
+
+        cs = exp.controller_spec
+        if cs is not None and cs.rulebase is not None:
+            check_loop_rulebase(cs.rulebase, spec.rulebase)
+        else:
+            load_loop_rulebase(spec.rulebase)
     faults = fault(spec.fault or exp.fault, spec.seed)
     impl = spec.fuzzy_impl
     if impl not in FUZZY_IMPLS:
@@ -162,31 +174,29 @@ def _run_reference(
 
     surface: Any = None
     label = "pi (python)"
+    cs = exp.controller_spec
     if spec.controller == "fuzzy-pi":
         impl = spec.fuzzy_impl
-        table_spec = (
-            exp.controller_spec is not None and exp.controller_spec.surface.method == "table"
-        )
-        if impl == "auto" and table_spec and exp.controller_spec is not None:
-            from fuzzkit.studies.controller_code import spec_surface
-
-            surface = spec_surface(exp.controller_spec)  # the spec's own lookup table
-            label = "the spec's lookup table (python)"
+        if cs is not None and impl in ("auto", "exact"):
+            surface, label = _spec_reference_surface(cs, impl, spec.rulebase)
         elif impl in ("auto", "exact"):
             surface = _exact_surface(spec.rulebase)
             label = f"exact engine {spec.rulebase} (python)"
-        elif impl == "table":
-            from fuzzkit.control.controllers import lookup_table_surface
-            from fuzzkit.studies.compiled.table import load_table, table_arrays
-
-            table = load_table(spec.rulebase)
-            surface = lookup_table_surface(table)
-            label = table_arrays(table).label + " (python)"
         else:
-            from fuzzkit.studies.compiled.generated_c import c_surface
+            if cs is not None:
+                _require_positional_roles(cs, impl)
+            if impl == "table":
+                from fuzzkit.control.controllers import lookup_table_surface
+                from fuzzkit.studies.compiled.table import load_table, table_arrays
 
-            surface = c_surface(spec.rulebase)
-            label = f"{surface.__name__} (python loop)"
+                table = load_table(spec.rulebase)
+                surface = lookup_table_surface(table)
+                label = table_arrays(table).label + " (python)"
+            else:
+                from fuzzkit.studies.compiled.generated_c import c_surface
+
+                surface = c_surface(spec.rulebase)
+                label = f"{surface.__name__} (python loop)"
     if exp.controller_spec is not None:
         label = f"spec {exp.controller_spec.name}: {label}"
     result = run(
@@ -203,6 +213,35 @@ def _run_reference(
     )
     result.loop += fallback
     return result
+
+
+def _spec_reference_surface(cs: Any, impl: str, rulebase: str) -> tuple[Any, str]:
+    """A controller spec's surface on the reference controller, in the spec's input roles:
+    its own (``auto``: the exact engine, or a ``table`` spec's lookup table) or the exact
+    engine (``exact``), with the run's label."""
+    from fuzzkit.control.loop_rulebase import exact_surface
+    from fuzzkit.control.spec import surface_inputs
+    from fuzzkit.studies.controller_code import spec_surface
+
+    if impl == "auto" and cs.surface.method == "table":
+        return spec_surface(cs), "the spec's lookup table (python)"
+    return exact_surface(cs.rulebase, surface_inputs(cs, cs.rulebase)), (
+        f"exact engine {rulebase} (python)"
+    )
+
+
+def _require_positional_roles(cs: Any, impl: str) -> None:
+    """``--fuzzy-impl table|c`` builds the rule base's own table or C, which take its inputs in
+    file order: refuse a spec whose ``inputs:`` maps them the other way round."""
+    from fuzzkit.control.loop_rulebase import POSITIONAL_ROLES
+    from fuzzkit.control.spec import surface_inputs
+
+    if surface_inputs(cs, cs.rulebase) != POSITIONAL_ROLES:
+        raise ConfigError(
+            f"--fuzzy-impl {impl} evaluates rule base {cs.rulebase.name}'s inputs in file "
+            f"order, and controller spec {cs.name!r} maps them the other way round (inputs: "
+            f"{', '.join(cs.inputs)}): leave out --fuzzy-impl (the spec's own surface runs)"
+        )
 
 
 def _run_generated(spec: RunSpec, exp: Experiment, plant: Any, faults: Any) -> RunResult:

@@ -20,7 +20,6 @@ import numpy.typing as npt
 from fuzzkit.control.controllers import (
     HybridForceController,
     Surface,
-    engine_surface,
     make_axis_controllers,
 )
 from fuzzkit.errors import ConfigError
@@ -100,12 +99,11 @@ class RunResult:
 
 
 def load_surface(rulebase: str = "macvicar_whelan") -> Surface:
-    """The control surface of a rule base (shipped name or YAML path), by the exact engine."""
-    from fuzzkit.control.loop_rulebase import load_loop_rulebase
-    from fuzzkit.fuzzy.inference import Engine
+    """The control surface of a rule base (shipped name or YAML path), by the exact engine: its
+    inputs by position (error, change), whatever their names."""
+    from fuzzkit.control.loop_rulebase import exact_surface, load_loop_rulebase
 
-    rb = load_loop_rulebase(rulebase)
-    return engine_surface(Engine(rb))
+    return exact_surface(load_loop_rulebase(rulebase))
 
 
 def build_controller(

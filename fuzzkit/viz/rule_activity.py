@@ -43,13 +43,16 @@ def strongest_rules(
     """The ``top`` strongest rules of every controlled period, per force-controlled axis.
 
     ``gains``: the fuzzy-PI's complete gains (``ki``, ``kp``) the run used, or per axis
-    (``{"z": {"ki": ..}}``, as a controller spec gives them).
+    (``{"z": {"ki": ..}}``, as a controller spec gives them). ``rb``'s inputs in role order
+    (the error, then its change: ``fuzzkit.control.spec.role_ordered`` under a spec).
     """
+    from fuzzkit.control.loop_rulebase import role_names
     from fuzzkit.fuzzy.inference import engine_for
 
     engine = engine_for(rb)
     ran = np.array([s == "engaged" for s in period_status(result)], dtype=bool)
     top = min(top, len(rb.rules))
+    e_name, de_name, _ = role_names(rb)
     out = []
     for i, axis in enumerate("xyz"):
         if not result.experiment.selection[i]:
@@ -57,7 +60,7 @@ def strongest_rules(
         g = gains.get(axis, gains)
         en = np.clip(g["ki"] * result.e[ran, i], -1.0, 1.0)
         den = np.clip(g["kp"] * result.de[ran, i], -1.0, 1.0)
-        firing = engine.firing_strengths({"e": en, "de": den})
+        firing = engine.firing_strengths({e_name: en, de_name: den})
         order = np.argsort(-firing, axis=1, kind="stable")[:, :top]
         out.append(AxisRules(axis, result.t[ran], order, np.take_along_axis(firing, order, axis=1)))
     return out

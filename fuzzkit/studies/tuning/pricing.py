@@ -61,12 +61,7 @@ class CaseRunner:
         if self.compiled:
             pass  # the generated controller holds the surface
         elif isinstance(problem.surface, str):
-            from fuzzkit.control.loop_rulebase import load_loop_rulebase
-            from fuzzkit.fuzzy.inference import Engine
-
-            self.surface = engine_table_surface(
-                Engine(load_loop_rulebase(problem.surface)), n=TABLE_SIZE
-            )
+            self.surface = _rulebase_table(problem)
         elif problem.surface is not None:
             self.surface = tabulated_surface(problem.surface, n=TABLE_SIZE)
 
@@ -129,6 +124,21 @@ class CaseRunner:
                 continue
             out.append(run_cost(result, p.weights))
         return tuple(out)
+
+
+def _rulebase_table(problem: TuningProblem) -> Surface:
+    """The 201 x 201 table of the problem's rule base, its inputs in the roles the cases' spec
+    gives them (by position without one)."""
+    from fuzzkit.control.loop_rulebase import POSITIONAL_ROLES, load_loop_rulebase, role_names
+    from fuzzkit.control.spec import surface_inputs
+    from fuzzkit.fuzzy.inference import Engine
+
+    spec = problem.cases[0].controller_spec if problem.cases else None
+    if spec is not None and spec.rulebase is not None:
+        rb, roles = spec.rulebase, surface_inputs(spec, spec.rulebase)
+    else:
+        rb, roles = load_loop_rulebase(str(problem.surface)), POSITIONAL_ROLES
+    return engine_table_surface(Engine(rb), *role_names(rb, roles), n=TABLE_SIZE)
 
 
 def evaluate_gains(problem: TuningProblem, gains: Mapping[str, float]) -> tuple[float, ...]:
