@@ -114,8 +114,15 @@ class Rig:
         out_type = PoseStamped if self.options.output == "pose" else TwistStamped
         self.corrections: list[Any] = []
         self.diagnostics: list[Any] = []
+        self.statuses: list[Any] = []  # the node's ~/status, one per period stepped
         self.tester.create_subscription(
             out_type, self.options.correction_topic, self.corrections.append, reliable
+        )
+        self.tester.create_subscription(
+            DiagnosticArray,
+            f"{self.namespace}/{self.node.get_name()}/status",
+            lambda m: self.statuses.append(m.status[0]),
+            reliable,
         )
         name = f"fuzzkit/{controller.spec.name}"
         self.tester.create_subscription(

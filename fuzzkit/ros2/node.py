@@ -9,7 +9,7 @@ module wires it to ROS (docs/ros2.md lists the topics, parameters, services and 
   wrench; none yet: the controller holds, as for a missing sample);
 * the correction topic (reliable, depth 10): one message per period stepped;
 * ``/diagnostics`` (reliable, depth 10): on every change of the status bits, when the watchdog
-  stops the output, and once a second;
+  stops the output, and once a second; ``~/status``: the same for every period stepped;
 * services ``~/tare`` and ``~/reset`` (``std_srvs/Trigger``);
 * parameters: the spec's run-time parameters (:mod:`fuzzkit.ros2.parameters`), each change
   through the generated ``set_params``; ``limit_n`` and ``period_s`` read-only;
@@ -86,6 +86,7 @@ class ControllerNode(Node):
         out_type = PoseStamped if options.output == "pose" else TwistStamped
         self._out = self.create_publisher(out_type, options.correction_topic, RELIABLE)
         self._diag = self.create_publisher(DiagnosticArray, "/diagnostics", RELIABLE)
+        self._status = self.create_publisher(DiagnosticArray, "~/status", RELIABLE)
         self.create_subscription(
             WrenchStamped, options.wrench_topic, self._on_wrench, qos_profile_sensor_data
         )
@@ -141,6 +142,7 @@ class ControllerNode(Node):
         self._frame = frame
         for step in steps:
             self._out.publish(correction(step, self.options.output, self.spec.period_s, frame))
+            self._status.publish(self._array(step))
             if step.status != self._reported:
                 self._publish_status(step)
         if self.stepper.watchdog.expired and not was_expired:
@@ -167,21 +169,19 @@ class ControllerNode(Node):
     def _heartbeat(self) -> None:
         self._publish_status(self.stepper.last)
 
-    def _publish_status(self, step: Step | None) -> None:
+    def _array(self, step: Step | None) -> Any:
+        """The diagnostics of ``step`` (None: before the first), stamped with its period."""
         status = 0 if step is None else step.status
         period = -1 if step is None else step.period
         stamp = self.get_clock().now().nanoseconds if step is None else step.stamp_ns
-        self._reported = status
-        self._diag.publish(
-            diagnostic_array(
-                self.spec.name,
-                stamp,
-                status,
-                period,
-                self.stepper.watchdog.expired,
-                self.stepper.counters,
-            )
-        )
+        return diagnostic_array(
+            self.spec.name, stamp, status, period, self.stepper.watchdog.expired,
+            self.stepper.counters,
+        )  # fmt: skip
+
+    def _publish_status(self, step: Step | None) -> None:
+        self._reported = 0 if step is None else step.status
+        self._diag.publish(self._array(step))
 
     # ---------------------------------------------------------------------------- services
 
