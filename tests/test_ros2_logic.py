@@ -216,3 +216,17 @@ def test_a_gap_in_the_stamps_stops_the_output_until_reset() -> None:
     steps = stepper.sample(START_NS + 99 * PERIOD_NS, f, DOWN, now_ns=0)
     assert [s.period for s in steps] == [0] and steps[0].u == (0.0, 0.0, 0.0)
     assert steps[0].status & st.TARING  # the reset restarted the tare
+
+
+def test_the_watchdog_periods_are_the_specs() -> None:
+    """``safety.watchdog.periods``: 10 when left out; read, written back and used by the node."""
+    from fuzzkit.control.spec_reader import loads_spec
+    from fuzzkit.control.spec_writer import dump_spec
+
+    text = SPEC.read_text(encoding="utf-8")
+    assert "watchdog" not in text and load_spec(SPEC).safety.watchdog_periods == 10
+    assert "watchdog" not in dump_spec(load_spec(SPEC))  # the default is not written
+    text = text.replace("  trip: {samples: 2}", "  trip: {samples: 2}\n  watchdog: {periods: 3}")
+    spec = loads_spec(text, "spec.yaml")
+    assert spec.safety.watchdog_periods == 3
+    assert loads_spec(dump_spec(spec), "again.yaml").safety.watchdog_periods == 3

@@ -52,7 +52,7 @@ class NodeOptions:
     pose_topic: str = "current_pose"
     correction_topic: str = "correction"
     frame_id: str | None = None  # None: the wrench's frame
-    watchdog_periods: int = 10
+    watchdog_periods: int | None = None  # None: the spec's safety.watchdog.periods
     node_name: str | None = None  # None: the spec's name
     namespace: str | None = None
     use_sim_time: bool = False
@@ -76,7 +76,8 @@ class ControllerNode(Node):
         )
         self.spec = spec
         self.options = options
-        self.stepper = Stepper(controller, options.watchdog_periods)
+        periods = options.watchdog_periods or spec.safety.watchdog_periods
+        self.stepper = Stepper(controller, periods)
         self._declare_parameters(controller)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self._needs_rotation = spec.sensor.tool is not None
