@@ -230,3 +230,26 @@ def test_the_watchdog_periods_are_the_specs() -> None:
     spec = loads_spec(text, "spec.yaml")
     assert spec.safety.watchdog_periods == 3
     assert loads_spec(dump_spec(spec), "again.yaml").safety.watchdog_periods == 3
+
+
+def test_auto_runs_the_generated_python_where_c_does_not_compile(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import fuzzkit.ros2.controller as node_controller
+    from fuzzkit.errors import ToolchainError
+
+    real = node_controller.open_generated
+
+    def no_compiler(spec: object, target: str, number_type: str | None = None) -> object:
+        if target == "c":
+            raise ToolchainError("no C compiler found")
+        return real(spec, target, number_type)
+
+    monkeypatch.setattr(node_controller, "open_generated", no_compiler)
+    spec = load_spec(SPEC_PI)
+    ctl = open_node_controller(spec, "auto")
+    assert ctl.impl == "python-generated"
+    u, status = ctl.step([0.0, 0.0, 1.0], list(DOWN))
+    assert u == [0.0, 0.0, 0.0] and status & st.TARING
+    with pytest.raises(ToolchainError, match="no C compiler"):
+        open_node_controller(spec, "c")
