@@ -125,10 +125,13 @@ class Rig:
             reliable,
         )
         name = f"fuzzkit/{controller.spec.name}"
+        ours = self.node.get_fully_qualified_name()  # not another run's node on this domain
         self.tester.create_subscription(
             DiagnosticArray,
             "/diagnostics",
-            lambda m: self.diagnostics.extend(s for s in m.status if s.name == name),
+            lambda m: self.diagnostics.extend(
+                s for s in m.status if s.name == name and s.hardware_id == ours
+            ),
             reliable,
         )
         self.until(

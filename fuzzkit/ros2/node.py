@@ -175,10 +175,10 @@ class ControllerNode(Node):
         status = 0 if step is None else step.status
         period = -1 if step is None else step.period
         stamp = self.get_clock().now().nanoseconds if step is None else step.stamp_ns
-        return diagnostic_array(
-            self.spec.name, stamp, status, period, self.stepper.watchdog.expired,
-            self.stepper.counters,
-        )  # fmt: skip
+        expired = self.stepper.watchdog.expired
+        node = self.get_fully_qualified_name()
+        counters = self.stepper.counters
+        return diagnostic_array(self.spec.name, node, stamp, status, period, expired, counters)
 
     def _publish_status(self, step: Step | None) -> None:
         self._reported = 0 if step is None else step.status
