@@ -253,3 +253,33 @@ def test_auto_runs_the_generated_python_where_c_does_not_compile(
     assert u == [0.0, 0.0, 0.0] and status & st.TARING
     with pytest.raises(ToolchainError, match="no C compiler"):
         open_node_controller(spec, "c")
+
+
+@needs_cc
+def test_a_bag_of_on_grid_samples_replays_as_the_node_steps(tmp_path) -> None:
+    """The samples the node stepped, recorded as a bag (stamps on the grid, in order, gaps
+    included): ``fuzzkit replay --forces BAG`` resamples it to what the node stepped."""
+    from test_replay_bags import wrench as bag_wrench
+    from test_replay_bags import write_bag
+
+    from fuzzkit.studies.rosbag_log import read_bag_log
+
+    spec = load_spec(SPEC)
+    forces, _ = hostile_log(spec, n=80, seed=9)
+    rng = np.random.default_rng(4)
+    sent = [k for k in range(len(forces)) if k in (0, len(forces) - 1) or rng.random() > 0.1]
+    stepper = Stepper(open_node_controller(spec, "c"), watchdog_periods=50)
+    steps = []
+    for k in sent:
+        steps += stepper.sample(START_NS + k * PERIOD_NS, list(forces[k]), list(DOWN), 0)
+    msgs = [
+        (START_NS + k * PERIOD_NS + 10_000, bag_wrench(START_NS + k * PERIOD_NS, forces[k]))
+        for k in sent
+    ]
+    bag = tmp_path / "bag"
+    write_bag(bag, "mcap", {"/ft": ("geometry_msgs/msg/WrenchStamped", msgs)})
+    log = read_bag_log(bag, spec.period_s, "/ft", frame_rotation=DOWN)
+    want_u, want_status = replay(spec, log, "c")
+    assert len(sent) < len(forces) and len(steps) == len(forces) == len(want_u)
+    np.testing.assert_array_equal(np.array([s.u for s in steps]), want_u)
+    np.testing.assert_array_equal([s.status for s in steps], want_status)
