@@ -418,7 +418,11 @@ def test_fuzzkit_ros2_runs_the_node_until_ctrl_c() -> None:
             tester.destroy_node()
     finally:
         proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=20)
+        try:
+            out, err = proc.communicate(timeout=20)
+        except subprocess.TimeoutExpired:  # never left running
+            proc.kill()
+            out, err = proc.communicate()
     assert proc.returncode == 0, err
     assert "e1_pi: the generated C (double) controller at 250 Hz as node e1_pi" in out
     assert f"{namespace}/ft_sensor_wrench -> {namespace}/correction (twist)" in out
