@@ -128,7 +128,11 @@ def measure(spec_path: Path, rate_hz: int, impl: str) -> tuple[list[float], int]
     finally:
         ctx.try_shutdown()
         node.terminate()
-        node.wait(timeout=10)
+        try:
+            node.wait(timeout=10)
+        except subprocess.TimeoutExpired:  # never left running
+            node.kill()
+            node.wait()
     latencies = [(answered[k] - sent[k]) / 1e9 for k in sent if k in answered]
     return latencies, len(sent) - len(latencies)
 

@@ -114,14 +114,24 @@ class Rig:
         out_type = PoseStamped if self.options.output == "pose" else TwistStamped
         self.corrections: list[Any] = []
         self.diagnostics: list[Any] = []
+        self.statuses: list[Any] = []  # the node's ~/status, one per period stepped
         self.tester.create_subscription(
             out_type, self.options.correction_topic, self.corrections.append, reliable
         )
+        self.tester.create_subscription(
+            DiagnosticArray,
+            f"{self.namespace}/{self.node.get_name()}/status",
+            lambda m: self.statuses.append(m.status[0]),
+            reliable,
+        )
         name = f"fuzzkit/{controller.spec.name}"
+        ours = self.node.get_fully_qualified_name()  # not another run's node on this domain
         self.tester.create_subscription(
             DiagnosticArray,
             "/diagnostics",
-            lambda m: self.diagnostics.extend(s for s in m.status if s.name == name),
+            lambda m: self.diagnostics.extend(
+                s for s in m.status if s.name == name and s.hardware_id == ours
+            ),
             reliable,
         )
         self.until(

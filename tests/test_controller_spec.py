@@ -203,6 +203,11 @@ def _line_col(text: str, needle: str) -> tuple[int, int]:
             "unknown key 'delay' in safety.trip",
         ),
         (
+            ("  trip: {samples: 2}", "  trip: {samples: 2}\n  watchdog: {periods: 0}", "0}"),
+            ControllerSpecError,
+            r"safety.watchdog.periods must be an integer >= 1 \(got 0\)",
+        ),
+        (
             ("period_s: 0.004", "period: 0.004", "period:"),
             ControllerSpecError,
             "unknown key 'period' in the controller spec .did you mean 'period_s'",

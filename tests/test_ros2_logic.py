@@ -216,3 +216,70 @@ def test_a_gap_in_the_stamps_stops_the_output_until_reset() -> None:
     steps = stepper.sample(START_NS + 99 * PERIOD_NS, f, DOWN, now_ns=0)
     assert [s.period for s in steps] == [0] and steps[0].u == (0.0, 0.0, 0.0)
     assert steps[0].status & st.TARING  # the reset restarted the tare
+
+
+def test_the_watchdog_periods_are_the_specs() -> None:
+    """``safety.watchdog.periods``: 10 when left out; read, written back and used by the node."""
+    from fuzzkit.control.spec_reader import loads_spec
+    from fuzzkit.control.spec_writer import dump_spec
+
+    text = SPEC.read_text(encoding="utf-8")
+    assert "watchdog" not in text and load_spec(SPEC).safety.watchdog_periods == 10
+    assert "watchdog" not in dump_spec(load_spec(SPEC))  # the default is not written
+    text = text.replace("  trip: {samples: 2}", "  trip: {samples: 2}\n  watchdog: {periods: 3}")
+    spec = loads_spec(text, "spec.yaml")
+    assert spec.safety.watchdog_periods == 3
+    assert loads_spec(dump_spec(spec), "again.yaml").safety.watchdog_periods == 3
+
+
+def test_auto_runs_the_generated_python_where_c_does_not_compile(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import fuzzkit.ros2.controller as node_controller
+    from fuzzkit.errors import ToolchainError
+
+    real = node_controller.open_generated
+
+    def no_compiler(spec: object, target: str, number_type: str | None = None) -> object:
+        if target == "c":
+            raise ToolchainError("no C compiler found")
+        return real(spec, target, number_type)
+
+    monkeypatch.setattr(node_controller, "open_generated", no_compiler)
+    spec = load_spec(SPEC_PI)
+    ctl = open_node_controller(spec, "auto")
+    assert ctl.impl == "python-generated"
+    u, status = ctl.step([0.0, 0.0, 1.0], list(DOWN))
+    assert u == [0.0, 0.0, 0.0] and status & st.TARING
+    with pytest.raises(ToolchainError, match="no C compiler"):
+        open_node_controller(spec, "c")
+
+
+@needs_cc
+def test_a_bag_of_on_grid_samples_replays_as_the_node_steps(tmp_path) -> None:
+    """The samples the node stepped, recorded as a bag (stamps on the grid, in order, gaps
+    included): ``fuzzkit replay --forces BAG`` resamples it to what the node stepped."""
+    from test_replay_bags import wrench as bag_wrench
+    from test_replay_bags import write_bag
+
+    from fuzzkit.studies.rosbag_log import read_bag_log
+
+    spec = load_spec(SPEC)
+    forces, _ = hostile_log(spec, n=80, seed=9)
+    rng = np.random.default_rng(4)
+    sent = [k for k in range(len(forces)) if k in (0, len(forces) - 1) or rng.random() > 0.1]
+    stepper = Stepper(open_node_controller(spec, "c"), watchdog_periods=50)
+    steps = []
+    for k in sent:
+        steps += stepper.sample(START_NS + k * PERIOD_NS, list(forces[k]), list(DOWN), 0)
+    msgs = [
+        (START_NS + k * PERIOD_NS + 10_000, bag_wrench(START_NS + k * PERIOD_NS, forces[k]))
+        for k in sent
+    ]
+    bag = tmp_path / "bag"
+    write_bag(bag, "mcap", {"/ft": ("geometry_msgs/msg/WrenchStamped", msgs)})
+    log = read_bag_log(bag, spec.period_s, "/ft", frame_rotation=DOWN)
+    want_u, want_status = replay(spec, log, "c")
+    assert len(sent) < len(forces) and len(steps) == len(forces) == len(want_u)
+    np.testing.assert_array_equal(np.array([s.u for s in steps]), want_u)
+    np.testing.assert_array_equal([s.status for s in steps], want_status)

@@ -10,7 +10,6 @@ EXIT_OK = 0
 #: fuzzkit.ros2.controller.IMPLS; a test holds them equal).
 OUTPUTS = ("pose", "twist")
 IMPLS = ("auto", "c", "python-generated")
-WATCHDOG_PERIODS = 10
 
 
 def register(sub: Any) -> None:
@@ -26,7 +25,8 @@ def register(sub: Any) -> None:
         "(du / T) in the wrench's frame. The spec's gains, set points and correction limits "
         "are ROS parameters, changed through the controller's set_params; ~/tare and ~/reset "
         "are std_srvs/Trigger services; the status bits are published on /diagnostics; a "
-        "watchdog stops the output when no sample came for --watchdog-periods periods. Needs "
+        "watchdog stops the output when no sample came for the spec's safety.watchdog.periods "
+        "periods. Needs "
         "the ROS 2 Python packages: pip install 'fuzzkit[ros2]'. Ctrl-C stops the node.",
         epilog="examples:\n"
         "  fuzzkit ros2 docs/examples/controller.yaml\n"
@@ -69,9 +69,10 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--watchdog-periods",
         type=int,
-        default=WATCHDOG_PERIODS,
+        default=None,
         metavar="N",
-        help="stop the output when no sample came for N periods of the spec",
+        help="stop the output when no sample came for N periods (default: the spec's "
+        "safety.watchdog.periods, 10 when it has none)",
     )
     p.add_argument(
         "--param",
@@ -114,7 +115,7 @@ def cmd_ros2(args: argparse.Namespace) -> int:
     from fuzzkit.errors import ConfigError
     from fuzzkit.ros2 import runtime
 
-    if args.watchdog_periods < 1:
+    if args.watchdog_periods is not None and args.watchdog_periods < 1:
         raise ConfigError(f"--watchdog-periods: expected at least 1, got {args.watchdog_periods}")
     overrides = _overrides(args.param)
     runtime.require()  # before the spec: without the extra, say how to install it first
@@ -138,7 +139,7 @@ def cmd_ros2(args: argparse.Namespace) -> int:
         pose_topic=args.pose_topic,
         correction_topic=args.correction_topic,
         frame_id=args.frame_id,
-        watchdog_periods=args.watchdog_periods,
+        watchdog_periods=args.watchdog_periods or spec.safety.watchdog_periods,
         node_name=args.node_name,
         namespace=args.namespace,
         use_sim_time=args.use_sim_time,
@@ -153,7 +154,7 @@ def cmd_ros2(args: argparse.Namespace) -> int:
             f"{node.resolve_topic_name(options.wrench_topic)} -> "
             f"{node.resolve_topic_name(options.correction_topic)} ({args.output}); services "
             f"{node.resolve_service_name('~/tare')}, {node.resolve_service_name('~/reset')}; "
-            f"watchdog {args.watchdog_periods} periods. Ctrl-C stops.",
+            f"watchdog {options.watchdog_periods} periods. Ctrl-C stops.",
             flush=True,
         )
         serve(node)

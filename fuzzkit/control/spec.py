@@ -37,6 +37,9 @@ STANDARD_GRAVITY_M_S2 = 9.80665
 MIN_PERIOD_S = 1e-5
 MAX_PERIOD_S = 10.0
 
+#: ``safety.watchdog.periods`` when the spec leaves it out.
+DEFAULT_WATCHDOG_PERIODS = 10
+
 #: A logical position in a spec: the YAML keys leading to a value (``("axes", "z", "kp")``).
 SpecPath = tuple[str, ...]
 
@@ -105,7 +108,8 @@ class Safety:
     force at ``backoff_speed_m_s`` (m/s). ``engage_threshold_n``: the loop engages once
     ``engage_samples`` consecutive valid samples exceed it on some axis (None: engaged from the
     start). ``spike_gate_n``: a sample jumping more than this (N) from the last accepted one is
-    rejected, unless ``spike_confirm`` samples in a row were.
+    rejected, unless ``spike_confirm`` samples in a row were. ``watchdog_periods``: a deployed
+    loop (``fuzzkit ros2``) stops its output when no sample came for this many periods.
     """
 
     limit_n: float
@@ -116,6 +120,7 @@ class Safety:
     trip_samples: int = 2
     backoff_m: float = 0.005
     backoff_speed_m_s: float = 0.02
+    watchdog_periods: int = DEFAULT_WATCHDOG_PERIODS
 
     @property
     def spike_gate(self) -> float:
@@ -327,6 +332,7 @@ def spec_problems(spec: ControllerSpec) -> list[tuple[SpecPath, str]]:
     _positive(out, ("safety", "spike_gate", "threshold_n"), s.spike_gate_n)
     _count(out, ("safety", "spike_gate", "confirm"), s.spike_confirm, 1)
     _count(out, ("safety", "trip", "samples"), s.trip_samples, 1)
+    _count(out, ("safety", "watchdog", "periods"), s.watchdog_periods, 1)
     _positive(out, ("safety", "backoff", "distance_m"), s.backoff_m)
     _positive(out, ("safety", "backoff", "speed_m_s"), s.backoff_speed_m_s)
     out += _sensor_problems(spec)

@@ -75,11 +75,12 @@ REQUIRED_KEYS = ("name", "controller", "period_s", "axes", "limits", "safety")
 AXIS_KEYS = ("setpoint_n", "gains")
 GAIN_KEYS = {"pi": ("kp", "ki"), "fuzzy-pi": ("kp", "ki", "kx")}
 LIMIT_KEYS = ("correction_m", "step_m")
-SAFETY_KEYS = ("limit_n", "engage", "spike_gate", "trip", "backoff")
+SAFETY_KEYS = ("limit_n", "engage", "spike_gate", "trip", "backoff", "watchdog")
 ENGAGE_KEYS = ("threshold_n", "samples")
 SPIKE_KEYS = ("threshold_n", "confirm")
 TRIP_KEYS = ("samples",)
 BACKOFF_KEYS = ("distance_m", "speed_m_s")
+WATCHDOG_KEYS = ("periods",)
 SENSOR_KEYS = ("tare", "tool", "lowpass_hz")
 TARE_KEYS = ("samples",)
 TOOL_KEYS = ("mass_kg", "com_m")
@@ -290,6 +291,7 @@ class _SpecReader(NodeReader):
         spike = sub("spike_gate", SPIKE_KEYS)
         trip = sub("trip", TRIP_KEYS)
         backoff = sub("backoff", BACKOFF_KEYS)
+        watchdog = sub("watchdog", WATCHDOG_KEYS)
         return Safety(
             limit_n=self.real(top, ("safety", "limit_n")),
             engage_threshold_n=self.optional_real(
@@ -302,6 +304,9 @@ class _SpecReader(NodeReader):
             backoff_m=self.real(backoff, ("safety", "backoff", "distance_m"), d.backoff_m),
             backoff_speed_m_s=self.real(
                 backoff, ("safety", "backoff", "speed_m_s"), d.backoff_speed_m_s
+            ),
+            watchdog_periods=self.count(
+                watchdog, ("safety", "watchdog", "periods"), d.watchdog_periods
             ),
         )
 

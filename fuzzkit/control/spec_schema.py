@@ -194,6 +194,9 @@ def json_schema() -> dict[str, Any]:
                 }
             ),
             "trip": _object({"samples": _count("consecutive samples above limit_n to trip", 1)}),
+            "watchdog": _object(
+                {"periods": _count("periods without a sample that stop a deployed loop", 1)}
+            ),
             "backoff": _object(
                 {
                     "distance_m": _number("retreat distance after a trip (m)", 0, True),

@@ -9,7 +9,7 @@ from __future__ import annotations
 from typing import Any
 
 from fuzzkit.control.adaptation_spec import Adaptation
-from fuzzkit.control.spec import ControllerSpec, Surface
+from fuzzkit.control.spec import DEFAULT_WATCHDOG_PERIODS, ControllerSpec, Surface
 
 
 def spec_document(spec: ControllerSpec) -> dict[str, Any]:
@@ -37,6 +37,8 @@ def spec_document(spec: ControllerSpec) -> dict[str, Any]:
         "trip": {"samples": s.trip_samples},
         "backoff": {"distance_m": s.backoff_m, "speed_m_s": s.backoff_speed_m_s},
     }
+    if s.watchdog_periods != DEFAULT_WATCHDOG_PERIODS:  # written when it is not the default
+        doc["safety"]["watchdog"] = {"periods": s.watchdog_periods}
     sensor = spec.sensor
     doc["sensor"] = {
         "tare": {"samples": sensor.tare_samples},

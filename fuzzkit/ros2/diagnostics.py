@@ -1,7 +1,8 @@
 """The node's status as ``diagnostic_msgs/DiagnosticArray``: the controller's status bits by
 name (:data:`fuzzkit.control.status.BITS`), the watchdog, and the node's counters.
 
-One ``DiagnosticStatus`` named ``fuzzkit/NAME`` (the spec's name). Its level: ERROR when the
+One ``DiagnosticStatus`` named ``fuzzkit/NAME`` (the spec's name), its ``hardware_id`` the
+node's fully qualified name (two nodes of one spec tell apart). Its level: ERROR when the
 safety limit tripped or the watchdog stopped the output, WARN when the last sample was held or
 rejected or a correction limit acted, OK otherwise; its message the set bits' names
 (``ENGAGED|SATURATED``, ``0`` when none). The values: every bit as ``true``/``false``, the bit
@@ -47,6 +48,7 @@ def status_values(
 
 def diagnostic_array(
     name: str,
+    node: str,
     stamp: int,
     status: int,
     period: int,
@@ -59,7 +61,7 @@ def diagnostic_array(
     entry = DiagnosticStatus()
     entry.level = bytes([level_of(status, watchdog_expired)])
     entry.name = f"fuzzkit/{name}"
-    entry.hardware_id = name
+    entry.hardware_id = node
     words = st.describe(status)
     entry.message = f"watchdog expired: no sample; {words}" if watchdog_expired else words
     entry.values = [

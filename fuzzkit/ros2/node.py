@@ -9,7 +9,7 @@ module wires it to ROS (docs/ros2.md lists the topics, parameters, services and 
   wrench; none yet: the controller holds, as for a missing sample);
 * the correction topic (reliable, depth 10): one message per period stepped;
 * ``/diagnostics`` (reliable, depth 10): on every change of the status bits, when the watchdog
-  stops the output, and once a second;
+  stops the output, and once a second; ``~/status``: the same for every period stepped;
 * services ``~/tare`` and ``~/reset`` (``std_srvs/Trigger``);
 * parameters: the spec's run-time parameters (:mod:`fuzzkit.ros2.parameters`), each change
   through the generated ``set_params``; ``limit_n`` and ``period_s`` read-only;
@@ -52,7 +52,7 @@ class NodeOptions:
     pose_topic: str = "current_pose"
     correction_topic: str = "correction"
     frame_id: str | None = None  # None: the wrench's frame
-    watchdog_periods: int = 10
+    watchdog_periods: int | None = None  # None: the spec's safety.watchdog.periods
     node_name: str | None = None  # None: the spec's name
     namespace: str | None = None
     use_sim_time: bool = False
@@ -76,7 +76,8 @@ class ControllerNode(Node):
         )
         self.spec = spec
         self.options = options
-        self.stepper = Stepper(controller, options.watchdog_periods)
+        periods = options.watchdog_periods or spec.safety.watchdog_periods
+        self.stepper = Stepper(controller, periods)
         self._declare_parameters(controller)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self._needs_rotation = spec.sensor.tool is not None
@@ -86,6 +87,7 @@ class ControllerNode(Node):
         out_type = PoseStamped if options.output == "pose" else TwistStamped
         self._out = self.create_publisher(out_type, options.correction_topic, RELIABLE)
         self._diag = self.create_publisher(DiagnosticArray, "/diagnostics", RELIABLE)
+        self._status = self.create_publisher(DiagnosticArray, "~/status", RELIABLE)
         self.create_subscription(
             WrenchStamped, options.wrench_topic, self._on_wrench, qos_profile_sensor_data
         )
@@ -141,6 +143,7 @@ class ControllerNode(Node):
         self._frame = frame
         for step in steps:
             self._out.publish(correction(step, self.options.output, self.spec.period_s, frame))
+            self._status.publish(self._array(step))
             if step.status != self._reported:
                 self._publish_status(step)
         if self.stepper.watchdog.expired and not was_expired:
@@ -167,21 +170,19 @@ class ControllerNode(Node):
     def _heartbeat(self) -> None:
         self._publish_status(self.stepper.last)
 
-    def _publish_status(self, step: Step | None) -> None:
+    def _array(self, step: Step | None) -> Any:
+        """The diagnostics of ``step`` (None: before the first), stamped with its period."""
         status = 0 if step is None else step.status
         period = -1 if step is None else step.period
         stamp = self.get_clock().now().nanoseconds if step is None else step.stamp_ns
-        self._reported = status
-        self._diag.publish(
-            diagnostic_array(
-                self.spec.name,
-                stamp,
-                status,
-                period,
-                self.stepper.watchdog.expired,
-                self.stepper.counters,
-            )
-        )
+        expired = self.stepper.watchdog.expired
+        node = self.get_fully_qualified_name()
+        counters = self.stepper.counters
+        return diagnostic_array(self.spec.name, node, stamp, status, period, expired, counters)
+
+    def _publish_status(self, step: Step | None) -> None:
+        self._reported = 0 if step is None else step.status
+        self._diag.publish(self._array(step))
 
     # ---------------------------------------------------------------------------- services
 
