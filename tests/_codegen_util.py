@@ -102,34 +102,3 @@ def table(name: str, number_type: NumberType) -> LookupTable:
 
 def sources(name: str, target: str, number_type: NumberType) -> dict[str, str]:
     return emit(rulebase(name), table(name, number_type), target)
-
-
-#: How many points `make test`'s CLI tests of ``compile --target python --verify`` check: the
-#: pure-Python module takes about 150 us a point, so the default 100,000 cost 16 s a call; the
-#: same commands at the default count run in `make verify` (``verify_points`` below).
-COVER_VERIFY_POINTS = 5_000
-
-
-def python_verify_points(monkeypatch: pytest.MonkeyPatch, points: int | None) -> None:
-    """Make ``compile --target python --verify`` check ``points`` points (None: the default,
-    :data:`fuzzkit.codegen.verify.DEFAULT_POINTS`), by the same verification otherwise."""
-    if points is None:
-        return
-    from fuzzkit.codegen import verify
-    from fuzzkit.codegen.backends.python import config
-
-    monkeypatch.setattr(
-        config, "verify_exact_python", functools.partial(verify.verify_exact_python, n=points)
-    )
-    monkeypatch.setattr(config, "verify_python", functools.partial(verify.verify_python, n=points))
-
-
-#: ``points`` parameters of a CLI test that runs ``compile --target python --verify``: the
-#: covering count in `make test`, the default count in `make verify`.
-verify_points = pytest.mark.parametrize(
-    "points",
-    [
-        pytest.param(COVER_VERIFY_POINTS, id="cover-points"),
-        pytest.param(None, id="full-points", marks=pytest.mark.verify),
-    ],
-)

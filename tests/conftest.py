@@ -132,3 +132,36 @@ def built_dists() -> Callable[[bool], tuple[Path, Path]]:
         return shared(f"dists:{kind}", lambda: build_dists(release, run_folder() / "dists"))
 
     return get
+
+
+# --------------------------------------------------------------------------------------------
+# compile --target python --verify in the CLI tests
+
+#: How many points `make test`'s CLI tests of ``compile --target python --verify`` check: the
+#: pure-Python module takes about 150 us a point, so the default 100,000 cost 16 s a call; the
+#: same tests at the default count run in `make verify`.
+COVER_VERIFY_POINTS = 5_000
+
+
+@pytest.fixture(
+    params=[
+        pytest.param(COVER_VERIFY_POINTS, id="cover-points"),
+        pytest.param(None, id="full-points", marks=pytest.mark.verify),
+    ]
+)
+def python_verify_points(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``compile --target python --verify`` checks :data:`COVER_VERIFY_POINTS` points (in
+    `make verify`: the default, ``fuzzkit.codegen.verify.DEFAULT_POINTS``), by the same
+    verification otherwise."""
+    if request.param is None:
+        return
+    import functools
+
+    from fuzzkit.codegen import verify
+    from fuzzkit.codegen.backends.python import config
+
+    fewer = functools.partial(verify.verify_exact_python, n=request.param)
+    monkeypatch.setattr(config, "verify_exact_python", fewer)
+    monkeypatch.setattr(
+        config, "verify_python", functools.partial(verify.verify_python, n=request.param)
+    )

@@ -6,7 +6,7 @@ import importlib.util
 from pathlib import Path
 
 import pytest
-from _codegen_util import needs_cc, python_verify_points, skip_no_cc, verify_points
+from _codegen_util import needs_cc, skip_no_cc
 
 from fuzzkit.cli import main
 
@@ -320,14 +320,11 @@ def test_auto_q15_has_no_exact_alternative_so_a_table_over_budget_is_taken_and_s
     assert sorted(p.name for p in out.iterdir()) == ["macvicar_whelan.c", "macvicar_whelan.h"]
 
 
-@verify_points
 def test_exact_python_with_verify(
     tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
-    monkeypatch: pytest.MonkeyPatch,
-    points: int | None,
+    python_verify_points: None,
 ) -> None:
-    python_verify_points(monkeypatch, points)
     out = tmp_path / "gen"
     code, text, err = _run(
         capsys, "compile", "three_input", "--target", "python", "--method", "exact",

@@ -6,7 +6,6 @@ import json
 from pathlib import Path
 
 import pytest
-from _codegen_util import python_verify_points, verify_points
 
 from fuzzkit.cli import main
 from fuzzkit.formats.registry import load
@@ -128,14 +127,11 @@ def test_validate_info_and_eval_read_foreign_files(
     assert out.splitlines()[0] == "slip,force_err,grip" and len(out.splitlines()) == 3
 
 
-@verify_points
 def test_surface_and_compile_read_foreign_files(
     tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
-    monkeypatch: pytest.MonkeyPatch,
-    points: int | None,
+    python_verify_points: None,
 ) -> None:
-    python_verify_points(monkeypatch, points)
     src = str(EXAMPLES / "heater.fis")
     png = tmp_path / "s.png"
     code, _, err = run(capsys, "surface", src, "--png", str(png), "--resolution", "21")
