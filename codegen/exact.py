@@ -3,7 +3,7 @@
 :func:`build_exact_spec` precomputes in Python everything the generated code can take as data:
 the fuzzification constants of every input term, each rule's antecedent as an expression over
 the memberships, which rules feed which output piece, and for piecewise-linear outputs the
-engine's own elementary intervals with the line (slope, intercept) of every piece in them
+engine's own elementary intervals with the line (slope, root) of every piece in them
 (``fuzzkit.fuzzy.inference.PiecewiseLinearGeometry``, the same breakpoint sweep). The templates
 (``backends/<target>/exact.*.jinja``) only lay that out; at run time the code intersects the
 firing levels with those lines, sorts the few points of each interval, and integrates the
@@ -25,6 +25,8 @@ import textwrap
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numpy as np
+
 from fuzzkit.codegen.emit import (
     FPI_GAIN_KEYS,
     FpiDefaults,
@@ -45,7 +47,6 @@ from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy import membership, shapes
 from fuzzkit.fuzzy.inference import OutputPieces, PiecewiseLinearGeometry, partition_centroid
 from fuzzkit.fuzzy.model import (
-    SUGENO_SHAPES,
     Compound,
     Expression,
     Proposition,
@@ -54,6 +55,7 @@ from fuzzkit.fuzzy.model import (
     Term,
     Variable,
 )
+from fuzzkit.fuzzy.output_geometry import LINEAR_NODES, TIE
 from fuzzkit.fuzzy.type2_model import Type2RuleBase
 
 #: Number types the exact target computes in (Q15 has no exact inference: use a table).
@@ -64,15 +66,15 @@ EXACT_NUMBER_TYPES = ("float", "double")
 #: output's full scale (largest |range end|): 2^-52 S x 64 for double (Python too), 2^-23 S x 64
 #: for float. Tested on 1e5 random points plus edges for every shipped rule base and a random
 #: family; see codegen/README.md. mom/som/lom are discontinuous where two maxima tie: the
-#: bound holds away from ties (double: levels within 1e-12 of each other count as tied, as in
+#: bound holds away from ties (double: levels within 1e-10 of each other count as tied, as in
 #: the engine); at a tie a rounding difference can move the result to the other maximum.
 ROUNDING_ULPS = 256
 EPSILON = {"double": 2.0**-52, "float": 2.0**-23}
 ROUNDING_BOUND = {k: ROUNDING_ULPS * v for k, v in EPSILON.items()}
 
-#: Defuzzifiers the exact method emits. Sugeno outputs (issue 15: ``constant`` and ``linear``
-#: terms, ``weighted_sum``) are a small addition: an output whose value is the weighted
-#: average or sum of per-rule values, like the weighted average's ``level_exprs``/``centres``.
+#: Defuzzifiers the exact method emits (``weighted_sum`` and ``weighted_average`` of Sugeno
+#: outputs: every consequent's value, a constant or ``c . x + c0``, weighted by its rule's
+#: firing strength, as ``fuzzkit.fuzzy.sugeno``).
 EXACT_DEFUZZIFIERS = (
     "centroid",
     "bisector",
@@ -80,6 +82,7 @@ EXACT_DEFUZZIFIERS = (
     "smallest_of_maximum",
     "largest_of_maximum",
     "weighted_average",
+    "weighted_sum",
 )
 #: Fuzzification kinds the exact templates implement (a shape's registry record says which
 #: one it uses, ``fuzzkit.fuzzy.shapes.ExactForm``; a shape without one is refused).
@@ -135,7 +138,7 @@ class ExactOutput:
     z: tuple[str, ...]
     slot_piece: tuple[str, ...]
     slope: tuple[str, ...]
-    icpt: tuple[str, ...]
+    anchor: tuple[str, ...]  # per slot: its line's root (slope 0: its value)
     candidates: int
     points: int  # points per interval after the crossings (bounded sum)
     gl_nodes: tuple[str, ...]
@@ -145,6 +148,17 @@ class ExactOutput:
     grid_cons: tuple[str, ...] = ()
     # Polynomial centroid (partition-style min/max outputs): the engine's own fast centroid
     poly: PolySpec | None = None
+    # Sugeno: per consequent (rule index, input coefficients, constant), in the engine's order
+    sugeno: tuple[SugenoTerm, ...] = ()
+
+
+@dataclass(frozen=True)
+class SugenoTerm:
+    """One consequent of a Sugeno output: ``w[rule] * (coefficients . x + constant)``."""
+
+    rule: int
+    coefficients: tuple[tuple[int, str], ...]  # (input index, literal) of each non-zero one
+    constant: str
 
 
 @dataclass(frozen=True)
@@ -221,7 +235,9 @@ class ExactSpec:
     max_base: int  # largest count of interval points before the bounded-sum crossings
     piece_type: str
     two: str
-    six: str
+    #: the engine's two Gauss-Legendre nodes and weights of a linear segment (on [-1, 1])
+    line_nodes: tuple[str, str]
+    line_weights: tuple[str, str]
     and_: str
     or_: str
     weighted: bool
@@ -230,6 +246,8 @@ class ExactSpec:
     n_terms0: int
     n_terms1: int
     windows: tuple[WindowSpec, ...]  # grid rules on two window inputs: visit 2 x 2 cells
+    #: a Sugeno output has a linear term: the code keeps the input values the terms see
+    keeps_inputs: bool = False
     #: "e [N], de [N], du [mm]" when any variable has units, else "" (as the table's header)
     units_line: str = ""
     input_units: tuple[str, ...] = ()  # " [N]" or "" per input
@@ -253,13 +271,17 @@ def unsupported_reason(rb: RuleBase, number_type: str = "double") -> str | None:
             "engine with a certified bound (use --method table); the exact method emits "
             "type-1 inference only"
         )
-    sugeno = [t.name for o in rb.outputs for t in o.terms if t.shape in SUGENO_SHAPES]
-    if sugeno or rb.defuzzifier not in EXACT_DEFUZZIFIERS:
-        return (
-            f"Sugeno outputs ({', '.join(sugeno) or rb.defuzzifier}) are not supported by the "
-            "exact method yet: compile with --method table"
-        )
+    if rb.defuzzifier not in EXACT_DEFUZZIFIERS:
+        return f"the exact method has no {rb.defuzzifier} defuzzifier: compile with --method table"
     for out in rb.outputs:
+        if out.is_sugeno:
+            if number_type == "float" and rb.out_of_range == "extend" and _linear(out):
+                return (
+                    f"output {out.name!r} has linear terms and the inputs are not clamped "
+                    "(out_of_range: extend): float cannot hold the inputs up to 1e100 the "
+                    "engine's terms see; use --type double"
+                )
+            continue
         for term in out.terms:
             pwl = shapes.shape(term.shape).piecewise_linear  # an unregistered shape raises
             if rb.defuzzifier != "weighted_average" and not pwl:
@@ -274,6 +296,10 @@ def unsupported_reason(rb: RuleBase, number_type: str = "double") -> str | None:
             if _exact_form(term) is None:
                 return _no_exact_form(var, term)
     return None
+
+
+def _linear(out: Variable) -> bool:
+    return any(t.shape == "linear" and any(t.params[:-1]) for t in out.terms)
 
 
 def _no_exact_form(var: Variable, term: Term) -> str:
@@ -367,6 +393,8 @@ def grid_rules(rb: RuleBase) -> dict[tuple[int, int], Rule] | None:
         ops.aggregation == "bounded_sum" and ops.implication == "product"
     )
     if len(rb.inputs) != 2 or not (per_term or rb.defuzzifier == "weighted_average"):
+        return None
+    if any(o.is_sugeno for o in rb.outputs):  # each consequent counts: no per-term levels
         return None
     names = (rb.inputs[0].name, rb.inputs[1].name)
     cells: dict[tuple[int, int], Rule] = {}
@@ -555,6 +583,8 @@ def _output(
     grid: dict[tuple[int, int], Rule] | None,
     windows: bool,
 ) -> ExactOutput:
+    if out.is_sugeno:
+        return _sugeno_output(rb, k, out, lit)
     pieces = OutputPieces(rb, out)
     ops = rb.operators
     rules_of_term: dict[int, list[int]] = {}
@@ -575,7 +605,7 @@ def _output(
                     cons[i * t1 + j] = out.term_index(c.term)
         grid_cons = _wrap([str(c) for c in cons], 16)
     empty_geo = dict(
-        n_intervals=0, slots=0, z=(), slot_piece=(), slope=(), icpt=(), candidates=0, points=0,
+        n_intervals=0, slots=0, z=(), slot_piece=(), slope=(), anchor=(), candidates=0, points=0,
         gl_nodes=(), gl_weights=(),
     )  # fmt: skip
     if rb.defuzzifier == "weighted_average":
@@ -651,7 +681,9 @@ def _output(
         z=wrap([lit(v) for v in z]),
         slot_piece=_wrap([str(int(p)) for p in geo.slot_piece.ravel()], 16),
         slope=wrap([lit(float(v)) for v in geo.slope.ravel()]),
-        icpt=wrap([lit(float(v)) for v in geo.icpt.ravel()]),
+        anchor=wrap(
+            [lit(float(v)) for v in np.where(geo.slope != 0.0, geo.root, geo.icpt).ravel()]
+        ),
         candidates=cand,
         points=points,
         gl_nodes=tuple(lit(float(v)) for v in xg) if ops.aggregation == "probabilistic_sum" else (),
@@ -661,6 +693,28 @@ def _output(
         empty=False,
         grid_cons=grid_cons,
     )
+
+
+def _sugeno_output(rb: RuleBase, k: int, out: Variable, lit: _Lit) -> ExactOutput:
+    """A Sugeno output: its consequents in rule order (``fuzzkit.fuzzy.sugeno.SugenoOutput``)."""
+    n = len(rb.inputs)
+    cons = []
+    for r, rule in enumerate(rb.rules):
+        for c in rule.consequents:
+            if c.variable != out.name:
+                continue
+            term = out.term(c.term)
+            coefs = (0.0,) * n if term.shape == "constant" else tuple(term.params[:n])
+            const = term.params[0] if term.shape == "constant" else term.params[n]
+            nonzero = tuple((i, lit(v)) for i, v in enumerate(coefs) if v != 0.0)
+            cons.append(SugenoTerm(r, nonzero, lit(const)))
+    return ExactOutput(
+        index=k, name=out.name, low=lit(out.low), high=lit(out.high),
+        default=lit.maybe_nan(out.default), defuzzifier=rb.defuzzifier, n_pieces=0,
+        level_exprs=(), centres=(), empty=not cons, sugeno=tuple(cons), n_intervals=0, slots=0,
+        z=(), slot_piece=(), slope=(), anchor=(), candidates=0, points=0, gl_nodes=(),
+        gl_weights=(),
+    )  # fmt: skip
 
 
 def _bound_note(number_type: str, target: Target) -> str:
@@ -769,7 +823,7 @@ def build_exact_spec(
     stack = real_bytes * (
         offset
         + len(rb.rules)
-        + max((o.n_pieces + 1 + 3 * o.n_intervals * max(o.points, 1) for o in outputs), default=0)
+        + max((o.n_pieces + 1 + 4 * o.n_intervals * max(o.points, 1) for o in outputs), default=0)
     )
     # with grid rules the expressions are not emitted (the loop inlines its operators)
     code = (
@@ -818,9 +872,9 @@ def build_exact_spec(
         zero=lit(0.0),
         one=lit(1.0),
         half=lit(0.5),
-        # levels this close count as one maximum: the engine's 1e-12 in double; float
-        # rounding of equal levels reaches a few float ulps
-        tie=lit(1e-12) if number_type == "double" else lit(2.0**-20),
+        # values this close to the height (a share of it) are one maximum: the engine's TIE in
+        # double; float rounding of equal levels reaches a few float ulps
+        tie=lit(TIE) if number_type == "double" else lit(2.0**-20),
         tiny=lit(1e-300) if number_type == "double" else lit(0.0),
         bisect_margin=lit(1.0 - 1e-15) if number_type == "double" else lit(1.0),
         extend_limit=lit(1e100) if number_type == "double" else lit(1e30),
@@ -831,7 +885,8 @@ def build_exact_spec(
         max_base=max_base,
         piece_type="unsigned char" if max_pieces < 255 else "unsigned short",
         two=lit(2.0),
-        six=lit(6.0),
+        line_nodes=(lit(float(LINEAR_NODES[0][0])), lit(float(LINEAR_NODES[0][1]))),
+        line_weights=(lit(float(LINEAR_NODES[1][0])), lit(float(LINEAR_NODES[1][1]))),
         and_=ops.and_,
         or_=ops.or_,
         weighted=any_weight,
@@ -848,6 +903,7 @@ def build_exact_spec(
         n_terms0=len(rb.inputs[0].terms),
         n_terms1=len(rb.inputs[1].terms) if len(rb.inputs) > 1 else 0,
         windows=windows or (),
+        keeps_inputs=any(any(t.coefficients) for o in outputs for t in o.sugeno),
     )
 
 

@@ -15,12 +15,14 @@ from __future__ import annotations
 
 import dataclasses
 import decimal
+import itertools
 import math
 from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 import numpy.typing as npt
 
+from fuzzkit.codegen.edge_floor import chord_floor
 from fuzzkit.codegen.lookup_table import (
     CHECK_FACTOR,
     DEFAULT_MAX_POINTS,
@@ -481,6 +483,29 @@ def _store(
     )
 
 
+def _table_breakpoints(
+    rb: RuleBase, counts: Sequence[int], number_type: NumberType
+) -> tuple[Q15Layout | None, tuple[FloatArray, ...]]:
+    """The breakpoints a table of ``counts`` stores (float32- or Q15-rounded), its Q15 layout."""
+    bps = tuple(axis_breakpoints(v, int(n)) for v, n in zip(rb.inputs, counts, strict=True))
+    if number_type == "q15":
+        return _q15_layout(rb, bps)
+    if number_type == "float":
+        return None, _float32_breakpoints(rb, bps)
+    return None, bps
+
+
+def _check_axes(
+    bps: Sequence[FloatArray], factor: int, number_type: NumberType
+) -> list[FloatArray]:
+    axes = [_check_grid_axis(bp, factor) for bp in bps]
+    if number_type == "float":
+        # A float C function only ever sees float32 inputs: certify it on such inputs (the
+        # rounding is monotone, so the grid keeps its shape per cell).
+        axes = [a.astype(np.float32).astype(np.float64) for a in axes]
+    return axes
+
+
 def build_table(
     rb: RuleBase,
     counts: Sequence[int],
@@ -506,12 +531,7 @@ def build_table(
     if len(counts) != len(rb.inputs):
         raise CodegenError(f"expected {len(rb.inputs)} breakpoint counts, got {len(counts)}")
     evaluator = evaluate if evaluate is not None else _default_evaluator(rb)
-    bps = tuple(axis_breakpoints(v, int(n)) for v, n in zip(rb.inputs, counts, strict=True))
-    layout: Q15Layout | None = None
-    if number_type == "q15":
-        layout, bps = _q15_layout(rb, bps)
-    elif number_type == "float":
-        bps = _float32_breakpoints(rb, bps)
+    layout, bps = _table_breakpoints(rb, counts, number_type)
     # The check grid depends on the breakpoints only: size it first, so that progress is
     # reported against the real total. A multiple of 4, so the 4x sub-grid the 2-D diagonals
     # are chosen on is part of it.
@@ -554,11 +574,7 @@ def build_table(
         else tuple(tolerance * (v.high - v.low) for v in rb.outputs),
         check_points=0,
     )
-    check_axes = [_check_grid_axis(bp, factor) for bp in bps]
-    if number_type == "float":
-        # A float C function only ever sees float32 inputs: certify it on such inputs (the
-        # rounding is monotone, so the grid keeps its shape per cell).
-        check_axes = [a.astype(np.float32).astype(np.float64) for a in check_axes]
+    check_axes = _check_axes(bps, factor, number_type)
     exact = _sample(rb, evaluator, check_axes)
     grids = np.meshgrid(*check_axes, indexing="ij")
     splits = _choose_splits(table, grids, exact, factor) if len(bps) == 2 else None
@@ -898,12 +914,18 @@ def _search(
         grow = math.sqrt(r) * 1.05 if math.isfinite(r) else 2.0
         cells = max(cells + 1, math.ceil(cells * min(grow, 4.0)))
     if best is None:
-        detail = f"best tried: {last.describe()}" if last is not None else "even the coarsest grid"
-        raise CodegenError(
-            f"the tolerance of {percent(tol)} of the output range cannot be met within "
-            f"{max_points} table "
-            f"points ({detail}); raise --tolerance or give --resolution"
-        )
+        # Before saying it cannot be done, make sure: every resolution within the cap.
+        best, top = _scan_uniform(rb, number_type, tol, max_points, evaluator, progress)
+        if best is None:
+            detail = f"; best tried: {last.describe()}" if last is not None else ""
+            size = "x".join([str(top)] * len(rb.inputs))
+            raise CodegenError(
+                f"the tolerance of {percent(tol)} of the output range cannot be met within "
+                f"{max_points} table points: no table of 2 to {top} breakpoints on every input "
+                f"(up to {size}) meets it, each shown by its cell edges or built and "
+                f"certified{detail}; raise --tolerance"
+            )
+        return best
     # Try a few smaller spacings below the first success.
     for smaller in range(cells - 1, max(cells - 4, 1), -1):
         counts = counts_for(smaller)
@@ -923,3 +945,122 @@ def _search(
         if ratio(trial) <= 1.0 and trial.n_points < best.n_points:
             best = trial
     return best
+
+
+def _scan_uniform(
+    rb: RuleBase,
+    number_type: NumberType,
+    tol: float,
+    max_points: int,
+    evaluator: Evaluator,
+    progress: ProgressFn | None,
+) -> tuple[LookupTable | None, int]:
+    """The smallest table of the same breakpoint count on every input that meets ``tol``.
+
+    Every count from 2 up to the largest within ``max_points`` (and the check-grid cap) is
+    settled: by its cell edges when they alone prove the bound too large
+    (:func:`_edges_refute`, a few lines of check points), else by building and certifying it.
+    Returns the table (None when none meets the tolerance) and the largest count tried.
+    """
+    d = len(rb.inputs)
+    top = MIN_BREAKPOINTS
+    while (
+        top < MAX_BREAKPOINTS
+        and (top + 1) ** d <= max_points
+        and check_points_for([top + 1] * d) <= MAX_CHECK_POINTS
+    ):
+        top += 1
+    limit = tuple(tol * (v.high - v.low) for v in rb.outputs)
+    hint = np.array([0.5 * (v.low + v.high) for v in rb.inputs])
+    for count in range(MIN_BREAKPOINTS, top + 1):
+        if progress is not None:
+            progress("resolutions", count - MIN_BREAKPOINTS, top - MIN_BREAKPOINTS + 1)
+        try:
+            refuted, hint = _edges_refute(rb, [count] * d, number_type, limit, evaluator, hint)
+            if refuted:
+                continue
+            table = build_table(
+                rb, [count] * d, number_type=number_type, tolerance=tol, evaluate=evaluator,
+                progress=progress,
+            )  # fmt: skip
+        except Q15ResolutionError:  # this many breakpoints do not fit Q15 codes
+            continue
+        if all(b <= t for b, t in zip(table.bound, table.tolerance, strict=True)):
+            return table, top
+    return None, top
+
+
+def _edges_refute(
+    rb: RuleBase,
+    counts: Sequence[int],
+    number_type: NumberType,
+    limit: Sequence[float],
+    evaluator: Evaluator,
+    hint: FloatArray,
+) -> tuple[bool, FloatArray]:
+    """Whether the cell edges of a ``counts`` table prove its bound above ``limit``.
+
+    The surface is sampled on the check points of grid lines through the nodes
+    (:mod:`fuzzkit.codegen.edge_floor`), nearest ``hint`` first: a few edges around it on the
+    nearest lines, then whole lines, one, two, four, ...; it stops at the first output whose
+    floor, less the rounding the table's arithmetic may add, times the bound's margin
+    exceeds its limit. Returns the verdict and where the largest floor was found (the next
+    count's ``hint``).
+    """
+    _, bps = _table_breakpoints(rb, counts, number_type)
+    factor = check_factor_for([len(b) for b in bps])
+    axes = _check_axes(bps, factor, number_type)
+    span = np.array([v.high - v.low for v in rb.inputs])
+    scale = np.array([max(abs(v.low), abs(v.high)) for v in rb.outputs])
+    slack = scale * {"double": 2.0**-40, "float": 2.0**-20, "q15": 8.0 / Q15_ONE}[number_type]
+    need = np.array(limit) / bound_margin(factor) + slack
+    lines: list[tuple[float, int, tuple[int, ...]]] = []
+    for a in range(len(bps)):
+        others = [b for b in range(len(bps)) if b != a]
+        for idx in itertools.product(*(range(len(bps[b])) for b in others)):
+            far = sum(
+                ((bps[b][i] - hint[b]) / span[b]) ** 2 for b, i in zip(others, idx, strict=True)
+            )
+            lines.append((float(far), a, idx))
+    lines.sort(key=lambda line: line[0])
+    worst, where = np.zeros(len(rb.outputs)), hint
+
+    def sample(chosen: Sequence[tuple[float, int, tuple[int, ...]]], window: int | None) -> None:
+        nonlocal where
+        for a in range(len(bps)):
+            group = [idx for _, ax, idx in chosen if ax == a]
+            if not group:
+                continue
+            edges = len(bps[a]) - 1
+            lo, hi = 0, edges
+            if window is not None:
+                at = int(np.clip(np.searchsorted(bps[a], hint[a]) - 1, 0, edges - 1))
+                lo, hi = max(0, at - window), min(edges, at + window + 1)
+            t = axes[a][lo * factor : hi * factor + 1]
+            others = [b for b in range(len(bps)) if b != a]
+            inputs = {}
+            for b, var in enumerate(rb.inputs):
+                if b == a:
+                    inputs[var.name] = np.tile(t, len(group))
+                else:
+                    col = np.array([bps[b][idx[others.index(b)]] for idx in group])
+                    inputs[var.name] = np.repeat(col, len(t))
+            got = evaluator(inputs)
+            for k, var in enumerate(rb.outputs):
+                f = np.asarray(got[var.name], dtype=np.float64).reshape(len(group), len(t))
+                floor, pos = chord_floor(t, f, factor)
+                line = int(np.argmax(floor))
+                if floor[line] > worst[k]:
+                    worst[k] = floor[line]
+                    where = np.array([inputs[v.name][line * len(t) + pos[line]] for v in rb.inputs])
+
+    sample(lines[:4], 4)
+    if np.any(worst > need):
+        return True, where
+    start, size = 0, 1
+    while start < len(lines):
+        sample(lines[start : start + size], None)
+        if np.any(worst > need):
+            return True, where
+        start, size = start + size, 2 * size
+    return False, where

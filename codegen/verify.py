@@ -26,7 +26,8 @@ from fuzzkit.codegen.lookup_table import Q15_ONE, ROUNDING_ALLOWANCE, LookupTabl
 from fuzzkit.codegen.names import symbol
 from fuzzkit.codegen.toolchain import CompiledTable
 from fuzzkit.errors import CodegenError
-from fuzzkit.fuzzy.model import RuleBase
+from fuzzkit.fuzzy import membership
+from fuzzkit.fuzzy.model import RuleBase, Variable
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -97,15 +98,40 @@ def edge_values(low: float, high: float) -> list[float]:
     ]
 
 
+def weak_values(var: Variable, count: int = 3) -> list[float]:
+    """Where ``var``'s strongest term is weakest (but not 0), ``count`` values of its range.
+
+    Between Gaussian terms of small sigma every membership can be 1e-20 and less; there an
+    implementation that loses the firing levels' scale (the point where an edge meets a tiny
+    level is the edge's foot to the last bit) still gets a plausible number. These values
+    make the verification look there.
+    """
+    x = np.linspace(var.low, var.high, 2049)
+    strongest = np.max([membership.evaluate_term(t, x) for t in var.terms], axis=0)
+    order = [int(i) for i in np.argsort(np.where(strongest > 0, strongest, np.inf))]
+    picked: list[int] = []
+    for i in order:  # the weakest, each at least 1 % of the range from the others
+        if strongest[i] > 0 and all(abs(i - j) > 20 for j in picked):
+            picked.append(i)
+        if len(picked) == count:
+            break
+    return [float(x[i]) for i in picked]
+
+
 def verification_points(rb: RuleBase, n: int = DEFAULT_POINTS, seed: int = 0) -> FloatArray:
-    """``n`` seeded random points in range plus every combination of edge values."""
+    """``n`` seeded random points in range, every combination of edge values, and of the
+    inputs' :func:`weak_values` (with each range's middle)."""
     rng = np.random.default_rng(seed)
     rand = np.column_stack([rng.uniform(v.low, v.high, n) for v in rb.inputs])
     edges = np.array(
         list(itertools.product(*[edge_values(v.low, v.high) for v in rb.inputs])),
         dtype=np.float64,
     )
-    return np.vstack([rand, edges])
+    weak = np.array(
+        list(itertools.product(*[[*weak_values(v), 0.5 * (v.low + v.high)] for v in rb.inputs])),
+        dtype=np.float64,
+    )
+    return np.vstack([rand, edges, weak])
 
 
 def _exact(rb: RuleBase, points: FloatArray) -> FloatArray:
@@ -231,13 +257,15 @@ def verify_python(
 def compare_exact(
     rb: RuleBase, number_type: str, target: str, got: FloatArray, exact: FloatArray
 ) -> Verification:
-    """Compare exact-method outputs with the engine: rounding only (``exact.ROUNDING_BOUND``).
+    """Compare exact-method outputs with the engine: rounding only (``exact.ROUNDING_BOUND``,
+    of the output's full scale, or of the value where that is larger).
 
     For mean/smallest/largest of maximum a point where two maxima tie to within rounding can
     jump to the other maximum; such points are counted in ``tie_jumps`` rather than in the
     error, and the check passes while they stay below 1 % of the points (double: the engine's
-    own 1e-12 tie tolerance makes them rare; float rounds levels to 1e-7, so nearly flat or
-    nearly tied maxima, e.g. under probabilistic-sum aggregation, jump more often).
+    own tie tolerance, 1e-10 of the height, makes them rare; float rounds levels to 1e-7, so
+    nearly flat or nearly tied maxima, e.g. under probabilistic-sum aggregation, jump more
+    often).
     """
     from fuzzkit.codegen.exact import rounding_allowance
     from fuzzkit.codegen.method import DISCONTINUOUS
@@ -250,7 +278,11 @@ def compare_exact(
     errors = []
     jumps = 0
     for k in range(got.shape[1]):
-        diff = np.abs(got[both[:, k], k] - exact[both[:, k], k])
+        want = exact[both[:, k], k]
+        # rounding is relative to the output's full scale, or to the value where it is larger
+        # (a Sugeno output is not held to its range: 1e100 inputs under `extend`)
+        scale = np.maximum(1.0, np.abs(want) / max(abs(rb.outputs[k].low), abs(rb.outputs[k].high)))
+        diff = np.abs(got[both[:, k], k] - want) / scale
         if rb.defuzzifier in DISCONTINUOUS:
             over = diff > allowance[k]
             jumps += int(np.count_nonzero(over))

@@ -71,13 +71,8 @@ def zmf(x: np.ndarray, a: float, b: float) -> np.ndarray:
     )
 
 
-def reference(rb: RuleBase, point: dict[str, float], n: int = GRID) -> float | None:
-    """Fine-grid Mamdani of the first output: one rule at a time, nothing vectorised.
-
-    None when no rule fires (zero area).
-    """
-    out = rb.outputs[0]
-    y = np.linspace(out.low, out.high, n)
+def firing(rb: RuleBase, point: dict[str, float]) -> list[float]:
+    """Every rule's firing strength at ``point`` (inputs clamped), its weight applied."""
     grades = {}
     for v in rb.inputs:
         x = min(max(point[v.name], v.low), v.high)
@@ -95,9 +90,18 @@ def reference(rb: RuleBase, point: dict[str, float], n: int = GRID) -> float | N
             acc = max(acc, v) if rb.operators.or_ == "max" else acc + v - acc * v
         return acc
 
+    return [fire(rule.antecedent) * rule.weight for rule in rb.rules]
+
+
+def reference(rb: RuleBase, point: dict[str, float], n: int = GRID) -> float | None:
+    """Fine-grid Mamdani of the first output: one rule at a time, nothing vectorised.
+
+    None when no rule fires (zero area).
+    """
+    out = rb.outputs[0]
+    y = np.linspace(out.low, out.high, n)
     agg = np.zeros(n)
-    for rule in rb.rules:
-        a = fire(rule.antecedent) * rule.weight
+    for rule, a in zip(rb.rules, firing(rb, point), strict=True):
         m = mu(out.term(rule.consequents[0].term), y)
         imp = np.minimum(a, m) if rb.operators.implication == "min" else a * m
         if rb.operators.aggregation == "max":

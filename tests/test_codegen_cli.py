@@ -274,7 +274,7 @@ def test_user_rule_base_compiles_with_the_defaults_and_says_why(
         "method: the exact inference, no table (rounding error only), because no table within "
         "--max-bytes 8192 meets the tolerance of 0.1 % of the output range." in text.splitlines()
     )
-    assert "verify c exact (float): ok on 100144 points" in text
+    assert "verify c exact (float): ok on 100160 points" in text
     assert sorted(p.name for p in out.iterdir()) == ["temperature_pd.c", "temperature_pd.h"]
     assert "no lookup table" in (out / "temperature_pd.c").read_text()
 

@@ -19,7 +19,8 @@ import pytest
 from _c_harness import HARNESS
 from _codegen_util import CC, CLANG, needs_cc, require_sanitizers, rulebase, skip_no_cc
 from _golden import GOLDEN, ULPS, check_golden, full_scale, golden_difference
-from _random_rulebases import edged_rulebase
+from _random_rulebases import edged_rulebase, random_rulebase
+from _sugeno_reference import sugeno_pi_by_hand
 
 from fuzzkit.codegen.emit import emit
 from fuzzkit.codegen.exact import ROUNDING_BOUND, emit_exact, unsupported_reason
@@ -40,7 +41,14 @@ from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy.model import RuleBase, Term, Variable
 from fuzzkit.fuzzy.validation import check
 
-SHIPPED = ["macvicar_whelan", "paper_table1", "gaussian5", "three_input", "temperature_pd"]
+SHIPPED = [
+    "macvicar_whelan",
+    "paper_table1",
+    "gaussian5",
+    "three_input",
+    "temperature_pd",
+    "sugeno_pi",
+]
 DEFUZZIFIERS = (
     "centroid",
     "bisector",
@@ -352,14 +360,43 @@ def test_exact_method_refuses_smooth_output_terms_with_the_reason(
         emit_exact(rb, "c", "double")
 
 
-def test_exact_method_refuses_sugeno_outputs_for_now() -> None:
-    base = rulebase("macvicar_whelan")
-    out = dataclasses.replace(base.outputs[0], terms=(Term("k", "constant", (0.5,)),))
-    rb = dataclasses.replace(base, outputs=(out,), rules=(), defuzzifier="weighted_average")
-    with pytest.raises(CodegenError, match=r"Sugeno outputs \(k\) are not supported"):
-        emit_exact(rb, "c", "double")
-    with pytest.raises(CodegenError, match=r"Sugeno outputs \(weighted_sum\)"):
-        emit_exact(dataclasses.replace(base, defuzzifier="weighted_sum"), "python")
+def test_sugeno_pi_exact_code_equals_the_gain_scheduled_law_by_hand() -> None:
+    rb = rulebase("sugeno_pi")
+    module = load_module(emit_exact(rb, "python"), rb.name)
+    rng = np.random.default_rng(2)
+    points = rng.uniform(-1.3, 1.3, (500, 2))
+    want = np.array([sugeno_pi_by_hand(e, de) for e, de in points])
+    np.testing.assert_allclose(python_outputs(module.eval, points)[:, 0], want, atol=1e-14)
+    if CC is not None:
+        with CompiledTable(emit_exact(rb, "c", "double"), rb.name, "double", 2, 1, fpi=True) as lib:
+            np.testing.assert_allclose(lib.eval_batch(points)[:, 0], want, atol=1e-14)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_random_sugeno_rule_bases_in_python_match_the_engine(seed: int) -> None:
+    rb = random_rulebase(seed, "clamp" if seed % 2 else "extend", sugeno=True)
+    result = verify_exact_python(rb, emit_exact(rb, "python"), n=300)
+    assert result.ok, (rb, result.describe())
+
+
+@needs_cc
+@skip_no_cc
+def test_random_sugeno_rule_bases_in_c_match_the_engine() -> None:
+    for seed in range(6):
+        rb = random_rulebase(seed, "clamp" if seed % 2 else "extend", sugeno=True)
+        for number_type in ("double", "float"):
+            if unsupported_reason(rb, number_type) is not None:
+                assert number_type == "float" and rb.out_of_range == "extend"
+                continue
+            result = verify_exact_c(rb, number_type, emit_exact(rb, "c", number_type), n=500)
+            assert result.ok, (rb, number_type, result.describe())
+
+
+def test_float_refuses_linear_sugeno_terms_over_inputs_that_are_not_clamped() -> None:
+    rb = dataclasses.replace(rulebase("sugeno_pi"), out_of_range="extend")
+    assert unsupported_reason(rb, "double") is None
+    with pytest.raises(CodegenError, match=r"linear terms .* not clamped .* --type double"):
+        emit_exact(rb, "c", "float")
 
 
 def test_exact_method_refuses_q15() -> None:

@@ -237,3 +237,21 @@ def test_negated_and_untested_inputs_in_the_rule_view() -> None:
     for var, cell in negated:
         assert cell.truth == pytest.approx(1.0 - memberships[var][cell.term])
     assert any(len(r.inputs) < 3 for r in rows.values())  # a rule that leaves an input out
+
+
+def test_explain_works_for_smooth_output_sets(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = Path(__file__).parent / "data" / "gaussian3x3.yaml"
+    args = ["eval", str(path), "-i", "e=0.3", "-i", "de=-0.6", "--explain"]
+    png = tmp_path / "why.png"
+    assert main([*args, "--png", str(png)]) == 0
+    text = capsys.readouterr().out
+    value = evaluate_point(load(path), {"e": 0.3, "de": -0.6})["du"]
+    assert f"du = {value!r} (centroid)" in text
+    assert png.read_bytes().startswith(b"\x89PNG")
+    assert main([*args, "--json"]) == 0
+    (out,) = json.loads(capsys.readouterr().out)["outputs"]
+    y, mu = np.array(out["aggregated_set"]["y"]), np.array(out["aggregated_set"]["mu"])
+    # the set drawn is the set the engine integrated: its centroid is the value printed
+    assert np.trapezoid(mu * y, y) / np.trapezoid(mu, y) == pytest.approx(value, abs=1e-5)

@@ -183,7 +183,13 @@ def _output(
 
 
 def _set_grid(out: Variable) -> FloatArray:
-    marks = [b for t in out.terms for b in membership.breakpoints(t) if out.low <= b <= out.high]
+    marks = [
+        b
+        for t in out.terms
+        if t.is_piecewise_linear
+        for b in membership.breakpoints(t)
+        if out.low <= b <= out.high
+    ]
     return np.unique(np.concatenate([np.linspace(out.low, out.high, SET_SAMPLES), marks]))
 
 

@@ -231,14 +231,14 @@ def _maximum(
     f: FloatArray,
     block_max: FloatArray,
 ) -> float:
-    """Smallest, largest or mean of the maximum: grid points within 1e-12 of the height.
+    """Smallest, largest or mean of the maximum: grid points within 1e-10 of the height (a share).
 
     Only the first and the last block whose largest value qualifies are rescanned.
     """
     if not height > 0.0:
         return default
     n = y.shape[0]
-    threshold = height - 1e-12
+    threshold = height * (1.0 - 1e-10)  # a share of the height, as output_geometry.TIE
     n_blocks = block_max.shape[0]
     q_first = 0
     while q_first < n_blocks - 1 and not block_max[q_first] >= threshold:

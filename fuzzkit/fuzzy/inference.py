@@ -6,8 +6,10 @@ one-call conveniences.
 
 Exactness
 ---------
-Centroid and bisector are exact for piecewise-linear outputs (closed form) and within 1e-9 of
-the output range for smooth ones (an a-priori grid): :mod:`fuzzkit.fuzzy.output_geometry`.
+Centroid and bisector are exact for piecewise-linear outputs (closed form,
+:mod:`fuzzkit.fuzzy.output_geometry`) and for Gaussian ones under max aggregation (closed form
+with erf, :mod:`fuzzkit.fuzzy.gaussian_geometry`), and within 1e-9 of the output range for
+other smooth ones (an a-priori grid, ``output_geometry.GridGeometry``).
 
 
 Semantics
@@ -46,6 +48,8 @@ import numpy.typing as npt
 from fuzzkit.errors import EvaluationError
 from fuzzkit.fuzzy import membership
 from fuzzkit.fuzzy.fastpath import PolyCentroid, ScalarPath, scalar_input
+from fuzzkit.fuzzy.gaussian_geometry import GaussianGeometry
+from fuzzkit.fuzzy.gaussian_geometry import applies as gaussian_applies
 from fuzzkit.fuzzy.model import Compound, Expression, Proposition, RuleBase, Variable
 from fuzzkit.fuzzy.output_geometry import (
     GridGeometry,
@@ -207,7 +211,7 @@ class _Output:
         self.defuzzifier = rb.defuzzifier
         self.pieces = OutputPieces(rb, out)
         self.centres = np.array([membership.centre(t, out.low, out.high) for t in out.terms])
-        self.geometry: PiecewiseLinearGeometry | GridGeometry | None = None
+        self.geometry: PiecewiseLinearGeometry | GaussianGeometry | GridGeometry | None = None
         self.fast_centroid: PolyCentroid | None = None
         if self.defuzzifier != "weighted_average" and not self.pieces.empty:
             if all(t.is_piecewise_linear for t in out.terms):
@@ -215,6 +219,8 @@ class _Output:
                 self.geometry = geo
                 if self.defuzzifier == "centroid":
                     self.fast_centroid = partition_centroid(geo, rb, len(out.terms))
+            elif gaussian_applies(rb, out, self.pieces):
+                self.geometry = GaussianGeometry(rb, out, self.pieces)
             else:
                 self.geometry = GridGeometry(rb, out, self.pieces)
 
@@ -234,6 +240,8 @@ class _Output:
         geo = self.geometry
         if isinstance(geo, PiecewiseLinearGeometry):
             return self._exact(geo, levels)
+        if isinstance(geo, GaussianGeometry):
+            return self._gaussian(geo, levels)
         if isinstance(geo, GridGeometry):
             return self._grid(geo, levels)
         raise RuntimeError("output stage has no geometry")  # unreachable by construction
@@ -250,6 +258,16 @@ class _Output:
             else:
                 val = geo.bisector(levels)
             return np.where(ok, val, self.default)
+        height, som, lom = geo.maxima(levels)
+        val = {"smallest_of_maximum": som, "largest_of_maximum": lom}.get(d, 0.5 * (som + lom))
+        return np.where(height > 0, val, self.default)
+
+    def _gaussian(self, geo: GaussianGeometry, levels: FloatArray) -> FloatArray:
+        d = self.defuzzifier
+        if d == "centroid":
+            return geo.centroid(levels, self.default)
+        if d == "bisector":
+            return geo.bisector(levels, self.default)
         height, som, lom = geo.maxima(levels)
         val = {"smallest_of_maximum": som, "largest_of_maximum": lom}.get(d, 0.5 * (som + lom))
         return np.where(height > 0, val, self.default)

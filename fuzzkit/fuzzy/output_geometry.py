@@ -10,10 +10,12 @@ and bisector are computed in **closed form**: the output range is cut into eleme
 on which every term is linear (term vertices, and for min/max the crossings of term edges), and
 inside each interval at the points where an edge meets a firing level (or, for product/max, two
 scaled edges meet). Between those points the aggregated set is linear (max or bounded sum; a
-bounded sum also gets the points where it reaches 1) and is integrated exactly by the trapezoid
-and moment formulas, or it is a polynomial of known degree (probabilistic sum) and is integrated
-exactly by Gauss-Legendre quadrature of sufficient order. The only error is floating-point
-rounding (about 1e-15 of the output range).
+bounded sum also gets the points where it reaches 1), or it is a polynomial of known degree
+(probabilistic sum); either way Gauss-Legendre quadrature of sufficient order (two nodes for a
+line) integrates it exactly. The set is read at those interior nodes only, never at the points
+(see :meth:`PiecewiseLinearGeometry.integrals`: at a tiny level the point where an edge meets
+it is the edge's foot to the last bit). The only error is floating-point rounding, relative to
+the levels (about 1e-15 of the output range however small the firing strengths).
 
 Outputs with smooth terms (gaussian, bell, sigmoid) are integrated on a uniform grid whose
 spacing is chosen from an a-priori trapezoid-rule bound (second-derivative and kink terms) so
@@ -124,6 +126,16 @@ def _gauss_legendre(n: int) -> tuple[FloatArray, FloatArray]:
     return x.astype(np.float64), w.astype(np.float64)
 
 
+#: Values within this share of the height count as one maximum: relative, so that a set whose
+#: levels are all 1e-20 has maxima as distinct as one whose levels are near 1, and above the
+#: noise of an edge read far from 0 (an output range at 1000 with terms 0.1 wide puts 1e-12 of
+#: rounding on every membership; an absolute 1e-12 made every point of a tiny set a maximum).
+TIE = 1e-10
+
+#: Two Gauss-Legendre nodes: exact for the area and moment of a linear piece.
+LINEAR_NODES = _gauss_legendre(2)
+
+
 class PiecewiseLinearGeometry:
     """Closed-form integration of the aggregated set of a piecewise-linear output."""
 
@@ -176,6 +188,10 @@ class PiecewiseLinearGeometry:
                 self.slot_piece[k, q] = p
                 self.slope[k, q] = s_
                 self.icpt[k, q] = c_
+        # a sloped line as slope * (y - root): accurate to the last bits near its root, where
+        # slope * y + intercept cancels to an absolute 1e-16 (which a level of 1e-20 is not)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.root = np.where(self.slope != 0.0, -self.icpt / self.slope, 0.0)
         self.kmax = kmax
         self.gl = _gauss_legendre(kmax // 2 + 2)
 
@@ -197,10 +213,21 @@ class PiecewiseLinearGeometry:
         c[np.abs(c) < 1e-14] = 0.0
         return s, c
 
+    @staticmethod
+    def _line_values(
+        slope: FloatArray, icpt: FloatArray, root: FloatArray, y: FloatArray
+    ) -> FloatArray:
+        """The lines' values at ``y``, clipped at 0: ``slope * (y - root)``, or a flat one's
+        intercept (all broadcast together)."""
+        return np.maximum(np.where(slope != 0.0, slope * (y - root), icpt), 0.0)
+
     def _aggregate(self, y: FloatArray, lv: FloatArray, final: bool = True) -> FloatArray:
         """Aggregated membership at points y (B, m, C), slot levels lv (B, m, K)."""
-        ell = np.maximum(
-            self.slope[None, :, None, :] * y[..., None] + self.icpt[None, :, None, :], 0.0
+        ell = self._line_values(
+            self.slope[None, :, None, :],
+            self.icpt[None, :, None, :],
+            self.root[None, :, None, :],
+            y[..., None],
         )
         lvb = lv[:, :, None, :]
         imp = np.minimum(lvb, ell) if self.implication == "min" else lvb * ell
@@ -217,14 +244,15 @@ class PiecewiseLinearGeometry:
         lv = np.concatenate([levels, np.zeros((b, 1))], axis=1)[:, self.slot_piece]
         s = self.slope[None]
         c = self.icpt[None]
+        r = self.root[None]
         z0 = np.broadcast_to(self.z0[None, :, None], (b, len(self.z0), 1))
         z1 = np.broadcast_to(self.z1[None, :, None], (b, len(self.z0), 1))
         with np.errstate(divide="ignore", invalid="ignore"):
             if self.implication == "min" and self.aggregation == "max":
-                cand = (lv[:, :, None, :] - c[..., :, None]) / s[..., :, None]
+                cand = r[..., :, None] + lv[:, :, None, :] / s[..., :, None]
                 cand = cand.reshape(b, len(self.z0), -1)
             elif self.implication == "min":
-                cand = (lv - c) / s
+                cand = r + lv / s
             elif self.aggregation == "max":
                 k = self.kmax
                 ii, kk = np.triu_indices(k, 1)
@@ -251,7 +279,7 @@ class PiecewiseLinearGeometry:
         ``lv`` (B, m, K) that :meth:`sample_points` returns."""
         k = np.clip(np.searchsorted(self.z1, y, side="left"), 0, len(self.z0) - 1)
         lvk = lv[np.arange(y.shape[0])[:, None], k]
-        ell = np.maximum(self.slope[k] * y[..., None] + self.icpt[k], 0.0)
+        ell = self._line_values(self.slope[k], self.icpt[k], self.root[k], y[..., None])
         imp = np.minimum(lvk, ell) if self.implication == "min" else lvk * ell
         if self.aggregation == "max":
             return cast(FloatArray, imp.max(axis=-1))
@@ -262,30 +290,43 @@ class PiecewiseLinearGeometry:
     def integrals(
         self, levels: FloatArray
     ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
-        """Per-segment area and moment (B, S), segment starts/ends (B, S), and values at points."""
+        """Per-segment area and moment (B, S), segment starts/ends (B, S), and the set's values
+        at each segment's two ends (B, S, 2).
+
+        The set is read only *inside* segments, at Gauss-Legendre nodes (two for a linear set,
+        exact for its area and moment), never at the points themselves: a point where an edge
+        meets a tiny level (1e-20) is the edge's foot to the last bit, and the set there reads
+        0 instead of the level, which turns a clipped term's flat top into a ramp. The values
+        at the ends are the segment's line through its two nodes (a flat top gives its level
+        exactly); a probabilistic sum, polynomial between points, gives its values at them.
+        """
         pts, lv = self.sample_points(levels)
         b = pts.shape[0]
         p0, p1 = pts[..., :-1], pts[..., 1:]
         h = p1 - p0
-        if self.aggregation != "probabilistic_sum":
+        psum = self.aggregation == "probabilistic_sum"
+        xg, wg = self.gl if psum else LINEAR_NODES
+        mid, half = 0.5 * (p0 + p1), 0.5 * h
+        nodes = mid[..., None] + half[..., None] * xg  # (B, m, C-1, n)
+        fn = self._aggregate(nodes.reshape(b, nodes.shape[1], -1), lv).reshape(nodes.shape)
+        area = half * (fn * wg).sum(-1)
+        moment = half * (fn * wg * nodes).sum(-1)
+        if psum:
             f = self._aggregate(pts, lv)
             f0, f1 = f[..., :-1], f[..., 1:]
-            area = 0.5 * h * (f0 + f1)
-            moment = h / 6.0 * (p0 * (2 * f0 + f1) + p1 * (f0 + 2 * f1))
         else:
-            xg, wg = self.gl
-            mid, half = 0.5 * (p0 + p1), 0.5 * h
-            nodes = mid[..., None] + half[..., None] * xg  # (B, m, C-1, n)
-            fn = self._aggregate(nodes.reshape(b, nodes.shape[1], -1), lv).reshape(nodes.shape)
-            area = half * (fn * wg).sum(-1)
-            moment = half * (fn * wg * nodes).sum(-1)
-            f = self._aggregate(pts, lv)
+            f0, f1 = segment_ends(p0, p1, nodes[..., 0], nodes[..., 1], fn[..., 0], fn[..., 1])
+            # a crossing rounded by an ulp leaves a kink inside a segment a few ulps wide, and
+            # its line overshoots: no value exceeds what the slot levels allow
+            top = lv.max(axis=-1) if self.aggregation == "max" else np.minimum(lv.sum(-1), 1.0)
+            f0 = np.minimum(f0, top[..., None])
+            f1 = np.minimum(f1, top[..., None])
         return (
             area.reshape(b, -1),
             moment.reshape(b, -1),
             p0.reshape(b, -1),
             p1.reshape(b, -1),
-            np.stack([f[..., :-1], f[..., 1:]], axis=-1).reshape(b, -1, 2),
+            np.stack([f0, f1], axis=-1).reshape(b, -1, 2),
         )
 
     def bisector(self, levels: FloatArray) -> FloatArray:
@@ -335,26 +376,48 @@ class PiecewiseLinearGeometry:
         nodes = a0[:, None] + 0.5 * t[:, None] * (xg + 1.0)  # (B, n)
         lv_i = lv[np.arange(b), interval][:, None, None, :]  # (B,1,1,K)
         y = nodes[:, None, :]  # (B,1,n)
-        ell = np.maximum(
-            self.slope[interval][:, None, None, :] * y[..., None]
-            + self.icpt[interval][:, None, None, :],
-            0.0,
+        ell = self._line_values(
+            self.slope[interval][:, None, None, :],
+            self.icpt[interval][:, None, None, :],
+            self.root[interval][:, None, None, :],
+            y[..., None],
         )
         imp = np.minimum(lv_i, ell) if self.implication == "min" else lv_i * ell
         f = _probabilistic_sum(imp)[:, 0, :]
         return cast(FloatArray, 0.5 * t * (f * wg).sum(-1))
 
     def maxima(self, levels: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Height, smallest and largest point of maximum (B,)."""
-        pts, lv = self.sample_points(levels)
-        b = pts.shape[0]
-        f = self._aggregate(pts, lv).reshape(b, -1)
-        y = pts.reshape(b, -1)
+        """Height, smallest and largest point of maximum (B,).
+
+        A linear set's values at the points are its segments' ends (see :meth:`integrals`), so
+        a clipped term's flat top starts where its edge meets the level even when that level
+        is tiny; a probabilistic sum is read at the points.
+        """
+        if self.aggregation == "probabilistic_sum":
+            pts, lv = self.sample_points(levels)
+            b = pts.shape[0]
+            f = self._aggregate(pts, lv).reshape(b, -1)
+            y = pts.reshape(b, -1)
+        else:
+            _, _, p0, p1, fv = self.integrals(levels)
+            f = fv.reshape(fv.shape[0], -1)
+            y = np.stack([p0, p1], axis=-1).reshape(f.shape)
         height = f.max(axis=1)
-        at_max = f >= height[:, None] - 1e-12
+        at_max = f >= height[:, None] * (1.0 - TIE)  # relative: the levels may be tiny
         som = np.where(at_max, y, np.inf).min(axis=1)
         lom = np.where(at_max, y, -np.inf).max(axis=1)
         return height, som, lom
+
+
+def segment_ends(
+    p0: FloatArray, p1: FloatArray, g0: FloatArray, g1: FloatArray, f0: FloatArray, f1: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """A linear segment's values at its ends ``p0``, ``p1`` from its values ``f0``, ``f1`` at
+    two interior nodes ``g0 < g1`` (the line through them; a zero-width segment: the node's)."""
+    d = g1 - g0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        slope = np.where(d > 0, (f1 - f0) / d, 0.0)
+    return f0 - (g0 - p0) * slope, f1 + (p1 - g1) * slope
 
 
 def partition_centroid(

@@ -65,7 +65,7 @@ TARGET = Target(
         "controller": {"{name}.py": "controller.py.jinja"},
     },
     visits_firing_cells=False,
-    fast_centroid=False,
+    fast_centroid=True,
     verify_table=_verify_table,
     verify_exact=_verify_exact,
     open_controller=open_controller,
