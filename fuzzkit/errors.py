@@ -78,10 +78,6 @@ class RuleBaseError(ProblemsError):
     """A rule base (YAML or Python-built) is malformed; every problem is listed."""
 
 
-class ModelError(FuzzkitError, ValueError):
-    """A model object was built with inconsistent values (programmatic use)."""
-
-
 class EvaluationError(FuzzkitError, ValueError):
     """Inputs handed to an engine do not fit the rule base (unknown or missing names, shapes)."""
 

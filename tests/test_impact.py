@@ -29,6 +29,23 @@ def spec() -> ControllerSpec:
     return load_spec(EXAMPLE)
 
 
+def test_the_impact_speed_is_one_formula_wherever_it_is_used() -> None:
+    """The spec's impact speed, the report's impact limit and the regulation task's approach
+    speed are one closed form, v = force / (stiffness * reaction time)."""
+    from fuzzkit.analysis.regulation import impact_speed_limit
+    from fuzzkit.control.impact import impact_speed_for
+    from fuzzkit.studies.regulation import approach_speed
+
+    assert impact_speed_for(15.0, 2.0e6, 0.042) == 15.0 / (2.0e6 * 0.042)
+    assert impact_speed_for(1.0, 1.0e4, 0.0) == math.inf
+    assert impact_speed_for(-1.0, 1.0e4, 0.1) == 0.0  # no headroom: no speed is safe
+    # the report's limit: the headroom above the set point (25 N limit, 10 N set point)
+    assert impact_speed_limit(2.0e6, 25.0, 0.042, 10.0) == impact_speed_for(15.0, 2.0e6, 0.042)
+    # the regulation task: a fifth of that headroom over its 0.1 s design delay, at most 5 mm/s
+    assert approach_speed(1.0e7, 25.0, 10.0) == pytest.approx(0.2 * 15.0 / (1.0e7 * 0.1))
+    assert approach_speed(1.0e3, 25.0, 10.0) == 5.0e-3
+
+
 def test_the_example_s_impact_speed_is_the_closed_form() -> None:
     s = spec()
     # 25 N limit, k_max 2000 N/mm, 3 engagement samples, 4 ms, latency 0 (delay 1): m = 2

@@ -36,7 +36,6 @@ KERNEL_MODULES = (
     "fuzzkit.plants.rough_profile",
     "fuzzkit.planar_sim.arm_period",
     "fuzzkit.studies.compiled.arm6_run",
-    "fuzzkit.studies.compiled.generated_c",
     "fuzzkit.studies.compiled.generated_controller",
     "fuzzkit.studies.compiled.period",
     "fuzzkit.studies.compiled.planar_run",

@@ -27,15 +27,13 @@ from fuzzkit.control.spec import EXACT, Surface
 from fuzzkit.errors import ConfigError
 from fuzzkit.fuzzy.model import RuleBase
 from fuzzkit.studies.experiments import DEFAULT_GAINS
+from fuzzkit.studies.outcome import BAND_N
 from fuzzkit.studies.task import Experiment
 
 #: Default lower end of the contact sector: the certificate holds while the spring-damper force
 #: the contact would have stays above (1 - 1/SIGMA_MIN) times the set point (docs/stability.md).
 SIGMA_MIN = 0.1
 
-#: The settling band of the simulated check (N): a settled force has its mean within it of the
-#: set point and its standard deviation below it.
-BAND_N = 0.5
 #: A certified cell must also keep the force's noise-driven standard deviation, predicted by
 #: the nominal model, below this share of the band (a stable loop can still amplify the
 #: sensor noise past it: 4x the default PI at 10 N/mm without latency, about 1 N).

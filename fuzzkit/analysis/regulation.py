@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from fuzzkit.control.impact import impact_speed_for
 from fuzzkit.studies.experiments import experiment, with_stiffness
 from fuzzkit.studies.regulation import (
     APPROACH_S,
@@ -54,12 +55,11 @@ def impact_speed_limit(
     """The approach speed (m/s) above which the impact alone passes ``limit_n``.
 
     Before the loop can react to the contact, the tool keeps moving for ``delay_s`` (engagement,
-    sensor and command delays, the inner loop's lag): the force reaches about
-    ``stiffness * speed * delay_s``, whatever the controller. Above this speed no gains help.
+    sensor and command delays, the inner loop's lag): the force rises by about
+    ``stiffness * speed * delay_s`` above the set point, whatever the controller
+    (:func:`fuzzkit.control.impact.impact_speed_for`). Above this speed no gains help.
     """
-    if delay_s <= 0.0:
-        return float("inf")
-    return max(limit_n - setpoint_n, 0.0) / (stiffness_n_per_m * delay_s)
+    return impact_speed_for(limit_n - setpoint_n, stiffness_n_per_m, delay_s)
 
 
 def scenario(name: str) -> Experiment:

@@ -7,20 +7,11 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-import numpy as np
-
-from fuzzkit.analysis.region import BAND_N
 from fuzzkit.studies.batch import map_runs
 from fuzzkit.studies.experiments import with_stiffness
+from fuzzkit.studies.outcome import END_STATES, end_state
 from fuzzkit.studies.runner import RunResult
 from fuzzkit.studies.task import Experiment
-
-#: A run has settled when it did not trip and, over its last :data:`TAIL_S`, the true force on
-#: every force-controlled axis has a mean within :data:`BAND_N` of the set point and a standard
-#: deviation below it (the sensor noise is 0.1 N).
-TAIL_S = 0.5
-
-OUTCOMES = ("settled", "oscillating", "tripped")
 
 
 @dataclass(frozen=True, slots=True)
@@ -38,19 +29,9 @@ class SimCase:
 
 
 def outcome(result: RunResult) -> str:
-    """``settled``, ``oscillating`` (neither tripped nor settled) or ``tripped``."""
-    if result.tripped:
-        return "tripped"
-    exp = result.experiment
-    tail = result.t >= result.t[-1] - TAIL_S
-    for axis in range(3):
-        if not exp.selection[axis]:
-            continue
-        f = result.force_true[tail, axis]
-        sp = float(exp.setpoints[axis])
-        if not (abs(float(np.mean(f)) - sp) < BAND_N and float(np.std(f)) < BAND_N):
-            return "oscillating"
-    return "settled"
+    """``settled``, ``oscillating`` (neither tripped nor settled) or ``tripped``
+    (:func:`fuzzkit.studies.outcome.end_state`)."""
+    return end_state(result)
 
 
 def simulate_case(case: SimCase) -> str:
@@ -132,4 +113,4 @@ def simulate_cells_seeds(
 
 def worst_outcome(outcomes: Sequence[str]) -> str:
     """``settled`` only when every seed settled; else the worst seen (tripped over oscillating)."""
-    return max(outcomes, key=OUTCOMES.index)
+    return max(outcomes, key=END_STATES.index)

@@ -11,13 +11,15 @@ import math
 from typing import Any
 
 from fuzzkit.cli import RULEBASE_SPEC_HELP, numbers
+from fuzzkit.control.names import GAIN_KEYS
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
 
-#: What the generated fuzzy-PI takes (``fuzzkit.codegen.emit.FPI_GAIN_KEYS``; kept here so the
-#: parser does not import fuzzkit.codegen).
-GAIN_KEYS = ("kp", "ki", "kx", "u_min", "u_max")
+#: What the generated table fuzzy-PI takes (``fuzzkit.codegen.emit.FPI_GAIN_KEYS``, which may
+#: not import fuzzkit.control; kept here so the parser does not import fuzzkit.codegen): the
+#: fuzzy-PI's scaling factors and the correction limits, not the step limit.
+FPI_GAIN_KEYS = (*GAIN_KEYS["fuzzy-pi"], "u_min", "u_max")
 
 
 def register(sub: Any) -> None:
@@ -114,19 +116,19 @@ def _fpi_defaults(path: str | None) -> Any:
     gains = read_gains(path, "fuzzy-pi", required=True)
     # The generated controller implements exactly these; dropping another key (rate_limit)
     # would ship a controller that behaves unlike the one simulated with the same file.
-    unsupported = [k for k in gains if k not in GAIN_KEYS]
+    unsupported = [k for k in gains if k not in FPI_GAIN_KEYS]
     if unsupported:
         raise ConfigError(
             f"{path}: the generated fuzzy-PI does not implement {', '.join(unsupported)} "
-            f"(it takes {', '.join(GAIN_KEYS)}); remove it from the file given to --gains"
+            f"(it takes {', '.join(FPI_GAIN_KEYS)}); remove it from the file given to --gains"
         )
-    missing = [k for k in GAIN_KEYS if k not in gains]
+    missing = [k for k in FPI_GAIN_KEYS if k not in gains]
     if missing:
         raise ConfigError(
-            f"{path}: compile --gains needs all of {', '.join(GAIN_KEYS)} for fuzzy-pi "
+            f"{path}: compile --gains needs all of {', '.join(FPI_GAIN_KEYS)} for fuzzy-pi "
             f"(missing: {', '.join(missing)})"
         )
-    values = {k: float(gains[k]) for k in GAIN_KEYS}
+    values = {k: float(gains[k]) for k in FPI_GAIN_KEYS}
     bad = [k for k, v in values.items() if not math.isfinite(v)]
     if bad:
         raise ConfigError(f"{path}: gains must be finite numbers (got {bad[0]}={values[bad[0]]})")

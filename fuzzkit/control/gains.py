@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from fuzzkit.control.names import GAIN_KEYS, GAIN_LIMIT_KEYS
 from fuzzkit.control.names import KINDS as CONTROLLERS
 from fuzzkit.errors import ConfigError, ConfigFileError, Location, Problem
 from fuzzkit.located_yaml import (
@@ -44,14 +45,13 @@ from fuzzkit.located_yaml import (
     to_python,
 )
 
-#: The gain keys each controller accepts.
-GAIN_KEYS: dict[str, tuple[str, ...]] = {
-    "pi": ("kp", "ki", "u_min", "u_max", "rate_limit"),
-    "fuzzy-pi": ("kp", "ki", "kx", "u_min", "u_max", "rate_limit"),
+#: The keys a gains file accepts per controller: its scaling factors, then the limits.
+FILE_KEYS: dict[str, tuple[str, ...]] = {
+    kind: (*GAIN_KEYS[kind], *GAIN_LIMIT_KEYS) for kind in GAIN_KEYS
 }
 
 #: Every gain key of any controller (a flat file may hold any of them).
-_ALL_KEYS = tuple(dict.fromkeys(k for keys in GAIN_KEYS.values() for k in keys))
+_ALL_KEYS = tuple(dict.fromkeys(k for keys in FILE_KEYS.values() for k in keys))
 
 #: Keys of a structured entry (``{gains: ..., provenance: ...}``).
 _ENTRY_KEYS = ("gains", "provenance")
@@ -92,7 +92,7 @@ def _check_gains(
     if not isinstance(data, dict):
         problems.append(Problem(at(), f"gains must be a mapping (got {type(data).__name__})"))
         return {}
-    allowed = GAIN_KEYS[controller] if controller else _ALL_KEYS
+    allowed = FILE_KEYS[controller] if controller else _ALL_KEYS
     out: dict[str, float] = {}
     for k, val in data.items():
         if k not in allowed:
@@ -110,7 +110,7 @@ def _check_gains(
             out[k] = float(val)
     # Sign and order checks the controllers would make, but located in the file.
     strict = controller == "fuzzy-pi"
-    for k in ("kp", "ki", "kx"):
+    for k in GAIN_KEYS["fuzzy-pi"]:
         if k in out and (out[k] <= 0.0 if strict else out[k] < 0.0):
             want = "> 0" if strict else ">= 0"
             problems.append(Problem(at(k), f"gain {k} must be {want} (got {out[k]!r})"))
@@ -238,11 +238,11 @@ def read_gains(
     entries = read_gains_file(path)
     if None in entries:
         gains = entries[None].gains
-        bad = [k for k in gains if k not in GAIN_KEYS[controller]]
+        bad = [k for k in gains if k not in FILE_KEYS[controller]]
         if bad:
             raise ConfigError(
                 f"{path}: unknown gain {bad[0]!r} for {controller} "
-                f"(expected one of {', '.join(GAIN_KEYS[controller])})"
+                f"(expected one of {', '.join(FILE_KEYS[controller])})"
             )
         # Re-check signs with the controller's own rule (fuzzy-PI needs > 0).
         problems: list[Problem] = []

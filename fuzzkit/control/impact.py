@@ -17,7 +17,8 @@ schedule's ``range_n_mm``, ``k_max``) that passes the safety limit when
     v > limit_n / (k_max * m * period)          (the impact speed)
 
 A spec without a schedule declares no ``k_max``: no impact speed. ``m = 0`` (engaged from the
-start, no latency): no finite one.
+start, no latency): no finite one. :func:`impact_speed_for` is that speed for any force, stiffness
+and reaction time: the regulation task's approach speed and the report's impact limit are it too.
 """
 
 from __future__ import annotations
@@ -25,9 +26,32 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Sequence
+from typing import Protocol
 
 from fuzzkit.control.spec import ControllerSpec
-from fuzzkit.plants.environment import Waypoint
+
+
+class Waypoint(Protocol):
+    """A point of a nominal path (``fuzzkit.plants.environment.Waypoint``): time and position."""
+
+    @property
+    def t_s(self) -> float: ...
+    @property
+    def x(self) -> float: ...
+    @property
+    def y(self) -> float: ...
+    @property
+    def z(self) -> float: ...
+
+
+def impact_speed_for(force_n: float, stiffness_n_per_m: float, reaction_s: float) -> float:
+    """The approach speed (m/s) at which a contact of ``stiffness_n_per_m`` reaches ``force_n``
+    before anything reacts: the tool keeps its speed ``v`` for ``reaction_s`` after touching, so
+    the force reaches ``stiffness * v * reaction_s``. Infinite for no reaction time; 0 for no
+    force (a negative one counts as none)."""
+    if reaction_s <= 0.0:
+        return math.inf
+    return max(force_n, 0.0) / (stiffness_n_per_m * reaction_s)
 
 
 def reaction_periods(spec: ControllerSpec, latency_periods: int) -> int:
@@ -46,9 +70,7 @@ def impact_speed(spec: ControllerSpec, latency_periods: int | None = None) -> fl
     est = ad.estimator
     latency = est.delay_periods - 1 if latency_periods is None else latency_periods
     m = reaction_periods(spec, latency)
-    if m <= 0:
-        return math.inf
-    return spec.safety.limit_n / (est.k_max_n_mm * 1e3 * m * spec.period_s)
+    return impact_speed_for(spec.safety.limit_n, est.k_max_n_mm * 1e3, m * spec.period_s)
 
 
 def impact_warning(

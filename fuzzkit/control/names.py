@@ -14,6 +14,13 @@ AXES = ("x", "y", "z")
 #: Controller kinds: incremental PI (eq. 9) and fuzzy-PI (sec. 3.2.4); a gains file's
 #: controllers, in file order.
 KINDS = ("pi", "fuzzy-pi")
+#: The scaling factors each kind takes (a spec's ``gains:`` per axis, the searched gains of a
+#: tune): a PI's gains on the change of error and on the error (m/N), a fuzzy-PI's input scales
+#: (1/N) and output scale (m per period).
+GAIN_KEYS: dict[str, tuple[str, ...]] = {"pi": ("kp", "ki"), "fuzzy-pi": ("kp", "ki", "kx")}
+#: What a gains file may add to them: the limits of the accumulated correction (m) and of its
+#: step (m per period).
+GAIN_LIMIT_KEYS = ("u_min", "u_max", "rate_limit")
 #: Prefix of the adaptive controller names: ``adaptive-pi``, ``adaptive-fuzzy-pi``.
 ADAPTIVE_PREFIX = "adaptive-"
 #: The adaptive controllers ``--controller`` takes: the kit's stiffness schedule on a kind.

@@ -26,7 +26,7 @@ from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 
 from fuzzkit.control.adaptation_reader import read_adaptation
 from fuzzkit.control.adaptation_spec import NONE
-from fuzzkit.control.names import AXES, KINDS
+from fuzzkit.control.names import AXES, GAIN_KEYS, KINDS
 from fuzzkit.control.spec import (
     EXACT,
     MAX_RESOLUTION,
@@ -73,7 +73,6 @@ TOP_KEYS = (
 )
 REQUIRED_KEYS = ("name", "controller", "period_s", "axes", "limits", "safety")
 AXIS_KEYS = ("setpoint_n", "gains")
-GAIN_KEYS = {"pi": ("kp", "ki"), "fuzzy-pi": ("kp", "ki", "kx")}
 LIMIT_KEYS = ("correction_m", "step_m")
 SAFETY_KEYS = ("limit_n", "engage", "spike_gate", "trip", "backoff", "watchdog")
 ENGAGE_KEYS = ("threshold_n", "samples")
@@ -257,7 +256,7 @@ class _SpecReader(NodeReader):
         path = ("axes", axis)
         entries = self.section(node, path, AXIS_KEYS, AXIS_KEYS)
         allowed = GAIN_KEYS.get(kind, GAIN_KEYS["fuzzy-pi"])
-        required = allowed if kind in KINDS else ("kp", "ki")
+        required = allowed if kind in KINDS else GAIN_KEYS["pi"]
         gains = (
             self.section(entries["gains"], (*path, "gains"), allowed, required)
             if ("gains" in entries)

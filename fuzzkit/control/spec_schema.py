@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Any
 
 from fuzzkit.control.adaptation_spec import MAX_HISTORY
-from fuzzkit.control.names import AXES, KINDS
+from fuzzkit.control.names import AXES, GAIN_KEYS, KINDS
 from fuzzkit.control.spec import (
     ADAPTATIONS,
     MAX_PERIOD_S,
@@ -162,7 +162,7 @@ def json_schema() -> dict[str, Any]:
     axis = _object(
         {
             "setpoint_n": _number("force set point f_d (N): what the tool exerts on the surface"),
-            "gains": _object(gains, ("kp", "ki")),
+            "gains": _object(gains, GAIN_KEYS["pi"]),
         },
         ("setpoint_n", "gains"),
     )

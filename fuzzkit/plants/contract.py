@@ -98,11 +98,6 @@ def task_to_base(scenario: Scenario, vec_task: Vec) -> Vec:
     return scenario.rotation @ vec_task
 
 
-def base_to_task(scenario: Scenario, vec_base: Vec) -> Vec:
-    """Express a base-frame vector in the task frame."""
-    return scenario.rotation.T @ vec_base
-
-
 def normal_force_by_axis(normal_forces_base: Iterable[Sequence[float]], rotation: Vec) -> Vec:
     """The normal contact force per task axis: what tells which task axis touches a surface.
 

@@ -253,10 +253,6 @@ class SerialChain:
         out[:3, 3] = p
         return out
 
-    def fk_position(self, q: Sequence[float]) -> Vec3:
-        """Return the TCP position as a tuple (the cheap form the plant uses every step)."""
-        return self._evaluate(q)[1]
-
     def frames(self, q: Sequence[float] | FloatArray) -> FloatArray:
         """Return the origins of the base, every DH frame and the TCP: shape ``(dof + 2, 3)``.
 

@@ -102,11 +102,6 @@ class ArmDynamics:
         """Whether joint ``joint`` (0-based) has a spring between its motor and its link."""
         return self.elastic and self.joint_stiffness_n_m_rad[joint] > 0.0
 
-    @property
-    def total_mass_kg(self) -> float:
-        """The robot's mass: moving links plus the foot."""
-        return sum(self.link_mass_kg) + self.base_mass_kg
-
 
 def _values(v: float | Sequence[float]) -> Sequence[float]:
     return v if isinstance(v, Sequence) else (v,)

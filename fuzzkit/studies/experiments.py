@@ -31,9 +31,11 @@ __all__ = [
     "DEFAULT_GAINS",
     "DEFAULT_LATENCY",
     "EXPERIMENTS",
+    "LOOP_GAIN_KEYS",
     "Experiment",
     "experiment",
     "press_experiment",
+    "scaled_default_gains",
     "scaled_gains",
     "with_spec",
     "with_stiffness",
@@ -133,14 +135,25 @@ def press_experiment(stiffness_n_per_m: float, gap_m: float = 0.0002) -> Experim
     )
 
 
+#: The gains that scale a controller's loop gain (the correction per newton of error): a PI's
+#: ``kp`` and ``ki``, a fuzzy-PI's output factor ``kx``.
+LOOP_GAIN_KEYS: dict[str, tuple[str, ...]] = {"pi": ("kp", "ki"), "fuzzy-pi": ("kx",)}
+
+
+def scaled_default_gains(kind: str, factor: float) -> dict[str, float]:
+    """The default gains of ``kind`` with the loop gain multiplied by ``factor``
+    (:data:`LOOP_GAIN_KEYS`)."""
+    g = dict(DEFAULT_GAINS[kind])
+    for key in LOOP_GAIN_KEYS[kind]:
+        g[key] *= factor
+    return g
+
+
 def scaled_gains(kind: str, stiffness_n_per_m: float) -> dict[str, float]:
     """Default gains scaled for another contact stiffness (same loop gain ``Ki*k`` per step).
 
     The loop gain of the incremental force loop is ``Ki * k`` per period; the defaults are tuned
-    for ``k = 10 N/mm``, so the correction gains are scaled by ``1e4 / k`` (``kx`` for fuzzy-PI).
+    for ``k = 10 N/mm``, so the loop gain is scaled by ``1e4 / k``
+    (:func:`scaled_default_gains`).
     """
-    g = dict(DEFAULT_GAINS[kind])
-    factor = 1.0e4 / stiffness_n_per_m
-    for key in ("kp", "ki") if kind == "pi" else ("kx",):
-        g[key] *= factor
-    return g
+    return scaled_default_gains(kind, 1.0e4 / stiffness_n_per_m)

@@ -12,15 +12,12 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-import numpy as np
-
 from fuzzkit.control.controllers import Surface
-from fuzzkit.studies.experiments import DEFAULT_GAINS, press_experiment
+from fuzzkit.studies.experiments import press_experiment, scaled_default_gains
+from fuzzkit.studies.outcome import SETTLED, end_state
 from fuzzkit.studies.runner import RunResult, run
 
-#: A run is stable when it does not trip and, over its last 0.5 s, the force's mean is within
-#: this of the set point and its standard deviation below it (N).
-STABLE_BAND_N = 0.5
+__all__ = ["StabilityMap", "is_stable", "scaled_default_gains", "stability_map"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -47,22 +44,9 @@ class StabilityMap:
         return out
 
 
-def scaled_default_gains(controller: str, factor: float) -> dict[str, float]:
-    """The default gains of ``controller`` with the loop gain multiplied by ``factor``."""
-    g = dict(DEFAULT_GAINS[controller])
-    for key in ("kp", "ki") if controller == "pi" else ("kx",):
-        g[key] *= factor
-    return g
-
-
-def is_stable(result: RunResult, setpoint_n: float = 10.0) -> bool:
-    """True when the run did not trip and its last 0.5 s sits within :data:`STABLE_BAND_N`."""
-    tail = result.force_true[result.t >= result.t[-1] - 0.5, 2]
-    return (
-        not result.tripped
-        and abs(float(np.mean(tail)) - setpoint_n) < STABLE_BAND_N
-        and float(np.std(tail)) < STABLE_BAND_N
-    )
+def is_stable(result: RunResult) -> bool:
+    """True when the run ended settled (:func:`fuzzkit.studies.outcome.end_state`)."""
+    return end_state(result) == SETTLED
 
 
 def stability_map(

@@ -32,6 +32,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from fuzzkit.control.controllers import Surface
+from fuzzkit.control.names import GAIN_KEYS
 from fuzzkit.errors import ConfigError
 from fuzzkit.studies.experiments import DEFAULT_GAINS
 
@@ -177,8 +178,8 @@ def matched_fuzzy_gains(
     pi.update(pi_gains or {})
     fz = dict(DEFAULT_GAINS["fuzzy-pi"])
     fz.update(fuzzy_gains or {})
-    for name, g, keys in (("pi", pi, ("kp", "ki")), ("fuzzy-pi", fz, ("kp", "ki", "kx"))):
-        for k in keys:
+    for name, g in (("pi", pi), ("fuzzy-pi", fz)):
+        for k in GAIN_KEYS[name]:
             if not (math.isfinite(g[k]) and g[k] > 0.0):
                 raise ConfigError(f"matching needs {name} {k} > 0 (got {g[k]!r})")
     slopes = measure_slopes(surface)
@@ -204,4 +205,4 @@ def matched_fuzzy_gains(
             f"kp not matched: dF/dde = {slopes.de:.3g} at the origin (no proportional action "
             f"for small errors); kp={fz['kp']:.4g} kept"
         )
-    return MatchedGains(out, {k: pi[k] for k in ("kp", "ki")}, slopes, tuple(notes))
+    return MatchedGains(out, {k: pi[k] for k in GAIN_KEYS["pi"]}, slopes, tuple(notes))

@@ -10,19 +10,39 @@ them.
 * :data:`NO_CONTACT`: the tool never touched anything, so there was nothing to settle.
 * :data:`NEVER_SETTLED`: in contact, but the force was outside the settling band at the end.
 * :data:`SETTLED`: in the band at the end (the settling time says since when).
+
+A whole run's end state (:func:`end_state`), which the stability certificate's simulated check
+and the latency sweep judge by, uses the same words and one more:
+
+* :data:`SETTLED`: not tripped, and over the last :data:`TAIL_S` the true force on every
+  force-controlled axis has its mean within :data:`BAND_N` of the set point and its standard
+  deviation below it;
+* :data:`OSCILLATING`: neither tripped nor settled;
+* :data:`TRIPPED`: as above.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from fuzzkit.studies.runner import RunResult
 
 SETTLED = "settled"
 NEVER_SETTLED = "never settled"
 NO_CONTACT = "no contact"
 TRIPPED = "tripped"
+OSCILLATING = "oscillating"
 #: Every outcome, in order of precedence (a tripped run is "tripped" whatever else holds).
 OUTCOMES = (TRIPPED, NO_CONTACT, NEVER_SETTLED, SETTLED)
+#: Every end state of a run (:func:`end_state`), from best to worst.
+END_STATES = (SETTLED, OSCILLATING, TRIPPED)
+#: The settling band of a run's end state (N): a settled force has its mean within it of the
+#: set point and its standard deviation below it (the sensor noise is 0.1 N).
+BAND_N = 0.5
+#: The end of the run the band is judged on (s).
+TAIL_S = 0.5
 
 
 def axis_outcome(metrics: Mapping[str, Any], tripped: bool) -> str:
@@ -43,3 +63,22 @@ def settling_text(metrics: Mapping[str, Any], tripped: bool, digits: int = 2) ->
     if outcome != SETTLED or value is None:
         return outcome
     return f"{value:.{digits}f} s"
+
+
+def end_state(result: RunResult) -> str:
+    """:data:`SETTLED`, :data:`OSCILLATING` or :data:`TRIPPED`: how the whole run ended (the
+    module docstring)."""
+    import numpy as np
+
+    if result.tripped:
+        return TRIPPED
+    exp = result.experiment
+    tail = result.t >= result.t[-1] - TAIL_S
+    for axis in range(3):
+        if not exp.selection[axis]:
+            continue
+        f = result.force_true[tail, axis]
+        sp = float(exp.setpoints[axis])
+        if not (abs(float(np.mean(f)) - sp) < BAND_N and float(np.std(f)) < BAND_N):
+            return OSCILLATING
+    return SETTLED

@@ -18,6 +18,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
+from fuzzkit.control.names import GAIN_KEYS
 from fuzzkit.control.spec import ControllerSpec
 from fuzzkit.errors import Location, Problem, ProblemsError, did_you_mean
 
@@ -27,7 +28,7 @@ EVENTS = ("reset", "tare")
 
 def parameter_names(spec: ControllerSpec) -> tuple[str, ...]:
     """The tunable parameters of ``spec``'s FMU, in its modelDescription's order."""
-    gains = ("kp", "ki", "kx") if spec.kind == "fuzzy-pi" else ("kp", "ki")
+    gains = GAIN_KEYS[spec.kind]
     names = []
     for a in sorted(spec.axes, key=lambda a: a.index):
         names += [f"{g}_{a.axis}" for g in gains] + [f"setpoint_{a.axis}"]

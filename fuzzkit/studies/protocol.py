@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 from fuzzkit.control.controllers import Surface
 from fuzzkit.control.gains import read_gains, read_gains_file
+from fuzzkit.control.names import GAIN_KEYS
 from fuzzkit.errors import ConfigError
 from fuzzkit.studies.experiments import DEFAULT_GAINS
 from fuzzkit.studies.matching import matched_fuzzy_gains
@@ -93,6 +94,5 @@ def protocol_gains(
 
 def format_gains(g: ControllerGains) -> str:
     """``pi: kp=4e-05, ki=1e-05 (default)`` for the human output of ``compare``."""
-    keys = ("kp", "ki", "kx") if g.controller == "fuzzy-pi" else ("kp", "ki")
-    vals = ", ".join(f"{k}={g.gains[k]:.4g}" for k in keys)
+    vals = ", ".join(f"{k}={g.gains[k]:.4g}" for k in GAIN_KEYS[g.controller])
     return f"{g.controller}: {vals} ({g.source})"

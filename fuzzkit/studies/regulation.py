@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from fuzzkit.control.impact import impact_speed_for
 from fuzzkit.errors import ConfigError
 from fuzzkit.plants.environment import Table
 from fuzzkit.studies.task import Experiment
@@ -34,7 +35,7 @@ def approach_speed(stiffness_n_per_m: float, limit_n: float, setpoint_n: float) 
     :data:`IMPACT_SHARE` of the headroom ``limit_n - setpoint_n``, at most
     :data:`MAX_APPROACH_M_S`."""
     headroom = IMPACT_SHARE * max(limit_n - setpoint_n, 0.0)
-    return min(MAX_APPROACH_M_S, headroom / (stiffness_n_per_m * DESIGN_DELAY_S))
+    return min(MAX_APPROACH_M_S, impact_speed_for(headroom, stiffness_n_per_m, DESIGN_DELAY_S))
 
 
 def is_regulation(exp: Experiment) -> bool:

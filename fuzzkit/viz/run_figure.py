@@ -10,8 +10,6 @@ each axis's outcome in the words of :mod:`fuzzkit.studies.outcome`.
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -19,7 +17,7 @@ import numpy as np
 from fuzzkit.studies.metrics import summary
 from fuzzkit.studies.outcome import TRIPPED, settling_text
 from fuzzkit.studies.runner import RunResult
-from fuzzkit.viz.figures import new_figure, save_figure
+from fuzzkit.viz.figures import new_figure
 from fuzzkit.viz.run_series import engaged_index
 
 _FORCE = "tab:blue"
@@ -131,8 +129,3 @@ def _title(result: RunResult) -> str:
         f"{engaged}, {trip}, peak true force {peak:.1f} N (limit {exp.force_limit_n:g} N); "
         f"settling: {outcomes}"
     )
-
-
-def write_run_png(result: RunResult, path: str | os.PathLike[str]) -> Path:
-    """Write :func:`run_figure` to ``path`` (.png or .svg), atomically."""
-    return save_figure(run_figure(result), path, dpi=100)

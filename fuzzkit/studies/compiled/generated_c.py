@@ -1,11 +1,9 @@
 """The rule base's generated C, compiled and called through ctypes as a fuzzy-PI surface.
 
-Lets a closed-loop run exercise the very code that goes on the robot: ``fuzzkit compile
---target c --type double`` output (``fuzzkit.codegen.emit``), compiled with the system compiler
-(``fuzzkit.codegen.toolchain``), called once per axis and period as ``NAME_eval``: from the
-Python loop through :func:`c_surface`, from the compiled loop through the ctypes function
-itself (:class:`GeneratedC`, which numba calls from nopython code by its address, read when the
-kernel is called: see :func:`call_c_surface`).
+Lets a Python-loop run exercise the rule base's ``fuzzkit compile --target c --type double``
+output (``fuzzkit.codegen.emit``), compiled with the system compiler
+(``fuzzkit.codegen.toolchain``), called once per axis and period as ``NAME_eval`` through
+:func:`c_surface` (``--fuzzy-impl c``).
 """
 
 from __future__ import annotations
@@ -15,13 +13,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
-
-import numpy as np
-import numpy.typing as npt
-
-from fuzzkit.jit import jit
-
-FloatArray = npt.NDArray[np.float64]
 
 #: Compiled libraries stay loaded for the life of the process (one per rule base).
 _LIBRARIES: list[Any] = []
@@ -88,18 +79,3 @@ def c_surface(
 
     surface.__name__ = gen.label
     return surface
-
-
-@jit
-def call_c_surface(fn: Any, io: FloatArray, x0: float, x1: float) -> float:
-    """``NAME_eval`` of a generated C at ``(x0, x1)``, from compiled code.
-
-    ``fn`` is the ctypes function (:attr:`GeneratedC.function`); passed as an argument, numba
-    types it by its signature alone and reads its address on every call of the kernel, so the
-    cached machine code never holds a stale pointer. ``io`` is a scratch array of 3 (the two
-    inputs, the output), allocated once per run.
-    """
-    io[0] = x0
-    io[1] = x1
-    fn(io[:2].ctypes, io[2:].ctypes)
-    return float(io[2])

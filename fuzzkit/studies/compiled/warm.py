@@ -101,12 +101,6 @@ def _table_surface() -> None:
     table2(t.bp0, t.bp1, t.values, t.splits, 0.1, -0.2)
 
 
-def _c_surface() -> None:
-    from fuzzkit.studies.compiled.generated_c import call_c_surface, load_generated_c
-
-    call_c_surface(load_generated_c().function, np.zeros(3), 0.1, -0.2)
-
-
 def _exact_grid_surface() -> None:
     from fuzzkit.formats.registry import loads
     from fuzzkit.fuzzy.inference import evaluate
@@ -150,11 +144,6 @@ STEPS = (
         _height_field,
     ),
     Step("lookup-table surface", ("fuzzkit.studies.compiled.table:table2",), _table_surface),
-    Step(
-        "generated C surface through ctypes",
-        ("fuzzkit.studies.compiled.generated_c:call_c_surface",),
-        _c_surface,
-    ),
     Step(
         "exact engine on a smooth output (grid kernel)",
         ("fuzzkit.fuzzy.grid_kernel:grid_defuzzify",),

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from fuzzkit.control.names import GAIN_KEYS
 from fuzzkit.errors import ConfigError
 
 Vec = npt.NDArray[np.float64]
@@ -49,6 +50,6 @@ class GainSpace:
 #: below about 1, so ``ki`` reaches down to 1e-8 m/N for stiff (1000 N/mm) environments. Fuzzy
 #: ``ki``, ``kp``: 1/N (full scale of e from 1 N to 1000 N); ``kx``: metres per step.
 SPACES: dict[str, GainSpace] = {
-    "pi": GainSpace(("kp", "ki"), (1.0e-7, 1.0e-8), (1.0e-3, 1.0e-3)),
-    "fuzzy-pi": GainSpace(("kp", "ki", "kx"), (1.0e-3, 1.0e-3, 1.0e-6), (10.0, 1.0, 1.0e-2)),
+    "pi": GainSpace(GAIN_KEYS["pi"], (1.0e-7, 1.0e-8), (1.0e-3, 1.0e-3)),
+    "fuzzy-pi": GainSpace(GAIN_KEYS["fuzzy-pi"], (1.0e-3, 1.0e-3, 1.0e-6), (10.0, 1.0, 1.0e-2)),
 }
