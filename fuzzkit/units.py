@@ -70,6 +70,11 @@ def parse_stiffnesses(text: str, unit: str = "N/mm") -> list[float]:
     return [parse_stiffness(t, unit) for t in items]
 
 
+def stiffness_text(n_per_m: float) -> str:
+    """A stiffness as printed: ``10 N/mm``."""
+    return f"{n_per_m / 1e3:g} N/mm"
+
+
 _PAIR = re.compile(r"^\s*(\d+)\s*(?:[:,]\s*(\d+)\s*)?$")
 _LATENCY_HELP = (
     f"SENSOR:COMMAND (or SENSOR,COMMAND) delays in periods, integers 0 to {MAX_LATENCY_PERIODS}"
