@@ -23,8 +23,12 @@ PYTHON_TOLERANCE_M = 1e-12
 
 
 def run_cli(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
-    """``fuzzkit ARGV`` in this process: its exit code, stdout and stderr."""
-    code = main(list(argv))
+    """``fuzzkit ARGV`` in this process: its exit code, stdout and stderr (an option argparse
+    refuses: exit 2, as the program's)."""
+    try:
+        code = main(list(argv))
+    except SystemExit as exc:
+        code = int(exc.code or 0)
     out, err = capsys.readouterr()
     return code, out, err
 

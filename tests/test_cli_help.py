@@ -81,10 +81,12 @@ def test_every_argument_has_help_and_every_default_is_shown(name: str) -> None:
     ],
 )
 def test_the_defaults_the_issue_names_are_in_the_help(name: str, option: str, shown: str) -> None:
-    text = " ".join(_commands()[name].format_help().split())
-    options = text[text.index("options:") :]
-    block = options[options.index(option + " ") :]
-    assert shown in block[:200]
+    lines = _commands()[name].format_help().splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith(f"  {option} "))
+    ends = (i for i in range(start + 1, len(lines)) if lines[i][:3] in ("  -", ""))
+    end = next(ends, len(lines))  # the next option, or the blank line after the last one
+    block = " ".join(" ".join(lines[start:end]).split())  # the option's own help, one line
+    assert block.endswith(shown)
 
 
 def test_rule_base_help_names_every_readable_file_kind() -> None:

@@ -120,11 +120,14 @@ def test_the_command_exits_2_with_the_option_named(
 
 def test_ranges_are_the_limits_of_the_code_they_feed() -> None:
     from fuzzkit.codegen.lookup_table import MAX_BREAKPOINTS, MIN_BREAKPOINTS
+    from fuzzkit.control.spec_reader import MAX_SAMPLES
     from fuzzkit.fuzzy.rule_view import MAX_RULES
     from fuzzkit.viz.surface import MAX_RESOLUTION
 
     assert (numbers.RULES_DRAWN.low, numbers.RULES_DRAWN.high) == (1, MAX_RULES)
     assert numbers.SURFACE_RESOLUTION.high == MAX_RESOLUTION
+    # a spec's safety.watchdog.periods takes 1 (the semantic checks) to MAX_SAMPLES
+    assert (numbers.WATCHDOG_PERIODS.low, numbers.WATCHDOG_PERIODS.high) == (1, MAX_SAMPLES)
     assert (numbers.BREAKPOINTS.low, numbers.BREAKPOINTS.high) == (
         MIN_BREAKPOINTS,
         MAX_BREAKPOINTS,

@@ -43,7 +43,10 @@ def test_the_command_spells_the_packages_choices() -> None:
     [
         (["--param", "kp_z"], "--param: expected NAME=NUMBER, got 'kp_z'"),
         (["--param", "kp_z=fast"], "--param: expected NAME=NUMBER"),
-        (["--watchdog-periods", "0"], "--watchdog-periods: expected at least 1, got 0"),
+        (
+            ["--watchdog-periods", "0"],
+            "argument --watchdog-periods: expected an integer from 1 to 1000000, got '0'",
+        ),
     ],
 )
 def test_bad_options_are_clear_errors(

@@ -92,3 +92,6 @@ TOLERANCE = real(0.0, 1.0, low_open=True)
 TABLE_BYTES = integer(1, 2**31 - 1)
 #: A fraction in (0, 1] (``stability --contact-sector``, ``--fuzzy-region``).
 UNIT_FRACTION = real(0.0, 1.0, low_open=True)
+#: Periods without a sample before a controller's watchdog stops its output (``fuzzkit ros2``;
+#: a spec's ``safety.watchdog.periods`` takes the same, ``control.spec_reader.MAX_SAMPLES``).
+WATCHDOG_PERIODS = integer(1, 1_000_000)

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from fuzzkit.cli import numbers
+
 EXIT_OK = 0
 #: Kept here so that building the parser imports nothing of ROS (fuzzkit.ros2.messages.OUTPUTS,
 #: fuzzkit.ros2.controller.IMPLS; a test holds them equal).
@@ -68,7 +70,7 @@ def register(sub: Any) -> None:
     )
     p.add_argument(
         "--watchdog-periods",
-        type=int,
+        type=numbers.WATCHDOG_PERIODS,
         default=None,
         metavar="N",
         help="stop the output when no sample came for N periods (default: the spec's "
@@ -115,8 +117,6 @@ def cmd_ros2(args: argparse.Namespace) -> int:
     from fuzzkit.errors import ConfigError
     from fuzzkit.ros2 import runtime
 
-    if args.watchdog_periods is not None and args.watchdog_periods < 1:
-        raise ConfigError(f"--watchdog-periods: expected at least 1, got {args.watchdog_periods}")
     overrides = _overrides(args.param)
     runtime.require()  # before the spec: without the extra, say how to install it first
     from fuzzkit.control.spec_reader import load_spec
