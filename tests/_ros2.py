@@ -134,11 +134,14 @@ class Rig:
             ),
             reliable,
         )
+        needs_pose = controller.spec.sensor.tool is not None
         self.until(
             lambda: (
                 self.wrench.get_subscription_count() > 0
                 and self.node._out.get_subscription_count() > 0
                 and self.node._diag.get_subscription_count() > 0
+                and self.node._status.get_subscription_count() > 0
+                and (needs_pose is False or self.pose.get_subscription_count() > 0)
             ),
             what="discovery",
         )

@@ -40,25 +40,26 @@ def _as_sent(rotation: Any) -> list[float] | None:
     return None if rotation is None else rotation_of(pose(0, _quaternion(rotation)))
 
 
-def over_ros(rig: Any, period_ns: int) -> Any:
+def over_ros(rig: Any, spec: Any) -> Any:
     """The step function of a plant on the far side of ROS 2: per period /clock, the tool pose
-    when it changed (waited for: the node pairs a wrench with the latest pose it has), the
-    wrench; then the node's correction and status for that period."""
+    and the wrench, stamped alike (the node runs with pose_sync: it pairs them by stamp,
+    whichever arrives first); then the node's correction and status for that period."""
     from _ros2 import pose, values, wrench
     from rosgraph_msgs.msg import Clock
 
     from fuzzkit.ros2.messages import time_msg
 
     periods = itertools.count()
-    sent: list[Any] = [None]  # the last rotation sent: a pose only when it changes
+    period_ns = round(spec.period_s * 1e9)
+    last = [np.eye(3).reshape(9).tolist()]  # the loop's start-up wait steps without a rotation
 
     def step(force: list[float], rotation: list[float] | None) -> tuple[list[float], int]:
         k = next(periods)
         t = START_NS + k * period_ns
         rig.clock.publish(Clock(clock=time_msg(t)))
-        if rotation is not None and rotation != sent[0]:
-            rig.give_pose(pose(t, _quaternion(rotation)))
-            sent[0] = rotation
+        if spec.sensor.tool is not None:  # the node waits for the pose of this stamp
+            last[0] = last[0] if rotation is None else rotation
+            rig.pose.publish(pose(t, _quaternion(last[0])))
         rig.wrench.publish(wrench(t, force))
         rig.until(lambda: len(rig.corrections) > k and len(rig.statuses) > k, what=f"period {k}")
         p = rig.corrections[k].pose.position
@@ -93,7 +94,6 @@ def test_the_loop_over_ros_is_the_loop_in_process_and_simulates_run(
     spec = load_spec(SPEC)
     run_spec_ = RunSpec("E1", plant=plant, controller_spec=str(SPEC), seed=0, duration_s=duration_s)
     _, exp, plant_obj = resolve(run_spec_)
-    period_ns = round(spec.period_s * 1e9)
     here = run(
         exp,
         plant_obj,
@@ -102,13 +102,14 @@ def test_the_loop_over_ros_is_the_loop_in_process_and_simulates_run(
         duration_s=duration_s,
     )
     with ros_context() as ctx:
-        rig = Rig(ctx, open_node_controller(spec, "c"), use_sim_time=True, watchdog_periods=10**6)
+        ctl = open_node_controller(spec, "c")
+        rig = Rig(ctx, ctl, use_sim_time=True, pose_sync=True, watchdog_periods=10**6)
         try:
             _, exp, plant_obj = resolve(run_spec_)
             remote = run(
                 exp,
                 plant_obj,
-                hybrid=StepController(spec, over_ros(rig, period_ns)),
+                hybrid=StepController(spec, over_ros(rig, spec)),
                 seed=0,
                 duration_s=duration_s,
             )

@@ -52,6 +52,13 @@ def register(sub: Any) -> None:
         help="the tool's PoseStamped (its orientation), read when the spec compensates the "
         "tool's weight (sensor.tool)",
     )
+    p.add_argument(
+        "--pose-sync",
+        action="store_true",
+        help="pair each wrench with the tool pose of its stamp: a wrench waits until a pose "
+        "stamped at or after it came (a plant stepping in lockstep publishes both); default: the "
+        "latest pose received, no waiting",
+    )
     p.add_argument("--correction-topic", default="correction", help="where u is published")
     p.add_argument(
         "--frame-id",
@@ -143,6 +150,7 @@ def cmd_ros2(args: argparse.Namespace) -> int:
         node_name=args.node_name,
         namespace=args.namespace,
         use_sim_time=args.use_sim_time,
+        pose_sync=args.pose_sync,
     )
     rclpy.init()
     try:
