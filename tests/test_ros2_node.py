@@ -431,3 +431,53 @@ def test_fuzzkit_ros2_runs_the_node_until_ctrl_c() -> None:
     # engaged pushing at 9 N against the 6 N set point (after the 2 N tare): the tool moves
     # back (du < 0 along z)
     assert all(m.twist.linear.z == 0.0 for m in got[:25]) and got[-1].twist.linear.z < 0.0
+
+
+@needs_cc
+@pytest.mark.verify  # the tool swinging: a pose with every sample, paired by stamp
+def test_a_tilting_tool_through_the_node_gives_replays_corrections() -> None:
+    """The tool swinging by up to 60 degrees while in contact, then dropouts with NaN rotations
+    (a zero quaternion) among them: each
+    wrench and its pose published with one stamp (``--pose-sync``), the node's corrections are
+    ``replay --impl c`` of the log with the rotations the poses carry, 0 m apart."""
+    from _ros2 import Rig, period_of, pose, ros_context, wrench
+    from scipy.spatial.transform import Rotation
+
+    from fuzzkit.ros2.controller import open_node_controller
+    from fuzzkit.ros2.messages import rotation_of
+
+    spec = load_spec(SPEC)
+    parts = hostile_segments(spec, n=150, seed=2)
+    forces = np.vstack([parts[k][0] for k in ("tilted_tool", "dropouts")])
+    rotations = np.vstack([parts[k][1] for k in ("tilted_tool", "dropouts")])
+    n = len(forces)
+    quats = []
+    for r in rotations:
+        finite = bool(np.all(np.isfinite(r)))
+        q = Rotation.from_matrix(r.reshape(3, 3)).as_quat() if finite else [0.0, 0.0, 0.0, 0.0]
+        quats.append(tuple(float(v) for v in q))
+    sent = np.array([rotation_of(pose(0, q)) for q in quats])  # what the node receives
+    with ros_context() as ctx:
+        rig = Rig(ctx, open_node_controller(spec, "c"), pose_sync=True, watchdog_periods=10**6)
+        try:
+            for k in range(n):
+                t = START_NS + k * PERIOD_NS
+                if k % 2:  # either order: the stamps pair them
+                    rig.pose.publish(pose(t, quats[k]))
+                    rig.wrench.publish(wrench(t, forces[k]))
+                else:
+                    rig.wrench.publish(wrench(t, forces[k]))
+                    rig.pose.publish(pose(t, quats[k]))
+                rig.until(lambda k=k: len(rig.corrections) > k, what=f"period {k}")
+            rig.settle()
+            corrections = list(rig.corrections)
+            diagnostics = list(rig.diagnostics)
+        finally:
+            rig.close()
+    assert [period_of(m, START_NS, PERIOD_NS) for m in corrections] == list(range(n))
+    got = np.array([[m.pose.position.x, m.pose.position.y, m.pose.position.z] for m in corrections])
+    want_u, want_status = replay(spec, SensorLog(forces, sent, None), "c")
+    assert float(np.max(np.abs(got - want_u))) == 0.0
+    np.testing.assert_array_equal(_statuses(diagnostics, n), want_status)
+    assert np.ptp(sent[np.all(np.isfinite(sent), axis=1), 8]) > 0.4  # it did swing
+    assert np.isnan(sent).any() and np.any(want_status & st.HELD)
