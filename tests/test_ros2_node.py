@@ -44,6 +44,8 @@ def test_the_command_spells_the_packages_choices() -> None:
         (["--param", "kp_z"], "--param: expected NAME=NUMBER, got 'kp_z'"),
         (["--param", "kp_z=fast"], "--param: expected NAME=NUMBER"),
         (["--watchdog-periods", "0"], "--watchdog-periods: expected at least 1, got 0"),
+        (["--param", "kp_z=0"], "--param: kp_z must be > 0 (a fuzzy-PI scaling factor), got 0"),
+        (["--param", "limit_n=30"], "--param: limit_n is built into the generated controller"),
     ],
 )
 def test_bad_options_are_clear_errors(
