@@ -32,7 +32,7 @@ from rclpy.qos import QoSProfile  # noqa: E402
 from rosgraph_msgs.msg import Clock  # noqa: E402
 
 from fuzzkit.ros2.controller import NodeController  # noqa: E402
-from fuzzkit.ros2.messages import stamp_ns, time_msg  # noqa: E402
+from fuzzkit.ros2.messages import stamp_ns, time_msg, wrench_message  # noqa: E402
 from fuzzkit.ros2.node import ControllerNode, NodeOptions  # noqa: E402
 
 #: Domains per run: a block of 4 (one per xdist worker) among 0..99.
@@ -74,12 +74,8 @@ def ros_context() -> Iterator[Any]:
                 os.environ[k] = v
 
 
-def wrench(stamp: int, force: Any, frame: str = "ft_sensor") -> Any:
-    msg = WrenchStamped()
-    msg.header.stamp = time_msg(stamp)
-    msg.header.frame_id = frame
-    msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z = (float(v) for v in force)
-    return msg
+def wrench(stamp: int, force: Any) -> Any:
+    return wrench_message(stamp, force)
 
 
 def pose(stamp: int, quaternion: tuple[float, float, float, float]) -> Any:

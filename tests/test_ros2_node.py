@@ -361,6 +361,16 @@ def test_the_correction_messages_carry_u_and_du_over_t() -> None:
     assert stop("twist", step.stamp_ns, "f").twist.linear.z == 0.0
     assert rotation_of(pose(0, DOWN_QUATERNION)) == list(DOWN)
     assert all(math.isnan(v) for v in rotation_of(pose(0, (0.0, 0.0, 0.0, 0.0))))
+    # the plant's side: a rotation matrix out as a pose and back, NaN as NaN
+    from scipy.spatial.transform import Rotation
+
+    from fuzzkit.ros2.messages import force_of, pose_message, wrench_message
+
+    tilt = Rotation.from_euler("xyz", [170.0, 20.0, -35.0], degrees=True).as_matrix().ravel()
+    np.testing.assert_allclose(rotation_of(pose_message(0, tilt)), tilt, rtol=0, atol=1e-15)
+    assert all(math.isnan(v) for v in rotation_of(pose_message(0, [math.nan] * 9)))
+    w = wrench_message(step.stamp_ns, (1.0, -2.0, 3.5))
+    assert force_of(w) == (1.0, -2.0, 3.5) and stamp_ns(w.header) == step.stamp_ns
 
 
 @needs_cc
