@@ -308,3 +308,5 @@ def test_a_wrench_takes_the_pose_of_its_stamp_whatever_arrives_first() -> None:
     for k in range(30, 34):
         assert synced.wrench(k, f"w{k}") == []
     assert synced.wrench(34, "w34") == [("w30", rot(20))]
+    synced.clear()  # the reset service: the waiting wrenches are forgotten
+    assert synced.pose(40, rot(40)) == []

@@ -211,6 +211,7 @@ class ControllerNode(Node):
 
     def _on_reset(self, request: Any, response: Any) -> Any:
         self.stepper.reset()
+        self._pairing.clear()  # wrenches waiting for their pose belong to the old grid
         self._reported = None
         response.success = True
         response.message = (

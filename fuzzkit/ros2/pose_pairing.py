@@ -27,6 +27,10 @@ class PosePairing(Generic[Item]):
         self._poses: deque[tuple[int, list[float]]] = deque(maxlen=max(depth, 1) + 1)
         self._pending: deque[tuple[int, Item]] = deque()
 
+    def clear(self) -> None:
+        """Forget the waiting wrenches (the poses stay: the tool has not moved)."""
+        self._pending.clear()
+
     def pose(self, stamp_ns: int, rotation: list[float]) -> list[tuple[Item, Rotation]]:
         """A pose arrived: the wrenches it releases, in arrival order, each with its rotation."""
         self._poses.append((stamp_ns, rotation))
