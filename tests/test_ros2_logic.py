@@ -87,7 +87,7 @@ def test_a_stream_steps_as_replay_of_the_log_it_makes(impl: str) -> None:
     ``fuzzkit replay --impl`` of the log with a NaN row for each period it had no sample for,
     0 m apart, the same status; and the reference within the C-versus-Python rounding."""
     spec = load_spec(SPEC)
-    forces, _ = hostile_log(spec, n=240, seed=5)
+    forces, _ = hostile_log(spec, n=100, seed=5)
     arrivals, used = stream(len(forces), seed=2)
     stepper = Stepper(open_node_controller(spec, impl), watchdog_periods=50)
     steps = _steps_of(stepper, forces, arrivals)
