@@ -163,6 +163,9 @@ def main() -> None:
         "fuzzkit ros2: wrench in -> correction out on loopback Fast DDS (UDPv4), separate "
         f"processes, {SECONDS:g} s of samples per row"
     )
+    for impl in IMPLS:
+        label = "generated C" if impl == "c" else "generated Python"
+        print(f"one controller step as the node calls it, {label}: {step_cpu_us(impl):.1f} us CPU")
     head = (
         f"{'rate':>7} {'period':>8} {'controller':>18} {'p50':>9} {'p99':>9} {'max':>9} {'lost':>6}"
     )
