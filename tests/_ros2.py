@@ -139,6 +139,7 @@ class Rig:
                 and self.node._status.get_subscription_count() > 0
                 and (needs_pose is False or self.pose.get_subscription_count() > 0)
             ),
+            timeout_s=30.0,
             what="discovery",
         )
 
