@@ -72,6 +72,13 @@ def _statuses(diagnostics: list, n: int) -> np.ndarray:
     return out
 
 
+def _positions(corrections: list) -> np.ndarray:
+    """The ``u`` of pose corrections, one row per message."""
+    return np.array(
+        [[m.pose.position.x, m.pose.position.y, m.pose.position.z] for m in corrections]
+    )
+
+
 def _grid_runs(diagnostics: list) -> list[list]:
     """The diagnostics split where the period falls back (a reset starts a new grid)."""
     from _ros2 import values
@@ -214,7 +221,7 @@ def test_parameter_changes_over_ros_give_replay_with_a_schedule() -> None:
     n = len(forces)
     log = SensorLog(forces, np.tile(DOWN, (n, 1)), None)
     want_u, want_status = replay(spec, log, "python", schedule=schedule)
-    got = np.array([[m.pose.position.x, m.pose.position.y, m.pose.position.z] for m in corrections])
+    got = _positions(corrections)
     assert float(np.max(np.abs(got - want_u))) <= 1e-9
     # the reset restarts the grid: the statuses from there are periods 0, 1, ... again
     runs = _grid_runs(diagnostics)
@@ -487,7 +494,7 @@ def test_a_tilting_tool_through_the_node_gives_replays_corrections() -> None:
         finally:
             rig.close()
     assert [period_of(m, START_NS, PERIOD_NS) for m in corrections] == list(range(n))
-    got = np.array([[m.pose.position.x, m.pose.position.y, m.pose.position.z] for m in corrections])
+    got = _positions(corrections)
     want_u, want_status = replay(spec, SensorLog(forces, sent, None), "c")
     assert float(np.max(np.abs(got - want_u))) == 0.0
     np.testing.assert_array_equal(_statuses(diagnostics, n), want_status)
