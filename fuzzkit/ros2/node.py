@@ -19,6 +19,7 @@ module wires it to ROS (docs/ros2.md lists the topics, parameters, services and 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -221,14 +222,27 @@ class ControllerNode(Node):
         return response
 
 
-def serve(node: ControllerNode) -> None:
-    """Spin ``node`` until Ctrl-C or the context shuts down, then destroy it."""
+def serve(
+    controller: NodeController,
+    options: NodeOptions,
+    ready: Callable[[ControllerNode], None] = lambda node: None,
+) -> None:
+    """Run the node on the default context until Ctrl-C (or SIGTERM) shuts it down: rclpy
+    initialised, ``ready(node)`` once it exists (the command prints what it runs), spun,
+    destroyed, rclpy shut down."""
     import rclpy
     from rclpy.executors import ExternalShutdownException
 
+    rclpy.init()
     try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
+        node = ControllerNode(controller, options)
+        try:
+            ready(node)
+            rclpy.spin(node)
+        except (KeyboardInterrupt, ExternalShutdownException):
+            pass
+        finally:
+            node.destroy_node()
     finally:
-        node.destroy_node()
+        if rclpy.ok():
+            rclpy.shutdown()
