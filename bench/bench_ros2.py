@@ -137,6 +137,21 @@ def measure(spec_path: Path, rate_hz: int, impl: str) -> tuple[list[float], int]
     return latencies, len(sent) - len(latencies)
 
 
+def step_cpu_us(impl: str, n: int = 2000) -> float:
+    """CPU time of one controller step as the node calls it (``NodeController.step``), us."""
+    from fuzzkit.control.spec_reader import load_spec
+    from fuzzkit.ros2.controller import open_node_controller
+
+    ctl = open_node_controller(load_spec(SPEC), impl)
+    down = [1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0]
+    for _ in range(30):  # the tare
+        ctl.step([0.0, 0.0, 3.0], down)
+    start = time.process_time()
+    for k in range(n):
+        ctl.step([0.1 * (k % 7), 0.0, 8.0 + 0.01 * (k % 13)], down)
+    return (time.process_time() - start) / n * 1e6
+
+
 def main() -> None:
     try:
         import rclpy  # noqa: F401
@@ -148,6 +163,9 @@ def main() -> None:
         "fuzzkit ros2: wrench in -> correction out on loopback Fast DDS (UDPv4), separate "
         f"processes, {SECONDS:g} s of samples per row"
     )
+    for impl in IMPLS:
+        label = "generated C" if impl == "c" else "generated Python"
+        print(f"one controller step as the node calls it, {label}: {step_cpu_us(impl):.1f} us CPU")
     head = (
         f"{'rate':>7} {'period':>8} {'controller':>18} {'p50':>9} {'p99':>9} {'max':>9} {'lost':>6}"
     )

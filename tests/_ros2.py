@@ -32,7 +32,7 @@ from rclpy.qos import QoSProfile  # noqa: E402
 from rosgraph_msgs.msg import Clock  # noqa: E402
 
 from fuzzkit.ros2.controller import NodeController  # noqa: E402
-from fuzzkit.ros2.messages import stamp_ns, time_msg  # noqa: E402
+from fuzzkit.ros2.messages import stamp_ns, time_msg, wrench_message  # noqa: E402
 from fuzzkit.ros2.node import ControllerNode, NodeOptions  # noqa: E402
 
 #: Domains per run: a block of 4 (one per xdist worker) among 0..99.
@@ -74,12 +74,8 @@ def ros_context() -> Iterator[Any]:
                 os.environ[k] = v
 
 
-def wrench(stamp: int, force: Any, frame: str = "ft_sensor") -> Any:
-    msg = WrenchStamped()
-    msg.header.stamp = time_msg(stamp)
-    msg.header.frame_id = frame
-    msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z = (float(v) for v in force)
-    return msg
+def wrench(stamp: int, force: Any) -> Any:
+    return wrench_message(stamp, force)
 
 
 def pose(stamp: int, quaternion: tuple[float, float, float, float]) -> Any:
@@ -134,12 +130,16 @@ class Rig:
             ),
             reliable,
         )
+        needs_pose = controller.spec.sensor.tool is not None
         self.until(
             lambda: (
                 self.wrench.get_subscription_count() > 0
                 and self.node._out.get_subscription_count() > 0
                 and self.node._diag.get_subscription_count() > 0
+                and self.node._status.get_subscription_count() > 0
+                and (needs_pose is False or self.pose.get_subscription_count() > 0)
             ),
+            timeout_s=30.0,
             what="discovery",
         )
 

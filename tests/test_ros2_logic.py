@@ -87,7 +87,7 @@ def test_a_stream_steps_as_replay_of_the_log_it_makes(impl: str) -> None:
     ``fuzzkit replay --impl`` of the log with a NaN row for each period it had no sample for,
     0 m apart, the same status; and the reference within the C-versus-Python rounding."""
     spec = load_spec(SPEC)
-    forces, _ = hostile_log(spec, n=240, seed=5)
+    forces, _ = hostile_log(spec, n=100, seed=5)
     arrivals, used = stream(len(forces), seed=2)
     stepper = Stepper(open_node_controller(spec, impl), watchdog_periods=50)
     steps = _steps_of(stepper, forces, arrivals)
@@ -283,3 +283,30 @@ def test_a_bag_of_on_grid_samples_replays_as_the_node_steps(tmp_path) -> None:
     assert len(sent) < len(forces) and len(steps) == len(forces) == len(want_u)
     np.testing.assert_array_equal(np.array([s.u for s in steps]), want_u)
     np.testing.assert_array_equal([s.status for s in steps], want_status)
+
+
+def test_a_wrench_takes_the_pose_of_its_stamp_whatever_arrives_first() -> None:
+    from fuzzkit.ros2.pose_pairing import PosePairing
+
+    def rot(k: int) -> list[float]:
+        return [float(k)] * 9
+
+    latest: PosePairing[str] = PosePairing(wait=False, depth=4)
+    assert latest.wrench(0, "w0") == [("w0", None)]  # no pose yet: none
+    latest.pose(5, rot(5))
+    latest.pose(3, rot(3))  # arrived last, stamped earlier: still the latest received
+    assert latest.wrench(4, "w4") == [("w4", rot(3))]
+
+    synced: PosePairing[str] = PosePairing(wait=True, depth=4)
+    assert synced.wrench(10, "w10") == []  # waits for a pose stamped at or after 10
+    assert synced.pose(8, rot(8)) == []
+    assert synced.pose(12, rot(12)) == [("w10", rot(8))]  # the latest at or before its stamp
+    assert synced.pose(20, rot(20)) == []
+    assert synced.wrench(20, "w20") == [("w20", rot(20))]  # its pose came first
+    assert synced.wrench(19, "w19") == [("w19", rot(12))]
+    # a silent pose topic: beyond depth waiting wrenches the oldest goes on with what there is
+    for k in range(30, 34):
+        assert synced.wrench(k, f"w{k}") == []
+    assert synced.wrench(34, "w34") == [("w30", rot(20))]
+    synced.clear()  # the reset service: the waiting wrenches are forgotten
+    assert synced.pose(40, rot(40)) == []

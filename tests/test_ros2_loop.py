@@ -1,12 +1,12 @@
 """The closed loop over ROS 2 (issue 39 item 3): the simulated plant (planar, arm6) steps in
 lockstep with the controller node on simulated time (``/clock``), each period one wrench and
-tool pose out over loopback Fast DDS and one correction and status back, and gives the run of
+tool pose out over loopback Fast DDS and one correction and status back
+(:class:`fuzzkit.ros2.plant_node.PlantNode`), and gives the run of
 the same loop with the generated controller called in-process, sample for sample, and that of
 ``fuzzkit simulate`` (the compiled loop) within the compiled loop's own tolerances."""
 
 from __future__ import annotations
 
-import itertools
 from typing import Any
 
 import numpy as np
@@ -19,57 +19,18 @@ from fuzzkit.ros2.closed_loop import StepController
 from fuzzkit.studies.batch import RunSpec, resolve, run_spec
 from fuzzkit.studies.runner import run
 
-START_NS = 1_000_000_000  # /clock of period 0 (1 s: sim time 0 means "no clock yet")
 U_TOL = 1e-9  # m, as tests/test_compiled_loop.py holds the compiled loop to the Python loop
 FORCE_TOL = {"planar": 1e-9, "arm6": 1e-6}  # N, likewise
 
 
-def _quaternion(rotation: Any) -> tuple[float, float, float, float]:
-    from scipy.spatial.transform import Rotation
-
-    x, y, z, w = Rotation.from_matrix(np.asarray(rotation).reshape(3, 3)).as_quat()
-    return (float(x), float(y), float(z), float(w))
-
-
-def _as_sent(rotation: Any) -> list[float] | None:
-    """The rotation as the node receives it: through a PoseStamped's quaternion."""
-    from _ros2 import pose
-
-    from fuzzkit.ros2.messages import rotation_of
-
-    return None if rotation is None else rotation_of(pose(0, _quaternion(rotation)))
-
-
-def over_ros(rig: Any, period_ns: int) -> Any:
-    """The step function of a plant on the far side of ROS 2: per period /clock, the tool pose
-    when it changed (waited for: the node pairs a wrench with the latest pose it has), the
-    wrench; then the node's correction and status for that period."""
-    from _ros2 import pose, values, wrench
-    from rosgraph_msgs.msg import Clock
-
-    from fuzzkit.ros2.messages import time_msg
-
-    periods = itertools.count()
-    sent: list[Any] = [None]  # the last rotation sent: a pose only when it changes
-
-    def step(force: list[float], rotation: list[float] | None) -> tuple[list[float], int]:
-        k = next(periods)
-        t = START_NS + k * period_ns
-        rig.clock.publish(Clock(clock=time_msg(t)))
-        if rotation is not None and rotation != sent[0]:
-            rig.give_pose(pose(t, _quaternion(rotation)))
-            sent[0] = rotation
-        rig.wrench.publish(wrench(t, force))
-        rig.until(lambda: len(rig.corrections) > k and len(rig.statuses) > k, what=f"period {k}")
-        p = rig.corrections[k].pose.position
-        return [p.x, p.y, p.z], int(values(rig.statuses[k])["status"])
-
-    return step
-
-
 def in_process(ctl: Any) -> Any:
+    """The generated controller called here, with the rotation as the node receives it (through
+    a PoseStamped's quaternion)."""
+    from fuzzkit.ros2.messages import pose_message, rotation_of
+
     def step(force: list[float], rotation: list[float] | None) -> tuple[list[float], int]:
-        return ctl.step(force, _as_sent(rotation))
+        sent = None if rotation is None else rotation_of(pose_message(0, rotation))
+        return ctl.step(force, sent)
 
     return step
 
@@ -89,11 +50,11 @@ def test_the_loop_over_ros_is_the_loop_in_process_and_simulates_run(
     from _ros2 import Rig, ros_context
 
     from fuzzkit.ros2.controller import open_node_controller
+    from fuzzkit.ros2.plant_node import PlantNode
 
     spec = load_spec(SPEC)
     run_spec_ = RunSpec("E1", plant=plant, controller_spec=str(SPEC), seed=0, duration_s=duration_s)
     _, exp, plant_obj = resolve(run_spec_)
-    period_ns = round(spec.period_s * 1e9)
     here = run(
         exp,
         plant_obj,
@@ -102,17 +63,28 @@ def test_the_loop_over_ros_is_the_loop_in_process_and_simulates_run(
         duration_s=duration_s,
     )
     with ros_context() as ctx:
-        rig = Rig(ctx, open_node_controller(spec, "c"), use_sim_time=True, watchdog_periods=10**6)
+        ctl = open_node_controller(spec, "c")
+        rig = Rig(ctx, ctl, use_sim_time=True, pose_sync=True, watchdog_periods=10**6)
+        plant_node = PlantNode(
+            spec,
+            rig.node.get_fully_qualified_name(),
+            rig.options,
+            context=ctx,
+            executor=rig.executor,  # one process: one executor spins both nodes
+        )
+        rig.executor.add_node(plant_node)
         try:
+            plant_node.wait_for_controller()
             _, exp, plant_obj = resolve(run_spec_)
             remote = run(
                 exp,
                 plant_obj,
-                hybrid=StepController(spec, over_ros(rig, period_ns)),
+                hybrid=StepController(spec, plant_node.step),
                 seed=0,
                 duration_s=duration_s,
             )
         finally:
+            plant_node.destroy_node()
             rig.close()
     assert remote.engaged_time_s is not None  # the run reached contact
     for name in ("t", "u", "force", "force_sensor", "tool_position", "status"):

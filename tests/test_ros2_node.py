@@ -47,6 +47,8 @@ def test_the_command_spells_the_packages_choices() -> None:
             ["--watchdog-periods", "0"],
             "argument --watchdog-periods: expected an integer from 1 to 1000000, got '0'",
         ),
+        (["--param", "kp_z=0"], "--param: kp_z must be > 0 (a fuzzy-PI scaling factor), got 0"),
+        (["--param", "limit_n=30"], "--param: limit_n is built into the generated controller"),
     ],
 )
 def test_bad_options_are_clear_errors(
@@ -71,6 +73,13 @@ def _statuses(diagnostics: list, n: int) -> np.ndarray:
         assert current is not None, "the first period's status is published"
         out[k] = current
     return out
+
+
+def _positions(corrections: list) -> np.ndarray:
+    """The ``u`` of pose corrections, one row per message."""
+    return np.array(
+        [[m.pose.position.x, m.pose.position.y, m.pose.position.z] for m in corrections]
+    )
 
 
 def _grid_runs(diagnostics: list) -> list[list]:
@@ -215,7 +224,7 @@ def test_parameter_changes_over_ros_give_replay_with_a_schedule() -> None:
     n = len(forces)
     log = SensorLog(forces, np.tile(DOWN, (n, 1)), None)
     want_u, want_status = replay(spec, log, "python", schedule=schedule)
-    got = np.array([[m.pose.position.x, m.pose.position.y, m.pose.position.z] for m in corrections])
+    got = _positions(corrections)
     assert float(np.max(np.abs(got - want_u))) <= 1e-9
     # the reset restarts the grid: the statuses from there are periods 0, 1, ... again
     runs = _grid_runs(diagnostics)
@@ -362,6 +371,16 @@ def test_the_correction_messages_carry_u_and_du_over_t() -> None:
     assert stop("twist", step.stamp_ns, "f").twist.linear.z == 0.0
     assert rotation_of(pose(0, DOWN_QUATERNION)) == list(DOWN)
     assert all(math.isnan(v) for v in rotation_of(pose(0, (0.0, 0.0, 0.0, 0.0))))
+    # the plant's side: a rotation matrix out as a pose and back, NaN as NaN
+    from scipy.spatial.transform import Rotation
+
+    from fuzzkit.ros2.messages import force_of, pose_message, wrench_message
+
+    tilt = Rotation.from_euler("xyz", [170.0, 20.0, -35.0], degrees=True).as_matrix().ravel()
+    np.testing.assert_allclose(rotation_of(pose_message(0, tilt)), tilt, rtol=0, atol=1e-15)
+    assert all(math.isnan(v) for v in rotation_of(pose_message(0, [math.nan] * 9)))
+    w = wrench_message(step.stamp_ns, (1.0, -2.0, 3.5))
+    assert force_of(w) == (1.0, -2.0, 3.5) and stamp_ns(w.header) == step.stamp_ns
 
 
 @needs_cc
@@ -434,3 +453,53 @@ def test_fuzzkit_ros2_runs_the_node_until_ctrl_c() -> None:
     # engaged pushing at 9 N against the 6 N set point (after the 2 N tare): the tool moves
     # back (du < 0 along z)
     assert all(m.twist.linear.z == 0.0 for m in got[:25]) and got[-1].twist.linear.z < 0.0
+
+
+@needs_cc
+@pytest.mark.verify  # the tool swinging: a pose with every sample, paired by stamp
+def test_a_tilting_tool_through_the_node_gives_replays_corrections() -> None:
+    """The tool swinging by up to 60 degrees while in contact, then dropouts with NaN rotations
+    (a zero quaternion) among them: each
+    wrench and its pose published with one stamp (``--pose-sync``), the node's corrections are
+    ``replay --impl c`` of the log with the rotations the poses carry, 0 m apart."""
+    from _ros2 import Rig, period_of, pose, ros_context, wrench
+    from scipy.spatial.transform import Rotation
+
+    from fuzzkit.ros2.controller import open_node_controller
+    from fuzzkit.ros2.messages import rotation_of
+
+    spec = load_spec(SPEC)
+    parts = hostile_segments(spec, n=150, seed=2)
+    forces = np.vstack([parts[k][0] for k in ("tilted_tool", "dropouts")])
+    rotations = np.vstack([parts[k][1] for k in ("tilted_tool", "dropouts")])
+    n = len(forces)
+    quats = []
+    for r in rotations:
+        finite = bool(np.all(np.isfinite(r)))
+        q = Rotation.from_matrix(r.reshape(3, 3)).as_quat() if finite else [0.0, 0.0, 0.0, 0.0]
+        quats.append(tuple(float(v) for v in q))
+    sent = np.array([rotation_of(pose(0, q)) for q in quats])  # what the node receives
+    with ros_context() as ctx:
+        rig = Rig(ctx, open_node_controller(spec, "c"), pose_sync=True, watchdog_periods=10**6)
+        try:
+            for k in range(n):
+                t = START_NS + k * PERIOD_NS
+                if k % 2:  # either order: the stamps pair them
+                    rig.pose.publish(pose(t, quats[k]))
+                    rig.wrench.publish(wrench(t, forces[k]))
+                else:
+                    rig.wrench.publish(wrench(t, forces[k]))
+                    rig.pose.publish(pose(t, quats[k]))
+                rig.until(lambda k=k: len(rig.corrections) > k, what=f"period {k}")
+            rig.settle()
+            corrections = list(rig.corrections)
+            diagnostics = list(rig.diagnostics)
+        finally:
+            rig.close()
+    assert [period_of(m, START_NS, PERIOD_NS) for m in corrections] == list(range(n))
+    got = _positions(corrections)
+    want_u, want_status = replay(spec, SensorLog(forces, sent, None), "c")
+    assert float(np.max(np.abs(got - want_u))) == 0.0
+    np.testing.assert_array_equal(_statuses(diagnostics, n), want_status)
+    assert np.ptp(sent[np.all(np.isfinite(sent), axis=1), 8]) > 0.4  # it did swing
+    assert np.isnan(sent).any() and np.any(want_status & st.HELD)

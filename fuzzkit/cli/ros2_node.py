@@ -54,6 +54,13 @@ def register(sub: Any) -> None:
         help="the tool's PoseStamped (its orientation), read when the spec compensates the "
         "tool's weight (sensor.tool)",
     )
+    p.add_argument(
+        "--pose-sync",
+        action="store_true",
+        help="pair each wrench with the tool pose of its stamp: a wrench waits until a pose "
+        "stamped at or after it came (a plant stepping in lockstep publishes both); default: the "
+        "latest pose received, no waiting",
+    )
     p.add_argument("--correction-topic", default="correction", help="where u is published")
     p.add_argument(
         "--frame-id",
@@ -129,9 +136,7 @@ def cmd_ros2(args: argparse.Namespace) -> int:
     except ParameterRefused as exc:
         raise ConfigError(f"--param: {exc.reason}") from None
 
-    import rclpy
-
-    from fuzzkit.ros2.node import ControllerNode, NodeOptions, serve
+    from fuzzkit.ros2.node import NodeOptions, serve
 
     options = NodeOptions(
         output=args.output,
@@ -143,22 +148,19 @@ def cmd_ros2(args: argparse.Namespace) -> int:
         node_name=args.node_name,
         namespace=args.namespace,
         use_sim_time=args.use_sim_time,
+        pose_sync=args.pose_sync,
     )
-    rclpy.init()
-    try:
-        node = ControllerNode(controller, options)
-        impl = "generated C (double)" if controller.impl == "c" else "generated Python"
-        rate = 1.0 / spec.period_s
+    impl = "generated C (double)" if controller.impl == "c" else "generated Python"
+
+    def ready(node: Any) -> None:
         print(
-            f"{spec.name}: the {impl} controller at {rate:g} Hz as node {node.get_name()}: "
-            f"{node.resolve_topic_name(options.wrench_topic)} -> "
+            f"{spec.name}: the {impl} controller at {1.0 / spec.period_s:g} Hz as node "
+            f"{node.get_name()}: {node.resolve_topic_name(options.wrench_topic)} -> "
             f"{node.resolve_topic_name(options.correction_topic)} ({args.output}); services "
             f"{node.resolve_service_name('~/tare')}, {node.resolve_service_name('~/reset')}; "
             f"watchdog {options.watchdog_periods} periods. Ctrl-C stops.",
             flush=True,
         )
-        serve(node)
-    finally:
-        if rclpy.ok():
-            rclpy.shutdown()
+
+    serve(controller, options, ready)
     return EXIT_OK

@@ -48,6 +48,36 @@ def rotation_of(msg: Any) -> list[float]:
     return [float(v) for v in r]
 
 
+def wrench_message(stamp: int, force_n: Any, frame_id: str = "ft_sensor") -> Any:
+    """A ``WrenchStamped`` of the force ``force_n`` (N; no torque), stamped ``stamp`` (ns): what
+    a sensor driver, or the simulated plant, publishes."""
+    from geometry_msgs.msg import WrenchStamped
+
+    msg = WrenchStamped()
+    msg.header.stamp = time_msg(stamp)
+    msg.header.frame_id = frame_id
+    f = msg.wrench.force
+    f.x, f.y, f.z = (float(v) for v in force_n)
+    return msg
+
+
+def pose_message(stamp: int, rotation: Any) -> Any:
+    """A ``PoseStamped`` whose orientation is ``rotation`` (row-major 3x3, world-from-sensor; not
+    finite: the zero quaternion, which :func:`rotation_of` reads back as NaN)."""
+    from geometry_msgs.msg import PoseStamped
+    from scipy.spatial.transform import Rotation
+
+    msg = PoseStamped()
+    msg.header.stamp = time_msg(stamp)
+    r = np.asarray(rotation, dtype=np.float64).reshape(3, 3)
+    q = msg.pose.orientation
+    if np.all(np.isfinite(r)):
+        q.x, q.y, q.z, q.w = (float(v) for v in Rotation.from_matrix(r).as_quat())
+    else:
+        q.x, q.y, q.z, q.w = 0.0, 0.0, 0.0, 0.0
+    return msg
+
+
 def correction(step: Step, output: str, period_s: float, frame_id: str) -> Any:
     """The message the node publishes for ``step`` (``output``: :data:`OUTPUTS`)."""
     if output == "pose":

@@ -5,8 +5,8 @@ rclpy at module scope). The node's logic is :class:`~fuzzkit.ros2.stepper.Steppe
 module wires it to ROS (docs/ros2.md lists the topics, parameters, services and QoS):
 
 * subscriptions (sensor-data QoS: best effort, the last 5): the wrench topic, and for a spec that
-  compensates the tool's weight the tool pose (the latest pose's rotation goes with each
-  wrench; none yet: the controller holds, as for a missing sample);
+  compensates the tool's weight the tool pose (which pose goes with a wrench:
+  :mod:`~fuzzkit.ros2.pose_pairing`);
 * the correction topic (reliable, depth 10): one message per period stepped;
 * ``/diagnostics`` (reliable, depth 10): on every change of the status bits, when the watchdog
   stops the output, and once a second; ``~/status``: the same for every period stepped;
@@ -19,6 +19,7 @@ module wires it to ROS (docs/ros2.md lists the topics, parameters, services and 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,6 +36,7 @@ from fuzzkit.ros2.controller import NodeController, ParameterRefused
 from fuzzkit.ros2.diagnostics import diagnostic_array
 from fuzzkit.ros2.messages import correction, force_of, rotation_of, stamp_ns, stop
 from fuzzkit.ros2.parameters import READ_ONLY
+from fuzzkit.ros2.pose_pairing import PosePairing
 from fuzzkit.ros2.stepper import Step, Stepper
 
 #: How often the diagnostics are repeated when nothing changes (s).
@@ -56,6 +58,7 @@ class NodeOptions:
     node_name: str | None = None  # None: the spec's name
     namespace: str | None = None
     use_sim_time: bool = False
+    pose_sync: bool = False  # a wrench waits for the pose of its stamp (pose_pairing)
 
 
 class ControllerNode(Node):
@@ -81,7 +84,8 @@ class ControllerNode(Node):
         self._declare_parameters(controller)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self._needs_rotation = spec.sensor.tool is not None
-        self._rotation: list[float] | None = None
+        self._rotation: list[float] | None = None  # the latest pose's
+        self._pairing: PosePairing[Any] = PosePairing(options.pose_sync, periods)
         self._frame = options.frame_id or ""
         self._reported: int | None = None  # the status bits last published
         out_type = PoseStamped if options.output == "pose" else TwistStamped
@@ -133,9 +137,18 @@ class ControllerNode(Node):
 
     def _on_pose(self, msg: Any) -> None:
         self._rotation = rotation_of(msg)
+        for wrench, rotation in self._pairing.pose(stamp_ns(msg.header), self._rotation):
+            self._step(wrench, rotation)
 
     def _on_wrench(self, msg: Any) -> None:
-        rotation = self._rotation if self._needs_rotation else None
+        if not self._needs_rotation:
+            self._step(msg, None)
+            return
+        for wrench, rotation in self._pairing.wrench(stamp_ns(msg.header), msg):
+            self._step(wrench, rotation)
+
+    def _step(self, msg: Any, rotation: list[float] | None) -> None:
+        """Step the wrench ``msg`` with the tool's ``rotation``; publish what it gives."""
         was_expired = self.stepper.watchdog.expired
         now = self.get_clock().now().nanoseconds
         steps = self.stepper.sample(stamp_ns(msg.header), force_of(msg), rotation, now)
@@ -199,6 +212,7 @@ class ControllerNode(Node):
 
     def _on_reset(self, request: Any, response: Any) -> Any:
         self.stepper.reset()
+        self._pairing.clear()  # wrenches waiting for their pose belong to the old grid
         self._reported = None
         response.success = True
         response.message = (
@@ -208,14 +222,27 @@ class ControllerNode(Node):
         return response
 
 
-def serve(node: ControllerNode) -> None:
-    """Spin ``node`` until Ctrl-C or the context shuts down, then destroy it."""
+def serve(
+    controller: NodeController,
+    options: NodeOptions,
+    ready: Callable[[ControllerNode], None] = lambda node: None,
+) -> None:
+    """Run the node on the default context until Ctrl-C (or SIGTERM) shuts it down: rclpy
+    initialised, ``ready(node)`` once it exists (the command prints what it runs), spun,
+    destroyed, rclpy shut down."""
     import rclpy
     from rclpy.executors import ExternalShutdownException
 
+    rclpy.init()
     try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
+        node = ControllerNode(controller, options)
+        try:
+            ready(node)
+            rclpy.spin(node)
+        except (KeyboardInterrupt, ExternalShutdownException):
+            pass
+        finally:
+            node.destroy_node()
     finally:
-        node.destroy_node()
+        if rclpy.ok():
+            rclpy.shutdown()
