@@ -5,12 +5,15 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import pytest
 
 from fuzzkit.cli import main
 from fuzzkit.fuzzy.describe import ZERO_ULPS, shown_output
 from fuzzkit.fuzzy.model import Variable
+
+ROOT = Path(__file__).resolve().parent.parent
 
 
 def _eval(capsys: pytest.CaptureFixture[str], *argv: str) -> str:
@@ -87,3 +90,21 @@ def test_term_labels_stay_inside_and_never_overlap(peaks: list[float], names: li
     by_name = {n: (x, ha) for n, x, ha, _ in placed}
     if peaks[0] == -1.0:  # a term peaking at an end: its label aligned to that end
         assert by_name[names[0]] == (-1.0, "left") and by_name[names[-1]] == (1.0, "right")
+
+
+# ------------------------------------------------------------------ one .fis typo, one message
+
+
+def test_one_fis_typo_gives_one_message(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text = (ROOT / "docs" / "examples" / "heater.fis").read_text(encoding="utf-8")
+    assert "'zero':'trimf'" in text  # the rules below number this input's terms
+    bad = tmp_path / "typo.fis"
+    bad.write_text(text.replace("'zero':'trimf'", "'zero':'trimff'", 1), encoding="utf-8")
+    assert main(["validate", str(bad)]) == 2
+    printed = capsys.readouterr()
+    lines = (printed.out + printed.err).splitlines()
+    problems = [line for line in lines if "typo.fis:" in line]
+    assert len(problems) == 1, problems
+    assert "'trimff' (did you mean 'trimf'?)" in problems[0]
