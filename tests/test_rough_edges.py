@@ -95,9 +95,7 @@ def test_term_labels_stay_inside_and_never_overlap(peaks: list[float], names: li
 # ------------------------------------------------------------------ one .fis typo, one message
 
 
-def test_one_fis_typo_gives_one_message(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_one_fis_typo_gives_one_message(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     text = (ROOT / "docs" / "examples" / "heater.fis").read_text(encoding="utf-8")
     assert "'zero':'trimf'" in text  # the rules below number this input's terms
     bad = tmp_path / "typo.fis"
@@ -108,3 +106,40 @@ def test_one_fis_typo_gives_one_message(
     problems = [line for line in lines if "typo.fis:" in line]
     assert len(problems) == 1, problems
     assert "'trimff' (did you mean 'trimf'?)" in problems[0]
+
+
+# ------------------------------------------------------------------ replay's sensor log
+
+
+def test_a_missing_log_is_named_without_an_errno(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    spec = str(ROOT / "docs" / "examples" / "controller.yaml")
+    missing = tmp_path / "nope.csv"
+    assert main(["replay", spec, "--forces", str(missing), "--out", str(tmp_path / "u.csv")]) == 2
+    err = capsys.readouterr().err
+    assert f"{missing}: cannot read: No such file or directory" in err
+    assert "Errno" not in err and not (tmp_path / "u.csv").exists()
+
+
+@pytest.mark.parametrize("cell", ["nan", "-nan", "NaN", "-NaN", "+nan", "NAN", "-nan(ind)", ""])
+def test_every_printf_nan_is_a_missing_sample(tmp_path: Path, cell: str) -> None:
+    from fuzzkit.studies.replay import read_sensor_log
+
+    log = tmp_path / "log.csv"
+    log.write_text(f"fx,fy,fz\n0,0,1.5\n{cell},0,{cell}\n-inf,inf,2\n", encoding="utf-8")
+    forces = read_sensor_log(log).forces
+    assert forces[0].tolist() == [0.0, 0.0, 1.5]
+    assert math.isnan(forces[1, 0]) and forces[1, 1] == 0.0 and math.isnan(forces[1, 2])
+    assert forces[2].tolist() == [-math.inf, math.inf, 2.0]
+
+
+@pytest.mark.parametrize("cell", ["nann", "n/a", "-", "1.5.2", "nan(x"])
+def test_what_is_no_number_is_still_refused_at_its_cell(tmp_path: Path, cell: str) -> None:
+    from fuzzkit.errors import ProblemsError
+    from fuzzkit.studies.replay import read_sensor_log
+
+    log = tmp_path / "log.csv"
+    log.write_text(f"fx,fy,fz\n0,{cell},1\n", encoding="utf-8")
+    with pytest.raises(ProblemsError, match=r"log.csv:2:\d+: expected a number"):
+        read_sensor_log(log)
