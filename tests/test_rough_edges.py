@@ -143,3 +143,25 @@ def test_what_is_no_number_is_still_refused_at_its_cell(tmp_path: Path, cell: st
     log.write_text(f"fx,fy,fz\n0,{cell},1\n", encoding="utf-8")
     with pytest.raises(ProblemsError, match=r"log.csv:2:\d+: expected a number"):
         read_sensor_log(log)
+
+
+# ------------------------------------------------------------------ the run CSV's time column
+
+
+def test_the_run_csv_times_are_the_decimal_periods() -> None:
+    import csv
+    import io
+    from fractions import Fraction
+
+    from fuzzkit.studies.batch import RunSpec, run_spec
+    from fuzzkit.studies.run_table import run_csv
+
+    result = run_spec(RunSpec("E1", plant="planar", loop="python", duration_s=2.0))
+    assert float(result.t[-1]) != 2.0  # the plants' sum of 4 ms periods has drifted
+    rows = list(csv.DictReader(io.StringIO(run_csv(result))))
+    times = [row["t_s"] for row in rows]
+    for k, text in enumerate(times, start=1):
+        # k periods of 4 ms: the double nearest to the decimal k / 250, printed as that decimal
+        assert float(text) == float(Fraction(k, 250)), (k, text)
+        assert len(text.partition(".")[2]) <= 3, text
+    assert times[-1] == "2.0" and times[468] == "1.876"
