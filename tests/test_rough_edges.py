@@ -165,3 +165,33 @@ def test_the_run_csv_times_are_the_decimal_periods() -> None:
         assert float(text) == float(Fraction(k, 250)), (k, text)
         assert len(text.partition(".")[2]) <= 3, text
     assert times[-1] == "2.0" and times[468] == "1.876"
+
+
+# ------------------------------------------------------------------ info SPEC
+
+
+def test_info_of_a_spec_shows_its_gains_limits_safety_and_front_end(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    import yaml
+
+    path = ROOT / "docs" / "examples" / "controller_pi.yaml"
+    doc = yaml.safe_load(path.read_text(encoding="utf-8"))  # the file's own numbers
+    assert main(["info", str(path)]) == 0
+    out = capsys.readouterr().out
+    for axis, entry in doc["axes"].items():
+        g = entry["gains"]
+        assert (
+            f"axis {axis}: set point {entry['setpoint_n']:g} N; kp {g['kp']:g}, ki {g['ki']:g}"
+            in out
+        )
+    lim, safety, sensor = doc["limits"], doc["safety"], doc["sensor"]
+    assert f"|u| <= {lim['correction_m']:g} m per axis, |du| <= {lim['step_m']:g} m" in out
+    assert f"limit {safety['limit_n']:g} N (trip after {safety['trip']['samples']} samples" in out
+    engage = safety["engage"]
+    assert f"engage above {engage['threshold_n']:g} N for {engage['samples']} samples" in out
+    assert f"spike gate {safety['spike_gate']['threshold_n']:g} N" in out
+    assert f"tare over the first {sensor['tare']['samples']} samples" in out
+    assert f"gravity compensation of {sensor['tool']['mass_kg']:g} kg at [0, 0, 0.06] m" in out
+    assert f"low-pass {sensor['lowpass_hz']:g} Hz" in out
+    assert f"period {doc['period_s'] * 1e3:g} ms" in out
