@@ -3,6 +3,7 @@ and the other small things each checked where the user sees them."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -195,3 +196,38 @@ def test_info_of_a_spec_shows_its_gains_limits_safety_and_front_end(
     assert f"gravity compensation of {sensor['tool']['mass_kg']:g} kg at [0, 0, 0.06] m" in out
     assert f"low-pass {sensor['lowpass_hz']:g} Hz" in out
     assert f"period {doc['period_s'] * 1e3:g} ms" in out
+
+
+# ------------------------------------------------------------------ a .fis that is a table
+
+
+def test_a_fis_whose_rules_are_a_full_grid_is_shown_as_the_table(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from fuzzkit.formats.registry import load
+    from fuzzkit.fuzzy.describe import full_grid, rule_grid
+
+    fis = tmp_path / "mw.fis"
+    assert (
+        main(["export", "macvicar_whelan", "--format", "fis", "--out", str(fis), "--allow-loss"])
+        == 0
+    )
+    rb = load(str(fis))
+    assert rb.table is None  # MATLAB's format lists the rules one by one
+    grid = rule_grid(rb)
+    assert grid is not None and (grid.row_input, grid.column_input) == ("e", "de")
+    labels = ["NL", "NM", "NS", "ZR", "PS", "PM", "PL"]
+    # DESIGN.md: the canonical table is the saturated sum of the label indices
+    want = [[labels[min(max(i + j - 6, -3), 3) + 3] for j in range(7)] for i in range(7)]
+    assert [list(row) for row in grid.cells] == want
+    capsys.readouterr()
+    assert main(["info", str(fis)]) == 0
+    out = capsys.readouterr().out
+    assert "(table: rows e, columns de -> du, listed rule by rule in the file)" in out
+    assert "  ZR   NL NM NS ZR PS PM PL" in out and " 1. if e is" not in out
+    # one rule missing, or weighted, and it is a list again
+    assert full_grid(dataclasses.replace(rb, rules=rb.rules[1:])) is None
+    weighted = dataclasses.replace(rb.rules[0], weight=0.5)
+    assert full_grid(dataclasses.replace(rb, rules=(weighted, *rb.rules[1:]))) is None
+    heater = load(str(ROOT / "docs" / "examples" / "heater.fis"))
+    assert rule_grid(heater) is None

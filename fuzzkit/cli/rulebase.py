@@ -319,10 +319,12 @@ def describe_rulebase(rb: RuleBase) -> str:
         lines += _variable_lines(var, "output", rb.input_names, fp)
     lines.append("")
     grid = _table_grid(rb)
-    if grid is not None and rb.table is not None:
+    shape = rule_grid(rb)
+    if grid is not None and shape is not None:
+        listed = "" if rb.table is not None else ", listed rule by rule in the file"
         lines.append(
-            f"rules: {len(rb.rules)} (table: rows {rb.table.rows}, columns "
-            f"{rb.table.columns} -> {rb.table.output})"
+            f"rules: {len(rb.rules)} (table: rows {shape.row_input}, columns "
+            f"{shape.column_input} -> {shape.output}{listed})"
         )
         lines += grid
     else:
