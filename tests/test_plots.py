@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import html.parser
 import math
+import re
 import struct
 import subprocess
 import sys
@@ -481,6 +482,24 @@ def test_stiffness_figure_uses_log_axes_and_a_never_settled_row() -> None:
     assert any("below 0.1 %" in t.get_text() for t in overshoot.texts)
     assert "planar plant" in fig.get_suptitle()
     assert figure_bytes(fig)[:8] == PNG_MAGIC
+
+
+def test_stiffness_figure_ticks_are_plain_numbers_and_the_legend_shows_the_dots() -> None:
+    # issue 41: 1-1.5 % overshoot on a log axis was labelled 1.5x10^0 ... 10^0, and the legend
+    # drew bare line styles beside series drawn as dots on lines
+    rows = [(k, {"overshoot_pct": o, "settling_time_s": s}) for k, o, s in
+            ((5.0, 1.0, 0.11), (10.0, 1.2, 0.13), (20.0, 1.5, 0.3))]  # fmt: skip
+    fig = stiffness_figure({("pi", "default"): rows, ("fuzzy-pi", "matched"): rows})
+    figure_bytes(fig)  # the labels are made at draw time
+    overshoot, settling, trip, _ = fig.axes
+    for ax in (overshoot, settling):
+        labels = [t.get_text() for t in ax.get_yticklabels(which="both") if t.get_text()]
+        assert labels and all(re.fullmatch(r"[0-9.]+", t) for t in labels), labels
+    assert {"1", "1.5"} <= {t.get_text() for t in overshoot.get_yticklabels(which="both")}
+    assert [t.get_text() for t in trip.get_xticklabels()] == ["5", "10", "20"]
+    legend = fig.legends[0]
+    assert [t.get_text() for t in legend.get_texts()] == ["PI default", "fuzzy-PI matched"]
+    assert all(h.get_marker() == "o" for h in legend.legend_handles)
 
 
 def test_stiffness_figure_marks_trips_instead_of_plotting_their_overshoot() -> None:
