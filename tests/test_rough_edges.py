@@ -231,3 +231,20 @@ def test_a_fis_whose_rules_are_a_full_grid_is_shown_as_the_table(
     assert full_grid(dataclasses.replace(rb, rules=(weighted, *rb.rules[1:]))) is None
     heater = load(str(ROOT / "docs" / "examples" / "heater.fis"))
     assert rule_grid(heater) is None
+
+
+# ------------------------------------------------------------------ tuned gains, shortest form
+
+
+@pytest.mark.parametrize(
+    ("value", "text"),
+    [(0.00020000000000000004, "0.0002"), (0.1 + 0.2, "0.3"), (4e-05, "4e-05"), (0.05, "0.05")],
+)
+def test_a_tuned_gain_is_written_in_its_shortest_form(value: float, text: str) -> None:
+    from fuzzkit.cli.tuning import GAIN_DIGITS_REL, shortest_gain
+
+    assert repr(shortest_gain(value)) == text
+    # a gain the search really found keeps what it is, to 1e-12
+    found = 10**-3.123456789
+    assert abs(shortest_gain(found) - found) <= GAIN_DIGITS_REL * found
+    assert shortest_gain(found) != 10**-3.12
