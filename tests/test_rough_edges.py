@@ -248,3 +248,49 @@ def test_a_tuned_gain_is_written_in_its_shortest_form(value: float, text: str) -
     found = 10**-3.123456789
     assert abs(shortest_gain(found) - found) <= GAIN_DIGITS_REL * found
     assert shortest_gain(found) != 10**-3.12
+
+
+# ------------------------------------------------------------------ safety shown (item 1)
+
+
+def test_limit_exceeded_is_read_from_the_true_force() -> None:
+    import numpy as np
+
+    from fuzzkit.studies.outcome import limit_exceeded, limit_text
+
+    t = np.arange(1, 11) * 0.004
+    f = np.zeros((10, 3))
+    assert limit_exceeded(t, f, 25.0) is None
+    f[4, 0], f[5, 2], f[6, 2] = -26.0, 24.0, 40.0  # x passes first (pushing), z higher later
+    got = limit_exceeded(t, f, 25.0)
+    assert got == {"time_s": t[4], "peak_true_n": 40.0, "axis": "z"}
+    text = limit_text(got, 25.0, tripped=False)
+    assert (
+        text
+        == "limit exceeded: 40.0 N true (z) from 0.020 s, limit 25 N; the controller did not trip"
+    )
+    f[:, :] = 25.0  # at the limit is not past it
+    assert limit_exceeded(t, f, 25.0) is None
+
+
+def test_a_run_past_the_limit_says_so_and_fails_on_trip(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    argv = ["simulate", "E1", "--plant", "arm6", "--latency", "300:300"]
+    assert main([*argv, "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    over = doc["limit_exceeded"]
+    assert over["peak_true_n"] > doc["safety_limit"] and over["axis"] == "z"
+    assert over["peak_true_n"] == max(a["peak_force_true"] for a in doc["axes"].values())
+    assert main([*argv, "--fail-on-trip"]) == 3
+    assert "SAFETY: limit exceeded: " in capsys.readouterr().out
+
+
+def test_a_latency_longer_than_half_the_run_is_refused_with_the_range(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    # E1 runs 5 s at 4 ms: at most 625 periods of delay in all
+    assert main(["simulate", "E1", "--latency", "1000:1000"]) == 2
+    err = capsys.readouterr().err
+    assert "2000 periods of delay (8 s) is more than half of E1's 5 s run" in err
+    assert "0 to 625 periods" in err

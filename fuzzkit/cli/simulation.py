@@ -21,15 +21,15 @@ from fuzzkit.control.names import KINDS as CONTROLLERS
 from fuzzkit.control.names import RUN_CONTROLLERS
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
-from fuzzkit.studies.outcome import settling_text
+from fuzzkit.studies.outcome import limit_text, settling_text
 from fuzzkit.units import latency_text
 
 FAULT_KINDS = ("none", "spike", "nan", "dropout", "delay")  # fuzzkit.studies.faults.FAULTS
 
 
 FAIL_ON_TRIP_HELP = (
-    f"exit with status {EXIT_TRIPPED} when a run tripped the safety limit (after printing and "
-    "writing everything; 0 otherwise, 2 for bad input)"
+    f"exit with status {EXIT_TRIPPED} when a run tripped the safety limit or its true force "
+    "passed it untripped (after printing and writing everything; 0 otherwise, 2 for bad input)"
 )
 
 #: ``fuzzkit compare --protocol`` choices (fuzzkit.studies.protocol.PROTOCOLS).
@@ -262,6 +262,7 @@ def _simulate(args: argparse.Namespace) -> int:
     if args.latency is not None:
         sensor, command = args.latency
         latency = (sensor, exp.latency_periods[1] if command is None else command)
+    cli_units.check_latency_fits(latency, exp)
     if args.spec and args.gains:
         raise ConfigError("--spec: a controller spec holds its gains; give --spec or --gains")
     spec = RunSpec(
@@ -295,7 +296,8 @@ def _simulate(args: argparse.Namespace) -> int:
     data["gains"] = gains
     data["gains_source"] = source
     _warn_impact(ran_exp, sum(data["latency_periods"]))
-    status = EXIT_TRIPPED if args.fail_on_trip and result.tripped else 0
+    exceeded = data["limit_exceeded"]
+    status = EXIT_TRIPPED if args.fail_on_trip and (result.tripped or exceeded) else 0
     if args.json:
         print(json.dumps(data, indent=2, allow_nan=False))  # never invalid JSON
         return status
@@ -322,6 +324,8 @@ def _simulate(args: argparse.Namespace) -> int:
             f"peak {_fmt(m['peak_force_true'], 1)} N true ({_fmt(m['peak_force_measured'], 1)} N "
             f"measured), contact lost {_fmt(m['contact_lost_s'])} s"
         )
+    if exceeded is not None:
+        print(f"  SAFETY: {limit_text(exceeded, data['safety_limit'], result.tripped)}")
     if result.faults or result.tripped:
         print(f"  sensor faults: {result.faults}, safety trip: {result.tripped}")
     for msg, count in sorted(result.messages.items()):
@@ -424,7 +428,9 @@ def compare_spec(name: str, controller: str, gains: dict[str, float], args: Any)
     latency = None
     if args.latency is not None:  # one number sets the sensor delay only, as simulate
         sensor, command = args.latency
-        latency = (sensor, experiment(name).latency_periods[1] if command is None else command)
+        exp = experiment(name)
+        latency = (sensor, exp.latency_periods[1] if command is None else command)
+        cli_units.check_latency_fits(latency, exp)
     return RunSpec(
         experiment=name,
         controller=controller,
@@ -444,6 +450,7 @@ def _compare(args: argparse.Namespace) -> int:
 
     for name in args.experiments:
         experiment(name)  # reject unknown names before any simulation runs
+        compare_spec(name, "pi", {}, args)  # and a latency longer than the run
     if args.rrd_dir and not Path(args.rrd_dir).is_dir():
         raise ConfigError(f"{args.rrd_dir}: folder does not exist")
     from fuzzkit.viz.run_files import check_trace_dir, write_run_traces
@@ -503,7 +510,8 @@ def _compare(args: argparse.Namespace) -> int:
         for controller in CONTROLLERS:
             print(f"  {format_gains(chosen[controller])}")
         print(comparison_table(rows))
-    return EXIT_TRIPPED if args.fail_on_trip and any(r["tripped"] for r in rows) else 0
+    failed = any(r["tripped"] or r["limit_exceeded"] for r in rows)
+    return EXIT_TRIPPED if args.fail_on_trip and failed else 0
 
 
 def _scenario(args: argparse.Namespace) -> int:

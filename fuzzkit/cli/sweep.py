@@ -139,7 +139,9 @@ def _sweep(args: argparse.Namespace) -> int:
     from fuzzkit.viz.sweep_figure import write_sweep_figure
 
     for name in args.experiments:
-        experiment(name)  # a bad name or scenario file fails here, before any run
+        exp = experiment(name)  # a bad name or scenario file fails here, before any run
+        for latency in args.latency or ():
+            cli_units.check_latency_fits(latency, exp, args.duration)
     names = list(args.experiments)  # what each run loads: a shipped name or the file
     controllers = [c.strip() for c in args.controller.split(",")]
     for c in controllers:

@@ -217,6 +217,11 @@ def _tune(args: argparse.Namespace) -> int:
     ks = tuple(args.stiffness)
     latencies = args.latency or None
     experiments, controller, rulebase, loop = _tuning_target(args)
+    from fuzzkit.studies.experiments import experiment
+
+    for e in experiments:
+        for latency in latencies or ():
+            cli_units.check_latency_fits(latency, experiment(e) if isinstance(e, str) else e)
     spec = None
     if args.spec:
         from fuzzkit.control.spec_reader import load_spec

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from fuzzkit.studies.metrics import summary
-from fuzzkit.studies.outcome import TRIPPED, settling_text
+from fuzzkit.studies.outcome import TRIPPED, limit_exceeded, settling_text
 from fuzzkit.studies.runner import RunResult
 from fuzzkit.viz.figures import new_figure, save_figure
 from fuzzkit.viz.run_series import engaged_index
@@ -118,6 +118,9 @@ def _title(result: RunResult) -> str:
     exp = result.experiment
     peak = float(np.nanmax(np.abs(result.force_true))) if len(result.t) else 0.0
     trip = f"TRIPPED at {result.trip_time_s:.3f} s" if result.trip_time_s is not None else "no trip"
+    exceeded = limit_exceeded(result.t, result.force_true, exp.force_limit_n)
+    if exceeded is not None:
+        trip += f", LIMIT EXCEEDED from {exceeded['time_s']:.3f} s"
     engaged = (
         f"engaged at {result.engaged_time_s:.3f} s (green)"
         if result.engaged_time_s is not None
