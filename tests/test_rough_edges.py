@@ -294,3 +294,38 @@ def test_a_latency_longer_than_half_the_run_is_refused_with_the_range(
     err = capsys.readouterr().err
     assert "2000 periods of delay (8 s) is more than half of E1's 5 s run" in err
     assert "0 to 625 periods" in err
+
+
+# ------------------------------------------------------------------ every run names what ran
+
+
+def test_simulate_names_the_rule_base_the_spec_and_the_gains(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from fuzzkit.viz.run_figure import run_figure
+
+    png = tmp_path / "run.png"
+    argv = ["simulate", "E1", "--rulebase", "macvicar_whelan", "--png", str(png)]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "  ran: rule base macvicar_whelan; gains: the defaults" in out
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    assert main([*argv[:-2], "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert (doc["rulebase"], doc["controller_spec"], doc["gains_source"]) == (
+        "macvicar_whelan",
+        None,
+        "the defaults",
+    )
+    assert doc["controller_impl"]  # the implementation, as before
+    spec = str(ROOT / "docs" / "examples" / "controller_pi.yaml")
+    assert main(["simulate", "E1", "--spec", spec, "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert (doc["rulebase"], doc["controller_spec"]) == (None, "e1_pi")
+    assert doc["gains_source"] == "controller spec e1_pi"
+    # the figure's title carries the same words
+    from fuzzkit.studies.batch import RunSpec, run_spec
+
+    result = run_spec(RunSpec("E1", plant="planar", duration_s=1.0))
+    title = run_figure(result, "rule base gaussian5; gains: the defaults")._suptitle.get_text()
+    assert title.endswith("\nrule base gaussian5; gains: the defaults")

@@ -291,10 +291,11 @@ def _simulate(args: argparse.Namespace) -> int:
         write_run_rrd(
             result, args.rrd, None if isinstance(plant, str) else plant, _fuzzy(ran, gains)
         )
-    written = write_run_traces(result, png, csv)
+    named = ran_names(ran, ran_exp, source)
+    written = write_run_traces(result, png, csv, ran_text(named))
     data = summary(result)
     data["gains"] = gains
-    data["gains_source"] = source
+    data.update(named)
     _warn_impact(ran_exp, sum(data["latency_periods"]))
     exceeded = data["limit_exceeded"]
     status = EXIT_TRIPPED if args.fail_on_trip and (result.tripped or exceeded) else 0
@@ -307,6 +308,7 @@ def _simulate(args: argparse.Namespace) -> int:
         f"({data['loop']} loop, {data['real_time_factor']}x real time in CPU time; "
         f"controller: {data['controller_impl']})"
     )
+    print(f"  ran: {ran_text(named)}")
     print(f"  {task_text(result.experiment)}")
     print(f"  gains: {_gains_text(gains)} ({source})")
     print(
@@ -333,6 +335,29 @@ def _simulate(args: argparse.Namespace) -> int:
     for path in [*([args.rrd] if args.rrd else []), *written]:
         print(f"  wrote {path}")
     return status
+
+
+def ran_names(ran: Any, exp: Any, gains_source: str) -> dict[str, str | None]:
+    """What ran, as the JSON of ``simulate`` and ``compare`` names it: ``controller_spec`` (its
+    name, or None), ``rulebase`` (fuzzy-PI's, or None) and ``gains_source``; the
+    implementation is the result's ``controller_impl``."""
+    cs = exp.controller_spec
+    return {
+        "controller_spec": None if cs is None else cs.name,
+        "rulebase": ran.rulebase if ran.controller == "fuzzy-pi" else None,
+        "gains_source": gains_source,
+    }
+
+
+def ran_text(named: dict[str, str | None]) -> str:
+    """:func:`ran_names` in words: ``controller spec e1_fuzzy, rule base macvicar_whelan;
+    gains: controller spec e1_fuzzy``."""
+    parts = [
+        f"{what} {named[key]}"
+        for key, what in (("controller_spec", "controller spec"), ("rulebase", "rule base"))
+        if named[key] is not None
+    ]
+    return f"{', '.join(parts) or 'pi'}; gains: {named['gains_source']}"
 
 
 def task_text(exp: Any) -> str:
@@ -444,7 +469,7 @@ def compare_spec(name: str, controller: str, gains: dict[str, float], args: Any)
 
 
 def _compare(args: argparse.Namespace) -> int:
-    from fuzzkit.studies.batch import experiment_and_plant, run_spec
+    from fuzzkit.studies.batch import experiment_and_plant, resolve, run_spec
     from fuzzkit.studies.experiments import experiment
     from fuzzkit.studies.metrics import summary
 
@@ -493,15 +518,18 @@ def _compare(args: argparse.Namespace) -> int:
                     None if isinstance(drawn, str) else drawn,
                     (load_loop_rulebase(args.rulebase), chosen[controller].gains),
                 )
+            ran, ran_exp, _ = resolve(spec)
+            named = ran_names(ran, ran_exp, chosen[controller].source)
             write_run_traces(
                 result,
                 png_dir / f"{stem}.png" if png_dir else None,
                 csv_dir / f"{stem}.csv" if csv_dir else None,
+                ran_text(named),
             )
             row = summary(result)
             row["protocol"] = args.protocol
             row["gains"] = dict(chosen[controller].gains)
-            row["gains_source"] = chosen[controller].source
+            row.update(named)
             rows.append(row)
     if args.json:
         print(json.dumps(rows, indent=2, allow_nan=False))

@@ -29,8 +29,9 @@ _TRIP = "tab:red"
 _ENGAGED = "tab:green"
 
 
-def run_figure(result: RunResult) -> Any:
-    """The run's figure (a matplotlib Figure, no pyplot)."""
+def run_figure(result: RunResult, ran: str | None = None) -> Any:
+    """The run's figure (a matplotlib Figure, no pyplot); ``ran``, when given, names what ran
+    (the spec or rule base and the gains' source) on a line of the title."""
     exp = result.experiment
     axes_idx = [i for i in (2, 0, 1) if exp.selection[i]]
     fig = new_figure(12.0, 2.6 * len(axes_idx) + 0.9)
@@ -84,7 +85,7 @@ def run_figure(result: RunResult) -> Any:
             ax_f.legend(fontsize=7, loc="best")
     for ax in grid[-1]:
         ax.set_xlabel("time [s]")
-    fig.suptitle(_title(result), fontsize=10)
+    fig.suptitle(_title(result) + (f"\n{ran}" if ran else ""), fontsize=10)
     fig.tight_layout()
     return fig
 
