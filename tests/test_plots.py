@@ -532,6 +532,32 @@ def _sweep_rows() -> list[dict[str, Any]]:
     return rows
 
 
+def test_sweep_figure_keeps_two_specs_apart_and_names_them() -> None:
+    # issue 41: two specs of one kind were one series, their mean drawn as if over seeds
+    from fuzzkit.viz.sweep_figure import sweep_figure
+
+    rows = []
+    for spec, overshoot in (("specs/a.yaml", 1.0), ("specs/b.yaml", 3.0)):
+        row = dict(_sweep_rows()[3], controller_spec=spec, gains=spec, tripped=False)
+        rows.append({**row, "z_overshoot_pct": overshoot, "z_settling_time_s": 0.2})
+    fig = sweep_figure(rows)
+    overshoot = fig.axes[0]
+    bars = sorted(p.get_height() for p in overshoot.patches)
+    assert bars == [1.0, 3.0]  # one bar per spec, each its own run: no 2.0 mean of both
+    names = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert names == ["spec a (fuzzy-PI)", "spec b (fuzzy-PI)"]
+    colours = {tuple(p.get_facecolor()) for p in overshoot.patches}
+    assert len(colours) == 2
+
+
+def test_sweep_specs_name_a_specs_gains_after_it() -> None:
+    from fuzzkit.studies.sweep import sweep_specs
+
+    spec = str(Path(__file__).parent.parent / "docs" / "examples" / "controller.yaml")
+    runs = sweep_specs(["E1"], ["pi"], controller_specs=[spec])
+    assert [r.gains_label for r in runs] == [spec]
+
+
 def test_sweep_figure_keeps_never_settled_and_tripped_runs_and_names_the_plant() -> None:
     from fuzzkit.viz.palette import TRIP_LABEL
     from fuzzkit.viz.sweep_figure import NEVER_SETTLED_LABEL, sweep_figure
