@@ -51,7 +51,8 @@ def stiffness_lines(
         "### Certified region over the stiffness study",
         "",
         f"Each run above against the stability certificate (`fuzzkit stability`, "
-        f"[docs/stability.md](../stability.md)) for the same gains, {PLANT} plant, latency "
+        f"[docs/stability.md](../stability.md)) for the same gains, on the {PLANT} plant the "
+        f"study ran on (for every report), latency "
         f"{latency_text(latency)}: **C** certified, **-** not; then the run: settled, or "
         "tripped. The last column is the approach speed above which the impact alone passes "
         f"the {exp.force_limit_n:g} N limit: stiffness x speed x {1e3 * delay:.0f} ms (the "
