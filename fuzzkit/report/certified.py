@@ -13,6 +13,7 @@ from fuzzkit.analysis.region import certify_cell, fuzzy_part
 from fuzzkit.analysis.regulation import impact_speed_limit
 from fuzzkit.studies.experiments import press_experiment
 from fuzzkit.studies.latency_sweep import StabilityMap, scaled_default_gains
+from fuzzkit.studies.outcome import axis_outcome
 from fuzzkit.units import latency_text
 
 #: The plant the report's stiffness study and latency map run on.
@@ -53,8 +54,9 @@ def stiffness_lines(
         f"Each run above against the stability certificate (`fuzzkit stability`, "
         f"[docs/stability.md](../stability.md)) for the same gains, on the {PLANT} plant the "
         f"study ran on (for every report), latency "
-        f"{latency_text(latency)}: **C** certified, **-** not; then the run: settled, or "
-        "tripped. The last column is the approach speed above which the impact alone passes "
+        f"{latency_text(latency)}: **C** certified, **-** not; then how the run "
+        "ended (settled, never settled, tripped). The last column is the approach speed "
+        "above which the impact alone passes "
         f"the {exp.force_limit_n:g} N limit: stiffness x speed x {1e3 * delay:.0f} ms (the "
         "engagement, the delays and the inner loop's lags) > limit - set point, whatever the "
         "controller.",
@@ -72,11 +74,7 @@ def stiffness_lines(
                 exp, ctrl, gains[(ctrl, label)], inner, fuzzy, k, latency, 0.1, noise
             )
             m = rows[i][1]
-            ran = (
-                "tripped"
-                if m.get("tripped")
-                else ("settled" if m.get("settling_time_s") is not None else "not settled")
-            )
+            ran = axis_outcome(m, bool(m.get("tripped")))  # the words every command uses
             cells.append(f"{'C' if cell.certified else '-'}, {ran}")
         speed = impact_speed_limit(k * 1e3, exp.force_limit_n, delay, sp)
         md.append(f"| {k:g} | " + " | ".join(cells) + f" | {1e3 * speed:.3g} mm/s |")

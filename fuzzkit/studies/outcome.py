@@ -1,9 +1,9 @@
 """How one force-controlled axis of a run ended, in words defined once.
 
 ``fuzzkit simulate`` (text and ``--json``), ``compare``, ``tune``, the run figure and the
-report say *never settled*, *no contact* and *tripped* with these words and mean the same
-thing by them; a settling time of None is never printed as ``-``, which would say none of
-them.
+report (its certified-region table too) say *never settled*, *no contact* and *tripped* with
+these words and mean the same thing by them; a settling time of None is never printed as
+``-``, which would say none of them.
 
 * :data:`TRIPPED`: the run tripped the safety limit (the controller stopped and retreated;
   what follows says nothing about settling).
