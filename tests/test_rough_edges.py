@@ -329,3 +329,13 @@ def test_simulate_names_the_rule_base_the_spec_and_the_gains(
     result = run_spec(RunSpec("E1", plant="planar", duration_s=1.0))
     title = run_figure(result, "rule base gaussian5; gains: the defaults")._suptitle.get_text()
     assert title.endswith("\nrule base gaussian5; gains: the defaults")
+
+
+def test_a_sweep_row_holds_the_limit_exceeded_flat() -> None:
+    from fuzzkit.studies.batch import RunSpec, execute
+
+    row = execute(RunSpec("E1", plant="arm6", latency=(300, 300), duration_s=3.0))
+    assert row["limit_exceeded_s"] is not None and row["limit_exceeded_peak_n"] > 25.0
+    assert "limit_exceeded" not in row  # no dict in a table's cell
+    calm = execute(RunSpec("E1", plant="arm6", duration_s=3.0))
+    assert calm["limit_exceeded_s"] is None and calm["limit_exceeded_peak_n"] is None

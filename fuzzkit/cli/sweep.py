@@ -199,7 +199,10 @@ def _sweep(args: argparse.Namespace) -> int:
     tripped = sum(bool(r.get("tripped")) for r in rows)
     if tripped:
         print(f"{tripped} of {len(rows)} runs tripped the safety limit")
-    return EXIT_TRIPPED if args.fail_on_trip and tripped else 0
+    exceeded = sum(r.get("limit_exceeded_s") is not None for r in rows)
+    if exceeded:
+        print(f"{exceeded} of {len(rows)} runs' true force passed the safety limit")
+    return EXIT_TRIPPED if args.fail_on_trip and (tripped or exceeded) else 0
 
 
 def run_sweep_traced(
