@@ -180,6 +180,7 @@ def test_summary_has_the_issue_keys() -> None:
         "seed",
         "safety_limit",
         "tripped",
+        "limit_exceeded",
         "sim_time_s",
         "wall_time_s",
         "loop",
@@ -189,6 +190,7 @@ def test_summary_has_the_issue_keys() -> None:
         "axes",
     }
     assert data["loop"] == "python"
+    assert data["limit_exceeded"] is None  # E3 with PI: the true force stays below the limit
     # simulated seconds per CPU second of the loop
     assert data["real_time_factor"] == pytest.approx(
         data["sim_time_s"] / data["cpu_time_s"],

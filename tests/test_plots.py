@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import html.parser
 import math
+import re
 import struct
 import subprocess
 import sys
@@ -483,6 +484,24 @@ def test_stiffness_figure_uses_log_axes_and_a_never_settled_row() -> None:
     assert figure_bytes(fig)[:8] == PNG_MAGIC
 
 
+def test_stiffness_figure_ticks_are_plain_numbers_and_the_legend_shows_the_dots() -> None:
+    # issue 41: 1-1.5 % overshoot on a log axis was labelled 1.5x10^0 ... 10^0, and the legend
+    # drew bare line styles beside series drawn as dots on lines
+    rows = [(k, {"overshoot_pct": o, "settling_time_s": s}) for k, o, s in
+            ((5.0, 1.0, 0.11), (10.0, 1.2, 0.13), (20.0, 1.5, 0.3))]  # fmt: skip
+    fig = stiffness_figure({("pi", "default"): rows, ("fuzzy-pi", "matched"): rows})
+    figure_bytes(fig)  # the labels are made at draw time
+    overshoot, settling, trip, _ = fig.axes
+    for ax in (overshoot, settling):
+        labels = [t.get_text() for t in ax.get_yticklabels(which="both") if t.get_text()]
+        assert labels and all(re.fullmatch(r"[0-9.]+", t) for t in labels), labels
+    assert {"1", "1.5"} <= {t.get_text() for t in overshoot.get_yticklabels(which="both")}
+    assert [t.get_text() for t in trip.get_xticklabels()] == ["5", "10", "20"]
+    legend = fig.legends[0]
+    assert [t.get_text() for t in legend.get_texts()] == ["PI default", "fuzzy-PI matched"]
+    assert all(h.get_marker() == "o" for h in legend.legend_handles)
+
+
 def test_stiffness_figure_marks_trips_instead_of_plotting_their_overshoot() -> None:
     fig = stiffness_figure(_study(), "arm6")
     overshoot, settling, tripped, _ = fig.axes
@@ -511,6 +530,32 @@ def _sweep_rows() -> list[dict[str, Any]]:
                 "z_steady_state_error_std": 0.1, "z_peak_force": 60.0 if trip else 12.0,
             })  # fmt: skip
     return rows
+
+
+def test_sweep_figure_keeps_two_specs_apart_and_names_them() -> None:
+    # issue 41: two specs of one kind were one series, their mean drawn as if over seeds
+    from fuzzkit.viz.sweep_figure import sweep_figure
+
+    rows = []
+    for spec, overshoot in (("specs/a.yaml", 1.0), ("specs/b.yaml", 3.0)):
+        row = dict(_sweep_rows()[3], controller_spec=spec, gains=spec, tripped=False)
+        rows.append({**row, "z_overshoot_pct": overshoot, "z_settling_time_s": 0.2})
+    fig = sweep_figure(rows)
+    overshoot = fig.axes[0]
+    bars = sorted(p.get_height() for p in overshoot.patches)
+    assert bars == [1.0, 3.0]  # one bar per spec, each its own run: no 2.0 mean of both
+    names = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert names == ["spec a (fuzzy-PI)", "spec b (fuzzy-PI)"]
+    colours = {tuple(p.get_facecolor()) for p in overshoot.patches}
+    assert len(colours) == 2
+
+
+def test_sweep_specs_name_a_specs_gains_after_it() -> None:
+    from fuzzkit.studies.sweep import sweep_specs
+
+    spec = str(Path(__file__).parent.parent / "docs" / "examples" / "controller.yaml")
+    runs = sweep_specs(["E1"], ["pi"], controller_specs=[spec])
+    assert [r.gains_label for r in runs] == [spec]
 
 
 def test_sweep_figure_keeps_never_settled_and_tripped_runs_and_names_the_plant() -> None:

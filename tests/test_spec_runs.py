@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 from pathlib import Path
 
 import jsonschema
@@ -222,13 +223,25 @@ def test_tune_a_spec_writes_it_back_with_the_tuned_gains(
 ) -> None:
     from fuzzkit.control.gains import read_gains
 
+    # issue 41: the spec's own correction limit (0.04 here, not the defaults' 0.05) is what
+    # the gains file's u_min/u_max say, the comparison is with the spec's gains, and every
+    # number is written in its shortest form (no 0.00020000000000000004)
+    text = PI.read_text(encoding="utf-8")
+    assert "correction_m: 0.05 " in text
+    spec = tmp_path / "pi.yaml"
+    spec.write_text(text.replace("correction_m: 0.05 ", "correction_m: 0.04 "), encoding="utf-8")
     out, spec_out = tmp_path / "gains.yaml", tmp_path / "tuned.yaml"
-    argv = ["tune", "E1", "--spec", str(PI), "--stiffness", "10", "--budget", "10"]
+    argv = ["tune", "E1", "--spec", str(spec), "--stiffness", "10", "--budget", "10"]
     argv += ["--workers", "1", "--quiet", "--out", str(out), "--spec-out", str(spec_out)]
     assert main(argv) == 0
-    assert f"wrote {spec_out}" in capsys.readouterr().out
+    printed = capsys.readouterr()
+    assert f"wrote {spec_out}" in printed.out
+    assert f"vs the gains of {spec} " in printed.out and "default gains" not in printed.out
     gains = read_gains(out, "pi")
-    tuned, original = load_spec(spec_out), load_spec(PI)
+    assert (gains["u_min"], gains["u_max"]) == (-0.04, 0.04)
+    for written in (out.read_text(encoding="utf-8"), spec_out.read_text(encoding="utf-8")):
+        assert not re.search(r"\d(0{6,}|9{6,})\d", written), written
+    tuned, original = load_spec(spec_out), load_spec(spec)
     assert all((a.kp, a.ki) == (gains["kp"], gains["ki"]) for a in tuned.axes)
     # everything but the gains is the spec's: task, limits, safety, front end
     assert dataclasses.replace(tuned, axes=original.axes, source=None) == dataclasses.replace(

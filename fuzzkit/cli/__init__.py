@@ -92,7 +92,8 @@ def add_plant_argument(parser: argparse.ArgumentParser, what: str, both: bool = 
         "--plant",
         choices=[*sorted(PLANTS), *(["both"] if both else [])],
         default="planar",
-        help=f"{what}: {plants_text()}" + ("; both: planar and arm6" if both else ""),
+        help=f"{what} (default: planar): {plants_text()}"
+        + ("; both: planar and arm6" if both else ""),
     )
 
 

@@ -319,10 +319,12 @@ def describe_rulebase(rb: RuleBase) -> str:
         lines += _variable_lines(var, "output", rb.input_names, fp)
     lines.append("")
     grid = _table_grid(rb)
-    if grid is not None and rb.table is not None:
+    shape = rule_grid(rb)
+    if grid is not None and shape is not None:
+        listed = "" if rb.table is not None else ", listed rule by rule in the file"
         lines.append(
-            f"rules: {len(rb.rules)} (table: rows {rb.table.rows}, columns "
-            f"{rb.table.columns} -> {rb.table.output})"
+            f"rules: {len(rb.rules)} (table: rows {shape.row_input}, columns "
+            f"{shape.column_input} -> {shape.output}{listed})"
         )
         lines += grid
     else:
@@ -350,10 +352,54 @@ def cmd_info(args: argparse.Namespace) -> int:
     if kind.name == "controller spec":
         from fuzzkit.control.spec_reader import load_spec
 
-        rb = load_spec(args.rulebase).rulebase
-        if rb is not None:
-            print(describe_rulebase(rb))
+        spec = load_spec(args.rulebase)
+        print(spec_text(spec))
+        if spec.rulebase is not None:
+            print(f"\nrule base: {describe_rulebase(spec.rulebase)}")
     return EXIT_OK
+
+
+def spec_text(spec: Any) -> str:
+    """What ``fuzzkit info SPEC`` shows of a controller spec before its rule base: the period
+    and surface, each axis's set point and gains, the limits, the safeguards, the sensor front
+    end and the adaptation, every value as the controller uses it (defaults filled in)."""
+    s, lim, sensor = spec.safety, spec.limits, spec.sensor
+    surface = spec.surface.method
+    if surface == "table":
+        size = spec.surface.tolerance or spec.surface.resolution
+        what = "tolerance" if spec.surface.tolerance is not None else "resolution"
+        surface = f"table ({what} {size:g})"
+    lines = [
+        f"  {spec.kind}, period {spec.period_s * 1e3:g} ms ({1.0 / spec.period_s:g} Hz)"
+        + (f", surface {surface}" if spec.kind == "fuzzy-pi" else "")
+    ]
+    for a in spec.axes:
+        gains = f"kp {a.kp:g}, ki {a.ki:g}" + (f", kx {a.kx:g}" if a.kx is not None else "")
+        lines.append(f"  axis {a.axis}: set point {a.setpoint_n:g} N; {gains}")
+    lines.append(
+        f"  limits: |u| <= {lim.correction_m:g} m per axis, |du| <= {lim.step_m:g} m per period"
+    )
+    engage = (
+        "from the start"
+        if s.engage_threshold_n is None
+        else f"above {s.engage_threshold_n:g} N for {s.engage_samples} samples"
+    )
+    lines.append(
+        f"  safety: limit {s.limit_n:g} N (trip after {s.trip_samples} samples, back off "
+        f"{s.backoff_m:g} m at {s.backoff_speed_m_s:g} m/s); engage {engage}; spike gate "
+        f"{s.spike_gate:g} N ({s.spike_confirm} in a row accepted)"
+    )
+    front = []
+    if sensor.tare_samples:
+        front.append(f"tare over the first {sensor.tare_samples} samples")
+    if sensor.tool is not None:
+        com = ", ".join(f"{c:g}" for c in sensor.tool.com_m)
+        front.append(f"gravity compensation of {sensor.tool.mass_kg:g} kg at [{com}] m")
+    if sensor.lowpass_hz is not None:
+        front.append(f"low-pass {sensor.lowpass_hz:g} Hz")
+    lines.append(f"  sensor front end: {'; '.join(front) or 'none (raw samples)'}")
+    lines.append(f"  adaptation: {spec.adaptation.mode}")
+    return "\n".join(lines)
 
 
 # ---------------------------------------------------------------------------- eval

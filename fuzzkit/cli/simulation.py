@@ -21,15 +21,15 @@ from fuzzkit.control.names import KINDS as CONTROLLERS
 from fuzzkit.control.names import RUN_CONTROLLERS
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path
-from fuzzkit.studies.outcome import settling_text
+from fuzzkit.studies.outcome import limit_text, settling_text
 from fuzzkit.units import latency_text
 
 FAULT_KINDS = ("none", "spike", "nan", "dropout", "delay")  # fuzzkit.studies.faults.FAULTS
 
 
 FAIL_ON_TRIP_HELP = (
-    f"exit with status {EXIT_TRIPPED} when a run tripped the safety limit (after printing and "
-    "writing everything; 0 otherwise, 2 for bad input)"
+    f"exit with status {EXIT_TRIPPED} when a run tripped the safety limit or its true force "
+    "passed it untripped (after printing and writing everything; 0 otherwise, 2 for bad input)"
 )
 
 #: ``fuzzkit compare --protocol`` choices (fuzzkit.studies.protocol.PROTOCOLS).
@@ -262,6 +262,7 @@ def _simulate(args: argparse.Namespace) -> int:
     if args.latency is not None:
         sensor, command = args.latency
         latency = (sensor, exp.latency_periods[1] if command is None else command)
+    cli_units.check_latency_fits(latency, exp)
     if args.spec and args.gains:
         raise ConfigError("--spec: a controller spec holds its gains; give --spec or --gains")
     spec = RunSpec(
@@ -293,12 +294,14 @@ def _simulate(args: argparse.Namespace) -> int:
             None if isinstance(plant, str) else plant,
             _fuzzy(ran, ran_exp, gains),
         )
-    written = write_run_traces(result, png, csv)
+    named = ran_names(ran, ran_exp, source)
+    written = write_run_traces(result, png, csv, ran_text(named))
     data = summary(result)
     data["gains"] = gains
-    data["gains_source"] = source
+    data.update(named)
     _warn_impact(ran_exp, sum(data["latency_periods"]))
-    status = EXIT_TRIPPED if args.fail_on_trip and result.tripped else 0
+    exceeded = data["limit_exceeded"]
+    status = EXIT_TRIPPED if args.fail_on_trip and (result.tripped or exceeded) else 0
     if args.json:
         print(json.dumps(data, indent=2, allow_nan=False))  # never invalid JSON
         return status
@@ -308,6 +311,7 @@ def _simulate(args: argparse.Namespace) -> int:
         f"({data['loop']} loop, {data['real_time_factor']}x real time in CPU time; "
         f"controller: {data['controller_impl']})"
     )
+    print(f"  ran: {ran_text(named)}")
     print(f"  {task_text(result.experiment)}")
     print(f"  gains: {_gains_text(gains)} ({source})")
     print(
@@ -325,6 +329,8 @@ def _simulate(args: argparse.Namespace) -> int:
             f"peak {_fmt(m['peak_force_true'], 1)} N true ({_fmt(m['peak_force_measured'], 1)} N "
             f"measured), contact lost {_fmt(m['contact_lost_s'])} s"
         )
+    if exceeded is not None:
+        print(f"  SAFETY: {limit_text(exceeded, data['safety_limit'], result.tripped)}")
     if result.faults or result.tripped:
         print(f"  sensor faults: {result.faults}, safety trip: {result.tripped}")
     for msg, count in sorted(result.messages.items()):
@@ -332,6 +338,29 @@ def _simulate(args: argparse.Namespace) -> int:
     for path in [*([args.rrd] if args.rrd else []), *written]:
         print(f"  wrote {path}")
     return status
+
+
+def ran_names(ran: Any, exp: Any, gains_source: str) -> dict[str, str | None]:
+    """What ran, as the JSON of ``simulate`` and ``compare`` names it: ``controller_spec`` (its
+    name, or None), ``rulebase`` (fuzzy-PI's, or None) and ``gains_source``; the
+    implementation is the result's ``controller_impl``."""
+    cs = exp.controller_spec
+    return {
+        "controller_spec": None if cs is None else cs.name,
+        "rulebase": ran.rulebase if ran.controller == "fuzzy-pi" else None,
+        "gains_source": gains_source,
+    }
+
+
+def ran_text(named: dict[str, str | None]) -> str:
+    """:func:`ran_names` in words: ``controller spec e1_fuzzy, rule base macvicar_whelan;
+    gains: controller spec e1_fuzzy``."""
+    parts = [
+        f"{what} {named[key]}"
+        for key, what in (("controller_spec", "controller spec"), ("rulebase", "rule base"))
+        if named[key] is not None
+    ]
+    return f"{', '.join(parts) or 'pi'}; gains: {named['gains_source']}"
 
 
 def task_text(exp: Any) -> str:
@@ -433,7 +462,9 @@ def compare_spec(name: str, controller: str, gains: dict[str, float], args: Any)
     latency = None
     if args.latency is not None:  # one number sets the sensor delay only, as simulate
         sensor, command = args.latency
-        latency = (sensor, experiment(name).latency_periods[1] if command is None else command)
+        exp = experiment(name)
+        latency = (sensor, exp.latency_periods[1] if command is None else command)
+        cli_units.check_latency_fits(latency, exp)
     return RunSpec(
         experiment=name,
         controller=controller,
@@ -447,12 +478,13 @@ def compare_spec(name: str, controller: str, gains: dict[str, float], args: Any)
 
 
 def _compare(args: argparse.Namespace) -> int:
-    from fuzzkit.studies.batch import experiment_and_plant, run_spec
+    from fuzzkit.studies.batch import experiment_and_plant, resolve, run_spec
     from fuzzkit.studies.experiments import experiment
     from fuzzkit.studies.metrics import summary
 
     for name in args.experiments:
         experiment(name)  # reject unknown names before any simulation runs
+        compare_spec(name, "pi", {}, args)  # and a latency longer than the run
     if args.rrd_dir and not Path(args.rrd_dir).is_dir():
         raise ConfigError(f"{args.rrd_dir}: folder does not exist")
     from fuzzkit.viz.run_files import check_trace_dir, write_run_traces
@@ -495,15 +527,18 @@ def _compare(args: argparse.Namespace) -> int:
                     None if isinstance(drawn, str) else drawn,
                     (load_loop_rulebase(args.rulebase), chosen[controller].gains),
                 )
+            ran, ran_exp, _ = resolve(spec)
+            named = ran_names(ran, ran_exp, chosen[controller].source)
             write_run_traces(
                 result,
                 png_dir / f"{stem}.png" if png_dir else None,
                 csv_dir / f"{stem}.csv" if csv_dir else None,
+                ran_text(named),
             )
             row = summary(result)
             row["protocol"] = args.protocol
             row["gains"] = dict(chosen[controller].gains)
-            row["gains_source"] = chosen[controller].source
+            row.update(named)
             rows.append(row)
     if args.json:
         print(json.dumps(rows, indent=2, allow_nan=False))
@@ -512,7 +547,8 @@ def _compare(args: argparse.Namespace) -> int:
         for controller in CONTROLLERS:
             print(f"  {format_gains(chosen[controller])}")
         print(comparison_table(rows))
-    return EXIT_TRIPPED if args.fail_on_trip and any(r["tripped"] for r in rows) else 0
+    failed = any(r["tripped"] or r["limit_exceeded"] for r in rows)
+    return EXIT_TRIPPED if args.fail_on_trip and failed else 0
 
 
 def _scenario(args: argparse.Namespace) -> int:

@@ -139,7 +139,9 @@ def _sweep(args: argparse.Namespace) -> int:
     from fuzzkit.viz.sweep_figure import write_sweep_figure
 
     for name in args.experiments:
-        experiment(name)  # a bad name or scenario file fails here, before any run
+        exp = experiment(name)  # a bad name or scenario file fails here, before any run
+        for latency in args.latency or ():
+            cli_units.check_latency_fits(latency, exp, args.duration)
     names = list(args.experiments)  # what each run loads: a shipped name or the file
     controllers = [c.strip() for c in args.controller.split(",")]
     for c in controllers:
@@ -197,7 +199,10 @@ def _sweep(args: argparse.Namespace) -> int:
     tripped = sum(bool(r.get("tripped")) for r in rows)
     if tripped:
         print(f"{tripped} of {len(rows)} runs tripped the safety limit")
-    return EXIT_TRIPPED if args.fail_on_trip and tripped else 0
+    exceeded = sum(r.get("limit_exceeded_s") is not None for r in rows)
+    if exceeded:
+        print(f"{exceeded} of {len(rows)} runs' true force passed the safety limit")
+    return EXIT_TRIPPED if args.fail_on_trip and (tripped or exceeded) else 0
 
 
 def run_sweep_traced(

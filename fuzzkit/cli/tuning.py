@@ -217,6 +217,16 @@ def _tune(args: argparse.Namespace) -> int:
     ks = tuple(args.stiffness)
     latencies = args.latency or None
     experiments, controller, rulebase, loop = _tuning_target(args)
+    from fuzzkit.studies.experiments import experiment
+
+    for e in experiments:
+        for latency in latencies or ():
+            cli_units.check_latency_fits(latency, experiment(e) if isinstance(e, str) else e)
+    spec = None
+    if args.spec:
+        from fuzzkit.control.spec_reader import load_spec
+
+        spec = load_spec(args.spec)
     constraint = (
         _certified_over(args, experiments[0], controller, rulebase) if args.certify else None
     )
@@ -270,7 +280,7 @@ def _tune(args: argparse.Namespace) -> int:
     # the full per-case runs (what the trip warning counts): not after Ctrl-C (the user wants
     # out)
     cases = [] if result.interrupted else compare_cases(result, seed=0)
-    for line in tune_report_lines(result, cases, start_name):
+    for line in tune_report_lines(result, cases, start_name, tuned_gains(result, spec)):
         print(line)
     warnings = honesty_warnings(result, cases, start_name)
     for line in warnings:
@@ -282,10 +292,13 @@ def _tune(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 1
-    _, kept = write_gains(out, result.to_entry(), merge=not args.replace)
+    import dataclasses
+
+    entry = dataclasses.replace(result.to_entry(), gains=tuned_gains(result, spec))
+    _, kept = write_gains(out, entry, merge=not args.replace)
     print(f"wrote {out}" + (f" (kept the {', '.join(kept)} entry)" if kept else ""))
     if args.spec_out:
-        _write_spec(args, result)
+        _write_spec(args, result, entry.gains)
         print(f"wrote {args.spec_out}")
     if result.interrupted:
         print(f"fuzzkit: interrupted (Ctrl-C); {out} holds the best gains so far", file=sys.stderr)
@@ -336,8 +349,9 @@ def honesty_warnings(result: Any, cases: Any, start: str) -> list[str]:
 
 
 def _starting_gains(args: argparse.Namespace, controller: str) -> tuple[Any, str]:
-    """The gains the search starts from and is judged against: a ``--spec``'s own (when all
-    its axes share them), or None for the defaults; and how to name them."""
+    """The gains the search starts from and is judged against: a ``--spec``'s own, with its
+    correction limit as ``u_min``/``u_max`` (when all its axes share them), or None for the
+    defaults; and how to name them. A spec whose axes differ is said so once, here."""
     if not args.spec:
         return None, "the default gains"
     from fuzzkit.control.spec_reader import load_spec
@@ -345,12 +359,46 @@ def _starting_gains(args: argparse.Namespace, controller: str) -> tuple[Any, str
     spec = load_spec(args.spec)
     shared = {(a.kp, a.ki, a.kx) for a in spec.axes}
     if len(shared) != 1:
-        return None, "the default gains (the spec's axes have different gains)"
+        each = "; ".join(f"{a.axis}: kp {a.kp:g}, ki {a.ki:g}" for a in spec.axes)
+        print(
+            f"note: {args.spec}'s axes have different gains ({each}); tune searches one gain "
+            "set for every axis, so it starts from and is judged against the default gains",
+            file=sys.stderr,
+        )
+        return None, "the default gains"
     kp, ki, kx = shared.pop()
     gains = {"kp": kp, "ki": ki, **({"kx": kx} if controller == "fuzzy-pi" else {})}
     from fuzzkit.studies.experiments import DEFAULT_GAINS
 
-    return {**DEFAULT_GAINS[controller], **gains}, f"the gains of {args.spec}"
+    return {**DEFAULT_GAINS[controller], **gains, **_spec_limits(spec)}, f"the gains of {args.spec}"
+
+
+def _spec_limits(spec: Any) -> dict[str, float]:
+    """A spec's correction limit as a gains file spells it (``u_min``, ``u_max``)."""
+    return {"u_min": -spec.limits.correction_m, "u_max": spec.limits.correction_m}
+
+
+#: Tuned gains are written as the shortest decimal within this relative distance of the value
+#: found: a gain the search moved through log10 and back carries about 1e-15 of rounding
+#: (``0.00020000000000000004``); the search itself resolves 0.002 decades (0.5 %).
+GAIN_DIGITS_REL = 1e-12
+
+
+def shortest_gain(value: float) -> float:
+    """``value`` as the shortest decimal within :data:`GAIN_DIGITS_REL` of it (``repr`` of the
+    result prints that decimal): ``0.00020000000000000004`` -> ``0.0002``."""
+    for digits in range(1, 18):
+        short = float(f"{value:.{digits}g}")
+        if abs(short - value) <= GAIN_DIGITS_REL * abs(value):
+            return short
+    return value
+
+
+def tuned_gains(result: Any, spec: Any) -> dict[str, float]:
+    """What ``tune`` writes: the result's gains, each as :func:`shortest_gain`, with a
+    ``--spec``'s own correction limit as ``u_min``/``u_max`` (not the defaults')."""
+    gains = {k: shortest_gain(v) for k, v in result.gains.items()}
+    return {**gains, **(_spec_limits(spec) if spec is not None else {})}
 
 
 def _tuning_target(args: argparse.Namespace) -> tuple[list[Any], str, str, str]:
@@ -384,7 +432,7 @@ def _tuning_target(args: argparse.Namespace) -> tuple[list[Any], str, str, str]:
     return experiments, spec.kind, spec.rulebase_source or args.rulebase, loop
 
 
-def _write_spec(args: argparse.Namespace, result: Any) -> None:
+def _write_spec(args: argparse.Namespace, result: Any, gains: dict[str, float]) -> None:
     """The tuned gains as a controller spec (atomically): ``--spec``'s, or one of the first
     experiment's task."""
     import re
@@ -401,7 +449,6 @@ def _write_spec(args: argparse.Namespace, result: Any) -> None:
         f"# written by fuzzkit tune {' '.join(args.experiments)} ({result.plant}); "
         "format: docs/controller.md\n"
     )
-    gains = dict(result.to_entry().gains)
     if args.spec:
         import dataclasses
         import os
@@ -460,12 +507,15 @@ def _metric(v: Any, unit: str, digits: int, missing: str) -> str:
     return missing if v is None else f"{v:.{digits}f}{unit}"
 
 
-def tune_report_lines(result: Any, cases: Any, start: str = "the default gains") -> list[str]:
+def tune_report_lines(
+    result: Any, cases: Any, start: str = "the default gains", gains: Any = None
+) -> list[str]:
     """What ``fuzzkit tune`` prints after the search: the rule, the verdict, per-case numbers.
 
     ``result`` is a ``fuzzkit.studies.tuning.TuneResult``, ``cases`` the
     ``fuzzkit.studies.tuning_check.compare_cases`` of it, ``start`` what the search started
-    from and is judged against (the default gains, or a spec's).
+    from and is judged against (the default gains, or a spec's), ``gains`` the gains as
+    written (:func:`tuned_gains`; default: the result's).
     """
     what = "experiment x stiffness x latency" if result.latencies else "experiment x stiffness"
     rule = (
@@ -512,8 +562,8 @@ def tune_report_lines(result: Any, cases: Any, start: str = "the default gains")
         lines.append(
             f"  {name}: {cost:.6g} ({start}: {result.baseline_experiment_costs[name]:.6g})"
         )
-    gains = ", ".join(f"{k}={v:.6g}" for k, v in result.gains.items())
-    lines.append(f"  gains: {gains}" + (f" ({start})" if result.kept_defaults else ""))
+    shown = ", ".join(f"{k}={v!r}" for k, v in (gains or result.gains).items())
+    lines.append(f"  gains: {shown}" + (f" ({start})" if result.kept_defaults else ""))
     return lines
 
 

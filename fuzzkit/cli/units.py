@@ -85,6 +85,38 @@ latencies = _argparse_type(units.parse_latencies, "latencies")
 OPTION_TYPES = (stiffness, stiffnesses, latency_or_sensor, latency, latencies)
 
 
+#: A run's sensor and command delays together may be at most this fraction of its duration:
+#: beyond it the loop acts on samples older than half the run, and a run can end before a
+#: correction computed from its contact ever reaches the robot.
+LATENCY_RUN_FRACTION = 0.5
+
+
+def check_latency_fits(
+    latency: tuple[int, int] | None, exp: Any, duration_s: float | None = None
+) -> None:
+    """Refuse ``--latency`` when its delays are longer than :data:`LATENCY_RUN_FRACTION` of
+    the run of ``exp`` (an :class:`~fuzzkit.studies.task.Experiment`; ``duration_s``: the run's
+    length when not the scenario's), naming the range.
+
+    Raises
+    ------
+    ConfigError
+        The delays, in periods and seconds, and the most the run takes.
+    """
+    if latency is None:
+        return
+    period = exp.scenario.period_s
+    duration = exp.scenario.duration_s if duration_s is None else duration_s
+    most = int(LATENCY_RUN_FRACTION * duration / period + 1e-9)
+    total = latency[0] + latency[1]
+    if total > most:
+        raise ConfigError(
+            f"--latency {units.latency_text(latency)}: {total} periods of delay "
+            f"({total * period:g} s) is more than half of {exp.name}'s {duration:g} s run; "
+            f"sensor + command delays may be 0 to {most} periods ({most * period:g} s) there"
+        )
+
+
 def store_alias(parser: argparse.ArgumentParser, *flags: str, dest: str, **kw: Any) -> None:
     """An old spelling of an option, kept working and hidden from ``--help``."""
     parser.add_argument(*flags, dest=dest, help=argparse.SUPPRESS, **kw)

@@ -29,7 +29,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path as FsPath
 
-from fuzzkit.errors import Problem
+from fuzzkit.errors import Problem, did_you_mean
 from fuzzkit.formats.foreign_common import (
     SUGENO_DEFUZZIFIERS,
     Collector,
@@ -214,7 +214,8 @@ def _mf_term(
     if kind in _OTHER_MFS:
         return f"membership function {kind!r} is not in fuzzkit's model (refused, not approximated)"
     if kind not in known:
-        return f"unknown or custom membership function {kind!r} (refused, not approximated)"
+        hint = did_you_mean(kind, [*known, *_OTHER_MFS])
+        return f"unknown or custom membership function {kind!r}{hint} (refused, not approximated)"
     shape, spelling = known[kind][0]
     count = spelling.arity if spelling.arity is not None else n_inputs + 1  # linear: c_i, c_0
     if len(p) != count:
@@ -227,8 +228,15 @@ def _mf_term(
 
 
 def _variable(
-    sec: _Section, kind: str, found: Collector, sugeno: bool, n_inputs: int
+    sec: _Section,
+    kind: str,
+    found: Collector,
+    sugeno: bool,
+    n_inputs: int,
+    incomplete: dict[str, int],
 ) -> Variable | None:
+    """One [InputN] or [OutputN]; a variable whose MFs were not all read is entered in
+    ``incomplete`` with its NumMFs (its terms then number differently from the file's)."""
     where = f"[{sec.name}]"
     for key in sec.keys:
         if key not in _VAR_KEYS and re.fullmatch(r"MF\d+", key) is None:
@@ -251,22 +259,26 @@ def _variable(
     # A count is checked against the lines there are, never looped over: NumMFs=1e18 is one
     # problem (the first missing MF), not an endless loop.
     n_present = sum(1 for k in sec.keys if re.fullmatch(r"MF\d+", k))
+    complete = True  # every MF read: else the rules' term numbers cannot be trusted
     for i in range(1, min(n_mfs, n_present + 1) + 1):
         mf = sec.keys.get(f"MF{i}")
         if mf is None:
             found.add(
                 sec.line, 1, f"{where}: NumMFs={n_mfs} but MF{i} is missing (truncated file?)"
             )
+            complete = False
             continue
         m = _MF.match(mf.text)
         if m is None:
             found.add(
                 mf.line, mf.col, f"{where} MF{i}: expected 'name':'type',[params], got {mf.text!r}"
             )
+            complete = False
             continue
         tname, mf_kind = m.group(1), m.group(2)
         params = _vector(m.group(3), mf.line, mf.col + m.start(3), found, f"{where} MF{i}")
         if params is None:
+            complete = False
             continue
         if tname in seen:
             found.add(
@@ -275,17 +287,23 @@ def _variable(
                 f"{where} MF{i}: term name {tname!r} is already MF{seen[tname]} of {name!r}; "
                 "a rule-base name must be unambiguous",
             )
+            complete = False
             continue
         seen[tname] = i
         term = _mf_term(tname, mf_kind, params, kind == "output" and sugeno, n_inputs)
         if isinstance(term, str):
             found.add(mf.line, mf.col, f"{where} MF{i} ({tname!r}): {term}")
+            complete = False
             continue
         found.mark((*base, "terms", tname), mf.line, mf.col)
         terms.append(term)
     extra = [k for k in sec.keys if re.fullmatch(r"MF\d+", k) and not 1 <= int(k[2:]) <= n_mfs]
     for k in extra:
         found.add(sec.keys[k].line, 1, f"{where}: {k} is beyond NumMFs={n_mfs}")
+    if not complete:
+        # a term is missing: the rules number the terms, so they are checked against the
+        # declared count, not the terms read (one mistake, one message)
+        incomplete[name] = n_mfs
     default = (rng[0] + rng[1]) / 2 if kind == "output" else None
     return Variable(name, rng[0], rng[1], tuple(terms), default)
 
@@ -298,7 +316,12 @@ def _index(token: str) -> int | None:
 
 
 def _rule(
-    v: _Value, k: int, inputs: list[Variable], outputs: list[Variable], found: Collector
+    v: _Value,
+    k: int,
+    inputs: list[Variable],
+    outputs: list[Variable],
+    found: Collector,
+    incomplete: dict[str, int],
 ) -> Rule | None:
     m = _RULE.match(v.text)
     if m is None:
@@ -353,14 +376,16 @@ def _rule(
                 "whole number (hedges are not supported)",
             )
             ok = False
-        elif abs(idx) > len(var.terms):
+        elif abs(idx) > incomplete.get(var.name, len(var.terms)):
             found.add(
                 v.line,
                 v.col,
                 f"rule {k + 1}: input {var.name!r} has "
-                f"{len(var.terms)} terms, the rule uses term {abs(idx)}",
+                f"{incomplete.get(var.name, len(var.terms))} terms, the rule uses term {abs(idx)}",
             )
             ok = False
+        elif var.name in incomplete:
+            ok = False  # the term's problem is already reported
         elif idx != 0:
             props.append(Proposition(var.name, var.terms[abs(idx) - 1].name, idx < 0))
     then: list[Consequent] = []
@@ -374,14 +399,16 @@ def _rule(
                 "negated or hedged conclusions cannot be expressed in fuzzkit",
             )
             ok = False
-        elif idx > len(var.terms):
+        elif idx > incomplete.get(var.name, len(var.terms)):
             found.add(
                 v.line,
                 v.col,
                 f"rule {k + 1}: output {var.name!r} has "
-                f"{len(var.terms)} terms, the rule uses term {idx}",
+                f"{incomplete.get(var.name, len(var.terms))} terms, the rule uses term {idx}",
             )
             ok = False
+        elif var.name in incomplete:
+            ok = False  # the term's problem is already reported
         elif idx != 0:
             then.append(Consequent(var.name, var.terms[idx - 1].name))
     if ok and not props:
@@ -481,6 +508,7 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
     if n_in is None or n_out is None or n_rules is None:
         found.fail()
     groups: dict[str, list[Variable]] = {"input": [], "output": []}
+    incomplete: dict[str, int] = {}  # variables whose MFs were not all read: their NumMFs
     for kind_, count in (("input", n_in), ("output", n_out)):
         title = kind_.capitalize()
         n_present = sum(1 for sec in sections if re.fullmatch(rf"{title}\d+", sec.name))
@@ -494,7 +522,7 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
                     f"Num{title}s={count} but [{title}{i}] is missing (truncated file?)",
                 )
                 continue
-            var = _variable(sec, kind_, found, sugeno, n_in)
+            var = _variable(sec, kind_, found, sugeno, n_in, incomplete)
             if var is not None:
                 groups[kind_].append(var)
     for sec in sections:
@@ -519,7 +547,7 @@ def loads_with_warnings(text: str, source: str = "<string>") -> tuple[RuleBase, 
                 f"{len(rules_sec.rules)} rule lines (truncated file?)",
             )
         for k, v in enumerate(rules_sec.rules):
-            rule = _rule(v, k, groups["input"], groups["output"], found)
+            rule = _rule(v, k, groups["input"], groups["output"], found, incomplete)
             if rule is not None:
                 rules.append(rule)
     found.raise_if_any()

@@ -87,10 +87,11 @@ class RuleGrid:
 
 
 def rule_grid(rb: RuleBase) -> RuleGrid | None:
-    """The rules as a table, or ``None`` if they were not written as one (list-form rules)."""
+    """The rules as a table: written as one, or a list that is one (:func:`full_grid`, as a
+    ``.fis`` file writes a table); ``None`` otherwise."""
     t = rb.table
     if t is None:
-        return None
+        return full_grid(rb)
     try:
         rows, cols = rb.input(t.rows).term_names, rb.input(t.columns).term_names
     except KeyError:
@@ -114,6 +115,45 @@ def rule_grid(rb: RuleBase) -> RuleGrid | None:
         rows=rows_shown,
         columns=tuple(cols),
         cells=tuple(tuple(cell.get((r, c), EMPTY_CELL) for c in cols) for r in rows_shown),
+    )
+
+
+def full_grid(rb: RuleBase) -> RuleGrid | None:
+    """List-form rules that are a complete table, as that table; else ``None``.
+
+    They are when the rule base has two inputs and one output, and its rules are exactly one
+    ``if A is a and B is b then out is c`` (weight 1, nothing negated) for every pair of terms
+    ``(a, b)``: what a table means, so showing them as one loses nothing. Rows and columns
+    keep the terms' order.
+    """
+    if len(rb.inputs) != 2 or len(rb.outputs) != 1:
+        return None
+    first, second = rb.inputs
+    cell: dict[tuple[str, str], str] = {}
+    for rule in rb.rules:
+        a = rule.antecedent
+        if rule.weight != 1.0 or len(rule.consequents) != 1:
+            return None
+        if not (isinstance(a, Compound) and a.op == "and" and len(a.operands) == 2):
+            return None
+        props = [p for p in a.operands if isinstance(p, Proposition) and not p.negated]
+        by_var = {p.variable: p.term for p in props}
+        if len(props) != 2 or set(by_var) != {first.name, second.name}:
+            return None
+        key = (by_var[first.name], by_var[second.name])
+        if key in cell:
+            return None
+        cell[key] = rule.consequents[0].term
+    rows, cols = first.term_names, second.term_names
+    if len(cell) != len(rows) * len(cols):
+        return None
+    return RuleGrid(
+        row_input=first.name,
+        column_input=second.name,
+        output=rb.outputs[0].name,
+        rows=tuple(rows),
+        columns=tuple(cols),
+        cells=tuple(tuple(cell[r, c] for c in cols) for r in rows),
     )
 
 

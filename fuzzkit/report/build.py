@@ -621,7 +621,8 @@ def _markdown(
         "## Environment stiffness",
         "",
         "Press 10 N on E1's hammer from 0.2 mm above it (`press_experiment`), the same gains "
-        "at every stiffness.",
+        "at every stiffness, on the planar plant's Python loop: this study runs there for "
+        "every report, whatever `--plant` the runs above took.",
         "",
         "![overshoot and settling time against stiffness](stiffness.png)",
         "",

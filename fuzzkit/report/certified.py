@@ -52,7 +52,8 @@ def stiffness_lines(
         "### Certified region over the stiffness study",
         "",
         f"Each run above against the stability certificate (`fuzzkit stability`, "
-        f"[docs/stability.md](../stability.md)) for the same gains, {PLANT} plant, latency "
+        f"[docs/stability.md](../stability.md)) for the same gains, on the {PLANT} plant the "
+        f"study ran on (for every report), latency "
         f"{latency_text(latency)}: **C** certified, **-** not; then how the run ended "
         "(settled, never settled, no contact or tripped: docs/simulation.md). The last column "
         "is the approach speed above which the impact alone passes "
@@ -73,7 +74,7 @@ def stiffness_lines(
                 exp, ctrl, gains[(ctrl, label)], inner, fuzzy, k, latency, 0.1, noise
             )
             m = rows[i][1]
-            ran = axis_outcome(m, bool(m.get("tripped")))
+            ran = axis_outcome(m, bool(m.get("tripped")))  # the words every command uses
             cells.append(f"{'C' if cell.certified else '-'}, {ran}")
         speed = impact_speed_limit(k * 1e3, exp.force_limit_n, delay, sp)
         md.append(f"| {k:g} | " + " | ".join(cells) + f" | {1e3 * speed:.3g} mm/s |")

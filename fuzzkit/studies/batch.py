@@ -416,6 +416,9 @@ def result_row(spec: RunSpec, result: RunResult) -> dict[str, Any]:
         elif key in ("stiffness_estimate_n_mm", "gain_scale_final"):  # per axis too
             for axis, v in value.items():
                 row[f"{axis}_{key}"] = v
+        elif key == "limit_exceeded":  # flat, as a table's columns are: None when it held
+            row["limit_exceeded_s"] = None if value is None else value["time_s"]
+            row["limit_exceeded_peak_n"] = None if value is None else value["peak_true_n"]
         elif key not in ("experiment", "controller", "plant"):
             row[key] = value
     return row

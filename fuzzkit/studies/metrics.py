@@ -12,7 +12,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.control.names import AXES
-from fuzzkit.studies.outcome import axis_outcome
+from fuzzkit.studies.outcome import axis_outcome, limit_exceeded
 from fuzzkit.studies.runner import RunResult
 
 Vec = npt.NDArray[np.float64]
@@ -225,7 +225,9 @@ def _nanmax_abs(x: Vec) -> float | None:
 def summary(result: RunResult) -> dict[str, Any]:
     """The JSON summary of a run: experiment, controller, plant, the run's conditions
     (``stiffness`` in N/mm, ``latency_periods`` [sensor, command], ``fault``, ``seed``,
-    ``safety_limit``, ``tripped``), times, and per-axis metrics.
+    ``safety_limit``, ``tripped``, ``limit_exceeded``: when and how far the true force passed
+    the limit, or None, :func:`~fuzzkit.studies.outcome.limit_exceeded`), times, and per-axis
+    metrics.
 
     Only force-controlled axes appear under ``axes`` (z first). Values that do not apply (the
     overshoot of a 0 N set point, the RMS while moving of a held path) are None (JSON null);
@@ -249,6 +251,9 @@ def summary(result: RunResult) -> dict[str, Any]:
         "seed": result.seed,
         "safety_limit": result.experiment.force_limit_n,
         "tripped": result.tripped,
+        "limit_exceeded": limit_exceeded(
+            result.t, result.force_true, result.experiment.force_limit_n
+        ),
         "sim_time_s": round(result.sim_time_s, 6),
         "wall_time_s": round(result.wall_time_s, 4),
         "loop": result.loop,

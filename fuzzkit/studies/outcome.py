@@ -1,9 +1,9 @@
 """How one force-controlled axis of a run ended, in words defined once.
 
 ``fuzzkit simulate`` (text and ``--json``), ``compare``, ``tune``, the run figure and the
-report say *never settled*, *no contact* and *tripped* with these words and mean the same
-thing by them; a settling time of None is never printed as ``-``, which would say none of
-them.
+report (its certified-region table too) say *never settled*, *no contact* and *tripped* with
+these words and mean the same thing by them; a settling time of None is never printed as
+``-``, which would say none of them.
 
 * :data:`TRIPPED`: the run tripped the safety limit (the controller stopped and retreated;
   what follows says nothing about settling).
@@ -19,11 +19,14 @@ and the latency sweep judge by, uses the same words and one more:
   deviation below it;
 * :data:`OSCILLATING`: neither tripped nor settled;
 * :data:`TRIPPED`: as above.
+
+Beside them, for the whole run, :data:`LIMIT_EXCEEDED`: the true contact force passed the
+safety limit (:func:`limit_exceeded`), tripped or not.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
@@ -43,6 +46,45 @@ END_STATES = (SETTLED, OSCILLATING, TRIPPED)
 BAND_N = 0.5
 #: The end of the run the band is judged on (s).
 TAIL_S = 0.5
+#: A run whose *true* contact force passed the safety limit, whether or not the controller
+#: saw it (:func:`limit_exceeded`); said beside the axes' outcomes, and ``--fail-on-trip``
+#: fails on it as on a trip.
+LIMIT_EXCEEDED = "limit exceeded"
+
+
+def limit_exceeded(
+    t: Sequence[float] | Any, force_true: Any, limit_n: float
+) -> dict[str, Any] | None:
+    """When and how far the true contact force (any axis, ``(n, 3)``) passed ``limit_n``:
+    ``{"time_s": first period above, "peak_true_n": largest |force|, "axis": its axis}``,
+    or None when it never did. Computed from the plant's force, not the sensor's: a delayed,
+    filtered or gated sample can hide a force that the robot and the part did feel."""
+    import numpy as np
+
+    f = np.abs(np.asarray(force_true, dtype=np.float64))
+    if f.size == 0:
+        return None
+    over = np.nanmax(f, axis=1) > limit_n
+    if not over.any():
+        return None
+    k, axis = np.unravel_index(int(np.nanargmax(f)), f.shape)
+    return {
+        "time_s": float(np.asarray(t)[int(np.argmax(over))]),
+        "peak_true_n": float(f[k, axis]),
+        "axis": "xyz"[int(axis)],
+    }
+
+
+def limit_text(exceeded: Mapping[str, Any] | None, limit_n: float, tripped: bool) -> str:
+    """The words for :func:`limit_exceeded`: ``limit exceeded: 400 N true (x) at 1.87 s, limit
+    25 N; the controller did not trip`` (empty when the limit held)."""
+    if exceeded is None:
+        return ""
+    seen = "the controller tripped" if tripped else "the controller did not trip"
+    return (
+        f"{LIMIT_EXCEEDED}: {exceeded['peak_true_n']:.1f} N true ({exceeded['axis']}) from "
+        f"{exceeded['time_s']:.3f} s, limit {limit_n:g} N; {seen}"
+    )
 
 
 def axis_outcome(metrics: Mapping[str, Any], tripped: bool) -> str:

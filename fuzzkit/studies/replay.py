@@ -3,9 +3,11 @@ a user's own robot (``fuzzkit replay``).
 
 The log is CSV with a header: ``fx,fy,fz`` (N, task frame) required, ``t`` (s) and the nine
 rotation entries ``r11,r12,...,r33`` (row-major, world-from-sensor) optional, in any order. An
-empty cell or ``nan`` is a missing sample. Reading is strict: every problem is reported as
-``file:line:col`` at once (:class:`~fuzzkit.errors.ProblemsError`). The output CSV has
-``t`` (when the log has it), ``ux,uy,uz`` (m) and ``status`` per row.
+empty cell or a NaN in any spelling C's printf writes (``nan``, ``-nan``, ``NaN``,
+``-nan(ind)``) is a missing sample; ``inf`` and ``-inf`` are infinite samples. Reading is
+strict: every problem is reported as ``file:line:col`` at once
+(:class:`~fuzzkit.errors.ProblemsError`). The output CSV has ``t`` (when the log has it),
+``ux,uy,uz`` (m) and ``status`` per row.
 
 A run's CSV (``fuzzkit simulate --csv``, :mod:`fuzzkit.studies.run_table`) is read as it is:
 its ``t_s`` is the time, ``f<a>_measured_n`` the sample the controller received (after the
@@ -42,6 +44,8 @@ GENERATED = {"python-generated": "python", "c": "c"}
 IMPLS = ("python", *GENERATED)
 #: A number as the log may write it (no thousands separators, no quotes).
 _NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?|[+-]?inf(?:inity)?", re.I)
+#: NaN as C's printf (``nan``, ``-nan``), MSVC (``-nan(ind)``) and others write it, any case.
+_NAN = re.compile(r"[+-]?nan(?:\([\w]*\))?", re.I)
 #: Problems listed before the reader stops (a wrong file would list every row).
 MAX_PROBLEMS = 20
 
@@ -97,12 +101,20 @@ def read_sensor_log(path: str | Path) -> SensorLog:
     ProblemsError
         Every problem with its ``file:line:col``: no header, unknown or repeated columns,
         ``fx,fy,fz`` missing, some but not all rotation columns, a row with the wrong number
-        of cells, a cell that is not a number, a missing or non-increasing time.
-    OSError
-        The file cannot be read.
+        of cells, a cell that is not a number, a missing or non-increasing time; a file
+        that cannot be read (missing, a folder), at the file's name.
     """
     name = str(path)
-    data = Path(path).read_bytes()
+    try:
+        data = Path(path).read_bytes()  # not size-capped: a long log is many megabytes
+    except IsADirectoryError:
+        raise ProblemsError(
+            [Problem(Location(name), "is a directory (expected a CSV file)")]
+        ) from None
+    except OSError as exc:
+        raise ProblemsError(
+            [Problem(Location(name), f"cannot read: {exc.strerror or exc}")]
+        ) from None
     problems: list[Problem] = []
 
     def bad(line: int, col: int, message: str) -> None:
@@ -167,7 +179,7 @@ def read_sensor_log(path: str | Path) -> SensorLog:
             continue
         row = []
         for k, (cell, col) in enumerate(cells):
-            if k in ignored or not cell or cell.lower() == "nan":
+            if k in ignored or not cell or _NAN.fullmatch(cell):
                 row.append(math.nan)
             elif _NUMBER.fullmatch(cell):
                 row.append(float(cell))

@@ -1,16 +1,16 @@
 """One closed-loop run as a table: one row per controller period, for a spreadsheet or pandas.
 
-The columns, in order (units in the names; ``<a>`` is x, y, z):
-``t_s``; ``f<a>_measured_n`` (the sample the controller consumed, NaN where none reached it)
-and ``f<a>_true_n`` (the contact force) for every axis; for each force-controlled axis
-``f<a>_setpoint_n``, ``e<a>_n`` (``setpoint - measured``), ``de<a>_n`` (change of ``e`` since
+The columns, in order (units in the names; ``<a>`` is x, y, z): ``t_s`` (the period index times the
+period, :func:`period_times`); ``f<a>_measured_n`` (the sample the controller consumed, NaN where
+none reached it) and ``f<a>_true_n`` (the contact force) for every axis; for each force-controlled
+axis ``f<a>_setpoint_n``, ``e<a>_n`` (``setpoint - measured``), ``de<a>_n`` (change of ``e`` since
 the last controlled period), ``du<a>_m`` (correction this period) and ``u<a>_m`` (the correction
-the controller commands: the sum of ``du``, plus the back-off after a trip); for each
-motion-only axis ``u<a>_m`` (the back-off after a trip, else 0); when the run's controller spec
-compensates the tool's weight, the tool rotation the controller received with each sample,
-``r11`` .. ``r33`` (row-major, world-from-sensor); then ``status`` (:data:`STATUSES`). Numbers
-are written with ``repr``, so they read back bit for bit: ``fuzzkit replay SPEC --forces
-RUN.csv`` reads the file as it is and reproduces the ``u<a>_m`` columns.
+the controller commands: the sum of ``du``, plus the back-off after a trip); for each motion-only
+axis ``u<a>_m`` (the back-off after a trip, else 0); when the run's controller spec compensates the
+tool's weight, the tool rotation the controller received with each sample, ``r11`` .. ``r33``
+(row-major, world-from-sensor); then ``status`` (:data:`STATUSES`). Numbers are written with
+``repr``, so they read back bit for bit: ``fuzzkit replay SPEC --forces RUN.csv`` reads the file as
+it is and reproduces the ``u<a>_m`` columns.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ import io
 import math
 
 import numpy as np
+import numpy.typing as npt
 
 from fuzzkit.control.names import AXES
 from fuzzkit.studies.runner import RunResult
@@ -47,6 +48,21 @@ def period_status(result: RunResult) -> list[str]:
         else:
             out.append("approach")
     return out
+
+
+def period_times(result: RunResult) -> npt.NDArray[np.float64]:
+    """The time of every period's sample, computed from its index as ``k / rate`` (``k *
+    period`` where the rate is no whole number of hertz), not accumulated: the CSV's ``t_s``
+    then reads ``1.876``, the decimal it is, where the plants' sum of periods has drifted to
+    ``1.8759999999999042``."""
+    period = result.experiment.scenario.period_s
+    n = len(result.t)
+    first = round(float(result.t[0]) / period) if n else 0
+    k = np.arange(first, first + n, dtype=np.float64)
+    rate = 1.0 / period
+    if abs(rate - round(rate)) < 1e-9 * rate:
+        return k / round(rate)  # correctly rounded: the nearest double to the decimal time
+    return k * period
 
 
 def run_columns(result: RunResult) -> list[str]:
@@ -77,8 +93,9 @@ def run_csv(result: RunResult) -> str:
     writer.writerow(run_columns(result))
     controlled = [i for i in range(3) if result.experiment.selection[i]]
     rotation = result.rotation if _writes_rotation(result) else None
+    times = period_times(result)
     for k, status in enumerate(period_status(result)):
-        row = [repr(float(result.t[k]))]
+        row = [repr(float(times[k]))]
         for i in range(3):
             row += [repr(float(result.force[k, i])), repr(float(result.force_true[k, i]))]
         for i in controlled:

@@ -87,7 +87,7 @@ def sweep_specs(
                 latency=lat,
                 seed=seed,
                 gains=gains_items(gain_sets[label].get(ctrl, {})),
-                gains_label=label,
+                gains_label=label if cspec is None else cspec,  # a spec's gains are its own
                 rulebase=rulebase,
                 loop=loop,
                 duration_s=duration_s,

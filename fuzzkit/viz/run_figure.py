@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from fuzzkit.studies.metrics import summary
-from fuzzkit.studies.outcome import TRIPPED, settling_text
+from fuzzkit.studies.outcome import TRIPPED, limit_exceeded, settling_text
 from fuzzkit.studies.runner import RunResult
 from fuzzkit.viz.figures import new_figure
 from fuzzkit.viz.run_series import engaged_index
@@ -27,8 +27,9 @@ _TRIP = "tab:red"
 _ENGAGED = "tab:green"
 
 
-def run_figure(result: RunResult) -> Any:
-    """The run's figure (a matplotlib Figure, no pyplot)."""
+def run_figure(result: RunResult, ran: str | None = None) -> Any:
+    """The run's figure (a matplotlib Figure, no pyplot); ``ran``, when given, names what ran
+    (the spec or rule base and the gains' source) on a line of the title."""
     exp = result.experiment
     axes_idx = [i for i in (2, 0, 1) if exp.selection[i]]
     fig = new_figure(12.0, 2.6 * len(axes_idx) + 0.9)
@@ -82,7 +83,7 @@ def run_figure(result: RunResult) -> Any:
             ax_f.legend(fontsize=7, loc="best")
     for ax in grid[-1]:
         ax.set_xlabel("time [s]")
-    fig.suptitle(_title(result), fontsize=10)
+    fig.suptitle(_title(result) + (f"\n{ran}" if ran else ""), fontsize=10)
     fig.tight_layout()
     return fig
 
@@ -116,6 +117,9 @@ def _title(result: RunResult) -> str:
     exp = result.experiment
     peak = float(np.nanmax(np.abs(result.force_true))) if len(result.t) else 0.0
     trip = f"TRIPPED at {result.trip_time_s:.3f} s" if result.trip_time_s is not None else "no trip"
+    exceeded = limit_exceeded(result.t, result.force_true, exp.force_limit_n)
+    if exceeded is not None:
+        trip += f", LIMIT EXCEEDED from {exceeded['time_s']:.3f} s"
     engaged = (
         f"engaged at {result.engaged_time_s:.3f} s (green)"
         if result.engaged_time_s is not None

@@ -42,14 +42,15 @@ class TraceFiles:
     csv: str | None = None
 
 
-def trace_files(result: RunResult, png: bool, csv: bool) -> TraceFiles:
-    """Render the asked-for traces of ``result`` in memory."""
+def trace_files(result: RunResult, png: bool, csv: bool, ran: str | None = None) -> TraceFiles:
+    """Render the asked-for traces of ``result`` in memory (``ran``: what ran, for the
+    figure's title, :func:`fuzzkit.viz.run_figure.run_figure`)."""
     data: bytes | None = None
     if png:
         from fuzzkit.viz.figures import figure_bytes
         from fuzzkit.viz.run_figure import run_figure
 
-        data = figure_bytes(run_figure(result), "png", dpi=100)
+        data = figure_bytes(run_figure(result, ran), "png", dpi=100)
     return TraceFiles(png=data, csv=run_csv(result) if csv else None)
 
 
@@ -71,9 +72,11 @@ def write_run_traces(
     result: RunResult,
     png: str | os.PathLike[str] | None = None,
     csv: str | os.PathLike[str] | None = None,
+    ran: str | None = None,
 ) -> list[Path]:
-    """Render and write ``result``'s traces to ``png`` and/or ``csv``."""
-    return write_traces(trace_files(result, png is not None, csv is not None), png, csv)
+    """Render and write ``result``'s traces to ``png`` and/or ``csv`` (``ran``: what ran, for
+    the figure's title)."""
+    return write_traces(trace_files(result, png is not None, csv is not None, ran), png, csv)
 
 
 def execute_traced(item: tuple[RunSpec, bool, bool]) -> tuple[dict[str, Any], TraceFiles]:

@@ -11,6 +11,8 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
+from matplotlib.lines import Line2D
+from matplotlib.ticker import FuncFormatter, NullLocator
 
 from fuzzkit.viz.figures import new_figure
 from fuzzkit.viz.palette import (
@@ -198,6 +200,22 @@ def _metric(rows: Sequence[tuple[float, Any]], key: str, tripped: Any) -> Any:
     return np.where(tripped, math.nan, np.array(raw, dtype=float))
 
 
+def plain_log_ticks(axis: Any) -> None:
+    """Label a log axis with plain numbers (``1.5``, ``0.2``, ``10``), not ``1.5 x 10^0``;
+    its minor ticks too when the axis spans too little for the decades to say much: all of
+    them under 0.7 of a decade, those at 2, 3 and 5 up to 1.3 decades, none beyond."""
+
+    def minor(x: float, _pos: int) -> str:
+        low, high = sorted(axis.get_view_interval())
+        span = math.log10(high / low) if low > 0 else math.inf
+        mantissa = round(x / 10 ** math.floor(math.log10(x) + 1e-9), 6) if x > 0 else 0.0
+        shown = span < 0.7 or (span <= 1.3 and mantissa in (2.0, 3.0, 5.0))
+        return f"{x:g}" if shown else ""
+
+    axis.set_major_formatter(FuncFormatter(lambda x, _pos: f"{x:g}"))
+    axis.set_minor_formatter(FuncFormatter(minor))
+
+
 def stiffness_figure(
     study: Mapping[tuple[str, str], Sequence[tuple[float, Any]]], plant: str = "planar"
 ) -> Any:
@@ -238,11 +256,16 @@ def stiffness_figure(
         never = np.isnan(settle) & ~tripped
         never_ax.plot(ks[never], np.full(int(never.sum()), row), "x", ms=8, mew=2, color=colour)
         trip_ax.plot(ks[tripped], np.full(int(tripped.sum()), row), **TRIP_STYLE)
+    studied = sorted({k for rows in study.values() for k, _ in rows})
     for ax in (ax1, ax2):
         ax.set_xscale("log")
         ax.set_yscale("log")
+        plain_log_ticks(ax.yaxis)
         ax.grid(alpha=0.3, which="both")
         ax.tick_params(labelbottom=False)
+    # the stiffnesses studied, as numbers, are the x ticks (shared by the four panels)
+    ax1.set_xticks(studied, [f"{k:g}" for k in studied])
+    ax1.xaxis.set_minor_locator(NullLocator())
     ax1.set_ylabel("overshoot [%]")
     if floor_used:
         ax1.text(
@@ -256,8 +279,12 @@ def stiffness_figure(
     names = [f"{controller_name(c)} {g}" for (c, g), _ in series]
     _strip(trip_ax, names, f"red X = {TRIP_LABEL}: stopped, no overshoot to plot")
     _strip(never_ax, names, "x = never settled (within the run)")
-    handles, labels = ax1.get_legend_handles_labels()
-    fig.legend(handles, labels, loc="upper center", ncol=len(labels), bbox_to_anchor=(0.5, 0.93))
+    # each series as it is drawn: its line style with the dots on it
+    handles = [
+        Line2D([], [], color=controller_colour(c, order), marker="o", ms=3.5, **gains_style(g))
+        for c, g in study
+    ]
+    fig.legend(handles, names, loc="upper center", ncol=len(names), bbox_to_anchor=(0.5, 0.93))
     fig.suptitle(f"press 10 N on the hammer ({plant} plant)", fontsize=11)
     fig.subplots_adjust(left=0.1, right=0.98, top=0.84, bottom=0.1)
     return fig

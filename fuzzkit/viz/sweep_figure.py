@@ -1,11 +1,12 @@
-"""The summary figure of a sweep: each force-control metric per case, one colour per controller.
+"""The summary figure of a sweep: each force-control metric per case, one colour per series.
 
-A case is one (experiment, stiffness, latency, gains) combination; every seed is a dot and the
-mean of the dots a bar, so the spread over sensor noise shows next to the difference between
-controllers. No run is dropped: a run that never settled is a cross on the top edge of the
-settling-time panel, and a run that tripped the safety limit (its overshoot, settling and
-steady error describe a stopped controller) a red cross on the top edge of those panels; its
-peak force, what tripped it, is plotted.
+A series is a controller, or a controller spec (:func:`series_of`: two specs are two series, never
+one average), named in the legend. A case is one (experiment, stiffness, latency, gains)
+combination; every seed is a dot and the mean of the dots a bar, so the spread over sensor noise
+shows next to the difference between controllers. No run is dropped: a run that never settled is a
+cross on the top edge of the settling-time panel, and a run that tripped the safety limit (its
+overshoot, settling and steady error describe a stopped controller) a red cross on the top edge of
+those panels; its peak force, what tripped it, is plotted.
 """
 
 from __future__ import annotations
@@ -41,9 +42,24 @@ def case_label(row: Mapping[str, Any]) -> str:
         "own stiffness" if k is None else f"{k:g} N/mm",
         f"latency {latency_text((row['sensor_delay'], row['command_delay']))} periods",
     ]
-    if row.get("gains", "default") != "default":
+    if row.get("gains", "default") != "default" and not row.get("controller_spec"):
         parts.append(Path(str(row["gains"])).stem)
     return "\n".join(parts)
+
+
+def series_of(row: Mapping[str, Any]) -> str:
+    """The series a row belongs to: its controller, or its controller spec (``spec a``), so
+    that two specs of one kind are never averaged together as if they were seeds."""
+    spec = row.get("controller_spec")
+    return f"spec {Path(str(spec)).stem}" if spec else str(row["controller"])
+
+
+def _series_name(series: str, rows: Sequence[Mapping[str, Any]]) -> str:
+    """The legend's name of a series: ``PI``, or ``spec a (fuzzy-PI)``."""
+    if not series.startswith("spec "):
+        return controller_name(series)
+    kind = next(str(r["controller"]) for r in rows if series_of(r) == series)
+    return f"{series} ({controller_name(kind)})"
 
 
 def _tripped(row: Mapping[str, Any]) -> bool:
@@ -59,7 +75,7 @@ def sweep_figure(rows: Sequence[Mapping[str, Any]], axis: str = "z") -> Any:
     from matplotlib.transforms import blended_transform_factory
 
     cases = list(dict.fromkeys(case_label(r) for r in rows))
-    controllers = list(dict.fromkeys(str(r["controller"]) for r in rows))
+    controllers = list(dict.fromkeys(series_of(r) for r in rows))
     plants = list(dict.fromkeys(str(r.get("plant", "?")) for r in rows))
     fig = new_figure(max(7.0, 1.3 * len(cases) + 3.0), 2.3 * len(METRICS) + 1.2)
     axes = fig.subplots(len(METRICS), 1, sharex=True, squeeze=False)[:, 0]
@@ -77,7 +93,7 @@ def sweep_figure(rows: Sequence[Mapping[str, Any]], axis: str = "z") -> Any:
             edge: dict[str, list[float]] = {"never": [], "trip": []}
             means: list[float] = []
             for i, case in enumerate(cases):
-                mine = [r for r in rows if r["controller"] == ctrl and case_label(r) == case]
+                mine = [r for r in rows if series_of(r) == ctrl and case_label(r) == case]
                 vals: list[float] = []
                 marks: dict[str, int] = {"never": 0, "trip": 0}
                 for r in mine:
@@ -116,20 +132,28 @@ def sweep_figure(rows: Sequence[Mapping[str, Any]], axis: str = "z") -> Any:
         fontsize=10,
         y=1 - 0.06 / height,
     )
-    _legend(fig, controllers, marked, 1 - 0.3 / height)
+    _legend(
+        fig, controllers, marked, 1 - 0.3 / height, [_series_name(s, rows) for s in controllers]
+    )
     fig.tight_layout(rect=(0, 0, 1, 1 - 0.6 / height))
     return fig
 
 
-def _legend(fig: Any, controllers: Sequence[str], marked: Mapping[str, bool], top: float) -> None:
-    """One legend above the panels: the controllers' colours and the edge marks used."""
+def _legend(
+    fig: Any,
+    controllers: Sequence[str],
+    marked: Mapping[str, bool],
+    top: float,
+    names: Sequence[str],
+) -> None:
+    """One legend above the panels: each series' colour and name, and the edge marks used."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     order = tuple(controllers)
     handles: list[Any] = [
-        Patch(color=controller_colour(c, order), alpha=0.6, label=controller_name(c))
-        for c in controllers
+        Patch(color=controller_colour(c, order), alpha=0.6, label=name)
+        for c, name in zip(controllers, names, strict=True)
     ]
     if marked["never"]:
         handles.append(Line2D([], [], marker="x", ms=8, mew=2, color="0.3", ls="none",
