@@ -122,18 +122,16 @@ class GaussianGeometry:
         level: FloatArray,
         scale: FloatArray,
     ) -> tuple[FloatArray, FloatArray]:
-        m, s = self.m[q], self.s[q]
-        gauss = (
-            scale
-            * s
-            * _SQRT_HALF_PI
-            * _erf_diff((u - m) / (s * math.sqrt(2)), (v - m) / (s * math.sqrt(2)))
-        )
-        du = (u - m) / s
-        dv = (v - m) / s
-        gm = m * gauss + scale * s * s * (np.exp(-0.5 * du * du) - np.exp(-0.5 * dv * dv))
-        area = np.where(flat, level * (v - u), gauss)
-        moment = np.where(flat, level * 0.5 * (v - u) * (v + u), gm)
+        area = level * (v - u)
+        moment = level * 0.5 * (v - u) * (v + u)
+        # the Gaussian pieces only (most segments are plateaus, or empty at the range ends)
+        tail = ~flat & (v > u)
+        m, s = self.m[q[tail]], self.s[q[tail]]
+        c, ut, vt = scale[tail], u[tail], v[tail]
+        du, dv = (ut - m) / s, (vt - m) / s
+        gauss = c * s * _SQRT_HALF_PI * _erf_diff(du / math.sqrt(2), dv / math.sqrt(2))
+        area[tail] = gauss
+        moment[tail] = m * gauss + c * s * s * (np.exp(-0.5 * du * du) - np.exp(-0.5 * dv * dv))
         return area, moment
 
     def centroid(self, levels: FloatArray, default: float) -> FloatArray:
@@ -196,18 +194,10 @@ class GaussianGeometry:
 
 
 def _erf_diff(a: FloatArray, b: FloatArray) -> FloatArray:
-    """``erf(b) - erf(a)`` without cancelling in the tails (erfc on the side both are on)."""
-    pos = np.minimum(a, b) > 0
-    neg = np.maximum(a, b) < 0
-    mid = special.erf(b) - special.erf(a)
-    return cast(
-        FloatArray,
-        np.where(
-            pos,
-            special.erfc(a) - special.erfc(b),
-            np.where(neg, special.erfc(-b) - special.erfc(-a), mid),
-        ),
-    )
+    """``erf(b) - erf(a)`` for ``a <= b`` from ``erfc(|a|)`` and ``erfc(|b|)``: no cancelling
+    in the tails, where both ``erf`` are near the same +-1."""
+    ea, eb = special.erfc(np.abs(a)), special.erfc(np.abs(b))
+    return cast(FloatArray, np.where(a >= 0, ea - eb, np.where(b <= 0, eb - ea, 2.0 - ea - eb)))
 
 
 def _crossings(m1: float, s1: float, m2: float, s2: float, log_ratio: float) -> list[float]:
