@@ -10,8 +10,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _codegen_util import CC, CLANG, needs_cc, skip_no_cc
 from _mamdani_reference import firing
 
+from fuzzkit.cli import main
+from fuzzkit.codegen.exact import emit_exact
+from fuzzkit.codegen.toolchain import STRICT_FLAGS, run_compiler
+from fuzzkit.codegen.verify import verify_exact_c, verify_exact_python
 from fuzzkit.formats.registry import load
 from fuzzkit.fuzzy.gaussian_geometry import GaussianGeometry
 from fuzzkit.fuzzy.inference import Engine
@@ -90,3 +95,85 @@ def test_a_101x101_surface_of_gaussian_outputs_is_the_reference_where_sampled() 
     for i, j in [(50, 50), (13, 77)]:
         want = _reference(rb, {"e": float(e[i, j]), "de": float(de[i, j])}, GRIDS["cover"])
         assert surface[i, j] == pytest.approx(want, abs=1e-10)
+
+
+# --------------------------------------------------------------------------- generated code
+
+
+def _narrow(implication: str) -> RuleBase:
+    """The same with input terms of sigma 0.05: between them every strength is 1e-20 or less."""
+    rb = _variant(implication, "centroid")
+    inputs = tuple(
+        dataclasses.replace(
+            v, terms=tuple(dataclasses.replace(t, params=(t.params[0], 0.05)) for t in v.terms)
+        )
+        for v in rb.inputs
+    )
+    return dataclasses.replace(rb, inputs=inputs)
+
+
+@pytest.mark.parametrize("implication", ["min", "product"])
+def test_generated_python_of_gaussian_outputs_equals_the_engine(implication: str) -> None:
+    for rb in (_variant(implication, "centroid"), _narrow(implication)):
+        result = verify_exact_python(rb, emit_exact(rb, "python"), n=2000)
+        assert result.ok, result.describe()
+
+
+@needs_cc
+@skip_no_cc
+@pytest.mark.parametrize("number_type", ["double", "float"])
+@pytest.mark.parametrize("implication", ["min", "product"])
+def test_generated_c_of_gaussian_outputs_equals_the_engine(
+    implication: str, number_type: str
+) -> None:
+    narrow = _narrow(implication)
+    if number_type == "float":
+        # product AND of two 1e-22 memberships is 1e-44, below float's normal range (its
+        # levels have lost their digits there): min AND keeps them at 1e-22
+        narrow = dataclasses.replace(
+            narrow, operators=dataclasses.replace(narrow.operators, and_="min")
+        )
+    for rb in (_variant(implication, "centroid"), narrow):
+        result = verify_exact_c(rb, number_type, emit_exact(rb, "c", number_type), n=5000)
+        assert result.ok, result.describe()
+
+
+def test_where_every_strength_is_tiny_the_engine_keeps_the_flat_tops() -> None:
+    rb = _narrow("min")
+    point = {"e": 0.5, "de": -0.45}
+    assert 0.0 < max(firing(rb, point)) < 1e-15
+    got = Engine(rb).evaluate_point(point)["du"]
+    assert got == pytest.approx(_reference(rb, point, GRIDS["cover"]), abs=1e-10)
+
+
+@needs_cc
+@skip_no_cc
+@pytest.mark.parametrize("compiler", ["cc", "clang"])
+def test_generated_c_of_gaussian_outputs_compiles_without_a_diagnostic(
+    tmp_path: Path, compiler: str
+) -> None:
+    cc = CC if compiler == "cc" else ([CLANG] if CLANG else None)
+    if cc is None:
+        pytest.skip("clang not installed (apt-get install -y clang); gcc covers it here")
+    for implication in ("min", "product"):
+        rb = _variant(implication, "centroid")
+        for number_type in ("double", "float"):
+            for rel, text in emit_exact(rb, "c", number_type).items():
+                (tmp_path / rel).write_text(text)
+            proc = run_compiler([*cc, *STRICT_FLAGS, "-O2", "-c", f"{rb.name}.c"], tmp_path)
+            assert proc.stderr.strip() == ""
+
+
+@needs_cc
+@skip_no_cc
+@pytest.mark.parametrize(
+    "target, number_type", [("python", "double"), ("c", "double"), ("c", "float")]
+)
+def test_gaussian_outputs_compile_and_verify_from_the_command_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], target: str, number_type: str
+) -> None:
+    args = ["compile", str(FILE), "--target", target, "--type", number_type, "--method", "exact"]
+    code = main([*args, "--verify", "--out", str(tmp_path / "out"), "--quiet"])
+    text = capsys.readouterr().out
+    assert code == 0, text
+    assert ": ok on" in text and "exact inference" in text

@@ -206,14 +206,21 @@ def _crossings(m1: float, s1: float, m2: float, s2: float, log_ratio: float) -> 
     return [float(r[0, 0]) for r in roots if np.isfinite(r[0, 0])]
 
 
+def quadratic(m1: float, s1: float, m2: float, s2: float) -> tuple[float, float, float]:
+    """``(a, b, c0)``: ``ln L_1 g_1 = ln L_2 g_2`` is ``a y^2 + b y + c0 + ln(L_1 / L_2) = 0``."""
+    a = 0.5 / (s2 * s2) - 0.5 / (s1 * s1)
+    bq = m1 / (s1 * s1) - m2 / (s2 * s2)
+    c0 = 0.5 * m2 * m2 / (s2 * s2) - 0.5 * m1 * m1 / (s1 * s1)
+    return float(a), float(bq), float(c0)
+
+
 def _crossings_batch(
     m1: float, s1: float, m2: float, s2: float, log_ratio: FloatArray
 ) -> list[FloatArray]:
     """Both roots (B, 1) each of ``log_ratio - (y - m1)^2 / 2 s1^2 + (y - m2)^2 / 2 s2^2 = 0``
     (NaN where there is none)."""
-    a = 0.5 / (s2 * s2) - 0.5 / (s1 * s1)
-    bq = m1 / (s1 * s1) - m2 / (s2 * s2)
-    c = 0.5 * m2 * m2 / (s2 * s2) - 0.5 * m1 * m1 / (s1 * s1) + log_ratio
+    a, bq, c0 = quadratic(m1, s1, m2, s2)
+    c = c0 + log_ratio
     with np.errstate(divide="ignore", invalid="ignore"):
         if a == 0.0:
             one = np.where(bq != 0.0, -c / bq, np.nan)
