@@ -174,6 +174,9 @@ class GaussSpec:
     linear: tuple[bool, ...]  # per pair: a == 0
     sqrt2: str
     sqrt_half_pi: str
+    peaks: tuple[str, ...]  # per piece: where its term is largest in the range
+    gpeaks: tuple[str, ...]  # and its value there
+    keep: str  # 1 - TIE: values at least this share of the height are maximal
 
 
 @dataclass(frozen=True)
@@ -314,9 +317,8 @@ def unsupported_reason(rb: RuleBase, number_type: str = "double") -> str | None:
                 return (
                     f"output {out.name!r} term {term.name!r} is a {term.shape}: the exact "
                     f"method integrates piecewise-linear output terms in closed form, and "
-                    f"Gaussian ones under max aggregation with the centroid (here "
-                    f"{rb.operators.aggregation}, {rb.defuzzifier}); use such terms, the "
-                    "weighted_average defuzzifier, or --method table"
+                    f"Gaussian ones under max aggregation (here {rb.operators.aggregation}); "
+                    "use such terms, the weighted_average defuzzifier, or --method table"
                 )
     for var in rb.inputs:
         for term in var.terms:
@@ -326,8 +328,9 @@ def unsupported_reason(rb: RuleBase, number_type: str = "double") -> str | None:
 
 
 def _gaussian_centroid(rb: RuleBase, out: Variable) -> bool:
-    """Gaussian terms, max aggregation, centroid: the closed form the templates emit."""
-    return rb.defuzzifier == "centroid" and gaussian_applies(rb, out, OutputPieces(rb, out))
+    """Gaussian terms, max aggregation (any defuzzifier but the weighted average, which only
+    needs the centres): the closed form the templates emit."""
+    return rb.defuzzifier != "weighted_average" and gaussian_applies(rb, out, OutputPieces(rb, out))
 
 
 def _linear(out: Variable) -> bool:
@@ -694,6 +697,12 @@ def _output(
             linear=tuple(linear) if gg.product else (),
             sqrt2=lit(math.sqrt(2.0)),
             sqrt_half_pi=lit(math.sqrt(0.5 * math.pi)),
+            peaks=tuple(lit(float(v)) for v in gg.peak),
+            gpeaks=tuple(
+                lit(float(np.exp(-0.5 * ((p - m) / sg) ** 2)))
+                for p, m, sg in zip(gg.peak, gg.m, gg.s, strict=True)
+            ),
+            keep=lit(1.0 - TIE),
         )
         return ExactOutput(
             index=k, name=out.name, low=lit(out.low), high=lit(out.high),

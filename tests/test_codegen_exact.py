@@ -39,7 +39,7 @@ from fuzzkit.codegen.verify import (
 )
 from fuzzkit.errors import CodegenError
 from fuzzkit.formats.registry import load
-from fuzzkit.fuzzy.model import RuleBase, Term, Variable
+from fuzzkit.fuzzy.model import Operators, RuleBase, Term, Variable
 from fuzzkit.fuzzy.validation import check
 
 SHIPPED = [
@@ -350,10 +350,10 @@ def test_auto_takes_the_exact_method_when_no_table_fits_the_budget() -> None:
         (
             {
                 "outputs": (Variable("du", -1, 1, (Term("g", "gaussian", (0.0, 0.3)),)),),
-                "defuzzifier": "bisector",
+                "operators": Operators("min", "max", "min", "bounded_sum"),
             },
-            r"piecewise-linear output terms .* Gaussian ones under max aggregation with the "
-            r"centroid \(here max, bisector\)",
+            r"piecewise-linear output terms .* Gaussian ones under max aggregation "
+            r"\(here bounded_sum\)",
         ),
         (
             {"outputs": (Variable("du", -1, 1, (Term("b", "bell", (0.3, 2.0, 0.0)),)),)},

@@ -183,7 +183,7 @@ class GaussianGeometry:
         top = levels * gpeak if self.product else np.minimum(levels, gpeak)
         height = top.max(axis=1)
         tie = (height * (1.0 - TIE))[:, None]
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             # the term's own value g must reach this for its implied set to reach the tie
             need = tie / levels if self.product else np.broadcast_to(tie, levels.shape)
             ok = (need <= gpeak) & (levels >= tie)
