@@ -44,8 +44,13 @@ def main() -> None:
     start = time.perf_counter()
     result = compile_rulebase(rb, "c", "float")
     rows.append((f"compile (c float, {result.method})", time.perf_counter() - start))
+    target = load_target("c")
     if result.table is not None:
-        load_target("c").verify_table(rb, result.table, result.files)
+        proof = target.verify_table(rb, result.table, result.files)
+    else:
+        proof = target.verify_exact(rb, "float", result.files)
+    if not proof.ok:
+        raise RuntimeError(proof.describe())
     rows.append(("compile --verify", time.perf_counter() - start))
     print(f"{'what':<56} {'seconds':>8}")
     for what, secs in rows:

@@ -309,7 +309,7 @@ def unsupported_reason(rb: RuleBase, number_type: str = "double") -> str | None:
                     "engine's terms see; use --type double"
                 )
             continue
-        if _gaussian_centroid(rb, out):
+        if _gaussian_closed_form(rb, out):
             continue
         for term in out.terms:
             pwl = shapes.shape(term.shape).piecewise_linear  # an unregistered shape raises
@@ -327,7 +327,7 @@ def unsupported_reason(rb: RuleBase, number_type: str = "double") -> str | None:
     return None
 
 
-def _gaussian_centroid(rb: RuleBase, out: Variable) -> bool:
+def _gaussian_closed_form(rb: RuleBase, out: Variable) -> bool:
     """Gaussian terms, max aggregation (any defuzzifier but the weighted average, which only
     needs the centres): the closed form the templates emit."""
     return rb.defuzzifier != "weighted_average" and gaussian_applies(rb, out, OutputPieces(rb, out))
@@ -677,7 +677,17 @@ def _output(
         )
     else:
         levels = tuple(f"w[{int(r)}]" for r in pieces.inst_rules)
-    if _gaussian_centroid(rb, out):
+
+    def closed_form(**how: PolySpec | GaussSpec) -> ExactOutput:
+        """An output integrated in closed form from its levels: no breakpoint sweep."""
+        return ExactOutput(
+            index=k, name=out.name, low=lit(out.low), high=lit(out.high),
+            default=lit.maybe_nan(out.default), defuzzifier=rb.defuzzifier,
+            n_pieces=pieces.n_pieces, level_exprs=levels, centres=(), empty=False,
+            grid_cons=grid_cons, **how, **empty_geo,  # type: ignore[arg-type]
+        )  # fmt: skip
+
+    if _gaussian_closed_form(rb, out):
         gg = GaussianGeometry(rb, out, pieces)
         k_ = gg.k
         n_points = 2 + len(gg.fixed) + (k_ * (k_ - 1) if gg.product else 2 * k_ * k_)
@@ -704,23 +714,13 @@ def _output(
             ),
             keep=lit(1.0 - TIE),
         )
-        return ExactOutput(
-            index=k, name=out.name, low=lit(out.low), high=lit(out.high),
-            default=lit.maybe_nan(out.default), defuzzifier=rb.defuzzifier,
-            n_pieces=pieces.n_pieces, level_exprs=levels, centres=(), empty=False,
-            grid_cons=grid_cons, gauss=gauss, **empty_geo,  # type: ignore[arg-type]
-        )  # fmt: skip
+        return closed_form(gauss=gauss)
     geo = PiecewiseLinearGeometry(rb, out, pieces)
     # the engine's fast centroid where the target's templates take it, else the general sweep
     firing_cons = cons if windows else None
     poly = _poly(rb, out, pieces, geo, lit, wrap, firing_cons) if lit.target.fast_centroid else None
     if poly is not None:
-        return ExactOutput(
-            index=k, name=out.name, low=lit(out.low), high=lit(out.high),
-            default=lit.maybe_nan(out.default), defuzzifier=rb.defuzzifier,
-            n_pieces=pieces.n_pieces, level_exprs=levels, centres=(), empty=False,
-            grid_cons=grid_cons, poly=poly, **empty_geo,  # type: ignore[arg-type]
-        )  # fmt: skip
+        return closed_form(poly=poly)
     m, kmax = len(geo.z0), geo.kmax
     if ops.implication == "min" and ops.aggregation == "max":
         cand = kmax * kmax
