@@ -20,6 +20,7 @@ as generated-code data, with its rounding bound.
 
 from __future__ import annotations
 
+import itertools
 import math
 import textwrap
 from collections.abc import Callable
@@ -45,6 +46,8 @@ from fuzzkit.codegen.names import names_note, symbol
 from fuzzkit.codegen.target import Target, load_target
 from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy import membership, shapes
+from fuzzkit.fuzzy.gaussian_geometry import GaussianGeometry, quadratic
+from fuzzkit.fuzzy.gaussian_geometry import applies as gaussian_applies
 from fuzzkit.fuzzy.inference import OutputPieces, PiecewiseLinearGeometry, partition_centroid
 from fuzzkit.fuzzy.model import (
     Compound,
@@ -150,6 +153,30 @@ class ExactOutput:
     poly: PolySpec | None = None
     # Sugeno: per consequent (rule index, input coefficients, constant), in the engine's order
     sugeno: tuple[SugenoTerm, ...] = ()
+    # Gaussian terms, max aggregation, centroid: closed form (erfc)
+    gauss: GaussSpec | None = None
+
+
+@dataclass(frozen=True)
+class GaussSpec:
+    """Gaussian output terms under max aggregation, for the centroid in closed form (as
+    ``fuzzkit.fuzzy.gaussian_geometry``): per piece its term's mean and sigma, the points
+    where two unscaled terms cross, and how many points a call sorts."""
+
+    means: tuple[str, ...]
+    sigmas: tuple[str, ...]
+    fixed: tuple[str, ...]
+    n_points: int
+    product: bool
+    #: product implication: per pair of pieces (i, j) where L_i g_i = L_j g_j, the quadratic
+    #: a y^2 + b y + c0 + ln(L_i / L_j) = 0 (``gaussian_geometry._crossings_batch``)
+    pairs: tuple[tuple[int, int, str, str, str], ...]
+    linear: tuple[bool, ...]  # per pair: a == 0
+    sqrt2: str
+    sqrt_half_pi: str
+    peaks: tuple[str, ...]  # per piece: where its term is largest in the range
+    gpeaks: tuple[str, ...]  # and its value there
+    keep: str  # 1 - TIE: values at least this share of the height are maximal
 
 
 @dataclass(frozen=True)
@@ -282,20 +309,28 @@ def unsupported_reason(rb: RuleBase, number_type: str = "double") -> str | None:
                     "engine's terms see; use --type double"
                 )
             continue
+        if _gaussian_closed_form(rb, out):
+            continue
         for term in out.terms:
             pwl = shapes.shape(term.shape).piecewise_linear  # an unregistered shape raises
             if rb.defuzzifier != "weighted_average" and not pwl:
                 return (
                     f"output {out.name!r} term {term.name!r} is a {term.shape}: the exact "
-                    f"method integrates only piecewise-linear output terms in closed form "
-                    f"({rb.defuzzifier}); use triangle/trapezoid/shoulder terms, the "
-                    "weighted_average defuzzifier, or --method table"
+                    f"method integrates piecewise-linear output terms in closed form, and "
+                    f"Gaussian ones under max aggregation (here {rb.operators.aggregation}); "
+                    "use such terms, the weighted_average defuzzifier, or --method table"
                 )
     for var in rb.inputs:
         for term in var.terms:
             if _exact_form(term) is None:
                 return _no_exact_form(var, term)
     return None
+
+
+def _gaussian_closed_form(rb: RuleBase, out: Variable) -> bool:
+    """Gaussian terms, max aggregation (any defuzzifier but the weighted average, which only
+    needs the centres): the closed form the templates emit."""
+    return rb.defuzzifier != "weighted_average" and gaussian_applies(rb, out, OutputPieces(rb, out))
 
 
 def _linear(out: Variable) -> bool:
@@ -642,17 +677,50 @@ def _output(
         )
     else:
         levels = tuple(f"w[{int(r)}]" for r in pieces.inst_rules)
+
+    def closed_form(**how: PolySpec | GaussSpec) -> ExactOutput:
+        """An output integrated in closed form from its levels: no breakpoint sweep."""
+        return ExactOutput(
+            index=k, name=out.name, low=lit(out.low), high=lit(out.high),
+            default=lit.maybe_nan(out.default), defuzzifier=rb.defuzzifier,
+            n_pieces=pieces.n_pieces, level_exprs=levels, centres=(), empty=False,
+            grid_cons=grid_cons, **how, **empty_geo,  # type: ignore[arg-type]
+        )  # fmt: skip
+
+    if _gaussian_closed_form(rb, out):
+        gg = GaussianGeometry(rb, out, pieces)
+        k_ = gg.k
+        n_points = 2 + len(gg.fixed) + (k_ * (k_ - 1) if gg.product else 2 * k_ * k_)
+        pairs: list[tuple[int, int, str, str, str]] = []
+        linear: list[bool] = []
+        for i, j in itertools.combinations(range(k_), 2):
+            qa, qb, qc = quadratic(gg.m[i], gg.s[i], gg.m[j], gg.s[j])
+            pairs.append((i, j, lit(qa), lit(qb), lit(qc)))
+            linear.append(qa == 0.0)
+        gauss = GaussSpec(
+            means=tuple(lit(float(v)) for v in gg.m),
+            sigmas=tuple(lit(float(v)) for v in gg.s),
+            fixed=tuple(lit(float(v)) for v in gg.fixed),
+            n_points=n_points,
+            product=gg.product,
+            pairs=tuple(pairs) if gg.product else (),
+            linear=tuple(linear) if gg.product else (),
+            sqrt2=lit(math.sqrt(2.0)),
+            sqrt_half_pi=lit(math.sqrt(0.5 * math.pi)),
+            peaks=tuple(lit(float(v)) for v in gg.peak),
+            gpeaks=tuple(
+                lit(float(np.exp(-0.5 * ((p - m) / sg) ** 2)))
+                for p, m, sg in zip(gg.peak, gg.m, gg.s, strict=True)
+            ),
+            keep=lit(1.0 - TIE),
+        )
+        return closed_form(gauss=gauss)
     geo = PiecewiseLinearGeometry(rb, out, pieces)
     # the engine's fast centroid where the target's templates take it, else the general sweep
     firing_cons = cons if windows else None
     poly = _poly(rb, out, pieces, geo, lit, wrap, firing_cons) if lit.target.fast_centroid else None
     if poly is not None:
-        return ExactOutput(
-            index=k, name=out.name, low=lit(out.low), high=lit(out.high),
-            default=lit.maybe_nan(out.default), defuzzifier=rb.defuzzifier,
-            n_pieces=pieces.n_pieces, level_exprs=levels, centres=(), empty=False,
-            grid_cons=grid_cons, poly=poly, **empty_geo,  # type: ignore[arg-type]
-        )  # fmt: skip
+        return closed_form(poly=poly)
     m, kmax = len(geo.z0), geo.kmax
     if ops.implication == "min" and ops.aggregation == "max":
         cand = kmax * kmax
@@ -804,6 +872,10 @@ def build_exact_spec(
             libm.update(form.libm if form is not None else ())
     if rb.defuzzifier == "bisector" and ops.aggregation != "probabilistic_sum":
         libm.add("sqrt")
+    if any(o.gauss is not None for o in outputs):
+        libm.update(("erfc", "exp", "fabs", "log", "sqrt"))
+        if any(o.gauss is not None and o.gauss.product for o in outputs):
+            libm.add("copysign")
     has_fpi = len(rb.inputs) == 2
     note = (
         ""
@@ -832,6 +904,8 @@ def build_exact_spec(
         else " ".join([r.expr for r in rules] + [e for o in outputs for e in o.level_exprs])
     )
     helpers = {h for h in ("min", "max", "psum") if f"{callee[h]}(" in code}
+    if any(o.gauss is not None and o.gauss.product for o in outputs):
+        helpers.add("finite")  # the crossings of two scaled Gaussians may not exist
     geo = [o for o in outputs if o.n_intervals]
     if (ops.implication == "product" and ops.aggregation == "max" and geo) or (
         rb.defuzzifier == "bisector" and ops.aggregation != "probabilistic_sum" and geo

@@ -955,12 +955,14 @@ def _scan_uniform(
     evaluator: Evaluator,
     progress: ProgressFn | None,
 ) -> tuple[LookupTable | None, int]:
-    """The smallest table of the same breakpoint count on every input that meets ``tol``.
+    """A table of the same breakpoint count on every input that meets ``tol``, or None when
+    no count within ``max_points`` (and the check-grid cap) does.
 
-    Every count from 2 up to the largest within ``max_points`` (and the check-grid cap) is
-    settled: by its cell edges when they alone prove the bound too large
-    (:func:`_edges_refute`, a few lines of check points), else by building and certifying it.
-    Returns the table (None when none meets the tolerance) and the largest count tried.
+    A count is settled by its cell edges when they alone prove the bound too large
+    (:func:`_edges_refute`, a few lines of check points), else by building and certifying
+    its table. The largest count first: when it meets the tolerance, bisection finds a count
+    that meets it with the next smaller one failing; when it does not, every other count is
+    settled before None is returned. Returns the table and the largest count.
     """
     d = len(rb.inputs)
     top = MIN_BREAKPOINTS
@@ -972,22 +974,42 @@ def _scan_uniform(
         top += 1
     limit = tuple(tol * (v.high - v.low) for v in rb.outputs)
     hint = np.array([0.5 * (v.low + v.high) for v in rb.inputs])
-    for count in range(MIN_BREAKPOINTS, top + 1):
+    settled = [0]
+
+    def settle(count: int) -> LookupTable | None:
+        nonlocal hint
         if progress is not None:
-            progress("resolutions", count - MIN_BREAKPOINTS, top - MIN_BREAKPOINTS + 1)
+            settled[0] += 1
+            progress("resolutions", settled[0], top - MIN_BREAKPOINTS + 1)
         try:
             refuted, hint = _edges_refute(rb, [count] * d, number_type, limit, evaluator, hint)
             if refuted:
-                continue
+                return None
             table = build_table(
                 rb, [count] * d, number_type=number_type, tolerance=tol, evaluate=evaluator,
                 progress=progress,
             )  # fmt: skip
         except Q15ResolutionError:  # this many breakpoints do not fit Q15 codes
-            continue
-        if all(b <= t for b, t in zip(table.bound, table.tolerance, strict=True)):
-            return table, top
-    return None, top
+            return None
+        ok = all(b <= t for b, t in zip(table.bound, table.tolerance, strict=True))
+        return table if ok else None
+
+    best = settle(top)
+    if best is None:
+        for count in range(MIN_BREAKPOINTS, top):
+            found = settle(count)
+            if found is not None:
+                return found, top
+        return None, top
+    low, high = MIN_BREAKPOINTS - 1, top  # high meets the tolerance, low does not (or is 1)
+    while high - low > 1:
+        mid = (low + high) // 2
+        found = settle(mid)
+        if found is not None:
+            high, best = mid, found
+        else:
+            low = mid
+    return best, top
 
 
 def _edges_refute(

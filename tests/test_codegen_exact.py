@@ -38,7 +38,8 @@ from fuzzkit.codegen.verify import (
     verify_exact_python,
 )
 from fuzzkit.errors import CodegenError
-from fuzzkit.fuzzy.model import RuleBase, Term, Variable
+from fuzzkit.formats.registry import load
+from fuzzkit.fuzzy.model import Operators, RuleBase, Term, Variable
 from fuzzkit.fuzzy.validation import check
 
 SHIPPED = [
@@ -177,10 +178,12 @@ def test_macvicar_whelan_runs_clean_under_sanitizers_on_1e5_points(
 @pytest.mark.parametrize("compiler", ["cc", "clang"])
 def test_every_operator_path_runs_clean_under_sanitizers(tmp_path: Path, compiler: str) -> None:
     cc = _compiler(compiler)
-    cases = [rulebase("three_input"), rulebase("gaussian5"), *random_family(7, 12)]
+    gaussian = load(Path(__file__).parent / "data" / "gaussian3x3.yaml")  # erfc closed form
+    cases = [rulebase("three_input"), rulebase("gaussian5"), gaussian, *random_family(7, 12)]
     seen = set()
     for k, rb in enumerate(cases):
-        key = (rb.operators.implication, rb.operators.aggregation, rb.defuzzifier)
+        smooth = rb.outputs[0].terms[0].shape == "gaussian"
+        key = (rb.operators.implication, rb.operators.aggregation, rb.defuzzifier, smooth)
         if key in seen:
             continue
         seen.add(key)
@@ -345,8 +348,16 @@ def test_auto_takes_the_exact_method_when_no_table_fits_the_budget() -> None:
     "change, match",
     [
         (
-            {"outputs": (Variable("du", -1, 1, (Term("g", "gaussian", (0.0, 0.3)),)),)},
-            "piecewise-linear",
+            {
+                "outputs": (Variable("du", -1, 1, (Term("g", "gaussian", (0.0, 0.3)),)),),
+                "operators": Operators("min", "max", "min", "bounded_sum"),
+            },
+            r"piecewise-linear output terms .* Gaussian ones under max aggregation "
+            r"\(here bounded_sum\)",
+        ),
+        (
+            {"outputs": (Variable("du", -1, 1, (Term("b", "bell", (0.3, 2.0, 0.0)),)),)},
+            "term 'b' is a bell",
         ),
     ],
 )

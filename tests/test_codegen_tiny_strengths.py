@@ -126,7 +126,7 @@ def test_generated_python_equals_the_engine_where_every_strength_is_tiny(
 @skip_no_cc
 @pytest.mark.parametrize("number_type", ["double", "float"])
 def test_generated_c_equals_the_engine_where_every_strength_is_tiny(number_type: str) -> None:
-    for implication, aggregation, defuzzifier in CASES[::3]:
+    for implication, aggregation, defuzzifier in CASES[::5]:  # every operator pair once
         rb = overlapping(implication, aggregation, defuzzifier)
         args = np.array([[x] for x in TINY_X], dtype=DTYPE[number_type])
         with CompiledTable(
@@ -151,6 +151,7 @@ def test_fis_generated_python_equals_the_engine_and_the_exact_set() -> None:
     assert verify_exact_python(rb, emit_exact(rb, "python"), n=2000).ok
 
 
+@pytest.mark.slow  # the Python --verify runs 1e5 points through the generated module
 @needs_cc
 @skip_no_cc
 @pytest.mark.parametrize(

@@ -6,12 +6,19 @@ adaptive quad was tried as the reference and is off by 1e-9 at the clip points' 
 from __future__ import annotations
 
 import dataclasses
+import itertools
 from pathlib import Path
 
 import numpy as np
 import pytest
+from _codegen_util import CC, CLANG, needs_cc, skip_no_cc
 from _mamdani_reference import firing
+from _pairwise import pairwise
 
+from fuzzkit.cli import main
+from fuzzkit.codegen.exact import emit_exact
+from fuzzkit.codegen.toolchain import STRICT_FLAGS, run_compiler
+from fuzzkit.codegen.verify import verify_exact_c, verify_exact_python
 from fuzzkit.formats.registry import load
 from fuzzkit.fuzzy.gaussian_geometry import GaussianGeometry
 from fuzzkit.fuzzy.inference import Engine
@@ -90,3 +97,102 @@ def test_a_101x101_surface_of_gaussian_outputs_is_the_reference_where_sampled() 
     for i, j in [(50, 50), (13, 77)]:
         want = _reference(rb, {"e": float(e[i, j]), "de": float(de[i, j])}, GRIDS["cover"])
         assert surface[i, j] == pytest.approx(want, abs=1e-10)
+
+
+# --------------------------------------------------------------------------- generated code
+
+
+def _narrow(implication: str, defuzzifier: str = "centroid") -> RuleBase:
+    """The same with input terms of sigma 0.05: between them every strength is 1e-20 or less."""
+    rb = _variant(implication, defuzzifier)
+    inputs = tuple(
+        dataclasses.replace(
+            v, terms=tuple(dataclasses.replace(t, params=(t.params[0], 0.05)) for t in v.terms)
+        )
+        for v in rb.inputs
+    )
+    return dataclasses.replace(rb, inputs=inputs)
+
+
+DEFUZZIFIERS = ("centroid", "bisector", *MAXIMA)
+#: implication x number type x defuzzifier: every pair in make test, the product in make verify
+C_AXES = (("min", "product"), ("double", "float"), DEFUZZIFIERS)
+C_CASES = [pytest.param(*row, id="cover-" + "-".join(row)) for row in pairwise(C_AXES)] + [
+    pytest.param(*row, id="full-" + "-".join(row), marks=pytest.mark.verify)
+    for row in itertools.product(*C_AXES)
+]
+
+
+@pytest.mark.parametrize("implication", ["min", "product"])
+@pytest.mark.parametrize("defuzzifier", DEFUZZIFIERS)
+def test_generated_python_of_gaussian_outputs_equals_the_engine(
+    implication: str, defuzzifier: str
+) -> None:
+    for rb in (_variant(implication, defuzzifier), _narrow(implication, defuzzifier)):
+        result = verify_exact_python(rb, emit_exact(rb, "python"), n=1000)
+        assert result.ok, result.describe()
+
+
+@needs_cc
+@skip_no_cc
+@pytest.mark.parametrize("implication, number_type, defuzzifier", C_CASES)
+def test_generated_c_of_gaussian_outputs_equals_the_engine(
+    implication: str, number_type: str, defuzzifier: str
+) -> None:
+    narrow = _narrow(implication, defuzzifier)
+    if number_type == "float":
+        # product AND of two 1e-22 memberships is 1e-44, below float's normal range (its
+        # levels have lost their digits there): min AND keeps them at 1e-22
+        narrow = dataclasses.replace(
+            narrow, operators=dataclasses.replace(narrow.operators, and_="min")
+        )
+    for rb in (_variant(implication, defuzzifier), narrow):
+        result = verify_exact_c(rb, number_type, emit_exact(rb, "c", number_type), n=5000)
+        assert result.ok, result.describe()
+
+
+def test_where_every_strength_is_tiny_the_engine_keeps_the_flat_tops() -> None:
+    rb = _narrow("min")
+    point = {"e": 0.5, "de": -0.45}
+    assert 0.0 < max(firing(rb, point)) < 1e-15
+    got = Engine(rb).evaluate_point(point)["du"]
+    assert got == pytest.approx(_reference(rb, point, GRIDS["cover"]), abs=1e-10)
+
+
+@needs_cc
+@skip_no_cc
+@pytest.mark.parametrize("compiler", ["cc", "clang"])
+def test_generated_c_of_gaussian_outputs_compiles_without_a_diagnostic(
+    tmp_path: Path, compiler: str
+) -> None:
+    cc = CC if compiler == "cc" else ([CLANG] if CLANG else None)
+    if cc is None:
+        pytest.skip("clang not installed (apt-get install -y clang); gcc covers it here")
+    cases = [(imp, d, "double") for imp in ("min", "product") for d in DEFUZZIFIERS[:3]]
+    for implication, defuzzifier, number_type in [*cases, ("product", "bisector", "float")]:
+        rb = _variant(implication, defuzzifier)
+        for rel, text in emit_exact(rb, "c", number_type).items():
+            (tmp_path / rel).write_text(text)
+        proc = run_compiler([*cc, *STRICT_FLAGS, "-O2", "-c", f"{rb.name}.c"], tmp_path)
+        assert proc.stderr.strip() == ""
+
+
+@needs_cc
+@skip_no_cc
+@pytest.mark.parametrize(
+    "path, number_type",
+    [
+        (FILE, "double"),
+        (FILE, "float"),
+        (Path(__file__).parent / "data/fis/gauss_outputs.fis", "double"),
+    ],
+)
+def test_gaussian_outputs_compile_and_verify_from_the_command_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], path: Path, number_type: str
+) -> None:
+    # gauss_outputs.fis: MATLAB gaussmf outputs (sigma 0.2), bisector, strengths of 1e-20
+    args = ["compile", str(path), "--target", "c", "--type", number_type, "--method", "exact"]
+    code = main([*args, "--verify", "--out", str(tmp_path / "out"), "--quiet"])
+    text = capsys.readouterr().out
+    assert code == 0, text
+    assert ": ok on" in text and "exact inference" in text

@@ -57,13 +57,19 @@ def test_the_edge_floor_is_below_the_error_of_the_table_built(
         assert floor > 0.05 * table.measured[k]  # and it is a floor worth having
 
 
+CAP, TOL = 200, 2e-3  # macvicar_whelan within 200 points cannot reach 0.2 % of its range
+
+
+def test_a_tolerance_out_of_reach_is_said_to_be_so_with_what_was_settled() -> None:
+    with pytest.raises(CodegenError, match=f"cannot be met within {CAP} table points") as err:
+        make_table(rulebase("macvicar_whelan"), number_type="double", tolerance=TOL, max_points=CAP)
+    assert "no table of 2 to 14 breakpoints on every input (up to 14x14)" in str(err.value)
+
+
+@pytest.mark.verify
 def test_a_tolerance_said_to_be_out_of_reach_is_met_by_no_resolution_within_the_cap() -> None:
-    rb = rulebase("macvicar_whelan")
-    tol = 2e-3
-    with pytest.raises(CodegenError, match="cannot be met within 400 table points") as err:
-        make_table(rb, number_type="double", tolerance=tol, max_points=400)
-    assert "no table of 2 to 20 breakpoints on every input (up to 20x20)" in str(err.value)
-    for count in range(2, 21):  # every one of them, built and certified
+    rb, tol = rulebase("macvicar_whelan"), TOL
+    for count in range(2, 15):  # every one the refusal above covers, built and certified
         table = build_table(rb, [count, count], number_type="double", tolerance=tol)
         assert max(b / t for b, t in zip(table.bound, table.tolerance, strict=True)) > 1, count
 
@@ -76,9 +82,8 @@ def test_a_resolution_that_meets_the_tolerance_is_found_when_the_first_guesses_m
     found = make_table(rb, number_type="double", tolerance=tol, max_points=cap)
     assert all(b <= t for b, t in zip(found.bound, found.tolerance, strict=True))
     assert found.n_points <= cap
-    # the smallest uniform one: every coarser uniform table misses
+    # found by bisection: the next coarser uniform table misses
     count = found.shape[0]
     assert list(found.shape) == [count, count]
-    for smaller in range(2, count):
-        table = build_table(rb, [smaller, smaller], number_type="double", tolerance=tol)
-        assert any(b > t for b, t in zip(table.bound, table.tolerance, strict=True)), smaller
+    coarser = build_table(rb, [count - 1, count - 1], number_type="double", tolerance=tol)
+    assert any(b > t for b, t in zip(coarser.bound, coarser.tolerance, strict=True))

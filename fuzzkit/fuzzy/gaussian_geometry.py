@@ -122,18 +122,16 @@ class GaussianGeometry:
         level: FloatArray,
         scale: FloatArray,
     ) -> tuple[FloatArray, FloatArray]:
-        m, s = self.m[q], self.s[q]
-        gauss = (
-            scale
-            * s
-            * _SQRT_HALF_PI
-            * _erf_diff((u - m) / (s * math.sqrt(2)), (v - m) / (s * math.sqrt(2)))
-        )
-        du = (u - m) / s
-        dv = (v - m) / s
-        gm = m * gauss + scale * s * s * (np.exp(-0.5 * du * du) - np.exp(-0.5 * dv * dv))
-        area = np.where(flat, level * (v - u), gauss)
-        moment = np.where(flat, level * 0.5 * (v - u) * (v + u), gm)
+        area = level * (v - u)
+        moment = level * 0.5 * (v - u) * (v + u)
+        # the Gaussian pieces only (most segments are plateaus, or empty at the range ends)
+        tail = ~flat & (v > u)
+        m, s = self.m[q[tail]], self.s[q[tail]]
+        c, ut, vt = scale[tail], u[tail], v[tail]
+        du, dv = (ut - m) / s, (vt - m) / s
+        gauss = c * s * _SQRT_HALF_PI * _erf_diff(du / math.sqrt(2), dv / math.sqrt(2))
+        area[tail] = gauss
+        moment[tail] = m * gauss + c * s * s * (np.exp(-0.5 * du * du) - np.exp(-0.5 * dv * dv))
         return area, moment
 
     def centroid(self, levels: FloatArray, default: float) -> FloatArray:
@@ -185,7 +183,7 @@ class GaussianGeometry:
         top = levels * gpeak if self.product else np.minimum(levels, gpeak)
         height = top.max(axis=1)
         tie = (height * (1.0 - TIE))[:, None]
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             # the term's own value g must reach this for its implied set to reach the tie
             need = tie / levels if self.product else np.broadcast_to(tie, levels.shape)
             ok = (need <= gpeak) & (levels >= tie)
@@ -196,18 +194,10 @@ class GaussianGeometry:
 
 
 def _erf_diff(a: FloatArray, b: FloatArray) -> FloatArray:
-    """``erf(b) - erf(a)`` without cancelling in the tails (erfc on the side both are on)."""
-    pos = np.minimum(a, b) > 0
-    neg = np.maximum(a, b) < 0
-    mid = special.erf(b) - special.erf(a)
-    return cast(
-        FloatArray,
-        np.where(
-            pos,
-            special.erfc(a) - special.erfc(b),
-            np.where(neg, special.erfc(-b) - special.erfc(-a), mid),
-        ),
-    )
+    """``erf(b) - erf(a)`` for ``a <= b`` from ``erfc(|a|)`` and ``erfc(|b|)``: no cancelling
+    in the tails, where both ``erf`` are near the same +-1."""
+    ea, eb = special.erfc(np.abs(a)), special.erfc(np.abs(b))
+    return cast(FloatArray, np.where(a >= 0, ea - eb, np.where(b <= 0, eb - ea, 2.0 - ea - eb)))
 
 
 def _crossings(m1: float, s1: float, m2: float, s2: float, log_ratio: float) -> list[float]:
@@ -216,14 +206,21 @@ def _crossings(m1: float, s1: float, m2: float, s2: float, log_ratio: float) -> 
     return [float(r[0, 0]) for r in roots if np.isfinite(r[0, 0])]
 
 
+def quadratic(m1: float, s1: float, m2: float, s2: float) -> tuple[float, float, float]:
+    """``(a, b, c0)``: ``ln L_1 g_1 = ln L_2 g_2`` is ``a y^2 + b y + c0 + ln(L_1 / L_2) = 0``."""
+    a = 0.5 / (s2 * s2) - 0.5 / (s1 * s1)
+    bq = m1 / (s1 * s1) - m2 / (s2 * s2)
+    c0 = 0.5 * m2 * m2 / (s2 * s2) - 0.5 * m1 * m1 / (s1 * s1)
+    return float(a), float(bq), float(c0)
+
+
 def _crossings_batch(
     m1: float, s1: float, m2: float, s2: float, log_ratio: FloatArray
 ) -> list[FloatArray]:
     """Both roots (B, 1) each of ``log_ratio - (y - m1)^2 / 2 s1^2 + (y - m2)^2 / 2 s2^2 = 0``
     (NaN where there is none)."""
-    a = 0.5 / (s2 * s2) - 0.5 / (s1 * s1)
-    bq = m1 / (s1 * s1) - m2 / (s2 * s2)
-    c = 0.5 * m2 * m2 / (s2 * s2) - 0.5 * m1 * m1 / (s1 * s1) + log_ratio
+    a, bq, c0 = quadratic(m1, s1, m2, s2)
+    c = c0 + log_ratio
     with np.errstate(divide="ignore", invalid="ignore"):
         if a == 0.0:
             one = np.where(bq != 0.0, -c / bq, np.nan)
