@@ -182,8 +182,7 @@ def _replay(f: Setup, src: list[str], plant: str, out: Path, capsys: Any) -> Any
     _cli(["simulate", str(f.scenario), *src, "--plant", plant, "--csv", str(run)], capsys)
     spec = src[1]
     replayed = out / "u.csv"
-    impl = "c" if plant in ("planar", "arm6") else "python"  # what the run ran
-    argv = ["replay", spec, "--forces", str(run), "--out", str(replayed), "--impl", impl]
+    argv = ["replay", spec, "--forces", str(run), "--out", str(replayed), "--impl", "c"]
     printed = _cli(argv, capsys)
     found = re.search(r"largest difference from the run's corrections \(u<a>_m\): (\S+) m", printed)
     assert found is not None and float(found.group(1)) == 0.0, printed
