@@ -94,3 +94,27 @@ def test_without_a_compiler_the_mujoco_run_executes_the_generated_python(
     impl = result.controller_impl  # type: ignore[attr-defined]
     assert impl.startswith("generated Python controller user_swapped_controller"), impl
     assert "no C compiler found" in impl
+
+
+def test_tuning_on_mujoco_prices_the_generated_controller() -> None:
+    """No stand-in surface: a tune on a plant without a compiled loop runs each candidate's
+    generated controller, which the spec's reference follows."""
+    from fuzzkit.control.spec_reader import load_spec
+    from fuzzkit.studies.experiments import experiment, with_spec
+    from fuzzkit.studies.tuning import CaseRunner, TuningProblem
+
+    exp = with_spec(experiment("E1"), load_spec(SPEC))
+    problem = TuningProblem.build([exp], "fuzzy-pi", str(SPEC.parent / "force_names_swapped.yaml"),
+                                  "mujoco", (10.0,), horizon_s=2.5)  # fmt: skip
+    gains = {"kp": 0.25, "ki": 0.06, "kx": 2.5e-4}
+    run = CaseRunner(problem).run_case(0, gains, 2.5)
+    assert run.controller_impl.startswith("generated C controller (double) user_swapped")
+    reference = CaseRunner(replace_impl(problem, "python")).run_case(0, gains, 2.5)
+    assert "generated" not in reference.controller_impl
+    assert float(np.nanmax(np.abs(run.force_true - reference.force_true))) < 1e-6  # N
+
+
+def replace_impl(problem: object, impl: str) -> object:
+    import dataclasses
+
+    return dataclasses.replace(problem, controller_impl=impl)  # type: ignore[type-var]

@@ -183,9 +183,8 @@ def _run_generated_python_loop(
     could not take it). A spec that adapts its gains still runs the reference there, and
     ``loop`` says so: the Python loop does not yet record the generated controller's
     stiffness estimate and gain factor."""
-    from fuzzkit.studies.compiled.generated_controller import run_controller_spec
-    from fuzzkit.studies.loop_controller import GeneratedLoopController
-    from fuzzkit.studies.runner import run, run_faults_and_latency
+    from fuzzkit.studies.loop_controller import run_controller
+    from fuzzkit.studies.runner import run
 
     cs = exp.controller_spec
     if cs is not None and cs.adaptation.mode != "none":
@@ -196,20 +195,12 @@ def _run_generated_python_loop(
             )
         why = " (an adapting spec runs on the reference controller in the Python loop)"
         return _run_reference(spec, exp, plant, faults, fallback or why)
-    ctl_spec = run_controller_spec(exp, spec.controller, dict(spec.gains), spec.rulebase)
-    _, sensor_delay, _ = run_faults_and_latency(exp, spec.seed, faults, spec.latency)
-    ctrl = GeneratedLoopController(ctl_spec, sensor_delay, require_c=spec.controller_impl == "c")
-    result = run(
-        exp,
-        plant,
-        ctl_spec.kind,
-        hybrid=ctrl,
-        seed=spec.seed,
-        faults=faults,
-        latency=spec.latency,
-        duration_s=spec.duration_s,
-        controller_impl=f"{ctrl.label} (python loop)",
+    gains, impl_c = dict(spec.gains), spec.controller_impl == "c"
+    ctrl = run_controller(
+        exp, spec.controller, gains, spec.rulebase, spec.seed, faults, spec.latency, impl_c
     )
+    result = run(exp, plant, ctrl.kind, hybrid=ctrl, seed=spec.seed, faults=faults,
+                 latency=spec.latency, duration_s=spec.duration_s)  # fmt: skip
     result.loop += fallback
     return result
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import ctypes
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -75,6 +75,28 @@ def _python_step(spec: ControllerSpec, why: str) -> tuple[StepFunction, str]:
         return int(status)
 
     return step, f"generated Python controller {spec.name}_controller (no C compiler: {why})"
+
+
+def run_controller(
+    exp: Any,
+    controller: str,
+    gains: Mapping[str, float],
+    rulebase: str,
+    seed: int,
+    faults: Any,
+    latency: tuple[int, int] | None,
+    require_c: bool = False,
+) -> GeneratedLoopController:
+    """The generated controller of a Python-loop run: the run's controller spec
+    (:func:`~fuzzkit.studies.compiled.generated_controller.run_controller_spec` of ``exp``,
+    ``controller``, ``gains``, ``rulebase``) with the run's sensor delay (its ``faults``,
+    seeded by ``seed``, and ``latency``, as :func:`fuzzkit.studies.runner.run` sets them)."""
+    from fuzzkit.studies.compiled.generated_controller import run_controller_spec
+    from fuzzkit.studies.runner import run_faults_and_latency
+
+    spec = run_controller_spec(exp, controller, gains, rulebase)
+    _, sensor_delay, _ = run_faults_and_latency(exp, seed, faults, latency)
+    return GeneratedLoopController(spec, sensor_delay, require_c)
 
 
 class GeneratedLoopController:

@@ -350,8 +350,9 @@ def _impl_label(
     hybrid: LoopController | None,
     surface: Surface | None,
 ) -> str:
-    if hybrid is not None:
-        return "custom"
+    if hybrid is not None:  # a generated controller names its code
+        label = getattr(hybrid, "label", None)
+        return "custom" if label is None else f"{label} (python loop)"
     if exp.controller_spec is not None:
         spec = exp.controller_spec
         on = spec.rulebase.name if spec.rulebase is not None else ""
