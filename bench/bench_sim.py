@@ -24,20 +24,13 @@ def _best_of(fn: Callable[[], float], repeat: int = 3) -> float:
     return max(fn() for _ in range(repeat))
 
 
-def closed_loop_rate(controller: str, surface_kind: str = "exact") -> float:
-    """Simulated seconds per wall second of E1 on the planar arm."""
-    from fuzzkit.control.controllers import engine_surface, engine_table_surface
-    from fuzzkit.formats.registry import load
-    from fuzzkit.fuzzy.inference import Engine
+def closed_loop_rate(controller: str) -> float:
+    """Simulated seconds per wall second of E1 on the planar arm, the reference controller in
+    the Python loop (a fuzzy-PI on the exact engine)."""
     from fuzzkit.studies.experiments import experiment
-    from fuzzkit.studies.runner import run
+    from fuzzkit.studies.runner import load_surface, run
 
-    surface = None
-    if controller == "fuzzy-pi":
-        engine = Engine(load("macvicar_whelan"))
-        exact = surface_kind == "exact"
-        names = ("e", "de", "du")
-        surface = engine_surface(engine, *names) if exact else engine_table_surface(engine, *names)
+    surface = load_surface() if controller == "fuzzy-pi" else None
     exp = experiment("E1")
 
     def once() -> float:
@@ -72,8 +65,7 @@ def main() -> int:
     """Print the benchmark table; returns 0."""
     rows = [
         ("E1 closed loop, PI", closed_loop_rate("pi")),
-        ("E1 closed loop, fuzzy-PI (exact engine)", closed_loop_rate("fuzzy-pi", "exact")),
-        ("E1 closed loop, fuzzy-PI (201x201 table)", closed_loop_rate("fuzzy-pi", "table")),
+        ("E1 closed loop, fuzzy-PI (exact engine)", closed_loop_rate("fuzzy-pi")),
         ("E1 planar plant only", plant_rate()),
     ]
     width = max(len(name) for name, _ in rows)

@@ -9,7 +9,6 @@ from __future__ import annotations
 import argparse
 
 from fuzzkit.studies.latency_sweep import stability_map
-from fuzzkit.studies.runner import load_surface
 from fuzzkit.viz.latency import write_stability_png
 
 FACTORS = (1.0, 2.0, 3.0, 4.0, 6.0, 8.0)
@@ -20,11 +19,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--out", default="docs/figures/latency_boundary.png")
     args = parser.parse_args()
-    surface = load_surface("macvicar_whelan")
-    maps = [
-        stability_map(c, FACTORS, DELAYS, surface if c == "fuzzy-pi" else None)
-        for c in ("pi", "fuzzy-pi")
-    ]
+    maps = [stability_map(c, FACTORS, DELAYS) for c in ("pi", "fuzzy-pi")]
     head = f"{'controller':<10}{'factor':>7}  stable at delay (periods) "
     print(head + " ".join(map(str, DELAYS)))
     for m in maps:

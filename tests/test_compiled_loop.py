@@ -350,7 +350,7 @@ def test_simulate_json_names_the_generated_controller(capsys: pytest.CaptureFixt
     assert data["controller_impl"].endswith("(compiled loop)")
 
 
-def test_without_a_compiler_the_reference_runs_and_says_why(
+def test_without_a_compiler_the_generated_python_runs_and_says_why(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     from fuzzkit.studies.batch import RunSpec, run_spec
@@ -363,6 +363,7 @@ def test_without_a_compiler_the_reference_runs_and_says_why(
     result = run_spec(spec)
     assert result.loop.startswith("python (fallback: the compiled loop runs the generated C")
     assert "no C compiler found" in result.loop
+    assert result.controller_impl.startswith("generated Python controller E1_pi_controller")
     assert len(result.t) == 50
     for explicit in (
         RunSpec("E1", "pi", "arm6", loop="compiled"),

@@ -13,7 +13,6 @@ from fuzzkit.control.controllers import (
     HybridForceController,
     make_axis_controllers,
     saturated_sum_surface,
-    tabulated_surface,
 )
 from fuzzkit.errors import ConfigError
 
@@ -90,17 +89,6 @@ def test_surface_answering_nan_never_moves_the_robot() -> None:
     f = FuzzyPI(lambda e, de: math.nan, kp=1.0, ki=1.0, kx=1.0)
     assert f.step(10.0, 0.0) == 0.0
     assert f.faults == 1
-
-
-def test_tabulated_surface_is_close_to_its_source() -> None:
-    tab = tabulated_surface(saturated_sum_surface, n=101)
-    rng = np.random.default_rng(0)
-    pts = rng.uniform(-1.0, 1.0, (500, 2))
-    err = max(
-        abs(tab(float(a), float(b)) - saturated_sum_surface(float(a), float(b))) for a, b in pts
-    )
-    assert err < 0.02
-    assert math.isnan(tab(math.nan, 0.0))
 
 
 def test_reset_clears_state() -> None:
@@ -245,18 +233,11 @@ def test_make_axis_controllers_follows_selection() -> None:
     assert axes[1] is None and isinstance(axes[0], PI) and isinstance(axes[2], PI)
 
 
-def test_engine_table_surface_tracks_the_exact_engine() -> None:
-    from fuzzkit.control.controllers import engine_surface, engine_table_surface
+def test_the_exact_surface_is_zero_at_the_origin_and_odd() -> None:
+    from fuzzkit.control.loop_rulebase import exact_surface
     from fuzzkit.formats.registry import load
-    from fuzzkit.fuzzy.inference import Engine
 
-    engine = Engine(load("macvicar_whelan"))
-    names = ("e", "de", "du")  # the shipped rule base's own
-    exact, table = engine_surface(engine, *names), engine_table_surface(engine, *names, n=201)
-    rng = np.random.default_rng(1)
-    pts = rng.uniform(-1.0, 1.0, (300, 2))
-    err = max(abs(table(float(a), float(b)) - exact(float(a), float(b))) for a, b in pts)
-    assert err < 0.01
+    exact = exact_surface(load("macvicar_whelan"))
     assert exact(0.0, 0.0) == pytest.approx(0.0, abs=1e-12)
     assert exact(0.3, 0.1) == pytest.approx(-exact(-0.3, -0.1), abs=1e-9)  # odd symmetry
 

@@ -44,8 +44,10 @@ def test_compensation_keeps_the_force_within_the_noise_and_the_tare_alone_does_n
     noise = load_scenario(TILT).scenario.sensor.noise_std_n
     on, on_std, result = _steady()
     off, _, _ = _steady(spec=TARE_ONLY)
-    # the loop and the plant: Python (the compiled plants model no tool weight, drift or tilt)
-    assert "fallback" in result.loop and result.plant == "arm6"  # type: ignore[attr-defined]
+    # the Python loop (the compiled plants model no tool weight, drift or tilt), running the
+    # generated controller
+    assert "does not model" in result.loop and result.plant == "arm6"  # type: ignore[attr-defined]
+    assert "generated C controller" in result.controller_impl  # type: ignore[attr-defined]
     assert abs(on) < noise and on_std < noise
     closed_form = 1.5 * GRAVITY_M_S2 * (1.0 - math.cos(math.radians(30.0)))  # 1.97 N
     assert off == pytest.approx(closed_form, abs=0.1)

@@ -90,54 +90,6 @@ def lookup_table_surface(table: Any) -> Surface:
     return surface
 
 
-def tabulated_surface(surface: Surface, n: int = 201) -> Surface:
-    """Sample ``surface`` on an ``n x n`` grid over [-1, 1]^2; answer by bilinear interpolation.
-
-    A fast stand-in for the exact engine in long simulations (error of order h^2 * curvature;
-    measure it against the source before trusting it: ``fuzzkit.codegen.lookup_table``
-    certifies a bound).
-    """
-    if n < 2:
-        raise ConfigError(f"tabulated_surface: n must be >= 2 (got {n})")
-    grid = np.linspace(-1.0, 1.0, n)
-    return _bilinear(np.array([[surface(float(a), float(b)) for b in grid] for a in grid]))
-
-
-def engine_table_surface(
-    engine: Any, e_name: str, de_name: str, out_name: str, n: int = 201
-) -> Surface:
-    """Like :func:`tabulated_surface` for an inference engine, sampled in one batch call."""
-    if n < 2:
-        raise ConfigError(f"engine_table_surface: n must be >= 2 (got {n})")
-    grid = np.linspace(-1.0, 1.0, n)
-    ee, dd = np.meshgrid(grid, grid, indexing="ij")
-    table = np.asarray(engine.evaluate({e_name: ee, de_name: dd})[out_name], dtype=np.float64)
-    return _bilinear(table.reshape(n, n))
-
-
-def _bilinear(table: Vec) -> Surface:
-    """Bilinear interpolation of ``table[i, j]`` = F(e_i, de_j) on a uniform [-1, 1]^2 grid."""
-    n = table.shape[0]
-    h = 2.0 / (n - 1)
-    rows = table.tolist()
-
-    def interp(e: float, de: float) -> float:
-        if math.isnan(e) or math.isnan(de):
-            return math.nan
-        fe = (min(max(e, -1.0), 1.0) + 1.0) / h
-        fd = (min(max(de, -1.0), 1.0) + 1.0) / h
-        i = min(int(fe), n - 2)
-        j = min(int(fd), n - 2)
-        se, sd = fe - i, fd - j
-        r0, r1 = rows[i], rows[i + 1]
-        val: float = (1.0 - se) * ((1.0 - sd) * r0[j] + sd * r0[j + 1]) + se * (
-            (1.0 - sd) * r1[j] + sd * r1[j + 1]
-        )
-        return val
-
-    return interp
-
-
 class _Incremental:
     """Shared state and limits of the incremental controllers (eq. 8)."""
 

@@ -148,11 +148,17 @@ def build_report(
         Unusable output folder, missing or bad gains files, unknown plant or rule base.
     """
     from fuzzkit.control.loop_rulebase import load_loop_rulebase
-    from fuzzkit.studies.batch import experiment_and_plant, run_spec
+    from fuzzkit.studies.batch import (
+        RunSpec,
+        experiment_and_plant,
+        gains_items,
+        run_resolved,
+        run_spec,
+    )
     from fuzzkit.studies.experiments import DEFAULT_GAINS, press_experiment
     from fuzzkit.studies.metrics import summary
     from fuzzkit.studies.plants import make_plant
-    from fuzzkit.studies.runner import load_surface, run
+    from fuzzkit.studies.runner import load_surface
     from fuzzkit.viz.figures import figure_bytes
     from fuzzkit.viz.study_figures import force_figure, stiffness_figure
 
@@ -253,12 +259,12 @@ def build_report(
                     bar.set_description(f"stiffness study {ctrl} {label}")
                     rows = []
                     for k in stiffnesses_n_per_mm:
-                        r = run(
-                            press_experiment(k * 1e3),
+                        press = press_experiment(k * 1e3)
+                        pair = gains_items(gains[(ctrl, label)])
+                        r = run_resolved(
+                            RunSpec(press.name, ctrl, "planar", gains=pair, rulebase=rulebase),
+                            press,
                             "planar",
-                            ctrl,
-                            gains=gains[(ctrl, label)],
-                            surface=surface if ctrl == "fuzzy-pi" else None,
                         )
                         m = axis_metrics(r, 2)
                         m["tripped"] = float(r.tripped)
@@ -350,7 +356,6 @@ def build_report(
         text += "\n".join(adaptive_section(pairs))
         text += _latency_section(
             out,
-            surface,
             log,
             tuple(latency_factors or LATENCY_FACTORS),
             tuple(latency_delays or LATENCY_DELAYS),
@@ -367,7 +372,6 @@ LATENCY_DELAYS = tuple(range(7))
 
 def _latency_section(
     out: Path,
-    surface: Any,
     stream: IO[str] | None,
     factors: tuple[float, ...],
     delays: tuple[int, ...],
@@ -380,9 +384,7 @@ def _latency_section(
 
     if stream is not None:
         print("latency sweep ...", file=stream, flush=True)
-    maps = [
-        stability_map(c, factors, delays, surface if c == "fuzzy-pi" else None) for c in CONTROLLERS
-    ]
+    maps = [stability_map(c, factors, delays, rulebase) for c in CONTROLLERS]
     write_stability_png(maps, out / "latency.png")
     md = [
         "",
@@ -391,8 +393,9 @@ def _latency_section(
         f"Default latency of E1-E3: {DEFAULT_LATENCY[0]} period sensor, {DEFAULT_LATENCY[1]} "
         "period command (ABB EGM at 4 ms). Stability boundary: press 10 N on the hammer at "
         "10 N/mm with the default gains times a factor, sensor delay "
-        f"{delays[0]}-{delays[-1]} periods; stable means no trip and the last "
-        "0.5 s within 0.5 N (`fuzzkit.studies.latency_sweep`).",
+        f"{delays[0]}-{delays[-1]} periods, each run the generated controller; stable means "
+        "no trip and the last 0.5 s within 0.5 N on every force-controlled axis "
+        "(`fuzzkit.studies.outcome.end_state`).",
         "",
         "![largest stable delay against the gain factor](latency.png)",
         "",

@@ -99,12 +99,13 @@ def _exact_surface(rulebase: str) -> Any:
 def run_spec(spec: RunSpec) -> RunResult:
     """Run ``spec`` and return the whole :class:`RunResult` (traces included).
 
-    The compiled loop runs the run's controller spec generated as C (double; one arithmetic
-    with ``fuzzkit compile``); the Python loop runs the reference controller, a fuzzy-PI's
-    surface by the exact engine (or the table, or the rule base's C: ``fuzzy_impl``). A run the
-    compiled loop cannot take (:class:`~fuzzkit.plants.contract.UnsupportedPlant`, an adapting
-    spec, or no C compiler) runs in the Python loop when the loop was left to ``auto``, and the
-    result's ``loop`` says so: ``python (fallback: ...)``.
+    Every run executes the run's controller spec as ``fuzzkit compile`` generates it (C
+    double; the generated Python without a C compiler): in the compiled loop where it models
+    the plant, else in the Python loop (MuJoCo; a scenario the kernels lack, a run without a
+    compiler: ``loop`` is then ``python (fallback: ...)``); ``controller_impl`` names the code.
+    The reference controller runs only when asked for (``controller_impl="python"``, a
+    ``fuzzy_impl``, ``loop="python"``), and for a spec that adapts its gains outside the
+    compiled loop (``loop`` says so).
     """
     from fuzzkit.studies.experiments import with_stiffness
 
@@ -141,29 +142,67 @@ def run_resolved(spec: RunSpec, exp: Experiment, plant: Any) -> RunResult:
             f"(expected {', '.join(CONTROLLER_IMPLS)})"
         )
     loop = spec.resolved_loop()
-    fallback = ""
     if loop == "compiled" and impl != "auto":
         raise ConfigError(
             f"--fuzzy-impl {impl} chooses the Python loop's surface; the compiled loop runs the "
             "generated controller (the spec's surface): leave out --loop compiled"
         )
+    # The reference controller runs only when asked for: --controller-impl python, a
+    # --fuzzy-impl, or the Python loop named (--loop python). Every other run executes the
+    # spec's generated controller: in the compiled loop where it models the plant and the
+    # scenario, else in the Python loop.
+    if spec.controller_impl == "python" or impl != "auto" or spec.loop == "python":
+        if spec.controller_impl == "c":
+            raise ConfigError(
+                "--controller-impl c runs the generated controller (in the compiled loop "
+                "where it models the plant); --loop python and --fuzzy-impl run the reference "
+                "controller: leave them out"
+            )
+        return _run_reference(spec, exp, plant, faults, "")
     if loop == "compiled":
         try:
             return _run_generated(spec, exp, plant, faults)
         except _Fallback as exc:
-            if spec.loop == "compiled" or spec.controller_impl == "c":
+            if spec.loop == "compiled":
                 raise ConfigError(f"{exc}; use --loop python") from exc
             fallback = f" (fallback: {exc})"
-    elif spec.controller_impl == "c":
-        raise ConfigError(
-            "--controller-impl c runs the generated controller in the compiled loop (arm6, "
-            "planar); leave out --loop python and --fuzzy-impl"
-        )
-    return _run_reference(spec, exp, plant, faults, fallback)
+    else:
+        fallback = ""  # a plant the compiled loop does not model (mujoco)
+    return _run_generated_python_loop(spec, exp, plant, faults, fallback)
 
 
 class _Fallback(Exception):
     """Why the compiled loop cannot take a run the Python loop can."""
+
+
+def _run_generated_python_loop(
+    spec: RunSpec, exp: Experiment, plant: Any, faults: Any, fallback: str
+) -> RunResult:
+    """``spec`` with the run's generated controller (C, or the generated Python without a
+    compiler) in the Python loop; ``loop`` says so, with ``fallback`` (why the compiled loop
+    could not take it). A spec that adapts its gains still runs the reference there, and
+    ``loop`` says so: the Python loop does not yet record the generated controller's
+    stiffness estimate and gain factor."""
+    from fuzzkit.studies.loop_controller import run_controller
+    from fuzzkit.studies.runner import run
+
+    cs = exp.controller_spec
+    if cs is not None and cs.adaptation.mode != "none":
+        if spec.controller_impl == "c":
+            raise ConfigError(
+                f"the Python loop runs a spec that adapts its gains ({cs.adaptation.mode}) on "
+                "the reference controller only; leave out --controller-impl c"
+            )
+        why = " (an adapting spec runs on the reference controller in the Python loop)"
+        return _run_reference(spec, exp, plant, faults, fallback or why)
+    gains, impl_c = dict(spec.gains), spec.controller_impl == "c"
+    ctrl = run_controller(
+        exp, spec.controller, gains, spec.rulebase, spec.seed, faults, spec.latency, impl_c
+    )
+    result = run(exp, plant, ctrl.kind, hybrid=ctrl, seed=spec.seed, faults=faults,
+                 latency=spec.latency, duration_s=spec.duration_s)  # fmt: skip
+    result.loop += fallback
+    return result
 
 
 def _run_reference(
@@ -268,10 +307,11 @@ def _run_generated(spec: RunSpec, exp: Experiment, plant: Any, faults: Any) -> R
     try:
         generated = load_generated_controller(ctl_spec)
     except ToolchainError as exc:
-        raise _Fallback(
-            f"the compiled loop runs the generated C controller and {exc}; the Python loop "
-            "runs the reference controller"
-        ) from exc
+        if spec.controller_impl == "c":
+            raise ConfigError(
+                f"--controller-impl c runs the generated C controller and {exc}"
+            ) from exc
+        raise _Fallback(f"the compiled loop runs the generated C controller and {exc}") from exc
     try:
         return run_compiled(
             exp,

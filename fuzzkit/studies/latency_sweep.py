@@ -12,10 +12,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from fuzzkit.control.controllers import Surface
 from fuzzkit.studies.experiments import press_experiment, scaled_default_gains
 from fuzzkit.studies.outcome import SETTLED, end_state
-from fuzzkit.studies.runner import RunResult, run
+from fuzzkit.studies.runner import RunResult
 
 __all__ = ["StabilityMap", "is_stable", "scaled_default_gains", "stability_map"]
 
@@ -53,29 +52,23 @@ def stability_map(
     controller: str,
     factors: Sequence[float],
     delays: Sequence[int],
-    surface: Surface | None = None,
+    rulebase: str = "macvicar_whelan",
     plant: str = "planar",
     duration_s: float = 2.0,
 ) -> StabilityMap:
-    """Run the press experiment for every gain factor and delay (one seed: 1)."""
+    """Run the press experiment for every gain factor and delay (one seed: 1), each run as
+    ``fuzzkit simulate`` runs it (:func:`fuzzkit.studies.batch.run_resolved`: the generated
+    controller, in the compiled loop where the plant has one)."""
+    from fuzzkit.studies.batch import RunSpec, gains_items, run_resolved
+
     exp = press_experiment(1.0e4)
     rows = []
     for factor in factors:
-        rows.append(
-            tuple(
-                is_stable(
-                    run(
-                        exp,
-                        plant,
-                        controller,
-                        gains=scaled_default_gains(controller, factor),
-                        surface=surface,
-                        seed=1,
-                        latency=(delay, 0),
-                        duration_s=duration_s,
-                    )
-                )
-                for delay in delays
-            )
-        )
+        gains = gains_items(scaled_default_gains(controller, factor))
+        runs = [
+            RunSpec(exp.name, controller, plant, seed=1, gains=gains, rulebase=rulebase,
+                    latency=(delay, 0), duration_s=duration_s)
+            for delay in delays
+        ]  # fmt: skip
+        rows.append(tuple(is_stable(run_resolved(r, exp, plant)) for r in runs))
     return StabilityMap(controller, tuple(factors), tuple(delays), tuple(rows))

@@ -12,7 +12,7 @@ import time
 from collections import deque
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -98,6 +98,19 @@ class RunResult:
         return float(self.t[-1]) if len(self.t) else 0.0
 
 
+class LoopController(Protocol):
+    """What the loop drives each period: the reference
+    (:class:`~fuzzkit.control.controllers.HybridForceController`) or a spec's generated
+    controller (:class:`fuzzkit.studies.loop_controller.GeneratedLoopController`). After each
+    call the loop reads ``status``, ``engaged``, ``tripped``, ``faults``, ``trip_time_s``,
+    ``setpoints``, ``e``, ``de``, ``du`` and ``controllers`` (the reference's axis
+    controllers, which may adapt; none for generated code)."""
+
+    def step(self, force: Vec | None, rotation: Vec | None = None) -> Vec: ...
+
+    def wait(self) -> Vec: ...
+
+
 def load_surface(rulebase: str = "macvicar_whelan") -> Surface:
     """The control surface of a rule base (shipped name or YAML path), by the exact engine: its
     inputs by position (error, change), whatever their names."""
@@ -150,7 +163,7 @@ def run(
     *,
     gains: Mapping[str, float] | None = None,
     surface: Surface | None = None,
-    hybrid: HybridForceController | None = None,
+    hybrid: LoopController | None = None,
     seed: int = 0,
     faults: Faults | None = None,
     duration_s: float | None = None,
@@ -174,7 +187,7 @@ def run(
     """
     if isinstance(plant, str):
         plant = make_plant(plant)
-    ctrl = hybrid or build_controller(exp, controller, gains, surface)
+    ctrl: Any = hybrid or build_controller(exp, controller, gains, surface)
     scn = exp.scenario
     faults, sensor_delay, command_delay = run_faults_and_latency(exp, seed, faults, latency)
     inject = FaultInjector(faults)
@@ -306,7 +319,7 @@ def _rotation(scn: Scenario, sample: PlantSample) -> Vec:
 
 def _controller_name(exp: Experiment, controller: str, hybrid: object) -> str:
     if hybrid is not None:
-        return "custom"
+        return str(getattr(hybrid, "kind", "custom"))  # a generated controller knows its kind
     return controller if exp.controller_spec is None else exp.controller_spec.kind
 
 
@@ -334,11 +347,12 @@ def check_latency(latency: tuple[int, int]) -> tuple[int, int]:
 def _impl_label(
     exp: Experiment,
     controller: str,
-    hybrid: HybridForceController | None,
+    hybrid: LoopController | None,
     surface: Surface | None,
 ) -> str:
-    if hybrid is not None:
-        return "custom"
+    if hybrid is not None:  # a generated controller names its code
+        label = getattr(hybrid, "label", None)
+        return "custom" if label is None else f"{label} (python loop)"
     if exp.controller_spec is not None:
         spec = exp.controller_spec
         on = spec.rulebase.name if spec.rulebase is not None else ""

@@ -217,10 +217,36 @@ def generated_step(
     ``c_step`` is ``NAME_controller_step`` (ctypes: numba reads its address at every call of
     the kernel), ``c_state`` its ``NAME_controller_t``, ``c_rot`` the tool's rotation
     (row-major 9). Writes ``correction`` and keeps the loop's bookkeeping in ``cs``, ``cv``
-    (:mod:`fuzzkit.studies.compiled.period`).
+    (:func:`loop_bookkeeping`).
+    """
+    status = int(c_step(c_state.ctypes, consumed.ctypes, c_rot.ctypes, correction.ctypes))
+    loop_bookkeeping(cs, cv, cp, selection, setpoints, status, consumed, correction, t_s)
+    return status
+
+
+@jit
+def loop_bookkeeping(
+    cs: FloatArray,
+    cv: FloatArray,
+    cp: FloatArray,
+    selection: FloatArray,
+    setpoints: FloatArray,
+    status: int,
+    consumed: FloatArray,
+    correction: FloatArray,
+    t_s: float,
+) -> None:
+    """The loop's record, in ``cs`` and ``cv``, of one step of a generated controller (C or
+    Python) in a run with parameters ``cp``, ``selection`` and ``setpoints``: from the status
+    the step returned and the correction it wrote for the ``consumed`` sample at ``t_s``.
+
+    Keeps (:mod:`fuzzkit.studies.compiled.period`) the engagement and
+    trip times, the fault count (a sample missing on a force-controlled axis after the
+    start-up's sensor-delay periods, or one the spike gate rejected: what the reference
+    counts) and the recorded ``e``, ``de``, ``du``, ``u`` of the periods the axis controllers
+    stepped.
     """
     cs[CS_CTRL_T] += cp[C_PERIOD]
-    status = int(c_step(c_state.ctypes, consumed.ctypes, c_rot.ctypes, correction.ctypes))
     u, e, du = cv[V_U], cv[V_E], cv[V_DU]
     missing = False
     for i in range(3):
@@ -247,4 +273,3 @@ def generated_step(
                 u[i] = correction[i]
                 e[i] = setpoints[i] - consumed[i]
         error_change(cs, cv)
-    return status

@@ -40,8 +40,9 @@ themselves are admissible, so this never fails; when nothing beats them, they ar
 and :attr:`TuneResult.kept_defaults` says so, with the cheapest candidate that was refused.
 
 Speed: experiments are simulated over short horizons (:data:`TUNING_HORIZON_S`: first contact
-plus the transient that the gains decide), and the fuzzy surface is a 201 x 201 bilinear lookup
-table sampled once from the exact engine (``fuzzkit.control.controllers.engine_table_surface``).
+plus the transient that the gains decide), and every candidate runs the generated controller
+(compiled once per structure, its gains set as run-time parameters), in the compiled loop where
+the plant has one.
 
 Determinism: the same arguments and ``seed`` give the same gains for any number of workers (the
 simulations are deterministic, the pool preserves order, the optimiser is seeded).
@@ -60,7 +61,7 @@ from fuzzkit.studies.batch import default_workers
 from fuzzkit.studies.tuning.admission import ADMIT_RULES, PENALTY, Evaluation
 from fuzzkit.studies.tuning.cost import CostWeights, run_cost
 from fuzzkit.studies.tuning.optimiser import Progress, optimise, progress_callback, tune
-from fuzzkit.studies.tuning.pricing import TABLE_SIZE, CaseRunner, evaluate_gains
+from fuzzkit.studies.tuning.pricing import CaseRunner, evaluate_gains
 from fuzzkit.studies.tuning.problem import (
     DEFAULT_STIFFNESSES_N_PER_MM,
     TUNING_HORIZON_S,
@@ -77,7 +78,6 @@ __all__ = [
     "DEFAULT_STIFFNESSES_N_PER_MM",
     "PENALTY",
     "SPACES",
-    "TABLE_SIZE",
     "TUNING_HORIZON_S",
     "CaseRunner",
     "CostWeights",

@@ -7,15 +7,12 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from fuzzkit.control.controllers import Surface, engine_table_surface, tabulated_surface
+from fuzzkit.control.controllers import Surface
 from fuzzkit.errors import ConfigError
 from fuzzkit.studies.plants import make_plant
 from fuzzkit.studies.runner import RunResult, run
 from fuzzkit.studies.tuning.cost import run_cost
 from fuzzkit.studies.tuning.problem import TuningProblem
-
-#: Samples per side of the lookup table standing in for the exact fuzzy engine while tuning.
-TABLE_SIZE = 201
 
 
 def adapts(exp: Any) -> bool:
@@ -26,13 +23,16 @@ def adapts(exp: Any) -> bool:
 
 
 class CaseRunner:
-    """Prices gain sets for one problem in this process (the surface table is built once).
+    """Prices gain sets for one problem in this process.
 
-    Runs the compiled loop (:mod:`fuzzkit.studies.compiled`) where the plant has one: each
-    candidate's controller spec runs as the generated C controller (what ``fuzzkit compile``
-    emits). The Python loop otherwise (``controller_impl == "python"``, a plant the compiled
-    loop does not model, or a controller spec that adapts its gains), with a 201 x 201
-    bilinear table of the surface.
+    Each candidate's controller spec runs as the generated controller (what ``fuzzkit
+    compile`` emits, compiled once per structure, the candidate's gains set as run-time
+    parameters): in the compiled loop (:mod:`fuzzkit.studies.compiled`) where the plant has
+    one, else in the Python loop (:class:`~fuzzkit.studies.loop_controller.
+    GeneratedLoopController`). The reference controller runs when asked for
+    (``controller_impl == "python"``, ``loop == "python"``), for a surface given as a function,
+    and for a controller spec that adapts its gains; its fuzzy surface is then the exact
+    engine (in the spec's input roles) or that function.
     """
 
     def __init__(self, problem: TuningProblem) -> None:
@@ -53,17 +53,18 @@ class CaseRunner:
                 f"the compiled loop does not run plant {problem.plant_name} "
                 "(or a surface given as a function); use loop='python'"
             )
-        if problem.controller_impl == "c" and not self.compiled:
-            raise ConfigError(
-                f"--controller-impl c runs in the compiled loop, which does not run plant "
-                f"{problem.plant_name}"
-            )
-        if self.compiled:
+        self.generated = self.compiled or (
+            problem.loop != "python"
+            and problem.controller_impl != "python"
+            and (problem.surface is None or isinstance(problem.surface, str))
+            and not any(adapts(exp) for exp in problem.cases)
+        )
+        if self.generated:
             pass  # the generated controller holds the surface
         elif isinstance(problem.surface, str):
-            self.surface = _rulebase_table(problem)
-        elif problem.surface is not None:
-            self.surface = tabulated_surface(problem.surface, n=TABLE_SIZE)
+            self.surface = _rulebase_surface(problem)
+        else:
+            self.surface = problem.surface
 
     def run_case(
         self, case: int, gains: Mapping[str, float], duration_s: float | None
@@ -86,15 +87,32 @@ class CaseRunner:
                 generated_controller=self._generated(exp, full),
             )
         plant = own or (make_plant(p.plant) if isinstance(p.plant, str) else p.plant())
+        hybrid = self._python_loop_controller(exp, full, p.latency_of(case))
         return run(
             exp,
             plant,
             p.controller,
             gains=full,
             surface=self.surface,
+            hybrid=hybrid,
             seed=p.noise_seed,
             duration_s=duration_s,
             latency=p.latency_of(case),
+        )
+
+    def _python_loop_controller(
+        self, exp: Any, gains: Mapping[str, float], latency: tuple[int, int] | None
+    ) -> Any:
+        """The candidate's generated controller for the Python loop (None: the reference)."""
+        if not self.generated:
+            return None
+        from fuzzkit.studies.loop_controller import run_controller
+
+        p = self.problem
+        rulebase = p.rulebase_name or "macvicar_whelan"
+        impl_c = p.controller_impl == "c"
+        return run_controller(
+            exp, p.controller, gains, rulebase, p.noise_seed, None, latency, impl_c
         )
 
     def _generated(self, exp: Any, gains: Mapping[str, float]) -> Any:
@@ -126,19 +144,18 @@ class CaseRunner:
         return tuple(out)
 
 
-def _rulebase_table(problem: TuningProblem) -> Surface:
-    """The 201 x 201 table of the problem's rule base, its inputs in the roles the cases' spec
-    gives them (by position without one)."""
-    from fuzzkit.control.loop_rulebase import POSITIONAL_ROLES, load_loop_rulebase, role_names
+def _rulebase_surface(problem: TuningProblem) -> Surface:
+    """The exact engine's surface of the problem's rule base for the reference controller, its
+    inputs in the roles the cases' spec gives them (by position without one)."""
+    from fuzzkit.control.loop_rulebase import POSITIONAL_ROLES, exact_surface, load_loop_rulebase
     from fuzzkit.control.spec import surface_inputs
-    from fuzzkit.fuzzy.inference import Engine
 
     spec = problem.cases[0].controller_spec if problem.cases else None
     if spec is not None and spec.rulebase is not None:
         rb, roles = spec.rulebase, surface_inputs(spec, spec.rulebase)
     else:
         rb, roles = load_loop_rulebase(str(problem.surface)), POSITIONAL_ROLES
-    return engine_table_surface(Engine(rb), *role_names(rb, roles), n=TABLE_SIZE)
+    return exact_surface(rb, roles)
 
 
 def evaluate_gains(problem: TuningProblem, gains: Mapping[str, float]) -> tuple[float, ...]:

@@ -1,0 +1,187 @@
+"""A spec's generated controller in the Python loop: C where a compiler exists, else the
+generated Python, behind what :func:`fuzzkit.studies.runner.run` drives.
+
+The Python loop runs the plants the compiled loop does not model (MuJoCo) and the scenarios
+its kernels lack (a tool's weight, a drifting bias, a tilted task frame); with this controller
+those runs execute the code ``fuzzkit compile`` emits, as the compiled loop does, and not the
+reference (which stays available with ``--controller-impl python``). The loop's record of each
+step (engagement and trip times, the fault count, ``e``, ``de``, ``du``) is the compiled
+loop's own, :func:`fuzzkit.studies.compiled.generated_controller.loop_bookkeeping`, so that the
+two loops record a step alike and ``fuzzkit replay`` of the run's CSV reproduces it.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from fuzzkit.control.spec import ControllerSpec
+from fuzzkit.errors import ToolchainError
+from fuzzkit.studies.compiled import period as P
+from fuzzkit.studies.compiled.generated_controller import (
+    code_spec,
+    load_generated_controller,
+    loop_bookkeeping,
+    params_of,
+)
+
+FloatArray = npt.NDArray[np.float64]
+#: one step of a generated controller: (sample, rotation row-major 9) -> status, writing the
+#: correction into the array it was given
+StepFunction = Callable[[FloatArray, FloatArray, FloatArray], int]
+
+
+def open_step(spec: ControllerSpec, require_c: bool = False) -> tuple[StepFunction, str]:
+    """The generated controller of ``spec`` as one step function, and its label: the double C
+    (compiled once per process and code, :func:`load_generated_controller`), or, without a C
+    compiler, the generated Python module (unless ``require_c``: the ToolchainError)."""
+    try:
+        gen = load_generated_controller(spec)
+    except ToolchainError as exc:
+        if require_c:
+            raise
+        return _python_step(spec, str(exc))
+    return _CStep(gen.step_function, gen.fresh_state()), gen.label
+
+
+class _CStep:
+    """``NAME_controller_step`` on a state of its own (a ``NAME_controller_t`` as doubles)."""
+
+    def __init__(self, fn: Any, state: FloatArray) -> None:
+        self.fn, self.state = fn, state
+        self.ptr = ctypes.POINTER(ctypes.c_double)
+
+    def __call__(self, force: FloatArray, rotation: FloatArray, out: FloatArray) -> int:
+        f, r, o = (a.ctypes.data_as(self.ptr) for a in (force, rotation, out))
+        return int(self.fn(self.state.ctypes.data, f, r, o))
+
+
+def _python_step(spec: ControllerSpec, why: str) -> tuple[StepFunction, str]:
+    from fuzzkit.studies.controller_code import open_generated
+
+    code = code_spec(spec)
+    ctl = open_generated(code, "python")
+    if code is not spec:
+        ctl.set_params(params_of(spec))
+
+    def step(force: FloatArray, rotation: FloatArray, out: FloatArray) -> int:
+        u, status = ctl.step(force.tolist(), rotation.tolist())
+        out[:] = u
+        return int(status)
+
+    return step, f"generated Python controller {spec.name}_controller (no C compiler: {why})"
+
+
+def run_controller(
+    exp: Any,
+    controller: str,
+    gains: Mapping[str, float],
+    rulebase: str,
+    seed: int,
+    faults: Any,
+    latency: tuple[int, int] | None,
+    require_c: bool = False,
+) -> GeneratedLoopController:
+    """The generated controller of a Python-loop run: the run's controller spec
+    (:func:`~fuzzkit.studies.compiled.generated_controller.run_controller_spec` of ``exp``,
+    ``controller``, ``gains``, ``rulebase``) with the run's sensor delay (its ``faults``,
+    seeded by ``seed``, and ``latency``, as :func:`fuzzkit.studies.runner.run` sets them)."""
+    from fuzzkit.studies.compiled.generated_controller import run_controller_spec
+    from fuzzkit.studies.runner import run_faults_and_latency
+
+    spec = run_controller_spec(exp, controller, gains, rulebase)
+    _, sensor_delay, _ = run_faults_and_latency(exp, seed, faults, latency)
+    return GeneratedLoopController(spec, sensor_delay, require_c)
+
+
+class GeneratedLoopController:
+    """The generated controller of ``spec`` with the attributes the Python loop reads of a
+    :class:`~fuzzkit.control.controllers.HybridForceController`: ``step``, ``wait``, the
+    status bits, engagement, trip, fault count and the recorded ``e``, ``de``, ``du``.
+
+    ``sensor_delay``: the run's sensor delay in periods (a fault's delay included,
+    ``fuzzkit.studies.runner.run_faults_and_latency``): the start-up periods in which a missing
+    sample is no sensor fault.
+    """
+
+    #: no reference axis controllers (nothing to adapt from the loop's side)
+    controllers: tuple[Any, ...] = ()
+
+    def __init__(self, spec: ControllerSpec, sensor_delay: int, require_c: bool = False) -> None:
+        self.spec = spec
+        self.kind = spec.kind
+        self._step, self.label = open_step(spec, require_c)
+        self.cp = np.zeros(P.N_CP)
+        thr = spec.safety.engage_threshold_n
+        self.cp[P.C_ENGAGE_THR] = math.nan if thr is None else thr
+        self.cp[P.C_PERIOD] = spec.period_s
+        self.cp[P.C_SENSOR_DELAY] = sensor_delay
+        self.selection = np.array([1.0 if s else 0.0 for s in spec.selection])
+        self.setpoints = np.asarray(spec.setpoints, dtype=np.float64)
+        self.cs, self.cv = P.controller_state(self.cp)
+        self._sample = np.zeros(3)
+        self._rotation = np.zeros(9)
+        self._out = np.zeros(3)
+        self.status = 0
+
+    def step(self, force: FloatArray | None, rotation: FloatArray | None = None) -> FloatArray:
+        """One period on the consumed sample (N, task frame; NaN: missing) and the tool's
+        rotation (3x3 world-from-sensor): the correction (m, task frame)."""
+        self._sample[:] = math.nan if force is None else force
+        if rotation is None:
+            self._rotation[:] = math.nan
+        else:
+            self._rotation[:] = np.asarray(rotation, dtype=np.float64).reshape(9)
+        self.status = self._step(self._sample, self._rotation, self._out)
+        t_s = self.cs[P.CS_CTRL_T] + self.cp[P.C_PERIOD]  # the controller's clock
+        loop_bookkeeping(
+            self.cs,
+            self.cv,
+            self.cp,
+            self.selection,
+            self.setpoints,
+            self.status,
+            self._sample,
+            self._out,
+            t_s,
+        )
+        return self._out.copy()
+
+    def wait(self) -> FloatArray:
+        """A start-up period with no measurement yet: the generated step on a missing sample,
+        as the compiled loop calls it (not counted as a fault)."""
+        return self.step(None)
+
+    @property
+    def engaged(self) -> bool:
+        return bool(self.cs[P.CS_ENGAGED] > 0.0)
+
+    @property
+    def tripped(self) -> bool:
+        return bool(self.cs[P.CS_TRIPPED] > 0.0)
+
+    @property
+    def faults(self) -> int:
+        return int(self.cs[P.CS_FAULTS])
+
+    @property
+    def trip_time_s(self) -> float | None:
+        t = float(self.cs[P.CS_TRIP_TIME])
+        return None if math.isnan(t) else t
+
+    @property
+    def e(self) -> FloatArray:
+        return np.asarray(self.cv[P.V_E], dtype=np.float64)
+
+    @property
+    def de(self) -> FloatArray:
+        return np.asarray(self.cv[P.V_DE], dtype=np.float64)
+
+    @property
+    def du(self) -> FloatArray:
+        return np.asarray(self.cv[P.V_DU], dtype=np.float64)
