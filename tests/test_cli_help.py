@@ -86,7 +86,7 @@ def test_the_defaults_the_issue_names_are_in_the_help(name: str, option: str, sh
     ends = (i for i in range(start + 1, len(lines)) if lines[i][:3] in ("  -", ""))
     end = next(ends, len(lines))  # the next option, or the blank line after the last one
     block = " ".join(" ".join(lines[start:end]).split())  # the option's own help, one line
-    assert block.endswith(shown)
+    assert shown in block
 
 
 def test_rule_base_help_names_every_readable_file_kind() -> None:

@@ -29,6 +29,7 @@ def _start(
     stderr: int = subprocess.PIPE,
 ) -> subprocess.Popen[str]:
     env = {k: v for k, v in os.environ.items() if k != "FUZZKIT_DEBUG"}
+    env["PYTHONFAULTHANDLER"] = "1"  # a crash prints its Python stack on stderr
     env.update(extra_env or {})
     return subprocess.Popen(
         [*FUZZKIT, *args], cwd=cwd, stdout=subprocess.PIPE, stderr=stderr, text=True, env=env
@@ -143,8 +144,8 @@ def test_sigint_on_report_keeps_an_existing_report_as_it_was(tmp_path: Path) -> 
     proc, terminal = _start_on_terminal(args, tmp_path)
     _wait_for(lambda: terminal.shows(r"tuning pi: .*\b[1-9]/10"), proc, 300.0)
     code, _, _ = _interrupt(proc)
-    terminal.lines()  # the terminal closed
-    assert code == 130
+    said = terminal.lines()  # the terminal closed
+    assert code == 130, "\n".join(said[-40:])
     assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]
     assert sorted(str(p.relative_to(out)) for p in out.rglob("*")) == [
         "report.md",
