@@ -37,6 +37,7 @@ KERNEL_MODULES = (
     "fuzzkit.planar_sim.arm_period",
     "fuzzkit.studies.compiled.arm6_run",
     "fuzzkit.studies.compiled.generated_controller",
+    "fuzzkit.studies.compiled.mujoco_run",
     "fuzzkit.studies.compiled.period",
     "fuzzkit.studies.compiled.planar_run",
     "fuzzkit.studies.compiled.table",

@@ -41,8 +41,14 @@ def servo_callback() -> ServoCallback | str:
     # multiply-adds: the ramp's doubles are the Python ramp's
     text = f"/* MuJoCo {mujoco.mj_versionString()} */\n" + source_text()
     flags = (*HOST_FLAGS, "-O2", "-ffp-contract=off", f"-I{include}")
+    shipped = sorted(include.parent.glob("libmujoco.so*"))
+    if not shipped:
+        return f"servo ramp in Python: no libmujoco.so beside {include}"
+    # linked against the very library the bindings loaded (dlopen finds it mapped already)
+    lib_dir = shipped[0].parent
+    libs = ("-lm", f"-L{lib_dir}", f"-l:{shipped[0].name}", f"-Wl,-rpath,{lib_dir}")
     try:
-        library = cached_library({"mujoco_servo.c": text}, "mujoco_servo", flags=flags)
+        library = cached_library({"mujoco_servo.c": text}, "mujoco_servo", flags=flags, libs=libs)
         return ServoCallback(library)
     except (ToolchainError, RuntimeError, OSError) as exc:
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__

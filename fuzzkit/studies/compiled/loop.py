@@ -45,7 +45,7 @@ if TYPE_CHECKING:
 
 
 #: Plants the compiled loop runs.
-COMPILED_PLANTS = ("arm6", "planar")
+COMPILED_PLANTS = ("arm6", "planar", "mujoco", "mujoco-elastic")
 
 _IK_MESSAGES = {
     "max_iterations": "IK not converged this period",
@@ -115,18 +115,38 @@ def run_compiled(
                 f"the compiled loop runs on {', '.join(COMPILED_PLANTS)} (got {plant!r}); "
                 "use --loop python"
             )
-        plant = _shared_plant() if plant == "arm6" else _planar_plant()
+        plant = _mujoco_plant(plant) if plant.startswith("mujoco") else (
+            _shared_plant() if plant == "arm6" else _planar_plant()
+        )  # fmt: skip
     if generated_controller is None:
         generated_controller = load_generated_controller(
             run_controller_spec(exp, controller, gains, rulebase)
         )
     ctrl = controller_args(exp, generated_controller, seed, faults, duration_s, latency)
     controller = generated_controller.spec.kind
+    from fuzzkit.plants.mujoco_arm import MujocoArmPlant
+
+    if isinstance(plant, MujocoArmPlant):  # an Arm6Plant too: first
+        from fuzzkit.studies.compiled.mujoco_loop import run_mujoco_compiled
+
+        return run_mujoco_compiled(exp, plant, controller, ctrl, seed)
     if isinstance(plant, Arm6Plant):
         return _run_arm6(exp, plant, controller, ctrl, seed)
     from fuzzkit.studies.compiled.planar_loop import run_planar_compiled
 
     return run_planar_compiled(exp, plant, controller, ctrl, seed)
+
+
+def _mujoco_plant(name: str) -> Arm6Plant:
+    """``--plant mujoco`` or ``mujoco-elastic`` as the registry builds it (servo callback
+    compiled; a MujocoArmPlant, which is an Arm6Plant)."""
+    from fuzzkit.plants.mujoco_arm import MujocoArmPlant
+    from fuzzkit.studies.plants import make_plant
+
+    plant = make_plant(name)
+    if not isinstance(plant, MujocoArmPlant):
+        raise ConfigError(f"plant {name!r} is not a MuJoCo plant")
+    return plant
 
 
 def _planar_plant() -> PlanarArmPlant:
