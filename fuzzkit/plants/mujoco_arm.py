@@ -26,8 +26,11 @@ after that, which MuJoCo computes rather than this kit:
   the runner's) as on ``arm6``.
 
 The physics runs at 1 kHz (:data:`~fuzzkit.plants.mujoco_model.PHYSICS_DT_S`), four steps per
-4 ms period. Runs are deterministic for a seed (MuJoCo is, single-threaded; the seed draws the
-sensor noise). docs/mujoco.md lists every parameter and its source.
+4 ms period: one ``mj_step(m, d, nstep=4)`` with the servo ramp as a C control callback when the
+plant is given one (:mod:`fuzzkit.plants.mujoco_servo`; ``--plant mujoco`` builds it through
+:mod:`fuzzkit.studies.mujoco_plants`), else four calls with the ramp in Python. Runs are
+deterministic for a seed (MuJoCo is, single-threaded; the seed draws the sensor noise).
+docs/mujoco.md lists every parameter and its source.
 """
 
 from __future__ import annotations
@@ -55,6 +58,7 @@ from fuzzkit.plants.mujoco_model import (
     profile_pose,
     scene_geoms,
 )
+from fuzzkit.plants.mujoco_servo import ServoCallback
 from fuzzkit.plants.rotations import Mat3, Vec3, matrix_from_quat
 
 FloatArray = npt.NDArray[np.float64]
@@ -117,6 +121,17 @@ class MujocoArmPlant(Arm6Plant):
         #: IK through arm6's compiled twin (False: the Python reference, for comparison)
         self.compiled_ik = True
         self._ik_arrays: tuple[FloatArray, ...] | None = None
+        #: the servo ramp in C as MuJoCo's control callback, when given
+        #: (:meth:`use_servo_callback`); None: the Python ramp, one ``mj_step`` per substep
+        self.servo: ServoCallback | None = None
+        #: why the ramp runs in Python, said once in the first period's messages
+        self.servo_note = ""
+
+    def use_servo_callback(self, servo: ServoCallback | None, why_not: str = "") -> None:
+        """Run the servo ramp as ``servo`` (from the next :meth:`reset` on), or in Python
+        with ``why_not`` said in the first period's messages."""
+        self.servo = servo
+        self.servo_note = "" if servo is not None else why_not
 
     # -- world building -------------------------------------------------------------------------
 
@@ -184,6 +199,11 @@ class MujocoArmPlant(Arm6Plant):
         self._follow_profiles()
         mujoco.mj_forward(m, d)
         self._sensor.settle(self._wrist())
+        self._userdata: FloatArray | None = None
+        if self.servo is not None:
+            self._userdata = self.servo.arm(d, n_sub, np.array(m.actuator_forcerange[:, 1]))
+            self.servo.install()
+        self._note = self.servo_note
         chain = self.chain
         self._ik_arrays = (
             (
@@ -286,15 +306,23 @@ class MujocoArmPlant(Arm6Plant):
         prev = self._ref_prev
         n = self._n_sub
         feed = self._kv_over_kp * (ref - prev) / self._dt
-        limits = m.actuator_forcerange[:, 1]
-        saturated = np.zeros(m.nu, dtype=bool)
+        follow = self._follow_profiles if self._profiles else None
+        if self.servo is not None and self._userdata is not None:
+            saturated = self.servo.period(m, d, self._userdata, prev, ref, feed, follow)
+        else:
+            # the reference ramp, which mujoco_servo.c computes alike in its callback
+            limits = m.actuator_forcerange[:, 1]
+            saturated = np.zeros(m.nu, dtype=bool)
+            for s in range(1, n + 1):
+                d.ctrl[:] = prev + (s / n) * (ref - prev) + feed
+                if follow is not None:
+                    follow()
+                mujoco.mj_step(m, d)
+                saturated |= np.abs(d.actuator_force) >= 0.999 * limits
+        if self._note:
+            messages.append(self._note)
+            self._note = ""
         t0 = self._t
-        for s in range(1, n + 1):
-            d.ctrl[:] = prev + (s / n) * (ref - prev) + feed
-            if self._profiles:
-                self._follow_profiles()
-            mujoco.mj_step(m, d)
-            saturated |= np.abs(d.actuator_force) >= 0.999 * limits
         self._ref_prev = ref
         self._t = t0 + self._dt
         # the sensor model advances once per period on the period's last force, as on arm6

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from fuzzkit.errors import ConfigError
 from fuzzkit.plants.environment import Box, RoughSurface, Table
 from fuzzkit.plants.environment import EnvObject as PlanarObject
+from fuzzkit.plants.mujoco_servo import userdata_size
 from fuzzkit.plants.robot_description import RobotDescription
 from fuzzkit.plants.rotations import Quat, quat_multiply
 
@@ -199,6 +200,8 @@ def arm_mjcf(
     return (
         f'<mujoco model="{robot.name}">'
         f'<compiler angle="radian" autolimits="true"/>'
+        # the servo callback's per-simulation state (fuzzkit.plants.mujoco_servo)
+        f'<size nuserdata="{userdata_size(len(joints))}"/>'
         f'<option timestep="{_f(PHYSICS_DT_S)}" integrator="implicitfast" cone="elliptic" '
         f'gravity="0 0 -9.80665"/>'
         f'<default><default class="link"><geom contype="0" conaffinity="0"/></default></default>'

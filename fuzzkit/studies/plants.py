@@ -26,10 +26,11 @@ PLANTS: dict[str, PlantEntry] = {
     "planar": PlantEntry("fuzzkit.planar_sim:PlanarArmPlant", "pymunk planar two-link arm"),
     "arm6": PlantEntry("fuzzkit.plants.arm6:Arm6Plant", "6-DOF IRB 140, kinematic"),
     "mujoco": PlantEntry(
-        "fuzzkit.plants.mujoco_arm:MujocoArmPlant", "the IRB 140 in MuJoCo, dynamic"
+        "fuzzkit.studies.mujoco_plants:mujoco_plant", "the IRB 140 in MuJoCo, dynamic"
     ),
     "mujoco-elastic": PlantEntry(
-        "fuzzkit.plants.mujoco_arm:ElasticMujocoArmPlant", "the MuJoCo IRB 140 with joint springs"
+        "fuzzkit.studies.mujoco_plants:elastic_mujoco_plant",
+        "the MuJoCo IRB 140 with joint springs",
     ),
 }
 
