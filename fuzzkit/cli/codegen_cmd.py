@@ -157,6 +157,7 @@ def cmd_compile(args: argparse.Namespace) -> int:
 
     from fuzzkit.codegen.lookup_table import NUMBER_TYPES
     from fuzzkit.codegen.method import DEFAULT_MAX_BYTES, compile_rulebase
+    from fuzzkit.codegen.provenance import refuse_overwrite
     from fuzzkit.codegen.target import all_targets, load_target
     from fuzzkit.errors import CodegenError, ConfigError
     from fuzzkit.fileio import write_tree_atomic
@@ -203,6 +204,7 @@ def cmd_compile(args: argparse.Namespace) -> int:
         )
     files = result.files
     table = result.table
+    refuse_overwrite(out, files)
     if table is not None:
         print(f"{rb.name}: {table.describe()}")
     else:
