@@ -113,3 +113,31 @@ def test_a_user_spec_tunes(name: str, tmp_path: Path, capsys: pytest.CaptureFixt
         assert found(doc, key) == [getattr(out.axes[0], key)], key
         assert all(getattr(a, key) == getattr(out.axes[0], key) for a in out.axes)
     capsys.readouterr()
+
+
+@pytest.mark.slow
+def test_a_spec_whose_axes_differ_tunes_from_its_own_gains(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Issue 41: ``spec_user_pi`` has x at kp 0.25, ki 0.04, kx 0.00015 and z at 0.2, 0.05,
+    0.0002. tune starts from and is judged against those (not the defaults), searches z's
+    gains (the set point) and writes x's scaled with them, each ratio kept."""
+    from fuzzkit.control.gains import read_gains
+    from fuzzkit.control.spec_reader import load_spec
+
+    spec, gains, tuned = USER_SPECS["user_pi"], tmp_path / "gains.yaml", tmp_path / "tuned.yaml"
+    argv = ["tune", "E1", "--spec", str(spec), "--plant", "planar", "--stiffness", "10"]
+    argv += ["--budget", "10", "--workers", "1", "--quiet", "--out", str(gains)]
+    assert main([*argv, "--spec-out", str(tuned)]) == 0
+    printed = capsys.readouterr()
+    assert printed.err.count("axes have different gains") == 1, printed.err
+    assert "searches axis z's" in printed.err
+    assert f"vs the gains of {spec} " in printed.out and "default gains" not in printed.out
+    out, original = load_spec(tuned), load_spec(spec)
+    x0, z0 = original.axes
+    x1, z1 = out.axes
+    entry = read_gains(gains, "fuzzy-pi")
+    assert (entry["kp"], entry["ki"], entry["kx"]) == (z1.kp, z1.ki, z1.kx)
+    for key in ("kp", "ki", "kx"):
+        ratio = getattr(x0, key) / getattr(z0, key)
+        assert getattr(x1, key) / getattr(z1, key) == pytest.approx(ratio, rel=1e-11), key
