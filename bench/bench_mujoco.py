@@ -41,8 +41,8 @@ def _timed(work: Callable[[], float]) -> tuple[float, float]:
 
 def closed_loop_rate(controller: str) -> tuple[float, float]:
     """Simulated seconds per wall and per CPU second of E1 on mujoco with ``controller``."""
+    from fuzzkit.loop.python_loop import load_surface, run
     from fuzzkit.studies.experiments import experiment
-    from fuzzkit.studies.runner import load_surface, run
 
     surface = load_surface() if controller == "fuzzy-pi" else None
     exp = experiment("E1")

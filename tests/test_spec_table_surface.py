@@ -16,8 +16,9 @@ from fuzzkit.cli import main
 from fuzzkit.codegen.controller import surface_table
 from fuzzkit.control.spec import role_ordered
 from fuzzkit.control.spec_reader import load_spec
-from fuzzkit.studies.batch import RunSpec, run_spec
-from fuzzkit.studies.controller_code import spec_surface
+from fuzzkit.loop.controller_code import spec_surface
+from fuzzkit.loop.spec import RunSpec
+from fuzzkit.studies.batch import run_spec
 from fuzzkit.studies.run_table import run_csv
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -18,7 +18,8 @@ from _codegen_util import needs_cc
 from _replay_logs import PYTHON_TOLERANCE_M, replayed_difference
 
 from fuzzkit.cli import main
-from fuzzkit.studies.batch import RunSpec, run_spec
+from fuzzkit.loop.spec import RunSpec
+from fuzzkit.studies.batch import run_spec
 from fuzzkit.studies.run_table import run_csv
 
 ROOT = Path(__file__).resolve().parent.parent

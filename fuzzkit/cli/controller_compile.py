@@ -57,7 +57,7 @@ def compile_spec(args: argparse.Namespace) -> int:
     from fuzzkit.control.spec_reader import load_spec
     from fuzzkit.errors import ConfigError
     from fuzzkit.fileio import write_atomic, write_tree_atomic
-    from fuzzkit.studies.controller_code import design_of, generate
+    from fuzzkit.loop.controller_code import design_of, generate
     from fuzzkit.studies.replay import SensorLog, replay
     from fuzzkit.studies.sensor_logs import hostile_log
 

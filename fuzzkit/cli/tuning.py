@@ -457,8 +457,8 @@ def _write_spec(args: argparse.Namespace, result: Any, gains: dict[str, float]) 
     from fuzzkit.control.spec_writer import dump_spec
     from fuzzkit.fileio import write_atomic
     from fuzzkit.formats.registry import load
+    from fuzzkit.loop.task import spec_for
     from fuzzkit.studies.experiments import experiment
-    from fuzzkit.studies.task import spec_for
 
     header = (
         f"# written by fuzzkit tune {' '.join(args.experiments)} ({result.plant}); "

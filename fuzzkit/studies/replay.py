@@ -237,7 +237,7 @@ def replay(
         )
     if impl == "python":
         from fuzzkit.control.reference import Controller
-        from fuzzkit.studies.controller_code import spec_surface
+        from fuzzkit.loop.controller_code import spec_surface
         from fuzzkit.studies.param_schedule import apply
 
         ref = Controller(spec, spec_surface(spec) if spec.kind == "fuzzy-pi" else None)
@@ -254,7 +254,7 @@ def replay(
             out[k], status[k] = ref.step(force, None if rot is None else rot[k])
         return out, status
     if impl in GENERATED:
-        from fuzzkit.studies.controller_code import open_generated
+        from fuzzkit.loop.controller_code import open_generated
 
         target = GENERATED[impl]
         ctl: Any = open_generated(spec, target, number_type if target == "c" else None)

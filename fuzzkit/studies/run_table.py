@@ -23,7 +23,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.control.names import AXES
-from fuzzkit.studies.runner import RunResult
+from fuzzkit.loop.result import RunResult
 
 #: What the loop did in a period: ``approach`` (not engaged yet: no correction), ``engaged``
 #: (the force loop runs), ``no sample`` (no valid force reached the controller: held),
