@@ -59,7 +59,7 @@ endef
 # them cached, its workers collect meanwhile (tests/conftest.py).
 WARM_LOCK := build/warm.lock
 test: $(STAMP)
-	$(BIN)/python -m fuzzkit.studies.compiled.warm --background $(WARM_LOCK) --jobs 1
+	$(BIN)/python -m fuzzkit.studies.warm --background $(WARM_LOCK) --jobs 1
 	$(call timed,lint)
 	$(call timed,typecheck)
 	$(call timed,imports)

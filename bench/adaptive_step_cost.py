@@ -15,7 +15,7 @@ import numpy as np
 
 from fuzzkit.control.adaptation_spec import NONE, Adaptation
 from fuzzkit.control.spec_reader import load_spec
-from fuzzkit.studies.controller_code import open_generated
+from fuzzkit.loop.controller_code import open_generated
 
 
 def main() -> None:

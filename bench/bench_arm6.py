@@ -47,8 +47,8 @@ def _best_of(fn: Callable[[], tuple[float, float]], repeat: int = 3) -> tuple[fl
 
 def closed_loop_rate(controller: str) -> tuple[float, float]:
     """Simulated seconds per wall second and per CPU second of E2 on arm6 with ``controller``."""
+    from fuzzkit.loop.python_loop import load_surface, run
     from fuzzkit.studies.experiments import experiment
-    from fuzzkit.studies.runner import load_surface, run
 
     surface = load_surface() if controller == "fuzzy-pi" else None
     exp = experiment("E2")

@@ -103,7 +103,7 @@ def bench_spec() -> ControllerSpec:
 
 def c_step(spec: ControllerSpec, number_type: str) -> tuple[float, int, int]:
     """``(ns per step, code + data bytes, last status)`` of the generated C build."""
-    from fuzzkit.studies.controller_code import generate
+    from fuzzkit.loop.controller_code import generate
 
     cc = find_compiler()
     if cc is None:
@@ -154,7 +154,7 @@ def python_step_us(make: object, n: int = 5000) -> float:
 
 def step_tables() -> None:
     from fuzzkit.control.reference import Controller
-    from fuzzkit.studies.controller_code import open_generated
+    from fuzzkit.loop.controller_code import open_generated
 
     spec = bench_spec()
     rows = []
@@ -189,14 +189,14 @@ def step_tables() -> None:
 
 
 def safety_matrix(seeds: int) -> None:
-    from fuzzkit.studies.compiled.generated_controller import (
+    from fuzzkit.loop.compiled.generated_controller import (
         load_generated_controller,
         run_controller_spec,
     )
-    from fuzzkit.studies.compiled.loop import run_compiled
+    from fuzzkit.loop.compiled_loop import run_compiled
+    from fuzzkit.loop.faults import FAULTS, fault
+    from fuzzkit.loop.python_loop import load_surface, run
     from fuzzkit.studies.experiments import EXPERIMENTS, experiment
-    from fuzzkit.studies.faults import FAULTS, fault
-    from fuzzkit.studies.runner import load_surface, run
 
     durations = {"E1": 3.5, "E2": 5.0, "E3": None}  # tests/test_safety.py's
     surface = load_surface("macvicar_whelan")

@@ -17,7 +17,8 @@ USER_SPECS = ("nonuniform5", "renamed", "gauss_prod", "user_pi")
 
 def rows() -> list[tuple[str, str, float, float]]:
     """``(case, what ran, rtf, target)`` per case."""
-    from fuzzkit.studies.batch import RunSpec, run_spec
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import run_spec
 
     root = Path(__file__).resolve().parent.parent / "tests" / "data" / "user"
     cases = [

@@ -51,7 +51,8 @@ def real_time_factors(
     plants: Sequence[tuple[str, int]] = LOOP_TARGETS,
 ) -> list[tuple[str, float, float | None, int]]:
     """``(case, python rtf, compiled rtf, target)`` rows, CPU time."""
-    from fuzzkit.studies.batch import RunSpec, run_spec
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import run_spec
 
     rows: list[tuple[str, float, float | None, int]] = []
     for plant, target in plants:
@@ -78,8 +79,9 @@ def real_time_factors(
 
 _FIRST_CALLS = """
 import json, time
-from fuzzkit.studies.batch import RunSpec, run_spec
-from fuzzkit.studies.compiled import generated_controller as G
+from fuzzkit.loop.spec import RunSpec
+from fuzzkit.studies.batch import run_spec
+from fuzzkit.loop.compiled import generated_controller as G
 from fuzzkit.studies.experiments import experiment
 G.load_generated_controller(G.run_controller_spec(experiment("E1"), "fuzzy-pi", None))  # not numba
 out = {}
@@ -184,6 +186,7 @@ def _compiled_planar_split() -> tuple[float, float]:
     force applied every substep: an upper bound)."""
     import numba
 
+    from fuzzkit.loop.spec import RunSpec
     from fuzzkit.planar_sim import PlanarArmPlant
     from fuzzkit.planar_sim import chipmunk_calls as cc
     from fuzzkit.planar_sim.arm_period import (
@@ -195,7 +198,7 @@ def _compiled_planar_split() -> tuple[float, float]:
         X_TOOL,
         pack,
     )
-    from fuzzkit.studies.batch import RunSpec, run_spec
+    from fuzzkit.studies.batch import run_spec
     from fuzzkit.studies.experiments import experiment
 
     spec = RunSpec("E2", "pi", plant="planar")

@@ -44,7 +44,8 @@ def _timed(work: Callable[[], float]) -> tuple[float, float]:
 def closed_loop_rate(controller: str, loop: str) -> tuple[float, float]:
     """Simulated seconds per wall and per CPU second of E1 on mujoco with ``controller`` in
     ``loop`` (the loop alone: ``RunResult.wall_time_s`` and ``cpu_time_s``)."""
-    from fuzzkit.studies.batch import RunSpec, run_spec
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import run_spec
 
     spec = RunSpec("E1", controller, plant="mujoco", loop=loop)
     run_spec(spec)  # build the controller and the callback, load the kernel
@@ -58,8 +59,8 @@ def closed_loop_rate(controller: str, loop: str) -> tuple[float, float]:
 
 def plant_rate() -> tuple[float, float]:
     """Simulated seconds per second of the MuJoCo plant alone on E1's path."""
+    from fuzzkit.loop.adapter import make_plant
     from fuzzkit.studies.experiments import experiment
-    from fuzzkit.studies.plants import make_plant
 
     scn = experiment("E1").scenario
     plant = make_plant("mujoco")

@@ -27,8 +27,8 @@ def _best_of(fn: Callable[[], float], repeat: int = 3) -> float:
 def closed_loop_rate(controller: str) -> float:
     """Simulated seconds per wall second of E1 on the planar arm, the reference controller in
     the Python loop (a fuzzy-PI on the exact engine)."""
+    from fuzzkit.loop.python_loop import load_surface, run
     from fuzzkit.studies.experiments import experiment
-    from fuzzkit.studies.runner import load_surface, run
 
     surface = load_surface() if controller == "fuzzy-pi" else None
     exp = experiment("E1")

@@ -1,7 +1,7 @@
 """The whole outer-loop controller as C or Python: the controller artefact.
 
 :func:`build_controller_spec` turns a :class:`ControllerDesign` (the controller spec as plain
-data: ``fuzzkit.codegen`` reads the fuzzy model only, so ``fuzzkit.studies.controller_code``
+data: ``fuzzkit.codegen`` reads the fuzzy model only, so ``fuzzkit.loop.controller_code``
 converts ``fuzzkit.control.spec.ControllerSpec`` into it) into the one object the
 ``backends/<target>/controller.*.jinja`` templates see, :class:`ControllerCodeSpec`. The
 controller is the reference's logic (``fuzzkit.control.controllers.HybridForceController``
@@ -367,7 +367,7 @@ def surface_table(
     """The double lookup table of a ``table`` surface, found as ``fuzzkit compile --method
     table`` finds it: the smallest whose verified bound meets ``tolerance`` (a fraction of the
     output's range), or the one of ``resolution`` breakpoints per input. The generated
-    controller and the reference (``fuzzkit.studies.controller_code.spec_surface``) both
+    controller and the reference (``fuzzkit.loop.controller_code.spec_surface``) both
     evaluate this table.
 
     Raises

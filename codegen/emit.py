@@ -112,6 +112,8 @@ class TableSpec:
     version: str
     source_file: str
     source_sha256: str
+    #: the rule base's own name, which each file's first line quotes (codegen.provenance)
+    source_name: str
     #: the header's sentence on a mangled rule-base name (codegen.names), or ""
     names_note: str
     description: tuple[str, ...]
@@ -435,6 +437,7 @@ def build_spec(
         version=__version__,
         source_file=_comment_safe(file_name),
         source_sha256=sha,
+        source_name=rb.name,
         names_note=names_note(rb.name),
         description=desc,
         units_line=units_line(rb),

@@ -230,6 +230,8 @@ class ExactSpec:
     version: str
     source_file: str
     source_sha256: str
+    #: the rule base's own name, which each file's first line quotes (codegen.provenance)
+    source_name: str
     #: the header's sentence on a mangled rule-base name (codegen.names), or ""
     names_note: str
     description: tuple[str, ...]
@@ -275,6 +277,10 @@ class ExactSpec:
     windows: tuple[WindowSpec, ...]  # grid rules on two window inputs: visit 2 x 2 cells
     #: a Sugeno output has a linear term: the code keeps the input values the terms see
     keeps_inputs: bool = False
+    #: the Sugeno stage's type: double in float code under ``extend`` (:func:`wide_sugeno`)
+    sugeno_type: str = "double"
+    sugeno_wide: bool = False
+    sugeno_extend_limit: str = ""
     #: "e [N], de [N], du [mm]" when any variable has units, else "" (as the table's header)
     units_line: str = ""
     input_units: tuple[str, ...] = ()  # " [N]" or "" per input
@@ -302,12 +308,6 @@ def unsupported_reason(rb: RuleBase, number_type: str = "double") -> str | None:
         return f"the exact method has no {rb.defuzzifier} defuzzifier: compile with --method table"
     for out in rb.outputs:
         if out.is_sugeno:
-            if number_type == "float" and rb.out_of_range == "extend" and _linear(out):
-                return (
-                    f"output {out.name!r} has linear terms and the inputs are not clamped "
-                    "(out_of_range: extend): float cannot hold the inputs up to 1e100 the "
-                    "engine's terms see; use --type double"
-                )
             continue
         if _gaussian_closed_form(rb, out):
             continue
@@ -335,6 +335,19 @@ def _gaussian_closed_form(rb: RuleBase, out: Variable) -> bool:
 
 def _linear(out: Variable) -> bool:
     return any(t.shape == "linear" and any(t.params[:-1]) for t in out.terms)
+
+
+def wide_sugeno(rb: RuleBase, number_type: str) -> bool:
+    """Whether float code computes the Sugeno stage in double: linear terms over inputs that
+    are not clamped (``out_of_range: extend``) see every input up to the engine's bound of
+    1e100, and their values (and ``c . x`` near FLT_MAX) do not fit a float; the sum is taken
+    in double and rounded once to float, so a value beyond float's range comes out as +-inf,
+    the float nearest to it."""
+    return (
+        number_type == "float"
+        and rb.out_of_range == "extend"
+        and any(o.is_sugeno and _linear(o) for o in rb.outputs)
+    )
 
 
 def _no_exact_form(var: Variable, term: Term) -> str:
@@ -617,9 +630,10 @@ def _output(
     wrap: Callable[[list[str]], tuple[str, ...]],
     grid: dict[tuple[int, int], Rule] | None,
     windows: bool,
+    sugeno_lit: _Lit,
 ) -> ExactOutput:
     if out.is_sugeno:
-        return _sugeno_output(rb, k, out, lit)
+        return _sugeno_output(rb, k, out, lit, sugeno_lit)
     pieces = OutputPieces(rb, out)
     ops = rb.operators
     rules_of_term: dict[int, list[int]] = {}
@@ -763,8 +777,9 @@ def _output(
     )
 
 
-def _sugeno_output(rb: RuleBase, k: int, out: Variable, lit: _Lit) -> ExactOutput:
-    """A Sugeno output: its consequents in rule order (``fuzzkit.fuzzy.sugeno.SugenoOutput``)."""
+def _sugeno_output(rb: RuleBase, k: int, out: Variable, lit: _Lit, value_lit: _Lit) -> ExactOutput:
+    """A Sugeno output: its consequents in rule order (``fuzzkit.fuzzy.sugeno.SugenoOutput``),
+    their coefficients as literals of the Sugeno stage's type (``value_lit``)."""
     n = len(rb.inputs)
     cons = []
     for r, rule in enumerate(rb.rules):
@@ -774,8 +789,8 @@ def _sugeno_output(rb: RuleBase, k: int, out: Variable, lit: _Lit) -> ExactOutpu
             term = out.term(c.term)
             coefs = (0.0,) * n if term.shape == "constant" else tuple(term.params[:n])
             const = term.params[0] if term.shape == "constant" else term.params[n]
-            nonzero = tuple((i, lit(v)) for i, v in enumerate(coefs) if v != 0.0)
-            cons.append(SugenoTerm(r, nonzero, lit(const)))
+            nonzero = tuple((i, value_lit(v)) for i, v in enumerate(coefs) if v != 0.0)
+            cons.append(SugenoTerm(r, nonzero, value_lit(const)))
     return ExactOutput(
         index=k, name=out.name, low=lit(out.low), high=lit(out.high),
         default=lit.maybe_nan(out.default), defuzzifier=rb.defuzzifier, n_pieces=0,
@@ -793,6 +808,16 @@ def _bound_note(number_type: str, target: Target) -> str:
         f"at most {ROUNDING_ULPS} x {eps} x the output's full scale (largest |range end|) for "
         "centroid, bisector and weighted average. mean/smallest/largest of maximum jump where "
         "two maxima tie; there a rounding difference can pick the other one."
+    )
+
+
+def _wide_note(wide: bool) -> str:
+    if not wide:
+        return ""
+    return (
+        " The Sugeno stage is computed in double (linear terms over inputs that are not "
+        "clamped see them up to 1e100, as the engine does) and rounded once to float: a value "
+        "beyond float's range comes out as +-inf."
     )
 
 
@@ -861,8 +886,10 @@ def build_exact_spec(
         rules.append(ExactRule(r, _comment_safe(_rule_text(rule.antecedent)), expr))
     grid = grid_rules(rb) if tg.visits_firing_cells else None
     windows = _windows(rb, lit) if grid is not None else None
+    wide = wide_sugeno(rb, number_type)
+    sugeno_lit = _Lit(tg, "double") if wide else lit
     outputs = tuple(
-        _output(rb, k, out, lit, agg_fmt, wrap, grid, windows is not None)
+        _output(rb, k, out, lit, agg_fmt, wrap, grid, windows is not None, sugeno_lit)
         for k, out in enumerate(rb.outputs)
     )
     libm: set[str] = set()
@@ -923,6 +950,7 @@ def build_exact_spec(
         version=__version__,
         source_file=_comment_safe(file_name),
         source_sha256=sha,
+        source_name=rb.name,
         names_note=names_note(rb.name),
         description=desc,
         n_inputs=len(rb.inputs),
@@ -939,7 +967,7 @@ def build_exact_spec(
         input_units=tuple(units_comment(v.units) for v in rb.inputs),
         output_units=tuple(units_comment(v.units) for v in rb.outputs),
         libm=tuple(sorted(libm)),
-        bound_note=tuple(textwrap.wrap(_bound_note(number_type, tg), 88)),
+        bound_note=tuple(textwrap.wrap(_bound_note(number_type, tg) + _wide_note(wide), 88)),
         has_fpi=has_fpi,
         fpi_note=note,
         fpi_defaults=defaults,
@@ -978,6 +1006,9 @@ def build_exact_spec(
         n_terms1=len(rb.inputs[1].terms) if len(rb.inputs) > 1 else 0,
         windows=windows or (),
         keeps_inputs=any(any(t.coefficients) for o in outputs for t in o.sugeno),
+        sugeno_type=tg.type_names["double" if wide else number_type],
+        sugeno_wide=wide,
+        sugeno_extend_limit=sugeno_lit(1e100) if wide else "",
     )
 
 

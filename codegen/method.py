@@ -16,7 +16,8 @@ from dataclasses import dataclass
 from fuzzkit.codegen.emit import FpiDefaults, emit
 from fuzzkit.codegen.exact import emit_exact, unsupported_reason
 from fuzzkit.codegen.lookup_table import DEFAULT_TOLERANCE, LookupTable, NumberType, percent
-from fuzzkit.codegen.table_search import ProgressFn, make_table, table_problem
+from fuzzkit.codegen.progress import ProgressFn
+from fuzzkit.codegen.table_search import make_table, table_problem
 from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy.model import RuleBase
 

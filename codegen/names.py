@@ -6,6 +6,11 @@ identifier in generated code (the C symbol prefix, the C and Python file and mod
 variable and term names appear there only in strings and comments. :func:`symbol` is the
 deterministic mangling, and :func:`names_note` the sentence every generated header carries
 when it applied.
+
+The mangling is injective (issue 40 item 7): two rule bases never get the same files or
+symbols. Each escape also applies to the ordinary names that look like its output, so no
+output is shared: ``in`` becomes ``in_``, and ``in_`` therefore ``in__``; ``_X`` becomes
+``fk_X``, and ``fk_X`` therefore ``fkfk_X``. Names that look like neither escape are kept.
 """
 
 from __future__ import annotations
@@ -29,22 +34,36 @@ def _reserved(name: str) -> bool:
     )
 
 
+def _needs_prefix(name: str) -> bool:
+    # with every leading "fk" removed: a C-reserved start, or underscores only (a bare "_"
+    # is Python's soft keyword, and "_" + "_" would be C-reserved)
+    core = name
+    while core.startswith(RESERVED_PREFIX_FIX):
+        core = core[len(RESERVED_PREFIX_FIX) :]
+    return _c_reserved_prefix(core) or (core != "" and core.strip("_") == "")
+
+
+def _needs_suffix(name: str) -> bool:
+    # the name without its trailing underscores is reserved (``in``, ``in_``, ``in__``)
+    return _reserved(name.rstrip("_"))
+
+
 def symbol(name: str) -> str:
     """``name`` as generated code spells it: unchanged unless a target language reserves it.
 
-    A keyword or reserved word of any target (``in``, ``int``, ``None``) gets a trailing ``_``
-    (``in_``), repeated until the result is free; a name C reserves for the implementation
-    (``__x``, ``_Foo``) gets the prefix :data:`RESERVED_PREFIX_FIX` (``fk__x``, ``fk_Foo``).
+    Two steps, each one-to-one, so the whole is: a name that, with its leading ``fk``\\ s
+    removed, starts as C reserves for the implementation (``__x``, ``_Foo``, also ``fk_Foo``)
+    or is all underscores gets the prefix :data:`RESERVED_PREFIX_FIX` (``fk__x``, ``fk_Foo``,
+    ``fkfk_Foo``); then a name that, with its trailing ``_``\\ s removed, is a keyword or
+    reserved word of a target (``in``, ``in_``) gets one more ``_`` (``in_``, ``in__``).
 
     Examples
     --------
-    >>> symbol("in"), symbol("e1"), symbol("_Bool")
-    ('in_', 'e1', 'fk_Bool')
+    >>> symbol("in"), symbol("in_"), symbol("e1"), symbol("_Bool"), symbol("fk_Bool")
+    ('in_', 'in__', 'e1', 'fk_Bool', 'fkfk_Bool')
     """
-    out = RESERVED_PREFIX_FIX + name if _c_reserved_prefix(name) else name
-    while _reserved(out):
-        out += "_"
-    return out
+    out = RESERVED_PREFIX_FIX + name if _needs_prefix(name) else name
+    return out + "_" if _needs_suffix(out) else out
 
 
 def names_note(rb_name: str) -> str:
@@ -54,6 +73,8 @@ def names_note(rb_name: str) -> str:
         return ""
     return (
         f"Names: rule base {rb_name!r} is spelt {spelt!r} in this code (symbols, files, "
-        "module), as it is reserved in C or Python (fuzzkit appends '_', or prefixes "
-        f"'{RESERVED_PREFIX_FIX}' to a leading '__' or '_' + capital)."
+        "module), as it is reserved in C or Python or looks like such a spelling (fuzzkit "
+        f"appends '_' to a reserved word and its '_' spellings, and prefixes "
+        f"'{RESERVED_PREFIX_FIX}' to a leading '__' or '_' + capital and its "
+        f"'{RESERVED_PREFIX_FIX}' spellings)."
     )

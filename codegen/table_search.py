@@ -17,7 +17,7 @@ import dataclasses
 import decimal
 import itertools
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -49,14 +49,10 @@ from fuzzkit.codegen.lookup_table import (
     percent,
     quantize_q15,
 )
+from fuzzkit.codegen.progress import ProgressFn
 from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy.membership import breakpoints
 from fuzzkit.fuzzy.model import RuleBase, Variable
-
-#: ``progress(task, done, total)``: reports exact-engine points evaluated (``done``) out of
-#: those expected (``total``, which may grow) for the table ``task`` names; each table built
-#: is a new task. A caller draws it (``fuzzkit compile`` draws a bar); codegen never prints.
-ProgressFn = Callable[[str, int, int], None]
 
 #: Points per exact-engine call when progress is reported.
 PROGRESS_CHUNK = 1 << 16

@@ -21,6 +21,7 @@ from fuzzkit.errors import CodegenError
 
 if TYPE_CHECKING:
     from fuzzkit.codegen.lookup_table import LookupTable
+    from fuzzkit.codegen.progress import ProgressFn
     from fuzzkit.fuzzy.model import RuleBase
 
 BACKENDS = Path(__file__).parent / "backends"
@@ -45,6 +46,35 @@ class Proof(Protocol):
 
     def describe(self) -> str:
         """One line for humans."""
+
+
+class VerifyTable(Protocol):
+    """Compile or import a generated table and compare it with the exact engine, reporting
+    the points evaluated to ``progress`` (``verify.verify_c``)."""
+
+    def __call__(
+        self,
+        rb: RuleBase,
+        table: LookupTable,
+        files: Mapping[str, str],
+        *,
+        progress: ProgressFn | None = None,
+    ) -> Proof:
+        """The outcome."""
+
+
+class VerifyExact(Protocol):
+    """The same for exact-method code in ``number_type`` (``verify.verify_exact_c``)."""
+
+    def __call__(
+        self,
+        rb: RuleBase,
+        number_type: str,
+        files: Mapping[str, str],
+        *,
+        progress: ProgressFn | None = None,
+    ) -> Proof:
+        """The outcome."""
 
 
 @dataclass(frozen=True)
@@ -88,8 +118,8 @@ class Target:
     fast_centroid: bool
     #: Proof of a table / an exact-method output: compile or import it and compare it with
     #: the exact engine (``fuzzkit compile --verify``).
-    verify_table: Callable[[RuleBase, LookupTable, Mapping[str, str]], Proof]
-    verify_exact: Callable[[RuleBase, str, Mapping[str, str]], Proof]
+    verify_table: VerifyTable
+    verify_exact: VerifyExact
     #: Build and load a generated controller: ``open_controller(files, name, number_type)``
     #: returns an object with ``step(force_n, tool_rotation) -> (correction, status)``.
     open_controller: Callable[[Mapping[str, str], str, str], Any] | None = None

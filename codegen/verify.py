@@ -24,6 +24,7 @@ import numpy.typing as npt
 
 from fuzzkit.codegen.lookup_table import Q15_ONE, ROUNDING_ALLOWANCE, LookupTable, quantize_q15
 from fuzzkit.codegen.names import symbol
+from fuzzkit.codegen.progress import ProgressFn
 from fuzzkit.codegen.toolchain import CompiledTable
 from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy import membership
@@ -36,6 +37,9 @@ FloatArray = npt.NDArray[np.float64]
 #: operation, so only FMA contraction and double rounding are left; none for Q15).
 ROUNDING = ROUNDING_ALLOWANCE
 DEFAULT_POINTS = 100_000
+#: Points per call when a verification reports progress: a pure-Python module takes about
+#: 150 us a point, so a chunk is about 0.3 s (progress, and a Ctrl-C, every chunk).
+PROGRESS_CHUNK = 2048
 
 
 @dataclass(frozen=True)
@@ -134,11 +138,53 @@ def verification_points(rb: RuleBase, n: int = DEFAULT_POINTS, seed: int = 0) ->
     return np.vstack([rand, edges, weak])
 
 
-def _exact(rb: RuleBase, points: FloatArray) -> FloatArray:
+def _exact(rb: RuleBase, points: FloatArray, meter: _Meter | None = None) -> FloatArray:
     from fuzzkit.fuzzy.inference import Engine
 
-    result = Engine(rb).evaluate({v.name: points[:, i] for i, v in enumerate(rb.inputs)})
-    return np.column_stack([np.asarray(result[v.name], dtype=np.float64) for v in rb.outputs])
+    engine = Engine(rb)
+
+    def run(part: FloatArray) -> FloatArray:
+        result = engine.evaluate({v.name: part[:, i] for i, v in enumerate(rb.inputs)})
+        return np.column_stack([np.asarray(result[v.name], dtype=np.float64) for v in rb.outputs])
+
+    return run(points) if meter is None else meter.map(run, points)
+
+
+class _Meter:
+    """Evaluates in chunks of :data:`PROGRESS_CHUNK` points and reports each to ``progress``
+    (``task``: what is verified; ``total``: every point of every evaluator the check runs).
+    Each point is evaluated on its own, so chunking changes no value."""
+
+    def __init__(self, progress: ProgressFn, task: str, total: int) -> None:
+        self.progress = progress
+        self.task = task
+        self.total = total
+        self.done = 0
+
+    def map(
+        self, fn: Callable[[npt.NDArray[Any]], npt.NDArray[Any]], points: npt.NDArray[Any]
+    ) -> npt.NDArray[Any]:
+        parts = []
+        self.progress(self.task, self.done, self.total)
+        for start in range(0, points.shape[0], PROGRESS_CHUNK):
+            part = points[start : start + PROGRESS_CHUNK]
+            parts.append(fn(part))
+            self.done += part.shape[0]
+            self.progress(self.task, self.done, self.total)
+        return np.vstack(parts)
+
+
+def _meter(progress: ProgressFn | None, task: str, points: npt.NDArray[Any]) -> _Meter | None:
+    """A meter over the generated code's and the engine's evaluation of ``points``."""
+    return None if progress is None else _Meter(progress, f"verify {task}", 2 * points.shape[0])
+
+
+def _generated(
+    evaluate: Callable[[npt.NDArray[Any]], npt.NDArray[Any]],
+    points: npt.NDArray[Any],
+    meter: _Meter | None,
+) -> npt.NDArray[Any]:
+    return evaluate(points) if meter is None else meter.map(evaluate, points)
 
 
 def compare(
@@ -201,10 +247,12 @@ def verify_c(
     *,
     n: int = DEFAULT_POINTS,
     compiler: Sequence[str] | None = None,
+    progress: ProgressFn | None = None,
 ) -> Verification:
     """Compile ``files`` (strict flags), load them and compare with the exact engine."""
     points = verification_points(rb, n)
     args, real = c_points(table, points)
+    meter = _meter(progress, f"c ({table.number_type})", real)
     fpi = len(rb.inputs) == 2
     with CompiledTable(
         files,
@@ -215,8 +263,8 @@ def verify_c(
         fpi=fpi,
         compiler=compiler,
     ) as lib:
-        got = c_outputs_real(table, lib.eval_batch(args))
-    return compare(rb, table, f"c ({table.number_type})", got, _exact(rb, real))
+        got = c_outputs_real(table, _generated(lib.eval_batch, args, meter))
+    return compare(rb, table, f"c ({table.number_type})", got, _exact(rb, real, meter))
 
 
 def load_module(files: Mapping[str, str], name: str) -> ModuleType:
@@ -245,13 +293,19 @@ def python_outputs(
 
 
 def verify_python(
-    rb: RuleBase, table: LookupTable, files: Mapping[str, str], *, n: int = DEFAULT_POINTS
+    rb: RuleBase,
+    table: LookupTable,
+    files: Mapping[str, str],
+    *,
+    n: int = DEFAULT_POINTS,
+    progress: ProgressFn | None = None,
 ) -> Verification:
     """Import the generated module and compare its ``eval`` with the exact engine."""
     module = load_module(files, symbol(rb.name))
     points = verification_points(rb, n)
-    got = python_outputs(module.eval, points)
-    return compare(rb, table, "python", got, _exact(rb, points))
+    meter = _meter(progress, "python", points)
+    got = _generated(lambda p: python_outputs(module.eval, p), points, meter)
+    return compare(rb, table, "python", got, _exact(rb, points, meter))
 
 
 def compare_exact(
@@ -279,10 +333,21 @@ def compare_exact(
     jumps = 0
     for k in range(got.shape[1]):
         want = exact[both[:, k], k]
+        have = got[both[:, k], k]
+        if number_type == "float":
+            # a value beyond float's range (a linear Sugeno term at a huge input) rounds to
+            # +-inf: that is the float nearest to it, and nothing else is
+            with np.errstate(over="ignore"):
+                beyond = np.isinf(want.astype(np.float32)) & np.isfinite(want)
+            wrong = np.any(have[beyond] != np.copysign(np.inf, want[beyond]))
+            want, have = want[~beyond], have[~beyond]
+            if wrong:
+                errors.append(math.inf)
+                continue
         # rounding is relative to the output's full scale, or to the value where it is larger
         # (a Sugeno output is not held to its range: 1e100 inputs under `extend`)
         scale = np.maximum(1.0, np.abs(want) / max(abs(rb.outputs[k].low), abs(rb.outputs[k].high)))
-        diff = np.abs(got[both[:, k], k] - want) / scale
+        diff = np.abs(have - want) / scale
         if rb.defuzzifier in DISCONTINUOUS:
             over = diff > allowance[k]
             jumps += int(np.count_nonzero(over))
@@ -307,12 +372,14 @@ def verify_exact_c(
     n: int = DEFAULT_POINTS,
     compiler: Sequence[str] | None = None,
     flags: Sequence[str] | None = None,
+    progress: ProgressFn | None = None,
 ) -> Verification:
     """Compile exact-method C, load it and compare with the exact engine."""
     points = verification_points(rb, n)
     dtype = np.float32 if number_type == "float" else np.float64
     with np.errstate(over="ignore"):
         args = points.astype(dtype)
+    meter = _meter(progress, f"c exact ({number_type})", points)
     extra = {} if flags is None else {"flags": tuple(flags)}
     with CompiledTable(
         files,
@@ -324,16 +391,21 @@ def verify_exact_c(
         compiler=compiler,
         **extra,
     ) as lib:
-        got = lib.eval_batch(args).astype(np.float64)
+        got = _generated(lib.eval_batch, args, meter).astype(np.float64)
     real = args.astype(np.float64)
-    return compare_exact(rb, number_type, f"c exact ({number_type})", got, _exact(rb, real))
+    return compare_exact(rb, number_type, f"c exact ({number_type})", got, _exact(rb, real, meter))
 
 
 def verify_exact_python(
-    rb: RuleBase, files: Mapping[str, str], *, n: int = DEFAULT_POINTS
+    rb: RuleBase,
+    files: Mapping[str, str],
+    *,
+    n: int = DEFAULT_POINTS,
+    progress: ProgressFn | None = None,
 ) -> Verification:
     """Import exact-method Python and compare its ``eval`` with the exact engine."""
     module = load_module(files, symbol(rb.name))
     points = verification_points(rb, n)
-    got = python_outputs(module.eval, points)
-    return compare_exact(rb, "double", "python exact", got, _exact(rb, points))
+    meter = _meter(progress, "python exact", points)
+    got = _generated(lambda p: python_outputs(module.eval, p), points, meter)
+    return compare_exact(rb, "double", "python exact", got, _exact(rb, points, meter))

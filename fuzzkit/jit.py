@@ -5,7 +5,7 @@ call after an install (or a change of the source) pays the compilation; later pr
 Kept typed here so that ``mypy --strict`` sees through the decorator.
 
 numba stamps a cached kernel with the content of the kernel's own source file only, so an edit to
-a compiled function it calls in another module (``studies/compiled/period.py`` called from
+a compiled function it calls in another module (``loop/compiled/period.py`` called from
 ``arm6_run.py``), or to a constant it reads from one, would silently load the stale kernel.
 fuzzkit's kernels are therefore stamped with the digest of their module's import closure
 instead (:class:`fuzzkit.import_closure.ImportGraph`: every package module the kernel's module

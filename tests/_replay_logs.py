@@ -16,10 +16,6 @@ from fuzzkit.studies.replay import ROTATION_COLUMNS
 REPO = Path(__file__).parent.parent
 SPEC = REPO / "docs" / "examples" / "controller.yaml"
 SPEC_PI = REPO / "docs" / "examples" / "controller_pi.yaml"
-#: How far the generated Python may be from the C controller a run deployed: double rounding
-#: of one arithmetic evaluated in two languages, never a different controller (those differ
-#: by more than 1e-7 m).
-PYTHON_TOLERANCE_M = 1e-12
 
 
 def run_cli(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
@@ -72,14 +68,30 @@ def read_out(path: Path) -> tuple[list[str], npt.NDArray[np.float64]]:
     )
 
 
+def _replayed(capsys: pytest.CaptureFixture[str], spec: Path, csv: Path, impl: str) -> str:
+    """``fuzzkit replay SPEC --forces CSV --impl IMPL`` of a run's CSV: what it prints (its
+    exit code checked against its verdict: 0 when it reproduces the run, else 1)."""
+    out = csv.with_name(f"u_{impl}.csv")
+    code = main(["replay", str(spec), "--forces", str(csv), "--out", str(out), "--impl", impl])
+    printed = capsys.readouterr().out
+    assert code == (0 if "replay: reproduces the run" in printed else 1), printed
+    return printed
+
+
 def replayed_difference(
     capsys: pytest.CaptureFixture[str], spec: Path, csv: Path, impl: str
 ) -> float:
-    """``fuzzkit replay SPEC --forces CSV --impl IMPL`` of a run's CSV: the largest difference
-    it prints between the replayed and the run's corrections, in metres."""
-    out = csv.with_name(f"u_{impl}.csv")
-    assert main(["replay", str(spec), "--forces", str(csv), "--out", str(out), "--impl", impl]) == 0
-    printed = capsys.readouterr().out
+    """The largest difference the replay of a run's CSV prints between the replayed and the
+    run's corrections, in metres."""
+    printed = _replayed(capsys, spec, csv, impl)
     found = re.search(r"largest difference from the run's corrections \(u<a>_m\): (\S+) m", printed)
     assert found is not None, printed
     return float(found.group(1))
+
+
+def reproduces(capsys: pytest.CaptureFixture[str], spec: Path, csv: Path, impl: str) -> bool:
+    """The replay of a run's CSV reproduces it: status bits equal in every row, corrections
+    within the replay's tolerance (relative to their size), exit 0."""
+    printed = _replayed(capsys, spec, csv, impl)
+    status_equal = "status bits: equal to the run's in every row" in printed
+    return status_equal and "replay: reproduces the run" in printed

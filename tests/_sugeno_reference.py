@@ -62,9 +62,13 @@ def _part(x: float) -> tuple[float, float, float]:
     return max(0.0, -x), 1 - abs(x), max(0.0, x)
 
 
-def sugeno_pi_by_hand(e: float, de: float) -> float:
-    """The shipped rule base, one rule at a time; product AND makes the weights sum to 1."""
-    ec, dc = min(max(e, -1.0), 1.0), min(max(de, -1.0), 1.0)
+def sugeno_pi_by_hand(e: float, de: float, bound: float = 1.0) -> float:
+    """The shipped rule base, one rule at a time; product AND makes the weights sum to 1.
+
+    The local laws see the inputs clamped to ``+-bound``: the range (1) under ``clamp``, the
+    engine's 1e100 under ``extend`` (the shoulder terms stay 1 beyond the range either way).
+    """
+    ec, dc = min(max(e, -bound), bound), min(max(de, -bound), bound)
     gentle, firm, hold = 0.2 * ec + 0.5 * dc, 0.6 * ec + 1.0 * dc, 0.0
     table = [[firm, gentle, gentle], [gentle, hold, gentle], [gentle, gentle, firm]]
     me, md = _part(e), _part(de)

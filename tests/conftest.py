@@ -12,7 +12,7 @@ import pytest
 # --------------------------------------------------------------------------------------------
 # numba kernels, compiled once before the xdist workers use them
 
-#: The controller's background warm-up (:class:`fuzzkit.studies.compiled.warm.Warming`).
+#: The controller's background warm-up (:class:`fuzzkit.studies.warm.Warming`).
 _WARMING: pytest.StashKey[Any] = pytest.StashKey()
 
 
@@ -34,7 +34,7 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     if hasattr(config, "workerinput") or config.option.collectonly:
         return
     if _several_workers(config):
-        from fuzzkit.studies.compiled.warm import warm, warm_in_background
+        from fuzzkit.studies.warm import warm, warm_in_background
 
         warming = warm_in_background(config.option.numprocesses)
         if warming is None:  # no flock here: warm before the workers start
@@ -60,7 +60,7 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
 def pytest_collection_finish(session: pytest.Session) -> None:
     """A worker waits here, after collecting, for the controller's warm-up to finish."""
     if hasattr(session.config, "workerinput"):
-        from fuzzkit.studies.compiled.warm import wait_for_warming
+        from fuzzkit.studies.warm import wait_for_warming
 
         wait_for_warming()
 

@@ -30,7 +30,7 @@ from fuzzkit.control.spec_reader import load_spec, loads_spec
 from fuzzkit.control.spec_schema import json_schema
 from fuzzkit.control.spec_writer import dump_spec
 from fuzzkit.errors import ConfigError, ControllerSpecError
-from fuzzkit.studies.controller_code import open_generated
+from fuzzkit.loop.controller_code import open_generated
 from fuzzkit.studies.spring_loop import SpringBench, run_spring
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "docs" / "examples"
@@ -416,7 +416,8 @@ def test_adaptive_controller_runs_and_reports_its_estimate(
 
 
 def test_sweep_rows_name_the_adaptive_controller_and_its_estimate() -> None:
-    from fuzzkit.studies.batch import RunSpec, execute
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import execute
 
     row = execute(
         RunSpec("E1", controller="adaptive-pi", plant="planar", stiffness_n_per_mm=20.0,
@@ -438,7 +439,8 @@ def test_tune_tunes_the_base_gains_under_the_schedule(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     from fuzzkit.cli import main
-    from fuzzkit.studies.batch import RunSpec, run_spec
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import run_spec
 
     out = tmp_path / "gains.yaml"
     args = ["tune", "E1", "--controller", "adaptive-pi", "--plant", "planar", "--stiffness", "20"]

@@ -16,10 +16,11 @@ import pytest
 from fuzzkit.cli import EXIT_TRIPPED, build_parser, main
 from fuzzkit.cli.simulation import comparison_table
 from fuzzkit.errors import ConfigError
-from fuzzkit.studies.batch import RunSpec, run_spec
+from fuzzkit.loop.faults import fault
+from fuzzkit.loop.python_loop import run
+from fuzzkit.loop.spec import RunSpec
+from fuzzkit.studies.batch import run_spec
 from fuzzkit.studies.experiments import DEFAULT_GAINS, experiment
-from fuzzkit.studies.faults import fault
-from fuzzkit.studies.runner import run
 
 
 def _subparser(name: str) -> argparse.ArgumentParser:

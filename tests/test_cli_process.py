@@ -178,6 +178,30 @@ def test_sigint_on_compile_exits_130_and_writes_nothing(tmp_path: Path) -> None:
     assert not out.exists() and list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
+def test_sigint_on_python_verify_shows_its_bar_exits_130_and_writes_nothing(
+    tmp_path: Path,
+) -> None:
+    out = tmp_path / "gen"
+    gaussian = Path(__file__).parent / "data" / "gaussian3x3.yaml"
+    # 1e5 points through the pure-Python module: about 15 s, drawn as a bar on a terminal
+    proc, terminal = _start_on_terminal(
+        ["compile", str(gaussian), "--target", "python", "--method", "exact", "--verify",
+         "--out", str(out)],
+        tmp_path,
+    )  # fmt: skip
+    _wait_for(lambda: terminal.shows(r"verify python exact: .*\b[1-9][\d.]*k?/200k"), proc, 120.0)
+    assert proc.poll() is None, "verify ended before the interrupt; make the job larger"
+    code, stdout, _ = _interrupt(proc)
+    assert code == 130
+    said = [ln for ln in terminal.lines() if "verify python exact: " not in ln]
+    assert _said_on_interrupt("\n".join(said)) == [
+        "fuzzkit: interrupted (Ctrl-C); nothing half-written"
+    ]
+    assert "wrote" not in stdout
+    assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize(
     "command",
     [

@@ -281,7 +281,7 @@ def test_the_docs_give_options_with_choices_a_value_help_lists() -> None:
 
 
 def test_every_plant_help_lists_every_registered_plant() -> None:
-    from fuzzkit.studies.plants import PLANTS
+    from fuzzkit.loop.adapter import PLANTS
 
     commands = [n for n, c in COMMANDS.items() if "--plant" in c.format_help()]
     assert {"simulate", "compare", "sweep", "tune", "report", "stability"} <= set(commands)

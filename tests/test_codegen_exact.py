@@ -10,6 +10,7 @@ clang, and under ASan/UBSan. Golden files: tests/golden/<rule base>/<target>-exa
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 import subprocess
 from pathlib import Path
@@ -170,6 +171,16 @@ def test_macvicar_whelan_runs_clean_under_sanitizers_on_1e5_points(
     tmp_path: Path, compiler: str, number_type: str
 ) -> None:
     _sanitized_run(tmp_path, _compiler(compiler), rulebase("macvicar_whelan"), number_type, 100_000)
+
+
+@needs_cc
+@skip_no_cc
+@pytest.mark.parametrize("compiler", ["cc", "clang"])
+def test_float_sugeno_in_double_over_extended_inputs_runs_clean_under_sanitizers(
+    tmp_path: Path, compiler: str
+) -> None:
+    rb = dataclasses.replace(rulebase("sugeno_pi"), out_of_range="extend")
+    _sanitized_run(tmp_path, _compiler(compiler), rb, "float", 1000)
 
 
 @pytest.mark.slow
@@ -396,18 +407,33 @@ def test_random_sugeno_rule_bases_in_c_match_the_engine() -> None:
     for seed in range(6):
         rb = random_rulebase(seed, "clamp" if seed % 2 else "extend", sugeno=True)
         for number_type in ("double", "float"):
-            if unsupported_reason(rb, number_type) is not None:
-                assert number_type == "float" and rb.out_of_range == "extend"
-                continue
+            assert unsupported_reason(rb, number_type) is None
             result = verify_exact_c(rb, number_type, emit_exact(rb, "c", number_type), n=500)
             assert result.ok, (rb, number_type, result.describe())
 
 
-def test_float_refuses_linear_sugeno_terms_over_inputs_that_are_not_clamped() -> None:
+@needs_cc
+@skip_no_cc
+def test_float_c_holds_linear_sugeno_terms_over_inputs_that_are_not_clamped() -> None:
+    # extend: the local laws see the input itself (up to 1e100), far beyond float's range
     rb = dataclasses.replace(rulebase("sugeno_pi"), out_of_range="extend")
-    assert unsupported_reason(rb, "double") is None
-    with pytest.raises(CodegenError, match=r"linear terms .* not clamped .* --type double"):
-        emit_exact(rb, "c", "float")
+    rng = np.random.default_rng(5)
+    far = [0.0, 0.3, -0.7, 1.0, -1.0, 5.0, -40.0, 1e30, -1e30, 3.0e38, -3.0e38, math.inf, -math.inf]
+    points = np.vstack([rng.uniform(-3, 3, (200, 2)), np.array(list(itertools.product(far, far)))])
+    args = points.astype(np.float32)
+    want = np.array([sugeno_pi_by_hand(e, de, 1e100) for e, de in args.astype(np.float64)])
+    with np.errstate(over="ignore"):
+        want32 = want.astype(np.float32)
+    assert np.isinf(want32).sum() > 10 and np.isfinite(want32).sum() > 200  # both kinds met
+    files = emit_exact(rb, "c", "float")
+    assert "computed in double" in files[f"{rb.name}.h"]
+    with CompiledTable(files, rb.name, "float", 2, 1, fpi=True) as lib:
+        got = lib.eval_batch(args)[:, 0]
+    fin = np.isfinite(want32)
+    np.testing.assert_array_equal(got[~fin], want32[~fin])
+    # double sum rounded once: the float weights' rounding, relative to the value
+    scale = np.maximum(1.0, np.abs(want[fin]))
+    assert np.max(np.abs(got[fin] - want[fin]) / scale) < 16 * 2.0**-23
 
 
 def test_exact_method_refuses_q15() -> None:

@@ -1,4 +1,4 @@
-"""The compiled closed loops (fuzzkit.studies.compiled) against the Python reference runner.
+"""The compiled closed loops (fuzzkit.loop.compiled) against the Python reference runner.
 
 The compiled loop's controller is the run's spec generated as C (double, the exact surface);
 the Python loop's is the reference controller on the exact engine. The two surfaces agree to
@@ -31,17 +31,18 @@ import numpy as np
 import pytest
 
 from fuzzkit.errors import ConfigError
+from fuzzkit.loop.compiled.table import load_table, table2, table_arrays
+from fuzzkit.loop.compiled_loop import run_compiled
+from fuzzkit.loop.faults import FAULTS, FaultInjector, Faults, fault, fault_schedule
+from fuzzkit.loop.python_loop import load_surface, run
+from fuzzkit.loop.result import RunResult
 from fuzzkit.plants.arm6 import Arm6Parameters, Arm6Plant
 from fuzzkit.plants.arm6_heightfield import height_field_contact, pack_height_field
 from fuzzkit.plants.arm6_period import pack
 from fuzzkit.plants.contract import ContactPlant, UnsupportedPlant
 from fuzzkit.plants.environment3d import HeightField
-from fuzzkit.studies.compiled.loop import run_compiled
-from fuzzkit.studies.compiled.table import load_table, table2, table_arrays
 from fuzzkit.studies.e3_arm6 import e3_arm6_experiment, make_e3_arm6_plant
 from fuzzkit.studies.experiments import experiment, with_stiffness
-from fuzzkit.studies.faults import FAULTS, FaultInjector, Faults, fault, fault_schedule
-from fuzzkit.studies.runner import RunResult, load_surface, run
 
 FORCE_TOL = 1e-6  # N (arm6)
 PLANAR_FORCE_TOL = 1e-9  # N
@@ -252,7 +253,9 @@ def test_table_kernel_reproduces_the_lookup_table_arithmetic() -> None:
 
 def test_compiled_loop_rejects_what_it_does_not_model() -> None:
     exp = experiment("E1")
-    with pytest.raises(ConfigError, match="compiled loop runs on arm6, planar"):
+    with pytest.raises(
+        ConfigError, match="compiled loop runs on arm6, mujoco, mujoco-elastic, planar"
+    ):
         run_compiled(exp, "moon", "pi")
     with pytest.raises(ConfigError, match=r"unknown controller 'pid'"):
         run_compiled(exp, "arm6", "pid")
@@ -261,7 +264,8 @@ def test_compiled_loop_rejects_what_it_does_not_model() -> None:
 
 
 def test_e3_on_arm6_runs_compiled() -> None:
-    from fuzzkit.studies.batch import RunSpec, run_spec
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import run_spec
 
     result = run_spec(RunSpec("E3", "pi", "arm6", duration_s=0.05))
     assert result.loop == "compiled"
@@ -293,8 +297,9 @@ def test_planar_compiled_loop_raises_the_python_loops_error_on_a_non_finite_stat
 def test_planar_runs_compiled_by_default_and_falls_back_where_it_cannot(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
+    from fuzzkit.loop.spec import RunSpec
     from fuzzkit.planar_sim import arm_period
-    from fuzzkit.studies.batch import RunSpec, run_spec
+    from fuzzkit.studies.batch import run_spec
 
     spec = RunSpec("E2", "pi", "planar", duration_s=0.2)
     assert run_spec(spec).loop == "compiled"
@@ -325,7 +330,8 @@ def test_compiled_loop_calls_the_controller_it_is_given() -> None:
     each run follows its own rule base (the kernel reads the function's address at every call,
     it is not frozen into the cached machine code)."""
     _needs_a_c_compiler()
-    from fuzzkit.studies.batch import RunSpec, run_spec
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import run_spec
 
     runs = {}
     for rb in ("macvicar_whelan", "paper_table1"):
@@ -353,8 +359,9 @@ def test_simulate_json_names_the_generated_controller(capsys: pytest.CaptureFixt
 def test_without_a_compiler_the_generated_python_runs_and_says_why(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    from fuzzkit.studies.batch import RunSpec, run_spec
-    from fuzzkit.studies.compiled import generated_controller
+    from fuzzkit.loop.compiled import generated_controller
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import run_spec
 
     monkeypatch.setenv("CC", "/nonexistent/cc")
     monkeypatch.setattr(generated_controller, "_LOADED", {})  # nothing compiled in this process
@@ -374,7 +381,8 @@ def test_without_a_compiler_the_generated_python_runs_and_says_why(
 
 
 def test_fuzzy_implementation_is_the_python_loops() -> None:
-    from fuzzkit.studies.batch import RunSpec, run_spec
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import run_spec
 
     assert RunSpec("E1", fuzzy_impl="table").resolved_loop() == "python"
     assert RunSpec("E1", controller_impl="python").resolved_loop() == "python"
@@ -389,7 +397,7 @@ def test_table_cache_builds_once_and_rebuilds_a_damaged_file(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     from fuzzkit.formats.registry import load
-    from fuzzkit.studies.compiled.table import cached_table
+    from fuzzkit.loop.compiled.table import cached_table
 
     monkeypatch.setenv("FUZZKIT_CACHE_DIR", str(tmp_path))
     rb = load("macvicar_whelan")

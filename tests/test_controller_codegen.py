@@ -31,7 +31,7 @@ from fuzzkit.control.adaptation_spec import Adaptation
 from fuzzkit.control.reference import Controller
 from fuzzkit.control.spec import AxisSpec, ControllerSpec, Limits, SensorSpec
 from fuzzkit.control.spec_reader import load_spec
-from fuzzkit.studies.controller_code import design_of, generate, open_generated
+from fuzzkit.loop.controller_code import design_of, generate, open_generated
 from fuzzkit.studies.replay import SensorLog, replay
 from fuzzkit.studies.sensor_logs import SEGMENTS, hostile_log, hostile_segments
 

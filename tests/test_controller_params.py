@@ -19,8 +19,8 @@ from _codegen_util import needs_cc
 
 from fuzzkit.control.spec import ControllerSpec, Limits
 from fuzzkit.control.spec_reader import load_spec
-from fuzzkit.studies.compiled.generated_controller import code_spec, params_of
-from fuzzkit.studies.controller_code import open_generated
+from fuzzkit.loop.compiled.generated_controller import code_spec, params_of
+from fuzzkit.loop.controller_code import open_generated
 
 ROOT = Path(__file__).resolve().parent.parent
 SPECS = {
@@ -138,7 +138,7 @@ def test_compiled_controllers_are_cached_on_disk(
 ) -> None:
     from fuzzkit.codegen import toolchain
     from fuzzkit.codegen.backends.c.run import CompiledController, harness_source
-    from fuzzkit.studies.controller_code import generate
+    from fuzzkit.loop.controller_code import generate
 
     monkeypatch.setenv("FUZZKIT_CACHE_DIR", str(tmp_path))
     calls: list[list[str]] = []

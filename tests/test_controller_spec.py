@@ -335,3 +335,27 @@ def test_cli_schema_controller(capsys: pytest.CaptureFixture[str]) -> None:
     schema = json.loads(capsys.readouterr().out)
     assert schema == json_schema()
     assert schema["title"] == "fuzzkit controller spec"
+
+
+def test_with_gains_moves_the_lead_axis_and_keeps_the_others_ratios() -> None:
+    from fuzzkit.control.spec import lead_axis, with_gains
+
+    root = Path(__file__).resolve().parent
+    spec = load_spec(root / "data" / "user" / "spec_user_pi.yaml")  # x: 0.25, 0.04, 1.5e-4
+    x, z = spec.axes  #                                                 z: 0.2, 0.05, 2e-4
+    assert lead_axis(spec) is z  # the force set point's axis, listed second
+    # the lead's own gains: the spec itself, bit for bit (the search's baseline)
+    assert with_gains(spec, {"kp": z.kp, "ki": z.ki, "kx": z.kx}) == spec
+    moved = with_gains(spec, {"kp": 0.4, "ki": 0.01, "kx": 0.0003, "u_min": -1.0})
+    mx, mz = moved.axes
+    assert (mz.kp, mz.ki, mz.kx) == (0.4, 0.01, 0.0003)
+    assert (mx.kp, mx.ki, mx.kx) == pytest.approx((0.5, 0.008, 0.000225), rel=1e-15)
+    assert moved.limits == spec.limits
+    # a lead gain of 0 scales nothing: a 0 follows the gain given, another value stays
+    pi = dataclasses.replace(
+        spec,
+        kind="pi",
+        axes=(dataclasses.replace(x, kx=None), dataclasses.replace(z, ki=0.0, kx=None)),
+    )
+    px, pz = with_gains(pi, {"kp": 0.1, "ki": 0.03}).axes
+    assert (pz.kp, pz.ki) == (0.1, 0.03) and (px.kp, px.ki) == (0.125, 0.04)

@@ -7,11 +7,12 @@ import functools
 import numpy as np
 import pytest
 
+from fuzzkit.loop.python_loop import load_surface, run
+from fuzzkit.loop.result import RunResult
 from fuzzkit.studies.e3_arm6 import Y_END, Y_START, e3_arm6_experiment, make_e3_arm6_plant, resolve
 from fuzzkit.studies.experiments import experiment
 from fuzzkit.studies.matching import matched_fuzzy_gains
 from fuzzkit.studies.metrics import axis_metrics
-from fuzzkit.studies.runner import RunResult, load_surface, run
 
 
 @functools.cache

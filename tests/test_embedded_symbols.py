@@ -23,7 +23,7 @@ from _codegen_util import CC, needs_cc
 from fuzzkit.codegen.method import compile_rulebase
 from fuzzkit.control.spec_reader import load_spec
 from fuzzkit.formats.registry import load
-from fuzzkit.studies.controller_code import generate
+from fuzzkit.loop.controller_code import generate
 
 REPO = Path(__file__).parent.parent
 ARM_GCC = shutil.which("arm-none-eabi-gcc")

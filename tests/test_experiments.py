@@ -11,6 +11,8 @@ import numpy as np
 import pytest
 
 from fuzzkit.control.controllers import Surface
+from fuzzkit.loop.python_loop import load_surface, run
+from fuzzkit.loop.result import RunResult
 from fuzzkit.studies.experiments import experiment, press_experiment, scaled_gains
 from fuzzkit.studies.metrics import (
     SUMMARY_AXIS_KEYS,
@@ -21,7 +23,6 @@ from fuzzkit.studies.metrics import (
     steady_state_error,
     summary,
 )
-from fuzzkit.studies.runner import RunResult, load_surface, run
 
 CONTROLLERS = ("pi", "fuzzy-pi")
 
@@ -125,7 +126,7 @@ def test_e3_both_axes_within_1n_in_steady_state(controller: str) -> None:
     assert r.tool_position[-1, 0] > 0.52
 
 
-# -- faults: tests/test_safety.py runs every fault kind of fuzzkit.studies.faults.FAULTS -------
+# -- faults: tests/test_safety.py runs every fault kind of fuzzkit.loop.faults.FAULTS -------
 
 
 # -- environment stiffness ------------------------------------------------------------------------

@@ -15,8 +15,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fuzzkit.loop.spec import RunSpec
 from fuzzkit.plants.contact import GRAVITY_M_S2
-from fuzzkit.studies.batch import RunSpec, run_spec
+from fuzzkit.studies.batch import run_spec
 from fuzzkit.studies.metrics import summary
 from fuzzkit.studies.scenario_file import load_scenario
 

@@ -33,18 +33,19 @@ from fuzzkit.control.reference import Controller
 from fuzzkit.control.spec import ControllerSpec
 from fuzzkit.control.spec_reader import load_spec
 from fuzzkit.errors import ConfigError
-from fuzzkit.studies.batch import RunSpec, execute, run_spec
-from fuzzkit.studies.compiled.generated_controller import (
+from fuzzkit.loop.compiled.generated_controller import (
     GeneratedController,
     load_generated_controller,
     run_controller_spec,
 )
-from fuzzkit.studies.compiled.loop import run_compiled
-from fuzzkit.studies.controller_code import generate, open_generated
+from fuzzkit.loop.compiled_loop import run_compiled
+from fuzzkit.loop.controller_code import generate, open_generated
+from fuzzkit.loop.faults import FAULTS, Faults, fault
+from fuzzkit.loop.result import RunResult
+from fuzzkit.loop.spec import RunSpec
+from fuzzkit.loop.task import with_spec
+from fuzzkit.studies.batch import execute, run_spec
 from fuzzkit.studies.experiments import experiment
-from fuzzkit.studies.faults import FAULTS, Faults, fault
-from fuzzkit.studies.runner import RunResult
-from fuzzkit.studies.task import with_spec
 
 pytestmark = needs_cc
 

@@ -5,7 +5,7 @@ The closure rules are checked on small package trees written here (an edit outsi
 keeps the digest, an edit inside it, at any depth, or a move changes it); then the real package's
 kernels are checked to be stamped with their own module's closure. Compiling every kernel from
 an empty cache takes about a minute of CPU, so no test here does it end to end:
-``python -m fuzzkit.studies.compiled.warm`` with an empty ``NUMBA_CACHE_DIR`` does, by hand.
+``python -m fuzzkit.studies.warm`` with an empty ``NUMBA_CACHE_DIR`` does, by hand.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from numba.core.registry import CPUDispatcher
 from fuzzkit import jit as jit_module
 from fuzzkit.errors import ToolchainError
 from fuzzkit.import_closure import ImportGraph
-from fuzzkit.studies.compiled import warm as warm_module
+from fuzzkit.studies import warm as warm_module
 
 #: The package's kernel modules: every module that compiles a function with ``fuzzkit.jit``.
 KERNEL_MODULES = (
@@ -35,12 +35,12 @@ KERNEL_MODULES = (
     "fuzzkit.plants.arm6_period",
     "fuzzkit.plants.rough_profile",
     "fuzzkit.planar_sim.arm_period",
-    "fuzzkit.studies.compiled.arm6_run",
-    "fuzzkit.studies.compiled.generated_controller",
-    "fuzzkit.studies.compiled.mujoco_run",
-    "fuzzkit.studies.compiled.period",
-    "fuzzkit.studies.compiled.planar_run",
-    "fuzzkit.studies.compiled.table",
+    "fuzzkit.loop.compiled.arm6_run",
+    "fuzzkit.loop.compiled.generated_controller",
+    "fuzzkit.loop.compiled.mujoco_run",
+    "fuzzkit.loop.compiled.period",
+    "fuzzkit.loop.compiled.planar_run",
+    "fuzzkit.loop.compiled.table",
 )
 
 #: A package ``pkg`` (with ``pkg.mapped`` in a folder of its own, as fuzzkit.codegen is):
@@ -222,7 +222,7 @@ def _kernels(module_name: str) -> list[CPUDispatcher]:
 
 
 def test_every_kernel_module_of_the_package_is_listed() -> None:
-    # a new kernel module must be warmed (fuzzkit.studies.compiled.warm) and is checked below
+    # a new kernel module must be warmed (fuzzkit.studies.warm) and is checked below
     graph = jit_module.package_graph()
     found = set()
     for root in jit_module.package_roots().values():
@@ -246,11 +246,11 @@ def test_a_real_kernel_is_stamped_with_its_modules_closure(module_name: str) -> 
 
 
 def test_the_run_loops_closure_holds_its_callees_and_not_the_cli() -> None:
-    closure = set(jit_module.package_graph().closure("fuzzkit.studies.compiled.arm6_run"))
+    closure = set(jit_module.package_graph().closure("fuzzkit.loop.compiled.arm6_run"))
     assert {
-        "fuzzkit.studies.compiled.arm6_run",
-        "fuzzkit.studies.compiled.period",  # faults and latency, called every period
-        "fuzzkit.studies.compiled.generated_controller",  # the controller's period
+        "fuzzkit.loop.compiled.arm6_run",
+        "fuzzkit.loop.compiled.period",  # faults and latency, called every period
+        "fuzzkit.loop.compiled.generated_controller",  # the controller's period
         "fuzzkit.plants.arm6_period",  # the plant's period
         "fuzzkit.plants.rough_profile",  # two levels down: arm6_period's floor
         "fuzzkit.control.status",  # constants: the status bits
@@ -263,7 +263,7 @@ def test_the_run_loops_closure_holds_its_callees_and_not_the_cli() -> None:
 
 def test_the_planar_loops_closure_reaches_the_mapped_planar_package() -> None:
     graph = jit_module.package_graph()
-    closure = graph.closure("fuzzkit.studies.compiled.planar_run")
+    closure = graph.closure("fuzzkit.loop.compiled.planar_run")
     assert "fuzzkit.planar_sim.arm_period" in closure
     assert "fuzzkit.planar_sim.chipmunk_calls" in closure  # the intrinsics it calls
     from fuzzkit.planar_sim import arm_period

@@ -11,8 +11,9 @@ import pytest
 
 from fuzzkit.control.controllers import Surface
 from fuzzkit.errors import ConfigError
+from fuzzkit.loop.python_loop import load_surface, run
+from fuzzkit.loop.result import RunResult
 from fuzzkit.studies.experiments import DEFAULT_GAINS, DEFAULT_LATENCY, experiment, press_experiment
-from fuzzkit.studies.runner import RunResult, load_surface, run
 
 
 @functools.cache

@@ -13,11 +13,12 @@ import numpy as np
 import pytest
 
 from fuzzkit.control.controllers import Surface
+from fuzzkit.loop.python_loop import load_surface, run
+from fuzzkit.loop.result import RunResult
 from fuzzkit.plants.contract import TOOL_DOWN, Scenario, normal_force_by_axis
 from fuzzkit.plants.environment import Box, Table, Waypoint
 from fuzzkit.studies.experiments import DEFAULT_GAINS, experiment
 from fuzzkit.studies.metrics import axis_first_contact, axis_metrics, summary
-from fuzzkit.studies.runner import RunResult, load_surface, run
 
 PERIOD = 0.004
 MU = 0.15
@@ -160,7 +161,7 @@ def _slide_scenario() -> Scenario:
 
 @pytest.mark.parametrize("plant_name", ["planar", "arm6", "mujoco"])
 def test_plants_report_normal_force_without_friction(plant_name: str) -> None:
-    from fuzzkit.studies.plants import make_plant
+    from fuzzkit.loop.adapter import make_plant
 
     plant = make_plant(plant_name)
     scn = _slide_scenario()

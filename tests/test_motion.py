@@ -316,7 +316,7 @@ def test_bad_corrections_are_rejected(bad: Arr) -> None:
 
 @pytest.fixture(scope="module")
 def fuzzy_surface() -> object:
-    from fuzzkit.studies.runner import load_surface
+    from fuzzkit.loop.python_loop import load_surface
 
     return load_surface()
 
@@ -326,8 +326,8 @@ def fuzzy_surface() -> object:
 def test_experiments_reach_both_set_points_within_1_n(
     name: str, controller: str, fuzzy_surface: object
 ) -> None:
+    from fuzzkit.loop.python_loop import run
     from fuzzkit.studies.experiments import experiment
-    from fuzzkit.studies.runner import run
 
     exp = experiment(name)
     res = run(
@@ -349,8 +349,8 @@ def test_experiments_reach_both_set_points_within_1_n(
 
 
 def test_selecting_only_z_leaves_x_on_the_nominal_path() -> None:
+    from fuzzkit.loop.python_loop import run
     from fuzzkit.studies.experiments import experiment
-    from fuzzkit.studies.runner import run
 
     exp = experiment("E2")
     assert exp.selection == (False, False, True)
@@ -372,8 +372,8 @@ def test_selecting_only_z_leaves_x_on_the_nominal_path() -> None:
 
 
 def test_arm6_recording_is_written_atomically_and_refuses_planar_runs(tmp_path: Path) -> None:
+    from fuzzkit.loop.python_loop import run
     from fuzzkit.studies.experiments import experiment
-    from fuzzkit.studies.runner import run
     from fuzzkit.viz.traces_arm6 import write_rrd
 
     res = run(experiment("E1"), "arm6", "pi", duration_s=0.5)
@@ -391,8 +391,8 @@ def test_arm6_recording_is_written_atomically_and_refuses_planar_runs(tmp_path: 
 
 
 def test_force_loop_holds_30_n_on_a_3d_rough_field_along_a_diagonal_path() -> None:
+    from fuzzkit.loop.python_loop import run
     from fuzzkit.studies.experiments import Experiment
-    from fuzzkit.studies.runner import run
 
     touch = -0.30 + 0.02 - 0.002  # 2 mm into the nominal surface, as E2 programs it
     field = HeightField.rough((0.30, 0.60), (-0.20, 0.20), -0.30, 0.0002, spacing=0.004, seed=7)

@@ -12,6 +12,8 @@ import numpy as np
 import pytest
 
 from fuzzkit.errors import ConfigError, SimulationError
+from fuzzkit.loop.adapter import make_plant
+from fuzzkit.loop.python_loop import load_surface, run
 from fuzzkit.plants.contact import GRAVITY_M_S2, ContactModel, SensorModel, ToolModel, tool_weight
 from fuzzkit.plants.contract import ContactPlant, Scenario
 from fuzzkit.plants.environment import RoughSurface, Table, Waypoint
@@ -20,8 +22,6 @@ from fuzzkit.plants.mujoco_arm import MujocoArmPlant, servo_step_response
 from fuzzkit.plants.mujoco_model import ArmDynamics, profile_pose
 from fuzzkit.plants.robot_description import load_robot
 from fuzzkit.studies.experiments import experiment
-from fuzzkit.studies.plants import make_plant
-from fuzzkit.studies.runner import load_surface, run
 
 TABLE_Z = -0.30
 
@@ -216,7 +216,8 @@ def test_the_servo_figure_draws_every_joint_beside_the_design() -> None:
 def test_a_dask_cluster_gives_the_in_process_results_on_it(dask_scheduler: str) -> None:
     """``fuzzkit sweep --plant mujoco --scheduler``: the same rows from two Dask worker
     processes as in this process (the plant is rebuilt from its name in each worker)."""
-    from fuzzkit.studies.batch import RunSpec, execute
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import execute
     from fuzzkit.studies.sweep import map_runs
 
     specs = [

@@ -1,5 +1,5 @@
-"""The compiled MuJoCo loop (``fuzzkit/studies/compiled/mujoco_run.py``) against the Python loop
-on the Python plant (the reference: ``studies.runner.run`` stepping ``MujocoArmPlant``), both
+"""The compiled MuJoCo loop (``fuzzkit/loop/compiled/mujoco_run.py``) against the Python loop on
+the Python plant (the reference: ``loop.python_loop.run`` stepping ``MujocoArmPlant``), both
 running the same generated C controller: every recorded series equal, bit for bit, the same
 messages, faults, trip and engagement; and what the kernel does not model runs the Python loop
 and says why."""
@@ -12,20 +12,23 @@ import numpy as np
 import pytest
 from _codegen_util import needs_cc
 
-from fuzzkit.plants.mujoco_arm import ElasticMujocoArmPlant, MujocoArmPlant
-from fuzzkit.plants.mujoco_model import ArmDynamics
-from fuzzkit.plants.mujoco_servo import ServoCallback
-from fuzzkit.studies import mujoco_plants
-from fuzzkit.studies.batch import RunSpec, run_spec
-from fuzzkit.studies.compiled.generated_controller import (
+from fuzzkit.loop import mujoco as mujoco_plants
+from fuzzkit.loop.compiled.generated_controller import (
     load_generated_controller,
     run_controller_spec,
 )
-from fuzzkit.studies.compiled.loop import run_compiled
+from fuzzkit.loop.compiled_loop import run_compiled
+from fuzzkit.loop.faults import fault
+from fuzzkit.loop.generated import GeneratedLoopController
+from fuzzkit.loop.python_loop import run
+from fuzzkit.loop.result import RunResult
+from fuzzkit.loop.spec import RunSpec
+from fuzzkit.loop.timing import run_faults_and_latency
+from fuzzkit.plants.mujoco_arm import ElasticMujocoArmPlant, MujocoArmPlant
+from fuzzkit.plants.mujoco_model import ArmDynamics
+from fuzzkit.plants.mujoco_servo import ServoCallback
+from fuzzkit.studies.batch import run_spec
 from fuzzkit.studies.experiments import experiment
-from fuzzkit.studies.faults import fault
-from fuzzkit.studies.loop_controller import GeneratedLoopController
-from fuzzkit.studies.runner import RunResult, run, run_faults_and_latency
 
 pytestmark = needs_cc
 

@@ -14,12 +14,12 @@ import numpy as np
 import pytest
 from _codegen_util import needs_cc
 
+from fuzzkit.loop import mujoco as mujoco_plants
+from fuzzkit.loop.adapter import make_plant
 from fuzzkit.plants.mujoco_arm import ElasticMujocoArmPlant, MujocoArmPlant
 from fuzzkit.plants.mujoco_model import ArmDynamics
 from fuzzkit.plants.mujoco_servo import ServoCallback
-from fuzzkit.studies import mujoco_plants
 from fuzzkit.studies.experiments import experiment
-from fuzzkit.studies.plants import make_plant
 
 
 @pytest.fixture(autouse=True)

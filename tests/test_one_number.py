@@ -32,13 +32,13 @@ def _compare_json(capsys: pytest.CaptureFixture[str], *args: str) -> list[dict[s
 
 def _report_path_overshoot(plant: str, controller: str) -> float:
     """E2 with matched gains as ``fuzzkit report`` runs it (its gains, its RunSpec)."""
+    from fuzzkit.loop.python_loop import load_surface
     from fuzzkit.report.grid import Condition, spec
     from fuzzkit.report.verdicts import NOMINAL
     from fuzzkit.studies.batch import run_spec
     from fuzzkit.studies.experiments import DEFAULT_GAINS
     from fuzzkit.studies.matching import matched_fuzzy_gains
     from fuzzkit.studies.metrics import summary
-    from fuzzkit.studies.runner import load_surface
 
     gains = (
         dict(DEFAULT_GAINS["pi"])

@@ -64,9 +64,9 @@ def test_each_word_is_what_simulate_prints_and_writes(
 
 
 def test_no_contact_and_never_settled_from_real_runs() -> None:
+    from fuzzkit.loop.python_loop import run
     from fuzzkit.studies.experiments import experiment
     from fuzzkit.studies.metrics import summary
-    from fuzzkit.studies.runner import run
 
     short = run(experiment("E1"), "planar", "pi", duration_s=1.0)  # contact comes at 1.87 s
     assert not short.in_contact.any()
@@ -104,8 +104,8 @@ def test_a_tripped_run_draws_no_frozen_error() -> None:
     """After the trip the controller computes no error: the figure's error and increment
     lines end at the trip (a frozen last value was drawn for 3 s before), and the panels and
     title say "tripped"."""
+    from fuzzkit.loop.python_loop import load_surface, run
     from fuzzkit.studies.experiments import experiment, with_stiffness
-    from fuzzkit.studies.runner import load_surface, run
     from fuzzkit.viz.run_figure import run_figure
 
     surface = load_surface("macvicar_whelan")

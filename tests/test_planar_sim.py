@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 from fuzzkit.errors import ConfigError, SimulationError
+from fuzzkit.loop.adapter import PLANTS, make_plant
 from fuzzkit.planar_sim import PlanarArmPlant, forward_kinematics, inverse_kinematics
 from fuzzkit.plants.contact import ContactModel, SensorModel
 from fuzzkit.plants.contract import ContactPlant, Scenario
 from fuzzkit.plants.environment import Box, RoughSurface, Table, Waypoint, nominal_position
-from fuzzkit.studies.plants import PLANTS, make_plant
 
 L1, L2 = 0.36, 0.38
 

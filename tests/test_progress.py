@@ -108,6 +108,25 @@ def test_table_search_reports_every_evaluated_point_and_the_same_table(
     assert all(re.fullmatch(r"\d+(x\d+)* table", t) for t in last)
 
 
+def test_python_verify_reports_every_point_twice_and_the_same_outcome() -> None:
+    from fuzzkit.codegen.exact import emit_exact
+    from fuzzkit.codegen.verify import PROGRESS_CHUNK, verify_exact_python
+
+    rb = load("gaussian5")
+    files = emit_exact(rb, "python")
+    n = PROGRESS_CHUNK + 100  # two chunks of random points, then edges and weak values
+    calls: list[tuple[str, int, int]] = []
+    with_progress = verify_exact_python(rb, files, n=n, progress=lambda *a: calls.append(a))
+    plain = verify_exact_python(rb, files, n=n)
+    # chunked evaluation changes no number: the same errors, exactly
+    assert with_progress == plain and plain.ok
+    # the generated module's points, then the engine's: done only grows, up to the total
+    assert {task for task, _, _ in calls} == {"verify python exact"}
+    dones = [done for _, done, _ in calls]
+    assert dones == sorted(dones) and calls[-1][1:] == (2 * plain.n_points, 2 * plain.n_points)
+    assert len(calls) >= 2 * 3  # each evaluator reports more than once
+
+
 class _SignalsCtrlCWhenCollected:
     """Sends SIGINT to this process from its finaliser: the KeyboardInterrupt the handler raises
     there is printed and dropped by Python, as one landing in numba's finalisers would be."""

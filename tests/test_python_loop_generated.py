@@ -18,7 +18,8 @@ from _pairwise import verify
 from _replay_logs import read_out
 
 from fuzzkit.cli import main
-from fuzzkit.studies.batch import RunSpec, run_spec
+from fuzzkit.loop.spec import RunSpec
+from fuzzkit.studies.batch import run_spec
 from fuzzkit.studies.run_table import run_csv
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -95,7 +96,7 @@ def test_the_reference_on_request_follows_the_generated_run(name: str) -> None:
 def test_without_a_compiler_the_mujoco_run_executes_the_generated_python(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    from fuzzkit.studies.compiled import generated_controller
+    from fuzzkit.loop.compiled import generated_controller
 
     monkeypatch.setenv("CC", "/nonexistent/cc")
     monkeypatch.setattr(generated_controller, "_LOADED", {})

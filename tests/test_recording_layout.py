@@ -15,8 +15,9 @@ import pytest
 from _rerun import rrd_dump
 
 from fuzzkit.formats.registry import loads
+from fuzzkit.loop.python_loop import run
+from fuzzkit.loop.result import RunResult
 from fuzzkit.studies.experiments import experiment
-from fuzzkit.studies.runner import RunResult, run
 from fuzzkit.viz.traces import write_run_rrd
 
 

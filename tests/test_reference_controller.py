@@ -245,8 +245,8 @@ def test_status_bits_are_distinct_single_bits() -> None:
 def test_spec_controller_is_the_closed_loops_controller(base: ControllerSpec) -> None:
     """Without a front end, the example spec's controller steps exactly like the runner's E1
     controller (default gains, E1's task) plus the spec's correction limits."""
+    from fuzzkit.loop.python_loop import build_controller, load_surface
     from fuzzkit.studies.experiments import experiment
-    from fuzzkit.studies.runner import build_controller, load_surface
 
     spec = dataclasses.replace(base, sensor=SensorSpec())
     surface = load_surface("macvicar_whelan") if base.kind == "fuzzy-pi" else None

@@ -287,7 +287,7 @@ def test_python_generated_runs_the_generated_module(
     _, got = read_out(out)
     # the module that `compile --target python` writes, imported here on its own
     from fuzzkit.codegen.verify import load_module
-    from fuzzkit.studies.controller_code import generate
+    from fuzzkit.loop.controller_code import generate
 
     module = load_module(generate(spec, "python"), f"{spec.name}_controller")
     ctl = module.Controller()

@@ -333,10 +333,10 @@ def test_the_report_tunes_both_controllers_on_one_problem(tmp_path: Path) -> Non
     latency), said in each gains file; the per-case prices of the report agree with the
     Python loop's (an independent implementation of the closed loop)."""
     from fuzzkit.control.gains import read_gains_file
+    from fuzzkit.loop.python_loop import run
     from fuzzkit.report.build import CONTROLLERS
     from fuzzkit.report.tuned import gains_for, tuned_vs_default
     from fuzzkit.studies.experiments import DEFAULT_GAINS, experiment, with_stiffness
-    from fuzzkit.studies.runner import run
     from fuzzkit.studies.tuning import TUNING_HORIZON_S, run_cost
 
     setup = TuningSetup(("E1",), "arm6", (20.0,), ((0, 0), (3, 3)))

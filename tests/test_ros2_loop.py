@@ -15,9 +15,10 @@ from _codegen_util import needs_cc
 from _replay_logs import SPEC
 
 from fuzzkit.control.spec_reader import load_spec
+from fuzzkit.loop.python_loop import run
+from fuzzkit.loop.spec import RunSpec
 from fuzzkit.ros2.closed_loop import StepController
-from fuzzkit.studies.batch import RunSpec, resolve, run_spec
-from fuzzkit.studies.runner import run
+from fuzzkit.studies.batch import resolve, run_spec
 
 U_TOL = 1e-9  # m, as tests/test_compiled_loop.py holds the compiled loop to the Python loop
 FORCE_TOL = {"planar": 1e-9, "arm6": 1e-6}  # N, likewise

@@ -154,7 +154,8 @@ def test_the_run_csv_times_are_the_decimal_periods() -> None:
     import io
     from fractions import Fraction
 
-    from fuzzkit.studies.batch import RunSpec, run_spec
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import run_spec
     from fuzzkit.studies.run_table import run_csv
 
     result = run_spec(RunSpec("E1", plant="planar", loop="python", duration_s=2.0))
@@ -324,7 +325,8 @@ def test_simulate_names_the_rule_base_the_spec_and_the_gains(
     assert (doc["rulebase"], doc["controller_spec"]) == (None, "e1_pi")
     assert doc["gains_source"] == "controller spec e1_pi"
     # the figure's title carries the same words
-    from fuzzkit.studies.batch import RunSpec, run_spec
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import run_spec
 
     result = run_spec(RunSpec("E1", plant="planar", duration_s=1.0))
     title = run_figure(result, "rule base gaussian5; gains: the defaults")._suptitle.get_text()
@@ -332,7 +334,8 @@ def test_simulate_names_the_rule_base_the_spec_and_the_gains(
 
 
 def test_a_sweep_row_holds_the_limit_exceeded_flat() -> None:
-    from fuzzkit.studies.batch import RunSpec, execute
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import execute
 
     row = execute(RunSpec("E1", plant="arm6", latency=(300, 300), duration_s=3.0))
     assert row["limit_exceeded_s"] is not None and row["limit_exceeded_peak_n"] > 25.0

@@ -10,9 +10,10 @@ import pytest
 from _rerun import rerun_cli
 
 from fuzzkit.formats.registry import load
+from fuzzkit.loop.python_loop import load_surface, run
+from fuzzkit.loop.result import RunResult
 from fuzzkit.studies.experiments import DEFAULT_GAINS, experiment
 from fuzzkit.studies.run_table import period_status
-from fuzzkit.studies.runner import RunResult, load_surface, run
 from fuzzkit.viz.rule_activity import rule_label, strongest_rules
 from fuzzkit.viz.traces import write_run_rrd
 

@@ -11,9 +11,10 @@ import numpy.typing as npt
 import pytest
 
 from fuzzkit.cli import main
-from fuzzkit.studies.batch import RunSpec, run_spec
+from fuzzkit.loop.result import RunResult
+from fuzzkit.loop.spec import RunSpec
+from fuzzkit.studies.batch import run_spec
 from fuzzkit.studies.run_table import run_columns
-from fuzzkit.studies.runner import RunResult
 from fuzzkit.viz.run_figure import run_figure
 from fuzzkit.viz.run_files import write_run_traces
 

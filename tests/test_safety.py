@@ -3,12 +3,12 @@ the reference controller and on the generated C controller.
 
 ``reference``: fuzzkit's controller in the Python loop (the exact engine as the fuzzy-PI's
 surface). ``generated-c``: the controller spec of the same settings
-(:func:`~fuzzkit.studies.compiled.generated_controller.run_controller_spec`) generated as C
+(:func:`~fuzzkit.loop.compiled.generated_controller.run_controller_spec`) generated as C
 (double), compiled, and run whole inside the compiled loop: what ``--controller-impl c``
 runs and what ships. For every run: the *true* contact force stays below the experiment's
 safety limit, the loop does not trip, every force-controlled axis with a set point reaches
 contact, and the set point is held at the end (after the fault). Faults at the strength of
-``fuzzkit.studies.faults.FAULTS``.
+``fuzzkit.loop.faults.FAULTS``.
 
 Each matrix runs twice over (tests/_pairwise.py): ``make test`` its covering set (every pair
 of values of any two axes in some row) at seeds 0 and 1, ``make verify`` (``-m verify``) the
@@ -26,15 +26,16 @@ from _codegen_util import needs_cc
 from _pairwise import matrix_params
 
 from fuzzkit.control.controllers import Surface
-from fuzzkit.studies.compiled.generated_controller import (
+from fuzzkit.loop.compiled.generated_controller import (
     GeneratedController,
     load_generated_controller,
     run_controller_spec,
 )
-from fuzzkit.studies.compiled.loop import run_compiled
+from fuzzkit.loop.compiled_loop import run_compiled
+from fuzzkit.loop.faults import FAULTS, fault
+from fuzzkit.loop.python_loop import load_surface, run
+from fuzzkit.loop.result import RunResult
 from fuzzkit.studies.experiments import EXPERIMENTS, experiment
-from fuzzkit.studies.faults import FAULTS, fault
-from fuzzkit.studies.runner import RunResult, load_surface, run
 
 IMPLS = ("reference", "generated-c")
 CONTROLLERS = ("pi", "fuzzy-pi")

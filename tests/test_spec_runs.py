@@ -156,7 +156,8 @@ def test_a_spec_runs_compiled_as_in_python(path: Path, fault: str) -> None:
     screened by the gate, gravity compensation, low-pass), with the spec's gains and limits,
     and repeats the Python loop's run on the reference controller (exact engine): the same
     samples in, the same corrections out."""
-    from fuzzkit.studies.batch import RunSpec, run_spec
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import run_spec
 
     kw = {"plant": "arm6", "controller_spec": str(path), "fault": fault, "duration_s": 2.5}
     co = run_spec(RunSpec("E1", loop="compiled", **kw))  # type: ignore[arg-type]
@@ -171,7 +172,8 @@ def test_a_spec_runs_compiled_as_in_python(path: Path, fault: str) -> None:
 
 
 def test_a_spec_with_different_gains_per_axis_runs_compiled(tmp_path: Path) -> None:
-    from fuzzkit.studies.batch import RunSpec, run_spec
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import run_spec
 
     spec = load_spec(PI)
     x, z = spec.axes
@@ -200,7 +202,7 @@ def test_sweep_over_specs() -> None:
 
 def test_the_spec_tune_writes_reads_back_with_the_tuned_gains() -> None:
     from fuzzkit.formats.registry import load
-    from fuzzkit.studies.task import spec_for
+    from fuzzkit.loop.task import spec_for
 
     gains = {"kp": 0.31, "ki": 0.062, "kx": 1.8e-4, "u_min": -0.04, "u_max": 0.05}
     spec = spec_for(

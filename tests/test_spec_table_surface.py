@@ -10,14 +10,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 from _codegen_util import needs_cc
-from _replay_logs import PYTHON_TOLERANCE_M, replayed_difference
+from _replay_logs import replayed_difference, reproduces
 
 from fuzzkit.cli import main
 from fuzzkit.codegen.controller import surface_table
 from fuzzkit.control.spec import role_ordered
 from fuzzkit.control.spec_reader import load_spec
-from fuzzkit.studies.batch import RunSpec, run_spec
-from fuzzkit.studies.controller_code import spec_surface
+from fuzzkit.loop.controller_code import spec_surface
+from fuzzkit.loop.spec import RunSpec
+from fuzzkit.studies.batch import run_spec
 from fuzzkit.studies.run_table import run_csv
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -102,7 +103,7 @@ def test_a_table_run_replays_and_differs_from_the_exact_one(
     csv = tmp_path / "run.csv"
     csv.write_text(run_csv(runs["table"]), encoding="utf-8")
     assert replayed_difference(capsys, spec, csv, "c") == 0.0
-    assert replayed_difference(capsys, spec, csv, "python") <= PYTHON_TOLERANCE_M
+    assert reproduces(capsys, spec, csv, "python")
     # the exact spec's controller on the table run's samples is another controller
     assert replayed_difference(capsys, EXAMPLE, csv, "c") > 1e-7
     assert float(np.max(np.abs(runs["table"].u - runs["exact"].u))) > 1e-7
@@ -121,5 +122,5 @@ def test_the_python_loop_runs_the_specs_table(
     csv = tmp_path / "run.csv"
     csv.write_text(run_csv(result), encoding="utf-8")
     assert replayed_difference(capsys, spec, csv, "python") == 0.0
-    assert replayed_difference(capsys, spec, csv, "c") <= PYTHON_TOLERANCE_M
+    assert reproduces(capsys, spec, csv, "c")
     assert replayed_difference(capsys, EXAMPLE, csv, "python") > 1e-7

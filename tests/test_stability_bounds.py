@@ -52,8 +52,7 @@ def test_a_surface_that_does_not_vanish_on_the_anti_diagonal_has_no_phi_but_grad
 
 @pytest.mark.slow
 def test_macvicar_whelan_phi_bounds_hold_on_the_table_between_its_nodes():
-    from fuzzkit.studies.compiled.loop import compiled_table
-    from fuzzkit.studies.compiled.table import table2
+    from fuzzkit.loop.compiled.table import compiled_table, table2
 
     t = compiled_table("macvicar_whelan")
     b = phi_bounds(t.bp0, t.bp1, t.values, t.splits, 1.0)

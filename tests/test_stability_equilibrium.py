@@ -98,7 +98,7 @@ def test_the_offset_rule_base_is_certified_nowhere_and_the_output_says_why(capsy
 def test_the_offset_loop_settles_where_the_rest_point_says_in_simulation():
     # independent of the certificate: the compiled loop's force, averaged over the last 0.5 s
     from fuzzkit.analysis.regulation import regulation_experiment
-    from fuzzkit.studies.compiled.loop import run_compiled
+    from fuzzkit.loop.compiled_loop import run_compiled
     from fuzzkit.studies.experiments import with_stiffness
 
     exp = with_stiffness(regulation_experiment(), 1.0e4)

@@ -13,7 +13,8 @@ import pytest
 
 from fuzzkit.cli import main
 from fuzzkit.errors import ConfigError
-from fuzzkit.studies.batch import RunSpec, execute, map_runs
+from fuzzkit.loop.spec import RunSpec
+from fuzzkit.studies.batch import execute, map_runs
 from fuzzkit.studies.sweep import TIMING_COLUMNS, run_sweep, sweep_specs, write_table
 
 

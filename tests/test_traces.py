@@ -11,8 +11,9 @@ import pytest
 from _rerun import entity_rows, rerun_cli
 
 from fuzzkit.errors import ConfigError
+from fuzzkit.loop.python_loop import run
+from fuzzkit.loop.result import RunResult
 from fuzzkit.studies.experiments import experiment
-from fuzzkit.studies.runner import RunResult, run
 from fuzzkit.viz.traces_planar import write_rrd
 
 

@@ -13,11 +13,11 @@ import pytest
 from fuzzkit.control.controllers import saturated_sum_surface
 from fuzzkit.control.gains import GainsEntry, parse_gains, read_gains, read_gains_file, write_gains
 from fuzzkit.errors import ConfigError
+from fuzzkit.loop.python_loop import run
 from fuzzkit.plants.contact import ToolModel
 from fuzzkit.plants.contract import PlantSample, Scenario
 from fuzzkit.plants.environment import Table, Waypoint, nominal_position
 from fuzzkit.studies.experiments import Experiment, experiment, with_stiffness
-from fuzzkit.studies.runner import run
 from fuzzkit.studies.tuning import (
     TUNING_HORIZON_S,
     GainSpace,
@@ -532,7 +532,7 @@ def test_readme_tour_tuned_gains_no_worse_at_any_stiffness() -> None:
     stiffness, the saved gains cost no more than the defaults when run again from scratch."""
     ks = (10.0, 100.0, 1000.0)
     result = tune(["E1"], "fuzzy-pi", stiffnesses_n_per_mm=ks, budget=12, seed=0, workers=2)
-    from fuzzkit.studies.runner import load_surface
+    from fuzzkit.loop.python_loop import load_surface
 
     surface = load_surface("macvicar_whelan")
     h = TUNING_HORIZON_S["E1"]
@@ -574,7 +574,8 @@ def test_tune_compares_tuned_with_defaults_per_stiffness_and_latency() -> None:
     has one case per latency, each run at its own latency (the same run as ``simulate`` with
     ``--latency`` gives), and the printed table names the latency of each case."""
     from fuzzkit.cli.tuning import tune_report_lines
-    from fuzzkit.studies.batch import RunSpec, execute, gains_items
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import execute, gains_items
     from fuzzkit.studies.tuning_check import compare_cases
 
     lats = [(0, 0), (3, 3)]
@@ -628,7 +629,7 @@ def test_tuning_e3_on_arm6_prices_the_papers_3d_e3() -> None:
     assert problem.paper_e3_cases == (True,)
     assert problem.cases[0].scenario.path == e3_arm6_experiment().scenario.path
     runner = CaseRunner(problem)
-    assert runner.compiled
+    assert runner.run_case(0, pi, 0.02).loop == "compiled"
     cost = runner.case_costs(pi)[0]
     h = min(TUNING_HORIZON_S["E3"], problem.cases[0].scenario.duration_s)
     exp3d = with_stiffness(e3_arm6_experiment(), 10e3)

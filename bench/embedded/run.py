@@ -147,7 +147,7 @@ def generate(build: Path) -> dict[str, object]:
     from fuzzkit.codegen.method import compile_rulebase
     from fuzzkit.control.spec_reader import load_spec
     from fuzzkit.formats.registry import load
-    from fuzzkit.studies.controller_code import generate as generate_controller
+    from fuzzkit.loop.controller_code import generate as generate_controller
     from fuzzkit.studies.sensor_logs import hostile_log
 
     spec = load_spec(SPEC)

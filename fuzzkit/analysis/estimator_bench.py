@@ -21,8 +21,8 @@ from fuzzkit.analysis.inner_loop import InnerLoop
 from fuzzkit.analysis.regulation import regulation_experiment
 from fuzzkit.control.adaptation import StiffnessSchedule
 from fuzzkit.control.adaptation_spec import Adaptation, Band, Estimator
+from fuzzkit.loop.adapter import make_plant
 from fuzzkit.plants.contract import task_to_base
-from fuzzkit.studies.plants import make_plant
 from fuzzkit.studies.regulation import surface_height
 
 #: The set point the contact is held around (N) and the force swing of the excitation.

@@ -2,7 +2,7 @@
 
 The fuzzy-PI computes ``du = Kx * F(x, y)`` with ``x = Ki*e`` and ``y = Kp*de`` (clipped to
 [-1, 1]). The surface the compiled loop and the generated table code evaluate is the rule base's
-lookup table (:func:`fuzzkit.studies.compiled.loop.compiled_table`): a continuous piecewise-linear
+lookup table (:func:`fuzzkit.loop.compiled.table.compiled_table`): a continuous piecewise-linear
 function on triangles. On such a surface every bound below is exact, from the table's nodes and
 triangles, with no sampling between them.
 
@@ -91,7 +91,7 @@ def triangles(
 
     Returns ``xs, ys, fs``, each ``(m, 3)``: the vertices' x, y and F. A cell with
     ``splits == 0`` is cut along its main diagonal (node ``i, j`` to ``i+1, j+1``), else along
-    its anti-diagonal, as :func:`fuzzkit.studies.compiled.table.table2` interpolates.
+    its anti-diagonal, as :func:`fuzzkit.loop.compiled.table.table2` interpolates.
     """
     if not (math.isfinite(rho) and rho > 0.0):
         raise ConfigError(f"the fuzzy region must be a number > 0 (got {rho})")

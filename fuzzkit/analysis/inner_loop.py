@@ -25,8 +25,8 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.analysis.regulation import regulation_experiment
+from fuzzkit.loop.adapter import make_plant
 from fuzzkit.plants.contract import task_to_base
-from fuzzkit.studies.plants import make_plant
 from fuzzkit.studies.regulation import surface_height
 
 FloatArray = npt.NDArray[np.float64]

@@ -26,9 +26,9 @@ from fuzzkit.control.names import KINDS as CONTROLLERS
 from fuzzkit.control.spec import EXACT, Surface
 from fuzzkit.errors import ConfigError
 from fuzzkit.fuzzy.model import RuleBase
+from fuzzkit.loop.task import Experiment
 from fuzzkit.studies.experiments import DEFAULT_GAINS
 from fuzzkit.studies.outcome import BAND_N
-from fuzzkit.studies.task import Experiment
 
 #: Default lower end of the contact sector: the certificate holds while the spring-damper force
 #: the contact would have stays above (1 - 1/SIGMA_MIN) times the set point (docs/stability.md).

@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from fuzzkit.control.impact import impact_speed_for
+from fuzzkit.loop.task import Experiment
 from fuzzkit.studies.experiments import experiment, with_stiffness
 from fuzzkit.studies.regulation import (
     APPROACH_S,
@@ -21,7 +22,6 @@ from fuzzkit.studies.regulation import (
     approach_speed,
     regulation_at,
 )
-from fuzzkit.studies.task import Experiment
 
 __all__ = [
     "APPROACH_S",

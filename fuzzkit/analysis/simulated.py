@@ -7,11 +7,11 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
+from fuzzkit.loop.result import RunResult
+from fuzzkit.loop.task import Experiment
 from fuzzkit.studies.batch import map_runs
 from fuzzkit.studies.experiments import with_stiffness
 from fuzzkit.studies.outcome import END_STATES, end_state
-from fuzzkit.studies.runner import RunResult
-from fuzzkit.studies.task import Experiment
 
 
 @dataclass(frozen=True, slots=True)
@@ -41,10 +41,11 @@ def simulate_case(case: SimCase) -> str:
 
 def run_case(case: SimCase) -> RunResult:
     """Run one case as ``fuzzkit simulate SCENARIO --stiffness K --latency S,C --seed N``
-    runs it (:func:`fuzzkit.studies.batch.run_resolved`: the compiled loop and its generated C
+    runs it (:func:`fuzzkit.loop.run.run_loop`: the compiled loop and its generated C
     controller where the plant has one): the scenario at that stiffness (``regulate``: its
     approach speed follows the stiffness)."""
-    from fuzzkit.studies.batch import RunSpec, run_resolved
+    from fuzzkit.loop.run import run_loop
+    from fuzzkit.loop.spec import RunSpec
 
     exp = with_stiffness(case.experiment, case.stiffness_n_per_mm * 1e3)
     spec = RunSpec(
@@ -56,7 +57,7 @@ def run_case(case: SimCase) -> RunResult:
         gains=case.gains,
         rulebase=case.rulebase,
     )
-    return run_resolved(spec, exp, case.plant)
+    return run_loop(spec, exp, case.plant)
 
 
 def simulate_cells(

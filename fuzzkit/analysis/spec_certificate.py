@@ -17,7 +17,7 @@ from typing import Any
 from fuzzkit.analysis.region import SIGMA_MIN, Region, certify_region, effective_gains
 from fuzzkit.control.spec import AxisSpec, ControllerSpec, role_ordered
 from fuzzkit.errors import ConfigError
-from fuzzkit.studies.task import Experiment, with_spec
+from fuzzkit.loop.task import Experiment, with_spec
 
 
 def spec_axis(spec: ControllerSpec, axis: str | None) -> AxisSpec:

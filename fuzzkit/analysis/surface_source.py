@@ -27,7 +27,7 @@ import numpy.typing as npt
 
 from fuzzkit.control.spec import EXACT, Surface
 from fuzzkit.fuzzy.model import RuleBase
-from fuzzkit.studies.compiled.table import TableArrays, table_arrays
+from fuzzkit.loop.compiled.table import TableArrays, table_arrays
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -53,7 +53,7 @@ class SurfaceSource:
     def on_error_axis(self, xs: FloatArray) -> FloatArray:
         """The deployed surface at ``(x, 0)`` for each ``x`` (scaled error, change 0)."""
         if self.covers_deployed:
-            from fuzzkit.studies.compiled.table import table2
+            from fuzzkit.loop.compiled.table import table2
 
             t = self.table
             return np.array([table2(t.bp0, t.bp1, t.values, t.splits, float(x), 0.0) for x in xs])

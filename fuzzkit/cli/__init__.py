@@ -69,7 +69,7 @@ def add_quiet_argument(parser: argparse.ArgumentParser, progress: bool = True) -
 
 def add_controller_impl_argument(parser: argparse.ArgumentParser) -> None:
     """``--controller-impl auto|python|c``, the same for ``simulate``, ``sweep`` and ``tune``
-    (``fuzzkit.studies.batch.CONTROLLER_IMPLS``)."""
+    (``fuzzkit.loop.spec.CONTROLLER_IMPLS``)."""
     parser.add_argument(
         "--controller-impl",
         choices=("auto", "python", "c"),
@@ -84,9 +84,9 @@ def add_controller_impl_argument(parser: argparse.ArgumentParser) -> None:
 
 def add_plant_argument(parser: argparse.ArgumentParser, what: str, both: bool = False) -> None:
     """``--plant NAME``, its choices and help listing every plant of the registry
-    (``fuzzkit.studies.plants.PLANTS``), so that a new plant shows in every command; ``both``
+    (``fuzzkit.loop.adapter.PLANTS``), so that a new plant shows in every command; ``both``
     adds the report's ``both`` (planar and arm6)."""
-    from fuzzkit.studies.plants import PLANTS, plants_text
+    from fuzzkit.loop.adapter import PLANTS, plants_text
 
     parser.add_argument(
         "--plant",

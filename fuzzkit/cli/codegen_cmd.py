@@ -157,6 +157,7 @@ def cmd_compile(args: argparse.Namespace) -> int:
 
     from fuzzkit.codegen.lookup_table import NUMBER_TYPES
     from fuzzkit.codegen.method import DEFAULT_MAX_BYTES, compile_rulebase
+    from fuzzkit.codegen.provenance import refuse_overwrite
     from fuzzkit.codegen.target import all_targets, load_target
     from fuzzkit.errors import CodegenError, ConfigError
     from fuzzkit.fileio import write_tree_atomic
@@ -203,6 +204,7 @@ def cmd_compile(args: argparse.Namespace) -> int:
         )
     files = result.files
     table = result.table
+    refuse_overwrite(out, files)
     if table is not None:
         print(f"{rb.name}: {table.describe()}")
     else:
@@ -215,10 +217,11 @@ def cmd_compile(args: argparse.Namespace) -> int:
     if defaults is not None and len(rb.inputs) != 2:
         print("note: --gains ignored (no fuzzy-PI API)")
     if args.verify:
-        if table is None:
-            result_v = target.verify_exact(rb, number_type, files)
-        else:
-            result_v = target.verify_table(rb, table, files)
+        with TaskBars(f"{rb.name}: ", quiet=args.quiet, unit="pt") as bars:
+            if table is None:
+                result_v = target.verify_exact(rb, number_type, files, progress=bars)
+            else:
+                result_v = target.verify_table(rb, table, files, progress=bars)
         print(result_v.describe())
         if not result_v.ok:
             print("nothing written: the generated code does not match the exact engine")

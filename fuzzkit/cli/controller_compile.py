@@ -52,11 +52,12 @@ def compile_spec(args: argparse.Namespace) -> int:
     import numpy as np
 
     from fuzzkit.codegen.controller import float_step_bound
+    from fuzzkit.codegen.provenance import refuse_overwrite
     from fuzzkit.codegen.target import load_target
     from fuzzkit.control.spec_reader import load_spec
     from fuzzkit.errors import ConfigError
     from fuzzkit.fileio import write_atomic, write_tree_atomic
-    from fuzzkit.studies.controller_code import design_of, generate
+    from fuzzkit.loop.controller_code import design_of, generate
     from fuzzkit.studies.replay import SensorLog, replay
     from fuzzkit.studies.sensor_logs import hostile_log
 
@@ -70,6 +71,8 @@ def compile_spec(args: argparse.Namespace) -> int:
     spec = load_spec(args.rulebase)
     number_type = args.number_type or default_number_type(spec, target.default_number_type)
     files = generate(spec, target.name, number_type)
+    if target.bundle is None:
+        refuse_overwrite(out, files)
     print(f"{spec.name}: {spec.kind} controller, {target.label} ({number_type})")
     if args.verify:
         if target.open_controller is None:  # pragma: no cover - both shipped targets can

@@ -7,6 +7,7 @@ import argparse
 from typing import Any
 
 EXIT_OK = 0
+EXIT_FAILURE = 1
 
 
 def register(sub: Any) -> None:
@@ -26,8 +27,9 @@ def register(sub: Any) -> None:
         "python-generated the generated Python module, c the generated C, compiled and run; "
         "--compare runs all three and prints the largest difference per column. A run's CSV "
         "(fuzzkit simulate --csv) is read as it is: the sample the controller received, and the "
-        "run's corrections, which the replay is compared with (the largest difference is "
-        "printed).",
+        "run's corrections and status bits, which the replay is compared with: it reproduces "
+        "the run when every status is equal and the corrections are within 1e-12 of their "
+        "largest magnitude (exit 1 when not).",
         epilog="examples:\n"
         "  fuzzkit replay docs/examples/controller.yaml --forces log.csv --out u_ref.csv\n"
         "  fuzzkit replay docs/examples/controller.yaml --forces log.csv --out u_c.csv --impl c\n"
@@ -147,7 +149,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
     from fuzzkit.control.spec_reader import load_spec
     from fuzzkit.errors import ConfigError, Location, Problem, ProblemsError
     from fuzzkit.fileio import check_output_path, write_atomic
-    from fuzzkit.studies.replay import compare, replay, replay_csv
+    from fuzzkit.studies.replay import compare, replay, replay_csv, reproduction
     from fuzzkit.studies.rosbag_log import is_bag
 
     if args.out is None and not args.compare:
@@ -193,13 +195,13 @@ def cmd_replay(args: argparse.Namespace) -> int:
             "c": f"generated C ({args.number_type})",
         }[args.impl]
         print(f"{spec.name}: {n} samples replayed by the {impl} controller; rows with {counts}")
-    if log.recorded is not None:
-        worst = float(np.max(np.abs(out - log.recorded))) if n else 0.0
-        print(f"largest difference from the run's corrections (u<a>_m): {worst:.3g} m")
+    verdict = reproduction(out, status, log)
+    for line in verdict.lines() if verdict is not None else ():
+        print(line)
     if args.out is not None:
         write_atomic(args.out, replay_csv(log.times, out, status, args.status_format == "names"))
         print(f"wrote {args.out}")
-    return EXIT_OK
+    return EXIT_OK if verdict is None or verdict.ok else EXIT_FAILURE
 
 
 def _print_differences(diffs: Any, number_type: str) -> None:

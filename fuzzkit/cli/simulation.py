@@ -24,7 +24,7 @@ from fuzzkit.fileio import check_output_path
 from fuzzkit.studies.outcome import limit_text, settling_text
 from fuzzkit.units import latency_text
 
-FAULT_KINDS = ("none", "spike", "nan", "dropout", "delay")  # fuzzkit.studies.faults.FAULTS
+FAULT_KINDS = ("none", "spike", "nan", "dropout", "delay")  # fuzzkit.loop.faults.FAULTS
 
 
 FAIL_ON_TRIP_HELP = (
@@ -232,7 +232,7 @@ def load_gains(path: str | None, controller: str, required: bool = True) -> dict
 def _surface_for(controller: str, rulebase: str) -> Any:
     if controller != "fuzzy-pi":
         return None
-    from fuzzkit.studies.runner import load_surface
+    from fuzzkit.loop.python_loop import load_surface
 
     return load_surface(rulebase)
 
@@ -256,7 +256,8 @@ def _simulate(args: argparse.Namespace) -> int:
 
     png = check_trace_path(args.png, "--png", ".png") if args.png else None
     csv = check_trace_path(args.csv, "--csv", ".csv") if args.csv else None
-    from fuzzkit.studies.batch import RunSpec, gains_items, resolve, run_spec
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import gains_items, resolve, run_spec
 
     latency = None
     if args.latency is not None:
@@ -456,7 +457,8 @@ def compare_spec(name: str, controller: str, gains: dict[str, float], args: Any)
     """The run ``fuzzkit compare`` makes of one experiment and controller: the same
     :class:`~fuzzkit.studies.batch.RunSpec` as ``fuzzkit simulate`` and ``fuzzkit report``
     (compiled loop where the plant has one), so that one experiment gives one number."""
-    from fuzzkit.studies.batch import RunSpec, gains_items
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import gains_items
     from fuzzkit.studies.experiments import experiment
 
     latency = None

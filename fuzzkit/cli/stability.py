@@ -150,7 +150,7 @@ def _certify_spec(
     from fuzzkit.analysis.spec_certificate import certify_spec, spec_axis, spec_gains
     from fuzzkit.control.spec_reader import load_spec
     from fuzzkit.errors import ConfigError
-    from fuzzkit.studies.task import with_spec
+    from fuzzkit.loop.task import with_spec
 
     clash = [f"--{n}" for n in ("controller", "gains", "rulebase") if getattr(args, n)]
     if clash:

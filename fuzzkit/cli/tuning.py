@@ -349,27 +349,28 @@ def honesty_warnings(result: Any, cases: Any, start: str) -> list[str]:
 
 
 def _starting_gains(args: argparse.Namespace, controller: str) -> tuple[Any, str]:
-    """The gains the search starts from and is judged against: a ``--spec``'s own, with its
-    correction limit as ``u_min``/``u_max`` (when all its axes share them), or None for the
+    """The gains the search starts from and is judged against: a ``--spec``'s own (its lead
+    axis's, :func:`fuzzkit.control.spec.lead_axis`, which the search moves with the other axes
+    keeping their ratios), with its correction limit as ``u_min``/``u_max``; or None for the
     defaults; and how to name them. A spec whose axes differ is said so once, here."""
     if not args.spec:
         return None, "the default gains"
+    from fuzzkit.control.spec import lead_axis
     from fuzzkit.control.spec_reader import load_spec
-
-    spec = load_spec(args.spec)
-    shared = {(a.kp, a.ki, a.kx) for a in spec.axes}
-    if len(shared) != 1:
-        each = "; ".join(f"{a.axis}: kp {a.kp:g}, ki {a.ki:g}" for a in spec.axes)
-        print(
-            f"note: {args.spec}'s axes have different gains ({each}); tune searches one gain "
-            "set for every axis, so it starts from and is judged against the default gains",
-            file=sys.stderr,
-        )
-        return None, "the default gains"
-    kp, ki, kx = shared.pop()
-    gains = {"kp": kp, "ki": ki, **({"kx": kx} if controller == "fuzzy-pi" else {})}
     from fuzzkit.studies.experiments import DEFAULT_GAINS
 
+    spec = load_spec(args.spec)
+    lead = lead_axis(spec)
+    if len({(a.kp, a.ki, a.kx) for a in spec.axes}) != 1:
+        others = ", ".join(a.axis for a in spec.axes if a is not lead)
+        print(
+            f"note: {args.spec}'s axes have different gains; tune searches axis {lead.axis}'s "
+            f"(the largest set point) and scales {others} with them, keeping their ratios",
+            file=sys.stderr,
+        )
+    gains = {"kp": lead.kp, "ki": lead.ki}
+    if controller == "fuzzy-pi" and lead.kx is not None:
+        gains["kx"] = lead.kx
     return {**DEFAULT_GAINS[controller], **gains, **_spec_limits(spec)}, f"the gains of {args.spec}"
 
 
@@ -399,6 +400,20 @@ def tuned_gains(result: Any, spec: Any) -> dict[str, float]:
     ``--spec``'s own correction limit as ``u_min``/``u_max`` (not the defaults')."""
     gains = {k: shortest_gain(v) for k, v in result.gains.items()}
     return {**gains, **(_spec_limits(spec) if spec is not None else {})}
+
+
+def _shortest_axes(spec: Any) -> Any:
+    """``spec`` with every axis's gains as :func:`shortest_gain` (the axes scaled with the lead
+    carry the factor's rounding, as the lead's own would)."""
+    import dataclasses
+
+    def short(v: float | None) -> float | None:
+        return None if v is None else shortest_gain(v)
+
+    axes = tuple(
+        dataclasses.replace(a, kp=short(a.kp), ki=short(a.ki), kx=short(a.kx)) for a in spec.axes
+    )
+    return dataclasses.replace(spec, axes=axes)
 
 
 def _tuning_target(args: argparse.Namespace) -> tuple[list[Any], str, str, str]:
@@ -442,8 +457,8 @@ def _write_spec(args: argparse.Namespace, result: Any, gains: dict[str, float]) 
     from fuzzkit.control.spec_writer import dump_spec
     from fuzzkit.fileio import write_atomic
     from fuzzkit.formats.registry import load
+    from fuzzkit.loop.task import spec_for
     from fuzzkit.studies.experiments import experiment
-    from fuzzkit.studies.task import spec_for
 
     header = (
         f"# written by fuzzkit tune {' '.join(args.experiments)} ({result.plant}); "
@@ -453,7 +468,7 @@ def _write_spec(args: argparse.Namespace, result: Any, gains: dict[str, float]) 
         import dataclasses
         import os
 
-        tuned = with_gains(load_spec(args.spec), gains)
+        tuned = _shortest_axes(with_gains(load_spec(args.spec), gains))
         if tuned.rulebase_source is not None and Path(tuned.rulebase_source).exists():
             # a rule base file given relative to the input spec: relative to the new one
             out_dir = Path(args.spec_out).resolve().parent

@@ -95,7 +95,7 @@ def check_latency_fits(
     latency: tuple[int, int] | None, exp: Any, duration_s: float | None = None
 ) -> None:
     """Refuse ``--latency`` when its delays are longer than :data:`LATENCY_RUN_FRACTION` of
-    the run of ``exp`` (an :class:`~fuzzkit.studies.task.Experiment`; ``duration_s``: the run's
+    the run of ``exp`` (an :class:`~fuzzkit.loop.task.Experiment`; ``duration_s``: the run's
     length when not the scenario's), naming the range.
 
     Raises

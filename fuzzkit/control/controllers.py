@@ -19,7 +19,7 @@ incremental form) and an optional ``rate_limit`` (largest ``|du|`` per step). A 
 never becomes a correction: the step is skipped, ``u`` is held and ``faults`` is incremented.
 
 Twins: this is the **reference** copy of the controller; the compiled loop's copy
-(:mod:`fuzzkit.studies.compiled.period`) and the generated controller
+(:mod:`fuzzkit.loop.compiled.period`) and the generated controller
 (:mod:`fuzzkit.codegen.controller`) are tested against it (``tests/test_compiled_loop.py``,
 ``tests/test_controller_codegen.py``), so it stays a separate implementation on purpose.
 """

@@ -16,7 +16,7 @@ sample by sample", is the contract every implementation matches):
 its spike gate and trip rule; this module holds the arithmetic and the state.
 
 Twins: this is the **reference** copy of the front end; the compiled loop's copy
-(:mod:`fuzzkit.studies.compiled.period`, ``tests/test_spec_runs.py``) and the generated
+(:mod:`fuzzkit.loop.compiled.period`, ``tests/test_spec_runs.py``) and the generated
 controller's (``tests/test_controller_codegen.py``) are tested against it, so it stays a
 separate implementation on purpose.
 """

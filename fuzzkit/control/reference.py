@@ -40,14 +40,14 @@ def spec_surface(spec: ControllerSpec) -> Surface:
     as :func:`fuzzkit.control.spec.surface_inputs` maps them, its first output.
 
     A ``table`` surface is not this one: its lookup table is built by the code generator
-    (``fuzzkit.studies.controller_code.spec_surface``), which the caller passes on."""
+    (``fuzzkit.loop.controller_code.spec_surface``), which the caller passes on."""
     rb = spec.rulebase
     if rb is None:
         raise ConfigError(f"controller spec {spec.name!r}: a {spec.kind} has no rule base")
     if spec.surface.method != "exact":
         raise ConfigError(
             f"controller spec {spec.name!r}: a {spec.surface.method} surface is evaluated by "
-            "its lookup table (fuzzkit.studies.controller_code.spec_surface), not exactly"
+            "its lookup table (fuzzkit.loop.controller_code.spec_surface), not exactly"
         )
     return exact_surface(rb, surface_inputs(spec, rb))
 

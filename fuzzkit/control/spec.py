@@ -489,20 +489,36 @@ def rulebase_problems(rb: RuleBase) -> list[str]:
     return out
 
 
+def lead_axis(spec: ControllerSpec) -> AxisSpec:
+    """The axis a single gain set names: the one with the largest ``|setpoint_n|`` (the first
+    listed of equal ones), the axis that regulates the contact force."""
+    return max(spec.axes, key=lambda a: abs(a.setpoint_n))
+
+
 def with_gains(spec: ControllerSpec, gains: Mapping[str, float]) -> ControllerSpec:
-    """``spec`` with ``gains``' ``kp``, ``ki`` (and ``kx``) on every axis (what tuning a spec
-    tries); other keys (the gains files' ``u_min``, ``rate_limit`` ...) do not change the
-    spec's limits, which are deployment settings."""
-    axes = tuple(
-        replace(
-            a,
-            kp=gains.get("kp", a.kp),
-            ki=gains.get("ki", a.ki),
-            kx=gains.get("kx", a.kx) if spec.kind == "fuzzy-pi" else a.kx,
-        )
-        for a in spec.axes
-    )
-    return replace(spec, axes=axes)
+    """``spec`` with ``gains``' ``kp``, ``ki`` (and ``kx``) on its :func:`lead_axis`, and every
+    other axis's gain scaled by the same factor, so that it keeps its ratio to the lead's
+    (what tuning a spec tries). On a spec whose axes share their gains, that is ``gains`` on
+    every axis; ``gains`` equal to the lead's own give ``spec`` back, bit for bit. Where the
+    lead's gain is 0 no factor exists: an axis with a gain of 0 takes ``gains``' value and one
+    with another keeps its own. Other keys (the gains files' ``u_min``, ``rate_limit`` ...) do
+    not change the spec's limits, which are deployment settings."""
+    lead = lead_axis(spec)
+
+    def scaled(own: float, lead_own: float, key: str) -> float:
+        if key not in gains:
+            return own
+        if lead_own == 0.0:
+            return gains[key] if own == 0.0 else own
+        return own * (gains[key] / lead_own)
+
+    def moved(a: AxisSpec) -> AxisSpec:
+        kx = a.kx
+        if spec.kind == "fuzzy-pi" and a.kx is not None and lead.kx is not None:
+            kx = scaled(a.kx, lead.kx, "kx")
+        return replace(a, kp=scaled(a.kp, lead.kp, "kp"), ki=scaled(a.ki, lead.ki, "ki"), kx=kx)
+
+    return replace(spec, axes=tuple(moved(a) for a in spec.axes))
 
 
 def require_valid(spec: ControllerSpec) -> ControllerSpec:

@@ -6,7 +6,7 @@ path and 3-D objects) into flat arrays; :func:`plant_step` then advances one per
 previous solution, joint speed limit and servo lag, forward kinematics, penalty contact with
 Coulomb friction, the F/T sensor's filter, noise and bias) without leaving compiled code. The
 closed loop that calls it every period, with the controller, lives in
-:mod:`fuzzkit.studies.compiled` (plants know no controller).
+:mod:`fuzzkit.loop.compiled` (plants know no controller).
 
 The formulas are the Python plant's, line for line and in the same order of operations; the only
 differences are the 6x6 linear solve of the IK step (LU with partial pivoting here, LAPACK in

@@ -28,7 +28,7 @@ after that, which MuJoCo computes rather than this kit:
 The physics runs at 1 kHz (:data:`~fuzzkit.plants.mujoco_model.PHYSICS_DT_S`), four steps per
 4 ms period: one ``mj_step(m, d, nstep=4)`` with the servo ramp as a C control callback when the
 plant is given one (:mod:`fuzzkit.plants.mujoco_servo`; ``--plant mujoco`` builds it through
-:mod:`fuzzkit.studies.mujoco_plants`), else four calls with the ramp in Python. Runs are
+:mod:`fuzzkit.loop.mujoco`), else four calls with the ramp in Python. Runs are
 deterministic for a seed (MuJoCo is, single-threaded; the seed draws the sensor noise).
 docs/mujoco.md lists every parameter and its source.
 """

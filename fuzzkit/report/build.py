@@ -148,17 +148,13 @@ def build_report(
         Unusable output folder, missing or bad gains files, unknown plant or rule base.
     """
     from fuzzkit.control.loop_rulebase import load_loop_rulebase
-    from fuzzkit.studies.batch import (
-        RunSpec,
-        experiment_and_plant,
-        gains_items,
-        run_resolved,
-        run_spec,
-    )
+    from fuzzkit.loop.adapter import make_plant
+    from fuzzkit.loop.python_loop import load_surface
+    from fuzzkit.loop.run import run_loop
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import experiment_and_plant, gains_items, run_spec
     from fuzzkit.studies.experiments import DEFAULT_GAINS, press_experiment
     from fuzzkit.studies.metrics import summary
-    from fuzzkit.studies.plants import make_plant
-    from fuzzkit.studies.runner import load_surface
     from fuzzkit.viz.figures import figure_bytes
     from fuzzkit.viz.study_figures import force_figure, stiffness_figure
 
@@ -261,7 +257,7 @@ def build_report(
                     for k in stiffnesses_n_per_mm:
                         press = press_experiment(k * 1e3)
                         pair = gains_items(gains[(ctrl, label)])
-                        r = run_resolved(
+                        r = run_loop(
                             RunSpec(press.name, ctrl, "planar", gains=pair, rulebase=rulebase),
                             press,
                             "planar",

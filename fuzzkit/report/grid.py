@@ -13,8 +13,9 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from fuzzkit.loop.spec import RunSpec
 from fuzzkit.report.verdicts import NOMINAL, Key
-from fuzzkit.studies.batch import RunSpec, gains_items, map_runs
+from fuzzkit.studies.batch import gains_items, map_runs
 from fuzzkit.studies.experiments import DEFAULT_LATENCY
 from fuzzkit.units import latency_text
 

@@ -23,7 +23,8 @@ def spec_rows(
     progress: Callable[[], None] | None = None,
 ) -> list[dict[str, Any]]:
     """One summary (``fuzzkit simulate --json``'s) per spec x plant x experiment, in order."""
-    from fuzzkit.studies.batch import RunSpec, run_spec
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import run_spec
     from fuzzkit.studies.metrics import summary
 
     rows = []
@@ -78,10 +79,11 @@ def adaptive_rows(
 
     from fuzzkit.control.adaptation_spec import NONE
     from fuzzkit.control.spec_reader import load_spec
-    from fuzzkit.studies.batch import RunSpec, experiment_and_plant
+    from fuzzkit.loop.python_loop import run
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import experiment_and_plant
     from fuzzkit.studies.experiments import with_spec
     from fuzzkit.studies.metrics import summary
-    from fuzzkit.studies.runner import run
 
     rows = []
     for path in specs:

@@ -1,6 +1,6 @@
 """A controller that is only a step function, as the simulated closed loop takes a controller:
 the face of :class:`fuzzkit.control.controllers.HybridForceController` that
-:func:`fuzzkit.studies.runner.run` reads (``hybrid=``).
+:func:`fuzzkit.loop.python_loop.run` reads (``hybrid=``).
 
 The step function is the generated controller, called in this process or over ROS 2 by a plant
 that steps in lockstep with the node (``tests/test_ros2_loop.py``): ``step(force, rotation) ->

@@ -1,5 +1,5 @@
 """The controller the node runs: the spec's generated C (where a compiler exists) or generated
-Python, opened by :func:`fuzzkit.studies.controller_code.open_generated`, with its run-time
+Python, opened by :func:`fuzzkit.loop.controller_code.open_generated`, with its run-time
 parameters by name, its tare and its reset.
 
 Nothing here computes a correction: every step, tare, reset and parameter change is a call into
@@ -16,8 +16,8 @@ from typing import Any
 from fuzzkit.control.names import AXES
 from fuzzkit.control.spec import ControllerSpec
 from fuzzkit.errors import ToolchainError
+from fuzzkit.loop.controller_code import open_generated
 from fuzzkit.ros2.parameters import refusal, tunable_values
-from fuzzkit.studies.controller_code import open_generated
 
 #: ``--impl``: ``auto`` is the generated C where it compiles, else the generated Python.
 IMPLS = ("auto", "c", "python-generated")

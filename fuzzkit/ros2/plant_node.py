@@ -5,7 +5,7 @@ Import this module only after :func:`fuzzkit.ros2.runtime.require` succeeded. Ea
 :meth:`PlantNode.step` publishes ``/clock`` (the period's time), the tool pose and the wrench
 with that one stamp, and waits for the controller node's correction and its ``~/status`` for
 that period; :class:`fuzzkit.ros2.closed_loop.StepController` makes that the controller of
-:func:`fuzzkit.studies.runner.run`, so the plants and the loop are the kit's own. The
+:func:`fuzzkit.loop.python_loop.run`, so the plants and the loop are the kit's own. The
 controller node must run with ``use_sim_time`` (its watchdog on ``/clock``), ``pose_sync``
 (a wrench waits for the pose of its stamp: the two topics may arrive in either order) and the
 pose output.

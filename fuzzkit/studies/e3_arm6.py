@@ -30,13 +30,13 @@ import math
 
 import numpy as np
 
+from fuzzkit.loop.adapter import make_plant
 from fuzzkit.plants.arm6 import Arm6Parameters, Arm6Plant
 from fuzzkit.plants.contact import ContactModel
 from fuzzkit.plants.contract import ContactPlant, Scenario
 from fuzzkit.plants.environment import Waypoint
 from fuzzkit.plants.environment3d import EnvObject3, HeightField, Plane
 from fuzzkit.studies.experiments import Experiment, experiment
-from fuzzkit.studies.plants import make_plant
 
 #: CAD heights and positions (scenario frame, m) and the real deviations of the workpiece.
 FLOOR_CAD_Z = -0.30
@@ -126,7 +126,7 @@ def resolve(name: str, plant: str) -> tuple[Experiment, ContactPlant]:
     """The experiment ``name`` and the plant to run it on.
 
     ``E3`` on ``arm6`` is the paper's geometry (this module); every other pair is the shared
-    definition of :mod:`fuzzkit.studies.experiments` on :func:`~fuzzkit.studies.plants.make_plant`.
+    definition of :mod:`fuzzkit.studies.experiments` on :func:`~fuzzkit.loop.adapter.make_plant`.
     """
     if name.upper() == "E3" and plant == "arm6":
         return e3_arm6_experiment(), make_e3_arm6_plant()

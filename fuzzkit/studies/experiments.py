@@ -24,7 +24,7 @@ import numpy.typing as npt
 
 from fuzzkit.control.names import AXES
 from fuzzkit.errors import ConfigError
-from fuzzkit.studies.task import DEFAULT_LATENCY, Experiment, with_spec
+from fuzzkit.loop.task import DEFAULT_GAINS, DEFAULT_LATENCY, Experiment, with_spec
 
 __all__ = [
     "AXES",
@@ -44,16 +44,6 @@ from fuzzkit.plants.environment import Box, Waypoint
 from fuzzkit.studies.regulation import REGULATION_NAME, is_regulation, regulation_at
 
 Vec = npt.NDArray[np.float64]
-
-#: Default gains, tuned by hand (like the paper's, "by trial and error") for the default contact
-#: stiffness of 10 N/mm and a 4 ms period. PI: metres per newton. Fuzzy-PI: Ki scales e and Kp
-#: scales de (1/N), Kx scales the output (m per step). Small-signal equivalence with the
-#: saturated-sum table: Kx*Ki = 1e-5 m/N = PI ki, Kx*Kp = 4e-5 m/N = PI kp.
-DEFAULT_GAINS: dict[str, dict[str, float]] = {
-    "pi": {"kp": 4.0e-5, "ki": 1.0e-5, "u_min": -0.05, "u_max": 0.05},
-    "fuzzy-pi": {"kp": 0.2, "ki": 0.05, "kx": 2.0e-4, "u_min": -0.05, "u_max": 0.05},
-}
-
 
 #: The shipped experiments: scenario files ``fuzzkit/studies/scenarios/<name>.yaml``.
 EXPERIMENTS = ("E1", "E2", "E3")

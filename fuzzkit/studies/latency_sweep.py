@@ -12,9 +12,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from fuzzkit.loop.result import RunResult
 from fuzzkit.studies.experiments import press_experiment, scaled_default_gains
 from fuzzkit.studies.outcome import SETTLED, end_state
-from fuzzkit.studies.runner import RunResult
 
 __all__ = ["StabilityMap", "is_stable", "scaled_default_gains", "stability_map"]
 
@@ -57,9 +57,11 @@ def stability_map(
     duration_s: float = 2.0,
 ) -> StabilityMap:
     """Run the press experiment for every gain factor and delay (one seed: 1), each run as
-    ``fuzzkit simulate`` runs it (:func:`fuzzkit.studies.batch.run_resolved`: the generated
+    ``fuzzkit simulate`` runs it (:func:`fuzzkit.loop.run.run_loop`: the generated
     controller, in the compiled loop where the plant has one)."""
-    from fuzzkit.studies.batch import RunSpec, gains_items, run_resolved
+    from fuzzkit.loop.run import run_loop
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import gains_items
 
     exp = press_experiment(1.0e4)
     rows = []
@@ -70,5 +72,5 @@ def stability_map(
                     latency=(delay, 0), duration_s=duration_s)
             for delay in delays
         ]  # fmt: skip
-        rows.append(tuple(is_stable(run_resolved(r, exp, plant)) for r in runs))
+        rows.append(tuple(is_stable(run_loop(r, exp, plant)) for r in runs))
     return StabilityMap(controller, tuple(factors), tuple(delays), tuple(rows))

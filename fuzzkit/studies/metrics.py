@@ -12,8 +12,8 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.control.names import AXES
+from fuzzkit.loop.result import RunResult
 from fuzzkit.studies.outcome import axis_outcome, limit_exceeded
-from fuzzkit.studies.runner import RunResult
 
 Vec = npt.NDArray[np.float64]
 

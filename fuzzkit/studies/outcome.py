@@ -30,7 +30,7 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from fuzzkit.studies.runner import RunResult
+    from fuzzkit.loop.result import RunResult
 
 SETTLED = "settled"
 NEVER_SETTLED = "never settled"

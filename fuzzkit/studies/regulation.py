@@ -14,8 +14,8 @@ from dataclasses import replace
 
 from fuzzkit.control.impact import impact_speed_for
 from fuzzkit.errors import ConfigError
+from fuzzkit.loop.task import Experiment
 from fuzzkit.plants.environment import Table
-from fuzzkit.studies.task import Experiment
 
 #: The scenario name of the regulation task.
 REGULATION_NAME = "regulate"

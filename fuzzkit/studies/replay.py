@@ -11,9 +11,12 @@ strict: every problem is reported as ``file:line:col`` at once
 
 A run's CSV (``fuzzkit simulate --csv``, :mod:`fuzzkit.studies.run_table`) is read as it is:
 its ``t_s`` is the time, ``f<a>_measured_n`` the sample the controller received (after the
-sensor's latency; NaN when none), its rotation columns when it has them, and its ``u<a>_m``
-the corrections the run's controller returned, which the replay is compared with
-(:attr:`SensorLog.recorded`).
+sensor's latency; NaN when none), its rotation columns when it has them, its ``u<a>_m`` the
+corrections the run's controller returned and its ``status_bits`` the status it returned
+(:attr:`SensorLog.recorded`, :attr:`SensorLog.recorded_status`), which the replay is compared
+with (:func:`reproduction`): the status bits exactly, the corrections within
+:data:`REPRODUCTION_RTOL` of their largest magnitude, so that a controller whose gains differ
+by 1e-10 of their value does not reproduce the run.
 """
 
 from __future__ import annotations
@@ -54,18 +57,26 @@ MAX_PROBLEMS = 20
 RUN_TIME = "t_s"
 RUN_FORCES = tuple(f"f{a}_measured_n" for a in "xyz")
 RUN_CORRECTIONS = tuple(f"u{a}_m" for a in "xyz")
+RUN_STATUS_BITS = "status_bits"
 _RUN_OTHER = re.compile(r"f[xyz]_(true|setpoint)_n|d?e[xyz]_n|du[xyz]_m|status")
+#: How far a replay's corrections may be from the run's, as a fraction of the run's largest
+#: ``|u|``: the reference and the generated code are one arithmetic, whose sums of thousands of
+#: periods were measured within 2e-15 of it apart (tests/test_user_specs.py's runs); a gain
+#: 1e-10 off its value is 100 times this.
+REPRODUCTION_RTOL = 1e-12
 
 
 @dataclass(frozen=True)
 class SensorLog:
     """A log read from CSV: forces ``(n, 3)``, rotations ``(n, 9)`` or None, times or None;
-    ``recorded``: a run CSV's corrections ``(n, 3)`` (m), None for a plain sensor log."""
+    ``recorded``: a run CSV's corrections ``(n, 3)`` (m), ``recorded_status`` its status bits
+    ``(n,)``; None for a plain sensor log (and for the status of a run CSV without them)."""
 
     forces: FloatArray
     rotations: FloatArray | None
     times: FloatArray | None
     recorded: FloatArray | None = None
+    recorded_status: npt.NDArray[np.int64] | None = None
 
 
 def _cells(line: str) -> list[tuple[str, int]]:
@@ -135,6 +146,7 @@ def read_sensor_log(path: str | Path) -> SensorLog:
     run = RUN_TIME in keys and all(c in keys for c in RUN_FORCES)
     index: dict[str, int] = {}
     recorded_at: dict[int, int] = {}  # axis -> column of a run's u<a>_m
+    status_at: int | None = None  # column of a run's status_bits
     ignored: set[int] = set()  # a run's other columns (text in status)
     for k, (cell, col) in enumerate(header):
         key = cell.lower()
@@ -145,6 +157,9 @@ def read_sensor_log(path: str | Path) -> SensorLog:
                 key = FORCE_COLUMNS[RUN_FORCES.index(key)]
             elif key in RUN_CORRECTIONS and RUN_CORRECTIONS.index(key) not in recorded_at:
                 recorded_at[RUN_CORRECTIONS.index(key)] = k
+                continue
+            elif key == RUN_STATUS_BITS and status_at is None:
+                status_at = k
                 continue
             elif _RUN_OTHER.fullmatch(key):
                 ignored.add(k)
@@ -179,7 +194,10 @@ def read_sensor_log(path: str | Path) -> SensorLog:
             continue
         row = []
         for k, (cell, col) in enumerate(cells):
-            if k in ignored or not cell or _NAN.fullmatch(cell):
+            if k == status_at and not (cell.isdigit() and int(cell) < 2**31):
+                bad(n, col, f"expected the status bits as a whole number, got {cell!r}")
+                row.append(math.nan)
+            elif k in ignored or not cell or _NAN.fullmatch(cell):
                 row.append(math.nan)
             elif _NUMBER.fullmatch(cell):
                 row.append(float(cell))
@@ -212,7 +230,10 @@ def read_sensor_log(path: str | Path) -> SensorLog:
     recorded = None
     if run and len(recorded_at) == 3:
         recorded = np.ascontiguousarray(values[:, [recorded_at[i] for i in range(3)]])
-    return SensorLog(np.ascontiguousarray(forces), rotations, times, recorded)
+    status = None
+    if run and status_at is not None:
+        status = values[:, status_at].astype(np.int64)
+    return SensorLog(np.ascontiguousarray(forces), rotations, times, recorded, status)
 
 
 def replay(
@@ -237,7 +258,7 @@ def replay(
         )
     if impl == "python":
         from fuzzkit.control.reference import Controller
-        from fuzzkit.studies.controller_code import spec_surface
+        from fuzzkit.loop.controller_code import spec_surface
         from fuzzkit.studies.param_schedule import apply
 
         ref = Controller(spec, spec_surface(spec) if spec.kind == "fuzzy-pi" else None)
@@ -254,7 +275,7 @@ def replay(
             out[k], status[k] = ref.step(force, None if rot is None else rot[k])
         return out, status
     if impl in GENERATED:
-        from fuzzkit.studies.controller_code import open_generated
+        from fuzzkit.loop.controller_code import open_generated
 
         target = GENERATED[impl]
         ctl: Any = open_generated(spec, target, number_type if target == "c" else None)
@@ -291,6 +312,60 @@ def compare(
             )
         )
     return (ref_out, ref_status), diffs
+
+
+@dataclass(frozen=True)
+class Reproduction:
+    """How a replay of a run's CSV compares with the run: the largest ``|u - u_run|``, what
+    :data:`REPRODUCTION_RTOL` allows, and the rows whose status bits differ (None: the CSV has
+    no ``status_bits``)."""
+
+    largest_m: float
+    allowed_m: float
+    status_rows: int | None
+    first_status_row: int | None
+
+    @property
+    def ok(self) -> bool:
+        """The replay reproduces the run: corrections within the tolerance, same status."""
+        return self.largest_m <= self.allowed_m and not self.status_rows
+
+    def lines(self) -> list[str]:
+        """What ``fuzzkit replay`` prints about it."""
+        out = [
+            f"largest difference from the run's corrections (u<a>_m): {self.largest_m:.3g} m "
+            f"(allowed {self.allowed_m:.3g} m: {REPRODUCTION_RTOL:g} of the largest |u|)"
+        ]
+        if self.status_rows is None:
+            out.append("status bits: the run's CSV has none (status_bits), not compared")
+        elif self.status_rows:
+            rows = "1 row differs" if self.status_rows == 1 else f"{self.status_rows} rows differ"
+            out.append(
+                f"status bits: {rows} from the run's, the first at period {self.first_status_row}"
+            )
+        else:
+            out.append("status bits: equal to the run's in every row")
+        verdict = "reproduces the run" if self.ok else "DOES NOT reproduce the run"
+        out.append(f"replay: {verdict}")
+        return out
+
+
+def reproduction(
+    out: FloatArray, status: npt.NDArray[np.int64], log: SensorLog
+) -> Reproduction | None:
+    """How the replay ``out``, ``status`` of ``log`` compares with the run it was read from
+    (None for a plain sensor log, which records no corrections)."""
+    if log.recorded is None:
+        return None
+    n = out.shape[0]
+    largest = float(np.max(np.abs(out - log.recorded))) if n else 0.0
+    scale = float(np.max(np.abs(log.recorded))) if n else 0.0
+    rows = first = None
+    if log.recorded_status is not None:
+        differ = np.flatnonzero(status != log.recorded_status)
+        rows = int(differ.size)
+        first = int(differ[0]) if differ.size else None
+    return Reproduction(largest, REPRODUCTION_RTOL * scale, rows, first)
 
 
 def replay_csv(

@@ -8,9 +8,11 @@ the last controlled period), ``du<a>_m`` (correction this period) and ``u<a>_m``
 the controller commands: the sum of ``du``, plus the back-off after a trip); for each motion-only
 axis ``u<a>_m`` (the back-off after a trip, else 0); when the run's controller spec compensates the
 tool's weight, the tool rotation the controller received with each sample, ``r11`` .. ``r33``
-(row-major, world-from-sensor); then ``status`` (:data:`STATUSES`). Numbers are written with
-``repr``, so they read back bit for bit: ``fuzzkit replay SPEC --forces RUN.csv`` reads the file as
-it is and reproduces the ``u<a>_m`` columns.
+(row-major, world-from-sensor); when the run's controller reports them, ``status_bits`` (the
+status bits it returned, :mod:`fuzzkit.control.status`, an integer); then ``status``
+(:data:`STATUSES`). Numbers are written with ``repr``, so they read back bit for bit: ``fuzzkit
+replay SPEC --forces RUN.csv`` reads the file as it is and reproduces the ``u<a>_m`` and
+``status_bits`` columns.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.control.names import AXES
-from fuzzkit.studies.runner import RunResult
+from fuzzkit.loop.result import RunResult
 
 #: What the loop did in a period: ``approach`` (not engaged yet: no correction), ``engaged``
 #: (the force loop runs), ``no sample`` (no valid force reached the controller: held),
@@ -76,6 +78,8 @@ def run_columns(result: RunResult) -> list[str]:
     cols += [f"u{a}_m" for i, a in enumerate(AXES) if not result.experiment.selection[i]]
     if _writes_rotation(result):
         cols += [f"r{i}{j}" for i in range(1, 4) for j in range(1, 4)]
+    if result.status is not None:
+        cols.append("status_bits")
     return [*cols, "status"]
 
 
@@ -112,5 +116,7 @@ def run_csv(result: RunResult) -> str:
         row += [repr(float(result.u[k, i])) for i in range(3) if i not in controlled]
         if rotation is not None:
             row += [repr(float(v)) for v in rotation[k]]
+        if result.status is not None:
+            row.append(str(int(result.status[k])))
         writer.writerow([*row, status])
     return buf.getvalue()

@@ -29,11 +29,11 @@ from fuzzkit.located_yaml import (
     compose_document,
     read_document,
 )
+from fuzzkit.loop.faults import FAULTS
+from fuzzkit.loop.task import Experiment, with_spec
 from fuzzkit.plants.contact import ContactModel, SensorModel, ToolModel
 from fuzzkit.plants.contract import Scenario
 from fuzzkit.plants.environment import Box, EnvObject, RoughSurface, Table, Waypoint
-from fuzzkit.studies.faults import FAULTS
-from fuzzkit.studies.task import Experiment, with_spec
 from fuzzkit.units import MAX_DURATION_S, MAX_LATENCY_PERIODS, parse_stiffness
 
 SCENARIO_DOCUMENT = DocumentKind(

@@ -18,7 +18,8 @@ from pathlib import Path
 from typing import Any
 
 from fuzzkit.errors import ConfigError
-from fuzzkit.studies.batch import RunSpec, execute, gains_items, map_runs
+from fuzzkit.loop.spec import RunSpec
+from fuzzkit.studies.batch import execute, gains_items, map_runs
 
 #: Columns that depend on the machine, not on the run (left out when comparing executors).
 TIMING_COLUMNS = ("wall_time_s", "cpu_time_s", "real_time_factor")

@@ -10,7 +10,7 @@ from __future__ import annotations
 import io
 from collections.abc import Mapping
 
-from fuzzkit.studies.runner import RunResult
+from fuzzkit.loop.result import RunResult
 from fuzzkit.viz.palette import controller_colour
 
 

@@ -19,8 +19,8 @@ import numpy.typing as npt
 
 from fuzzkit.fuzzy.describe import format_expression
 from fuzzkit.fuzzy.model import RuleBase
+from fuzzkit.loop.result import RunResult
 from fuzzkit.studies.run_table import period_status
-from fuzzkit.studies.runner import RunResult
 
 #: Rules shown per period.
 TOP_RULES = 3

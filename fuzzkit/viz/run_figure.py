@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
+from fuzzkit.loop.result import RunResult
 from fuzzkit.studies.metrics import summary
 from fuzzkit.studies.outcome import TRIPPED, limit_exceeded, settling_text
-from fuzzkit.studies.runner import RunResult
 from fuzzkit.viz.figures import new_figure
 from fuzzkit.viz.run_series import engaged_index
 

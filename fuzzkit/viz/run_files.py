@@ -11,9 +11,10 @@ from typing import Any
 
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import check_output_path, write_atomic
-from fuzzkit.studies.batch import RunSpec, result_row, run_spec
+from fuzzkit.loop.result import RunResult
+from fuzzkit.loop.spec import RunSpec
+from fuzzkit.studies.batch import result_row, run_spec
 from fuzzkit.studies.run_table import run_csv
-from fuzzkit.studies.runner import RunResult
 
 
 def check_trace_path(path: str | os.PathLike[str], option: str, suffix: str) -> Path:

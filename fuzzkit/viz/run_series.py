@@ -15,8 +15,8 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.control.names import AXES
+from fuzzkit.loop.result import RunResult
 from fuzzkit.plants.environment import nominal_position
-from fuzzkit.studies.runner import RunResult
 from fuzzkit.viz.blueprints import (
     ADAPTATION,
     CORRECTION,

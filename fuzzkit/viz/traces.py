@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from fuzzkit.fuzzy.model import RuleBase
-from fuzzkit.studies.runner import RunResult
+from fuzzkit.loop.result import RunResult
 from fuzzkit.viz import traces_arm6, traces_planar
 from fuzzkit.viz.rule_activity import rule_recording
 

@@ -29,6 +29,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.errors import ConfigError
+from fuzzkit.loop.result import RunResult
 from fuzzkit.plants.arm6 import Arm6Parameters
 from fuzzkit.plants.environment3d import (
     Box3,
@@ -38,7 +39,6 @@ from fuzzkit.plants.environment3d import (
     Plane,
     objects_from_scenario,
 )
-from fuzzkit.studies.runner import RunResult
 from fuzzkit.viz.recording import open_recording
 from fuzzkit.viz.rule_activity import RuleRecording
 from fuzzkit.viz.run_series import (

@@ -31,8 +31,8 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.errors import ConfigError
+from fuzzkit.loop.result import RunResult
 from fuzzkit.plants.environment import Box, EnvObject, RoughSurface, Table
-from fuzzkit.studies.runner import RunResult
 from fuzzkit.viz.recording import open_recording
 from fuzzkit.viz.rule_activity import RuleRecording
 from fuzzkit.viz.run_series import (

@@ -7,7 +7,7 @@ periods in one call). Its ``step_function`` is ``NAME_controller_step`` itself, 
 function with ``argtypes`` set, and ``state`` a caller-owned ``NAME_controller_t`` (a byte
 buffer of the right size), so a compiled loop can call the controller by address: pass
 ``step_function`` and ``ctypes.addressof(state)`` (or the buffer as an array) to numba, as
-``fuzzkit.studies.compiled.generated_c`` does for a surface.
+``fuzzkit.loop.compiled.generated_c`` does for a surface.
 """
 
 from __future__ import annotations

@@ -10,11 +10,12 @@ import math
 import sys
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 from fuzzkit.codegen.backends.python.run import open_controller
 from fuzzkit.codegen.lookup_table import LookupTable
-from fuzzkit.codegen.target import Target
-from fuzzkit.codegen.verify import Verification, verify_exact_python, verify_python
+from fuzzkit.codegen.target import Proof, Target
+from fuzzkit.codegen.verify import verify_exact_python, verify_python
 from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy.model import RuleBase
 from fuzzkit.fuzzy.validation import PYTHON_KEYWORDS
@@ -34,12 +35,13 @@ def module_clash(name: str) -> str | None:
     return None
 
 
-def _verify_exact(rb: RuleBase, number_type: str, files: Mapping[str, str]) -> Verification:
-    return verify_exact_python(rb, files)
+# Looked up at each call (not bound into TARGET) so that a test can give them fewer points.
+def _verify_exact(rb: RuleBase, number_type: str, files: Mapping[str, str], **kw: Any) -> Proof:
+    return verify_exact_python(rb, files, **kw)
 
 
-def _verify_table(rb: RuleBase, table: LookupTable, files: Mapping[str, str]) -> Verification:
-    return verify_python(rb, table, files)
+def _verify_table(rb: RuleBase, table: LookupTable, files: Mapping[str, str], **kw: Any) -> Proof:
+    return verify_python(rb, table, files, **kw)
 
 
 TARGET = Target(

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fuzzkit.studies.runner import RunResult
+from fuzzkit.loop.result import RunResult
 
 
 @dataclass(frozen=True, slots=True)

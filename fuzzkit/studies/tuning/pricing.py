@@ -9,61 +9,35 @@ from typing import Any
 
 from fuzzkit.control.controllers import Surface
 from fuzzkit.errors import ConfigError
-from fuzzkit.studies.plants import make_plant
-from fuzzkit.studies.runner import RunResult, run
+from fuzzkit.loop.adapter import make_plant
+from fuzzkit.loop.python_loop import run
+from fuzzkit.loop.result import RunResult
+from fuzzkit.plants.contract import UnsupportedPlant
 from fuzzkit.studies.tuning.cost import run_cost
 from fuzzkit.studies.tuning.problem import TuningProblem
-
-
-def adapts(exp: Any) -> bool:
-    """True when the experiment's controller spec adapts its gains (the compiled loop runs
-    fixed gains only)."""
-    spec = exp.controller_spec
-    return spec is not None and spec.adaptation.mode != "none"
 
 
 class CaseRunner:
     """Prices gain sets for one problem in this process.
 
-    Each candidate's controller spec runs as the generated controller (what ``fuzzkit
-    compile`` emits, compiled once per structure, the candidate's gains set as run-time
-    parameters): in the compiled loop (:mod:`fuzzkit.studies.compiled`) where the plant has
-    one, else in the Python loop (:class:`~fuzzkit.studies.loop_controller.
-    GeneratedLoopController`). The reference controller runs when asked for
-    (``controller_impl == "python"``, ``loop == "python"``), for a surface given as a function,
-    and for a controller spec that adapts its gains; its fuzzy surface is then the exact
-    engine (in the spec's input roles) or that function.
+    Each candidate runs through the loop's entry point (:func:`fuzzkit.loop.run.run_loop`), as
+    ``fuzzkit simulate`` runs it: the candidate's controller spec as the generated controller
+    (what ``fuzzkit compile`` emits, compiled once per structure, the candidate's gains set as
+    run-time parameters), in the plant's compiled loop where it has one, else in the Python
+    loop; the reference controller when asked for (``controller_impl == "python"``,
+    ``loop == "python"``). A surface given as a function is the reference controller's by
+    definition (no code is generated from a function): it runs in the Python loop.
     """
 
     def __init__(self, problem: TuningProblem) -> None:
-        from fuzzkit.studies.compiled.loop import compiled_supports
-
         self.problem = problem
         self.surface: Surface | None = None
-        self.compiled = (
-            problem.loop != "python"
-            and problem.controller_impl != "python"
-            and isinstance(problem.plant, str)
-            and compiled_supports(problem.plant)
-            and (problem.surface is None or isinstance(problem.surface, str))
-            and not any(adapts(exp) for exp in problem.cases)
-        )
-        if problem.loop == "compiled" and not self.compiled:
-            raise ConfigError(
-                f"the compiled loop does not run plant {problem.plant_name} "
-                "(or a surface given as a function); use loop='python'"
-            )
-        self.generated = self.compiled or (
-            problem.loop != "python"
-            and problem.controller_impl != "python"
-            and (problem.surface is None or isinstance(problem.surface, str))
-            and not any(adapts(exp) for exp in problem.cases)
-        )
-        if self.generated:
-            pass  # the generated controller holds the surface
-        elif isinstance(problem.surface, str):
-            self.surface = _rulebase_surface(problem)
-        else:
+        if problem.surface is not None and not isinstance(problem.surface, str):
+            if problem.loop == "compiled":
+                raise ConfigError(
+                    "the compiled loop runs the generated controller, and a surface given as "
+                    "a function has none; use loop='python'"
+                )
             self.surface = problem.surface
 
     def run_case(
@@ -71,62 +45,35 @@ class CaseRunner:
     ) -> RunResult:
         """Run case ``case`` with ``gains`` (searched names only, or complete) for
         ``duration_s`` (None: the experiment's whole duration)."""
-        from fuzzkit.studies.compiled.loop import run_compiled
+        from fuzzkit.loop.run import run_loop
+        from fuzzkit.loop.spec import RunSpec
+        from fuzzkit.studies.batch import gains_items
 
         p = self.problem
         full = p.full_gains(gains)
         exp = p.cases[case]
-        own = p.plant_of(case)
-        if self.compiled:
-            return run_compiled(
-                exp,
-                own if own is not None else str(p.plant),
-                seed=p.noise_seed,
-                duration_s=duration_s,
-                latency=p.latency_of(case),
-                generated_controller=self._generated(exp, full),
-            )
-        plant = own or (make_plant(p.plant) if isinstance(p.plant, str) else p.plant())
-        hybrid = self._python_loop_controller(exp, full, p.latency_of(case))
-        return run(
-            exp,
-            plant,
+        plant: Any = p.plant_of(case)
+        if plant is None:
+            plant = make_plant(p.plant) if isinstance(p.plant, str) else p.plant()
+        if self.surface is not None:
+            return run(
+                exp, plant, p.controller, gains=full, surface=self.surface,
+                seed=p.noise_seed, duration_s=duration_s, latency=p.latency_of(case),
+            )  # fmt: skip
+        spec = RunSpec(
+            exp.name,
             p.controller,
-            gains=full,
-            surface=self.surface,
-            hybrid=hybrid,
-            seed=p.noise_seed,
-            duration_s=duration_s,
+            # a plant factory's name is no registered plant: it runs in the Python loop
+            p.plant if isinstance(p.plant, str) else p.plant_name,
             latency=p.latency_of(case),
+            seed=p.noise_seed,
+            gains=gains_items(full),
+            rulebase=p.rulebase_name or "macvicar_whelan",
+            loop=p.loop,
+            duration_s=duration_s,
+            controller_impl=p.controller_impl,
         )
-
-    def _python_loop_controller(
-        self, exp: Any, gains: Mapping[str, float], latency: tuple[int, int] | None
-    ) -> Any:
-        """The candidate's generated controller for the Python loop (None: the reference)."""
-        if not self.generated:
-            return None
-        from fuzzkit.studies.loop_controller import run_controller
-
-        p = self.problem
-        rulebase = p.rulebase_name or "macvicar_whelan"
-        impl_c = p.controller_impl == "c"
-        return run_controller(
-            exp, p.controller, gains, rulebase, p.noise_seed, None, latency, impl_c
-        )
-
-    def _generated(self, exp: Any, gains: Mapping[str, float]) -> Any:
-        """The generated C controller of the candidate ``gains`` on ``exp`` (compiled once
-        per distinct code and process)."""
-        from fuzzkit.studies.compiled.generated_controller import (
-            load_generated_controller,
-            run_controller_spec,
-        )
-
-        rulebase = self.problem.rulebase_name or "macvicar_whelan"
-        return load_generated_controller(
-            run_controller_spec(exp, self.problem.controller, gains, rulebase)
-        )
+        return run_loop(spec, exp, plant)
 
     def case_costs(self, gains: Mapping[str, float]) -> tuple[float, ...]:
         """The cost of ``gains`` (searched names only, or complete) on every case."""
@@ -135,6 +82,8 @@ class CaseRunner:
         for i, horizon in enumerate(p.horizons):
             try:
                 result = self.run_case(i, gains, horizon)
+            except UnsupportedPlant:
+                raise  # a scenario the loop asked for cannot run: the user's to fix, every time
             except (ArithmeticError, ValueError):
                 # Gains that break the simulation (overflow, unreachable targets) are merely
                 # bad candidates: price them like a run that failed.

@@ -10,11 +10,11 @@ from dataclasses import dataclass
 
 from fuzzkit.control.controllers import Surface
 from fuzzkit.errors import ConfigError
+from fuzzkit.loop.adapter import make_plant
 from fuzzkit.plants.arm6 import Arm6Plant
 from fuzzkit.plants.contract import ContactPlant
 from fuzzkit.studies.e3_arm6 import make_e3_arm6_plant, resolve
 from fuzzkit.studies.experiments import DEFAULT_GAINS, Experiment, experiment, with_stiffness
-from fuzzkit.studies.plants import make_plant
 from fuzzkit.studies.tuning.cost import CostWeights
 from fuzzkit.studies.tuning.spaces import SPACES, GainSpace
 
@@ -75,7 +75,7 @@ class TuningProblem:
     #: ``auto`` (the compiled loop where the plant has one), ``compiled`` or ``python``
     loop: str = "auto"
     #: ``python`` (fuzzkit's controller) or ``c`` (each candidate's controller spec generated
-    #: as C and run whole in the compiled loop; ``fuzzkit.studies.batch.CONTROLLER_IMPLS``)
+    #: as C and run whole in the compiled loop; ``fuzzkit.loop.spec.CONTROLLER_IMPLS``)
     controller_impl: str = "auto"
     #: what each case is (parallel to ``cases``)
     case_keys: tuple[TuningCase, ...] = ()

@@ -1,37 +1,109 @@
-"""Drive the compiled MuJoCo loop (:func:`fuzzkit.studies.compiled.mujoco_run.run_mujoco`): reset
-the plant in Python, read it into arrays, one compiled call for every period, the recording
-into the runner's :class:`~fuzzkit.studies.runner.RunResult`.
+"""The MuJoCo plants' adapters: the IRB 140 in MuJoCo (``mujoco``) and with joint springs
+(``mujoco-elastic``), built with the servo ramp compiled as MuJoCo's control callback
+(:mod:`fuzzkit.plants.mujoco_servo`) where a C compiler exists, the Python ramp otherwise (the
+plant says so in its first period's messages), and their compiled loop: the plant reset in
+Python, read into arrays (:func:`pack`), then one compiled call
+(:func:`fuzzkit.loop.compiled.mujoco_run.run_mujoco`) runs every period, MuJoCo's C library
+called by address. What the kernel does not model raises
+:class:`~fuzzkit.plants.contract.UnsupportedPlant` (the Python loop runs it): a plant without
+its servo callback (no C compiler), the reference IK (``compiled_ik=False``), ``strict`` mode,
+a drifting sensor bias or a tilting tool. A tool's weight needs nothing: MuJoCo's wrist sensor
+measures it.
 
-What the kernel does not model raises :class:`~fuzzkit.plants.contract.UnsupportedPlant` (the
-Python loop runs it): a plant without its servo callback (no C compiler), the reference IK
-(``compiled_ik=False``), ``strict`` mode, a drifting sensor bias or a tilting tool. A tool's
-weight needs nothing: MuJoCo's wrist sensor measures it.
+The plant layer compiles nothing (it imports no code generation); this module compiles the
+plant's C source with the kit's toolchain (:func:`fuzzkit.codegen.toolchain.cached_library`,
+the on-disk cache of the compiled controllers) against the headers of the MuJoCo that is
+loaded, once per process. MuJoCo is imported only when a plant is built.
 """
 
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import dataclass
-from typing import Any
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import numpy.typing as npt
 
-from fuzzkit.errors import SimulationError
+from fuzzkit.codegen.toolchain import cached_library
+from fuzzkit.errors import SimulationError, ToolchainError
+from fuzzkit.loop.adapter import PlantAdapter
+from fuzzkit.loop.compiled import period as P
+from fuzzkit.loop.compiled.common import ControllerArgs, result_from_recording, warm_up
+from fuzzkit.loop.result import RunResult
+from fuzzkit.loop.task import Experiment
 from fuzzkit.plants.arm6_period import IK_STATUS_NAMES
 from fuzzkit.plants.contact import padded_terms, sensor_noise
-from fuzzkit.plants.contract import UnsupportedPlant, wrist_sensor_extras
-from fuzzkit.plants.environment import _roughness_terms
-from fuzzkit.plants.mujoco_arm import MujocoArmPlant
-from fuzzkit.plants.mujoco_model import PROFILE_HALF_THICKNESS_M
-from fuzzkit.studies.compiled import mujoco_run as K
-from fuzzkit.studies.compiled import period as P
-from fuzzkit.studies.compiled.common import ControllerArgs, result_from_recording, warm_up
-from fuzzkit.studies.experiments import Experiment
-from fuzzkit.studies.runner import RunResult
+from fuzzkit.plants.contract import ContactPlant, UnsupportedPlant, wrist_sensor_extras
 
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
+if TYPE_CHECKING:
+    from fuzzkit.plants.mujoco_arm import MujocoArmPlant
+    from fuzzkit.plants.mujoco_servo import ServoCallback
+
+#: the callback is host code against MuJoCo's headers, not embedded code: C11, else as strict
+HOST_FLAGS = ("-std=c11", "-Wall", "-Wextra", "-Werror", "-pedantic")
+
+
+def mujoco_include_dir() -> Path:
+    """The MuJoCo headers shipped in the ``mujoco`` wheel (``mujoco/include``)."""
+    import mujoco
+
+    return Path(mujoco.__file__).resolve().parent / "include"
+
+
+@functools.cache
+def servo_callback() -> ServoCallback | str:
+    """The compiled servo ramp, or why there is none (no compiler, no headers, a build that
+    failed): the reason the plant then states."""
+    import mujoco
+
+    from fuzzkit.plants.mujoco_servo import ServoCallback, source_text
+
+    include = mujoco_include_dir()
+    if not (include / "mujoco" / "mujoco.h").is_file():
+        return f"servo ramp in Python: no MuJoCo headers at {include}"
+    # the headers' version is part of the source, so the cache never mixes mjData layouts;
+    # C11, which MuJoCo's headers need (anonymous unions); no contraction into fused
+    # multiply-adds: the ramp's doubles are the Python ramp's
+    text = f"/* MuJoCo {mujoco.mj_versionString()} */\n" + source_text()
+    flags = (*HOST_FLAGS, "-O2", "-ffp-contract=off", f"-I{include}")
+    shipped = sorted(include.parent.glob("libmujoco.so*"))
+    if not shipped:
+        return f"servo ramp in Python: no libmujoco.so beside {include}"
+    # linked against the very library the bindings loaded (dlopen finds it mapped already)
+    lib_dir = shipped[0].parent
+    libs = ("-lm", f"-L{lib_dir}", f"-l:{shipped[0].name}", f"-Wl,-rpath,{lib_dir}")
+    try:
+        library = cached_library({"mujoco_servo.c": text}, "mujoco_servo", flags=flags, libs=libs)
+        return ServoCallback(library)
+    except (ToolchainError, RuntimeError, OSError) as exc:
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        return f"servo ramp in Python, not as a C control callback: {first}"
+
+
+def _with_callback(plant: MujocoArmPlant) -> MujocoArmPlant:
+    servo = servo_callback()
+    if isinstance(servo, str):
+        plant.use_servo_callback(None, servo)
+    else:
+        plant.use_servo_callback(servo)
+    return plant
+
+
+def mujoco_plant() -> ContactPlant:
+    """``--plant mujoco``: the rigid IRB 140 in MuJoCo, servo ramp in C where it compiles."""
+    from fuzzkit.plants.mujoco_arm import MujocoArmPlant
+
+    return _with_callback(MujocoArmPlant())
+
+
+def elastic_mujoco_plant() -> ContactPlant:
+    """``--plant mujoco-elastic``: the same with joint springs on axes 1-3."""
+    from fuzzkit.plants.mujoco_arm import ElasticMujocoArmPlant
+
+    return _with_callback(ElasticMujocoArmPlant())
+
 
 #: the messages of a period whose IK did not converge (as the compiled arm6 loop words them)
 IK_MESSAGES = {
@@ -43,7 +115,7 @@ IK_MESSAGES = {
 
 @dataclass(slots=True)
 class MujocoArrays:
-    """Everything :func:`~fuzzkit.studies.compiled.mujoco_run.run_mujoco` reads of the plant,
+    """Everything :func:`~fuzzkit.loop.compiled.mujoco_run.run_mujoco` reads of the plant,
     in its argument order: the arm (as arm6's compiled twin reads it), the MuJoCo indices, the
     rough profiles, parameters and state, and the ``MjData`` views it writes and reads."""
 
@@ -53,13 +125,17 @@ class MujocoArrays:
 
 
 def pack(plant: MujocoArmPlant) -> MujocoArrays:
-    """Read a freshly reset ``plant`` into the kernel's arrays.
+    """Read a freshly reset ``plant`` into the kernel's arrays (the compiled loop's).
 
     Raises
     ------
     UnsupportedPlant
         For what the kernel does not model (module docstring).
     """
+    from fuzzkit.loop.compiled import mujoco_run as K
+    from fuzzkit.plants.environment import _roughness_terms
+    from fuzzkit.plants.mujoco_model import PROFILE_HALF_THICKNESS_M
+
     servo = plant.servo
     if servo is None:
         raise UnsupportedPlant(
@@ -141,9 +217,10 @@ def pack(plant: MujocoArmPlant) -> MujocoArrays:
 
 
 def run_mujoco_compiled(
-    exp: Experiment, plant: MujocoArmPlant, controller: str, ctrl: ControllerArgs, seed: int
+    exp: Experiment, plant: ContactPlant, ctrl: ControllerArgs, seed: int
 ) -> RunResult:
-    """``exp`` on the MuJoCo ``plant`` in the compiled loop with the controller ``ctrl``.
+    """``exp`` on the MuJoCo ``plant`` in the compiled loop with the controller ``ctrl`` (the
+    adapters' ``compiled``).
 
     Raises
     ------
@@ -152,6 +229,13 @@ def run_mujoco_compiled(
     SimulationError
         When the simulation diverges, as the Python plant raises it.
     """
+    from fuzzkit.loop.compiled import mujoco_run as K
+    from fuzzkit.plants.mujoco_arm import MujocoArmPlant
+
+    if not isinstance(plant, MujocoArmPlant):
+        raise TypeError(
+            f"the mujoco compiled loop runs a MujocoArmPlant (got {type(plant).__name__})"
+        )
     scn = exp.scenario
     n = ctrl.periods
     reset = plant.reset(scn, seed=seed)
@@ -202,7 +286,7 @@ def run_mujoco_compiled(
             "stiffness too high for its 1 kHz physics step)"
         )
     return result_from_recording(
-        exp, plant.name, controller, ctrl, seed, rec, scalars, _messages(plant, rec), cpu, wall
+        exp, plant.name, ctrl, seed, rec, scalars, _messages(plant, rec), cpu, wall
     )
 
 
@@ -224,3 +308,7 @@ def _messages(plant: MujocoArmPlant, rec: dict[str, Any]) -> dict[str, int]:
                 on = ", ".join(n for i, n in enumerate(names) if int(mask) >> i & 1)
                 count(f"{what} {on}", times)
     return out
+
+
+ADAPTER = PlantAdapter("mujoco", mujoco_plant, compiled=run_mujoco_compiled)
+ELASTIC = PlantAdapter("mujoco-elastic", elastic_mujoco_plant, compiled=run_mujoco_compiled)

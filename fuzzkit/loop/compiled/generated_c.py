@@ -31,7 +31,7 @@ class GeneratedC:
 @lru_cache(maxsize=4)
 def load_generated_c(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3) -> GeneratedC:
     """Generate, compile and load the double C of ``rulebase`` at ``tolerance`` (the table of
-    :func:`fuzzkit.studies.compiled.table.load_table`), once per process.
+    :func:`fuzzkit.loop.compiled.table.load_table`), once per process.
 
     Raises
     ------
@@ -42,7 +42,7 @@ def load_generated_c(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3)
     from fuzzkit.codegen.names import symbol
     from fuzzkit.codegen.toolchain import CompiledTable
     from fuzzkit.control.loop_rulebase import load_loop_rulebase
-    from fuzzkit.studies.compiled.table import load_table
+    from fuzzkit.loop.compiled.table import load_table
 
     rb = load_loop_rulebase(rulebase)
     table = load_table(rulebase, tolerance)

@@ -16,6 +16,16 @@ from fuzzkit.plants.contract import Scenario
 DEFAULT_LATENCY: tuple[int, int] = (1, 1)
 
 
+#: Default gains, tuned by hand (like the paper's, "by trial and error") for the default contact
+#: stiffness of 10 N/mm and a 4 ms period. PI: metres per newton. Fuzzy-PI: Ki scales e and Kp
+#: scales de (1/N), Kx scales the output (m per step). Small-signal equivalence with the
+#: saturated-sum table: Kx*Ki = 1e-5 m/N = PI ki, Kx*Kp = 4e-5 m/N = PI kp.
+DEFAULT_GAINS: dict[str, dict[str, float]] = {
+    "pi": {"kp": 4.0e-5, "ki": 1.0e-5, "u_min": -0.05, "u_max": 0.05},
+    "fuzzy-pi": {"kp": 0.2, "ki": 0.05, "kx": 2.0e-4, "u_min": -0.05, "u_max": 0.05},
+}
+
+
 @dataclass(frozen=True, slots=True)
 class Experiment:
     """One experiment: a world plus what the force loop must do in it.
@@ -26,7 +36,7 @@ class Experiment:
     ``steady_window_s``: the final stretch used for steady-state statistics.
     ``latency_periods``: (sensor-to-controller, controller-to-motion) delays in periods.
     ``engage_samples``: consecutive samples above the threshold needed to engage. ``fault``:
-    the sensor fault kind injected by default (a name of ``fuzzkit.studies.faults.FAULTS``).
+    the sensor fault kind injected by default (a name of ``fuzzkit.loop.faults.FAULTS``).
     ``controller_spec``: the controller the experiment runs (a scenario's ``controller:``, or
     ``--spec``; :func:`fuzzkit.studies.experiments.with_spec`); its axes, set points, safety
     limit and engagement are the fields above. None: the controller named on the command line,

@@ -6,7 +6,7 @@ called by address: ``fuzzkit_mj_steps`` with the servo ramp as the control callb
 :mod:`fuzzkit.plants.mujoco_servo`; a rough profile's block moved before each substep), the
 tool's contact forces (``fuzzkit_tool_contacts``) and the wrist sensor model, then the
 plant-independent part shared with the other compiled loops
-(:mod:`fuzzkit.studies.compiled.period`: fault injection, latency queues, the generated
+(:mod:`fuzzkit.loop.compiled.period`: fault injection, latency queues, the generated
 controller), then recording. The Python plant
 (:class:`~fuzzkit.plants.mujoco_arm.MujocoArmPlant`) is the reference it is held to, bit for
 bit (``tests/test_mujoco_compiled.py``); it computes the same doubles in the same order.
@@ -21,10 +21,8 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.jit import jit
-from fuzzkit.plants.arm6_period import ik, matrix_from_quat, pose_at
-from fuzzkit.plants.rough_profile import profile_height_slope
-from fuzzkit.studies.compiled.generated_controller import generated_step
-from fuzzkit.studies.compiled.period import (
+from fuzzkit.loop.compiled.generated_controller import generated_step
+from fuzzkit.loop.compiled.period import (
     C_COMMAND_DELAY,
     C_PERIOD,
     C_SENSOR_DELAY,
@@ -39,6 +37,8 @@ from fuzzkit.studies.compiled.period import (
     sensor_latency,
     store_results,
 )
+from fuzzkit.plants.arm6_period import ik, matrix_from_quat, pose_at
+from fuzzkit.plants.rough_profile import profile_height_slope
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -99,7 +99,7 @@ def _follow_profiles(
 
 @jit
 def run_mujoco(
-    # plant (see fuzzkit.studies.compiled.mujoco_loop.MujocoArrays)
+    # plant (see fuzzkit.loop.mujoco.MujocoArrays)
     a_links: FloatArray,
     a_tool_r: FloatArray,
     a_tool_p: FloatArray,

@@ -12,11 +12,12 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from fuzzkit.studies.compiled import period as P
-from fuzzkit.studies.compiled.generated_controller import GeneratedController
-from fuzzkit.studies.experiments import Experiment
-from fuzzkit.studies.faults import Faults, fault_name, fault_schedule
-from fuzzkit.studies.runner import RunResult, run_faults_and_latency
+from fuzzkit.loop.compiled import period as P
+from fuzzkit.loop.compiled.generated_controller import GeneratedController
+from fuzzkit.loop.faults import Faults, fault_name, fault_schedule
+from fuzzkit.loop.result import RunResult
+from fuzzkit.loop.task import Experiment
+from fuzzkit.loop.timing import run_faults_and_latency
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -40,6 +41,8 @@ class ControllerArgs:
     faults: Faults
     latency: tuple[int, int]
     periods: int
+    #: the controller's kind (pi, fuzzy-pi), as the run result names it
+    kind: str
 
 
 def controller_args(
@@ -57,7 +60,7 @@ def controller_args(
     generated code's."""
     from dataclasses import replace
 
-    from fuzzkit.studies.task import with_spec
+    from fuzzkit.loop.task import with_spec
 
     spec = generated.spec
     task = replace(with_spec(exp, spec), controller_spec=None)
@@ -91,13 +94,13 @@ def controller_args(
         faults=faults,
         latency=(sensor_delay, command_delay),
         periods=n,
+        kind=spec.kind,
     )
 
 
 def result_from_recording(
     exp: Experiment,
     plant: str,
-    controller: str,
     ctrl: ControllerArgs,
     seed: int,
     rec: dict[str, Any],
@@ -112,7 +115,7 @@ def result_from_recording(
     engaged_time = float(scalars[P.R_ENGAGED_TIME])
     return RunResult(
         experiment=exp,
-        controller=controller,
+        controller=ctrl.kind,
         plant=plant,
         t=rec["t"],
         force=rec["force"],

@@ -117,7 +117,7 @@ def table_arrays(table: Any) -> TableArrays:
 def load_table(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3) -> Any:
     """The double lookup table of a rule base (shipped name or YAML path), as ``fuzzkit compile
     --target c --type double --tolerance`` builds it: what the compiled fuzzy-PI evaluates and
-    the generated C (:mod:`fuzzkit.studies.compiled.generated_c`) is emitted from."""
+    the generated C (:mod:`fuzzkit.loop.compiled.generated_c`) is emitted from."""
     from fuzzkit.codegen.table_search import make_table
     from fuzzkit.control.loop_rulebase import load_loop_rulebase
 
@@ -173,3 +173,12 @@ def cached_table(rb: Any, tolerance: float, build: Callable[[], Any]) -> TableAr
     except OSError:
         pass  # a read-only home only costs the rebuild next time
     return arrays
+
+
+def compiled_table(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3) -> TableArrays:
+    """:func:`load_table`'s arrays, from the on-disk cache after the first build."""
+    from fuzzkit.control.loop_rulebase import load_loop_rulebase
+
+    return cached_table(
+        load_loop_rulebase(rulebase), tolerance, lambda: load_table(rulebase, tolerance)
+    )

@@ -1,8 +1,8 @@
-"""Run an experiment on the pymunk planar arm through the compiled loop.
+"""The planar plant's adapter: the pymunk two-link arm and its compiled loop.
 
 The plant is reset in Python (:meth:`PlanarArmPlant.reset` builds the pymunk space), read into
 arrays (:func:`fuzzkit.planar_sim.arm_period.pack`), then one compiled call
-(:func:`fuzzkit.studies.compiled.planar_run.run_planar`) runs every period, calling Chipmunk
+(:func:`fuzzkit.loop.compiled.planar_run.run_planar`) runs every period, calling Chipmunk
 directly on that space.
 """
 
@@ -15,14 +15,16 @@ from typing import Any
 import numpy as np
 
 from fuzzkit.errors import SimulationError
+from fuzzkit.loop.adapter import PlantAdapter
+from fuzzkit.loop.compiled import period as P
+from fuzzkit.loop.compiled.common import ControllerArgs, result_from_recording, warm_up
+from fuzzkit.loop.compiled.planar_run import run_planar
+from fuzzkit.loop.result import RunResult
+from fuzzkit.loop.task import Experiment
 from fuzzkit.planar_sim import PlanarArmPlant
 from fuzzkit.planar_sim.arm_period import STEP_NON_FINITE, pack, sensor_samples
 from fuzzkit.plants.contact import sensor_noise
-from fuzzkit.studies.compiled import period as P
-from fuzzkit.studies.compiled.common import ControllerArgs, result_from_recording, warm_up
-from fuzzkit.studies.compiled.planar_run import run_planar
-from fuzzkit.studies.experiments import Experiment
-from fuzzkit.studies.runner import RunResult
+from fuzzkit.plants.contract import ContactPlant
 
 #: What ``PlanarArmPlant.step`` says, per flag of ``plant_step`` (index 1, 2, 3).
 _MESSAGES = (
@@ -33,9 +35,14 @@ _MESSAGES = (
 
 
 def run_planar_compiled(
-    exp: Experiment, plant: PlanarArmPlant, controller: str, ctrl: ControllerArgs, seed: int
+    exp: Experiment, plant: ContactPlant, ctrl: ControllerArgs, seed: int
 ) -> RunResult:
-    """One compiled run on ``plant`` (see :func:`fuzzkit.studies.compiled.loop.run_compiled`)."""
+    """One compiled run on ``plant`` (a :class:`~fuzzkit.planar_sim.PlanarArmPlant`; the
+    adapter's ``compiled``)."""
+    if not isinstance(plant, PlanarArmPlant):
+        raise TypeError(
+            f"the planar compiled loop runs a PlanarArmPlant (got {type(plant).__name__})"
+        )
     scn = exp.scenario
     n = ctrl.periods
     reset = plant.reset(scn, seed=seed)
@@ -90,6 +97,7 @@ def run_planar_compiled(
         count = int(np.count_nonzero(flags[:, i]))
         if count:
             messages[_MESSAGES[i - 1].format(limits[i - 1])] = count
-    return result_from_recording(
-        exp, "planar", controller, ctrl, seed, rec, scalars, messages, cpu, wall
-    )
+    return result_from_recording(exp, "planar", ctrl, seed, rec, scalars, messages, cpu, wall)
+
+
+ADAPTER = PlantAdapter("planar", PlanarArmPlant, compiled=run_planar_compiled)

@@ -7,11 +7,9 @@ and signs). One :class:`RunResult` holds every series of a run, one sample per p
 
 from __future__ import annotations
 
-import math
 import time
 from collections import deque
 from collections.abc import Mapping
-from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 import numpy as np
@@ -23,85 +21,20 @@ from fuzzkit.control.controllers import (
     make_axis_controllers,
 )
 from fuzzkit.errors import ConfigError
+from fuzzkit.loop.adapter import make_plant
+from fuzzkit.loop.faults import FaultInjector, Faults, fault_name
+from fuzzkit.loop.result import RunResult
+from fuzzkit.loop.task import DEFAULT_GAINS, Experiment
+from fuzzkit.loop.timing import run_faults_and_latency
 from fuzzkit.plants.contract import ContactPlant, PlantSample, Scenario
-from fuzzkit.studies.experiments import DEFAULT_GAINS, Experiment
-from fuzzkit.studies.faults import FaultInjector, Faults, fault, fault_name
-from fuzzkit.studies.plants import make_plant
 
 Vec = npt.NDArray[np.float64]
-
-
-@dataclass(slots=True)
-class RunResult:
-    """Everything a run produced: time series (one row per controller period) and a summary."""
-
-    experiment: Experiment
-    controller: str
-    plant: str
-    t: Vec
-    # the sample the controller consumed (sensor_delay periods old), task frame (n, 3), NaN
-    # where no valid sample reached the controller
-    force: Vec
-    force_sensor: Vec  # what the sensor interface delivered this period (after faults) (n, 3)
-    force_true: Vec  # (n, 3)
-    setpoint: Vec  # (n, 3)
-    e: Vec
-    de: Vec
-    du: Vec
-    u: Vec  # task-frame correction S*u (+ back-off), (n, 3)
-    tool_position: Vec  # base frame (n, 3)
-    nominal_position: Vec
-    target_position: Vec  # nominal + the correction the plant received (base frame)
-    joint_angles: Vec
-    in_contact: npt.NDArray[np.bool_]  # any object touches the tool
-    # normal contact force per task axis (n, 3), friction excluded (PlantSample.force_normal);
-    # NaN rows when the plant does not report it
-    force_normal: Vec
-    moving: npt.NDArray[np.bool_]  # the nominal path was moving during that period
-    arm_points: list[Vec]
-    contact_points: list[Vec]
-    faults: int
-    tripped: bool
-    seed: int  # of the sensor noise
-    latency_periods: tuple[int, int]  # (sensor, command), fault delay included
-    fault: str  # the fault kind's name in fuzzkit.studies.faults.FAULTS, or "custom"
-    fault_seed: int
-    trip_time_s: float | None
-    engaged_time_s: float | None
-    wall_time_s: float
-    messages: dict[str, int] = field(default_factory=dict)
-    #: which loop ran: "python" (this module) or "compiled" (fuzzkit.studies.compiled)
-    loop: str = "python"
-    #: CPU time of the loop alone (s, time.process_time), start-up excluded
-    cpu_time_s: float = 0.0
-    #: which controller implementation ran (exact engine, lookup table, generated C ...)
-    controller_impl: str = ""
-    #: adaptation (issue 24), per period and task axis: the factor of the output gain (n, 3)
-    #: and the stiffness estimate (N/mm, NaN without a schedule); None for fixed gains
-    gain_scale: Vec | None = None
-    stiffness_n_mm: Vec | None = None
-    #: the controller's status bits per period (fuzzkit.control.status), where it reports them
-    #: (the Python loop's controller, the generated C controller); None otherwise
-    status: npt.NDArray[np.int64] | None = None
-    #: the tool's rotation (world-from-sensor, row-major, (n, 9)) the controller received with
-    #: each consumed sample; None where not recorded
-    rotation: Vec | None = None
-
-    @property
-    def real_time_factor(self) -> float:
-        """Simulated seconds per CPU second of the loop."""
-        return self.sim_time_s / self.cpu_time_s if self.cpu_time_s > 0.0 else math.inf
-
-    @property
-    def sim_time_s(self) -> float:
-        """Simulated time covered by the run (s)."""
-        return float(self.t[-1]) if len(self.t) else 0.0
 
 
 class LoopController(Protocol):
     """What the loop drives each period: the reference
     (:class:`~fuzzkit.control.controllers.HybridForceController`) or a spec's generated
-    controller (:class:`fuzzkit.studies.loop_controller.GeneratedLoopController`). After each
+    controller (:class:`fuzzkit.loop.generated.GeneratedLoopController`). After each
     call the loop reads ``status``, ``engaged``, ``tripped``, ``faults``, ``trip_time_s``,
     ``setpoints``, ``e``, ``de``, ``du`` and ``controllers`` (the reference's axis
     controllers, which may adapt; none for generated code)."""
@@ -135,7 +68,7 @@ def build_controller(
     if exp.controller_spec is not None:
         from fuzzkit.control.reference import hybrid_from_spec
         from fuzzkit.control.spec import with_gains
-        from fuzzkit.studies.controller_code import spec_surface
+        from fuzzkit.loop.controller_code import spec_surface
 
         spec = exp.controller_spec
         if surface is None and spec.kind == "fuzzy-pi":
@@ -321,27 +254,6 @@ def _controller_name(exp: Experiment, controller: str, hybrid: object) -> str:
     if hybrid is not None:
         return str(getattr(hybrid, "kind", "custom"))  # a generated controller knows its kind
     return controller if exp.controller_spec is None else exp.controller_spec.kind
-
-
-def run_faults_and_latency(
-    exp: Experiment, seed: int, faults: Faults | None, latency: tuple[int, int] | None
-) -> tuple[Faults, int, int]:
-    """The faults and ``(sensor, command)`` delays a run uses: the experiment's where None (its
-    fault kind seeded by ``seed``), the fault's delay added to the sensor delay. Both loops (this
-    module and :mod:`fuzzkit.studies.compiled`) take them from here."""
-    if faults is None:
-        faults = fault(exp.fault, seed)
-    sensor_delay, command_delay = check_latency(exp.latency_periods if latency is None else latency)
-    return faults, sensor_delay + faults.delay_steps, command_delay
-
-
-def check_latency(latency: tuple[int, int]) -> tuple[int, int]:
-    """``(sensor_delay, command_delay)`` as non-negative integers, or a ConfigError."""
-    if len(latency) != 2 or any(isinstance(v, bool) or int(v) != v or v < 0 for v in latency):
-        raise ConfigError(
-            f"latency must be (sensor_delay, command_delay), integers >= 0 (got {latency!r})"
-        )
-    return int(latency[0]), int(latency[1])
 
 
 def _impl_label(

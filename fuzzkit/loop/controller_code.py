@@ -156,7 +156,7 @@ def generate(spec: ControllerSpec, target: str, number_type: str | None = None) 
 
     Emitted once per process for an equal spec, target and number type: a tune, a sweep or a
     report asks for the same code for every run (the code of
-    :func:`fuzzkit.studies.compiled.generated_controller.code_spec` leaves out the gains), and
+    :func:`fuzzkit.loop.compiled.generated_controller.code_spec` leaves out the gains), and
     emitting it costs tens of ms. The spec is frozen; each caller gets its own dict."""
     return dict(_emitted(spec, target, number_type))
 

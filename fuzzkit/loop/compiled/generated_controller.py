@@ -2,7 +2,7 @@
 
 What ships is what runs: the controller spec of the run (the given one, or
 :func:`run_controller_spec` of the run's settings) goes through ``fuzzkit compile``'s generator
-(:func:`fuzzkit.studies.controller_code.open_generated`, C, double), is compiled with the strict
+(:func:`fuzzkit.loop.controller_code.open_generated`, C, double), is compiled with the strict
 flags, and every period the compiled loop calls ``NAME_controller_step`` by its address
 (:func:`generated_step`): the sensor front end, spike gate, engagement, trip and back-off,
 the axis controllers and the correction limits are the generated code's, not the loop's.
@@ -32,7 +32,7 @@ from fuzzkit.control.names import AXES
 from fuzzkit.control.spec import ControllerSpec, Limits, require_valid, with_gains
 from fuzzkit.errors import ConfigError
 from fuzzkit.jit import jit
-from fuzzkit.studies.compiled.period import (
+from fuzzkit.loop.compiled.period import (
     C_PERIOD,
     C_SENSOR_DELAY,
     CS_CTRL_T,
@@ -46,8 +46,7 @@ from fuzzkit.studies.compiled.period import (
     V_U,
     error_change,
 )
-from fuzzkit.studies.experiments import DEFAULT_GAINS
-from fuzzkit.studies.task import Experiment, spec_for
+from fuzzkit.loop.task import DEFAULT_GAINS, Experiment, spec_for
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -131,7 +130,7 @@ def load_generated_controller(spec: ControllerSpec) -> GeneratedController:
     ToolchainError
         No C compiler, or the generated code does not compile.
     """
-    from fuzzkit.studies.controller_code import generate, open_generated
+    from fuzzkit.loop.controller_code import generate, open_generated
 
     require_valid(spec)
     code = code_spec(spec)
@@ -166,7 +165,7 @@ def run_controller_spec(
     with ``gains``' ``kp``, ``ki``, ``kx`` on every axis, or else one built from the run's
     settings (``controller``, the default gains updated by ``gains``, ``rulebase``, the
     experiment's axes, set points, safety limit and engagement): the controller
-    ``fuzzkit.studies.runner.build_controller`` builds for the same run.
+    ``fuzzkit.loop.python_loop.build_controller`` builds for the same run.
 
     Without a ``rate_limit`` in the gains, the spec's step limit is twice its correction
     limit, which ``|du|`` cannot exceed once ``|u|`` is clamped: no step limit, as in the
@@ -240,7 +239,7 @@ def loop_bookkeeping(
     Python) in a run with parameters ``cp``, ``selection`` and ``setpoints``: from the status
     the step returned and the correction it wrote for the ``consumed`` sample at ``t_s``.
 
-    Keeps (:mod:`fuzzkit.studies.compiled.period`) the engagement and
+    Keeps (:mod:`fuzzkit.loop.compiled.period`) the engagement and
     trip times, the fault count (a sample missing on a force-controlled axis after the
     start-up's sensor-delay periods, or one the spike gate rejected: what the reference
     counts) and the recorded ``e``, ``de``, ``du``, ``u`` of the periods the axis controllers

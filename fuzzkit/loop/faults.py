@@ -106,7 +106,7 @@ class FaultInjector:
 def fault_schedule(faults: Faults, periods: int) -> tuple[Vec, npt.NDArray[np.bool_]]:
     """The random part of ``periods`` samples of :class:`FaultInjector`, drawn up front in its
     order: per period the spike sign (0: none) and whether the sample is NaN. The compiled loop
-    (:mod:`fuzzkit.studies.compiled`) injects from it; the injector's draws are the same."""
+    (:mod:`fuzzkit.loop.compiled`) injects from it; the injector's draws are the same."""
     rng = np.random.default_rng(faults.seed)
     spike = np.zeros(periods)
     nan = np.zeros(periods, dtype=bool)

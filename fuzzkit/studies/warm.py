@@ -4,7 +4,7 @@ numba compiles a kernel on its first call in a process and caches the machine co
 processes started later load it. Started together (the test suite's workers, a sweep's
 processes), each of them would compile the same kernels again. :func:`warm` makes that first
 call once, beforehand: ``tests/conftest.py`` runs it in pytest's controller process before the
-xdist workers start, and ``python -m fuzzkit.studies.compiled.warm`` does it by hand (and says
+xdist workers start, and ``python -m fuzzkit.studies.warm`` does it by hand (and says
 what it compiled and how long it took); ``--background LOCK`` starts it and returns at once,
 so that ``make test`` compiles the kernels while its static checks run.
 
@@ -58,9 +58,9 @@ rules:
 
 
 def _arm6_loop() -> None:
-    from fuzzkit.studies.compiled.loop import run_compiled
+    from fuzzkit.loop.compiled_loop import run_compiled
+    from fuzzkit.loop.faults import fault
     from fuzzkit.studies.experiments import experiment
-    from fuzzkit.studies.faults import fault
 
     # PI and fuzzy-PI are the same kernel (the controller is generated C called by address);
     # both are run so that each one's C controller is built and cached as well
@@ -71,9 +71,9 @@ def _arm6_loop() -> None:
 
 
 def _planar_loop() -> None:
-    from fuzzkit.studies.compiled.loop import run_compiled
+    from fuzzkit.loop.compiled_loop import run_compiled
+    from fuzzkit.loop.faults import fault
     from fuzzkit.studies.experiments import experiment
-    from fuzzkit.studies.faults import fault
 
     run_compiled(experiment("E1"), "planar", "pi", duration_s=WARM_DURATION_S)
     run_compiled(
@@ -82,7 +82,7 @@ def _planar_loop() -> None:
 
 
 def _mujoco_loop() -> None:
-    from fuzzkit.studies.compiled.loop import run_compiled
+    from fuzzkit.loop.compiled_loop import run_compiled
     from fuzzkit.studies.experiments import experiment
 
     # E3: a rough profile (the substep-by-substep path) and a wall
@@ -102,8 +102,7 @@ def _height_field() -> None:
 
 
 def _table_surface() -> None:
-    from fuzzkit.studies.compiled.loop import compiled_table
-    from fuzzkit.studies.compiled.table import table2
+    from fuzzkit.loop.compiled.table import compiled_table, table2
 
     t = compiled_table()
     table2(t.bp0, t.bp1, t.values, t.splits, 0.1, -0.2)
@@ -138,17 +137,17 @@ class Step:
 STEPS = (
     Step(
         "arm6 loop (plant, faults, latency, generated C controller)",
-        ("fuzzkit.studies.compiled.arm6_run:run_arm6",),
+        ("fuzzkit.loop.compiled.arm6_run:run_arm6",),
         _arm6_loop,
     ),
     Step(
         "planar loop (Chipmunk calls, faults, generated C controller)",
-        ("fuzzkit.studies.compiled.planar_run:run_planar",),
+        ("fuzzkit.loop.compiled.planar_run:run_planar",),
         _planar_loop,
     ),
     Step(
         "mujoco loop (MuJoCo called by address, servo callback, generated C controller)",
-        ("fuzzkit.studies.compiled.mujoco_run:run_mujoco",),
+        ("fuzzkit.loop.compiled.mujoco_run:run_mujoco",),
         _mujoco_loop,
     ),
     Step(
@@ -156,7 +155,7 @@ STEPS = (
         ("fuzzkit.plants.arm6_heightfield:height_field_contact",),
         _height_field,
     ),
-    Step("lookup-table surface", ("fuzzkit.studies.compiled.table:table2",), _table_surface),
+    Step("lookup-table surface", ("fuzzkit.loop.compiled.table:table2",), _table_surface),
     Step(
         "exact engine on a smooth output (grid kernel)",
         ("fuzzkit.fuzzy.grid_kernel:grid_defuzzify",),
@@ -217,7 +216,7 @@ class Warming:
 
 
 def _warm_part(part: int, jobs: int) -> list[str]:
-    return [sys.executable, "-m", "fuzzkit.studies.compiled.warm", "--part", f"{part}/{jobs}"]
+    return [sys.executable, "-m", "fuzzkit.studies.warm", "--part", f"{part}/{jobs}"]
 
 
 def warm_in_background(
@@ -227,7 +226,7 @@ def warm_in_background(
 ) -> Warming | None:
     """Start ``jobs`` processes that warm the kernels between them, while this process goes
     on; processes started after it wait for them in :func:`wait_for_warming`. Part ``k`` runs
-    ``command(k, jobs)``: ``python -m fuzzkit.studies.compiled.warm --part k/jobs``.
+    ``command(k, jobs)``: ``python -m fuzzkit.studies.warm --part k/jobs``.
 
     The processes share one exclusive ``flock`` on a lock file, taken here before they start
     and inherited by them, so it is released only when the last of them exits (or dies); the
@@ -304,7 +303,7 @@ def main(argv: list[str] | None = None) -> int:
     with ``--background LOCK``, start that in ``--jobs`` processes holding the lock ``LOCK``
     and return at once (their output goes to ``LOCK`` with the suffix ``.log``; a process given
     ``FUZZKIT_WARM_LOCK=LOCK`` waits for them in :func:`wait_for_warming`)."""
-    parser = argparse.ArgumentParser(prog="python -m fuzzkit.studies.compiled.warm")
+    parser = argparse.ArgumentParser(prog="python -m fuzzkit.studies.warm")
     parser.add_argument(
         "--part", type=_part, default=(0, 1), help="K/N: every N-th step from the K-th"
     )

@@ -1,12 +1,12 @@
 """A spec's generated controller in the Python loop: C where a compiler exists, else the
-generated Python, behind what :func:`fuzzkit.studies.runner.run` drives.
+generated Python, behind what :func:`fuzzkit.loop.python_loop.run` drives.
 
 The Python loop runs the plants the compiled loop does not model (MuJoCo) and the scenarios
 its kernels lack (a tool's weight, a drifting bias, a tilted task frame); with this controller
 those runs execute the code ``fuzzkit compile`` emits, as the compiled loop does, and not the
 reference (which stays available with ``--controller-impl python``). The loop's record of each
 step (engagement and trip times, the fault count, ``e``, ``de``, ``du``) is the compiled
-loop's own, :func:`fuzzkit.studies.compiled.generated_controller.loop_bookkeeping`, so that the
+loop's own, :func:`fuzzkit.loop.compiled.generated_controller.loop_bookkeeping`, so that the
 two loops record a step alike and ``fuzzkit replay`` of the run's CSV reproduces it.
 """
 
@@ -22,8 +22,8 @@ import numpy.typing as npt
 
 from fuzzkit.control.spec import ControllerSpec
 from fuzzkit.errors import ToolchainError
-from fuzzkit.studies.compiled import period as P
-from fuzzkit.studies.compiled.generated_controller import (
+from fuzzkit.loop.compiled import period as P
+from fuzzkit.loop.compiled.generated_controller import (
     code_spec,
     load_generated_controller,
     loop_bookkeeping,
@@ -62,7 +62,7 @@ class _CStep:
 
 
 def _python_step(spec: ControllerSpec, why: str) -> tuple[StepFunction, str]:
-    from fuzzkit.studies.controller_code import open_generated
+    from fuzzkit.loop.controller_code import open_generated
 
     code = code_spec(spec)
     ctl = open_generated(code, "python")
@@ -88,11 +88,11 @@ def run_controller(
     require_c: bool = False,
 ) -> GeneratedLoopController:
     """The generated controller of a Python-loop run: the run's controller spec
-    (:func:`~fuzzkit.studies.compiled.generated_controller.run_controller_spec` of ``exp``,
+    (:func:`~fuzzkit.loop.compiled.generated_controller.run_controller_spec` of ``exp``,
     ``controller``, ``gains``, ``rulebase``) with the run's sensor delay (its ``faults``,
-    seeded by ``seed``, and ``latency``, as :func:`fuzzkit.studies.runner.run` sets them)."""
-    from fuzzkit.studies.compiled.generated_controller import run_controller_spec
-    from fuzzkit.studies.runner import run_faults_and_latency
+    seeded by ``seed``, and ``latency``, as :func:`fuzzkit.loop.python_loop.run` sets them)."""
+    from fuzzkit.loop.compiled.generated_controller import run_controller_spec
+    from fuzzkit.loop.timing import run_faults_and_latency
 
     spec = run_controller_spec(exp, controller, gains, rulebase)
     _, sensor_delay, _ = run_faults_and_latency(exp, seed, faults, latency)
@@ -105,7 +105,7 @@ class GeneratedLoopController:
     status bits, engagement, trip, fault count and the recorded ``e``, ``de``, ``du``.
 
     ``sensor_delay``: the run's sensor delay in periods (a fault's delay included,
-    ``fuzzkit.studies.runner.run_faults_and_latency``): the start-up periods in which a missing
+    ``fuzzkit.loop.timing.run_faults_and_latency``): the start-up periods in which a missing
     sample is no sensor fault.
     """
 

@@ -1,7 +1,7 @@
 """The whole closed-loop run on the arm6 plant as one compiled loop over periods.
 
 Per period: the compiled plant step (:func:`fuzzkit.plants.arm6_period.plant_step`), then the
-plant-independent part shared with the planar loop (:mod:`fuzzkit.studies.compiled.period`:
+plant-independent part shared with the planar loop (:mod:`fuzzkit.loop.compiled.period`:
 fault injection, latency queues, the hybrid controller), then recording.
 """
 
@@ -13,9 +13,8 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.jit import jit
-from fuzzkit.plants.arm6_period import plant_step, pose_at
-from fuzzkit.studies.compiled.generated_controller import generated_step
-from fuzzkit.studies.compiled.period import (
+from fuzzkit.loop.compiled.generated_controller import generated_step
+from fuzzkit.loop.compiled.period import (
     C_COMMAND_DELAY,
     C_PERIOD,
     C_SENSOR_DELAY,
@@ -30,6 +29,7 @@ from fuzzkit.studies.compiled.period import (
     sensor_latency,
     store_results,
 )
+from fuzzkit.plants.arm6_period import plant_step, pose_at
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]

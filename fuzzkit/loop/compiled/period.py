@@ -1,16 +1,16 @@
 """The plant-independent part of one compiled period, shared by every compiled loop.
 
-Per period, as :func:`fuzzkit.studies.runner.run` does it (the cross-branch timing agreement):
+Per period, as :func:`fuzzkit.loop.python_loop.run` does it (the cross-branch timing agreement):
 the plant's measured force -> :func:`inject_faults` -> :func:`sensor_latency` (the controller
 consumes the sample of ``sensor_delay`` periods ago, a delay fault's periods included; the queue
 starts filled with the reset sample's force) -> the controller -> :func:`command_latency` (the
 plant receives the correction computed ``command_delay`` periods ago; the queue starts with
-zeros). The plant kernels (:mod:`fuzzkit.studies.compiled.arm6_run` for arm6,
-:mod:`fuzzkit.studies.compiled.planar_run` for the pymunk arm) wrap their plant step with
+zeros). The plant kernels (:mod:`fuzzkit.loop.compiled.arm6_run` for arm6,
+:mod:`fuzzkit.loop.compiled.planar_run` for the pymunk arm) wrap their plant step with
 these.
 
 The controller is the run's controller spec generated as C (double) and called by address,
-:func:`fuzzkit.studies.compiled.generated_controller.generated_step`: what ``fuzzkit compile``
+:func:`fuzzkit.loop.compiled.generated_controller.generated_step`: what ``fuzzkit compile``
 emits is what the loop runs; the loop holds no controller logic of its own (one arithmetic,
 issue 28). What stays here is the loop's bookkeeping around it, in two arrays made by
 :func:`controller_state`: scalars ``cs`` (``CS_*``: engagement and trip times, the fault

@@ -2,7 +2,7 @@
 
 Per period: the planar plant step (:func:`fuzzkit.planar_sim.arm_period.plant_step`: numba code
 around the same Chipmunk calls the Python plant makes), then the plant-independent part shared
-with the arm6 loop (:mod:`fuzzkit.studies.compiled.period`), then recording.
+with the arm6 loop (:mod:`fuzzkit.loop.compiled.period`), then recording.
 """
 
 from __future__ import annotations
@@ -13,9 +13,8 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.jit import jit
-from fuzzkit.planar_sim.arm_period import STEP_OK, arm_pose, nominal_at, plant_step
-from fuzzkit.studies.compiled.generated_controller import generated_step
-from fuzzkit.studies.compiled.period import (
+from fuzzkit.loop.compiled.generated_controller import generated_step
+from fuzzkit.loop.compiled.period import (
     C_COMMAND_DELAY,
     C_PERIOD,
     C_SENSOR_DELAY,
@@ -30,6 +29,7 @@ from fuzzkit.studies.compiled.period import (
     sensor_latency,
     store_results,
 )
+from fuzzkit.planar_sim.arm_period import STEP_OK, arm_pose, nominal_at, plant_step
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]

@@ -1,0 +1,235 @@
+"""The closed loop's entry point: :func:`run_loop`, a run specification and its experiment in, a
+:class:`~fuzzkit.loop.result.RunResult` out, and the one rule for which loop and which
+controller implementation run it."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Any
+
+from fuzzkit.errors import ConfigError
+from fuzzkit.loop import python_loop
+from fuzzkit.loop.result import RunResult
+from fuzzkit.loop.spec import CONTROLLER_IMPLS, FUZZY_IMPLS, RunSpec
+from fuzzkit.loop.task import Experiment
+from fuzzkit.plants.contract import ContactPlant, UnsupportedPlant
+
+
+@lru_cache(maxsize=8)
+def _exact_surface(rulebase: str) -> Any:
+    return python_loop.load_surface(rulebase)
+
+
+def run_loop(spec: RunSpec, exp: Experiment, plant: str | ContactPlant) -> RunResult:
+    """Run ``spec`` on ``exp`` (its controller spec, stiffness and task resolved:
+    :func:`fuzzkit.studies.batch.resolve`) and ``plant`` (a registered name, or a plant
+    object whose ``name`` is registered); the one entry point of the closed loop.
+
+    Every run executes the run's controller spec as ``fuzzkit compile`` generates it (C
+    double; the generated Python without a C compiler): in the plant's compiled loop where
+    its adapter has one, else in the Python loop (MuJoCo; a scenario the kernels lack, a run
+    without a compiler: ``loop`` is then ``python (fallback: ...)``); ``controller_impl`` names
+    the code. The reference controller runs only when asked for (``controller_impl="python"``,
+    a ``fuzzy_impl``, ``loop="python"``), and for a spec that adapts its gains outside the
+    compiled loop (``loop`` says so).
+    """
+    from fuzzkit.loop.faults import fault
+
+    if spec.controller == "fuzzy-pi":  # what the loop needs, said before anything runs
+        from fuzzkit.control.loop_rulebase import check_loop_rulebase, load_loop_rulebase
+
+        cs = exp.controller_spec
+        if cs is not None and cs.rulebase is not None:
+            check_loop_rulebase(cs.rulebase, spec.rulebase)
+        else:
+            load_loop_rulebase(spec.rulebase)
+    faults = fault(spec.fault or exp.fault, spec.seed)
+    impl = spec.fuzzy_impl
+    if impl not in FUZZY_IMPLS:
+        raise ConfigError(f"unknown fuzzy implementation {impl!r} (expected {FUZZY_IMPLS})")
+    if spec.controller_impl not in CONTROLLER_IMPLS:
+        raise ConfigError(
+            f"unknown controller implementation {spec.controller_impl!r} "
+            f"(expected {', '.join(CONTROLLER_IMPLS)})"
+        )
+    loop = spec.resolved_loop()
+    if loop == "compiled" and impl != "auto":
+        raise ConfigError(
+            f"--fuzzy-impl {impl} chooses the Python loop's surface; the compiled loop runs the "
+            "generated controller (the spec's surface): leave out --loop compiled"
+        )
+    # The reference controller runs only when asked for: --controller-impl python, a
+    # --fuzzy-impl, or the Python loop named (--loop python). Every other run executes the
+    # spec's generated controller: in the compiled loop where it models the plant and the
+    # scenario, else in the Python loop.
+    if spec.controller_impl == "python" or impl != "auto" or spec.loop == "python":
+        if spec.controller_impl == "c":
+            raise ConfigError(
+                "--controller-impl c runs the generated controller (in the compiled loop "
+                "where it models the plant); --loop python and --fuzzy-impl run the reference "
+                "controller: leave them out"
+            )
+        return _run_reference(spec, exp, plant, faults, "")
+    if loop == "compiled":
+        try:
+            return _run_generated(spec, exp, plant, faults)
+        except _Fallback as exc:
+            if spec.loop == "compiled":
+                # the loop asked for cannot run it (a ConfigError: exit 2 on the command line)
+                raise UnsupportedPlant(f"{exc}; use --loop python") from exc
+            fallback = f" (fallback: {exc})"
+    else:
+        fallback = ""  # a plant the compiled loop does not model (mujoco)
+    return _run_generated_python_loop(spec, exp, plant, faults, fallback)
+
+
+class _Fallback(Exception):
+    """Why the compiled loop cannot take a run the Python loop can."""
+
+
+def _run_generated_python_loop(
+    spec: RunSpec, exp: Experiment, plant: Any, faults: Any, fallback: str
+) -> RunResult:
+    """``spec`` with the run's generated controller (C, or the generated Python without a
+    compiler) in the Python loop; ``loop`` says so, with ``fallback`` (why the compiled loop
+    could not take it). A spec that adapts its gains still runs the reference there, and
+    ``loop`` says so: the Python loop does not yet record the generated controller's
+    stiffness estimate and gain factor."""
+    from fuzzkit.loop.generated import run_controller
+
+    cs = exp.controller_spec
+    if cs is not None and cs.adaptation.mode != "none":
+        if spec.controller_impl == "c":
+            raise ConfigError(
+                f"the Python loop runs a spec that adapts its gains ({cs.adaptation.mode}) on "
+                "the reference controller only; leave out --controller-impl c"
+            )
+        why = " (an adapting spec runs on the reference controller in the Python loop)"
+        return _run_reference(spec, exp, plant, faults, fallback or why)
+    gains, impl_c = dict(spec.gains), spec.controller_impl == "c"
+    ctrl = run_controller(
+        exp, spec.controller, gains, spec.rulebase, spec.seed, faults, spec.latency, impl_c
+    )
+    result = python_loop.run(exp, plant, ctrl.kind, hybrid=ctrl, seed=spec.seed, faults=faults,
+                 latency=spec.latency, duration_s=spec.duration_s)  # fmt: skip
+    result.loop += fallback
+    return result
+
+
+def _run_reference(
+    spec: RunSpec, exp: Experiment, plant: Any, faults: Any, fallback: str
+) -> RunResult:
+    """``spec`` in the Python loop, on the reference controller."""
+
+    surface: Any = None
+    label = "pi (python)"
+    cs = exp.controller_spec
+    if spec.controller == "fuzzy-pi":
+        impl = spec.fuzzy_impl
+        if cs is not None and impl in ("auto", "exact"):
+            surface, label = _spec_reference_surface(cs, impl, spec.rulebase)
+        elif impl in ("auto", "exact"):
+            surface = _exact_surface(spec.rulebase)
+            label = f"exact engine {spec.rulebase} (python)"
+        else:
+            if cs is not None:
+                _require_positional_roles(cs, impl)
+            if impl == "table":
+                from fuzzkit.control.controllers import lookup_table_surface
+                from fuzzkit.loop.compiled.table import load_table, table_arrays
+
+                table = load_table(spec.rulebase)
+                surface = lookup_table_surface(table)
+                label = table_arrays(table).label + " (python)"
+            else:
+                from fuzzkit.loop.compiled.generated_c import c_surface
+
+                surface = c_surface(spec.rulebase)
+                label = f"{surface.__name__} (python loop)"
+    if exp.controller_spec is not None:
+        label = f"spec {exp.controller_spec.name}: {label}"
+    result = python_loop.run(
+        exp,
+        plant,
+        spec.controller,
+        gains=dict(spec.gains),
+        surface=surface,
+        seed=spec.seed,
+        faults=faults,
+        latency=spec.latency,
+        duration_s=spec.duration_s,
+        controller_impl=label,
+    )
+    result.loop += fallback
+    return result
+
+
+def _spec_reference_surface(cs: Any, impl: str, rulebase: str) -> tuple[Any, str]:
+    """A controller spec's surface on the reference controller, in the spec's input roles:
+    its own (``auto``: the exact engine, or a ``table`` spec's lookup table) or the exact
+    engine (``exact``), with the run's label."""
+    from fuzzkit.control.loop_rulebase import exact_surface
+    from fuzzkit.control.spec import surface_inputs
+    from fuzzkit.loop.controller_code import spec_surface
+
+    if impl == "auto" and cs.surface.method == "table":
+        return spec_surface(cs), "the spec's lookup table (python)"
+    return exact_surface(cs.rulebase, surface_inputs(cs, cs.rulebase)), (
+        f"exact engine {rulebase} (python)"
+    )
+
+
+def _require_positional_roles(cs: Any, impl: str) -> None:
+    """``--fuzzy-impl table|c`` builds the rule base's own table or C, which take its inputs in
+    file order: refuse a spec whose ``inputs:`` maps them the other way round."""
+    from fuzzkit.control.loop_rulebase import POSITIONAL_ROLES
+    from fuzzkit.control.spec import surface_inputs
+
+    if surface_inputs(cs, cs.rulebase) != POSITIONAL_ROLES:
+        raise ConfigError(
+            f"--fuzzy-impl {impl} evaluates rule base {cs.rulebase.name}'s inputs in file "
+            f"order, and controller spec {cs.name!r} maps them the other way round (inputs: "
+            f"{', '.join(cs.inputs)}): leave out --fuzzy-impl (the spec's own surface runs)"
+        )
+
+
+def _run_generated(spec: RunSpec, exp: Experiment, plant: Any, faults: Any) -> RunResult:
+    """``spec`` with the run's generated C controller in the compiled loop.
+
+    Raises
+    ------
+    _Fallback
+        The compiled loop cannot run it (adaptation, a plant mode the kernel lacks, no C
+        compiler); the caller decides whether the Python loop may.
+    """
+    from fuzzkit.errors import ToolchainError
+    from fuzzkit.loop.compiled.generated_controller import (
+        load_generated_controller,
+        run_controller_spec,
+    )
+    from fuzzkit.loop.compiled_loop import run_compiled
+
+    cs = exp.controller_spec
+    if cs is not None and cs.adaptation.mode != "none":
+        raise _Fallback(f"the compiled loop does not run adaptation ({cs.adaptation.mode})")
+    ctl_spec = run_controller_spec(exp, spec.controller, dict(spec.gains), spec.rulebase)
+    try:
+        generated = load_generated_controller(ctl_spec)
+    except ToolchainError as exc:
+        if spec.controller_impl == "c":
+            raise ConfigError(
+                f"--controller-impl c runs the generated C controller and {exc}"
+            ) from exc
+        raise _Fallback(f"the compiled loop runs the generated C controller and {exc}") from exc
+    try:
+        return run_compiled(
+            exp,
+            plant,
+            seed=spec.seed,
+            faults=faults,
+            latency=spec.latency,
+            duration_s=spec.duration_s,
+            generated_controller=generated,
+        )
+    except UnsupportedPlant as exc:
+        raise _Fallback(str(exc)) from exc

@@ -1,0 +1,79 @@
+"""The loop package (``fuzzkit.loop``): its plant registry and adapters, and every caller going
+through its one entry point (``fuzzkit.loop.run.run_loop``)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from fuzzkit.errors import ConfigError
+from fuzzkit.loop.adapter import PLANTS, adapter, compiled_plants, compiled_supports, make_plant
+from fuzzkit.plants.contract import UnsupportedPlant
+
+TILT = str(Path(__file__).resolve().parent.parent / "docs" / "examples" / "tilt.yaml")
+
+
+def test_every_registered_plant_has_an_adapter_of_its_name() -> None:
+    for name in PLANTS:
+        assert adapter(name).name == name
+    # the compiled loops are the kinematic arm's and the planar arm's (MuJoCo: the Python loop)
+    assert compiled_plants() == ("arm6", "planar")
+    assert not compiled_supports("mujoco") and not compiled_supports("moon")
+
+
+def test_an_unknown_plant_is_refused_with_the_registered_names() -> None:
+    with pytest.raises(ConfigError, match=r"unknown plant 'moon' \(expected one of arm6, "):
+        make_plant("moon")
+
+
+def test_the_registry_imports_no_plant_until_one_is_built() -> None:
+    """``--plant`` help lists every plant from the registration alone: building the parser
+    imports neither pymunk nor MuJoCo."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys; from fuzzkit.loop.adapter import plants_text; plants_text(); "
+        "print(sorted(m for m in ('pymunk', 'mujoco') if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+
+
+def _tilt_problem(loop: str):  # type: ignore[no-untyped-def]
+    from fuzzkit.studies.tuning import TuningProblem
+
+    return TuningProblem.build(
+        [TILT], "fuzzy-pi", plant="arm6", stiffnesses_n_per_mm=None, horizon_s=1.0, loop=loop
+    )
+
+
+def test_tune_prices_a_scenario_the_kernels_lack_as_simulate_runs_it() -> None:
+    """The tilt scenario (a tool weight, a drifting bias, a tilting tool) has no compiled
+    kernel: ``tune`` prices it in the Python loop with the generated controller, the cost of
+    the run ``simulate`` makes with the same gains, never the failed run's price."""
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import run_spec
+    from fuzzkit.studies.experiments import DEFAULT_GAINS
+    from fuzzkit.studies.tuning import CaseRunner
+    from fuzzkit.studies.tuning.cost import run_cost
+
+    problem = _tilt_problem("auto")
+    gains = dict(DEFAULT_GAINS["fuzzy-pi"])  # the scenario's spec's own kp, ki, kx
+    runner = CaseRunner(problem)
+    (cost,) = runner.case_costs(gains)
+    assert cost != problem.weights.none
+    simulated = run_spec(RunSpec(TILT, plant="arm6", duration_s=1.0))
+    assert simulated.loop.startswith("python (fallback: ")
+    assert "generated" in simulated.controller_impl
+    assert cost == run_cost(simulated, problem.weights)
+
+
+def test_tune_on_the_compiled_loop_refuses_a_scenario_its_kernels_lack() -> None:
+    from fuzzkit.studies.experiments import DEFAULT_GAINS
+    from fuzzkit.studies.tuning import CaseRunner
+
+    runner = CaseRunner(_tilt_problem("compiled"))
+    with pytest.raises(UnsupportedPlant, match=r"does not model a tool weight.*--loop python"):
+        runner.case_costs(dict(DEFAULT_GAINS["fuzzy-pi"]))
