@@ -40,6 +40,7 @@ KERNEL_MODULES = (
     "fuzzkit.loop.compiled.mujoco_run",
     "fuzzkit.loop.compiled.period",
     "fuzzkit.loop.compiled.planar_run",
+    "fuzzkit.loop.compiled.skeleton",
     "fuzzkit.loop.compiled.table",
 )
 

@@ -14,7 +14,7 @@ import numpy as np
 from fuzzkit.loop.adapter import PlantAdapter
 from fuzzkit.loop.compiled import arm6_run as K
 from fuzzkit.loop.compiled import period as P
-from fuzzkit.loop.compiled.common import ControllerArgs, result_from_recording, warm_up
+from fuzzkit.loop.compiled.common import ControllerArgs, recording, result_from_recording, warm_up
 from fuzzkit.loop.result import RunResult
 from fuzzkit.loop.task import Experiment
 from fuzzkit.plants.arm6 import Arm6Plant
@@ -43,29 +43,8 @@ def run_arm6_compiled(
     noise = sensor_noise(scn.sensor.noise_std_n, seed, n + 1)
     dof = arrays.q.shape[0]
     n_obj = max(arrays.obj_kind.shape[0], 1)
-    rec = {
-        "t": np.empty(n),
-        "force": np.empty((n, 3)),
-        "force_sensor": np.empty((n, 3)),
-        "force_true": np.empty((n, 3)),
-        "e": np.empty((n, 3)),
-        "de": np.empty((n, 3)),
-        "du": np.empty((n, 3)),
-        "u": np.empty((n, 3)),
-        "tool": np.empty((n, 3)),
-        "nominal": np.empty((n, 3)),
-        "target": np.empty((n, 3)),
-        "joints": np.empty((n, dof)),
-        "contact": np.empty(n, dtype=np.bool_),
-        "force_normal": np.empty((n, 3)),
-        "moving": np.empty(n, dtype=np.bool_),
-        "ik": np.empty(n, dtype=np.int64),
-        "limited": np.empty(n, dtype=np.bool_),
-        "arm": np.empty((n, dof + 2, 3)),
-        "points": np.zeros((n, n_obj, 3)),
-        "npoints": np.empty(n, dtype=np.int64),
-        "status": np.empty(n, dtype=np.int64),
-    }
+    extra = {"ik": np.empty(n, dtype=np.int64), "limited": np.empty(n, dtype=np.bool_)}
+    rec = recording(n, dof, dof + 2, n_obj, extra)
     scalars = np.zeros(P.N_RESULTS)
     reset_force = np.asarray(reset.force, dtype=np.float64).copy()
     a = arrays

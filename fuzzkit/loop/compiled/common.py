@@ -98,6 +98,37 @@ def controller_args(
     )
 
 
+def recording(
+    n: int, joints: int, arm_rows: int, points: int, extra: dict[str, Any]
+) -> dict[str, Any]:
+    """The recording arrays of an ``n``-period compiled run, in the kernels' argument order: the
+    series every loop records, the plant's own ``extra`` ones after ``moving``, then the arm's
+    ``arm_rows`` points, up to ``points`` contact points and their count, the status bits."""
+    rec: dict[str, Any] = {
+        "t": np.empty(n),
+        "force": np.empty((n, 3)),
+        "force_sensor": np.empty((n, 3)),
+        "force_true": np.empty((n, 3)),
+        "e": np.empty((n, 3)),
+        "de": np.empty((n, 3)),
+        "du": np.empty((n, 3)),
+        "u": np.empty((n, 3)),
+        "tool": np.empty((n, 3)),
+        "nominal": np.empty((n, 3)),
+        "target": np.empty((n, 3)),
+        "joints": np.empty((n, joints)),
+        "contact": np.empty(n, dtype=np.bool_),
+        "force_normal": np.empty((n, 3)),
+        "moving": np.empty(n, dtype=np.bool_),
+    }
+    rec.update(extra)
+    rec["arm"] = np.empty((n, arm_rows, 3))
+    rec["points"] = np.zeros((n, points, 3))
+    rec["npoints"] = np.empty(n, dtype=np.int64)
+    rec["status"] = np.empty(n, dtype=np.int64)
+    return rec
+
+
 def result_from_recording(
     exp: Experiment,
     plant: str,

@@ -13,21 +13,18 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.jit import jit
-from fuzzkit.loop.compiled.generated_controller import generated_step
 from fuzzkit.loop.compiled.period import (
-    C_COMMAND_DELAY,
     C_PERIOD,
-    C_SENSOR_DELAY,
-    V_DE,
-    V_DU,
-    V_E,
-    command_latency,
     controller_state,
     credit_normal,
-    inject_faults,
     path_held,
-    sensor_latency,
     store_results,
+)
+from fuzzkit.loop.compiled.skeleton import (
+    controller_period,
+    record_controller,
+    start_queues,
+    to_base,
 )
 from fuzzkit.planar_sim.arm_period import STEP_OK, arm_pose, nominal_at, plant_step
 
@@ -91,19 +88,10 @@ def run_planar(
     n_periods: int = r_t.shape[0]
     n_obj = a_kind.shape[0]
     period = cp[C_PERIOD]
-    sd = int(cp[C_SENSOR_DELAY])
-    cd = int(cp[C_COMMAND_DELAY])
     cs, cv = controller_state(cp)
-    e, de, du = cv[V_E], cv[V_DE], cv[V_DU]
-    sensor_q = np.empty((sd + 1, 3))
-    for k in range(sd + 1):
-        sensor_q[k, :] = reset_force
-    command_q = np.zeros((cd + 1, 3))
+    sensor_q, command_q, c_rot = start_queues(cp, reset_force, a_rot)
     applied = np.zeros(3)
     correction = np.zeros(3)
-    c_rot = np.empty(9)  # the tool's rotation, row-major, for the generated controller
-    for j in range(9):
-        c_rot[j] = a_rot[j // 3, j % 3]
     corr_base = np.zeros(3)
     nominal = np.empty(3)
     nominal_before = np.empty(3)
@@ -118,10 +106,7 @@ def run_planar(
         path_before = path_t
         if not path_held(cp, cs):
             path_t += period
-        for j in range(3):
-            corr_base[j] = (
-                a_rot[j, 0] * applied[0] + a_rot[j, 1] * applied[1] + a_rot[j, 2] * applied[2]
-            )
+        to_base(a_rot, applied, corr_base)
         count = plant_step(
             a_path, a_kind, a_p, a_terms, a_nterms, a_rot, params, functions, pointers, stick,
             state, noise, corr_base, path_t,
@@ -131,13 +116,10 @@ def run_planar(
             store_results(cs, out_scalars)
             return k
         t_s = state[0]
-        inject_faults(cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured)
-        # before the first measurement arrives (k < sd) the controller waits: no fault counted
-        consumed = sensor_latency(k, sd, sensor_q, measured, reset_force)
-        r_status[k] = generated_step(
-            c_step, c_state, c_rot, cp, selection, setpoints, consumed, t_s, cs, cv, correction
-        )
-        command_latency(k, cd, command_q, correction, applied)
+        r_status[k], consumed = controller_period(
+            k, cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured, sensor_q, reset_force,
+            c_step, c_state, c_rot, selection, setpoints, cs, cv, correction, command_q, applied,
+        )  # fmt: skip
         # ---- recording (PlanarArmPlant._sample and the runner's row) ----
         moving = False
         if path_t > path_before:
@@ -150,14 +132,11 @@ def run_planar(
         r_moving[k] = moving
         r_contact[k] = count > 0
         r_npoints[k] = count
+        record_controller(
+            k, consumed, measured, f_true, cv, correction,
+            r_force, r_force_sensor, r_force_true, r_e, r_de, r_du, r_u,
+        )  # fmt: skip
         for j in range(3):
-            r_force[k, j] = consumed[j]
-            r_force_sensor[k, j] = measured[j]
-            r_force_true[k, j] = f_true[j]
-            r_e[k, j] = e[j]
-            r_de[k, j] = de[j]
-            r_du[k, j] = du[j]
-            r_u[k, j] = correction[j]
             r_tool[k, j] = r_arm[k, 3, j]
             r_nominal[k, j] = nominal[j]
             r_target[k, j] = target[j]
