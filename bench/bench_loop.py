@@ -9,8 +9,10 @@ Tables
    best of 5 compiled, 2 Python runs): E1-E3 on ``arm6`` and on the pymunk ``planar`` arm
    with PI and fuzzy-PI, the Python reference loop (fuzzy-PI on the exact engine, as
    ``simulate --loop python`` runs it) next to the compiled loop (the run's generated C
-   controller). Targets: 500x on arm6, 100x on planar. Then the first-call cost of each compiled
-   kernel in a fresh numba cache (what the first run after an install pays).
+   controller); the same on the MuJoCo IRB 140 (``mujoco``: 1 kHz physics, the servo ramp as a
+   C control callback). Targets: 500x on arm6, 100x on planar, 40x on mujoco. Then the
+   first-call cost of each compiled kernel in a fresh numba cache (what the first run after an
+   install pays).
 2. Where the planar period's time goes: in the Python loop, pymunk's step through its Python
    wrapper and through the bare C call, the other pymunk calls of a substep, and the cap they
    put on the real-time factor with 4 substeps per 4 ms period; in the compiled loop, the
@@ -41,13 +43,19 @@ def _best_rtf(fn: Callable[[], float], repeat: int = 3) -> float:
     return max(fn() for _ in range(repeat))
 
 
-def real_time_factors() -> list[tuple[str, float, float | None, int]]:
+#: (plant, target real-time factor of its compiled loop)
+LOOP_TARGETS = (("arm6", 500), ("planar", 100), ("mujoco", 40))
+
+
+def real_time_factors(
+    plants: Sequence[tuple[str, int]] = LOOP_TARGETS,
+) -> list[tuple[str, float, float | None, int]]:
     """``(case, python rtf, compiled rtf, target)`` rows, CPU time."""
     from fuzzkit.loop.spec import RunSpec
     from fuzzkit.studies.batch import run_spec
 
     rows: list[tuple[str, float, float | None, int]] = []
-    for plant, target in (("arm6", 500), ("planar", 100)):
+    for plant, target in plants:
         for name in ARM6_CASES:
             for ctrl in CONTROLLERS:
                 spec = RunSpec(name, ctrl, plant=plant)
@@ -80,6 +88,7 @@ out = {}
 for label, plant in (
     ("arm6 (whole kernel)", "arm6"),
     ("planar (its plant and loop)", "planar"),
+    ("mujoco (its loop, servo callback built)", "mujoco"),
 ):
     c0, w0 = time.process_time(), time.perf_counter()
     run_spec(RunSpec("E1", "fuzzy-pi", plant, duration_s=0.1))

@@ -253,7 +253,9 @@ def test_table_kernel_reproduces_the_lookup_table_arithmetic() -> None:
 
 def test_compiled_loop_rejects_what_it_does_not_model() -> None:
     exp = experiment("E1")
-    with pytest.raises(ConfigError, match="compiled loop runs on arm6, planar"):
+    with pytest.raises(
+        ConfigError, match="compiled loop runs on arm6, mujoco, mujoco-elastic, planar"
+    ):
         run_compiled(exp, "moon", "pi")
     with pytest.raises(ConfigError, match=r"unknown controller 'pid'"):
         run_compiled(exp, "arm6", "pid")

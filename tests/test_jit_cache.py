@@ -37,6 +37,7 @@ KERNEL_MODULES = (
     "fuzzkit.planar_sim.arm_period",
     "fuzzkit.loop.compiled.arm6_run",
     "fuzzkit.loop.compiled.generated_controller",
+    "fuzzkit.loop.compiled.mujoco_run",
     "fuzzkit.loop.compiled.period",
     "fuzzkit.loop.compiled.planar_run",
     "fuzzkit.loop.compiled.table",

@@ -5,6 +5,7 @@ ramp, said so, where it cannot be compiled."""
 
 from __future__ import annotations
 
+import copy
 import ctypes
 from collections.abc import Iterator
 
@@ -155,3 +156,37 @@ def test_a_library_built_for_other_mujoco_headers_is_refused() -> None:
 
     with pytest.raises(RuntimeError, match="compiled against MuJoCo"):
         ServoCallback(Other())
+
+
+@needs_cc
+def test_a_limit_reached_only_in_the_periods_last_substep_is_marked() -> None:
+    """The callback runs before each substep's forces are computed, so the last substep's are
+    marked after ``mj_step`` (``fuzzkit_servo_mark_last``): a limit between the first three
+    substeps' force and the last one's, from the Python ramp's forces, marks that servo only."""
+    plant = MujocoArmPlant()
+    scn = experiment("E1").scenario
+    plant.reset(scn)
+    for k in range(30):  # moving along the path
+        plant.step(np.zeros(3), (k + 1) * scn.period_s)
+    m, start = plant.model, plant.data
+    prev = np.array(start.ctrl)
+    ref, feed = prev + 0.01, np.zeros(m.nu)
+    d = copy.copy(start)
+    forces = []
+    for s in range(1, 5):  # the reference ramp
+        d.ctrl[:] = prev + (s / 4) * (ref - prev) + feed
+        mujoco.mj_step(m, d)
+        forces.append(np.abs(d.actuator_force))
+    f = np.array(forces)
+    rising = [a for a in range(m.nu) if f[3, a] > 1.001 * f[:3, a].max()]
+    assert rising  # a ramp up: some servo's torque grows to the last substep
+    a = rising[0]
+    limits = np.full(m.nu, 1e9)
+    limits[a] = 0.5 * (f[3, a] + f[:3, a].max()) / 0.999
+    servo = _servo()
+    fast = copy.copy(start)
+    u = servo.arm(fast, 4, limits)
+    servo.install()
+    marked = servo.period(m, fast, u, prev, ref, feed)
+    assert np.flatnonzero(marked).tolist() == [a]
+    assert np.array_equal(fast.qpos, d.qpos)

@@ -1,10 +1,10 @@
 """No silent fallback to the reference (issue 37 item 2): a run the compiled loop does not take
-(the MuJoCo plants; the tilt scenario's tool weight, drifting bias and tilt on arm6) runs the
-spec's generated C controller in the Python loop, says so in ``loop`` and ``controller_impl``,
-and ``fuzzkit replay SPEC --forces run.csv --impl c`` reproduces its corrections to 0 m with the
-same status bits in every period. The reference stays the independent check: on the same
-plant, the reference run's forces follow the generated run's to within the rounding of two
-implementations of one arithmetic.
+(the tilt scenario's tool weight, drifting bias and tilt on arm6) runs the spec's generated C
+controller in the Python loop, says so in ``loop`` and ``controller_impl``; the MuJoCo plants,
+which the compiled loop runs now, run it there; and ``fuzzkit replay SPEC --forces run.csv
+--impl c`` reproduces its corrections to 0 m with the same status bits in every period. The
+reference stays the independent check: on the same plant, the reference run's forces follow
+the generated run's to within the rounding of two implementations of one arithmetic.
 """
 
 from __future__ import annotations
@@ -64,8 +64,9 @@ def test_the_generated_controller_runs_and_replays_to_0_m_with_the_same_status(
 ) -> None:
     result: object = _run(name)
     loop, impl = result.loop, result.controller_impl  # type: ignore[attr-defined]
-    assert loop.startswith("python"), loop
-    assert impl.startswith("generated C controller (double)") and impl.endswith("(python loop)")
+    ran = "compiled" if name.startswith("mujoco") else "python"
+    assert loop.startswith(ran), loop
+    assert impl.startswith("generated C controller (double)") and impl.endswith(f"({ran} loop)")
     assert ("fallback" in loop) == (name == "tilt-arm6")  # the compiled loop lacks the tilt
     assert not result.tripped and result.engaged_time_s is not None  # type: ignore[attr-defined]
     csv = tmp_path / "run.csv"

@@ -9,8 +9,8 @@
  * (the previous period's joint reference, the new one, the velocity feed-forward), in the
  * operation order of the Python ramp in fuzzkit/plants/mujoco_arm.py, so the two give the same
  * doubles. From the second substep on it also marks the actuators whose force in the previous
- * substep reached 99.9 % of their limit (the last substep's force is checked by the caller after
- * mj_step, since the callback runs before the forces of its own step are computed).
+ * substep reached 99.9 % of their limit; the last substep's forces, computed after the callback's
+ * last call, are marked by fuzzkit_servo_mark_last after mj_step.
  *
  * All state is per MjData, in d->userdata (layout below, written by
  * fuzzkit/plants/mujoco_servo.py): no static state, so one callback serves every MjData of every
@@ -35,34 +35,115 @@ int fuzzkit_servo_mj_version(void)
     return mjVERSION_HEADER;
 }
 
+/* Whether d's userdata carries this layout for m's actuators (armed by the plant). */
+static int armed(const mjModel *m, const mjData *d)
+{
+    const mjtNum *u = d->userdata;
+    return m->nuserdata >= FK_SERVO_HEAD && u[FK_SERVO_MARK] == FK_SERVO_MARK_VALUE &&
+           u[FK_SERVO_NU] == (double)m->nu && m->nuserdata >= FK_SERVO_HEAD + 5 * m->nu;
+}
+
+/* The torque-limit test, defined once: mark every actuator whose force (the last step's) is at
+ * 99.9 % of its limit. */
+static void mark_saturated(const mjModel *m, mjData *d)
+{
+    int i, nu = m->nu;
+    const mjtNum *limit = d->userdata + FK_SERVO_HEAD + 3 * nu;
+    mjtNum *saturated = d->userdata + FK_SERVO_HEAD + 4 * nu;
+    for (i = 0; i < nu; i++) {
+        if (fabs(d->actuator_force[i]) >= 0.999 * limit[i]) {
+            saturated[i] = 1.0;
+        }
+    }
+}
+
 void fuzzkit_servo_ramp(const mjModel *m, mjData *d);
 void fuzzkit_servo_ramp(const mjModel *m, mjData *d)
 {
     mjtNum *u = d->userdata;
-    const mjtNum *prev, *ref, *feed, *limit;
-    mjtNum *saturated;
+    const mjtNum *prev, *ref, *feed;
     double s, n;
-    int i, nu;
+    int i, nu = m->nu;
 
-    if (m->nuserdata < FK_SERVO_HEAD || u[FK_SERVO_MARK] != FK_SERVO_MARK_VALUE) {
-        return;
-    }
-    nu = m->nu;
-    if (u[FK_SERVO_NU] != (double)nu || m->nuserdata < FK_SERVO_HEAD + 5 * nu) {
+    if (!armed(m, d)) {
         return;
     }
     s = u[FK_SERVO_SUBSTEP] + 1.0;
     n = u[FK_SERVO_NSUB];
     u[FK_SERVO_SUBSTEP] = s;
+    if (s > 1.0) {
+        mark_saturated(m, d); /* the previous substep's forces */
+    }
     prev = u + FK_SERVO_HEAD;
     ref = prev + nu;
     feed = ref + nu;
-    limit = feed + nu;
-    saturated = u + FK_SERVO_HEAD + 4 * nu;
     for (i = 0; i < nu; i++) {
         d->ctrl[i] = prev[i] + (s / n) * (ref[i] - prev[i]) + feed[i];
-        if (s > 1.0 && fabs(d->actuator_force[i]) >= 0.999 * limit[i]) {
-            saturated[i] = 1.0;
-        }
     }
+}
+
+/* After a period's last substep: its forces, which the callback (run before them) cannot see. */
+void fuzzkit_servo_mark_last(const mjModel *m, mjData *d);
+void fuzzkit_servo_mark_last(const mjModel *m, mjData *d)
+{
+    if (armed(m, d)) {
+        mark_saturated(m, d);
+    }
+}
+
+/* Two helpers for a loop compiled around MuJoCo (fuzzkit/studies/compiled/mujoco_run.py), so
+ * that a period needs no Python: */
+
+/* n physics steps (the callback ramps the controls), the last one's torque limits marked;
+ * returns how many times MuJoCo warned of a bad acceleration (mjWARN_BADQACC: the simulation
+ * diverged and MuJoCo reset it) during them. */
+int fuzzkit_mj_steps(const mjModel *m, mjData *d, int n);
+int fuzzkit_mj_steps(const mjModel *m, mjData *d, int n)
+{
+    int before = d->warning[mjWARN_BADQACC].number;
+    int k;
+    for (k = 0; k < n; k++) {
+        mj_step(m, d);
+    }
+    fuzzkit_servo_mark_last(m, d);
+    return d->warning[mjWARN_BADQACC].number - before;
+}
+
+/* The contact forces geom `tip` exerts on the scene, as MujocoArmPlant._contact_force sums them
+ * (the same operations in the same order): the total into total[3] (world frame), each
+ * contact's normal part into normals[3 k] and its point into points[3 k], for up to `most`
+ * contacts; returns the number of contacts of `tip`. */
+int fuzzkit_tool_contacts(const mjModel *m, const mjData *d, int tip, double *total,
+                          double *normals, double *points, int most);
+int fuzzkit_tool_contacts(const mjModel *m, const mjData *d, int tip, double *total,
+                          double *normals, double *points, int most)
+{
+    mjtNum out[6];
+    double by_tool[3], along;
+    int i, j, count = 0;
+
+    total[0] = total[1] = total[2] = 0.0;
+    for (i = 0; i < d->ncon; i++) {
+        const mjContact *c = d->contact + i;
+        const mjtNum *f = c->frame; /* rows: normal, then the two tangents */
+        if (c->geom[0] != tip && c->geom[1] != tip) {
+            continue;
+        }
+        mj_contactForce(m, d, i, out);
+        for (j = 0; j < 3; j++) {
+            /* the force geom1 exerts on geom2, from the contact frame: frame^T out */
+            double on_geom2 = f[j] * out[0] + f[3 + j] * out[1] + f[6 + j] * out[2];
+            by_tool[j] = c->geom[0] == tip ? on_geom2 : -on_geom2;
+        }
+        along = f[0] * by_tool[0] + f[1] * by_tool[1] + f[2] * by_tool[2];
+        for (j = 0; j < 3; j++) {
+            total[j] += by_tool[j];
+            if (count < most) {
+                normals[3 * count + j] = f[j] * along;
+                points[3 * count + j] = c->pos[j];
+            }
+        }
+        count++;
+    }
+    return count;
 }

@@ -70,8 +70,22 @@ class ServoCallback:
             )
         self.library = library
         self.function = library.fuzzkit_servo_ramp
-        #: the raw address, for callers that step MuJoCo from compiled code
-        self.address = ctypes.cast(self.function, ctypes.c_void_p).value
+        address = ctypes.c_uint64  # an MjModel's or MjData's ``_address``
+        #: ``fuzzkit_mj_steps(model, data, n)``: n physics steps, the bad-acceleration
+        #: warnings among them (for a loop compiled around MuJoCo: no Python per period)
+        self.steps = library.fuzzkit_mj_steps
+        self.steps.argtypes = [address, address, ctypes.c_int]
+        self.steps.restype = ctypes.c_int
+        #: ``fuzzkit_tool_contacts(model, data, tip, total, normals, points, most)``: the
+        #: plant's contact-force sum (``MujocoArmPlant._contact_force``) in C
+        self.contacts = library.fuzzkit_tool_contacts
+        self.contacts.argtypes = [address, address, ctypes.c_int, *(ctypes.c_void_p,) * 3,
+                                  ctypes.c_int]  # fmt: skip
+        self.contacts.restype = ctypes.c_int
+        #: ``fuzzkit_servo_mark_last(model, data)``: the last substep's torque limits marked
+        self.mark_last = library.fuzzkit_servo_mark_last
+        self.mark_last.argtypes = [address, address]
+        self.mark_last.restype = None
 
     def install(self) -> None:
         """Make the ramp MuJoCo's control callback (process-global; the binding keeps the C
@@ -100,8 +114,8 @@ class ServoCallback:
         u[U_MARK] = MARK
         return u
 
-    @staticmethod
     def period(
+        self,
         m: mujoco.MjModel,
         d: mujoco.MjData,
         u: FloatArray,
@@ -129,8 +143,7 @@ class ServoCallback:
             for _ in range(n_sub):
                 before_substep()
                 mujoco.mj_step(m, d)
-        # the callback checks each substep's force before the next one: the last is checked here
-        limits = u[h + 3 * nu : h + 4 * nu]
-        last: npt.NDArray[np.bool_] = np.abs(d.actuator_force) >= 0.999 * limits
-        either: npt.NDArray[np.bool_] = last | (saturated != 0.0)
-        return either
+        # the callback marks each substep's forces before the next one; the last ones here
+        self.mark_last(m._address, d._address)
+        marked: npt.NDArray[np.bool_] = saturated != 0.0
+        return marked

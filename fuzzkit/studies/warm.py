@@ -81,6 +81,14 @@ def _planar_loop() -> None:
     )
 
 
+def _mujoco_loop() -> None:
+    from fuzzkit.loop.compiled_loop import run_compiled
+    from fuzzkit.studies.experiments import experiment
+
+    # E3: a rough profile (the substep-by-substep path) and a wall
+    run_compiled(experiment("E3"), "mujoco", "pi", duration_s=WARM_DURATION_S)
+
+
 def _height_field() -> None:
     from fuzzkit.plants.arm6_heightfield import height_field_contact, pack_height_field
     from fuzzkit.plants.environment3d import HeightField
@@ -136,6 +144,11 @@ STEPS = (
         "planar loop (Chipmunk calls, faults, generated C controller)",
         ("fuzzkit.loop.compiled.planar_run:run_planar",),
         _planar_loop,
+    ),
+    Step(
+        "mujoco loop (MuJoCo called by address, servo callback, generated C controller)",
+        ("fuzzkit.loop.compiled.mujoco_run:run_mujoco",),
+        _mujoco_loop,
     ),
     Step(
         "height-field contact, called from Python",
