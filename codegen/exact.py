@@ -246,6 +246,8 @@ class ExactSpec:
     aggregation: str
     clamp: bool
     libm: tuple[str, ...]
+    #: math functions the code computes itself (``Target.portable_math``), not taken from libm
+    own_math: tuple[str, ...]
     bound_note: tuple[str, ...]
     has_fpi: bool
     fpi_note: str
@@ -899,10 +901,18 @@ def build_exact_spec(
             libm.update(form.libm if form is not None else ())
     if rb.defuzzifier == "bisector" and ops.aggregation != "probabilistic_sum":
         libm.add("sqrt")
-    if any(o.gauss is not None for o in outputs):
-        libm.update(("erfc", "exp", "fabs", "log", "sqrt"))
-        if any(o.gauss is not None and o.gauss.product for o in outputs):
-            libm.add("copysign")
+    for o in outputs:
+        if o.gauss is None:
+            continue
+        libm.update(("log", "sqrt"))  # where a term meets a level: m -+ s sqrt(-2 ln L)
+        if o.defuzzifier in ("centroid", "bisector"):  # the integrals: erfc and exp
+            libm.update(("erfc", "exp", "fabs"))
+            if o.gauss.product:
+                libm.add("copysign")
+    own_math = libm & set(tg.portable_math.get(number_type, ()))
+    if "erfc" in own_math:
+        own_math.add("exp")  # erfc is computed through exp
+    libm -= own_math
     has_fpi = len(rb.inputs) == 2
     note = (
         ""
@@ -967,6 +977,7 @@ def build_exact_spec(
         input_units=tuple(units_comment(v.units) for v in rb.inputs),
         output_units=tuple(units_comment(v.units) for v in rb.outputs),
         libm=tuple(sorted(libm)),
+        own_math=tuple(sorted(own_math)),
         bound_note=tuple(textwrap.wrap(_bound_note(number_type, tg) + _wide_note(wide), 88)),
         has_fpi=has_fpi,
         fpi_note=note,

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import importlib
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
@@ -123,6 +123,9 @@ class Target:
     #: Build and load a generated controller: ``open_controller(files, name, number_type)``
     #: returns an object with ``step(force_n, tool_rotation) -> (correction, status)``.
     open_controller: Callable[[Mapping[str, str], str, str], Any] | None = None
+    #: Per number type, the math functions its exact code computes itself rather than call
+    #: (C float: exp, log, erfc, whose libm versions differ by an ulp between C libraries).
+    portable_math: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     #: A target whose templates this one reuses: a template missing from ``folder`` is taken
     #: from that target's folder (the FMU target lays the C target's controller out as is).
     extends: str | None = None

@@ -271,3 +271,56 @@ def edged_rulebase(rng: np.random.Generator, lo: float, hi: float) -> RuleBase:
     )
     defuzz = str(rng.choice(["centroid", *MAMDANI_DEFUZZIFIERS]))
     return RuleBase("r", inputs, (out,), tuple(rules), ops, defuzz)
+
+
+def narrow_rulebase(rng: np.random.Generator) -> RuleBase:
+    """A two-input loop-style rule base with a narrow feature, drawn from ``rng``: per input
+    2-4 covering triangles or gaussians and one 10-50x narrower term placed anywhere, AND
+    min or product, implication min or product (bounded sum with
+    product), centroid, a random rule table over 3-5 output triangles, some weights below 1.
+    What the certificate's sound surface bounds must hold on (tests/test_stability_sound_bounds.py).
+    """
+    gaussian = bool(rng.random() < 0.5)
+
+    def terms(prefix: str) -> tuple[Term, ...]:
+        # a covering set of 2-4 wide terms, and one narrow term anywhere
+        n = int(rng.integers(2, 5))
+        peaks = np.sort(rng.uniform(-1.0, 1.0, n))
+        peaks[0], peaks[-1] = -1.0, 1.0
+        gaps = np.diff(peaks)
+        widths = [1.2 * max(gaps[max(k - 1, 0)], gaps[min(k, n - 2)]) for k in range(n)]
+        peaks = np.append(peaks, rng.uniform(-0.9, 0.9))
+        widths.append(float(rng.uniform(0.3, 0.8)) / float(rng.uniform(10, 50)))
+        out = []
+        for k, (p, width) in enumerate(zip(peaks, widths, strict=True)):
+            if gaussian:
+                out.append(Term(f"{prefix}{k}", "gaussian", (_round(float(p)), _round(width / 2))))
+            else:
+                a, c = _round(float(p) - width), _round(float(p) + width)
+                out.append(Term(f"{prefix}{k}", "triangle", (a, _round(float(p)), c)))
+        return tuple(out)
+
+    e, de = Variable("e", -1.0, 1.0, terms("E")), Variable("de", -1.0, 1.0, terms("D"))
+    n_out = int(rng.integers(3, 6))
+    centres = np.linspace(-1.0, 1.0, n_out)
+    half = 2.0 / (n_out - 1)
+    out = Variable(
+        "du",
+        -1.0,
+        1.0,
+        tuple(
+            Term(f"O{k}", "triangle", (_round(c - half), _round(c), _round(c + half)))
+            for k, c in enumerate(centres)
+        ),
+    )
+    rules = []
+    for a in e.terms:
+        for b in de.terms:
+            weight = 1.0 if rng.random() < 0.8 else _round(float(rng.uniform(0.3, 1.0)))
+            ante = Compound("and", (Proposition("e", a.name), Proposition("de", b.name)))
+            then = f"O{int(rng.integers(0, n_out))}"
+            rules.append(Rule(ante, (Consequent("du", then),), weight))
+    implication = str(rng.choice(["min", "product"]))
+    aggregation = "bounded_sum" if implication == "product" and rng.random() < 0.3 else "max"
+    ops = Operators(str(rng.choice(["min", "product"])), "max", implication, aggregation)
+    return RuleBase("narrow", (e, de), (out,), tuple(rules), ops, "centroid")

@@ -384,13 +384,15 @@ def test_fuzzy_implementation_is_the_python_loops() -> None:
     from fuzzkit.loop.spec import RunSpec
     from fuzzkit.studies.batch import run_spec
 
-    assert RunSpec("E1", fuzzy_impl="table").resolved_loop() == "python"
+    reference = RunSpec("E1", fuzzy_impl="table", controller_impl="reference")
+    assert reference.resolved_loop() == "python"
     assert RunSpec("E1", controller_impl="python").resolved_loop() == "python"
     assert RunSpec("E1").resolved_loop() == "compiled"
     with pytest.raises(ConfigError, match="unknown fuzzy implementation"):
         run_spec(RunSpec("E1", "fuzzy-pi", "arm6", fuzzy_impl="fast", duration_s=0.1))
-    with pytest.raises(ConfigError, match="controller-impl c runs the generated controller"):
-        run_spec(RunSpec("E1", "fuzzy-pi", "arm6", fuzzy_impl="table", controller_impl="c"))
+    for impl in ("auto", "c", "python"):  # the reference's surface asks for the reference
+        with pytest.raises(ConfigError, match="add --controller-impl reference"):
+            run_spec(RunSpec("E1", "fuzzy-pi", "arm6", fuzzy_impl="table", controller_impl=impl))
 
 
 def test_table_cache_builds_once_and_rebuilds_a_damaged_file(

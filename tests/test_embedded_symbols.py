@@ -26,6 +26,7 @@ from fuzzkit.formats.registry import load
 from fuzzkit.loop.controller_code import generate
 
 REPO = Path(__file__).parent.parent
+DATA = Path(__file__).parent / "data"
 ARM_GCC = shutil.which("arm-none-eabi-gcc")
 ARM_NM = shutil.which("arm-none-eabi-nm")
 #: CI installs the toolchain before the suite (.ci/run: make embedded-toolchain), so there a
@@ -103,6 +104,7 @@ KINDS: dict[str, Callable[[], dict[str, str]]] = {
     "exact-float": lambda: _exact("macvicar_whelan", "float"),
     "exact-double": lambda: _exact("macvicar_whelan", "double"),
     "exact-gaussian-float": lambda: _exact("three_input", "float"),
+    "exact-gaussian-outputs-float": lambda: _exact(str(DATA / "gaussian3x3.yaml"), "float"),
     "controller-fuzzy-float": lambda: _controller("controller.yaml", "float"),
     "controller-pi-double": lambda: _controller("controller_pi.yaml", "double"),
 }
@@ -143,18 +145,20 @@ def test_host_objects_call_only_what_the_header_lists(
 def test_the_headers_list_memset_and_the_math_functions() -> None:
     # the float code's memset is real: gcc -O3 and the ARM builds call it (checked above)
     assert _listed(built("exact-float")["macvicar_whelan.h"]) == {"memset"}
-    assert _listed(built("exact-gaussian-float")["three_input.h"]) == {
-        "memset",
-        "expf",
-        "powf",
-        "fabsf",
-    }
+    # float code computes exp, log and erfc itself (the same bits with any C library)
+    assert _listed(built("exact-gaussian-float")["three_input.h"]) == {"memset", "powf", "fabsf"}
+    gaussian_outputs = built("exact-gaussian-outputs-float")["gaussian3x3.h"]
+    assert _listed(gaussian_outputs) == {"memset", "fabsf", "sqrtf"}
+    assert _listed(built("exact-double")["macvicar_whelan.h"]) == {"memset"}
     assert _listed(built("table-q15")["macvicar_whelan.h"]) == set()
     ctl = built("controller-fuzzy-float")["e1_fuzzy_controller.h"]
     assert _listed(ctl) == {"memset", "sqrtf", "e1_fuzzy_surface_eval"}
 
 
-@pytest.mark.parametrize("artefact", ["table-float", "exact-float", "controller-fuzzy-float"])
+@pytest.mark.parametrize(
+    "artefact",
+    ["table-float", "exact-float", "exact-gaussian-outputs-float", "controller-fuzzy-float"],
+)
 def test_cortex_m4f_objects_call_only_what_the_header_lists(
     tmp_path: Path, artefact: str, arm_toolchain: tuple[str, str]
 ) -> None:

@@ -134,8 +134,12 @@ def test_the_python_loop_records_the_same_status_as_the_generated_controller() -
     # reference controller in the Python loop must report the generated C's status bits
     c = _run("planar", "pi", "spike")
     py = run_spec(
-        RunSpec("E1", "pi", "planar", seed=3, fault="spike", duration_s=DURATION_S, loop="python")
-    )
+        RunSpec(
+            "E1", "pi", "planar", seed=3, fault="spike", duration_s=DURATION_S,
+            controller_impl="reference",
+        )
+    )  # fmt: skip
+    assert py.loop == "python" and py.controller_impl.startswith("reference controller")
     assert py.status is not None and c.status is not None
     np.testing.assert_array_equal(py.status, c.status)
     assert float(np.max(np.abs(c.u - py.u))) <= TOLERANCE_M
@@ -166,7 +170,8 @@ def test_the_row_names_the_generated_controller() -> None:
 @pytest.mark.parametrize(
     "changes, match",
     [
-        ({"loop": "python"}, "compiled loop"),
+        ({"controller_impl": "python", "loop": "compiled"}, "compiled loop"),
+        ({"controller_impl": "reference", "loop": "compiled"}, "compiled loop"),
         ({"fuzzy_impl": "table"}, "fuzzy-impl"),
         ({"controller_impl": "rust"}, "unknown controller implementation"),
         ({"gains": (("u_max", float("inf")), ("u_min", float("-inf")))}, "correction_m"),
@@ -191,9 +196,19 @@ def test_simulate_cli_runs_the_generated_controller(capsys: pytest.CaptureFixtur
     assert main([*argv, "--json"]) == 0  # the default: the same, in the compiled loop
     data = json.loads(capsys.readouterr().out)
     assert data["controller_impl"].startswith("generated C controller (double) E1_pi_controller")
-    assert main([*argv, "--controller-impl", "python", "--json"]) == 0  # the reference
+    assert main([*argv, "--controller-impl", "python", "--json"]) == 0  # the generated Python
     data = json.loads(capsys.readouterr().out)
+    assert data["controller_impl"].startswith("generated Python controller E1_pi_controller")
+    assert data["loop"] == "python"
+    assert main([*argv, "--loop", "python", "--json"]) == 0  # the loop, not the controller
+    data = json.loads(capsys.readouterr().out)
+    assert data["controller_impl"].startswith("generated C controller (double) E1_pi_controller")
+    assert data["loop"] == "python"
+    assert main([*argv, "--controller-impl", "reference", "--json"]) == 0  # asked for by name
+    data = json.loads(capsys.readouterr().out)
+    assert data["controller_impl"].startswith("reference controller, pi")
     assert "generated" not in data["controller_impl"] and data["loop"] == "python"
+    assert main([*argv, "--fuzzy-impl", "table"]) == 2  # the reference's surface: asked for
 
 
 def test_sweep_and_tune_pass_the_choice_on() -> None:
@@ -206,8 +221,11 @@ def test_sweep_and_tune_pass_the_choice_on() -> None:
     problem = TuningProblem.build(["E1"], "pi", plant="planar", controller_impl="c")
     r = CaseRunner(problem).run_case(0, {"kp": 3e-5, "ki": 1e-5}, 0.5)
     assert r.controller_impl.startswith("generated C controller (double) E1_pi_controller")
-    with pytest.raises(ConfigError, match="compiled loop"):
-        TuningProblem.build(["E1"], "pi", plant="planar", loop="python", controller_impl="c")
+    # --loop python names the loop: the generated C runs there too
+    problem = TuningProblem.build(["E1"], "pi", plant="planar", loop="python", controller_impl="c")
+    r = CaseRunner(problem).run_case(0, {"kp": 3e-5, "ki": 1e-5}, 0.5)
+    assert r.loop == "python"
+    assert r.controller_impl.startswith("generated C controller (double) E1_pi_controller")
 
 
 # --------------------------------------------------------------------------- safety parameters

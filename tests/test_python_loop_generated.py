@@ -85,7 +85,7 @@ def test_the_generated_controller_runs_and_replays_to_0_m_with_the_same_status(
 
 @pytest.mark.parametrize("name", ["mujoco", pytest.param("tilt-arm6", marks=verify)])
 def test_the_reference_on_request_follows_the_generated_run(name: str) -> None:
-    generated, reference = _run(name), _run(name, impl="python")
+    generated, reference = _run(name), _run(name, impl="reference")
     assert "generated" not in reference.controller_impl  # type: ignore[attr-defined]
     assert reference.loop == "python"  # type: ignore[attr-defined]
     # one arithmetic in two implementations: the exact engine against the generated exact C
@@ -120,7 +120,7 @@ def test_tuning_on_mujoco_prices_the_generated_controller() -> None:
     gains = {"kp": 0.25, "ki": 0.06, "kx": 2.5e-4}
     run = CaseRunner(problem).run_case(0, gains, 2.5)
     assert run.controller_impl.startswith("generated C controller (double) user_swapped")
-    reference = CaseRunner(replace_impl(problem, "python")).run_case(0, gains, 2.5)
+    reference = CaseRunner(replace_impl(problem, "reference")).run_case(0, gains, 2.5)
     assert "generated" not in reference.controller_impl
     assert float(np.nanmax(np.abs(run.force_true - reference.force_true))) < 1e-6  # N
 

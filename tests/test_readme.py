@@ -310,8 +310,8 @@ def test_a_second_command_in_process_reads_the_file_as_it_is_now(
     """fuzzkit caches rule bases by their path: a second command in the same process must see
     a rewritten file, as a second ``fuzzkit`` process does."""
 
-    # the Python loop's exact surface is cached by the rule base's path
-    argv = ["simulate", "E1", "--rulebase", "rb.yaml", "--loop", "python", "--json"]
+    # the reference controller's exact surface is cached by the rule base's path
+    argv = ["simulate", "E1", "--rulebase", "rb.yaml", "--controller-impl", "reference", "--json"]
 
     def simulate() -> dict[str, object]:
         done = run_in_process(argv, tmp_path)

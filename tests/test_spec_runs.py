@@ -161,7 +161,7 @@ def test_a_spec_runs_compiled_as_in_python(path: Path, fault: str) -> None:
 
     kw = {"plant": "arm6", "controller_spec": str(path), "fault": fault, "duration_s": 2.5}
     co = run_spec(RunSpec("E1", loop="compiled", **kw))  # type: ignore[arg-type]
-    py = run_spec(RunSpec("E1", loop="python", **kw))  # type: ignore[arg-type]
+    py = run_spec(RunSpec("E1", controller_impl="reference", **kw))  # type: ignore[arg-type]
     name = load_spec(path).name
     assert co.loop == "compiled" and f"generated C controller (double) {name}" in co.controller_impl
     assert np.any(co.in_contact)

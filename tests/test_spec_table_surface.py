@@ -112,10 +112,10 @@ def test_a_table_run_replays_and_differs_from_the_exact_one(
 def test_the_python_loop_runs_the_specs_table(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    # --controller-impl python (the reference in the Python loop) evaluates the table too
+    # --controller-impl reference (in the Python loop) evaluates the table too
     spec = _spec(tmp_path, "{method: table, resolution: 9}")
     result = run_spec(
-        RunSpec("E1", plant="planar", controller_spec=str(spec), controller_impl="python",
+        RunSpec("E1", plant="planar", controller_spec=str(spec), controller_impl="reference",
                 seed=2, duration_s=2.0)
     )  # fmt: skip
     assert result.loop.startswith("python") and "lookup table" in result.controller_impl

@@ -8,6 +8,9 @@ Generates the float controller of ``docs/examples/controller.yaml`` (two force a
 * Cortex-M4F (hardware single-precision FPU) on QEMU's ``mps2-an386``: the controller's
   surface ``eval`` on random points plus every combination of edge values (0, +-1, +-1e30,
   +-inf, NaN, ...), then the controller ``step`` on a hostile sensor log;
+* the same core: the exact float ``eval`` of the 3x3 Gaussian rule base
+  (``tests/data/gaussian3x3.yaml``: Gaussian output terms in closed form, ``erfcf``) and of the
+  shipped Sugeno controller ``sugeno_pi``, on random points and the edge values;
 * Cortex-M3 on ``mps2-an385`` and Cortex-M0 on ``microbit``: the Q15 table's ``eval``;
 
 runs each under QEMU (ARM semihosting for output, ``-icount shift=0``), builds the same harness
@@ -38,6 +41,7 @@ import sys
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -45,6 +49,11 @@ HERE = Path(__file__).resolve().parent
 REPO = HERE.parent.parent
 SPEC = REPO / "docs" / "examples" / "controller.yaml"
 RULEBASE = "macvicar_whelan"
+#: Rule bases whose exact float ``eval`` runs on the Cortex-M4F: (row label, file or name).
+EXACT_FLOAT = (
+    ("3x3 Gaussian outputs", str(REPO / "tests" / "data" / "gaussian3x3.yaml")),
+    ("Sugeno", "sugeno_pi"),
+)
 POINTS = 50_000
 #: Edge-value combinations the harness evaluates besides the random points (2 inputs):
 #: 17 float edge values, 9 Q15 codes (harness.c).
@@ -142,7 +151,7 @@ def log_source(forces: np.ndarray, rotations: np.ndarray) -> str:
     )
 
 
-def generate(build: Path) -> dict[str, object]:
+def generate(build: Path) -> dict[str, Any]:
     """Write the generated sources and the log into ``build``; what the harness needs."""
     from fuzzkit.codegen.method import compile_rulebase
     from fuzzkit.control.spec_reader import load_spec
@@ -159,7 +168,26 @@ def generate(build: Path) -> dict[str, object]:
     q15 = compile_rulebase(rb, "c", "q15", method="table")
     for rel, text in q15.files.items():
         (build / rel).write_text(text)
-    return {"name": spec.name, "log_n": forces.shape[0]}
+    exact = []
+    for _, source in EXACT_FLOAT:
+        rb = load(source)
+        for rel, text in compile_rulebase(rb, "c", "float", method="exact").files.items():
+            (build / rel).write_text(text)
+        exact.append(rb.name)
+    return {"name": spec.name, "log_n": forces.shape[0], "exact": exact}
+
+
+def exact_defines(name: str) -> list[str]:
+    """``-D`` flags of the harness for the exact float ``eval`` of rule base ``name``."""
+    return [
+        f'-DFK_EVAL_HEADER="{name}.h"',
+        f"-DFK_EVAL={name}_eval",
+        "-DFK_EVAL_T=float",
+        "-DFK_NIN=2",
+        "-DFK_NOUT=1",
+        f"-DFK_POINTS={POINTS}u",
+        "-DFK_AMPLITUDE=1.5f",
+    ]
 
 
 def harness_defines(kind: str, info: dict[str, object]) -> list[str]:
@@ -413,6 +441,8 @@ def measure(build: Path) -> list[Row]:
     flash, ram = footprint(build, M4F, f"{name}_surface.h", surf_call, [f"{name}_surface.c"])
     rows.append(_row("surface eval, exact (float)", M4F, flash, ram, t["eval"], host_eval,
                      0, same))  # fmt: skip
+    for (label, _), rb_name in zip(EXACT_FLOAT, info["exact"], strict=True):
+        rows.append(exact_row(build, label, rb_name))
     # the Q15 table on the Cortex-M3 and M0
     defines = harness_defines("q15", info)
     files = sources("q15", info)
@@ -432,6 +462,25 @@ def measure(build: Path) -> list[Row]:
         rows.append(_row(f"{RULEBASE} Q15 table eval", board, flash, ram,
                          timings(target)["eval"], host_q15, host_bytes, same))  # fmt: skip
     return rows
+
+
+def exact_row(build: Path, label: str, name: str) -> Row:
+    """The exact float ``eval`` of rule base ``name`` on the Cortex-M4F against the host."""
+    defines = exact_defines(name)
+    files = [f"{name}.c"]
+    elf = cross_link(build, M4F, f"{name}_m4f.elf", [str(HERE / "harness.c"), *files], defines)
+    target = qemu(build, M4F, elf)
+    host, host_bytes = host_run(build, f"{name}_host", files, defines)
+    same = compare(target, host, f"{name} on {M4F.name}")
+    call = (
+        "float in[2], out[1]; in[0] = fk_sink_f[0]; in[1] = fk_sink_f[1]; "
+        f"{name}_eval(in, out); fk_sink_f[2] = out[0];"
+    )
+    flash, ram = footprint(build, M4F, f"{name}.h", call, files)
+    host_eval = host_instructions(build, f"{name}_host", f"{name}_eval",
+                                  POINTS + EDGE_COMBOS["float"])  # fmt: skip
+    return _row(f"{label} ({name}) eval, exact (float)", M4F, flash, ram,
+                timings(target)["eval"], host_eval, host_bytes, same)  # fmt: skip
 
 
 def _row(what: str, board: Board, flash: int, ram: int, t: list[int], host: float | None,

@@ -68,17 +68,20 @@ def add_quiet_argument(parser: argparse.ArgumentParser, progress: bool = True) -
 
 
 def add_controller_impl_argument(parser: argparse.ArgumentParser) -> None:
-    """``--controller-impl auto|python|c``, the same for ``simulate``, ``sweep`` and ``tune``
-    (``fuzzkit.loop.spec.CONTROLLER_IMPLS``)."""
+    """``--controller-impl auto|c|python|reference``, the same for ``simulate``, ``sweep`` and
+    ``tune`` (``fuzzkit.loop.spec.CONTROLLER_IMPLS``)."""
+    from fuzzkit.loop.spec import CONTROLLER_IMPLS
+
     parser.add_argument(
         "--controller-impl",
-        choices=("auto", "python", "c"),
+        choices=CONTROLLER_IMPLS,
         default="auto",
-        help="c: the run's controller spec (--spec, or built from the controller, gains, rule "
-        "base and scenario) generated as C (double, the spec's surface) and run whole inside "
-        "the compiled loop, what `fuzzkit compile` ships; python: fuzzkit's reference "
-        "controller in the Python loop; auto (default): c where the compiled loop runs "
-        "(arm6, planar) and a C compiler exists, else python",
+        help="which code runs the run's controller spec (--spec, or built from the controller, "
+        "gains, rule base and scenario): c, generated as C (double, the spec's surface), what "
+        "`fuzzkit compile` ships, inside the compiled loop where the plant has one; python, "
+        "the generated Python, in the Python loop; reference, fuzzkit's reference controller "
+        "(for debugging), in the Python loop; auto (default): c where a C compiler exists, "
+        "else python. The run's controller_impl says which ran",
     )
 
 

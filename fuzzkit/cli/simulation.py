@@ -93,21 +93,19 @@ def register(subparsers: Any) -> None:
         "--loop",
         choices=("compiled", "python"),
         default=None,
-        help="compiled (the whole run as one numba function, arm6 and planar; the controller is "
-        "the run's controller spec generated as C, in double, what `fuzzkit compile` ships) or "
-        "python (the reference loop and controller). Default: compiled where the plant has it "
-        "and a C compiler is found, python otherwise or when --fuzzy-impl or --controller-impl "
-        "python asks for it",
+        help="compiled (the whole run as one numba function, arm6 and planar) or python (the "
+        "loop plant by plant in Python); either runs the controller --controller-impl names. "
+        "Default: compiled where the plant has it and the controller is the generated C, "
+        "python otherwise",
     )
     sim.add_argument(
         "--fuzzy-impl",
         choices=("auto", "exact", "table", "c"),
         default="auto",
-        help="the fuzzy-pi surface of the Python loop's reference controller: exact (the exact "
-        "engine), table (the rule base's double lookup table) or c (the rule base's generated "
-        "C surface through ctypes; needs a C compiler); each runs the Python loop (not with "
-        "--loop compiled). Default auto: the spec's surface (exact, or the table a spec's "
-        "surface: names), in either loop",
+        help="with --controller-impl reference only: the reference controller's fuzzy-pi "
+        "surface, exact (the exact engine), table (the rule base's double lookup table) or c "
+        "(the rule base's generated C surface through ctypes; needs a C compiler). Default "
+        "auto: the spec's surface (exact, or the table a spec's surface: names)",
     )
     add_controller_impl_argument(sim)
     sim.add_argument("--rrd", metavar="OUT.rrd", help="write a Rerun recording of the run")

@@ -87,7 +87,8 @@ def register(subparsers: Any) -> None:
         "--loop",
         choices=("compiled", "python"),
         default=None,
-        help="default: compiled where the plant supports it",
+        help="default: compiled where the plant supports it and the controller is the "
+        "generated C (--controller-impl auto or c)",
     )
     add_controller_impl_argument(p)
     p.add_argument(

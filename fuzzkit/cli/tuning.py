@@ -84,7 +84,8 @@ def register(subparsers: Any) -> None:
         "--loop",
         choices=("compiled", "python"),
         default=None,
-        help="default: the compiled loop where the plant has one (arm6, planar)",
+        help="default: the compiled loop where the plant has one (arm6, planar) and the "
+        "controller is the generated C (--controller-impl auto or c)",
     )
     add_controller_impl_argument(tune)
     tune.add_argument(

@@ -4,7 +4,7 @@ generated Python, behind what :func:`fuzzkit.loop.python_loop.run` drives.
 The Python loop runs the plants the compiled loop does not model (MuJoCo) and the scenarios
 its kernels lack (a tool's weight, a drifting bias, a tilted task frame); with this controller
 those runs execute the code ``fuzzkit compile`` emits, as the compiled loop does, and not the
-reference (which stays available with ``--controller-impl python``). The loop's record of each
+reference (which stays available with ``--controller-impl reference``). The loop's record of each
 step (engagement and trip times, the fault count, ``e``, ``de``, ``du``) is the compiled
 loop's own, :func:`fuzzkit.loop.compiled.generated_controller.loop_bookkeeping`, so that the
 two loops record a step alike and ``fuzzkit replay`` of the run's CSV reproduces it.
@@ -36,16 +36,19 @@ FloatArray = npt.NDArray[np.float64]
 StepFunction = Callable[[FloatArray, FloatArray, FloatArray], int]
 
 
-def open_step(spec: ControllerSpec, require_c: bool = False) -> tuple[StepFunction, str]:
+def open_step(spec: ControllerSpec, impl: str = "auto") -> tuple[StepFunction, str]:
     """The generated controller of ``spec`` as one step function, and its label: the double C
-    (compiled once per process and code, :func:`load_generated_controller`), or, without a C
-    compiler, the generated Python module (unless ``require_c``: the ToolchainError)."""
+    (``impl`` ``c``, or ``auto`` where a C compiler exists; compiled once per process and code,
+    :func:`load_generated_controller`), or the generated Python module (``python``, or
+    ``auto`` without a C compiler; ``c`` raises the ToolchainError)."""
+    if impl == "python":
+        return _python_step(spec, "asked for")
     try:
         gen = load_generated_controller(spec)
     except ToolchainError as exc:
-        if require_c:
+        if impl == "c":
             raise
-        return _python_step(spec, str(exc))
+        return _python_step(spec, f"no C compiler: {exc}")
     return _CStep(gen.step_function, gen.fresh_state()), gen.label
 
 
@@ -74,7 +77,7 @@ def _python_step(spec: ControllerSpec, why: str) -> tuple[StepFunction, str]:
         out[:] = u
         return int(status)
 
-    return step, f"generated Python controller {spec.name}_controller (no C compiler: {why})"
+    return step, f"generated Python controller {spec.name}_controller ({why})"
 
 
 def run_controller(
@@ -85,18 +88,19 @@ def run_controller(
     seed: int,
     faults: Any,
     latency: tuple[int, int] | None,
-    require_c: bool = False,
+    impl: str = "auto",
 ) -> GeneratedLoopController:
     """The generated controller of a Python-loop run: the run's controller spec
     (:func:`~fuzzkit.loop.compiled.generated_controller.run_controller_spec` of ``exp``,
     ``controller``, ``gains``, ``rulebase``) with the run's sensor delay (its ``faults``,
-    seeded by ``seed``, and ``latency``, as :func:`fuzzkit.loop.python_loop.run` sets them)."""
+    seeded by ``seed``, and ``latency``, as :func:`fuzzkit.loop.python_loop.run` sets them), in
+    the implementation ``impl`` (:func:`open_step`)."""
     from fuzzkit.loop.compiled.generated_controller import run_controller_spec
     from fuzzkit.loop.timing import run_faults_and_latency
 
     spec = run_controller_spec(exp, controller, gains, rulebase)
     _, sensor_delay, _ = run_faults_and_latency(exp, seed, faults, latency)
-    return GeneratedLoopController(spec, sensor_delay, require_c)
+    return GeneratedLoopController(spec, sensor_delay, impl)
 
 
 class GeneratedLoopController:
@@ -112,10 +116,10 @@ class GeneratedLoopController:
     #: no reference axis controllers (nothing to adapt from the loop's side)
     controllers: tuple[Any, ...] = ()
 
-    def __init__(self, spec: ControllerSpec, sensor_delay: int, require_c: bool = False) -> None:
+    def __init__(self, spec: ControllerSpec, sensor_delay: int, impl: str = "auto") -> None:
         self.spec = spec
         self.kind = spec.kind
-        self._step, self.label = open_step(spec, require_c)
+        self._step, self.label = open_step(spec, impl)
         self.cp = np.zeros(P.N_CP)
         thr = spec.safety.engage_threshold_n
         self.cp[P.C_ENGAGE_THR] = math.nan if thr is None else thr

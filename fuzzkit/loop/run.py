@@ -29,9 +29,9 @@ def run_loop(spec: RunSpec, exp: Experiment, plant: str | ContactPlant) -> RunRe
     double; the generated Python without a C compiler): in the plant's compiled loop where
     its adapter has one, else in the Python loop (MuJoCo; a scenario the kernels lack, a run
     without a compiler: ``loop`` is then ``python (fallback: ...)``); ``controller_impl`` names
-    the code. The reference controller runs only when asked for (``controller_impl="python"``,
-    a ``fuzzy_impl``, ``loop="python"``), and for a spec that adapts its gains outside the
-    compiled loop (``loop`` says so).
+    the code (``controller_impl="python"``: the generated Python, in the Python loop). The
+    reference controller runs only when asked for (``controller_impl="reference"``), and for a
+    spec that adapts its gains (``loop`` and ``controller_impl`` say so).
     """
     from fuzzkit.loop.faults import fault
 
@@ -44,31 +44,9 @@ def run_loop(spec: RunSpec, exp: Experiment, plant: str | ContactPlant) -> RunRe
         else:
             load_loop_rulebase(spec.rulebase)
     faults = fault(spec.fault or exp.fault, spec.seed)
-    impl = spec.fuzzy_impl
-    if impl not in FUZZY_IMPLS:
-        raise ConfigError(f"unknown fuzzy implementation {impl!r} (expected {FUZZY_IMPLS})")
-    if spec.controller_impl not in CONTROLLER_IMPLS:
-        raise ConfigError(
-            f"unknown controller implementation {spec.controller_impl!r} "
-            f"(expected {', '.join(CONTROLLER_IMPLS)})"
-        )
+    check_implementation(spec)
     loop = spec.resolved_loop()
-    if loop == "compiled" and impl != "auto":
-        raise ConfigError(
-            f"--fuzzy-impl {impl} chooses the Python loop's surface; the compiled loop runs the "
-            "generated controller (the spec's surface): leave out --loop compiled"
-        )
-    # The reference controller runs only when asked for: --controller-impl python, a
-    # --fuzzy-impl, or the Python loop named (--loop python). Every other run executes the
-    # spec's generated controller: in the compiled loop where it models the plant and the
-    # scenario, else in the Python loop.
-    if spec.controller_impl == "python" or impl != "auto" or spec.loop == "python":
-        if spec.controller_impl == "c":
-            raise ConfigError(
-                "--controller-impl c runs the generated controller (in the compiled loop "
-                "where it models the plant); --loop python and --fuzzy-impl run the reference "
-                "controller: leave them out"
-            )
+    if spec.controller_impl == "reference":
         return _run_reference(spec, exp, plant, faults, "")
     if loop == "compiled":
         try:
@@ -79,8 +57,34 @@ def run_loop(spec: RunSpec, exp: Experiment, plant: str | ContactPlant) -> RunRe
                 raise UnsupportedPlant(f"{exc}; use --loop python") from exc
             fallback = f" (fallback: {exc})"
     else:
-        fallback = ""  # a plant the compiled loop does not model (mujoco)
+        fallback = ""  # a plant without a compiled loop (mujoco), or the Python loop asked for
     return _run_generated_python_loop(spec, exp, plant, faults, fallback)
+
+
+def check_implementation(spec: RunSpec) -> None:
+    """The one rule for which controller runs, checked: the spec's generated controller
+    (``controller_impl`` ``auto``, ``c`` or ``python``), or the reference when asked for by
+    name (``reference``; a ``fuzzy_impl`` chooses the reference's surface, so it asks for the
+    reference too). ``loop`` names the loop, never the controller.
+
+    Raises
+    ------
+    ConfigError
+        An unknown implementation, or a ``fuzzy_impl`` without the reference.
+    """
+    impl = spec.fuzzy_impl
+    if impl not in FUZZY_IMPLS:
+        raise ConfigError(f"unknown fuzzy implementation {impl!r} (expected {FUZZY_IMPLS})")
+    if spec.controller_impl not in CONTROLLER_IMPLS:
+        raise ConfigError(
+            f"unknown controller implementation {spec.controller_impl!r} "
+            f"(expected {', '.join(CONTROLLER_IMPLS)})"
+        )
+    if impl != "auto" and spec.controller_impl != "reference":
+        raise ConfigError(
+            f"--fuzzy-impl {impl} chooses the reference controller's surface, and this run "
+            "executes the spec's generated controller: add --controller-impl reference"
+        )
 
 
 class _Fallback(Exception):
@@ -90,26 +94,27 @@ class _Fallback(Exception):
 def _run_generated_python_loop(
     spec: RunSpec, exp: Experiment, plant: Any, faults: Any, fallback: str
 ) -> RunResult:
-    """``spec`` with the run's generated controller (C, or the generated Python without a
-    compiler) in the Python loop; ``loop`` says so, with ``fallback`` (why the compiled loop
-    could not take it). A spec that adapts its gains still runs the reference there, and
-    ``loop`` says so: the Python loop does not yet record the generated controller's
-    stiffness estimate and gain factor."""
+    """``spec`` with the run's generated controller (C, or the generated Python: asked for,
+    or without a compiler) in the Python loop; ``loop`` says so, with ``fallback`` (why the
+    compiled loop could not take it). A spec that adapts its gains still runs the reference
+    there, and ``loop`` says so: the Python loop does not yet record the generated
+    controller's stiffness estimate and gain factor."""
     from fuzzkit.loop.generated import run_controller
 
     cs = exp.controller_spec
     if cs is not None and cs.adaptation.mode != "none":
-        if spec.controller_impl == "c":
+        if spec.controller_impl != "auto":
             raise ConfigError(
-                f"the Python loop runs a spec that adapts its gains ({cs.adaptation.mode}) on "
-                "the reference controller only; leave out --controller-impl c"
+                f"a spec that adapts its gains ({cs.adaptation.mode}) runs on the reference "
+                f"controller only; use --controller-impl reference (or auto), not "
+                f"{spec.controller_impl}"
             )
         why = " (an adapting spec runs on the reference controller in the Python loop)"
         return _run_reference(spec, exp, plant, faults, fallback or why)
-    gains, impl_c = dict(spec.gains), spec.controller_impl == "c"
     ctrl = run_controller(
-        exp, spec.controller, gains, spec.rulebase, spec.seed, faults, spec.latency, impl_c
-    )
+        exp, spec.controller, dict(spec.gains), spec.rulebase, spec.seed, faults, spec.latency,
+        spec.controller_impl,
+    )  # fmt: skip
     result = python_loop.run(exp, plant, ctrl.kind, hybrid=ctrl, seed=spec.seed, faults=faults,
                  latency=spec.latency, duration_s=spec.duration_s)  # fmt: skip
     result.loop += fallback
@@ -147,7 +152,9 @@ def _run_reference(
                 surface = c_surface(spec.rulebase)
                 label = f"{surface.__name__} (python loop)"
     if exp.controller_spec is not None:
-        label = f"spec {exp.controller_spec.name}: {label}"
+        label = f"spec {exp.controller_spec.name}: reference controller, {label}"
+    else:
+        label = f"reference controller, {label}"
     result = python_loop.run(
         exp,
         plant,

@@ -7,17 +7,21 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from fuzzkit.errors import ConfigError
-from fuzzkit.loop.adapter import compiled_supports
+from fuzzkit.loop.adapter import compiled_plants, compiled_supports
 
 LOOPS = ("auto", "compiled", "python")
-#: How the Python loop's reference controller evaluates a fuzzy-PI's surface: the ``exact``
-#: engine (``auto``), the generated double lookup ``table``, or the rule base's generated ``c``
-#: through ctypes. The compiled loop runs the generated controller, whose surface is the spec's.
+#: How the reference controller evaluates a fuzzy-PI's surface (with ``controller_impl
+#: "reference"`` only): the ``exact`` engine (``auto``), the generated double lookup ``table``,
+#: or the rule base's generated ``c`` through ctypes. Every other run executes the generated
+#: controller, whose surface is the spec's.
 FUZZY_IMPLS = ("auto", "exact", "table", "c")
-#: Which controller runs: ``c``, the run's controller spec generated as C and run whole in the
-#: compiled loop; ``python``, fuzzkit's reference controller in the Python loop; ``auto``: C
-#: where the compiled loop runs (arm6, planar) and a C compiler exists, else the reference.
-CONTROLLER_IMPLS = ("auto", "python", "c")
+#: Which controller runs. ``auto``: the run's controller spec as ``fuzzkit compile`` generates
+#: it, C (double) where a C compiler exists, else the generated Python; ``c``: the generated C
+#: (refused without a compiler); ``python``: the generated Python (in the Python loop);
+#: ``reference``: fuzzkit's reference controller (in the Python loop), only when asked for.
+CONTROLLER_IMPLS = ("auto", "c", "python", "reference")
+#: The implementations the compiled loops run (they call the generated C by address).
+COMPILED_IMPLS = ("auto", "c")
 
 
 @dataclass(frozen=True, slots=True)
@@ -29,13 +33,14 @@ class RunSpec:
     :data:`fuzzkit.loop.faults.FAULTS`, seeded by ``seed`` (None: the experiment's).
     ``gains``: overrides of the default gains, as sorted ``(name, value)`` pairs;
     ``gains_label`` names where they came from (a file) for the table. ``loop``:
-    ``compiled`` (arm6, planar), ``python``, or ``auto`` (compiled where supported).
+    ``compiled`` (arm6, planar), ``python``, or ``auto`` (compiled where supported); it names
+    the loop, never the controller.
     ``duration_s``: None runs the experiment's whole duration. ``controller_spec``: a
     controller spec file (``docs/controller.md``) whose controller runs instead of
     ``controller`` with ``gains`` (a scenario with a ``controller:`` runs its own).
-    ``controller_impl``: ``auto``, ``c`` (the run's controller spec, given or built from the
-    settings, generated as C and run in the compiled loop) or ``python`` (the reference
-    controller in the Python loop); :data:`CONTROLLER_IMPLS`.
+    ``controller_impl``: which code runs the run's controller spec (given, or built from the
+    settings), :data:`CONTROLLER_IMPLS`: the generated C or Python, or the reference when
+    asked for. ``fuzzy_impl``: the reference controller's surface, :data:`FUZZY_IMPLS`.
     """
 
     experiment: str
@@ -55,16 +60,29 @@ class RunSpec:
     controller_impl: str = "auto"
 
     def resolved_loop(self) -> str:
-        """``compiled`` or ``python``: what ``auto`` means for this plant."""
+        """``compiled`` or ``python``: what ``auto`` means for this plant and implementation
+        (the compiled loop where the plant's adapter has one and the controller is the
+        generated C, the Python loop otherwise).
+
+        Raises
+        ------
+        ConfigError
+            An unknown loop, or ``compiled`` for a plant without a compiled loop or an
+            implementation it does not run.
+        """
         if self.loop not in LOOPS:
             raise ConfigError(f"unknown loop {self.loop!r} (expected {', '.join(LOOPS)})")
+        compiled_impl = self.controller_impl in COMPILED_IMPLS
         if self.loop == "auto":
-            reference = self.controller_impl == "python" or self.fuzzy_impl != "auto"
-            return "compiled" if compiled_supports(self.plant) and not reference else "python"
+            return "compiled" if compiled_supports(self.plant) and compiled_impl else "python"
         if self.loop == "compiled" and not compiled_supports(self.plant):
             raise ConfigError(
-                f"the compiled loop does not model the {self.plant} plant (it runs on arm6 and "
-                "planar); "
-                "use --loop python"
+                f"the compiled loop does not model the {self.plant} plant (it runs on "
+                f"{' and '.join(compiled_plants())}); use --loop python"
+            )
+        if self.loop == "compiled" and not compiled_impl:
+            raise ConfigError(
+                f"--controller-impl {self.controller_impl} runs in the Python loop (the "
+                "compiled loop runs the generated C): leave out --loop compiled"
             )
         return self.loop

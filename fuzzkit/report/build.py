@@ -9,10 +9,10 @@ surface; overshoot and settling time against stiffness; the latency boundary), t
 table, the gains and how the tuned ones compare with the defaults per tuning case
 (``fuzzkit.report.tuned``); plus one ``.rrd`` per nominal run.
 
-Runs go through ``fuzzkit.studies.batch.run_spec``, as ``fuzzkit simulate`` runs them: the
-compiled loop (fuzzy-PI as the generated lookup table) where the plant has one (arm6), the
-Python loop with the exact engine otherwise. The stiffness study and the latency map run the
-planar plant's Python loop.
+Runs go through ``fuzzkit.studies.batch.run_spec`` (the loop's entry point,
+``fuzzkit.loop.run.run_loop``), as ``fuzzkit simulate`` runs them: the generated controller, in
+the compiled loop where the plant has one. The stiffness study runs on the report's first
+plant (:mod:`fuzzkit.report.stiffness_study`), the latency map on the planar plant.
 """
 
 from __future__ import annotations
@@ -122,7 +122,7 @@ def build_report(
     Parameters
     ----------
     out : output folder (created; its parent must exist).
-    plants : plant names to run E1-E3 on (the stiffness study uses ``planar``).
+    plants : plant names to run E1-E3 on (the stiffness study runs on the first).
     budget : tuning budget per controller when ``gains_dir`` is None.
     gains_dir : folder with ``pi.yaml`` and ``fuzzy-pi.yaml`` (skip tuning).
     rulebase : the fuzzy-PI rule base.
@@ -150,10 +150,9 @@ def build_report(
     from fuzzkit.control.loop_rulebase import load_loop_rulebase
     from fuzzkit.loop.adapter import make_plant
     from fuzzkit.loop.python_loop import load_surface
-    from fuzzkit.loop.run import run_loop
-    from fuzzkit.loop.spec import RunSpec
-    from fuzzkit.studies.batch import experiment_and_plant, gains_items, run_spec
-    from fuzzkit.studies.experiments import DEFAULT_GAINS, press_experiment
+    from fuzzkit.report.stiffness_study import stiffness_study
+    from fuzzkit.studies.batch import experiment_and_plant, run_spec
+    from fuzzkit.studies.experiments import DEFAULT_GAINS
     from fuzzkit.studies.metrics import summary
     from fuzzkit.viz.figures import figure_bytes
     from fuzzkit.viz.study_figures import force_figure, stiffness_figure
@@ -247,28 +246,17 @@ def build_report(
 
             write_surface_png(rb, out / "surface.png")
 
-            study: dict[tuple[str, str], list[tuple[float, Any]]] = {}
-            from fuzzkit.studies.metrics import axis_metrics
+            study_plant = plants[0]  # the report's plant (its first --plant)
 
-            for ctrl in CONTROLLERS:
-                for label in LABELS:
-                    bar.set_description(f"stiffness study {ctrl} {label}")
-                    rows = []
-                    for k in stiffnesses_n_per_mm:
-                        press = press_experiment(k * 1e3)
-                        pair = gains_items(gains[(ctrl, label)])
-                        r = run_loop(
-                            RunSpec(press.name, ctrl, "planar", gains=pair, rulebase=rulebase),
-                            press,
-                            "planar",
-                        )
-                        m = axis_metrics(r, 2)
-                        m["tripped"] = float(r.tripped)
-                        rows.append((k, m))
-                        bar.update(1)
-                    study[(ctrl, label)] = rows
+            def counted(ctrl: str, label: str) -> None:
+                bar.set_description(f"stiffness study {ctrl} {label}")
+                bar.update(1)
+
+            studied = {(c, lab): gains[(c, lab)] for c in CONTROLLERS for lab in LABELS}
+            study = stiffness_study(study_plant, studied, stiffnesses_n_per_mm, rulebase, counted)
         write_atomic(
-            out / "stiffness.png", figure_bytes(stiffness_figure(study, "planar"), dpi=FIGURE_DPI)
+            out / "stiffness.png",
+            figure_bytes(stiffness_figure(study, study_plant), dpi=FIGURE_DPI),
         )
 
         # The claims at every latency and stiffness, for the fair gains sets.
@@ -620,8 +608,8 @@ def _markdown(
         "## Environment stiffness",
         "",
         "Press 10 N on E1's hammer from 0.2 mm above it (`press_experiment`), the same gains "
-        "at every stiffness, on the planar plant's Python loop: this study runs there for "
-        "every report, whatever `--plant` the runs above took.",
+        f"at every stiffness, on the {plants[0]} plant (the report's first `--plant`), each "
+        "run the generated controller as `fuzzkit simulate` runs it.",
         "",
         "![overshoot and settling time against stiffness](stiffness.png)",
         "",
@@ -638,7 +626,7 @@ def _markdown(
                 f"{fmt(m['overshoot_pct'], ' %', 1)}, {fmt(m['settling_time_s'], ' s')}{tr}"
             )
         md.append(f"| {k:g} | " + " | ".join(cells) + " |")
-    md += stiffness_lines(study, gains, rulebase)
+    md += stiffness_lines(study, gains, rulebase, plants[0])
     md += ["", "## Recordings", ""]
     if rrd:
         md.append(

@@ -16,7 +16,7 @@ from fuzzkit.studies.latency_sweep import StabilityMap, scaled_default_gains
 from fuzzkit.studies.outcome import axis_outcome
 from fuzzkit.units import latency_text
 
-#: The plant the report's stiffness study and latency map run on.
+#: The plant the report's latency map runs on (the stiffness study runs on the report's).
 PLANT = "planar"
 
 
@@ -38,9 +38,11 @@ def stiffness_lines(
     study: Mapping[tuple[str, str], list[tuple[float, Any]]],
     gains: Mapping[tuple[str, str], Mapping[str, float]],
     rulebase: str,
+    plant: str = PLANT,
 ) -> list[str]:
-    """The stiffness study's runs against the certificate, per stiffness, and the impact speed."""
-    inner = identify(PLANT)
+    """The stiffness study's runs (on ``plant``) against the certificate, per stiffness, and
+    the impact speed."""
+    inner = identify(plant)
     ks = [k for k, _ in next(iter(study.values()))]
     exp = press_experiment(ks[0] * 1e3)
     latency = exp.latency_periods
@@ -52,8 +54,8 @@ def stiffness_lines(
         "### Certified region over the stiffness study",
         "",
         f"Each run above against the stability certificate (`fuzzkit stability`, "
-        f"[docs/stability.md](../stability.md)) for the same gains, on the {PLANT} plant the "
-        f"study ran on (for every report), latency "
+        f"[docs/stability.md](../stability.md)) for the same gains, on the {plant} plant the "
+        f"study ran on, latency "
         f"{latency_text(latency)}: **C** certified, **-** not; then how the run ended "
         "(settled, never settled, no contact or tripped: docs/simulation.md). The last column "
         "is the approach speed above which the impact alone passes "

@@ -46,7 +46,8 @@ def sweep_specs(
 
     ``controller_specs``: controller spec files, each a value of the sweep in place of the
     ``controllers`` (a spec holds its controller and gains, so ``gains`` must be None).
-    ``controller_impl``: ``auto``, ``python`` or ``c`` (:class:`~fuzzkit.studies.batch.RunSpec`).
+    ``controller_impl``: which code runs the controller,
+    :data:`fuzzkit.loop.spec.CONTROLLER_IMPLS` (:class:`~fuzzkit.loop.spec.RunSpec`).
 
     ``gains`` maps a label (a gains file name) to per-controller overrides
     (``{label: {controller: {name: value}}}``); None runs the default gains only.

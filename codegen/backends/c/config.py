@@ -80,6 +80,8 @@ TARGET = Target(
     },
     visits_firing_cells=True,
     fast_centroid=True,
+    # the same bits on a microcontroller's C library (newlib) as on the host's (glibc)
+    portable_math={"float": ("erfc", "exp", "log")},
     verify_table=verify_c,
     verify_exact=verify_exact_c,
     open_controller=open_controller,

@@ -24,9 +24,9 @@ class CaseRunner:
     ``fuzzkit simulate`` runs it: the candidate's controller spec as the generated controller
     (what ``fuzzkit compile`` emits, compiled once per structure, the candidate's gains set as
     run-time parameters), in the plant's compiled loop where it has one, else in the Python
-    loop; the reference controller when asked for (``controller_impl == "python"``,
-    ``loop == "python"``). A surface given as a function is the reference controller's by
-    definition (no code is generated from a function): it runs in the Python loop.
+    loop; the reference controller when asked for (``controller_impl == "reference"``). A
+    surface given as a function is the reference controller's by definition (no code is
+    generated from a function): it runs in the Python loop.
     """
 
     def __init__(self, problem: TuningProblem) -> None:

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from fuzzkit.control.controllers import Surface
 from fuzzkit.errors import ConfigError
 from fuzzkit.loop.adapter import make_plant
+from fuzzkit.loop.spec import CONTROLLER_IMPLS, LOOPS
 from fuzzkit.plants.arm6 import Arm6Plant
 from fuzzkit.plants.contract import ContactPlant
 from fuzzkit.studies.e3_arm6 import make_e3_arm6_plant, resolve
@@ -74,8 +75,8 @@ class TuningProblem:
     latencies: tuple[tuple[int, int], ...] | None = None
     #: ``auto`` (the compiled loop where the plant has one), ``compiled`` or ``python``
     loop: str = "auto"
-    #: ``python`` (fuzzkit's controller) or ``c`` (each candidate's controller spec generated
-    #: as C and run whole in the compiled loop; ``fuzzkit.loop.spec.CONTROLLER_IMPLS``)
+    #: which code runs each candidate's controller spec (``fuzzkit.loop.spec.CONTROLLER_IMPLS``:
+    #: the generated C or Python, or the reference when asked for)
     controller_impl: str = "auto"
     #: what each case is (parallel to ``cases``)
     case_keys: tuple[TuningCase, ...] = ()
@@ -167,17 +168,17 @@ class TuningProblem:
         lats = None if latencies is None else tuple((int(a), int(b)) for a, b in latencies)
         if lats is not None and (not lats or any(min(pair) < 0 for pair in lats)):
             raise ConfigError(f"latencies must be (sensor, command) pairs >= 0 (got {lats})")
-        if loop not in ("auto", "compiled", "python"):
-            raise ConfigError(f"unknown loop {loop!r} (expected auto, compiled or python)")
-        if controller_impl not in ("auto", "python", "c"):
+        if loop not in LOOPS:
+            raise ConfigError(f"unknown loop {loop!r} (expected {', '.join(LOOPS)})")
+        if controller_impl not in CONTROLLER_IMPLS:
             raise ConfigError(
                 f"unknown controller implementation {controller_impl!r} "
-                "(expected auto, python or c)"
+                f"(expected {', '.join(CONTROLLER_IMPLS)})"
             )
-        if controller_impl == "c" and (loop == "python" or not isinstance(surface or "", str)):
+        if controller_impl in ("c", "python") and not isinstance(surface or "", str):
             raise ConfigError(
-                "--controller-impl c runs the generated controller in the compiled loop, on a "
-                "rule base given by name or path; leave out --loop python"
+                f"--controller-impl {controller_impl} runs the generated controller, of a rule "
+                "base given by name or path (a surface given as a function has no code)"
             )
         case_lats: tuple[tuple[int, int] | None, ...]
         if lats is not None:

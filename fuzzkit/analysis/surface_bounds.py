@@ -1,0 +1,166 @@
+"""Sound bounds of the deployed exact surface and its slopes, refined by branch and bound.
+
+The input square [-1, 1]^2 is cut into :data:`SEEDS` x :data:`SEEDS` rectangles; each gets the
+enclosure of :mod:`fuzzkit.analysis.surface_enclosure` (``F``, ``dF/dx``, ``dF/dy`` at every
+point, kinks included). The slopes the surface attains in a rectangle are measured by secants
+of the engine (:data:`PROBES` points inside it, a step of 1e-6 of its width: a secant is a
+slope the surface has, by the mean-value theorem). A rectangle whose enclosure reaches farther
+than ``tolerance`` beyond the attained slopes is cut in four, down to :data:`MAX_DEPTH` levels;
+``tolerance`` is :data:`RELATIVE_TOLERANCE` of the largest attained slope. ``gap`` reports the
+largest remaining distance (a rectangle at the last level may keep more, around a kink the
+secants straddle less well); the enclosure is sound whatever the gap.
+
+:meth:`SurfaceBounds.over` gives the bounds over any box: the hull of the rectangles that meet
+it (closed), so a rectangle that only touches the box's edge counts too: the slopes at the
+box's boundary (Clarke's gradient there takes the neighbours' in) are inside.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from fuzzkit.analysis.intervals import FloatArray
+from fuzzkit.analysis.surface_enclosure import Enclosure, why_unsupported
+from fuzzkit.fuzzy.model import RuleBase
+
+SEEDS = 32
+MAX_DEPTH = 2
+RELATIVE_TOLERANCE = 0.05
+#: Secant probes per rectangle (relative positions in it).
+PROBES = ((0.5, 0.5), (0.2, 0.2), (0.2, 0.8), (0.8, 0.2), (0.8, 0.8))
+_STEP = 1e-6
+
+
+@dataclass(frozen=True, slots=True)
+class Box:
+    """Bounds over a box: ``f``, ``dF/dx``, ``dF/dy`` as ``(low, high)``."""
+
+    f: tuple[float, float]
+    dx: tuple[float, float]
+    dy: tuple[float, float]
+
+
+@dataclass(frozen=True, slots=True)
+class SurfaceBounds:
+    """The leaves of the branch and bound: rectangles and their enclosures (arrays)."""
+
+    rect: FloatArray  # (n, 4): x0, x1, y0, y1
+    f: FloatArray  # (n, 2)
+    dx: FloatArray  # (n, 2)
+    dy: FloatArray  # (n, 2)
+    tolerance: float
+    gap: float
+    method: str = (
+        "sound: outward-rounded interval enclosure of the closed-form slopes over rectangles, "
+        "branch and bound"
+    )
+
+    def over(self, x_lo: float, x_hi: float, y_lo: float, y_hi: float) -> Box:
+        """The hull of the bounds over the rectangles meeting ``[x_lo, x_hi] x [y_lo, y_hi]``."""
+        r = self.rect
+        meet = (r[:, 0] <= x_hi) & (r[:, 1] >= x_lo) & (r[:, 2] <= y_hi) & (r[:, 3] >= y_lo)
+        if not np.any(meet):
+            raise ValueError(f"no rectangle meets [{x_lo}, {x_hi}] x [{y_lo}, {y_hi}]")
+
+        def hull(a: FloatArray) -> tuple[float, float]:
+            return float(np.min(a[meet, 0])), float(np.max(a[meet, 1]))
+
+        return Box(hull(self.f), hull(self.dx), hull(self.dy))
+
+    @property
+    def finite(self) -> bool:
+        """Every enclosure is finite (no rectangle where no rule may fire)."""
+        return bool(np.all(np.isfinite(self.dx)) and np.all(np.isfinite(self.dy)))
+
+
+def _secants(rb: RuleBase, rect: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Attained slopes: per rectangle, the min and max secant along x and along y, (n, 2)."""
+    from fuzzkit.fuzzy.inference import evaluate
+
+    a, b = rb.inputs[0].name, rb.inputs[1].name
+    out = rb.outputs[0].name
+    wx, wy = rect[:, 1] - rect[:, 0], rect[:, 3] - rect[:, 2]
+    sx, sy = [], []
+    for px, py in PROBES:
+        x = rect[:, 0] + px * wx
+        y = rect[:, 2] + py * wy
+        hx, hy = _STEP * wx, _STEP * wy
+        xs = np.concatenate([x - hx, x + hx, x, x])
+        ys = np.concatenate([y, y, y - hy, y + hy])
+        f = np.asarray(evaluate(rb, {a: xs, b: ys})[out]).reshape(4, -1)
+        sx.append((f[1] - f[0]) / (2 * hx))
+        sy.append((f[3] - f[2]) / (2 * hy))
+    ax, ay = np.array(sx), np.array(sy)
+    return np.stack([ax.min(0), ax.max(0)], 1), np.stack([ay.min(0), ay.max(0)], 1)
+
+
+def _split(rect: FloatArray) -> FloatArray:
+    x0, x1, y0, y1 = rect.T
+    xm, ym = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
+    parts = [
+        np.stack(c, 1)
+        for c in ((x0, xm, y0, ym), (xm, x1, y0, ym), (x0, xm, ym, y1), (xm, x1, ym, y1))
+    ]
+    return np.concatenate(parts)
+
+
+def compute(rb: RuleBase) -> SurfaceBounds:
+    """Branch and bound over [-1, 1]^2 (see the module doc).
+
+    Raises
+    ------
+    ValueError
+        The rule base has no sound enclosure (:func:`why_unsupported` says why).
+    """
+    enclosure = Enclosure(rb)
+    ex = np.union1d(np.linspace(-1.0, 1.0, SEEDS + 1), enclosure.input_kinks(0))
+    ey = np.union1d(np.linspace(-1.0, 1.0, SEEDS + 1), enclosure.input_kinks(1))
+    x0, y0 = np.meshgrid(ex[:-1], ey[:-1], indexing="ij")
+    x1, y1 = np.meshgrid(ex[1:], ey[1:], indexing="ij")
+    rect = np.stack([x0.ravel(), x1.ravel(), y0.ravel(), y1.ravel()], 1)
+    done: list[tuple[FloatArray, ...]] = []
+    tolerance, gap = math.nan, 0.0
+    for depth in range(MAX_DEPTH + 1):
+        c = enclosure.enclose(rect[:, 0], rect[:, 1], rect[:, 2], rect[:, 3])
+        att_x, att_y = _secants(rb, rect)
+        if depth == 0:
+            scale = max(float(np.max(np.abs(att_x))), float(np.max(np.abs(att_y))), 1e-12)
+            tolerance = RELATIVE_TOLERANCE * scale
+        excess = np.max(
+            np.stack(
+                [
+                    c.gx.hi - att_x[:, 1],
+                    att_x[:, 0] - c.gx.lo,
+                    c.gy.hi - att_y[:, 1],
+                    att_y[:, 0] - c.gy.lo,
+                ]
+            ),
+            axis=0,
+        )
+        excess = np.where(np.isfinite(excess), excess, np.inf)
+        keep = (excess <= tolerance) | (depth == MAX_DEPTH)
+        enc = (
+            np.stack([c.f.lo, c.f.hi], 1),
+            np.stack([c.gx.lo, c.gx.hi], 1),
+            np.stack([c.gy.lo, c.gy.hi], 1),
+        )
+        done.append((rect[keep], *(a[keep] for a in enc)))
+        gap = max(gap, float(np.max(excess[keep], initial=0.0)))
+        if np.all(keep):
+            break
+        rect = _split(rect[~keep])
+    parts = [np.concatenate([d[k] for d in done]) for k in range(4)]
+    return SurfaceBounds(parts[0], parts[1], parts[2], parts[3], tolerance, gap)
+
+
+@lru_cache(maxsize=16)
+def surface_bounds(rb: RuleBase) -> SurfaceBounds | str:
+    """The bounds of ``rb``'s exact surface (inputs in role order, clamped), or why none."""
+    why = why_unsupported(rb)
+    if why is not None:
+        return why
+    return compute(rb)

@@ -1,0 +1,232 @@
+"""Tighter slope enclosures where the rules' min and max switch along one line of a rectangle.
+
+With min AND, a rule's strength is the smaller of its terms' memberships, and an output term's
+level the largest of its rules' strengths: which term and which rule is selected switches along
+lines. The interval enclosure (:mod:`fuzzkit.analysis.surface_enclosure`) takes each level's
+slope as the hull of its candidates independently of the others; where several levels switch
+along the same line (the diagonals of a symmetric partition: every rule near the origin of
+``macvicar_whelan`` switches on ``|e| = |de|``) that hull loses the correlation and does not
+shrink however small the rectangle.
+
+Inside a rectangle between the input terms' kinks every membership is affine, so every
+comparison that selects a term or a rule is an affine function of ``(x, y)``, known exactly
+from its values at the four corners (the memberships there, as the engine computes them). When
+every comparison that changes sign inside the rectangle has the same zero line, the selection
+is constant on each side of it: the levels' slopes there are those at one point strictly inside
+that side. The slope enclosure is then the hull of ``sum_t dF/dL_t * dL_t`` over the two sides
+(``dF/dL_t`` still enclosed over the whole rectangle), intersected with the independent one.
+Rectangles with two or more distinct switch lines keep the independent enclosure.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Protocol
+
+import numpy as np
+import numpy.typing as npt
+
+from fuzzkit.analysis.intervals import FloatArray, Interval, dot
+from fuzzkit.analysis.term_intervals import enclose
+from fuzzkit.fuzzy.model import RuleBase
+
+Firing = list[tuple[Interval, Interval, Interval]]
+
+
+class _Rule(Protocol):
+    @property
+    def props(self) -> tuple[tuple[int, int, bool], ...]: ...
+    @property
+    def weight(self) -> float: ...
+    @property
+    def consequent(self) -> int: ...
+
+
+class Enclosure(Protocol):
+    """What :func:`refine` reads of :class:`fuzzkit.analysis.surface_enclosure.Enclosure`."""
+
+    @property
+    def rb(self) -> RuleBase: ...
+    @property
+    def rules(self) -> Sequence[_Rule]: ...
+
+    def firing(self, x0: FloatArray, x1: FloatArray, y0: FloatArray, y1: FloatArray) -> Firing: ...
+
+    def levels(self, firing: Firing, sl: slice) -> tuple[Interval, Interval, Interval]: ...
+
+
+#: Relative agreement of two normalised switch lines that counts as the same line.
+SAME_LINE = 1e-9
+#: How far (share of the way to the centre) a side's point sits inside from its corner.
+INSET = 1e-6
+_CORNERS = ((0, 0), (1, 0), (0, 1), (1, 1))
+BoolArray = npt.NDArray[np.bool_]
+
+
+def _memberships(enc: Enclosure, rect: FloatArray) -> list[list[FloatArray]]:
+    """Per input, per term: the membership at the rectangle's corners, (n, 4)."""
+    out = []
+    for axis in (0, 1):
+        ends = (rect[:, 2 * axis], rect[:, 2 * axis + 1])
+        terms = []
+        for term in enc.rb.inputs[axis].terms:
+            at = [enclose(term, e, e)[0] for e in ends]
+            vals = [0.5 * (v.lo + v.hi) for v in at]
+            terms.append(np.stack([vals[c[axis]] for c in _CORNERS], 1))
+        out.append(terms)
+    return out
+
+
+def _affine(enc: Enclosure, rect: FloatArray) -> BoolArray:
+    """Whether every input term is affine on each rectangle (one slope, no kink inside)."""
+    ok = np.ones(rect.shape[0], dtype=bool)
+    for axis in (0, 1):
+        for term in enc.rb.inputs[axis].terms:
+            _, d = enclose(term, rect[:, 2 * axis], rect[:, 2 * axis + 1])
+            ok &= (d.hi - d.lo) <= 1e-9 * (1.0 + np.abs(d.hi))
+    return ok
+
+
+def refine(
+    enc: Enclosure, rect: FloatArray, firing: Firing, gx: Interval, gy: Interval, dfdl: Interval
+) -> tuple[Interval, Interval]:
+    """The slopes ``gx``, ``gy`` (with ``dF/dL_t`` = ``dfdl``, (n, T)) of the rectangles
+    ``rect`` (n, 4), tightened where one switch line crosses (module doc)."""
+    n = rect.shape[0]
+    if n == 0:
+        return gx, gy
+    level, lgx, lgy = enc.levels(firing, slice(0, n))
+    width = np.maximum(lgx.hi - lgx.lo, lgy.hi - lgy.lo).max(axis=1)
+    cand = (width > 1e-9) & np.isfinite(gx.lo) & np.isfinite(gx.hi)
+    cand &= _affine(enc, rect)
+    idx = np.nonzero(cand)[0]
+    if idx.size == 0:
+        return gx, gy
+    sub = rect[idx]
+    mus = _memberships(enc, sub)
+    lines = _comparisons(enc, mus, [(a.lo[idx], a.hi[idx]) for a, _, _ in firing], level, idx)
+    options = _sides(sub, lines)
+    if options is None:
+        return gx, gy
+    points, which, valid = options
+    # the levels' slopes at each side's point (a point rectangle: one selection, no kink)
+    pf = enc.firing(points[:, 0], points[:, 0], points[:, 1], points[:, 1])
+    _, pgx, pgy = enc.levels(pf, slice(0, points.shape[0]))
+    single_x: BoolArray = np.all(pgx.hi - pgx.lo <= 1e-9 * (1 + np.abs(pgx.hi)), axis=1)
+    single_y: BoolArray = np.all(pgy.hi - pgy.lo <= 1e-9 * (1 + np.abs(pgy.hi)), axis=1)
+    single = single_x & single_y
+    side_dfdl = Interval(dfdl.lo[idx][which], dfdl.hi[idx][which])
+    ox, oy = dot(side_dfdl, pgx), dot(side_dfdl, pgy)
+    new = [gx.lo.copy(), gx.hi.copy(), gy.lo.copy(), gy.hi.copy()]
+    for k, cell in enumerate(idx):
+        mine = which == k
+        if not (valid[k] and np.all(single[mine])):
+            continue
+        lo_x, hi_x = ox.lo[mine].min(), ox.hi[mine].max()
+        lo_y, hi_y = oy.lo[mine].min(), oy.hi[mine].max()
+        new[0][cell], new[1][cell] = max(new[0][cell], lo_x), min(new[1][cell], hi_x)
+        new[2][cell], new[3][cell] = max(new[2][cell], lo_y), min(new[3][cell], hi_y)
+    return Interval(new[0], new[1]), Interval(new[2], new[3])
+
+
+def _comparisons(
+    enc: Enclosure,
+    mus: list[list[FloatArray]],
+    strength: list[tuple[FloatArray, FloatArray]],
+    level: Interval,
+    idx: npt.NDArray[np.intp],
+) -> list[FloatArray]:
+    """Corner values (n, 4) of every live comparison (masked with NaN where not live)."""
+    n = idx.size
+    props: list[list[tuple[FloatArray, BoolArray]]] = []  # per rule: (corner values, can-min)
+    for r, rule in enumerate(enc.rules):
+        vals = []
+        for axis, t, neg in rule.props:
+            v = mus[axis][t]
+            vals.append(1.0 - v if neg else v)
+        vals = [rule.weight * v for v in vals]
+        live: BoolArray = (
+            np.all([v.max(1) > 0.0 for v in vals], axis=0) if vals else np.ones(n, dtype=bool)
+        )
+        top = np.min([v.max(1) for v in vals], axis=0) if vals else np.ones(n)
+        props.append([(v, live & (v.min(1) <= top)) for v in vals])
+        del r
+    out: list[FloatArray] = []
+
+    def add(a: FloatArray, b: FloatArray, live: BoolArray) -> None:
+        out.append(np.where(live[:, None], a - b, np.nan))
+
+    for rp in props:
+        for i in range(len(rp)):
+            for j in range(i + 1, len(rp)):
+                add(rp[i][0], rp[j][0], rp[i][1] & rp[j][1])
+    by_term: dict[int, list[int]] = {}
+    for r, rule in enumerate(enc.rules):
+        by_term.setdefault(rule.consequent, []).append(r)
+    for t, rs in by_term.items():
+        can = [strength[r][1] >= level.lo[idx, t] for r in rs]
+        for a in range(len(rs)):
+            for b in range(a + 1, len(rs)):
+                for va, ca in props[rs[a]]:
+                    for vb, cb in props[rs[b]]:
+                        add(va, vb, can[a] & can[b] & ca & cb)
+    return out
+
+
+def _sides(
+    rect: FloatArray, lines: list[FloatArray]
+) -> tuple[FloatArray, npt.NDArray[np.intp], BoolArray] | None:
+    """Points inside each side of the one switch line per rectangle.
+
+    Returns ``(points (m, 2), rectangle index of each point (m,), valid (n,))``; a rectangle
+    with no crossing comparison gets its centre, one with a single line a point on each side,
+    one with several lines is not valid.
+    """
+    n = rect.shape[0]
+    if not lines:
+        return None
+    g = np.stack(lines, 1)  # (n, M, 4)
+    live = ~np.isnan(g[:, :, 0])
+    gmin = np.where(live, np.nanmin(np.where(live[..., None], g, np.inf), axis=2), 0.0)
+    gmax = np.where(live, np.nanmax(np.where(live[..., None], g, -np.inf), axis=2), 0.0)
+    cross = live & (gmin < 0.0) & (gmax > 0.0)
+    # an affine function's coefficients on the unit square, normalised, sign fixed
+    c0 = g[:, :, 0]
+    a = g[:, :, 1] - c0
+    b = g[:, :, 2] - c0
+    affine = np.abs(g[:, :, 3] - (c0 + a + b)) <= 1e-12 * (
+        np.abs(c0) + np.abs(a) + np.abs(b) + 1e-300
+    )
+    norm = np.hypot(a, b)
+    norm = np.where(norm > 0.0, norm, 1.0)
+    sign = np.where((a > 0.0) | ((a == 0.0) & (b > 0.0)), 1.0, -1.0)
+    coef = np.stack([a, b, c0], 2) * (sign / norm)[..., None]
+    first = np.argmax(cross, axis=1)
+    ref = coef[np.arange(n), first]  # (n, 3)
+    same = np.all(np.abs(coef - ref[:, None, :]) <= SAME_LINE * (1.0 + np.abs(ref[:, None, :])), 2)
+    n_cross = cross.sum(1)
+    valid = np.all(~cross | (same & affine), axis=1) & np.all(~live | affine | ~cross, axis=1)
+    corners = np.array(_CORNERS, dtype=np.float64)
+    pts, which = [], []
+    for k in range(n):
+        x0, x1, y0, y1 = rect[k]
+        span = np.array([x1 - x0, y1 - y0])
+        base = np.array([x0, y0])
+        if n_cross[k] == 0:
+            pts.append(base + 0.5 * span)
+            which.append(k)
+            continue
+        if not valid[k]:
+            continue
+        gk = g[k, first[k]]
+        for corner in (int(np.argmin(gk)), int(np.argmax(gk))):
+            # the point just inside from the corner where the line's function is extreme
+            u = corners[corner] + INSET * (0.5 - corners[corner])
+            val = gk[0] + (gk[1] - gk[0]) * u[0] + (gk[2] - gk[0]) * u[1]
+            if np.sign(val) != np.sign(gk[corner]) or val == 0.0:
+                valid[k] = False
+            pts.append(base + u * span)
+            which.append(k)
+    if not pts:
+        return None
+    return np.array(pts), np.array(which, dtype=np.intp), valid
