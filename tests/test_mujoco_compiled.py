@@ -56,7 +56,7 @@ def _both(
     _, sensor_delay, _ = run_faults_and_latency(exp, seed, faults, latency)
     reference_plant = make(dynamics=dynamics)
     reference_plant.use_servo_callback(servo())
-    hybrid = GeneratedLoopController(generated.spec, sensor_delay, require_c=True)
+    hybrid = GeneratedLoopController(generated.spec, sensor_delay, impl="c")
     reference = run(exp, reference_plant, controller, hybrid=hybrid, seed=seed, faults=faults,
                     duration_s=duration_s, latency=latency)  # fmt: skip
     plant = make(dynamics=dynamics)
