@@ -10,14 +10,18 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from typing import Any
 
 import numpy as np
 
 from fuzzkit.errors import SimulationError
 from fuzzkit.loop.adapter import PlantAdapter
 from fuzzkit.loop.compiled import period as P
-from fuzzkit.loop.compiled.common import ControllerArgs, result_from_recording, warm_up
+from fuzzkit.loop.compiled.common import (
+    ControllerArgs,
+    recording,
+    result_from_recording,
+    warm_up,
+)
 from fuzzkit.loop.compiled.planar_run import run_planar
 from fuzzkit.loop.result import RunResult
 from fuzzkit.loop.task import Experiment
@@ -50,29 +54,7 @@ def run_planar_compiled(
     noise = sensor_noise(
         scn.sensor.noise_std_n, seed, sensor_samples(scn.period_s, scn.sensor.rate_hz, n)
     )
-    n_obj = max(a.obj_kind.shape[0], 1)
-    rec: dict[str, Any] = {
-        "t": np.empty(n),
-        "force": np.empty((n, 3)),
-        "force_sensor": np.empty((n, 3)),
-        "force_true": np.empty((n, 3)),
-        "e": np.empty((n, 3)),
-        "de": np.empty((n, 3)),
-        "du": np.empty((n, 3)),
-        "u": np.empty((n, 3)),
-        "tool": np.empty((n, 3)),
-        "nominal": np.empty((n, 3)),
-        "target": np.empty((n, 3)),
-        "joints": np.empty((n, 2)),
-        "contact": np.empty(n, dtype=np.bool_),
-        "force_normal": np.empty((n, 3)),
-        "moving": np.empty(n, dtype=np.bool_),
-        "flags": np.zeros((n, 4), dtype=np.int64),
-        "arm": np.empty((n, 4, 3)),
-        "points": np.zeros((n, n_obj, 3)),
-        "npoints": np.empty(n, dtype=np.int64),
-        "status": np.empty(n, dtype=np.int64),
-    }
+    rec = recording(n, 2, 4, a.obj_kind.shape[0], flags=np.zeros((n, 4), dtype=np.int64))
     scalars = np.zeros(P.N_RESULTS)
     reset_force = np.asarray(reset.force, dtype=np.float64).copy()
     args = (

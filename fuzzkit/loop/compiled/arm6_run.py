@@ -1,8 +1,9 @@
 """The whole closed-loop run on the arm6 plant as one compiled loop over periods.
 
-Per period: the compiled plant step (:func:`fuzzkit.plants.arm6_period.plant_step`), then the
-plant-independent part shared with the planar loop (:mod:`fuzzkit.loop.compiled.period`:
-fault injection, latency queues, the hybrid controller), then recording.
+Per period: the compiled plant step (:func:`fuzzkit.plants.arm6_period.plant_step`) inside the
+skeleton every compiled loop shares (:mod:`fuzzkit.loop.compiled.skeleton`: the path's clock,
+fault injection, latency queues, the generated controller, the common recording), then the
+arm's own recording.
 """
 
 from __future__ import annotations
@@ -13,21 +14,12 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.jit import jit
-from fuzzkit.loop.compiled.generated_controller import generated_step
-from fuzzkit.loop.compiled.period import (
-    C_COMMAND_DELAY,
-    C_PERIOD,
-    C_SENSOR_DELAY,
-    V_DE,
-    V_DU,
-    V_E,
-    command_latency,
-    controller_state,
-    credit_normal,
-    inject_faults,
-    path_held,
-    sensor_latency,
-    store_results,
+from fuzzkit.loop.compiled.period import credit_normal, store_results
+from fuzzkit.loop.compiled.skeleton import (
+    controller_period,
+    loop_state,
+    period_start,
+    record_period,
 )
 from fuzzkit.plants.arm6_period import plant_step, pose_at
 
@@ -60,7 +52,7 @@ def run_arm6(
     q_ref: FloatArray,
     q_ik: FloatArray,
     stick: FloatArray,
-    state: FloatArray,
+    state_p: FloatArray,
     noise: FloatArray,
     reset_force: FloatArray,
     # controller
@@ -89,33 +81,22 @@ def run_arm6(
     r_contact: BoolArray,
     r_force_normal: FloatArray,
     r_moving: BoolArray,
-    r_ik: IntArray,
-    r_limited: BoolArray,
     r_arm: FloatArray,
     r_points: FloatArray,
     r_npoints: IntArray,
     r_status: IntArray,
+    # the arm's own: the IK's status, the joint speed limit hit
+    r_ik: IntArray,
+    r_limited: BoolArray,
     out_scalars: FloatArray,
 ) -> None:
     """Run ``r_t.shape[0]`` periods; fill the recording arrays and ``out_scalars``."""
     n_periods = r_t.shape[0]
     dof = q.shape[0]
     n_obj = a_kind.shape[0]
-    period = cp[C_PERIOD]
-    sd = int(cp[C_SENSOR_DELAY])
-    cd = int(cp[C_COMMAND_DELAY])
-    cs, cv = controller_state(cp)
-    e, de, du = cv[V_E], cv[V_DE], cv[V_DU]
-    sensor_q = np.empty((sd + 1, 3))
-    for k in range(sd + 1):
-        sensor_q[k, :] = reset_force
-    command_q = np.zeros((cd + 1, 3))
-    applied = np.zeros(3)
-    correction = np.zeros(3)
-    c_rot = np.empty(9)  # the tool's rotation, row-major, for the generated controller
-    for j in range(9):
-        c_rot[j] = a_rot_task[j // 3, j % 3]
-    corr_base = np.zeros(3)
+    cs, cv, sensor_q, command_q, applied, correction, c_rot, corr_base = loop_state(
+        cp, reset_force, a_rot_task
+    )
     # plant outputs
     nominal = np.empty(3)
     nominal_before = np.empty(3)
@@ -131,56 +112,19 @@ def run_arm6(
     path_t = 0.0
     for k in range(n_periods):
         path_before = path_t
-        if not path_held(cp, cs):
-            path_t += period
-        for j in range(3):
-            corr_base[j] = (
-                a_rot_task[j, 0] * applied[0]
-                + a_rot_task[j, 1] * applied[1]
-                + a_rot_task[j, 2] * applied[2]
-            )
+        path_t = period_start(cp, cs, path_t, a_rot_task, applied, corr_base)
         ik_status, count, limited = plant_step(
-            a_links,
-            a_tool_r,
-            a_tool_p,
-            a_lower,
-            a_upper,
-            a_dq_max,
-            a_path_t,
-            a_path_pos,
-            a_path_quat,
-            a_kind,
-            a_p,
-            a_terms,
-            a_nterms,
-            a_grid,
-            a_rot_task,
-            params,
-            q,
-            q_ref,
-            q_ik,
-            stick,
-            state,
-            noise,
-            corr_base,
-            path_t,
-            nominal,
-            tcp,
-            rot,
-            origins,
-            f_true,
-            f_meas,
-            points,
-            normals,
-        )
-        t_s = state[0]
-        inject_faults(cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured)
-        # before the first measurement arrives (k < sd) the controller waits: no fault counted
-        consumed = sensor_latency(k, sd, sensor_q, measured, reset_force)
-        r_status[k] = generated_step(
-            c_step, c_state, c_rot, cp, selection, setpoints, consumed, t_s, cs, cv, correction
-        )
-        command_latency(k, cd, command_q, correction, applied)
+            a_links, a_tool_r, a_tool_p, a_lower, a_upper, a_dq_max, a_path_t, a_path_pos,
+            a_path_quat, a_kind, a_p, a_terms, a_nterms, a_grid, a_rot_task, params, q, q_ref,
+            q_ik, stick, state_p, noise, corr_base, path_t,
+            nominal, tcp, rot, origins, f_true, f_meas, points, normals,
+        )  # fmt: skip
+        t_s = state_p[0]
+        r_status[k], consumed = controller_period(
+            k, cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured, reset_force, c_step,
+            c_state, selection, setpoints, cs, cv, sensor_q, command_q, applied, correction,
+            c_rot,
+        )  # fmt: skip
         # ---- recording ----
         moving = False
         if path_t > path_before:
@@ -188,24 +132,18 @@ def run_arm6(
             for j in range(3):
                 if abs(nominal[j] - nominal_before[j]) > 1e-9:
                     moving = True
-        r_t[k] = t_s
-        r_moving[k] = moving
+        record_period(
+            k, t_s, moving, count, consumed, measured, f_true, cv, correction, r_t, r_moving,
+            r_contact,
+            r_npoints, r_force, r_force_sensor, r_force_true, r_e, r_de, r_du, r_u,
+            r_force_normal,
+        )  # fmt: skip
         r_ik[k] = ik_status
         r_limited[k] = limited
-        r_contact[k] = count > 0
-        r_npoints[k] = count
         for j in range(3):
-            r_force[k, j] = consumed[j]
-            r_force_sensor[k, j] = measured[j]
-            r_force_true[k, j] = f_true[j]
-            r_e[k, j] = e[j]
-            r_de[k, j] = de[j]
-            r_du[k, j] = du[j]
-            r_u[k, j] = correction[j]
             r_tool[k, j] = tcp[j] - a_offset[j]
             r_nominal[k, j] = nominal[j] - a_offset[j]
             r_target[k, j] = nominal[j] + corr_base[j] - a_offset[j]
-            r_force_normal[k, j] = 0.0
         for c in range(count):
             for j in range(3):
                 r_points[k, c, j] = points[c, j] - a_offset[j]

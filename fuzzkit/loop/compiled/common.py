@@ -98,6 +98,35 @@ def controller_args(
     )
 
 
+def recording(n: int, joints: int, arm_points: int, n_obj: int, **own: Any) -> dict[str, Any]:
+    """The recording arrays of an ``n``-period compiled run, in the order every plant's loop
+    takes them (``r_t`` ...), then the plant's ``own`` (its loop's last arguments before
+    ``out_scalars``): ``joints`` joint angles, ``arm_points`` points of the drawn arm,
+    ``n_obj`` contact points at most."""
+    return {
+        "t": np.empty(n),
+        "force": np.empty((n, 3)),
+        "force_sensor": np.empty((n, 3)),
+        "force_true": np.empty((n, 3)),
+        "e": np.empty((n, 3)),
+        "de": np.empty((n, 3)),
+        "du": np.empty((n, 3)),
+        "u": np.empty((n, 3)),
+        "tool": np.empty((n, 3)),
+        "nominal": np.empty((n, 3)),
+        "target": np.empty((n, 3)),
+        "joints": np.empty((n, joints)),
+        "contact": np.empty(n, dtype=np.bool_),
+        "force_normal": np.empty((n, 3)),
+        "moving": np.empty(n, dtype=np.bool_),
+        "arm": np.empty((n, arm_points, 3)),
+        "points": np.zeros((n, max(n_obj, 1), 3)),
+        "npoints": np.empty(n, dtype=np.int64),
+        "status": np.empty(n, dtype=np.int64),
+        **own,
+    }
+
+
 def result_from_recording(
     exp: Experiment,
     plant: str,
