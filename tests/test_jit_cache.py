@@ -250,6 +250,7 @@ def test_the_run_loops_closure_holds_its_callees_and_not_the_cli() -> None:
     closure = set(jit_module.package_graph().closure("fuzzkit.loop.compiled.arm6_run"))
     assert {
         "fuzzkit.loop.compiled.arm6_run",
+        "fuzzkit.loop.compiled.skeleton",  # the per-period skeleton every loop shares
         "fuzzkit.loop.compiled.period",  # faults and latency, called every period
         "fuzzkit.loop.compiled.generated_controller",  # the controller's period
         "fuzzkit.plants.arm6_period",  # the plant's period

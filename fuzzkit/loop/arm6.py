@@ -8,13 +8,19 @@ compiled call (:func:`fuzzkit.loop.compiled.arm6_run.run_arm6`) runs every perio
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 
 import numpy as np
 
 from fuzzkit.loop.adapter import PlantAdapter
 from fuzzkit.loop.compiled import arm6_run as K
 from fuzzkit.loop.compiled import period as P
-from fuzzkit.loop.compiled.common import ControllerArgs, recording, result_from_recording, warm_up
+from fuzzkit.loop.compiled.common import (
+    ControllerArgs,
+    recording,
+    result_from_recording,
+    warm_up,
+)
 from fuzzkit.loop.result import RunResult
 from fuzzkit.loop.task import Experiment
 from fuzzkit.plants.arm6 import Arm6Plant
@@ -42,9 +48,8 @@ def run_arm6_compiled(
     arrays = pack(plant)  # UnsupportedPlant (a ConfigError) for what the kernel lacks
     noise = sensor_noise(scn.sensor.noise_std_n, seed, n + 1)
     dof = arrays.q.shape[0]
-    n_obj = max(arrays.obj_kind.shape[0], 1)
-    extra = {"ik": np.empty(n, dtype=np.int64), "limited": np.empty(n, dtype=np.bool_)}
-    rec = recording(n, dof, dof + 2, n_obj, extra)
+    own = {"ik": np.empty(n, dtype=np.int64), "limited": np.empty(n, dtype=np.bool_)}
+    rec = recording(n, dof, dof + 2, arrays.obj_kind.shape[0], **own)
     scalars = np.zeros(P.N_RESULTS)
     reset_force = np.asarray(reset.force, dtype=np.float64).copy()
     a = arrays
@@ -58,14 +63,8 @@ def run_arm6_compiled(
     warm_up(K.run_arm6, args, rec, scalars, ctrl)
     wall0 = time.perf_counter()
     cpu0 = time.process_time()
-    K.run_arm6(
-        *args,
-        rec["t"], rec["force"], rec["force_sensor"], rec["force_true"], rec["e"], rec["de"],
-        rec["du"], rec["u"], rec["tool"], rec["nominal"], rec["target"], rec["joints"],
-        rec["contact"], rec["force_normal"], rec["moving"], rec["ik"], rec["limited"], rec["arm"],
-        rec["points"], rec["npoints"], rec["status"],
-        scalars,
-    )  # fmt: skip
+    kernel: Callable[..., None] = K.run_arm6  # called with the argument list built above
+    kernel(*args, *rec.values(), scalars)
     cpu = time.process_time() - cpu0
     wall = time.perf_counter() - wall0
     messages: dict[str, int] = {}

@@ -243,12 +243,12 @@ def run_mujoco_compiled(
     noise = sensor_noise(scn.sensor.noise_std_n, seed, n + 1)
     dof = len(plant._q_ref)
     n_bodies = len(plant._arm_bodies)
-    extra = {
-        "ik": np.empty(n, dtype=np.int64),
-        "limited": np.empty(n, dtype=np.int64),
-        "saturated": np.empty(n, dtype=np.int64),
-    }
-    rec = recording(n, dof, n_bodies + 1, K.MOST_CONTACTS, extra)
+    rec = recording(
+        n, dof, n_bodies + 1, K.MOST_CONTACTS,
+        ik=np.empty(n, dtype=np.int64),
+        limited=np.empty(n, dtype=np.int64),  # bit masks of the joints and of the servos
+        saturated=np.empty(n, dtype=np.int64),
+    )  # fmt: skip
     scalars = np.zeros(P.N_RESULTS)
     reset_force = np.asarray(reset.force, dtype=np.float64).copy()
     args = (

@@ -16,7 +16,12 @@ import numpy as np
 from fuzzkit.errors import SimulationError
 from fuzzkit.loop.adapter import PlantAdapter
 from fuzzkit.loop.compiled import period as P
-from fuzzkit.loop.compiled.common import ControllerArgs, recording, result_from_recording, warm_up
+from fuzzkit.loop.compiled.common import (
+    ControllerArgs,
+    recording,
+    result_from_recording,
+    warm_up,
+)
 from fuzzkit.loop.compiled.planar_run import run_planar
 from fuzzkit.loop.result import RunResult
 from fuzzkit.loop.task import Experiment
@@ -49,9 +54,7 @@ def run_planar_compiled(
     noise = sensor_noise(
         scn.sensor.noise_std_n, seed, sensor_samples(scn.period_s, scn.sensor.rate_hz, n)
     )
-    n_obj = max(a.obj_kind.shape[0], 1)
-    extra = {"flags": np.zeros((n, 4), dtype=np.int64)}
-    rec = recording(n, 2, 4, n_obj, extra)
+    rec = recording(n, 2, 4, a.obj_kind.shape[0], flags=np.zeros((n, 4), dtype=np.int64))
     scalars = np.zeros(P.N_RESULTS)
     reset_force = np.asarray(reset.force, dtype=np.float64).copy()
     args = (

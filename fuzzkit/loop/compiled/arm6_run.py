@@ -1,8 +1,9 @@
 """The whole closed-loop run on the arm6 plant as one compiled loop over periods.
 
-Per period: the compiled plant step (:func:`fuzzkit.plants.arm6_period.plant_step`), then the
-plant-independent part shared with the planar loop (:mod:`fuzzkit.loop.compiled.period`:
-fault injection, latency queues, the hybrid controller), then recording.
+Per period: the compiled plant step (:func:`fuzzkit.plants.arm6_period.plant_step`) inside the
+skeleton every compiled loop shares (:mod:`fuzzkit.loop.compiled.skeleton`: the path's clock,
+fault injection, latency queues, the generated controller, the common recording), then the
+arm's own recording.
 """
 
 from __future__ import annotations
@@ -13,18 +14,12 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.jit import jit
-from fuzzkit.loop.compiled.period import (
-    C_PERIOD,
-    controller_state,
-    credit_normal,
-    path_held,
-    store_results,
-)
+from fuzzkit.loop.compiled.period import credit_normal, store_results
 from fuzzkit.loop.compiled.skeleton import (
     controller_period,
-    record_controller,
-    start_queues,
-    to_base,
+    loop_state,
+    period_start,
+    record_period,
 )
 from fuzzkit.plants.arm6_period import plant_step, pose_at
 
@@ -57,7 +52,7 @@ def run_arm6(
     q_ref: FloatArray,
     q_ik: FloatArray,
     stick: FloatArray,
-    state: FloatArray,
+    state_p: FloatArray,
     noise: FloatArray,
     reset_force: FloatArray,
     # controller
@@ -86,24 +81,22 @@ def run_arm6(
     r_contact: BoolArray,
     r_force_normal: FloatArray,
     r_moving: BoolArray,
-    r_ik: IntArray,
-    r_limited: BoolArray,
     r_arm: FloatArray,
     r_points: FloatArray,
     r_npoints: IntArray,
     r_status: IntArray,
+    # the arm's own: the IK's status, the joint speed limit hit
+    r_ik: IntArray,
+    r_limited: BoolArray,
     out_scalars: FloatArray,
 ) -> None:
     """Run ``r_t.shape[0]`` periods; fill the recording arrays and ``out_scalars``."""
     n_periods = r_t.shape[0]
     dof = q.shape[0]
     n_obj = a_kind.shape[0]
-    period = cp[C_PERIOD]
-    cs, cv = controller_state(cp)
-    sensor_q, command_q, c_rot = start_queues(cp, reset_force, a_rot_task)
-    applied = np.zeros(3)
-    correction = np.zeros(3)
-    corr_base = np.zeros(3)
+    cs, cv, sensor_q, command_q, applied, correction, c_rot, corr_base = loop_state(
+        cp, reset_force, a_rot_task
+    )
     # plant outputs
     nominal = np.empty(3)
     nominal_before = np.empty(3)
@@ -119,47 +112,18 @@ def run_arm6(
     path_t = 0.0
     for k in range(n_periods):
         path_before = path_t
-        if not path_held(cp, cs):
-            path_t += period
-        to_base(a_rot_task, applied, corr_base)
+        path_t = period_start(cp, cs, path_t, a_rot_task, applied, corr_base)
         ik_status, count, limited = plant_step(
-            a_links,
-            a_tool_r,
-            a_tool_p,
-            a_lower,
-            a_upper,
-            a_dq_max,
-            a_path_t,
-            a_path_pos,
-            a_path_quat,
-            a_kind,
-            a_p,
-            a_terms,
-            a_nterms,
-            a_grid,
-            a_rot_task,
-            params,
-            q,
-            q_ref,
-            q_ik,
-            stick,
-            state,
-            noise,
-            corr_base,
-            path_t,
-            nominal,
-            tcp,
-            rot,
-            origins,
-            f_true,
-            f_meas,
-            points,
-            normals,
-        )
-        t_s = state[0]
+            a_links, a_tool_r, a_tool_p, a_lower, a_upper, a_dq_max, a_path_t, a_path_pos,
+            a_path_quat, a_kind, a_p, a_terms, a_nterms, a_grid, a_rot_task, params, q, q_ref,
+            q_ik, stick, state_p, noise, corr_base, path_t,
+            nominal, tcp, rot, origins, f_true, f_meas, points, normals,
+        )  # fmt: skip
+        t_s = state_p[0]
         r_status[k], consumed = controller_period(
-            k, cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured, sensor_q, reset_force,
-            c_step, c_state, c_rot, selection, setpoints, cs, cv, correction, command_q, applied,
+            k, cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured, reset_force, c_step,
+            c_state, selection, setpoints, cs, cv, sensor_q, command_q, applied, correction,
+            c_rot,
         )  # fmt: skip
         # ---- recording ----
         moving = False
@@ -168,21 +132,18 @@ def run_arm6(
             for j in range(3):
                 if abs(nominal[j] - nominal_before[j]) > 1e-9:
                     moving = True
-        r_t[k] = t_s
-        r_moving[k] = moving
+        record_period(
+            k, t_s, moving, count, consumed, measured, f_true, cv, correction, r_t, r_moving,
+            r_contact,
+            r_npoints, r_force, r_force_sensor, r_force_true, r_e, r_de, r_du, r_u,
+            r_force_normal,
+        )  # fmt: skip
         r_ik[k] = ik_status
         r_limited[k] = limited
-        r_contact[k] = count > 0
-        r_npoints[k] = count
-        record_controller(
-            k, consumed, measured, f_true, cv, correction,
-            r_force, r_force_sensor, r_force_true, r_e, r_de, r_du, r_u,
-        )  # fmt: skip
         for j in range(3):
             r_tool[k, j] = tcp[j] - a_offset[j]
             r_nominal[k, j] = nominal[j] - a_offset[j]
             r_target[k, j] = nominal[j] + corr_base[j] - a_offset[j]
-            r_force_normal[k, j] = 0.0
         for c in range(count):
             for j in range(3):
                 r_points[k, c, j] = points[c, j] - a_offset[j]

@@ -98,13 +98,12 @@ def controller_args(
     )
 
 
-def recording(
-    n: int, joints: int, arm_rows: int, points: int, extra: dict[str, Any]
-) -> dict[str, Any]:
-    """The recording arrays of an ``n``-period compiled run, in the kernels' argument order: the
-    series every loop records, the plant's own ``extra`` ones after ``moving``, then the arm's
-    ``arm_rows`` points, up to ``points`` contact points and their count, the status bits."""
-    rec: dict[str, Any] = {
+def recording(n: int, joints: int, arm_points: int, n_obj: int, **own: Any) -> dict[str, Any]:
+    """The recording arrays of an ``n``-period compiled run, in the order every plant's loop
+    takes them (``r_t`` ...), then the plant's ``own`` (its loop's last arguments before
+    ``out_scalars``): ``joints`` joint angles, ``arm_points`` points of the drawn arm,
+    ``n_obj`` contact points at most."""
+    return {
         "t": np.empty(n),
         "force": np.empty((n, 3)),
         "force_sensor": np.empty((n, 3)),
@@ -120,13 +119,12 @@ def recording(
         "contact": np.empty(n, dtype=np.bool_),
         "force_normal": np.empty((n, 3)),
         "moving": np.empty(n, dtype=np.bool_),
+        "arm": np.empty((n, arm_points, 3)),
+        "points": np.zeros((n, max(n_obj, 1), 3)),
+        "npoints": np.empty(n, dtype=np.int64),
+        "status": np.empty(n, dtype=np.int64),
+        **own,
     }
-    rec.update(extra)
-    rec["arm"] = np.empty((n, arm_rows, 3))
-    rec["points"] = np.zeros((n, points, 3))
-    rec["npoints"] = np.empty(n, dtype=np.int64)
-    rec["status"] = np.empty(n, dtype=np.int64)
-    return rec
 
 
 def result_from_recording(

@@ -1,8 +1,8 @@
 """The whole closed-loop run on the pymunk planar arm as one compiled loop over periods.
 
 Per period: the planar plant step (:func:`fuzzkit.planar_sim.arm_period.plant_step`: numba code
-around the same Chipmunk calls the Python plant makes), then the plant-independent part shared
-with the arm6 loop (:mod:`fuzzkit.loop.compiled.period`), then recording.
+around the same Chipmunk calls the Python plant makes) inside the skeleton every compiled loop
+shares (:mod:`fuzzkit.loop.compiled.skeleton`), then the arm's own recording.
 """
 
 from __future__ import annotations
@@ -13,18 +13,12 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.jit import jit
-from fuzzkit.loop.compiled.period import (
-    C_PERIOD,
-    controller_state,
-    credit_normal,
-    path_held,
-    store_results,
-)
+from fuzzkit.loop.compiled.period import credit_normal, store_results
 from fuzzkit.loop.compiled.skeleton import (
     controller_period,
-    record_controller,
-    start_queues,
-    to_base,
+    loop_state,
+    period_start,
+    record_period,
 )
 from fuzzkit.planar_sim.arm_period import STEP_OK, arm_pose, nominal_at, plant_step
 
@@ -75,11 +69,12 @@ def run_planar(
     r_contact: BoolArray,
     r_force_normal: FloatArray,
     r_moving: BoolArray,
-    r_flags: IntArray,
     r_arm: FloatArray,
     r_points: FloatArray,
     r_npoints: IntArray,
     r_status: IntArray,
+    # the arm's own: the plant step's flags
+    r_flags: IntArray,
     out_scalars: FloatArray,
 ) -> int:
     """Run up to ``r_t.shape[0]`` periods, filling the recording arrays and ``out_scalars``;
@@ -87,12 +82,9 @@ def run_planar(
     of the last one says so)."""
     n_periods: int = r_t.shape[0]
     n_obj = a_kind.shape[0]
-    period = cp[C_PERIOD]
-    cs, cv = controller_state(cp)
-    sensor_q, command_q, c_rot = start_queues(cp, reset_force, a_rot)
-    applied = np.zeros(3)
-    correction = np.zeros(3)
-    corr_base = np.zeros(3)
+    cs, cv, sensor_q, command_q, applied, correction, c_rot, corr_base = loop_state(
+        cp, reset_force, a_rot
+    )
     nominal = np.empty(3)
     nominal_before = np.empty(3)
     target = np.empty(3)
@@ -104,9 +96,7 @@ def run_planar(
     path_t = 0.0
     for k in range(n_periods):
         path_before = path_t
-        if not path_held(cp, cs):
-            path_t += period
-        to_base(a_rot, applied, corr_base)
+        path_t = period_start(cp, cs, path_t, a_rot, applied, corr_base)
         count = plant_step(
             a_path, a_kind, a_p, a_terms, a_nterms, a_rot, params, functions, pointers, stick,
             state, noise, corr_base, path_t,
@@ -117,8 +107,9 @@ def run_planar(
             return k
         t_s = state[0]
         r_status[k], consumed = controller_period(
-            k, cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured, sensor_q, reset_force,
-            c_step, c_state, c_rot, selection, setpoints, cs, cv, correction, command_q, applied,
+            k, cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured, reset_force, c_step,
+            c_state, selection, setpoints, cs, cv, sensor_q, command_q, applied, correction,
+            c_rot,
         )  # fmt: skip
         # ---- recording (PlanarArmPlant._sample and the runner's row) ----
         moving = False
@@ -128,19 +119,16 @@ def run_planar(
                 if abs(nominal[j] - nominal_before[j]) > 1e-9:
                     moving = True
         arm_pose(params, functions, pointers, r_joints[k], r_arm[k])
-        r_t[k] = t_s
-        r_moving[k] = moving
-        r_contact[k] = count > 0
-        r_npoints[k] = count
-        record_controller(
-            k, consumed, measured, f_true, cv, correction,
-            r_force, r_force_sensor, r_force_true, r_e, r_de, r_du, r_u,
+        record_period(
+            k, t_s, moving, count, consumed, measured, f_true, cv, correction, r_t, r_moving,
+            r_contact,
+            r_npoints, r_force, r_force_sensor, r_force_true, r_e, r_de, r_du, r_u,
+            r_force_normal,
         )  # fmt: skip
         for j in range(3):
             r_tool[k, j] = r_arm[k, 3, j]
             r_nominal[k, j] = nominal[j]
             r_target[k, j] = target[j]
-            r_force_normal[k, j] = 0.0
         for c in range(count):
             r_points[k, c, 0] = points[c, 0]
             r_points[k, c, 1] = 0.0
