@@ -38,7 +38,7 @@ Semantics
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -354,9 +354,13 @@ class Engine:
                 for o in rulebase.outputs
             ]
         self._linear = any(isinstance(o, SugenoOutput) and o.linear for o in self._outputs)
-        self._scalar: ScalarPath | SugenoScalarPath | None = None
+        self._scalar: (
+            ScalarPath | SugenoScalarPath | Callable[[Sequence[float]], list[float]] | None
+        )
         if self._type2 is None:
             self._scalar = _scalar_path(rulebase, self._outputs) or sugeno_scalar_path(rulebase)
+        else:
+            self._scalar = self._type2.scalar_path()
 
     def work_per_point(self) -> int:
         """Roughly how many operations one point costs the batch engine: the rules over the
