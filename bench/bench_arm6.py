@@ -47,15 +47,14 @@ def _best_of(fn: Callable[[], tuple[float, float]], repeat: int = 3) -> tuple[fl
 
 def closed_loop_rate(controller: str) -> tuple[float, float]:
     """Simulated seconds per wall second and per CPU second of E2 on arm6 with ``controller``."""
-    from fuzzkit.loop.python_loop import load_surface, run
-    from fuzzkit.studies.experiments import experiment
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import run_spec
 
-    surface = load_surface() if controller == "fuzzy-pi" else None
-    exp = experiment("E2")
+    spec = RunSpec("E2", controller, "arm6", controller_impl="reference")
 
     def once() -> tuple[float, float]:
         clock = _Clock()
-        res = run(exp, "arm6", controller, surface=surface)
+        res = run_spec(spec)  # the loop's entry point, the reference asked for by name
         return clock.rates(res.sim_time_s)
 
     return _best_of(once)

@@ -189,41 +189,33 @@ def step_tables() -> None:
 
 
 def safety_matrix(seeds: int) -> None:
-    from fuzzkit.loop.compiled.generated_controller import (
-        load_generated_controller,
-        run_controller_spec,
-    )
-    from fuzzkit.loop.compiled_loop import run_compiled
-    from fuzzkit.loop.faults import FAULTS, fault
-    from fuzzkit.loop.python_loop import load_surface, run
-    from fuzzkit.studies.experiments import EXPERIMENTS, experiment
+    from fuzzkit.loop.faults import FAULTS
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import run_spec
+    from fuzzkit.studies.experiments import EXPERIMENTS
 
     durations = {"E1": 3.5, "E2": 5.0, "E3": None}  # tests/test_safety.py's
-    surface = load_surface("macvicar_whelan")
+    impls = {"generated C controller, compiled loop": "c"}
+    impls["reference controller, Python loop"] = "reference"
     totals = {"generated C controller, compiled loop": [0.0, 0.0, 0]}
     totals["reference controller, Python loop"] = [0.0, 0.0, 0]
     for name in sorted(EXPERIMENTS):
-        exp = experiment(name)
         for controller in ("pi", "fuzzy-pi"):
-            gen = load_generated_controller(run_controller_spec(exp, controller, None))
             for kind in sorted(FAULTS):
                 for seed in range(seeds):
-                    common = {
-                        "seed": seed,
-                        "faults": fault(kind, seed),
-                        "duration_s": durations[name],
-                    }
                     runs = {
-                        "generated C controller, compiled loop": run_compiled(
-                            exp, "arm6", generated_controller=gen, **common
-                        ),
-                        "reference controller, Python loop": run(
-                            exp,
-                            "arm6",
-                            controller,
-                            surface=surface if controller == "fuzzy-pi" else None,
-                            **common,
-                        ),
+                        label: run_spec(
+                            RunSpec(
+                                name,
+                                controller,
+                                "arm6",
+                                seed=seed,
+                                fault=kind,
+                                duration_s=durations[name],
+                                controller_impl=impl,
+                            )
+                        )
+                        for label, impl in impls.items()
                     }
                     for label, r in runs.items():
                         t = totals[label]

@@ -27,15 +27,14 @@ def _best_of(fn: Callable[[], float], repeat: int = 3) -> float:
 def closed_loop_rate(controller: str) -> float:
     """Simulated seconds per wall second of E1 on the planar arm, the reference controller in
     the Python loop (a fuzzy-PI on the exact engine)."""
-    from fuzzkit.loop.python_loop import load_surface, run
-    from fuzzkit.studies.experiments import experiment
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import run_spec
 
-    surface = load_surface() if controller == "fuzzy-pi" else None
-    exp = experiment("E1")
+    spec = RunSpec("E1", controller, "planar", seed=1, controller_impl="reference")
 
     def once() -> float:
         t0 = time.perf_counter()
-        res = run(exp, "planar", controller, surface=surface, seed=1)
+        res = run_spec(spec)  # the loop's entry point, the reference asked for by name
         return res.sim_time_s / (time.perf_counter() - t0)
 
     return _best_of(once)

@@ -2,19 +2,21 @@
 
 ``macvicar_whelan_it2`` (49 rules, Karnik-Mendel). Rows:
 
-* fuzzkit's exact IT2 engine (continuous type reduction): one scalar point
-  (``Engine.evaluate_point``) and a 101x101 surface (one vectorised ``evaluate``);
+* fuzzkit's exact IT2 engine (continuous type reduction, the compiled kernel of
+  ``fuzzkit/fuzzy/type2_kernel.py``): one scalar point (``Engine.evaluate_point``) and a
+  101x101 surface (one ``evaluate``);
 * pyit2fls 0.9.0 (``--peers-python``: an environment holding it, ``make bench`` installs it in
   ``.venv-bench``), Karnik-Mendel on a 101-point output domain: mean time per point over an
   11x11 grid, and the 101x101 surface extrapolated from it (10201 x the per-point time; the
   peer evaluates one point per call, so the extrapolation is its real cost to within the
   machine's noise). Its value at the scalar point is printed beside fuzzkit's exact one and
-  fuzzkit's ``resolution: 101`` one (which is pyit2fls's number to rounding);
+  fuzzkit's ``resolution: 101`` one (which is pyit2fls's number to rounding). The back end
+  pyit2fls ran (its optional C ``typereduction`` extension or its Python KM) is printed;
 * the generated controller: the IT2 surface as a C float lookup table (65x65, its certified
   bound against the exact engine printed), ns per ``NAME_eval`` (the harness of
   bench_codegen.py, -O2, CPU-time clock) and per 3-axis step (3 evals).
 
-Target (issue 32): the engine 100x faster than pyit2fls; the generated step <= 1 us (3 axes).
+Target (issues 32, 43): the engine 100x faster than pyit2fls; the generated step <= 1 us (3 axes).
 """
 
 from __future__ import annotations
@@ -51,8 +53,8 @@ PEER_GRID = 11
 TABLE_RESOLUTION = 65
 
 
-def peer_row(python: str, rb: fuzzkit.fuzzy.model.RuleBase) -> tuple[float, float]:  # type: ignore[name-defined]
-    """(seconds per point, value at POINT) of pyit2fls."""
+def peer_row(python: str, rb: fuzzkit.fuzzy.model.RuleBase) -> tuple[float, float, str]:  # type: ignore[name-defined]
+    """(seconds per point, value at POINT, back end) of pyit2fls."""
     g = np.linspace(-1.0, 1.0, PEER_GRID)
     ge, gd = np.meshgrid(g, g, indexing="ij")
     spec = system_spec(rb, "karnik-mendel", 101)
@@ -64,7 +66,7 @@ def peer_row(python: str, rb: fuzzkit.fuzzy.model.RuleBase) -> tuple[float, floa
             [python, str(EVAL), "time", str(path)], check=True, capture_output=True, text=True
         ).stdout
     got = json.loads(out)
-    return float(got["seconds_per_point"]), float(got["crisp"][0])
+    return float(got["seconds_per_point"]), float(got["crisp"][0]), str(got["backend"])
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -85,7 +87,7 @@ def main(argv: list[str] | None = None) -> None:
     print(f"  {'fuzzkit exact':<44} {scalar * 1e3:>8.2f}ms {surface:>9.2f}s  {value:.10f}")
     print(f"  {'fuzzkit resolution: 101':<44} {'':>10} {'':>10}  {value101:.10f}")
     if args.peers_python:
-        per_point, peer_value = peer_row(args.peers_python, rb)
+        per_point, peer_value, backend = peer_row(args.peers_python, rb)
         print(
             f"  {'pyit2fls 0.9.0 KM, 101-point domain':<44} {per_point * 1e3:>8.2f}ms "
             f"{per_point * SURFACE_N**2:>9.1f}s  {peer_value:.10f}"
@@ -95,6 +97,7 @@ def main(argv: list[str] | None = None) -> None:
             f"surface {per_point * SURFACE_N**2 / surface:.0f}x (pyit2fls surface extrapolated "
             f"from {PEER_GRID}x{PEER_GRID} points; target 100x)"
         )
+        print(f"  pyit2fls back end: {backend}")
     start = time.perf_counter()
     table = make_table(rb, number_type="float", resolution=TABLE_RESOLUTION)
     built = time.perf_counter() - start

@@ -115,6 +115,14 @@ def compile_rulebase(
             f"rule base {rb.name!r} cannot be compiled: the exact method: {exact_why}; "
             f"a table: {table_why}"
         )
+    elif discontinuous and resolution is None:
+        # no table follows the jumps, so a search for one would spend its whole budget
+        raise CodegenError(
+            f"rule base {rb.name!r} cannot be compiled: the exact method: {exact_why}; a "
+            f"table: {rb.defuzzifier} is discontinuous (the result jumps where two maxima "
+            "swap), so no table meets a useful tolerance (give --resolution to get one with "
+            "its measured bound)"
+        )
     tol = DEFAULT_TOLERANCE if tolerance is None else tolerance
     per_point = _VALUE_BYTES[number_type] * len(rb.outputs)
     if resolution is not None:  # the user chose the table's size: its errors are theirs to see

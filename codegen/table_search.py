@@ -22,6 +22,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import numpy.typing as npt
 
+from fuzzkit.codegen.budget import SEARCH_SECONDS, EngineBudget
 from fuzzkit.codegen.edge_floor import chord_floor
 from fuzzkit.codegen.lookup_table import (
     CHECK_FACTOR,
@@ -153,11 +154,15 @@ MAX_CHECK_POINTS = 1 << 22
 
 
 def _engine_evaluator(rb: RuleBase) -> Evaluator:
+    """The exact engine, each call charged to a :class:`~fuzzkit.codegen.budget.EngineBudget`
+    of ``SEARCH_SECONDS`` before it runs (chunked callers charge each chunk)."""
     from fuzzkit.fuzzy.inference import Engine
 
     engine = Engine(rb)
+    budget = EngineBudget(engine, "the table search", SEARCH_SECONDS)
 
     def evaluate(inputs: Mapping[str, FloatArray]) -> Mapping[str, FloatArray]:
+        budget.charge(math.prod(np.broadcast_shapes(*[np.shape(v) for v in inputs.values()])))
         return engine.evaluate(inputs)
 
     return evaluate

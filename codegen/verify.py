@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from fuzzkit.codegen.budget import VERIFY_SECONDS, EngineBudget
 from fuzzkit.codegen.lookup_table import Q15_ONE, ROUNDING_ALLOWANCE, LookupTable, quantize_q15
 from fuzzkit.codegen.names import symbol
 from fuzzkit.codegen.progress import ProgressFn
@@ -142,6 +143,8 @@ def _exact(rb: RuleBase, points: FloatArray, meter: _Meter | None = None) -> Flo
     from fuzzkit.fuzzy.inference import Engine
 
     engine = Engine(rb)
+    # refused before any work if the engine would take too long (codegen.budget)
+    EngineBudget(engine, "--verify", VERIFY_SECONDS).charge(points.shape[0])
 
     def run(part: FloatArray) -> FloatArray:
         result = engine.evaluate({v.name: part[:, i] for i, v in enumerate(rb.inputs)})

@@ -23,14 +23,14 @@ from fuzzkit.formats.registry import load
 CODEGEN = Path(emit.__file__).parent
 REPO = Path(__file__).parent.parent
 #: Modules every target shares: codegen's own (not its backends), the compile commands and the
-#: studies' spec -> generated code path (``--controller-impl c``, ``fuzzkit replay --impl c``
+#: loop's spec -> generated code path (``--controller-impl c``, ``fuzzkit replay --impl c``
 #: choose an implementation there, not a target: studies/replay.py and batch.py are not listed).
 SHARED = [
     *sorted(CODEGEN.glob("*.py")),
     REPO / "fuzzkit" / "cli" / "codegen_cmd.py",
     REPO / "fuzzkit" / "cli" / "controller_compile.py",
-    REPO / "fuzzkit" / "studies" / "controller_code.py",
-    REPO / "fuzzkit" / "studies" / "compiled" / "generated_controller.py",
+    REPO / "fuzzkit" / "loop" / "controller_code.py",
+    REPO / "fuzzkit" / "loop" / "compiled" / "generated_controller.py",
 ]
 
 

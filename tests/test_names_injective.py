@@ -8,6 +8,7 @@ import re
 from pathlib import Path
 
 import pytest
+from _small_rulebases import SUM_TABLE_3X3
 
 from fuzzkit.cli import main
 from fuzzkit.codegen.method import compile_rulebase
@@ -64,15 +65,7 @@ inputs:
   de: {{range: [-1, 1], terms: {{partition: triangular, labels: [N, Z, P]}}}}
 outputs:
   du: {{range: [-1, 1], terms: {{partition: triangular, labels: [N, Z, P]}}}}
-rules:
-  table:
-    rows: e
-    columns: de
-    cells: |
-      N N Z
-      N Z P
-      Z P P
-"""
+""" + SUM_TABLE_3X3.replace("{", "{{").replace("}", "}}")
 
 
 @pytest.mark.parametrize(("first", "second"), [("in", "in_"), ("_X", "fk_X")])

@@ -4,12 +4,13 @@ the label peaks and everything between, is checked for a rule that fires."""
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from fuzzkit.errors import RuleBaseError
-from fuzzkit.formats import fll, registry, yaml_reader
+from fuzzkit.formats import registry, yaml_reader
 from fuzzkit.fuzzy.inference import evaluate
 from fuzzkit.fuzzy.membership import evaluate_term
 from fuzzkit.fuzzy.model import Compound, Proposition, RuleBase, Term
@@ -142,12 +143,42 @@ rules:
     assert "where e is Z and de is P (e.g. at e=0, de=1)" in problem.message
 
 
-def test_imported_files_get_their_own_located_errors() -> None:
+def test_imported_files_get_their_own_located_warnings(tmp_path: Path) -> None:
+    # imports get coverage: allow_gaps, so a combination no rule reaches is a located warning
     rb = registry.load("macvicar_whelan")
     sparse = dataclasses.replace(rb, rules=rb.rules[1:], table=None)
-    text = registry.dumps(sparse, "fll", allow_loss=True)
-    with pytest.raises(RuleBaseError) as info:
-        fll.loads(text, "sparse.fll")
-    (problem,) = info.value.problems
-    assert problem.location.file == "sparse.fll" and problem.location.line > 1
+    path = tmp_path / "sparse.fll"
+    path.write_text(registry.dumps(sparse, "fll", allow_loss=True))
+    loaded, warnings = registry.load_with_warnings(path)
+    assert loaded.coverage == "allow_gaps"
+    (problem,) = [w for w in warnings if "no rule fires" in w.message]
+    assert problem.severity == "warning"
+    assert problem.location.file == str(path) and problem.location.line > 1
     assert "where e is NL and de is NL" in problem.message
+
+
+def _transposed(cells: str, coverage: str = "") -> str:
+    # rows are the second input (de), columns the first (e)
+    return table(cells).replace("rows: e\n    columns: de", "rows: de\n    columns: e") + coverage
+
+
+def test_a_hole_in_a_table_whose_rows_are_the_second_input_is_located_at_its_cell() -> None:
+    text = _transposed("N N Z/N Z -/Z P P")
+    assert "rows: de" in text
+    with pytest.raises(RuleBaseError) as info:
+        yaml_reader.loads_rulebase(text, "hole.yaml")
+    (problem,) = info.value.problems
+    line = text.splitlines()[problem.location.line - 1]
+    assert problem.location.line == 14 and line[problem.location.col - 1] == "-"
+    # the hole is row Z (de), column P (e)
+    assert "where e is P and de is Z" in problem.message
+
+
+def test_allow_gaps_makes_an_empty_cell_a_located_warning_and_the_output_nan() -> None:
+    text = table("N N Z/N Z -/Z P P") + "coverage: allow_gaps\n"
+    rb, warnings = yaml_reader.loads_rulebase_with_warnings(text, "hole.yaml")
+    (warning,) = warnings
+    line = text.splitlines()[warning.location.line - 1]
+    assert warning.severity == "warning" and warning.location.line == 14
+    assert line[warning.location.col - 1] == "-" and "NaN" in warning.message
+    assert np.isnan(evaluate(rb, {"e": np.array([0.0]), "de": np.array([1.0])})["du"][0])

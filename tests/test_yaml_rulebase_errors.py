@@ -7,6 +7,7 @@ import threading
 from pathlib import Path
 from string import Template
 
+import numpy as np
 import pytest
 
 from fuzzkit import located_yaml
@@ -14,6 +15,7 @@ from fuzzkit.errors import Problem, RuleBaseError
 from fuzzkit.formats import yaml_reader as dsl
 from fuzzkit.formats.registry import loads
 from fuzzkit.formats.yaml_reader import RULE_BASE_DOCUMENT
+from fuzzkit.fuzzy.membership import evaluate_term
 from fuzzkit.fuzzy.model import Compound, Consequent, Proposition, Rule, RuleBase, Term, Variable
 from fuzzkit.fuzzy.validation import check, ensure_valid
 
@@ -249,7 +251,8 @@ CASES = [
         ),
         3,
         "{N:",
-        r"input 'e' is not covered on at 0\.0",
+        # the engine's triangles compute 0 within 2^-54 of the vertex, not only at it
+        r"input 'e' is not covered on \[-5\.55111\d*e-17, 5\.55111\d*e-17\]",
     ),
     (
         doc(du_extra=", default: 2"),
@@ -578,7 +581,8 @@ def test_python_built_model_is_checked_with_logical_paths() -> None:
 
 
 def test_coverage_is_exact_at_the_vertices() -> None:
-    # Two triangles meeting at 0 with membership 0 there: x = 0 fires no rule.
+    # Two triangles meeting at 0 with membership 0 there: x = 0 fires no rule, nor do the
+    # floats within 2^-54 of it, where both compute to exactly 0 (1 - t rounds to 0)
     gap = Variable(
         "e",
         -1.0,
@@ -586,15 +590,25 @@ def test_coverage_is_exact_at_the_vertices() -> None:
         (Term("N", "triangle", (-2.0, -1.0, 0.0)), Term("P", "triangle", (0.0, 1.0, 2.0))),
     )
     issues = dict(check(_model(inputs=(gap,))))
-    assert "not covered on at 0.0" in issues[("inputs", "e", "terms")]
-    # A vertical edge (a == b) has membership 1 at a, so this partition is covered.
+    edge = 2.0**-54
+    assert f"not covered on [{-edge!r}, {edge!r}]" in issues[("inputs", "e", "terms")]
+    mu = np.array([evaluate_term(t, np.array([-edge, 0.0, edge])) for t in gap.terms])
+    assert np.all(mu == 0.0)  # the engine's own arithmetic, as the gap says
+    beside = np.array([np.nextafter(-edge, -1.0), np.nextafter(edge, 1.0)])
+    assert np.all(np.max([evaluate_term(t, beside) for t in gap.terms], axis=0) > 0.0)
+    # A vertical edge (a == b) has membership 1 at a, so 0 itself is covered; left of it the
+    # triangle computes 0 from -2^-54 and the edge (a slope of 1e200) rises only from -1e-200
     edge = Variable(
         "e",
         -1.0,
         1.0,
         (Term("N", "triangle", (-2.0, -1.0, 0.0)), Term("P", "trapezoid", (0.0, 0.0, 1.0, 1.0))),
     )
-    assert check(_model(inputs=(edge,))) == []
+    (message,) = dict(check(_model(inputs=(edge,)))).values()
+    assert f"not covered on [{-(2.0**-54)!r}, -1e-200]" in message
+    at = np.array([-(2.0**-54), -1e-17, -1e-200, -1e-201, 0.0])
+    mu = np.max([evaluate_term(t, at) for t in edge.terms], axis=0)
+    assert list(mu[:3]) == [0.0, 0.0, 0.0] and mu[3] > 0.0 and mu[4] == 1.0
 
 
 def test_python_object_tags_are_refused_not_read_as_data() -> None:

@@ -21,6 +21,8 @@ from fuzzkit.analysis.fuzzy_bounds import StructureError, gradient_bounds, phi_b
 from fuzzkit.analysis.inner_loop import InnerLoop, identify
 from fuzzkit.analysis.invariant_region import level_set, validity_slabs
 from fuzzkit.analysis.loop_model import AxisLoop, noise_std, vertex_matrices
+from fuzzkit.analysis.rest_points import RestProof, prove_exact, prove_table
+from fuzzkit.analysis.surface_enclosure import why_unsupported
 from fuzzkit.analysis.surface_source import SurfaceSource, surface_source
 from fuzzkit.control.names import KINDS as CONTROLLERS
 from fuzzkit.control.spec import EXACT, Surface
@@ -59,6 +61,9 @@ class FuzzyPart:
     rho: float
     zeros: ZeroSet
     details: dict[str, Any] = field(default_factory=dict)
+    #: the sound proof that no other rest point lies on the line de = 0
+    #: (:mod:`fuzzkit.analysis.rest_points`); a string: why there is none
+    rest: RestProof | str = "not computed"
 
 
 def fuzzy_part(rulebase: str | RuleBase, rho: float = 1.0, surface: Surface = EXACT) -> FuzzyPart:
@@ -73,8 +78,23 @@ def fuzzy_part(rulebase: str | RuleBase, rho: float = 1.0, surface: Surface = EX
     return _fuzzy_part(rb, rho, surface)
 
 
+def _rest_proof(source: SurfaceSource) -> RestProof | str:
+    """No other rest point on the whole line de = 0, proven on the deployed surface."""
+    if source.covers_deployed:
+        return prove_table(source.table, -1.0, 1.0)
+    why = why_unsupported(source.rulebase)
+    if why is not None:
+        return f"no sound bound of the exact surface: {why}"
+    return prove_exact(source.rulebase, -1.0, 1.0)
+
+
 @lru_cache(maxsize=16)
 def _fuzzy_part(rb: RuleBase, rho: float, surface: Surface) -> FuzzyPart:
+    part = _fuzzy_bounds(rb, rho, surface)
+    return replace(part, rest=_rest_proof(surface_source(rb, surface)))
+
+
+def _fuzzy_bounds(rb: RuleBase, rho: float, surface: Surface) -> FuzzyPart:
     source = surface_source(rb, surface)
     t = source.table
     zeros = zero_set(source.on_error_axis, tuple(float(b) for b in t.bp0))
@@ -141,6 +161,26 @@ def loop_equilibrium(
         raise ConfigError("fuzzy-pi needs the rule base's bounds")
     all_gains, _, _ = effective_gains(controller, gains)
     return fuzzy_equilibrium(fuzzy.zeros, all_gains["ki"], _setpoint(exp))
+
+
+def other_rest_point(fuzzy: FuzzyPart, ki: float) -> str:
+    """Why another rest point may lie in the box the certificate covers ("" if none can).
+
+    The box is ``|Ki*e| <= rho`` around the set point (the invariant level set lies inside
+    it); ``fuzzy.rest`` proves where ``F(x, 0)`` cannot vanish.
+    """
+    proof = fuzzy.rest
+    if isinstance(proof, str):
+        return proof
+    found = proof.within(-fuzzy.rho, fuzzy.rho)
+    if not found:
+        return ""
+    a, b = found[0]
+    return (
+        f"F(Ki*e, 0) may vanish at Ki*e in [{a:.4g}, {b:.4g}] (e = {a / ki:.3g} to "
+        f"{b / ki:.3g} N), inside the region the certificate covers (|Ki*e| <= {fuzzy.rho:.3g}):"
+        " the loop can rest there, off the set point"
+    )
 
 
 def _setpoint(exp: Experiment) -> float:
@@ -331,15 +371,22 @@ def certify_cell(
         why = f"no common Lyapunov function ({cert.solver_status})"
     elif not quiet:
         why = f"the nominal model predicts {noise:.3g} N of noise, above {NOISE_SHARE * BAND_N:g} N"
+    lone = True
     if not rest.at_setpoint:
         # the model is about the rest point; the set point is not it, so "settles at the set
         # point" cannot be certified, whatever the Lyapunov function says about the rest point
         stable = "stable" if cert.certified else "not proven stable"
         why = f"the set point is not the loop's rest point ({stable} around it): {rest.why}"
+    elif fuzzy is not None:
+        other = other_rest_point(fuzzy, effective_gains(controller, gains)[0]["ki"])
+        if other:
+            lone = False
+            stable = "stable" if cert.certified else "not proven stable"
+            why = f"the set point may not be the only rest point ({stable}): {other}"
     return Cell(
         float(stiffness_n_per_mm),
         lat,
-        cert.certified and quiet and rest.at_setpoint,
+        cert.certified and quiet and rest.at_setpoint and lone,
         cert.margin,
         cert.solver_status,
         cert.certified,
@@ -466,6 +513,12 @@ def certify_region(
             "rulebase": rulebase if isinstance(rulebase, str) else rulebase.name,
             "bounds": fuzzy.kind,
             "zero_set_scaled_error": [list(iv) for iv in fuzzy.zeros.intervals],
+            "lone_rest_point": fuzzy.rest
+            if isinstance(fuzzy.rest, str)
+            else {
+                **fuzzy.rest.as_dict(),
+                "unresolved_near_set_point_n": [v / all_gains["ki"] for v in fuzzy.rest.near],
+            },
             "region": {
                 "abs_ki_e_max": fuzzy.rho,
                 "abs_kp_de_max": fuzzy.rho,

@@ -118,9 +118,11 @@ class _Rule:
 
 
 class Enclosure:
-    """The enclosures of one rule base's surface (inputs in role order; see module doc)."""
+    """The enclosures of one rule base's surface (inputs in role order; see module doc);
+    ``bins``: the output axis's bins (the value enclosure's resolution, about one bin's
+    width)."""
 
-    def __init__(self, rb: RuleBase) -> None:
+    def __init__(self, rb: RuleBase, bins: int = OUTPUT_BINS) -> None:
         why = why_unsupported(rb)
         if why is not None:
             raise ValueError(why)
@@ -149,6 +151,7 @@ class Enclosure:
         self.rules = tuple(rules)
         self.and_min = rb.operators.and_ == "min"
         self.out = out
+        self.bins = bins
         #: every input term is piecewise linear: affine inside a rectangle between kinks
         self.affine_inputs = all(t.is_piecewise_linear for v in rb.inputs for t in v.terms)
 
@@ -230,14 +233,20 @@ class Enclosure:
 
     # ------------------------------------------------------------------ output
     def enclose(
-        self, x0: FloatArray, x1: FloatArray, y0: FloatArray, y1: FloatArray
+        self,
+        x0: FloatArray,
+        x1: FloatArray,
+        y0: FloatArray,
+        y1: FloatArray,
+        tighten: bool = True,
     ) -> CellEnclosure:
-        """``F`` and its slopes over each rectangle ``[x0, x1] x [y0, y1]``."""
+        """``F`` and its slopes over each rectangle ``[x0, x1] x [y0, y1]`` (``tighten``: along
+        the switch lines, :mod:`fuzzkit.analysis.switch_lines`; only the slopes change)."""
         with np.errstate(invalid="ignore", over="ignore"):
-            return self._enclose(x0, x1, y0, y1)
+            return self._enclose(x0, x1, y0, y1, tighten)
 
     def _enclose(
-        self, x0: FloatArray, x1: FloatArray, y0: FloatArray, y1: FloatArray
+        self, x0: FloatArray, x1: FloatArray, y0: FloatArray, y1: FloatArray, tighten: bool
     ) -> CellEnclosure:
         firing = self.firing(x0, x1, y0, y1)
         if self.out.is_sugeno or self.rb.defuzzifier == "weighted_average":
@@ -246,7 +255,7 @@ class Enclosure:
         cells = CellEnclosure(
             *(_concat([getattr(p, a) for p in parts]) for a in ("f", "gx", "gy", "dfdl"))
         )
-        if self.and_min and self.affine_inputs and cells.dfdl is not None:
+        if tighten and self.and_min and self.affine_inputs and cells.dfdl is not None:
             gx, gy = refine(
                 self, np.stack([x0, x1, y0, y1], 1), firing, cells.gx, cells.gy, cells.dfdl
             )
@@ -294,7 +303,7 @@ class Enclosure:
         """Output bins ``(y0, y1)`` and each term's value range on them, (T, B)."""
         out = self.out
         pts = [p for t in out.terms for p in breakpoints(t) if out.low < p < out.high]
-        edges = np.union1d(np.linspace(out.low, out.high, OUTPUT_BINS + 1), pts)
+        edges = np.union1d(np.linspace(out.low, out.high, self.bins + 1), pts)
         y0, y1 = edges[:-1], edges[1:]
         c = [value_bounds(t, y0, y1) for t in out.terms]
         return y0, y1, Interval(np.array([v.lo for v in c]), np.array([v.hi for v in c]))

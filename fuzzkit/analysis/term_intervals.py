@@ -37,18 +37,29 @@ def supported(term: Term, low: float = -1.0, high: float = 1.0) -> bool:
     """Whether :func:`enclose` bounds this term's membership on ``[low, high]`` (a vertical
     edge inside it is a jump: not bounded)."""
     if term.is_piecewise_linear:
-        xs, _ = _vertices(term)
+        pts = shape(term.shape).points
+        xs = np.array([x for x, _ in pts(term.params)]) if pts is not None else np.zeros(0)
         jumps = xs[1:][np.diff(xs) == 0.0]
         return not np.any((jumps > low) & (jumps < high))
     return term.shape in SMOOTH
 
 
 def _vertices(term: Term) -> tuple[FloatArray, FloatArray]:
-    """The term's vertices ``(x, mu)``, constant beyond the ends (a vertical edge: two points
-    at one ``x``)."""
+    """The term's vertices ``(x, mu)``, constant beyond the ends. A vertical edge (two points
+    at one ``x``) keeps the upper value: the engine's formula takes it there (its rise or fall
+    term is exactly 1 at the edge), and :func:`supported` allows such an edge only at the
+    universe's ends, where nothing lies beyond."""
     pts = shape(term.shape).points
-    assert pts is not None  # a piecewise-linear shape has its point list
-    xs, ys = zip(*pts(term.params), strict=True)
+    if pts is None:
+        raise ValueError(f"{term.name}: a {term.shape} term has no vertices")
+    xs: list[float] = []
+    ys: list[float] = []
+    for x, y in pts(term.params):
+        if xs and x == xs[-1]:
+            ys[-1] = max(ys[-1], y)
+        else:
+            xs.append(float(x))
+            ys.append(float(y))
     return np.array(xs, dtype=np.float64), np.array(ys, dtype=np.float64)
 
 
@@ -59,9 +70,8 @@ def _pieces(term: Term) -> list[tuple[float, float, float]]:
     xs, ys = _vertices(term)
     out = [(-math.inf, float(xs[0]), 0.0)]
     for k in range(len(xs) - 1):
-        if xs[k + 1] > xs[k]:
-            slope = float((ys[k + 1] - ys[k]) / (xs[k + 1] - xs[k]))
-            out.append((float(xs[k]), float(xs[k + 1]), slope))
+        slope = float((ys[k + 1] - ys[k]) / (xs[k + 1] - xs[k]))
+        out.append((float(xs[k]), float(xs[k + 1]), slope))
     out.append((float(xs[-1]), math.inf, 0.0))
     return out
 

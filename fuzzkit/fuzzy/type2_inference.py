@@ -24,9 +24,9 @@ on IT2 rule bases unchanged. Semantics (docs/type2.md):
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import replace
-from typing import Protocol
+from typing import Protocol, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -35,6 +35,12 @@ from fuzzkit.fuzzy import membership, type_reduction
 from fuzzkit.fuzzy.model import RuleBase, Variable
 from fuzzkit.fuzzy.output_geometry import OutputPieces, PiecewiseLinearGeometry
 from fuzzkit.fuzzy.sugeno import SugenoOutput
+from fuzzkit.fuzzy.type2_kernel import (
+    FiringLayout,
+    OutputLayout,
+    continuous_intervals,
+    evaluate_points,
+)
 from fuzzkit.fuzzy.type2_model import Footprint, Type2RuleBase
 
 FloatArray = npt.NDArray[np.float64]
@@ -52,23 +58,6 @@ def lower_variable(var: Variable, footprint: Footprint) -> tuple[Variable, Float
     """``var`` with its lower shapes as terms, and the terms' heights (scales)."""
     shapes, scales = footprint.lower_terms(var)
     return replace(var, terms=shapes), np.array(scales, dtype=np.float64)
-
-
-def _distinct(pts: FloatArray) -> FloatArray:
-    """Rows of sorted points with repeats dropped, padded with each row's last point.
-
-    The cut candidates repeat a lot (clipped to their interval's ends); a repeated point only
-    adds a zero-width segment, so dropping repeats changes no integral and saves most work.
-    """
-    repeat = np.zeros(pts.shape, dtype=bool)
-    repeat[:, 1:] = pts[:, 1:] == pts[:, :-1]
-    order = np.argsort(repeat, axis=1, kind="stable")
-    kept = np.take_along_axis(pts, order, axis=1)
-    count = pts.shape[1] - repeat.sum(axis=1)
-    width = int(count.max())
-    kept = kept[:, :width]
-    last = kept[np.arange(pts.shape[0]), count - 1]
-    return np.where(np.arange(width)[None, :] < count[:, None], kept, last[:, None])
 
 
 class _Type2Mamdani:
@@ -90,25 +79,33 @@ class _Type2Mamdani:
                 [membership.evaluate_term(t, self.grid) for t in low_var.terms]
             )
             return
-        self.upper = PiecewiseLinearGeometry(rb, out, self.pieces)
-        self.lower = PiecewiseLinearGeometry(
-            rb, low_var, self.pieces, heights=self.heights.tolist()
+        self.layout = OutputLayout.of(
+            self.pieces,
+            PiecewiseLinearGeometry(rb, out, self.pieces),
+            PiecewiseLinearGeometry(rb, low_var, self.pieces, heights=self.heights.tolist()),
+            self.implication == "product",
         )
 
-    def sets(
-        self, firing_lo: FloatArray, firing_up: FloatArray
-    ) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Cut points (B, n) and the upper and lower sets there (B, n), continuous mode."""
-        pts_u, lv_u = self.upper.sample_points(self.pieces.levels(firing_up))
-        pts_l, lv_l = self.lower.sample_points(self.pieces.levels(firing_lo))
-        b = pts_u.shape[0]
-        # both sets are linear between the union of their cut points
-        pts = _distinct(
-            np.sort(np.concatenate([pts_u.reshape(b, -1), pts_l.reshape(b, -1)], axis=1), axis=1)
+    @property
+    def continuous(self) -> bool:
+        """Exact (continuous) type reduction, with rules to reduce."""
+        return self.resolution is None and not self.pieces.empty
+
+    def reduced_points(self, x: FloatArray, firing: FiringLayout) -> FloatArray:
+        """As :meth:`reduced`, from the input values (B, I) in one compiled pass."""
+        return evaluate_points(x, firing, self.layout)
+
+    def value(self, reduced: FloatArray) -> FloatArray:
+        """The output from :meth:`reduced`'s columns (the default where nothing fires)."""
+        value = self._continuous(reduced)
+        return np.where(np.isnan(value), self.default, value)
+
+    def reduced(self, firing_lo: FloatArray, firing_up: FloatArray) -> FloatArray:
+        """Continuous mode: ``y_l, y_r, A_U, M_U, A_L, M_L, first, last`` per point (B, 8),
+        from the compiled kernel (:mod:`fuzzkit.fuzzy.type2_kernel`)."""
+        return continuous_intervals(
+            self.pieces.levels(firing_up), self.pieces.levels(firing_lo), self.layout
         )
-        up = self.upper.values_at(pts, lv_u)
-        lo = self.lower.values_at(pts, lv_l)
-        return pts, up, np.minimum(lo, up)
 
     def sampled(
         self, firing_lo: FloatArray, firing_up: FloatArray
@@ -132,11 +129,9 @@ class _Type2Mamdani:
         if self.pieces.empty:
             return np.full(b, self.default)
         if self.resolution is None:
-            y, up, lo = self.sets(firing_lo, firing_up)
-            value = self._continuous(y, up, lo)
-        else:
-            up, lo = self.sampled(firing_lo, firing_up)
-            value = self._discrete(np.broadcast_to(self.grid, up.shape), up, lo)
+            return self.value(self.reduced(firing_lo, firing_up))
+        up, lo = self.sampled(firing_lo, firing_up)
+        value = self._discrete(np.broadcast_to(self.grid, up.shape), up, lo)
         return np.where(np.isnan(value), self.default, value)
 
     def interval(
@@ -147,23 +142,21 @@ class _Type2Mamdani:
         if self.pieces.empty:
             return np.full(b, np.nan), np.full(b, np.nan)
         if self.resolution is None:
-            y, up, lo = self.sets(firing_lo, firing_up)
-            y_l, y_r, *_ = type_reduction.continuous_interval(y, up, lo)
-            return y_l, y_r
+            r = self.reduced(firing_lo, firing_up)
+            return r[:, 0], r[:, 1]
         up, lo = self.sampled(firing_lo, firing_up)
         return type_reduction.discrete_interval(np.broadcast_to(self.grid, up.shape), lo, up)
 
-    def _continuous(self, y: FloatArray, up: FloatArray, lo: FloatArray) -> FloatArray:
-        y_l, y_r, a_u, m_u, a_l, m_l = type_reduction.continuous_interval(y, up, lo)
+    def _continuous(self, reduced: FloatArray) -> FloatArray:
+        y_l, y_r, a_u, m_u, a_l, m_l, first, last = reduced.T
         if self.method == "nie-tan":
             return type_reduction.nie_tan(a_u, m_u, a_l, m_l)
         if self.method == "wu-mendel":
-            first, last = type_reduction.continuous_support(y, up)
             return type_reduction.wu_mendel(
                 (a_l, m_l, m_l - first * a_l, last * a_l - m_l),
                 (a_u, m_u, m_u - first * a_u, last * a_u - m_u),
             )
-        return 0.5 * (y_l + y_r)
+        return cast(FloatArray, 0.5 * (y_l + y_r))
 
     def _discrete(self, y: FloatArray, up: FloatArray, lo: FloatArray) -> FloatArray:
         return reduce_points(self.method, y, lo, up)
@@ -266,6 +259,11 @@ class Type2Engine:
             _Type2Sugeno(rb, o, footprint) if o.is_sugeno else _Type2Mamdani(rb, o, footprint)
             for o in rb.outputs
         ]
+        # every output continuous Mamdani and the firing one the kernel covers: the whole
+        # evaluation is one compiled pass per output (fuzzy.type2_kernel)
+        self.compiled: FiringLayout | None = None
+        if all(isinstance(o, _Type2Mamdani) and o.continuous for o in self.outputs):
+            self.compiled = FiringLayout.of(rb, [v for v, _ in lowers], [h for _, h in lowers])
 
     def firing_intervals(self, flat: list[FloatArray]) -> tuple[FloatArray, FloatArray]:
         """Lower and upper firing strengths of every rule (B, R), weights applied."""
@@ -281,6 +279,9 @@ class Type2Engine:
     def intervals(self, flat: list[FloatArray]) -> dict[str, tuple[FloatArray, FloatArray]]:
         """The Karnik-Mendel interval ``(y_l, y_r)`` of every output (the Sugeno ones over
         their rules' consequent values), whatever the rule base's type reduction."""
+        compiled = self._compiled(flat)
+        if compiled is not None:
+            return {name: (r[:, 0], r[:, 1]) for name, r in compiled.items()}
         f_lo, f_up = self.firing_intervals(flat)
         prepared = [fz.prepare(x) for fz, x in zip(self.upper_fuzzifiers, flat, strict=True)]
         result = {}
@@ -291,8 +292,49 @@ class Type2Engine:
                 result[out.name] = out.interval(f_lo, f_up)
         return result
 
+    def _compiled(self, flat: list[FloatArray]) -> dict[str, FloatArray] | None:
+        """``y_l, y_r, A_U, M_U, A_L, M_L, first, last`` (B, 8) of every output, by the
+        compiled point path (None where it does not apply)."""
+        if self.compiled is None:
+            return None
+        x = np.stack(flat, axis=1)
+        return {
+            out.name: out.reduced_points(x, self.compiled)
+            for out in self.outputs
+            if isinstance(out, _Type2Mamdani)
+        }
+
+    def scalar_path(self) -> Callable[[Sequence[float]], list[float]] | None:
+        """``values -> outputs`` at one point through the kernel alone, for rule bases the
+        compiled path covers with Karnik-Mendel (or EKM) outputs; None otherwise."""
+        compiled = self.compiled
+        if compiled is None or any(o.method not in ("karnik-mendel", "ekm") for o in self.outputs):
+            return None
+        outputs = [(o.layout, o.default) for o in self.outputs if isinstance(o, _Type2Mamdani)]
+        nan = [math.nan] * len(outputs)
+
+        def point(values: Sequence[float]) -> list[float]:
+            x = np.array([values], dtype=np.float64)
+            if np.isnan(x).any():
+                return nan.copy()  # a NaN input: never a correction
+            result = []
+            for layout, default in outputs:
+                row = evaluate_points(x, compiled, layout)[0]
+                y = 0.5 * (float(row[0]) + float(row[1]))
+                result.append(default if y != y else y)
+            return result
+
+        return point
+
     def evaluate_flat(self, flat: list[FloatArray]) -> dict[str, FloatArray]:
         """Every output at the points of the 1-D arrays ``flat`` (input order, no NaN)."""
+        compiled = self._compiled(flat)
+        if compiled is not None:
+            return {
+                out.name: out.value(compiled[out.name])
+                for out in self.outputs
+                if isinstance(out, _Type2Mamdani)
+            }
         f_lo, f_up = self.firing_intervals(flat)
         prepared = [fz.prepare(x) for fz, x in zip(self.upper_fuzzifiers, flat, strict=True)]
         result = {}

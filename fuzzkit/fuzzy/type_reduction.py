@@ -1,23 +1,24 @@
 """Type reduction of interval type-2 sets: Karnik-Mendel, Nie-Tan and Wu-Mendel, vectorised.
 
-Every function works on a batch: one row per evaluation point.
-
-**Continuous** (:func:`continuous_interval`, the exact engine's default). The upper and lower
-output sets ``U`` and ``L`` are piecewise linear between the points of a row (the engine cuts
-them there). The centroid interval ``[y_l, y_r]`` of all embedded sets is found exactly: with
-``W = U - L >= 0``, the left end is the root of
+**Continuous** (:func:`interval_of_row`, compiled, one evaluation point; the exact
+engine's default, fused with the cut of the sets in :mod:`fuzzkit.fuzzy.type2_kernel`). The
+upper and lower output sets ``U`` and ``L`` are piecewise linear between the points of a row
+(the engine cuts them there). The centroid interval ``[y_l, y_r]`` of all embedded sets is
+found exactly: with ``W = U - L >= 0``, the left end is the root of
 
     g_l(s) = s (A_L + int_a^s W) - (M_L + int_a^s y W),
 
 ``A``/``M`` the area and first moment. ``g_l' = A_L + int_a^s W > 0`` (g_l rises) and
-``g_l'' = W >= 0`` (convex), so the root is unique: it is bracketed between two cut points by
-the signs of ``g_l`` there, and on that piece ``g_l`` is a cubic in ``s`` that Newton's method,
-started at the right end of the piece, approaches monotonically from above. The right end
+``g_l'' = W >= 0`` (convex), so the root is unique: it is bracketed between two cut points
+by a binary search on the signs of ``g_l`` there, and on that piece ``g_l`` is a cubic in
+``s`` that Newton's method, started at the right end of the piece, approaches monotonically
+from above. The right end
 ``y_r`` is the root of ``g_r(s) = s (A_U - int_a^s W) - (M_U - int_a^s y W)`` (rising and
 concave: Newton from the left end). A fixed number of Newton steps (``NEWTON_STEPS``) leaves only
 rounding. When the lower set is empty the interval is the upper set's support.
 
-**Discrete** (:func:`discrete_interval`; ``resolution: N``, MATLAB's and pyit2fls's way, and
+The other functions work on a batch, one row per evaluation point. **Discrete**
+(:func:`discrete_interval`; ``resolution: N``, MATLAB's and pyit2fls's way, and
 IT2 Sugeno on the rule consequents): the interval of the centroids of every embedded set over
 sorted points ``y_i`` with weights in ``[lower_i, upper_i]``; every switch point is enumerated,
 so the result is what the Karnik-Mendel iteration converges to, with no iteration at all.
@@ -33,121 +34,120 @@ from typing import cast
 import numpy as np
 import numpy.typing as npt
 
+from fuzzkit.jit import jit
+
 FloatArray = npt.NDArray[np.float64]
+EPS = float(np.finfo(np.float64).eps)
 
 #: Newton steps on the bracketing piece, at most. From the safe side the iterates are
 #: monotone, and the root is simple (``g' = D > 0``) unless the lower set is empty, which is
 #: solved apart; convergence is then quadratic, and 40 steps leave only rounding even from a
-#: poor start. The loop stops early once every step is below 4 ulp of the piece.
+#: poor start. The loop stops early once a step is below 4 ulp of the piece.
 NEWTON_STEPS = 40
 
 
-def _segment_integrals(y: FloatArray, f: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Area and first moment of the piecewise-linear ``f`` on each segment of ``y`` (B, n-1)."""
-    y0, y1 = y[:, :-1], y[:, 1:]
-    f0, f1 = f[:, :-1], f[:, 1:]
-    h = y1 - y0
-    area = 0.5 * h * (f0 + f1)
-    moment = h / 6.0 * (y0 * (2 * f0 + f1) + y1 * (f0 + 2 * f1))
-    return area, moment
-
-
-def _cumulative(parts: FloatArray) -> FloatArray:
-    """Cumulative sums from 0 at the first point: (B, n-1) -> (B, n)."""
-    out = np.zeros((parts.shape[0], parts.shape[1] + 1))
-    np.cumsum(parts, axis=1, out=out[:, 1:])
-    return out
-
-
+@jit
 def _root_on_piece(
-    y: FloatArray,
-    w: FloatArray,
-    d_at: FloatArray,
-    n_at: FloatArray,
-    g_at: FloatArray,
-    sign: float,
-) -> FloatArray:
-    """The root of ``g(s) = s D(s) - N(s)`` on the piece where ``g`` changes sign.
+    y: FloatArray, w: FloatArray, j: int, d0: float, n0: float, sign: float
+) -> float:
+    """The root of ``g(s) = s D(s) - N(s)`` on the piece ``[y[j], y[j + 1]]``.
 
-    ``d_at``/``n_at``/``g_at`` are ``D``, ``N`` and ``g`` at the cut points, ``w`` is ``W`` there;
-    inside a piece ``D' = sign * W`` and ``N' = sign * s W``. ``sign`` +1: left end (convex,
-    Newton from the right); -1: right end (concave, Newton from the left).
+    ``d0``/``n0`` are ``D`` and ``N`` at ``y[j]``, ``w`` is ``W`` at the cut points; inside the
+    piece ``D' = sign * W`` and ``N' = sign * s W``. ``sign`` +1: left end (convex, Newton from
+    the right); -1: right end (concave, Newton from the left).
     """
-    b, n = y.shape
-    rows = np.arange(b)
-    below = np.count_nonzero(g_at < 0.0, axis=1)
-    j = np.clip(below - 1, 0, n - 2)
-    p, q = y[rows, j], y[rows, j + 1]
+    p, q = y[j], y[j + 1]
     h = q - p
-    w0, w1 = w[rows, j], w[rows, j + 1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        k = np.where(h > 0.0, (w1 - w0) / h, 0.0)
-    d0, n0 = d_at[rows, j], n_at[rows, j]
-
-    def d_of(t: FloatArray) -> FloatArray:
-        return cast(FloatArray, d0 + sign * (w0 * t + 0.5 * k * t * t))
-
-    def g_of(t: FloatArray) -> FloatArray:
+    w0, w1 = w[j], w[j + 1]
+    k = (w1 - w0) / h if h > 0.0 else 0.0
+    t = h if sign > 0 else 0.0
+    tiny = 4.0 * EPS * (abs(p) + h)
+    for _ in range(NEWTON_STEPS):
+        d = d0 + sign * (w0 * t + 0.5 * k * t * t)
         n_t = n0 + sign * (p * w0 * t + 0.5 * (p * k + w0) * t * t + k * t * t * t / 3.0)
-        return cast(FloatArray, (p + t) * d_of(t) - n_t)
-
-    t = h.copy() if sign > 0 else np.zeros_like(h)
-    tiny = 4.0 * np.finfo(np.float64).eps * (np.abs(p) + h)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        for _ in range(NEWTON_STEPS):
-            d = d_of(t)
-            step = np.where(d > 0.0, g_of(t) / d, 0.0)
-            moved = np.clip(t - step, 0.0, h)
-            done = bool(np.all(np.abs(moved - t) <= tiny))
+        g = (p + t) * d - n_t
+        step = g / d if d > 0.0 else 0.0
+        moved = min(max(t - step, 0.0), h)
+        if not abs(moved - t) > tiny:
             t = moved
-            if done:
-                break  # the steps are down to rounding (quadratic convergence: the last one)
-    return cast(FloatArray, p + t)
+            break  # the steps are down to rounding (quadratic convergence: the last one)
+        t = moved
+    return float(p + t)
 
 
-def continuous_interval(
-    y: FloatArray, upper: FloatArray, lower: FloatArray
-) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
-    """Exact centroid interval of piecewise-linear IT2 sets cut at ``y`` (B, n), sorted rows.
+@jit
+def _bracket(y: FloatArray, d: FloatArray, nn: FloatArray, n: int) -> int:
+    """The piece ``j`` (0..n-2) where the rising ``g = y D - N`` turns non-negative: binary
+    search for the number of cut points where ``g < 0``."""
+    lo, hi = 0, n  # g < 0 on [0, lo), g >= 0 on [hi, n)
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if y[mid] * d[mid] - nn[mid] < 0.0:
+            lo = mid + 1
+        else:
+            hi = mid
+    return min(max(lo - 1, 0), n - 2)
 
-    Returns ``y_l, y_r, A_U, M_U, A_L, M_L`` (each (B,)); ``y_l``/``y_r`` are NaN where the
-    upper set is empty (``A_U == 0``).
+
+@jit
+def interval_of_row(
+    y: FloatArray, upper: FloatArray, lower: FloatArray, n: int, out: FloatArray
+) -> None:
+    """Exact centroid interval of piecewise-linear IT2 sets cut at ``y[:n]`` (sorted, n >= 2).
+
+    Writes ``y_l, y_r, A_U, M_U, A_L, M_L, first, last`` into ``out[:8]``: the interval (NaN
+    where the upper set is empty, ``A_U == 0``), the sets' areas and first moments, and the
+    ends of the upper set's support (the cut points just outside where it is above zero).
     """
-    area_u, mom_u = _segment_integrals(y, upper)
-    area_l, mom_l = _segment_integrals(y, lower)
-    a_u, m_u = area_u.sum(axis=1), mom_u.sum(axis=1)
-    a_l, m_l = area_l.sum(axis=1), mom_l.sum(axis=1)
-    cw = _cumulative(area_u - area_l)
-    cmw = _cumulative(mom_u - mom_l)
-    w = upper - lower
-    d_l = a_l[:, None] + cw
-    n_l = m_l[:, None] + cmw
-    d_r = a_u[:, None] - cw
-    n_r = m_u[:, None] - cmw
-    y_l = _root_on_piece(y, w, d_l, n_l, y * d_l - n_l, 1.0)
-    y_r = _root_on_piece(y, w, d_r, n_r, y * d_r - n_r, -1.0)
-    # An empty lower set is the one case of a multiple root (g' = D vanishes there), which
-    # rounding would blur to ~1e-8: every sub-support of the upper set is then embedded, and
-    # the interval is the support itself.
-    no_lower = ~(a_l > 0.0)
-    if no_lower.any():
-        first, last = continuous_support(y, upper)
-        y_l = np.where(no_lower, first, y_l)
-        y_r = np.where(no_lower, last, y_r)
-    empty = ~(a_u > 1e-300)
-    y_l = np.where(empty, np.nan, y_l)
-    y_r = np.where(empty, np.nan, y_r)
-    return y_l, y_r, a_u, m_u, a_l, m_l
-
-
-def continuous_support(y: FloatArray, upper: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """The ends of the upper set's support (where it is above zero), per row."""
-    b, n = y.shape
-    rows = np.arange(b)
-    pos = upper > 0.0
-    first = np.argmax(pos, axis=1)
-    last = n - 1 - np.argmax(pos[:, ::-1], axis=1)
-    return y[rows, np.maximum(first - 1, 0)], y[rows, np.minimum(last + 1, n - 1)]
+    a_u = m_u = a_l = m_l = 0.0
+    cw = np.empty(n)
+    cmw = np.empty(n)
+    w = np.empty(n)
+    cw[0] = cmw[0] = 0.0
+    for i in range(n):
+        w[i] = upper[i] - lower[i]
+    first, last = -1, -1
+    for i in range(n - 1):
+        y0, y1 = y[i], y[i + 1]
+        h = y1 - y0
+        au = 0.5 * h * (upper[i] + upper[i + 1])
+        mu = h / 6.0 * (y0 * (2 * upper[i] + upper[i + 1]) + y1 * (upper[i] + 2 * upper[i + 1]))
+        al = 0.5 * h * (lower[i] + lower[i + 1])
+        ml = h / 6.0 * (y0 * (2 * lower[i] + lower[i + 1]) + y1 * (lower[i] + 2 * lower[i + 1]))
+        a_u += au
+        m_u += mu
+        a_l += al
+        m_l += ml
+        cw[i + 1] = cw[i] + (au - al)
+        cmw[i + 1] = cmw[i] + (mu - ml)
+    for i in range(n):
+        if upper[i] > 0.0:
+            if first < 0:
+                first = i
+            last = i
+    d = np.empty(n)
+    nn = np.empty(n)
+    for i in range(n):
+        d[i] = a_l + cw[i]
+        nn[i] = m_l + cmw[i]
+    j = _bracket(y, d, nn, n)
+    y_l = _root_on_piece(y, w, j, d[j], nn[j], 1.0)
+    for i in range(n):
+        d[i] = a_u - cw[i]
+        nn[i] = m_u - cmw[i]
+    j = _bracket(y, d, nn, n)
+    y_r = _root_on_piece(y, w, j, d[j], nn[j], -1.0)
+    lo_end = y[max(first - 1, 0)] if first >= 0 else y[0]
+    hi_end = y[min(last + 1, n - 1)] if last >= 0 else y[n - 1]
+    if not a_l > 0.0:
+        # An empty lower set is the one case of a multiple root (g' = D vanishes there), which
+        # rounding would blur to ~1e-8: every sub-support of the upper set is then embedded,
+        # and the interval is the support itself.
+        y_l, y_r = lo_end, hi_end
+    if not a_u > 1e-300:
+        y_l = y_r = np.nan
+    out[0], out[1], out[2], out[3] = y_l, y_r, a_u, m_u
+    out[4], out[5], out[6], out[7] = a_l, m_l, lo_end, hi_end
 
 
 def discrete_interval(

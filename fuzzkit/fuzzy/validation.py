@@ -36,7 +36,7 @@ from dataclasses import dataclass
 from typing import TypeAlias
 
 from fuzzkit.errors import Location, Problem, RuleBaseError, did_you_mean
-from fuzzkit.fuzzy import resolution, rule_coverage, term_placement
+from fuzzkit.fuzzy import membership_bounds, resolution, rule_coverage, term_placement
 from fuzzkit.fuzzy.model import (
     AGGREGATIONS,
     AND_OPERATORS,
@@ -54,7 +54,6 @@ from fuzzkit.fuzzy.model import (
     Term,
     Variable,
 )
-from fuzzkit.fuzzy.shapes import Piece
 from fuzzkit.fuzzy.shapes import shape as shape_record
 from fuzzkit.fuzzy.type2_model import Type2RuleBase
 from fuzzkit.fuzzy.type2_validation import footprint_problems
@@ -210,51 +209,15 @@ def _term_is_valid(term: Term) -> bool:
 # ---------------------------------------------------------------------------- coverage
 
 
-def _support(term: Term) -> list[Piece]:
-    """Where a (valid) term's membership is > 0, exactly, as pieces of the real line.
-
-    Raises UnknownShapeError for a shape that is not registered (nothing is assumed).
-    """
-    return shape_record(term.shape).support(term.params)
-
-
-def _covered(x: float, pieces: Sequence[Piece]) -> bool:
-    for lo, lo_in, hi, hi_in in pieces:
-        if (lo < x or (lo == x and lo_in)) and (x < hi or (x == hi and hi_in)):
-            return True
-    return False
-
-
 def uncovered(var: Variable) -> list[tuple[float, float]]:
-    """The closed intervals of ``[low, high]`` where no term of ``var`` has membership > 0.
+    """The closed intervals of ``[low, high]`` where no term of ``var`` has a computed
+    membership > 0 (a Gaussian's tail that underflows to 0 is not covered).
 
-    Exact: membership supports are unions of intervals with known ends, so testing every end
-    point and one point between each pair of consecutive ends decides the whole range. A gap
-    of a single point is reported as ``(x, x)``.
+    Decided by sound bounds of the computed membership (:mod:`fuzzkit.fuzzy.membership_bounds`),
+    down to single floats where a term's membership reaches 0. A gap of a single point is
+    reported as ``(x, x)``.
     """
-    pieces = [piece for t in var.terms for piece in _support(t)]
-    ends = {var.low, var.high}
-    for lo, _, hi, _ in pieces:
-        for x in (lo, hi):
-            if var.low < x < var.high:
-                ends.add(x)
-    xs = sorted(ends)
-    gaps: list[tuple[float, float]] = []
-
-    def add(lo: float, hi: float) -> None:
-        if gaps and gaps[-1][1] == lo:
-            gaps[-1] = (gaps[-1][0], hi)
-        else:
-            gaps.append((lo, hi))
-
-    for i, x in enumerate(xs):
-        if not _covered(x, pieces):
-            add(x, x)
-        if i + 1 < len(xs):
-            mid = 0.5 * (x + xs[i + 1])
-            if not _covered(mid, pieces):
-                add(x, xs[i + 1])
-    return gaps
+    return membership_bounds.positive_parts(var)
 
 
 # ---------------------------------------------------------------------------- variables
@@ -357,6 +320,8 @@ def _coverage_gaps(rb: RuleBase) -> list[Issue]:
         range_ok = math.isfinite(var.low) and math.isfinite(var.high) and var.low < var.high
         if not (range_ok and var.terms and all(map(_term_is_valid, var.terms))):
             continue
+        if any(shape_record(t.shape).mu is None for t in var.terms):
+            continue  # a Sugeno output term as an input term: an error of its own
         gaps = uncovered(var)
         if gaps:
             text = ", ".join(
@@ -512,13 +477,14 @@ def diagnose(
     A coverage gap (part of an input's range where no term is above zero) is a warning when
     ``allow_gaps`` is true, an error when it is false; ``None`` (default) follows
     ``rb.coverage``. A combination of input labels where no rule concluding an output fires
-    (:mod:`fuzzkit.fuzzy.rule_coverage`) is a warning when that output has a ``default``, else
-    an error; every reader (YAML, .fis, .fcl, .fll) makes this check, and so ``fuzzkit
-    validate``, ``eval``, ``surface`` and ``compile`` do. ``rule_coverage_check=False`` leaves
-    it out, as :func:`check` and :func:`ensure_valid` (which engines call on models built in
-    Python) do: such a model evaluates to the default, or NaN, where no rule fires. A term
-    wholly outside its range is an error, a shoulder that never reaches 1 inside it a warning
-    (:mod:`fuzzkit.fuzzy.term_placement`). Everything else is an error.
+    (:mod:`fuzzkit.fuzzy.rule_coverage`) is a warning when that output has a ``default`` or
+    gaps are allowed, else an error; every reader (YAML, .fis, .fcl, .fll) makes this check,
+    and so ``fuzzkit validate``, ``eval``, ``surface`` and ``compile`` do.
+    ``rule_coverage_check=False`` leaves it out, as :func:`check` and :func:`ensure_valid`
+    (which engines call on models built in Python) do: such a model evaluates to the
+    default, or NaN, where no rule fires. A term wholly outside its range is an error, a
+    shoulder that never reaches 1 inside it a warning (:mod:`fuzzkit.fuzzy.term_placement`).
+    Everything else is an error.
     """
     gaps_allowed = rb.coverage == "allow_gaps" if allow_gaps is None else allow_gaps
     errors = _errors(rb)
@@ -528,10 +494,11 @@ def diagnose(
     check_rules = rule_coverage_check and not errors
     unfired, defaulted = rule_coverage.rule_gaps(rb) if check_rules else ([], [])
     outside, cut_short = term_placement.misplaced_terms(rb) if not errors else ([], [])
-    errors = errors + outside + unfired
     notes = cut_short + defaulted
     if gaps_allowed:
-        return Diagnosis(errors, gaps + notes)
+        # where no rule fires the outputs take their default, or NaN: a warning, located
+        return Diagnosis(errors + outside, gaps + unfired + notes)
+    errors = errors + outside + unfired
     hint = " (set coverage: allow_gaps to make this a warning)"
     return Diagnosis(errors + [(path, message + hint) for path, message in gaps], notes)
 

@@ -5,7 +5,7 @@
     python pyit2fls_eval.py version            -> pyit2fls's version
 
 ``time`` (bench/bench_type2.py) evaluates every point once, after one warm-up call, and
-reports the mean wall time per point.
+reports the mean wall time per point and which back end pyit2fls's Karnik-Mendel ran on.
 
 SYSTEM.json (written by make_it2_refs.py from a fuzzkit IT2 rule base) lists the inputs' and the
 output's terms as ``[shape, points, height]`` pairs (upper, lower), the rules (AND only), the
@@ -54,6 +54,15 @@ def _set(domain: np.ndarray, term: dict[str, list]) -> IT2FS:
     return IT2FS(domain, umf, up, lmf, lp)
 
 
+def _backend() -> str:
+    """Which Karnik-Mendel pyit2fls runs: its optional C extension or its Python one."""
+    import pyit2fls.pyit2fls as impl
+
+    if getattr(impl, "isThereTypereduction", False):
+        return "C extension typereduction"
+    return "pure Python/NumPy KM_algorithm (no typereduction C extension)"
+
+
 def main() -> None:
     if sys.argv[1] == "version":
         sys.stdout.write(version("pyit2fls") + "\n")
@@ -93,7 +102,7 @@ def main() -> None:
             crisp.append(float(value))
     if sys.argv[1] == "time":
         seconds = (time.perf_counter() - start) / n
-        json.dump({"seconds_per_point": seconds, "crisp": crisp}, sys.stdout)
+        json.dump({"seconds_per_point": seconds, "crisp": crisp, "backend": _backend()}, sys.stdout)
         return
     json.dump({"y_l": y_l, "y_r": y_r, "crisp": crisp}, sys.stdout)
 
