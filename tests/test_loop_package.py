@@ -17,9 +17,9 @@ TILT = str(Path(__file__).resolve().parent.parent / "docs" / "examples" / "tilt.
 def test_every_registered_plant_has_an_adapter_of_its_name() -> None:
     for name in PLANTS:
         assert adapter(name).name == name
-    # the compiled loops are the kinematic arm's and the planar arm's (MuJoCo: the Python loop)
-    assert compiled_plants() == ("arm6", "planar")
-    assert not compiled_supports("mujoco") and not compiled_supports("moon")
+    # every plant has a compiled loop now (the MuJoCo plants' since issue 37 item 4)
+    assert compiled_plants() == ("arm6", "mujoco", "mujoco-elastic", "planar")
+    assert compiled_supports("mujoco") and not compiled_supports("moon")
 
 
 def test_an_unknown_plant_is_refused_with_the_registered_names() -> None:

@@ -6,13 +6,11 @@ and says why."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-
 import numpy as np
 import pytest
 from _codegen_util import needs_cc
+from _mujoco import servo, uninstall_after
 
-from fuzzkit.loop import mujoco as mujoco_plants
 from fuzzkit.loop.compiled.generated_controller import (
     load_generated_controller,
     run_controller_spec,
@@ -26,7 +24,6 @@ from fuzzkit.loop.spec import RunSpec
 from fuzzkit.loop.timing import run_faults_and_latency
 from fuzzkit.plants.mujoco_arm import ElasticMujocoArmPlant, MujocoArmPlant
 from fuzzkit.plants.mujoco_model import ArmDynamics
-from fuzzkit.plants.mujoco_servo import ServoCallback
 from fuzzkit.studies.batch import run_spec
 from fuzzkit.studies.experiments import experiment
 
@@ -39,16 +36,7 @@ SERIES = (
 )  # fmt: skip
 
 
-@pytest.fixture(autouse=True)
-def _no_callback_after() -> Iterator[None]:
-    yield
-    ServoCallback.uninstall()
-
-
-def _servo() -> ServoCallback:
-    servo = mujoco_plants.servo_callback()
-    assert isinstance(servo, ServoCallback), servo
-    return servo
+_no_callback_after = pytest.fixture(autouse=True)(uninstall_after)
 
 
 def _both(
@@ -67,12 +55,12 @@ def _both(
     faults = fault(fault_kind, seed)
     _, sensor_delay, _ = run_faults_and_latency(exp, seed, faults, latency)
     reference_plant = make(dynamics=dynamics)
-    reference_plant.use_servo_callback(_servo())
-    hybrid = GeneratedLoopController(generated.spec, sensor_delay, require_c=True)
+    reference_plant.use_servo_callback(servo())
+    hybrid = GeneratedLoopController(generated.spec, sensor_delay, impl="c")
     reference = run(exp, reference_plant, controller, hybrid=hybrid, seed=seed, faults=faults,
                     duration_s=duration_s, latency=latency)  # fmt: skip
     plant = make(dynamics=dynamics)
-    plant.use_servo_callback(_servo())
+    plant.use_servo_callback(servo())
     compiled = run_compiled(exp, plant, seed=seed, faults=fault(fault_kind, seed),
                             duration_s=duration_s, latency=latency,
                             generated_controller=generated)  # fmt: skip
@@ -131,3 +119,34 @@ def test_plant_mujoco_runs_compiled_and_a_tilting_tool_falls_back_saying_why() -
     fell = run_spec(RunSpec(tilt, "pi", plant="mujoco", duration_s=0.5))
     assert fell.loop.startswith("python")
     assert "tilting tool" in fell.loop
+
+
+def test_the_plant_kept_between_compiled_runs_starts_each_run_afresh() -> None:
+    """``--plant mujoco`` keeps one plant per process for its compiled runs: each run of a
+    sequence (other scenarios, controllers, seeds, faults, latencies) is the run a fresh plant
+    gives."""
+    runs = [
+        ("E3", "fuzzy-pi", 4, "none", None),
+        ("E1", "pi", 9, "spike", (3, 2)),
+        ("E3", "fuzzy-pi", 4, "none", None),
+    ]
+    for name, controller, seed, fault_kind, latency in runs:
+        exp = experiment(name)
+        generated = load_generated_controller(run_controller_spec(exp, controller, None))
+        fresh = MujocoArmPlant()
+        fresh.use_servo_callback(servo())
+        kept, alone = (
+            run_compiled(
+                exp,
+                plant,
+                seed=seed,
+                faults=fault(fault_kind, seed),
+                duration_s=1.0,
+                latency=latency,
+                generated_controller=generated,
+            )
+            for plant in ("mujoco", fresh)
+        )
+        for key in SERIES:
+            a, b = np.asarray(getattr(kept, key)), np.asarray(getattr(alone, key))
+            assert np.array_equal(a, b, equal_nan=True), (name, key)

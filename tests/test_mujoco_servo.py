@@ -7,12 +7,12 @@ from __future__ import annotations
 
 import copy
 import ctypes
-from collections.abc import Iterator
 
 import mujoco
 import numpy as np
 import pytest
 from _codegen_util import needs_cc
+from _mujoco import servo, uninstall_after
 
 from fuzzkit.loop import mujoco as mujoco_plants
 from fuzzkit.loop.adapter import make_plant
@@ -21,18 +21,7 @@ from fuzzkit.plants.mujoco_model import ArmDynamics
 from fuzzkit.plants.mujoco_servo import ServoCallback
 from fuzzkit.studies.experiments import experiment
 
-
-@pytest.fixture(autouse=True)
-def _no_callback_after() -> Iterator[None]:
-    """MuJoCo's control callback is process-global: every test leaves none behind."""
-    yield
-    ServoCallback.uninstall()
-
-
-def _servo() -> ServoCallback:
-    servo = mujoco_plants.servo_callback()
-    assert isinstance(servo, ServoCallback), servo
-    return servo
+_no_callback_after = pytest.fixture(autouse=True)(uninstall_after)
 
 
 def _drive(
@@ -66,7 +55,7 @@ def test_the_callback_gives_the_python_ramps_trajectory_bit_for_bit(
     ``mj_step(nstep=4)``): every double of the state equal."""
     reference, ref_messages = _drive(plant_cls(), name, 200)
     plant = plant_cls()
-    plant.use_servo_callback(_servo())
+    plant.use_servo_callback(servo())
     fast, messages = _drive(plant, name, 200)
     assert np.array_equal(reference, fast)
     assert messages == ref_messages
@@ -79,7 +68,7 @@ def test_the_callback_finds_the_python_ramps_torque_limit_periods() -> None:
     dyn = ArmDynamics(torque_limit_n_m=(350.0, 20.0, 20.0, 40.0, 40.0, 25.0))
     reference, ref_messages = _drive(MujocoArmPlant(dynamics=dyn), "E1", 150)
     plant = MujocoArmPlant(dynamics=dyn)
-    plant.use_servo_callback(_servo())
+    plant.use_servo_callback(servo())
     fast, messages = _drive(plant, "E1", 150)
     limited = {m: c for m, c in ref_messages.items() if m.startswith("servo torque limit")}
     assert sum(limited.values()) > 100  # the case does saturate
@@ -115,7 +104,7 @@ def test_the_callbacks_state_is_per_simulation() -> None:
 
 
 def _with(plant: MujocoArmPlant) -> MujocoArmPlant:
-    plant.use_servo_callback(_servo())
+    plant.use_servo_callback(servo())
     return plant
 
 
@@ -183,10 +172,10 @@ def test_a_limit_reached_only_in_the_periods_last_substep_is_marked() -> None:
     a = rising[0]
     limits = np.full(m.nu, 1e9)
     limits[a] = 0.5 * (f[3, a] + f[:3, a].max()) / 0.999
-    servo = _servo()
+    callback = servo()
     fast = copy.copy(start)
-    u = servo.arm(fast, 4, limits)
-    servo.install()
-    marked = servo.period(m, fast, u, prev, ref, feed)
+    u = callback.arm(fast, 4, limits)
+    callback.install()
+    marked = callback.period(m, fast, u, prev, ref, feed)
     assert np.flatnonzero(marked).tolist() == [a]
     assert np.array_equal(fast.qpos, d.qpos)

@@ -21,21 +21,12 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.jit import jit
-from fuzzkit.loop.compiled.generated_controller import generated_step
-from fuzzkit.loop.compiled.period import (
-    C_COMMAND_DELAY,
-    C_PERIOD,
-    C_SENSOR_DELAY,
-    V_DE,
-    V_DU,
-    V_E,
-    command_latency,
-    controller_state,
-    credit_normal,
-    inject_faults,
-    path_held,
-    sensor_latency,
-    store_results,
+from fuzzkit.loop.compiled.period import credit_normal, store_results
+from fuzzkit.loop.compiled.skeleton import (
+    controller_period,
+    loop_state,
+    period_start,
+    record_period,
 )
 from fuzzkit.plants.arm6_period import ik, matrix_from_quat, pose_at
 from fuzzkit.plants.rough_profile import profile_height_slope
@@ -162,13 +153,15 @@ def run_mujoco(
     r_contact: BoolArray,
     r_force_normal: FloatArray,
     r_moving: BoolArray,
-    r_ik: IntArray,
-    r_limited: IntArray,
-    r_saturated: IntArray,
     r_arm: FloatArray,
     r_points: FloatArray,
     r_npoints: IntArray,
     r_status: IntArray,
+    # the plant's own: the IK's status, the joints at their speed limit and the servos at
+    # their torque limit (bit masks)
+    r_ik: IntArray,
+    r_limited: IntArray,
+    r_saturated: IntArray,
     out_scalars: FloatArray,
 ) -> int:
     """Run up to ``r_t.shape[0]`` periods; fill the recording arrays and ``out_scalars``.
@@ -178,24 +171,12 @@ def run_mujoco(
     dof = q_ref.shape[0]
     nu = ref_prev.shape[0]
     n_bodies = a_bodies.shape[0]
-    period = cp[C_PERIOD]
-    sd = int(cp[C_SENSOR_DELAY])
-    cd = int(cp[C_COMMAND_DELAY])
     dt = params[M_DT]
     m_addr, d_addr = np.uint64(layout[L_MODEL]), np.uint64(layout[L_DATA])
     tip, n_sub = layout[L_TIP], layout[L_NSUB]
-    cs, cv = controller_state(cp)
-    e, de, du = cv[V_E], cv[V_DE], cv[V_DU]
-    sensor_q = np.empty((sd + 1, 3))
-    for k in range(sd + 1):
-        sensor_q[k, :] = reset_force
-    command_q = np.zeros((cd + 1, 3))
-    applied = np.zeros(3)
-    correction = np.zeros(3)
-    c_rot = np.empty(9)
-    for j in range(9):
-        c_rot[j] = a_rot_task[j // 3, j % 3]
-    corr_base = np.zeros(3)
+    cs, cv, sensor_q, command_q, applied, correction, c_rot, corr_base = loop_state(
+        cp, reset_force, a_rot_task
+    )
     nominal = np.empty(3)
     nominal_before = np.empty(3)
     quat = np.empty(4)
@@ -216,14 +197,7 @@ def run_mujoco(
     path_t = 0.0
     for k in range(n_periods):
         path_before = path_t
-        if not path_held(cp, cs):
-            path_t += period
-        for j in range(3):
-            corr_base[j] = (
-                a_rot_task[j, 0] * applied[0]
-                + a_rot_task[j, 1] * applied[1]
-                + a_rot_task[j, 2] * applied[2]
-            )
+        path_t = period_start(cp, cs, path_t, a_rot_task, applied, corr_base)
         # ---- the inner loop's reference (Arm6Plant._reference_step) ----
         pose_at(a_path_t, a_path_pos, a_path_quat, path_t, nominal, quat)
         matrix_from_quat(quat, rt)
@@ -311,12 +285,11 @@ def run_mujoco(
         else:
             f_meas[0] = f_meas[1] = f_meas[2] = np.nan
         # ---- the plant-independent part ----
-        inject_faults(cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured)
-        consumed = sensor_latency(k, sd, sensor_q, measured, reset_force)
-        r_status[k] = generated_step(
-            c_step, c_state, c_rot, cp, selection, setpoints, consumed, t_s, cs, cv, correction
-        )
-        command_latency(k, cd, command_q, correction, applied)
+        r_status[k], consumed = controller_period(
+            k, cp, spike_sign[k], nan_flag[k], t_s, f_meas, measured, reset_force, c_step,
+            c_state, selection, setpoints, cs, cv, sensor_q, command_q, applied, correction,
+            c_rot,
+        )  # fmt: skip
         # ---- recording ----
         moving = False
         if path_t > path_before:
@@ -325,25 +298,18 @@ def run_mujoco(
                 if abs(nominal[j] - nominal_before[j]) > 1e-9:
                     moving = True
         shown = min(count, MOST_CONTACTS)
-        r_t[k] = t_s
-        r_moving[k] = moving
+        record_period(
+            k, t_s, moving, shown, consumed, measured, f_true, cv, correction, r_t, r_moving,
+            r_contact, r_npoints, r_force, r_force_sensor, r_force_true, r_e, r_de, r_du, r_u,
+            r_force_normal,
+        )  # fmt: skip
         r_ik[k] = status
         r_limited[k] = limited
         r_saturated[k] = saturated
-        r_contact[k] = count > 0
-        r_npoints[k] = shown
         for j in range(3):
-            r_force[k, j] = consumed[j]
-            r_force_sensor[k, j] = measured[j]
-            r_force_true[k, j] = f_true[j]
-            r_e[k, j] = e[j]
-            r_de[k, j] = de[j]
-            r_du[k, j] = du[j]
-            r_u[k, j] = correction[j]
             r_tool[k, j] = d_geom_xpos[tip, j] - a_offset[j]
             r_nominal[k, j] = nominal[j] - a_offset[j]
             r_target[k, j] = target[j] - a_offset[j]
-            r_force_normal[k, j] = 0.0
         for c in range(shown):
             for j in range(3):
                 r_points[k, c, j] = points[3 * c + j] - a_offset[j]

@@ -6,8 +6,9 @@ consumes the sample of ``sensor_delay`` periods ago, a delay fault's periods inc
 starts filled with the reset sample's force) -> the controller -> :func:`command_latency` (the
 plant receives the correction computed ``command_delay`` periods ago; the queue starts with
 zeros). The plant kernels (:mod:`fuzzkit.loop.compiled.arm6_run` for arm6,
-:mod:`fuzzkit.loop.compiled.planar_run` for the pymunk arm) wrap their plant step with
-these.
+:mod:`fuzzkit.loop.compiled.planar_run` for the pymunk arm,
+:mod:`fuzzkit.loop.compiled.mujoco_run` for MuJoCo) wrap their plant step with these, through
+:mod:`fuzzkit.loop.compiled.skeleton`.
 
 The controller is the run's controller spec generated as C (double) and called by address,
 :func:`fuzzkit.loop.compiled.generated_controller.generated_step`: what ``fuzzkit compile``
