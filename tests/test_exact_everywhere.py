@@ -3,14 +3,15 @@ MATLAB ``.fis`` with ``gaussmf`` outputs through the commands a user runs on the
 
 Each goes through validate, eval --explain (text and JSON), compile --verify (C float, C
 double, Python; the exact method: every rounding bound checked on 1e5 points plus edges),
-simulate on every plant, stability and tune. ``make test`` runs validate and explain of each;
-the rest, a few CPU-minutes, runs in ``make verify``. Not yet here: replay and report, which
-take a controller spec naming the rule base.
+simulate on every plant, replay (the shipped spec on the rule base, simulated on planar, its
+log replayed through the generated C to 0 m), stability and tune. ``make test`` runs validate
+and explain of each; the rest, a few CPU-minutes, runs in ``make verify``. Not here: report.
 """
 
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -75,6 +76,18 @@ def test_compile_simulate_stability_and_tune(
             _run(capsys, "simulate", "E1", "--rulebase", source, "--plant", plant, "--json")
         )
         assert run["plant"] == plant
+    # replay: the shipped spec on this rule base, simulated, then its log through the C
+    example = (Path(__file__).parent.parent / "docs" / "examples" / "controller.yaml").read_text()
+    spec = tmp_path / "spec.yaml"
+    rb_line = (
+        f"rulebase: {Path(source).resolve() if source.endswith(('.yaml', '.fis')) else source}"
+    )
+    spec.write_text(re.sub(r"(?m)^rulebase: .*$", rb_line, example))
+    run = tmp_path / "run.csv"
+    _run(capsys, "simulate", "E1", "--spec", str(spec), "--plant", "planar", "--csv", str(run))
+    out = _run(capsys, "replay", str(spec), "--forces", str(run), "--impl", "c",
+               "--out", str(tmp_path / "u.csv"))  # fmt: skip
+    assert "largest difference from the run's corrections (u<a>_m): 0 m" in out
     out = _run(capsys, "stability", "E1", "--controller", "fuzzy-pi", "--rulebase", source,
                "--stiffness", "10,20", "--latency", "1:1")  # fmt: skip
     assert "certified" in out
