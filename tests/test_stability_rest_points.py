@@ -16,7 +16,7 @@ from fuzzkit.analysis.rest_points import prove_exact, prove_table
 from fuzzkit.codegen.table_search import make_table
 from fuzzkit.control.loop_rulebase import load_loop_rulebase
 from fuzzkit.fuzzy.inference import evaluate
-from fuzzkit.studies.compiled.table import table2, table_arrays
+from fuzzkit.loop.compiled.table import table2, table_arrays
 
 NARROW = str(Path(__file__).parent / "data" / "stability" / "narrow_rest.yaml")
 
