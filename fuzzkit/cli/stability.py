@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from typing import Any
 
 from fuzzkit.cli import RULEBASE_SPEC_HELP, add_plant_argument, add_quiet_argument, numbers
@@ -105,6 +106,7 @@ def register(subparsers: Any) -> None:
 
 
 def _stability(args: argparse.Namespace) -> int:
+    from fuzzkit.analysis.inner_loop import poor_fit
     from fuzzkit.analysis.regulation import scenario
 
     if args.png:
@@ -133,6 +135,10 @@ def _stability(args: argparse.Namespace) -> int:
 
         write_region_png(region, args.png, simulated)
     data = region.as_dict()
+    inner = data["model"]["inner_loop"]
+    warning = poor_fit(inner["plant"], inner["fit_error_nrmse"])
+    if warning is not None:
+        print(f"fuzzkit: warning: {warning}", file=sys.stderr)
     if simulated is not None:
         for cell, outcome in zip(data["cells"], simulated, strict=True):
             cell["simulated"] = outcome
