@@ -200,8 +200,10 @@ def warm_up(
     ctrl: ControllerArgs,
     rec: dict[str, Any],
     scalars: Any,
+    extra: tuple[Any, ...] = (),
 ) -> None:
-    """Run ``kernel`` over zero periods once per process, with the run's argument types.
+    """Run ``kernel`` over zero periods once per process, with the run's argument types
+    (``extra``: a plant's own arguments after the reset force, as :func:`run_kernel`'s).
 
     The first call loads the machine code from numba's on-disk cache (or compiles it after an
     install); done here, that start-up cost stays out of the loop's CPU time. Zero periods
@@ -212,7 +214,7 @@ def warm_up(
         return
     own = tuple(np.array(x, copy=True) if isinstance(x, np.ndarray) else x for x in plant)
     empty = tuple(v[:0] for v in rec.values())
-    kernel(own, noise, reset_force, ctrl.record(), ctrl.c_step, empty, scalars.copy())
+    kernel(own, noise, reset_force, *extra, ctrl.record(), ctrl.c_step, empty, scalars.copy())
     _WARMED.add(key)
 
 
@@ -233,15 +235,18 @@ def run_kernel(
     ctrl: ControllerArgs,
     rec: dict[str, Any],
     scalars: Any,
+    extra: tuple[Any, ...] = (),
 ) -> tuple[Any, float, float]:
     """One compiled run: ``kernel`` on its named records (warmed first, :func:`warm_up`);
-    returns what it returned, and the CPU and wall seconds of the call alone."""
+    returns what it returned, and the CPU and wall seconds of the call alone. ``extra``: the
+    plant's own arguments after the reset force (MuJoCo's ``MjData`` views and C helpers)."""
     import time
 
-    warm_up(kernel, plant, noise, reset_force, ctrl, rec, scalars)
+    warm_up(kernel, plant, noise, reset_force, ctrl, rec, scalars, extra)
     wall0 = time.perf_counter()
     cpu0 = time.process_time()
     done = kernel(
-        plant, noise, reset_force, ctrl.record(), ctrl.c_step, tuple(rec.values()), scalars
-    )
+        plant, noise, reset_force, *extra, ctrl.record(), ctrl.c_step, tuple(rec.values()),
+        scalars,
+    )  # fmt: skip
     return done, time.process_time() - cpu0, time.perf_counter() - wall0
