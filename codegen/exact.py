@@ -990,7 +990,7 @@ def build_exact_spec(
         tie=lit(TIE) if number_type == "double" else lit(2.0**-20),
         tiny=lit(1e-300) if number_type == "double" else lit(0.0),
         bisect_margin=lit(1.0 - 1e-15) if number_type == "double" else lit(1.0),
-        extend_limit=lit(1e100) if number_type == "double" else lit(1e30),
+        extend_limit=lit(membership.EXTEND_LIMIT) if number_type == "double" else lit(1e30),
         vertical=lit(vertical),
         stack_bytes=stack,
         helpers=tuple(sorted(helpers)),
@@ -1019,7 +1019,7 @@ def build_exact_spec(
         keeps_inputs=any(any(t.coefficients) for o in outputs for t in o.sugeno),
         sugeno_type=tg.type_names["double" if wide else number_type],
         sugeno_wide=wide,
-        sugeno_extend_limit=sugeno_lit(1e100) if wide else "",
+        sugeno_extend_limit=sugeno_lit(membership.EXTEND_LIMIT) if wide else "",
     )
 
 

@@ -64,7 +64,6 @@ from fuzzkit.fuzzy.type2_model import Type2RuleBase
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.intp]
 
-_EXTEND_LIMIT = 1e100  # inputs are bounded by this under `extend` so no product overflows
 #: The batch engine's speed in :meth:`Engine.work_per_point` operations a second, below what
 #: this project's 2-core machine measures under load on shipped and random rule bases (the
 #: smooth-output grid kernel 4e7-4e8), so that work / speed over-estimates the time.
@@ -98,7 +97,7 @@ class _Fuzzifier:
         # per-call overhead dominates scalar evaluation
         if self.clamp:
             return _fmin(_fmax(x, self.low), self.high)
-        return _fmin(_fmax(x, -_EXTEND_LIMIT), _EXTEND_LIMIT)
+        return _fmin(_fmax(x, -membership.EXTEND_LIMIT), membership.EXTEND_LIMIT)
 
     def __call__(self, x: FloatArray) -> FloatArray:
         x = self.prepare(x)

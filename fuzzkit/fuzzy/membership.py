@@ -20,6 +20,11 @@ import numpy.typing as npt
 from fuzzkit.fuzzy.model import Term
 from fuzzkit.fuzzy.shapes import FloatArray, shape
 
+#: Under ``out_of_range: extend`` every engine (type-1 and Sugeno batch and scalar paths, the
+#: IT2 kernel) and the generated double code bound an input to +-this, so that no product of
+#: inputs, coefficients and memberships overflows.
+EXTEND_LIMIT = 1e100
+
 
 def evaluate_term(term: Term, x: npt.ArrayLike) -> FloatArray:
     """Membership of ``x`` (any shape) in ``term``.

@@ -24,8 +24,6 @@ from fuzzkit.fuzzy.model import Compound, Expression, RuleBase, Variable
 
 FloatArray = npt.NDArray[np.float64]
 
-_EXTEND_LIMIT = 1e100  # the bound the batch engine applies under ``extend``
-
 
 class SugenoOutput:
     """One Sugeno (Takagi-Sugeno-Kang) output: a weighted mean or sum over the fired rules.
@@ -147,7 +145,11 @@ class SugenoScalarPath:
             if self.clamp:
                 x = low if x < low else high if x > high else x
             else:
-                x = -_EXTEND_LIMIT if x < -_EXTEND_LIMIT else min(x, _EXTEND_LIMIT)
+                x = (
+                    -membership.EXTEND_LIMIT
+                    if x < -membership.EXTEND_LIMIT
+                    else min(x, membership.EXTEND_LIMIT)
+                )
             xs.append(float(x))
         mus = [
             [

@@ -44,9 +44,6 @@ IntArray = npt.NDArray[np.int64]
 #: (m, k) the slot's line (:class:`~fuzzkit.fuzzy.output_geometry.PiecewiseLinearGeometry`).
 Geometry = tuple[FloatArray, FloatArray, IntArray, FloatArray, FloatArray, FloatArray]
 
-#: Inputs are bounded by this under ``out_of_range: extend`` (the type-1 fuzzifier's bound).
-EXTEND_LIMIT = 1e100
-
 #: The output layout's integer header: implication product?, scratch width, terms, rule-term
 #: pairs, then (intervals, slots) of the upper and of the lower set.
 _OUT_HEADER = 8
@@ -359,8 +356,8 @@ class FiringLayout:
                 leaf[0, r, k] = rb.input_names.index(prop.variable)
                 leaf[1, r, k] = rb.input(prop.variable).term_index(prop.term)
         bound = rb.out_of_range == "clamp"
-        low = [v.low if bound else -EXTEND_LIMIT for v in rb.inputs]
-        high = [v.high if bound else EXTEND_LIMIT for v in rb.inputs]
+        low = [v.low if bound else -membership.EXTEND_LIMIT for v in rb.inputs]
+        high = [v.high if bound else membership.EXTEND_LIMIT for v in rb.inputs]
         weights = [rule.weight for rule in rb.rules]
         header = [n_in, n_t, len(props), width, int(rb.operators.and_ == "product")]
         floats = np.concatenate([low, high, forms.ravel(), scale.ravel(), weights])
