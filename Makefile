@@ -9,7 +9,9 @@ LOCK := requirements/dev.lock
 # The newest versions the ranges allow, in their own environment (`make test-latest`).
 LATEST_VENV ?= .venv-latest
 # Peer libraries for the benchmark live in their own environment: pyfuzzylite pins numpy<2,
-# which would drag the project's environment back to an old rerun-sdk.
+# which would drag the project's environment back to an old rerun-sdk. typereduction is
+# pyit2fls's optional C back end (its fastest Karnik-Mendel); the interop environment leaves it
+# out, so the committed pyit2fls references stay its Python KM's.
 BENCH_VENV ?= .venv-bench
 BENCH_STAMP := $(BENCH_VENV)/.peers-installed
 # The independent implementations the interop tests compare with: pyfuzzylite (own environment,
@@ -115,7 +117,7 @@ $(BENCH_VENV)/bin/python:
 
 $(BENCH_STAMP): | $(BENCH_VENV)/bin/python
 	$(BENCH_VENV)/bin/python -m pip install --quiet --upgrade pip
-	$(BENCH_VENV)/bin/python -m pip install --quiet "scikit-fuzzy==0.5.0" packaging networkx scipy "pyfuzzylite==8.0.6" "pyit2fls==0.9.0"
+	$(BENCH_VENV)/bin/python -m pip install --quiet "scikit-fuzzy==0.5.0" packaging networkx scipy "pyfuzzylite==8.0.6" "pyit2fls==0.9.0" "typereduction==0.2.2"
 	touch $@
 
 bench: $(STAMP) $(BENCH_STAMP)

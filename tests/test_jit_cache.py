@@ -31,6 +31,8 @@ from fuzzkit.studies import warm as warm_module
 #: The package's kernel modules: every module that compiles a function with ``fuzzkit.jit``.
 KERNEL_MODULES = (
     "fuzzkit.fuzzy.grid_kernel",
+    "fuzzkit.fuzzy.type2_kernel",
+    "fuzzkit.fuzzy.type_reduction",
     "fuzzkit.plants.arm6_heightfield",
     "fuzzkit.plants.arm6_period",
     "fuzzkit.plants.rough_profile",

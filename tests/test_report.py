@@ -365,3 +365,22 @@ def test_the_report_tunes_both_controllers_on_one_problem(tmp_path: Path) -> Non
             duration_s=TUNING_HORIZON_S["E1"],
         )
         assert c.default_cost == pytest.approx(run_cost(reference), rel=1e-6)
+
+
+def test_a_rule_base_without_small_signal_gain_runs_its_defaults_as_matched_and_says_so() -> None:
+    """``sugeno_pi`` holds du = 0 around the origin: F(e, 0) = 0.2 e^2 near it (a hand
+    derivation: only the Z and P terms of e fire, Z x Z concludes 0 and P x Z 0.2 e), so its
+    slopes there are 0 and there is no small-signal gain to match. The report's "matched"
+    fuzzy-PI then runs the default gains and the report says why."""
+    from fuzzkit.loop.python_loop import load_surface
+    from fuzzkit.report.build import matched_gains_for_report
+    from fuzzkit.studies.experiments import DEFAULT_GAINS
+
+    surface = load_surface("sugeno_pi")
+    assert surface(0.1, 0.0) == pytest.approx(0.2 * 0.1**2, rel=1e-9)  # the derivation above
+    gains, note = matched_gains_for_report(surface, "sugeno_pi")
+    assert gains == DEFAULT_GAINS["fuzzy-pi"]
+    assert note is not None and "`sugeno_pi` has no small-signal gain" in note
+    assert "runs the default gains" in note
+    gains, note = matched_gains_for_report(load_surface("macvicar_whelan"), "macvicar_whelan")
+    assert note is None and gains["kx"] != DEFAULT_GAINS["fuzzy-pi"]["kx"]  # slopes 1.5: matched

@@ -16,7 +16,7 @@ from fuzzkit.analysis.rest_points import prove_exact, prove_table
 from fuzzkit.codegen.table_search import make_table
 from fuzzkit.control.loop_rulebase import load_loop_rulebase
 from fuzzkit.fuzzy.inference import evaluate
-from fuzzkit.studies.compiled.table import table2, table_arrays
+from fuzzkit.loop.compiled.table import TableArrays, table2, table_arrays
 
 NARROW = str(Path(__file__).parent / "data" / "stability" / "narrow_rest.yaml")
 
@@ -38,11 +38,12 @@ def _sign_changes(xs, fs):
     "name",
     [
         "macvicar_whelan",
-        "gaussian5",
-        "tests/data/user/renamed.yaml",
-        "tests/data/user/user_pi.fis",
-        "tests/data/user/nonuniform5.yaml",
         NARROW,
+        # the others in make verify (a proof and 200,001 engine points each)
+        pytest.param("gaussian5", marks=pytest.mark.verify),
+        pytest.param("tests/data/user/renamed.yaml", marks=pytest.mark.verify),
+        pytest.param("tests/data/user/user_pi.fis", marks=pytest.mark.verify),
+        pytest.param("tests/data/user/nonuniform5.yaml", marks=pytest.mark.verify),
     ],
 )
 def test_the_proof_agrees_with_a_dense_evaluation(name):
@@ -64,14 +65,37 @@ def test_the_narrow_feature_has_two_more_rest_points_and_the_others_none():
     assert mw.proven
 
 
+@pytest.mark.parametrize("offset", [0.0, 0.013])  # de = 0 on a row of nodes, or across cells
+def test_the_table_proof_finds_the_zeros_of_a_closed_form_table(offset):
+    # F = x (x - 0.3) (x + 0.5) - y at the nodes: on de = 0 the table interpolates a cubic
+    # whose zeros -0.5, 0 and 0.3 are nodes of x
+    bp0 = np.linspace(-1.0, 1.0, 41)
+    bp1 = np.linspace(-1.0, 1.0, 41) + offset
+    bp1[0], bp1[-1] = -1.0, 1.0
+    xx, yy = np.meshgrid(bp0, bp1, indexing="ij")
+    values = xx * (xx - 0.3) * (xx + 0.5) - yy
+    rng = np.random.default_rng(1)
+    splits = rng.integers(0, 2, (40, 40))
+    proof = prove_table(TableArrays(bp0, bp1, values, splits, "cubic"), -1.0, 1.0)
+    xs = np.linspace(-1.0, 1.0, 4001)
+    fs = np.array([table2(bp0, bp1, values, splits, float(x), 0.0) for x in xs])
+    for x in _sign_changes(xs, fs):
+        assert any(a <= x <= b for a, b in proof.others)
+    for a, b in proof.others:
+        inside = (xs >= a) & (xs <= b)
+        assert np.any(fs[inside] <= 0.0) and np.any(fs[inside] >= 0.0)
+    assert len(proof.others) == 2 if offset == 0.0 else len(proof.others) >= 2
+
+
+@pytest.mark.verify
 def test_the_table_proof_is_exact_on_the_table():
     rb = replace(load_loop_rulebase(NARROW), out_of_range="clamp")
-    t = table_arrays(make_table(rb, number_type="double", resolution=201))
+    t = table_arrays(make_table(rb, number_type="double", resolution=161))
     proof = prove_table(t, -1.0, 1.0)
-    xs = np.linspace(-1.0, 1.0, 40_001)
+    xs = np.linspace(-1.0, 1.0, 4001)
     fs = np.array([table2(t.bp0, t.bp1, t.values, t.splits, float(x), 0.0) for x in xs])
     changes = _sign_changes(xs, fs)
-    assert len(changes) >= 2  # the 201-point table resolves the narrow feature's zeros
+    assert len(changes) >= 2  # the 161-point table resolves the narrow feature's zeros
     for x in changes:
         assert any(a <= x <= b for a, b in proof.others)
     for a, b in proof.others:

@@ -114,15 +114,20 @@ def test_without_spec_it_says_which_controller_it_assumed(capsys):
         ("spec_renamed.yaml", "certified"),
         # a dead band around zero error: the loop rests anywhere in it, refused with why
         ("spec_gauss_prod.yaml", "rest"),
-        ("spec_nonuniform5.yaml", "lyapunov"),
+        # non-monotone far from the origin: certified on a box around the rest point only
+        ("spec_nonuniform5.yaml", "local"),
+        # a negative slope at the origin of its surface: no box gets stable vertices
         ("spec_user_pi.yaml", "lyapunov"),
     ],
 )
 def test_user_style_specs_are_certified_or_refused_with_the_reason(capsys, spec, outcome):
     data = _run(capsys, "--spec", str(USER / spec))
     cells = data["cells"]
-    if outcome == "certified":
+    if outcome in ("certified", "local"):
         assert any(c["certified"] for c in cells)
+        if outcome == "local":
+            boxes = [c["fuzzy_region_scaled"] for c in cells if c["certified"]]
+            assert all(b < 0.2 for b in boxes)
         return
     assert not any(c["certified"] for c in cells)
     for c in cells:
@@ -131,3 +136,16 @@ def test_user_style_specs_are_certified_or_refused_with_the_reason(capsys, spec,
             assert "not the loop's rest point" in c["why_not_certified"]
     if outcome == "rest":
         assert "can rest anywhere" in data["model"]["equilibrium"]["why"]
+
+
+def test_local_certificates_of_a_user_rule_base_settle_in_simulation(capsys):
+    # issue 40 item 6: the whole-square slopes of nonuniform5 refuse every cell; the boxes
+    # around the rest point certify some, and each of those settles (no false certificate)
+    argv = ["stability", "regulate", "--spec", str(USER / "spec_nonuniform5.yaml")]
+    argv += ["--plant", "arm6", "--stiffness", "2,5,10", "--latency", "0:0,1:1"]
+    assert main([*argv, "--simulate", "--json"]) == 0
+    cells = json.loads(capsys.readouterr().out)["cells"]
+    certified = [c for c in cells if c["certified"]]
+    assert len(certified) >= 3
+    assert all(c["simulated"] == "settled" for c in certified)
+    assert all(0.0 < c["region_n"] < 1.0 for c in certified)  # local: well under 1 N

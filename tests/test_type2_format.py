@@ -181,15 +181,14 @@ def _cli(*args: str) -> subprocess.CompletedProcess[str]:
     )
 
 
-def test_cli_info_validate_and_explain() -> None:
+def test_cli_info_validate_and_explain() -> None:  # explain in detail: test_type2_explain.py
     info = _cli("info", "macvicar_whelan_it2")
     assert info.returncode == 0
     assert "interval type-2: type_reduction=karnik-mendel (continuous)" in info.stdout
     assert "lower: triangle a=-0.25 b=0 c=0.25 scale=0.8" in info.stdout
     assert _cli("validate", "macvicar_whelan_it2").returncode == 0
     why = _cli("eval", "macvicar_whelan_it2", "-i", "e=0.1", "-i", "de=0", "--explain")
-    assert why.returncode == 2 and "interval type-2" in why.stderr
-    assert "Traceback" not in why.stderr
+    assert why.returncode == 0 and "centroid interval [" in why.stdout
 
 
 def test_plot_shades_the_footprint(tmp_path: object) -> None:

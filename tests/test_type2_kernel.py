@@ -126,7 +126,7 @@ def test_kernel_interval_matches_the_brute_force_on_rules_of_two_inputs(imp: str
     np.testing.assert_allclose(y_r, want[:, 1], atol=1e-7)
 
 
-def test_outputs_without_rules_or_a_discretised_universe_leave_the_compiled_path() -> None:
+def test_a_discretised_universe_leaves_the_compiled_path() -> None:
     rb = load("macvicar_whelan_it2")
     assert isinstance(rb, Type2RuleBase)
     assert _type2(rb).compiled is not None

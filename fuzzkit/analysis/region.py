@@ -9,6 +9,8 @@ from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from typing import Any
 
+import numpy as np
+
 from fuzzkit.analysis.certificate import MIN_MARGIN, FloatArray, certify
 from fuzzkit.analysis.equilibrium import (
     Equilibrium,
@@ -64,6 +66,9 @@ class FuzzyPart:
     #: the sound proof that no other rest point lies on the line de = 0
     #: (:mod:`fuzzkit.analysis.rest_points`); a string: why there is none
     rest: RestProof | str = "not computed"
+    #: the rule base (role order) and surface the bounds were taken on, to take them again
+    #: on a smaller box (:func:`local_parts`)
+    source: tuple[RuleBase, Surface] | None = None
 
 
 def fuzzy_part(rulebase: str | RuleBase, rho: float = 1.0, surface: Surface = EXACT) -> FuzzyPart:
@@ -78,8 +83,10 @@ def fuzzy_part(rulebase: str | RuleBase, rho: float = 1.0, surface: Surface = EX
     return _fuzzy_part(rb, rho, surface)
 
 
-def _rest_proof(source: SurfaceSource) -> RestProof | str:
+@lru_cache(maxsize=16)
+def _rest_proof(rb: RuleBase, surface: Surface) -> RestProof | str:
     """No other rest point on the whole line de = 0, proven on the deployed surface."""
+    source = surface_source(rb, surface)
     if source.covers_deployed:
         return prove_table(source.table, -1.0, 1.0)
     why = why_unsupported(source.rulebase)
@@ -88,10 +95,29 @@ def _rest_proof(source: SurfaceSource) -> RestProof | str:
     return prove_exact(source.rulebase, -1.0, 1.0)
 
 
-@lru_cache(maxsize=16)
+@lru_cache(maxsize=256)
 def _fuzzy_part(rb: RuleBase, rho: float, surface: Surface) -> FuzzyPart:
     part = _fuzzy_bounds(rb, rho, surface)
-    return replace(part, rest=_rest_proof(surface_source(rb, surface)))
+    return replace(part, rest=_rest_proof(rb, surface), source=(rb, surface))
+
+
+#: The boxes a failed cell is tried on again, as shares of its box's half-width.
+LOCAL_SHARES = tuple(2.0 ** (-k / 2) for k in range(1, 11))
+#: At most this many of them are searched for a Lyapunov function.
+LOCAL_TRIES = 2
+
+
+def local_parts(fuzzy: FuzzyPart) -> Iterator[FuzzyPart]:
+    """The bounds on boxes around the rest point smaller than ``fuzzy``'s, largest first."""
+    if fuzzy.source is None:
+        return
+    rb, surface = fuzzy.source
+    seen = fuzzy.rho
+    for share in LOCAL_SHARES:
+        part = _fuzzy_part(rb, share * fuzzy.rho, surface)
+        if part.rho < seen:  # the box covers whole table cells: skip repeats
+            seen = part.rho
+            yield part
 
 
 def _fuzzy_bounds(rb: RuleBase, rho: float, surface: Surface) -> FuzzyPart:
@@ -208,6 +234,9 @@ class Cell:
     #: (:mod:`fuzzkit.analysis.invariant_region`; NaN without a Lyapunov function)
     region_n: float = math.nan
     region_limited_by: str = ""
+    #: the half-width of the box of scaled inputs |Ki (e - e0)|, |Kp de| the fuzzy bounds
+    #: were taken on (NaN for PI)
+    fuzzy_box: float = math.nan
 
     def as_dict(self) -> dict[str, Any]:
         """JSON form (a NaN or infinite number becomes null)."""
@@ -223,6 +252,7 @@ class Cell:
             "why_not_certified": self.why_not or None,
             "region_n": _finite(self.region_n),
             "region_limited_by": self.region_limited_by or None,
+            "fuzzy_region_scaled": _finite(self.fuzzy_box),
         }
 
 
@@ -316,8 +346,64 @@ def certify_cell(
     frontend_cutoff_hz: float | None = None,
     limits_m: tuple[float, float] | None = None,
 ) -> Cell:
-    """Certify one cell: with the contact sector ``[sigma_min, 1]`` (contact may be lost), else
-    with contact held (``[1, 1]``); ``Cell.contact_sector`` says which one holds.
+    """Certify one cell on the fuzzy box of ``fuzzy`` (:func:`certify_box`); a fuzzy-PI cell
+    refused there because a vertex (or a product of two) is unstable is tried on smaller boxes
+    around the rest point (:func:`local_parts`): the largest whose vertices are all stable,
+    then smaller ones, :data:`LOCAL_TRIES` searches at most. A box is certified with its own
+    bounds and its own ``region_n``. A rule base with a possible second rest point in the
+    first box is not tried again (the loop could rest there)."""
+    args = (exp, controller, gains, inner)
+    rest = (stiffness_n_per_mm, latency, sigma_min, noise_n, reuse)
+    opts = {"frontend_cutoff_hz": frontend_cutoff_hz, "limits_m": limits_m}
+    cell = certify_box(*args, fuzzy, *rest, **opts)  # type: ignore[arg-type]
+    if cell.certified or fuzzy is None or cell.why_not.startswith(("the set point", "no rest")):
+        return cell
+    if not cell.solver_status.startswith("refused"):
+        # the box's vertices were stable and no Lyapunov function was found for them: a
+        # smaller box rarely changes that, and each try is a solve
+        return cell
+    tries = 0
+    for part in local_parts(fuzzy):
+        loop = axis_loop(
+            exp,
+            controller,
+            gains,
+            inner,
+            part,
+            stiffness_n_per_mm * 1e3,
+            latency,
+            1.0,
+            frontend_cutoff_hz,
+        )
+        mats = vertex_matrices(loop)
+        if max(float(np.max(np.abs(np.linalg.eigvals(a)))) for a in mats) >= 1.0:
+            continue
+        local = certify_box(*args, part, *rest, **opts)  # type: ignore[arg-type]
+        if local.certified:
+            return local
+        tries += 1
+        if tries >= LOCAL_TRIES:
+            break
+    return cell
+
+
+def certify_box(
+    exp: Experiment,
+    controller: str,
+    gains: Mapping[str, float] | None,
+    inner: InnerLoop,
+    fuzzy: FuzzyPart | None,
+    stiffness_n_per_mm: float,
+    latency: tuple[int, int],
+    sigma_min: float,
+    noise_n: float,
+    reuse: FloatArray | None = None,
+    *,
+    frontend_cutoff_hz: float | None = None,
+    limits_m: tuple[float, float] | None = None,
+) -> Cell:
+    """Certify one cell on one fuzzy box: with the contact sector ``[sigma_min, 1]`` (contact
+    may be lost), else with contact held (``[1, 1]``); ``Cell.contact_sector`` says which one holds.
 
     Contact held is tried first: its vertices are a subset of the wider sector's, so when it
     fails the wider one fails too and is not tried. ``reuse``: a Lyapunov matrix to try before
@@ -396,6 +482,7 @@ def certify_cell(
         why,
         region_n,
         limited_by,
+        math.nan if fuzzy is None else fuzzy.rho,
     )
 
 

@@ -27,7 +27,7 @@ import numpy as np
 from fuzzkit.analysis.intervals import FloatArray, Interval
 from fuzzkit.analysis.surface_enclosure import Enclosure
 from fuzzkit.fuzzy.model import RuleBase
-from fuzzkit.studies.compiled.table import TableArrays, table2
+from fuzzkit.loop.compiled.table import TableArrays, table2
 
 #: Width ratio of neighbouring cells away from the set point, and the first cell's edge.
 RATIO = 1.125

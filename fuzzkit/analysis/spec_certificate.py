@@ -10,12 +10,12 @@ certified, as for every certificate (docs/stability.md).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import replace
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
 from typing import Any
 
 from fuzzkit.analysis.region import SIGMA_MIN, Region, certify_region, effective_gains
-from fuzzkit.control.spec import AxisSpec, ControllerSpec, role_ordered
+from fuzzkit.control.spec import AxisSpec, ControllerSpec, role_ordered, with_gains
 from fuzzkit.errors import ConfigError
 from fuzzkit.loop.task import Experiment, with_spec
 
@@ -145,3 +145,32 @@ def assumed(controller: str, gains: dict[str, float], rulebase: str) -> dict[str
         "front-end low-pass, no correction or step limit; give --spec SPEC to certify a "
         "controller spec as it ships",
     }
+
+
+@dataclass(frozen=True)
+class SpecCertifiedOver:
+    """A gain-set predicate for ``fuzzkit tune --spec SPEC --certify``: the spec as it ships
+    (its surface, rule base and input roles, front-end low-pass, limits, set points) with the
+    candidate gains on every axis (:func:`~fuzzkit.control.spec.with_gains`, what tuning a spec
+    tries), certified by :func:`certify_spec` in every cell of the grid, on every axis that
+    holds a contact force (set point > 0 N: a 0 N axis is no loop in contact). Stops at the
+    first axis that is not."""
+
+    experiment: Experiment
+    spec: ControllerSpec
+    plant: str
+    stiffnesses_n_per_mm: tuple[float, ...]
+    latencies: tuple[tuple[int, int], ...]
+    sigma_min: float = SIGMA_MIN
+
+    def __call__(self, gains: Mapping[str, float]) -> bool:
+        tuned = with_gains(self.spec, gains)
+        grid = (self.stiffnesses_n_per_mm, self.latencies)
+        held = [ax.axis for ax in tuned.axes if ax.setpoint_n > 0.0]
+        return all(
+            cell.certified
+            for axis in held
+            for cell in certify_spec(
+                self.experiment, tuned, self.plant, *grid, axis=axis, sigma_min=self.sigma_min
+            ).cells
+        )

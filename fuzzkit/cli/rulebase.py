@@ -622,27 +622,52 @@ def explanation_text(rb: RuleBase, data: Any) -> str:
     """What ``fuzzkit eval --explain`` prints for an :class:`~fuzzkit.fuzzy.explain.Explanation`."""
     lines = []
     for i in data.inputs:
-        fired = [f"{t} {_num(m)}" for t, m in i.memberships.items() if m > 0.0]
+        lows = i.lower_memberships
+        fired = [
+            f"{t} {_num(m)}" if lows is None else f"{t} [{_num(lows[t])}, {_num(m)}]"
+            for t, m in i.memberships.items()
+            if m > 0.0
+        ]
         seen = "" if i.seen == i.value else f" (clamped to {_num(i.seen)})"
         lines.append(f"{i.name} = {_num(i.value)}{seen}: {', '.join(fired) or 'no term'}")
     ops = data.operators
+    it2 = any(r.lower is not None for r in data.rules) or any(
+        o.interval is not None for o in data.outputs
+    )
+    what = "firing interval [lower, upper]" if it2 else "strength"
     lines.append(
-        f"rules that fire: {len(data.rules)} of {len(rb.rules)} (strength: and={ops['and']} of "
+        f"rules that fire: {len(data.rules)} of {len(rb.rules)} ({what}: and={ops['and']} of "
         "the memberships, times the weight)"
     )
-    lines += [f"  {r.strength:.4f}  #{r.index}: {r.text}" for r in data.rules]
+    lines += [
+        f"  {r.strength:.4f}  #{r.index}: {r.text}"
+        if r.lower is None
+        else f"  [{r.lower:.4f}, {r.strength:.4f}]  #{r.index}: {r.text}"
+        for r in data.rules
+    ]
     for o in data.outputs:
         var = rb.output(o.name)
         active = ", ".join(f"{t} {_num(a)}" for t, a in o.activations.items() if a > 0.0)
         if len(o.y):
+            upper = "upper " if o.mu_lower is not None else ""
             lines.append(
-                f"{o.name}: aggregated set (implication {ops['implication']}, aggregation "
-                f"{ops['aggregation']}); term levels {active or 'none'}"
+                f"{o.name}: {upper}aggregated set (implication {ops['implication']}, "
+                f"aggregation {ops['aggregation']}); term levels {active or 'none'}"
             )
             lines.append(f"  {_num(var.low)} |{_sparkline(o.mu)}| {_num(var.high)}")
+            if o.mu_lower is not None and o.lower_activations is not None:
+                low_active = ", ".join(
+                    f"{t} {_num(a)}" for t, a in o.lower_activations.items() if a > 0.0
+                )
+                lines.append(f"{o.name}: lower set; term levels {low_active or 'none'}")
+                lines.append(f"  {_num(var.low)} |{_sparkline(o.mu_lower)}| {_num(var.high)}")
         else:
             values = ", ".join(f"{t} = {_num(v)}" for t, v in o.term_values.items())
             lines.append(f"{o.name}: Sugeno terms at this point: {values}; activations {active}")
+        if o.interval is not None:
+            lines.append(
+                f"  centroid interval [{o.interval[0]!r}, {o.interval[1]!r}] (Karnik-Mendel)"
+            )
         lines.append(f"  {o.name} = {o.value!r} ({o.defuzzifier})")
     return "\n".join(lines)
 

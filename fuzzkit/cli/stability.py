@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from typing import Any
 
 from fuzzkit.cli import RULEBASE_SPEC_HELP, add_plant_argument, add_quiet_argument, numbers
@@ -105,6 +106,7 @@ def register(subparsers: Any) -> None:
 
 
 def _stability(args: argparse.Namespace) -> int:
+    from fuzzkit.analysis.inner_loop import poor_fit
     from fuzzkit.analysis.regulation import scenario
 
     if args.png:
@@ -133,6 +135,10 @@ def _stability(args: argparse.Namespace) -> int:
 
         write_region_png(region, args.png, simulated)
     data = region.as_dict()
+    inner = data["model"]["inner_loop"]
+    warning = poor_fit(inner["plant"], inner["fit_error_nrmse"])
+    if warning is not None:
+        print(f"fuzzkit: warning: {warning}", file=sys.stderr)
     if simulated is not None:
         for cell, outcome in zip(data["cells"], simulated, strict=True):
             cell["simulated"] = outcome
@@ -215,7 +221,10 @@ def _text(data: dict[str, Any], args: argparse.Namespace) -> str:
     ]
     if "fuzzy" in model:
         fz = model["fuzzy"]
-        what = fz.get("phi", [fz.get("dF_de"), fz.get("dF_dde")])
+        if "phi" in fz:
+            what = _interval(fz["phi"])
+        else:
+            what = f"dF/de in {_interval(fz['dF_de'])}, dF/dde in {_interval(fz['dF_dde'])}"
         lines.append(f"fuzzy bounds ({fz['bounds']}): {what}; {fz['bounds_are']}")
     rest = model["equilibrium"]
     if not rest["at_setpoint"]:
@@ -233,7 +242,7 @@ def _text(data: dict[str, Any], args: argparse.Namespace) -> str:
     ks = list(dict.fromkeys(c["stiffness_n_per_mm"] for c in data["cells"]))
     lats = list(dict.fromkeys(tuple(c["latency_periods"]) for c in data["cells"]))
     by = {(c["stiffness_n_per_mm"], tuple(c["latency_periods"])): c for c in data["cells"]}
-    lines.append("latency \\ N/mm " + " ".join(f"{k:>6g}" for k in ks))
+    lines.append("latency \\ N/mm".ljust(15) + " ".join(f"{k:>{_COL}g}" for k in ks))
     for lat in lats:
         row = []
         for k in ks:
@@ -245,7 +254,7 @@ def _text(data: dict[str, Any], args: argparse.Namespace) -> str:
                 mark = "n" if model["equilibrium"]["at_setpoint"] else "r"
             if "simulated" in c:
                 mark += c["simulated"][0]
-            row.append(f"{mark:>6}")
+            row.append(f"{mark:>{_COL}}")
         lines.append(f"{latency_text(lat):<15}" + " ".join(row))
     lines.append(
         "region_n (N): the certificate holds locally, for a force up to this far from the set "
@@ -255,8 +264,25 @@ def _text(data: dict[str, Any], args: argparse.Namespace) -> str:
         row = []
         for k in ks:
             c = by[(k, lat)]
-            row.append(f"{c['region_n']:>6.3g}" if c["certified"] else f"{'-':>6}")
+            row.append(f"{c['region_n']:>{_COL}.2f}" if c["certified"] else f"{'-':>{_COL}}")
         lines.append(f"{latency_text(lat):<15}" + " ".join(row))
+    refused = [c for c in data["cells"] if not c["certified"]]
+    if refused:
+        lines.append("why not certified:")
+    for c in refused:
+        why = c.get("why_not_certified") or "no reason recorded"
+        where = f"{latency_text(tuple(c['latency_periods']))}, {c['stiffness_n_per_mm']:g} N/mm"
+        lines.append(f"  {where}: {why}")
     certified = sum(c["certified"] for c in data["cells"])
     lines.append(f"certified {certified} of {len(data['cells'])} cells")
     return "\n".join(lines)
+
+
+#: Width of a column of the text grids (a stiffness, a verdict, a region_n of 8.2f).
+_COL = 8
+
+
+def _interval(bounds: Any) -> str:
+    """``[lo, hi]`` with fixed-width numbers (the JSON keeps every digit)."""
+    lo, hi = (float(v) for v in bounds)
+    return f"[{lo:9.4f}, {hi:9.4f}]"

@@ -229,7 +229,7 @@ def _tune(args: argparse.Namespace) -> int:
 
         spec = load_spec(args.spec)
     constraint = (
-        _certified_over(args, experiments[0], controller, rulebase) if args.certify else None
+        _certified_over(args, experiments[0], controller, rulebase, spec) if args.certify else None
     )
     out = Path(args.out)
     check_output_path(out, "gains file")
@@ -494,15 +494,23 @@ def _write_spec(args: argparse.Namespace, result: Any, gains: dict[str, float]) 
     write_atomic(Path(args.spec_out), dump_spec(spec, header))
 
 
-def _certified_over(args: argparse.Namespace, first: Any, controller: str, rulebase: str) -> Any:
-    """The ``--certify`` predicate (``fuzzkit.analysis.region.CertifiedOver``) on the first
-    tuned experiment (its period, contact damping and sensor)."""
+def _certified_over(
+    args: argparse.Namespace, first: Any, controller: str, rulebase: str, spec: Any = None
+) -> Any:
+    """The ``--certify`` predicate on the first tuned experiment (its period, contact damping
+    and sensor): with ``--spec`` the spec as it ships with the candidate gains
+    (``fuzzkit.analysis.spec_certificate.SpecCertifiedOver``), else the options' controller
+    (``fuzzkit.analysis.region.CertifiedOver``)."""
     from fuzzkit.analysis.region import CertifiedOver
+    from fuzzkit.analysis.spec_certificate import SpecCertifiedOver
     from fuzzkit.studies.experiments import experiment
 
     ks = args.certify
+    exp = experiment(first) if isinstance(first, str) else first
+    if spec is not None:
+        return SpecCertifiedOver(exp, spec, args.plant, tuple(ks), tuple(args.certify_latency))
     return CertifiedOver(
-        experiment(first) if isinstance(first, str) else first,
+        exp,
         controller,
         args.plant,
         tuple(ks),

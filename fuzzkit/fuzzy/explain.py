@@ -5,13 +5,18 @@ fires with its strength (weight applied), and per output the activation of each 
 aggregated output set, sampled finely enough to draw (and to check the defuzzified value by
 numeric integration), next to the exact engine's value. Sugeno outputs have no set: their terms'
 values at the point and activations stand in for it.
+
+An interval type-2 rule base is explained with its intervals: each input's lower memberships
+beside the upper ones, each rule's firing interval ``[lower, upper]`` (a rule fires when its
+upper strength is above 0; it is ranked by it), and per output the lower set beside the upper
+(aggregated) one and the centroid interval ``[y_l, y_r]``.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -22,7 +27,7 @@ from fuzzkit.fuzzy import membership
 from fuzzkit.fuzzy.describe import rule_sentence, shown_output
 from fuzzkit.fuzzy.model import RuleBase, Variable
 from fuzzkit.fuzzy.output_geometry import OutputPieces
-from fuzzkit.fuzzy.type2_model import footprint_of
+from fuzzkit.fuzzy.type2_model import Footprint, footprint_of
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -38,6 +43,7 @@ class InputExplanation:
     value: float
     seen: float
     memberships: dict[str, float]
+    lower_memberships: dict[str, float] | None = None  # interval type-2 only
 
 
 @dataclass(frozen=True, slots=True)
@@ -47,6 +53,7 @@ class FiredRule:
     index: int
     text: str
     strength: float
+    lower: float | None = None  # interval type-2: the lower firing strength (``strength``: upper)
 
 
 @dataclass(frozen=True, slots=True)
@@ -62,6 +69,11 @@ class OutputExplanation:
     y: FloatArray
     mu: FloatArray
     term_values: dict[str, float]
+    #: Interval type-2 only: the lower set at ``y`` (``mu`` is the upper one), each term's
+    #: lower activation, and the centroid interval ``(y_l, y_r)``.
+    mu_lower: FloatArray | None = None
+    lower_activations: dict[str, float] | None = None
+    interval: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -79,25 +91,45 @@ class Explanation:
         return {
             "rulebase": self.rulebase,
             "operators": self.operators,
-            "inputs": [
-                {"name": i.name, "value": i.value, "seen": i.seen, "memberships": i.memberships}
-                for i in self.inputs
-            ],
-            "rules": [
-                {"index": r.index, "rule": r.text, "strength": r.strength} for r in self.rules
-            ],
-            "outputs": [
-                {
-                    "name": o.name,
-                    "value": None if math.isnan(o.value) else o.value,
-                    "defuzzifier": o.defuzzifier,
-                    "activations": o.activations,
-                    "aggregated_set": {"y": o.y.tolist(), "mu": o.mu.tolist()},
-                    "term_values": o.term_values,
-                }
-                for o in self.outputs
-            ],
+            "inputs": [_input_data(i) for i in self.inputs],
+            "rules": [_rule_data(r) for r in self.rules],
+            "outputs": [_output_data(o) for o in self.outputs],
         }
+
+
+def _input_data(i: InputExplanation) -> dict[str, Any]:
+    data: dict[str, Any] = {
+        "name": i.name, "value": i.value, "seen": i.seen, "memberships": i.memberships
+    }  # fmt: skip
+    if i.lower_memberships is not None:
+        data["lower_memberships"] = i.lower_memberships
+    return data
+
+
+def _rule_data(r: FiredRule) -> dict[str, Any]:
+    data: dict[str, Any] = {"index": r.index, "rule": r.text, "strength": r.strength}
+    if r.lower is not None:
+        data["firing_interval"] = [r.lower, r.strength]
+    return data
+
+
+def _output_data(o: OutputExplanation) -> dict[str, Any]:
+    data: dict[str, Any] = {
+        "name": o.name,
+        "value": None if math.isnan(o.value) else o.value,
+        "defuzzifier": o.defuzzifier,
+        "activations": o.activations,
+        "aggregated_set": {"y": o.y.tolist(), "mu": o.mu.tolist()},
+        "term_values": o.term_values,
+    }
+    if o.interval is not None:
+        data["lower_activations"] = o.lower_activations
+        data["lower_set"] = {
+            "y": o.y.tolist(),
+            "mu": [] if o.mu_lower is None else o.mu_lower.tolist(),
+        }
+        data["interval"] = [None if math.isnan(v) else v for v in o.interval]
+    return data
 
 
 def explain(rb: RuleBase, point: Mapping[str, float]) -> Explanation:
@@ -106,17 +138,9 @@ def explain(rb: RuleBase, point: Mapping[str, float]) -> Explanation:
     Raises
     ------
     EvaluationError
-        A missing, unknown or NaN input (a NaN input gives NaN outputs: no rule fires), or an
-        interval type-2 rule base (its explanation would need the firing intervals and both
-        output sets; not written yet).
+        A missing, unknown or NaN input (a NaN input gives NaN outputs: no rule fires).
     """
     from fuzzkit.fuzzy.inference import engine_for
-
-    if footprint_of(rb) is not None:
-        raise EvaluationError(
-            f"rule base {rb.name!r} is interval type-2: the explanation shows type-1 inference "
-            "only (evaluate it without --explain)"
-        )
 
     engine = engine_for(rb)
     values = {n: float(point[n]) for n in rb.input_names if n in point}
@@ -127,13 +151,24 @@ def explain(rb: RuleBase, point: Mapping[str, float]) -> Explanation:
             f"input {', '.join(bad)} is NaN: every output is NaN and no rule fires; "
             "nothing to explain"
         )
-    inputs = tuple(_fuzzify(var, values[var.name], rb.out_of_range) for var in rb.inputs)
-    firing = engine.firing_strengths({n: np.array([v]) for n, v in values.items()})
+    footprint = footprint_of(rb)
+    inputs = tuple(_fuzzify(var, values[var.name], rb.out_of_range, footprint) for var in rb.inputs)
+    points = {n: np.array([v]) for n, v in values.items()}
+    lower: FloatArray | None = None
+    if footprint is None:
+        firing = engine.firing_strengths(points)
+    else:
+        lower, firing = engine.firing_intervals(points)
     result = engine.evaluate_point(values)
     rules = tuple(
         sorted(
             (
-                FiredRule(r + 1, rule_sentence(rule), float(firing[0, r]))
+                FiredRule(
+                    r + 1,
+                    rule_sentence(rule),
+                    float(firing[0, r]),
+                    None if lower is None else float(lower[0, r]),
+                )
                 for r, rule in enumerate(rb.rules)
                 if firing[0, r] > 0.0
             ),
@@ -144,6 +179,12 @@ def explain(rb: RuleBase, point: Mapping[str, float]) -> Explanation:
     outputs = tuple(
         _output(rb, out, firing, seen, shown_output(result[out.name], out)) for out in rb.outputs
     )
+    if footprint is not None and lower is not None:
+        intervals = engine.centroid_intervals(points)
+        outputs = tuple(
+            _lower_side(rb, out, o, lower, intervals[out.name], footprint)
+            for out, o in zip(rb.outputs, outputs, strict=True)
+        )
     ops = rb.operators
     return Explanation(
         rb.name,
@@ -159,10 +200,44 @@ def explain(rb: RuleBase, point: Mapping[str, float]) -> Explanation:
     )
 
 
-def _fuzzify(var: Variable, value: float, policy: str) -> InputExplanation:
+def _fuzzify(
+    var: Variable, value: float, policy: str, footprint: Footprint | None
+) -> InputExplanation:
     seen = min(max(value, var.low), var.high) if policy == "clamp" else value
-    mus = {t.name: float(membership.evaluate_term(t, np.array([seen]))[0]) for t in var.terms}
-    return InputExplanation(var.name, value, seen, mus)
+    x = np.array([seen])
+    mus = {t.name: float(membership.evaluate_term(t, x)[0]) for t in var.terms}
+    if footprint is None:
+        return InputExplanation(var.name, value, seen, mus)
+    shapes, scales = footprint.lower_terms(var)
+    lows = {
+        t.name: min(h * float(membership.evaluate_term(t, x)[0]), mus[t.name])
+        for t, h in zip(shapes, scales, strict=True)
+    }
+    return InputExplanation(var.name, value, seen, mus, lows)
+
+
+def _lower_side(
+    rb: RuleBase,
+    out: Variable,
+    upper: OutputExplanation,
+    lower: FloatArray,
+    interval: tuple[FloatArray, FloatArray],
+    footprint: Footprint,
+) -> OutputExplanation:
+    """``upper`` (the type-1 style explanation on the upper firing) with the lower side."""
+    pieces = OutputPieces(rb, out)
+    act = pieces.activations(lower)[0]
+    acts = {t.name: float(a) for t, a in zip(out.terms, act, strict=True)}
+    y_l, y_r = (shown_output(float(v[0]), out) for v in interval)
+    mu_lower = None
+    if len(upper.y):
+        shapes, scales = footprint.lower_terms(out)
+        low_var = replace(out, terms=shapes)
+        mu = aggregated_set(
+            rb, low_var, pieces.levels(lower)[0], pieces.piece_term, upper.y, np.array(scales)
+        )
+        mu_lower = np.minimum(mu, upper.mu)
+    return replace(upper, mu_lower=mu_lower, lower_activations=acts, interval=(y_l, y_r))
 
 
 def _output(
@@ -194,12 +269,20 @@ def _set_grid(out: Variable) -> FloatArray:
 
 
 def aggregated_set(
-    rb: RuleBase, out: Variable, levels: FloatArray, piece_term: npt.NDArray[np.intp], y: FloatArray
+    rb: RuleBase,
+    out: Variable,
+    levels: FloatArray,
+    piece_term: npt.NDArray[np.intp],
+    y: FloatArray,
+    heights: FloatArray | None = None,
 ) -> FloatArray:
-    """The aggregated output set at ``y``: every piece's term, cut (min) or scaled (product) at
-    its level, combined by the rule base's aggregation."""
+    """The aggregated output set at ``y``: every piece's term (times its height, an IT2 lower
+    term's scale), cut (min) or scaled (product) at its level, combined by the rule base's
+    aggregation."""
     ops = rb.operators
     term_mu = np.array([membership.evaluate_term(t, y) for t in out.terms])  # (T, len(y))
+    if heights is not None:
+        term_mu = term_mu * heights[:, None]
     implied = term_mu[piece_term]
     lv = levels[:, None]
     implied = np.minimum(implied, lv) if ops.implication == "min" else implied * lv

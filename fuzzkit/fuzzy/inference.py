@@ -522,6 +522,23 @@ class Engine:
         flat = [a.reshape(-1) for a in self._coerce(inputs)]
         return self._firing([fz(x) for fz, x in zip(self._fuzzifiers, flat, strict=True)])
 
+    def firing_intervals(
+        self, inputs: Mapping[str, npt.ArrayLike]
+    ) -> tuple[FloatArray, FloatArray]:
+        """For an interval type-2 rule base: the lower and the upper firing strength of every
+        rule at every point (weights applied), each of shape (points, rules).
+
+        Raises
+        ------
+        EvaluationError
+            For a type-1 rule base (its firing is :meth:`firing_strengths`).
+        """
+        if self._type2 is None:
+            raise EvaluationError(
+                f"rule base {self.rulebase.name!r} is type-1: it has no firing intervals"
+            )
+        return self._type2.firing_intervals([a.reshape(-1) for a in self._coerce(inputs)])
+
 
 def _scalar_path(rb: RuleBase, outputs: list[_Output | SugenoOutput]) -> ScalarPath | None:
     """The pure-Python single-point evaluator, when the rule base has its shape."""

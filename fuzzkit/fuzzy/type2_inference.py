@@ -1,4 +1,9 @@
-"""The exact interval type-2 engine (Mamdani and Sugeno outputs), vectorised over numpy arrays.
+"""The exact interval type-2 engine (Mamdani and Sugeno outputs) over batches of points.
+
+Continuous Mamdani outputs run as one compiled kernel per output
+(:mod:`fuzzkit.fuzzy.type2_kernel`): from the input values when the firing is one the kernel
+covers (piecewise-linear input terms, conjunctive antecedents), else from the piece levels of
+the numpy firing below; discretised (``resolution:``) and Sugeno outputs run in numpy.
 
 :class:`fuzzkit.fuzzy.inference.Engine` hands a rule base with a footprint to
 :class:`Type2Engine`, so ``Engine(rb).evaluate(...)``, surfaces, tables and generated code work

@@ -7,9 +7,6 @@ compiled call (:func:`fuzzkit.loop.compiled.arm6_run.run_arm6`) runs every perio
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable
-
 import numpy as np
 
 from fuzzkit.loop.adapter import PlantAdapter
@@ -17,9 +14,10 @@ from fuzzkit.loop.compiled import arm6_run as K
 from fuzzkit.loop.compiled import period as P
 from fuzzkit.loop.compiled.common import (
     ControllerArgs,
+    fields_record,
     recording,
     result_from_recording,
-    warm_up,
+    run_kernel,
 )
 from fuzzkit.loop.result import RunResult
 from fuzzkit.loop.task import Experiment
@@ -52,21 +50,8 @@ def run_arm6_compiled(
     rec = recording(n, dof, dof + 2, arrays.obj_kind.shape[0], **own)
     scalars = np.zeros(P.N_RESULTS)
     reset_force = np.asarray(reset.force, dtype=np.float64).copy()
-    a = arrays
-    args = (
-        a.links, a.tool_r, a.tool_p, a.lower, a.upper, a.dq_max, a.path_t, a.path_pos,
-        a.path_quat, a.obj_kind, a.obj_p, a.obj_terms, a.obj_nterms, a.obj_grid, a.rot_task,
-        a.offset,
-        a.params, a.q, a.q_ref, a.q_ik, a.stick, a.state, noise, reset_force,
-        ctrl.cp, ctrl.selection, ctrl.setpoints, ctrl.c_step, ctrl.c_state, ctrl.spike, ctrl.nan,
-    )  # fmt: skip
-    warm_up(K.run_arm6, args, rec, scalars, ctrl)
-    wall0 = time.perf_counter()
-    cpu0 = time.process_time()
-    kernel: Callable[..., None] = K.run_arm6  # called with the argument list built above
-    kernel(*args, *rec.values(), scalars)
-    cpu = time.process_time() - cpu0
-    wall = time.perf_counter() - wall0
+    plant_arrays = fields_record(arrays)
+    _, cpu, wall = run_kernel(K.run_arm6, plant_arrays, noise, reset_force, ctrl, rec, scalars)
     messages: dict[str, int] = {}
     for code, count in zip(*np.unique(rec["ik"], return_counts=True), strict=True):
         name = IK_STATUS_NAMES[int(code)]

@@ -19,7 +19,6 @@ loaded, once per process. MuJoCo is imported only when a plant is built.
 from __future__ import annotations
 
 import functools
-import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -30,7 +29,12 @@ from fuzzkit.codegen.toolchain import cached_library
 from fuzzkit.errors import SimulationError, ToolchainError
 from fuzzkit.loop.adapter import PlantAdapter
 from fuzzkit.loop.compiled import period as P
-from fuzzkit.loop.compiled.common import ControllerArgs, recording, result_from_recording, warm_up
+from fuzzkit.loop.compiled.common import (
+    ControllerArgs,
+    recording,
+    result_from_recording,
+    run_kernel,
+)
 from fuzzkit.loop.result import RunResult
 from fuzzkit.loop.task import Experiment
 from fuzzkit.plants.arm6_period import IK_STATUS_NAMES
@@ -251,17 +255,12 @@ def run_mujoco_compiled(
     )  # fmt: skip
     scalars = np.zeros(P.N_RESULTS)
     reset_force = np.asarray(reset.force, dtype=np.float64).copy()
-    args = (
-        *arrays.plant, noise, reset_force, *arrays.mujoco,
-        ctrl.cp, ctrl.selection, ctrl.setpoints, ctrl.c_step, ctrl.c_state, ctrl.spike, ctrl.nan,
+    views, mj_steps, tool_contacts = arrays.mujoco[:-2], *arrays.mujoco[-2:]
+    done, cpu, wall = run_kernel(
+        K.run_mujoco, arrays.plant, noise, reset_force, ctrl, rec, scalars,
+        extra=(views, mj_steps, tool_contacts),
     )  # fmt: skip
-    kernel: Any = K.run_mujoco
-    warm_up(kernel, args, rec, scalars, ctrl)
-    wall0 = time.perf_counter()
-    cpu0 = time.process_time()
-    done = int(kernel(*args, *rec.values(), scalars))
-    cpu = time.process_time() - cpu0
-    wall = time.perf_counter() - wall0
+    done = int(done)
     if done < n:
         raise SimulationError(
             f"t={rec['t'][done]:.3f} s: the MuJoCo simulation diverged (a contact or joint "

@@ -8,9 +8,6 @@ directly on that space.
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable
-
 import numpy as np
 
 from fuzzkit.errors import SimulationError
@@ -18,9 +15,10 @@ from fuzzkit.loop.adapter import PlantAdapter
 from fuzzkit.loop.compiled import period as P
 from fuzzkit.loop.compiled.common import (
     ControllerArgs,
+    fields_record,
     recording,
     result_from_recording,
-    warm_up,
+    run_kernel,
 )
 from fuzzkit.loop.compiled.planar_run import run_planar
 from fuzzkit.loop.result import RunResult
@@ -57,18 +55,9 @@ def run_planar_compiled(
     rec = recording(n, 2, 4, a.obj_kind.shape[0], flags=np.zeros((n, 4), dtype=np.int64))
     scalars = np.zeros(P.N_RESULTS)
     reset_force = np.asarray(reset.force, dtype=np.float64).copy()
-    args = (
-        a.path, a.obj_kind, a.obj_p, a.obj_terms, a.obj_nterms, a.rot, a.params, a.functions,
-        a.pointers, a.stick, a.state, noise, reset_force,
-        ctrl.cp, ctrl.selection, ctrl.setpoints, ctrl.c_step, ctrl.c_state, ctrl.spike, ctrl.nan,
-    )  # fmt: skip
-    warm_up(run_planar, args, rec, scalars, ctrl)
-    wall0 = time.perf_counter()
-    cpu0 = time.process_time()
-    kernel: Callable[..., int] = run_planar  # called with the argument list built above
-    done = kernel(*args, *rec.values(), scalars)
-    cpu = time.process_time() - cpu0
-    wall = time.perf_counter() - wall0
+    done, cpu, wall = run_kernel(
+        run_planar, fields_record(a), noise, reset_force, ctrl, rec, scalars
+    )
     flags = rec["flags"]
     if done < n and flags[done, 0] == STEP_NON_FINITE:
         t = float(a.state[0])

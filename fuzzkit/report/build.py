@@ -176,9 +176,10 @@ def build_report(
         if rrd:
             (out / "rrd").mkdir()
 
-        from fuzzkit.studies.matching import matched_fuzzy_gains, small_signal_ratios
+        from fuzzkit.studies.matching import small_signal_ratios
 
         surface = load_surface(rulebase)
+        matched, unmatched_note = matched_gains_for_report(surface, rulebase)
         gains: dict[tuple[str, str], dict[str, float]] = {}
         provenance: dict[str, dict[str, Any]] = {}
         setups: dict[str, TuningSetup] = {}
@@ -198,7 +199,7 @@ def build_report(
             gains[(ctrl, "tuned")] = g
             provenance[ctrl] = prov
         gains[("pi", "matched")] = dict(DEFAULT_GAINS["pi"])
-        gains[("fuzzy-pi", "matched")] = matched_fuzzy_gains(surface, DEFAULT_GAINS["pi"]).gains
+        gains[("fuzzy-pi", "matched")] = matched
         cache = RunCache()
         summaries: dict[Key, dict[str, Any]] = {}
         figures: list[tuple[str, str]] = []
@@ -317,6 +318,7 @@ def build_report(
             conds,
             rrd,
             small_signal_ratios(surface),
+            unmatched_note,
         )
         from fuzzkit.report.specs import adaptive_rows, adaptive_section, spec_rows, spec_section
 
@@ -420,6 +422,24 @@ def comparison_markdown(summaries: Mapping[Key, Mapping[str, Any]]) -> str:
     return "\n".join(lines)
 
 
+def matched_gains_for_report(surface: Any, rulebase: str) -> tuple[dict[str, float], str | None]:
+    """The fuzzy-PI's "matched" gains: matched to the default PI's small-signal gain
+    (``studies.matching.matched_fuzzy_gains``); or, for a rule base with no small-signal gain
+    at the origin, where there is nothing to match, the default gains and the sentence that
+    says so (the report states it where it defines its gains)."""
+    from fuzzkit.studies.experiments import DEFAULT_GAINS
+    from fuzzkit.studies.matching import has_small_signal_gain, matched_fuzzy_gains, measure_slopes
+
+    slopes = measure_slopes(surface)
+    if has_small_signal_gain(slopes):
+        return matched_fuzzy_gains(surface, DEFAULT_GAINS["pi"]).gains, None
+    return dict(DEFAULT_GAINS["fuzzy-pi"]), (
+        f"`{rulebase}` has no small-signal gain at the origin (dF/de = {slopes.e:.3g}, "
+        f'dF/dde = {slopes.de:.3g}), so there is nothing to match: its "matched" fuzzy-PI '
+        "runs the default gains, and the matched verdicts compare the defaults"
+    )
+
+
 def default_gain_sentence(rulebase: str, ratios: tuple[float, float]) -> str:
     """What the default gains give the fuzzy-PI running ``rulebase``, from its small-signal gain
     ratios to the PI's ``(proportional, integral)`` (``studies.matching.small_signal_ratios``)."""
@@ -453,6 +473,7 @@ def _markdown(
     conds: Sequence[Condition],
     rrd: bool,
     gain_ratios: tuple[float, float],
+    unmatched_note: str | None = None,
 ) -> str:
     plist = ", ".join(plants)
     everything = [*claims, *(c for c in swept if c.condition != NOMINAL)]
@@ -480,9 +501,14 @@ def _markdown(
         "",
         "Default gains are the hand-tuned `DEFAULT_GAINS` (like the paper's, by trial and error, "
         f"for 10 N/mm); with them {default_gain_sentence(rulebase, gain_ratios)}. "
-        "Matched gains: the PI runs its defaults and the fuzzy-PI's "
-        "scaling factors are derived from them through the rule base's measured slopes at the "
-        "origin, so both have the same small-signal gain (docs/comparison.md). Tuned gains "
+        + (
+            f"Matched gains: {unmatched_note}. "
+            if unmatched_note
+            else "Matched gains: the PI runs its defaults and the fuzzy-PI's "
+            "scaling factors are derived from them through the rule base's measured slopes at "
+            "the origin, so both have the same small-signal gain (docs/comparison.md). "
+        )
+        + "Tuned gains "
         "minimise `fuzzkit.studies.tuning.run_cost` "
         "(ITAE of the force error plus penalties for overshoot, force above the safety limit "
         "and contact loss) over every case of "
@@ -507,7 +533,7 @@ def _markdown(
             src = {
                 "default": "fuzzkit.studies.experiments.DEFAULT_GAINS",
                 "matched": "fuzzkit.studies.matching (measured slopes)"
-                if ctrl == "fuzzy-pi"
+                if ctrl == "fuzzy-pi" and not unmatched_note
                 else "fuzzkit.studies.experiments.DEFAULT_GAINS",
             }.get(label, prov.get("source"))
             kx = f"{g['kx']:.4g}" if "kx" in g else "-"

@@ -124,6 +124,13 @@ def small_signal_ratios(
     return kp / pi["kp"], ki / pi["ki"]
 
 
+def has_small_signal_gain(slopes: SurfaceSlopes) -> bool:
+    """Whether a surface with these slopes at the origin has a small-signal gain to match: a
+    positive slope above :data:`ZERO_SLOPE` along e or de (``sugeno_pi``, which holds du = 0
+    around the origin, has none)."""
+    return slopes.e > ZERO_SLOPE or slopes.de > ZERO_SLOPE
+
+
 @dataclass(frozen=True, slots=True)
 class MatchedGains:
     """Fuzzy-PI gains matched to a PI, and how: which gains could not be matched and why."""
@@ -184,7 +191,7 @@ def matched_fuzzy_gains(
                 raise ConfigError(f"matching needs {name} {k} > 0 (got {g[k]!r})")
     slopes = measure_slopes(surface)
     has_e, has_de = slopes.e > ZERO_SLOPE, slopes.de > ZERO_SLOPE
-    if not (has_e or has_de):
+    if not has_small_signal_gain(slopes):
         raise ConfigError(
             "the rule base has no small-signal gain along e or de (both slopes at the origin "
             f"are {slopes.e:.3g}, {slopes.de:.3g}): there is nothing to match"

@@ -115,6 +115,13 @@ def _exact_grid_surface() -> None:
     evaluate(loads(_SMOOTH_OUTPUT, "warm_smooth"), {"e": np.array([0.3])})
 
 
+def _type2_engine() -> None:
+    from fuzzkit.formats.registry import load
+    from fuzzkit.fuzzy.inference import evaluate
+
+    evaluate(load("macvicar_whelan_it2"), {"e": np.array([0.3, -0.2]), "de": np.array([0.1, 0.4])})
+
+
 @dataclass(frozen=True, slots=True)
 class Step:
     """One warming call: ``run`` calls the ``kernels`` (``module:name``; the ones it calls from
@@ -160,6 +167,11 @@ STEPS = (
         "exact engine on a smooth output (grid kernel)",
         ("fuzzkit.fuzzy.grid_kernel:grid_defuzzify",),
         _exact_grid_surface,
+    ),
+    Step(
+        "interval type-2 engine (firing, cut and Karnik-Mendel in one pass)",
+        ("fuzzkit.fuzzy.type2_kernel:_evaluate",),
+        _type2_engine,
     ),
 )
 

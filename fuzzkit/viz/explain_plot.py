@@ -82,14 +82,24 @@ def _aggregate_cell(ax: Any, var: Variable, out: OutputExplanation) -> None:
         for k in range(len(var.terms)):
             x, mu = term_curve(var, k)
             ax.plot(x, mu, color="0.8", lw=0.7)
-        ax.fill_between(out.y, out.mu, color=_OUTPUT_FILL, alpha=0.6, lw=0)
+        if out.mu_lower is None:
+            ax.fill_between(out.y, out.mu, color=_OUTPUT_FILL, alpha=0.6, lw=0)
+        else:  # interval type-2: the footprint between the lower and the upper set
+            ax.fill_between(out.y, out.mu_lower, out.mu, color=_OUTPUT_FILL, alpha=0.3, lw=0)
+            ax.fill_between(out.y, out.mu_lower, color=_OUTPUT_FILL, alpha=0.6, lw=0)
+            ax.plot(out.y, out.mu_lower, color=_OUTPUT_FILL, lw=1.0, ls="--")
         ax.plot(out.y, out.mu, color=_OUTPUT_FILL, lw=1.0)
     else:
         for name, z in out.term_values.items():
             ax.vlines(z, 0.0, out.activations[name], color=_OUTPUT_FILL, lw=2.5)
     ax.axvline(out.value, color=_VALUE, lw=2.0)
+    label = f"{out.name} = {num(out.value)}\n{out.defuzzifier}"
+    if out.interval is not None:
+        for end in out.interval:
+            ax.axvline(end, color=_VALUE, lw=1.0, ls=":")
+        label += f"\n[{num(out.interval[0])}, {num(out.interval[1])}]"
     ax.text(
-        0.98, 0.97, f"{out.name} = {num(out.value)}\n{out.defuzzifier}", transform=ax.transAxes,
+        0.98, 0.97, label, transform=ax.transAxes,
         ha="right", va="top", fontsize=7, color=_VALUE,
         bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.8, "pad": 1.0},
     )  # fmt: skip
@@ -138,6 +148,14 @@ def _partition_cell(ax: Any, var: Variable, seen: float) -> None:
     for name, x, ha, level in term_label_layout(peaks, names, var.low, var.high, per_char):
         ax.text(x, 1.02 + 0.2 * level, name, ha=ha, va="bottom", fontsize=_LABEL_PT)
     ax.axvline(seen, color=_VALUE, lw=1.5)
+
+
+def _strength(explanation: Explanation, row: RuleRow) -> str:
+    """The firing strength beside a rule's row: ``w [lower, upper]`` for an IT2 rule."""
+    lower = next((r.lower for r in explanation.rules if r.index == row.index), None)
+    if lower is None:
+        return f"w {row.strength:.3f}"
+    return f"w [{lower:.3f},\n   {row.strength:.3f}]"
 
 
 def explanation_figure(rb: RuleBase, explanation: Explanation, top: int = DEFAULT_RULES) -> Any:
@@ -196,7 +214,7 @@ def explanation_figure(rb: RuleBase, explanation: Explanation, top: int = DEFAUL
                 )
             if c == n_cols - 1 and r < len(rows):
                 ax.text(
-                    1.04, 0.5, f"w {rows[r].strength:.3f}", transform=ax.transAxes,
+                    1.04, 0.5, _strength(explanation, rows[r]), transform=ax.transAxes,
                     va="center", fontsize=8,
                 )  # fmt: skip
             if c == 0 and r == n_rows - 1:
@@ -205,10 +223,15 @@ def explanation_figure(rb: RuleBase, explanation: Explanation, top: int = DEFAUL
     shown = f"all {fired} drawn" if len(rows) == fired else f"the {len(rows)} strongest drawn"
     point = ", ".join(f"{i.name} = {num(i.value)}" for i in explanation.inputs)
     ops = rb.operators
+    key = (
+        "w: firing interval [lower, upper]; shaded: the footprint, dotted: [y_l, y_r]"
+        if any(o.interval is not None for o in explanation.outputs)
+        else "w: firing strength"
+    )
     fig.suptitle(
         f"{explanation.rulebase} at {point}: {fired} of {len(rb.rules)} rules fire ({shown})\n"
         f"and = {ops.and_}, implication = {ops.implication}, aggregation = {ops.aggregation}; "
-        "w: firing strength",
+        + key,
         fontsize=9,
     )
     return fig

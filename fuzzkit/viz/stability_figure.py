@@ -4,7 +4,7 @@ certified (with or without loss of contact) or not, and optionally the simulated
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -37,7 +37,10 @@ def region_figure(region: Region, simulated: Sequence[str] | None = None) -> Any
 
     ks = sorted({c.stiffness_n_per_mm for c in region.cells})
     lats = list(dict.fromkeys(c.latency for c in region.cells))
-    fig = Figure(figsize=(1.6 + 0.75 * len(ks), 1.8 + 0.45 * len(lats)), dpi=110)
+    # constrained layout keeps the axis labels, the two-line title and the legend whole
+    fig = Figure(
+        figsize=(4.6 + 0.75 * len(ks), 2.6 + 0.45 * len(lats)), dpi=110, layout="constrained"
+    )
     ax = fig.add_subplot(1, 1, 1)
     at_setpoint = bool(region.model["equilibrium"]["at_setpoint"])
     for idx, cell in enumerate(region.cells):
@@ -55,9 +58,8 @@ def region_figure(region: Region, simulated: Sequence[str] | None = None) -> Any
     ax.set_yticks(range(len(lats)), [latency_text(lat) for lat in lats])
     period_ms = 1e3 * float(region.model["period_s"])
     ax.set_xlabel("contact stiffness (N/mm)")
-    ax.set_ylabel(f"latency sensor+command (periods of {period_ms:g} ms)")
-    m = region.model
-    ax.set_title(f"{m['scenario']}: {m['controller']} on {m['plant']}", fontsize=10)
+    ax.set_ylabel(f"latency sensor:command\n(periods of {period_ms:g} ms)")
+    ax.set_title(region_title(region.model), fontsize=9)
     handles: list[Any] = [
         Patch(facecolor=_FILL["contact loss"], label="certified (contact may be lost)"),
         Patch(facecolor=_FILL["contact held"], label="certified while contact is held"),
@@ -73,9 +75,24 @@ def region_figure(region: Region, simulated: Sequence[str] | None = None) -> Any
             Line2D([], [], ls="", marker=mk, color=col, mfc="none", mew=2, label=f"sim: {name}")
             for name, (mk, col) in _MARK.items()
         ]
-    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
-    fig.tight_layout()
+    fig.legend(handles=handles, loc="outside right upper", fontsize=8)
     return fig
+
+
+def region_title(model: Mapping[str, Any]) -> str:
+    """The figure's title: the task, the controller and plant, then what is certified (the
+    spec and its axis, or the rule base and surface) and its gains."""
+    deployed = model["deployed"]
+    if deployed.get("assumed"):
+        # "fuzzy-pi (kp=0.2, ...) on macvicar_whelan (exact surface)": name it, gains below
+        what = deployed["controller"].split(" (", 1)[0]
+        if " on " in deployed["controller"]:
+            what += " on " + deployed["controller"].split(" on ", 1)[1]
+    else:
+        what = f"spec {deployed['spec']}, axis {deployed['axis']}, surface {deployed['surface']}"
+    gains = model.get("gains", {})
+    shown = ", ".join(f"{k}={gains[k]:g}" for k in ("kp", "ki", "kx") if k in gains)
+    return f"{model['scenario']}: {model['controller']} on {model['plant']}\n{what}\n{shown}"
 
 
 def _rect(x: int, y: int, colour: str) -> Any:

@@ -94,7 +94,7 @@ def main() -> None:
     for k in range(n):
         _, tr = system.evaluate({name: spec["points"][name][k] for name in names})
         value = tr[out]
-        if isinstance(value, tuple):
+        if np.size(value) == 2:  # (y_l, y_r): a tuple, or an array from the C extension
             y_l.append(float(value[0]))
             y_r.append(float(value[1]))
             crisp.append(0.5 * (float(value[0]) + float(value[1])))

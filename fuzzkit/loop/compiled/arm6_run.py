@@ -30,67 +30,33 @@ BoolArray = npt.NDArray[np.bool_]
 
 @jit
 def run_arm6(
-    # plant (see fuzzkit.plants.arm6_period.Arm6Arrays)
-    a_links: FloatArray,
-    a_tool_r: FloatArray,
-    a_tool_p: FloatArray,
-    a_lower: FloatArray,
-    a_upper: FloatArray,
-    a_dq_max: FloatArray,
-    a_path_t: FloatArray,
-    a_path_pos: FloatArray,
-    a_path_quat: FloatArray,
-    a_kind: IntArray,
-    a_p: FloatArray,
-    a_terms: FloatArray,
-    a_nterms: IntArray,
-    a_grid: FloatArray,
-    a_rot_task: FloatArray,
-    a_offset: FloatArray,
-    params: FloatArray,
-    q: FloatArray,
-    q_ref: FloatArray,
-    q_ik: FloatArray,
-    stick: FloatArray,
-    state_p: FloatArray,
+    plant: tuple[Any, ...],
     noise: FloatArray,
     reset_force: FloatArray,
-    # controller
-    cp: FloatArray,
-    selection: FloatArray,
-    setpoints: FloatArray,
-    # the generated NAME_controller_step (ctypes) and its state
+    ctrl: tuple[Any, ...],
     c_step: Any,
-    c_state: FloatArray,
-    # faults, one entry per period: spike sign (0: none), NaN sample
-    spike_sign: FloatArray,
-    nan_flag: BoolArray,
-    # recording, one row per period
-    r_t: FloatArray,
-    r_force: FloatArray,
-    r_force_sensor: FloatArray,
-    r_force_true: FloatArray,
-    r_e: FloatArray,
-    r_de: FloatArray,
-    r_du: FloatArray,
-    r_u: FloatArray,
-    r_tool: FloatArray,
-    r_nominal: FloatArray,
-    r_target: FloatArray,
-    r_joints: FloatArray,
-    r_contact: BoolArray,
-    r_force_normal: FloatArray,
-    r_moving: BoolArray,
-    r_arm: FloatArray,
-    r_points: FloatArray,
-    r_npoints: IntArray,
-    r_status: IntArray,
-    # the arm's own: the IK's status, the joint speed limit hit
-    r_ik: IntArray,
-    r_limited: BoolArray,
+    rec: tuple[Any, ...],
     out_scalars: FloatArray,
 ) -> None:
-    """Run ``r_t.shape[0]`` periods; fill the recording arrays and ``out_scalars``."""
+    """Run as many periods as the recording has rows; fill it and ``out_scalars``.
+
+    Named records, each unpacked once here: ``plant``, the arm's arrays in
+    :class:`~fuzzkit.plants.arm6_period.Arm6Arrays` field order; ``ctrl``, the controller's
+    (:meth:`~fuzzkit.loop.compiled.common.ControllerArgs.record`); ``c_step``, the generated
+    ``NAME_controller_step`` (ctypes); ``rec``, the recording
+    (:func:`~fuzzkit.loop.compiled.common.recording`, the arm's ``ik`` and ``limited`` last).
+    """
+    (
+        a_links, a_tool_r, a_tool_p, a_lower, a_upper, a_dq_max, a_path_t, a_path_pos,
+        a_path_quat, a_kind, a_p, a_terms, a_nterms, a_grid, a_rot_task, a_offset, params, q,
+        q_ref, q_ik, stick, state_p,
+    ) = plant  # fmt: skip
+    cp, selection, setpoints, c_state, spike_sign, nan_flag = ctrl
+    (
+        r_t, r_force, r_force_sensor, r_force_true, r_e, r_de, r_du, r_u, r_tool, r_nominal,
+        r_target, r_joints, r_contact, r_force_normal, r_moving, r_arm, r_points, r_npoints,
+        r_status, r_ik, r_limited,
+    ) = rec  # fmt: skip
     n_periods = r_t.shape[0]
     dof = q.shape[0]
     n_obj = a_kind.shape[0]

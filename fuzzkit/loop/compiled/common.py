@@ -44,6 +44,11 @@ class ControllerArgs:
     #: the controller's kind (pi, fuzzy-pi), as the run result names it
     kind: str
 
+    def record(self) -> tuple[Any, ...]:
+        """The controller's arrays as the compiled loops take them: ``(cp, selection,
+        setpoints, c_state, spike, nan)``."""
+        return (self.cp, self.selection, self.setpoints, self.c_state, self.spike, self.nan)
+
 
 def controller_args(
     exp: Experiment,
@@ -189,12 +194,16 @@ _WARMED: set[str] = set()
 
 def warm_up(
     kernel: Callable[..., Any],
-    args: tuple[Any, ...],
+    plant: tuple[Any, ...],
+    noise: Any,
+    reset_force: Any,
+    ctrl: ControllerArgs,
     rec: dict[str, Any],
     scalars: Any,
-    ctrl: ControllerArgs,
+    extra: tuple[Any, ...] = (),
 ) -> None:
-    """Run ``kernel`` over zero periods once per process, with the run's argument types.
+    """Run ``kernel`` over zero periods once per process, with the run's argument types
+    (``extra``: a plant's own arguments after the reset force, as :func:`run_kernel`'s).
 
     The first call loads the machine code from numba's on-disk cache (or compiles it after an
     install); done here, that start-up cost stays out of the loop's CPU time. Zero periods
@@ -203,7 +212,41 @@ def warm_up(
     key = getattr(kernel, "__name__", repr(kernel))
     if key in _WARMED:
         return
-    state = [np.array(x, copy=True) if isinstance(x, np.ndarray) else x for x in args]
-    empty = [v[:0] for v in rec.values()]
-    kernel(*state, *empty, scalars.copy())
+    own = tuple(np.array(x, copy=True) if isinstance(x, np.ndarray) else x for x in plant)
+    empty = tuple(v[:0] for v in rec.values())
+    kernel(own, noise, reset_force, *extra, ctrl.record(), ctrl.c_step, empty, scalars.copy())
     _WARMED.add(key)
+
+
+def fields_record(arrays: Any) -> tuple[Any, ...]:
+    """A plant's packed arrays (a dataclass: ``Arm6Arrays``, ``PlanarArrays``) as the record its
+    compiled loop takes: the fields in declaration order, the arrays themselves (not copies:
+    the loop updates the plant's state in place)."""
+    from dataclasses import fields
+
+    return tuple(getattr(arrays, f.name) for f in fields(arrays))
+
+
+def run_kernel(
+    kernel: Callable[..., Any],
+    plant: tuple[Any, ...],
+    noise: Any,
+    reset_force: Any,
+    ctrl: ControllerArgs,
+    rec: dict[str, Any],
+    scalars: Any,
+    extra: tuple[Any, ...] = (),
+) -> tuple[Any, float, float]:
+    """One compiled run: ``kernel`` on its named records (warmed first, :func:`warm_up`);
+    returns what it returned, and the CPU and wall seconds of the call alone. ``extra``: the
+    plant's own arguments after the reset force (MuJoCo's ``MjData`` views and C helpers)."""
+    import time
+
+    warm_up(kernel, plant, noise, reset_force, ctrl, rec, scalars, extra)
+    wall0 = time.perf_counter()
+    cpu0 = time.process_time()
+    done = kernel(
+        plant, noise, reset_force, *extra, ctrl.record(), ctrl.c_step, tuple(rec.values()),
+        scalars,
+    )  # fmt: skip
+    return done, time.process_time() - cpu0, time.perf_counter() - wall0

@@ -90,83 +90,41 @@ def _follow_profiles(
 
 @jit
 def run_mujoco(
-    # plant (see fuzzkit.loop.mujoco.MujocoArrays)
-    a_links: FloatArray,
-    a_tool_r: FloatArray,
-    a_tool_p: FloatArray,
-    a_lower: FloatArray,
-    a_upper: FloatArray,
-    a_dq_max: FloatArray,
-    a_path_t: FloatArray,
-    a_path_pos: FloatArray,
-    a_path_quat: FloatArray,
-    a_rot_task: FloatArray,
-    a_offset: FloatArray,
-    a_kv_over_kp: FloatArray,
-    a_servo_qpos: IntArray,
-    a_link_qpos: IntArray,
-    a_elastic: BoolArray,
-    a_bodies: IntArray,
-    prof_p: FloatArray,
-    prof_terms: FloatArray,
-    prof_nterms: IntArray,
-    prof_mocap: IntArray,
-    params: FloatArray,
-    layout: IntArray,
-    q_ref: FloatArray,
-    q_ik: FloatArray,
-    ref_prev: FloatArray,
-    state: FloatArray,
+    plant: tuple[Any, ...],
     noise: FloatArray,
     reset_force: FloatArray,
-    # MuJoCo's arrays (views of the MjData) and the C helpers
-    d_userdata: FloatArray,
-    d_qpos: FloatArray,
-    d_sensordata: FloatArray,
-    d_geom_xpos: FloatArray,
-    d_xpos: FloatArray,
-    d_mocap_pos: FloatArray,
-    d_mocap_quat: FloatArray,
+    mj: tuple[Any, ...],
     mj_steps: Any,
     tool_contacts: Any,
-    # controller
-    cp: FloatArray,
-    selection: FloatArray,
-    setpoints: FloatArray,
+    ctrl: tuple[Any, ...],
     c_step: Any,
-    c_state: FloatArray,
-    spike_sign: FloatArray,
-    nan_flag: BoolArray,
-    # recording, one row per period
-    r_t: FloatArray,
-    r_force: FloatArray,
-    r_force_sensor: FloatArray,
-    r_force_true: FloatArray,
-    r_e: FloatArray,
-    r_de: FloatArray,
-    r_du: FloatArray,
-    r_u: FloatArray,
-    r_tool: FloatArray,
-    r_nominal: FloatArray,
-    r_target: FloatArray,
-    r_joints: FloatArray,
-    r_contact: BoolArray,
-    r_force_normal: FloatArray,
-    r_moving: BoolArray,
-    r_arm: FloatArray,
-    r_points: FloatArray,
-    r_npoints: IntArray,
-    r_status: IntArray,
-    # the plant's own: the IK's status, the joints at their speed limit and the servos at
-    # their torque limit (bit masks)
-    r_ik: IntArray,
-    r_limited: IntArray,
-    r_saturated: IntArray,
+    rec: tuple[Any, ...],
     out_scalars: FloatArray,
 ) -> int:
-    """Run up to ``r_t.shape[0]`` periods; fill the recording arrays and ``out_scalars``.
+    """Run up to as many periods as the recording has rows; fill it and ``out_scalars``.
     Returns the number of periods run: fewer when the simulation diverged (a bad acceleration
-    or a non-finite state in the last period run)."""
+    or a non-finite state in the last period run).
+
+    Named records, each unpacked once here: ``plant``, the arm's arrays in
+    :class:`~fuzzkit.loop.mujoco.MujocoArrays` ``plant`` order; ``mj``, the ``MjData`` views;
+    ``mj_steps``, ``tool_contacts``, the plant's C helpers; ``ctrl``, the controller's
+    (:meth:`~fuzzkit.loop.compiled.common.ControllerArgs.record`); ``c_step``, the generated
+    ``NAME_controller_step`` (ctypes); ``rec``, the recording
+    (:func:`~fuzzkit.loop.compiled.common.recording`, the arm's ``ik``, ``limited`` and
+    ``saturated`` last)."""
+    (
+        a_links, a_tool_r, a_tool_p, a_lower, a_upper, a_dq_max, a_path_t, a_path_pos,
+        a_path_quat, a_rot_task, a_offset, a_kv_over_kp, a_servo_qpos, a_link_qpos, a_elastic,
+        a_bodies, prof_p, prof_terms, prof_nterms, prof_mocap, params, layout, q_ref, q_ik,
+        ref_prev, state,
+    ) = plant  # fmt: skip
+    d_userdata, d_qpos, d_sensordata, d_geom_xpos, d_xpos, d_mocap_pos, d_mocap_quat = mj
+    cp, selection, setpoints, c_state, spike_sign, nan_flag = ctrl
+    (
+        r_t, r_force, r_force_sensor, r_force_true, r_e, r_de, r_du, r_u, r_tool, r_nominal,
+        r_target, r_joints, r_contact, r_force_normal, r_moving, r_arm, r_points, r_npoints,
+        r_status, r_ik, r_limited, r_saturated,
+    ) = rec  # fmt: skip
     n_periods = r_t.shape[0]
     dof = q_ref.shape[0]
     nu = ref_prev.shape[0]

@@ -29,57 +29,34 @@ BoolArray = npt.NDArray[np.bool_]
 
 @jit
 def run_planar(
-    # plant (see fuzzkit.planar_sim.arm_period.PlanarArrays)
-    a_path: FloatArray,
-    a_kind: IntArray,
-    a_p: FloatArray,
-    a_terms: FloatArray,
-    a_nterms: IntArray,
-    a_rot: FloatArray,
-    params: FloatArray,
-    functions: IntArray,
-    pointers: IntArray,
-    stick: FloatArray,
-    state: FloatArray,
+    plant: tuple[Any, ...],
     noise: FloatArray,
     reset_force: FloatArray,
-    # controller
-    cp: FloatArray,
-    selection: FloatArray,
-    setpoints: FloatArray,
-    # the generated NAME_controller_step (ctypes) and its state
+    ctrl: tuple[Any, ...],
     c_step: Any,
-    c_state: FloatArray,
-    # faults, one entry per period: spike sign (0: none), NaN sample
-    spike_sign: FloatArray,
-    nan_flag: BoolArray,
-    # recording, one row per period
-    r_t: FloatArray,
-    r_force: FloatArray,
-    r_force_sensor: FloatArray,
-    r_force_true: FloatArray,
-    r_e: FloatArray,
-    r_de: FloatArray,
-    r_du: FloatArray,
-    r_u: FloatArray,
-    r_tool: FloatArray,
-    r_nominal: FloatArray,
-    r_target: FloatArray,
-    r_joints: FloatArray,
-    r_contact: BoolArray,
-    r_force_normal: FloatArray,
-    r_moving: BoolArray,
-    r_arm: FloatArray,
-    r_points: FloatArray,
-    r_npoints: IntArray,
-    r_status: IntArray,
-    # the arm's own: the plant step's flags
-    r_flags: IntArray,
+    rec: tuple[Any, ...],
     out_scalars: FloatArray,
 ) -> int:
-    """Run up to ``r_t.shape[0]`` periods, filling the recording arrays and ``out_scalars``;
+    """Run up to as many periods as the recording has rows, filling it and ``out_scalars``;
     returns the periods done (fewer when the arm's state became non-finite: ``r_flags[k, 0]``
-    of the last one says so)."""
+    of the last one says so).
+
+    Named records, each unpacked once here: ``plant``, the arm's arrays in
+    :class:`~fuzzkit.planar_sim.arm_period.PlanarArrays` field order; ``ctrl``, the
+    controller's (:meth:`~fuzzkit.loop.compiled.common.ControllerArgs.record`); ``c_step``,
+    the generated ``NAME_controller_step`` (ctypes); ``rec``, the recording
+    (:func:`~fuzzkit.loop.compiled.common.recording`, the arm's ``flags`` last).
+    """
+    (
+        a_path, a_kind, a_p, a_terms, a_nterms, a_rot, params, functions, pointers, stick,
+        state,
+    ) = plant  # fmt: skip
+    cp, selection, setpoints, c_state, spike_sign, nan_flag = ctrl
+    (
+        r_t, r_force, r_force_sensor, r_force_true, r_e, r_de, r_du, r_u, r_tool, r_nominal,
+        r_target, r_joints, r_contact, r_force_normal, r_moving, r_arm, r_points, r_npoints,
+        r_status, r_flags,
+    ) = rec  # fmt: skip
     n_periods: int = r_t.shape[0]
     n_obj = a_kind.shape[0]
     cs, cv, sensor_q, command_q, applied, correction, c_rot, corr_base = loop_state(
