@@ -68,9 +68,11 @@ class AdaptationDesign:
     and ``delay`` (periods), ``forgetting``, the excitation thresholds ``min_step_m`` and
     ``min_force_n``, the initial estimate and its bounds (N/mm), the bands as ``(up_to_n_mm or
     None, scale)``, the dwell time in periods, the sudden-stiffening factor ``jump`` and the
-    least ``spread`` of the increments the slope needs. Self-tuning: ``alpha_min``, ``alpha_max``,
-    the rule table of alpha (7x7, rows e, columns de) and the input gains per axis. The
-    inner-loop model the estimator regresses on: ``inner_q``, ``inner_a``, ``inner_g``.
+    least ``spread`` of the increments the slope needs, the force ``contact_n`` (N) both ends of
+    the window must reach for an update (out of contact the estimate is frozen). Self-tuning:
+    ``alpha_min``, ``alpha_max``, the rule table of alpha (7x7, rows e, columns de) and the input
+    gains per axis. The inner-loop model the estimator regresses on: ``inner_q``, ``inner_a``,
+    ``inner_g``.
     """
 
     mode: str
@@ -91,6 +93,7 @@ class AdaptationDesign:
     gde: tuple[float, float, float] = (0.0, 0.0, 0.0)
     jump: float = 4.0
     spread: float = 0.05
+    contact_n: float = 1.0
     inner_q: float = 0.0
     inner_a: float = 0.0
     inner_g: float = 1.0
@@ -131,6 +134,7 @@ class AdaptationCode:
     three: str
     jump: str
     spread: str
+    contact: str  # the least force (N) at both ends of the window for an update
     inner_q: str  # x = q*x + (1-q)*u; m = a*m + ((1-a)*g)*x, the literals as the reference rounds
     inner_q1: str
     inner_a: str
@@ -578,6 +582,7 @@ def _adaptation_code(design: ControllerDesign, lit: Callable[[float], str]) -> A
         three=lit(3.0),
         jump=lit(ad.jump),
         spread=lit(ad.spread),
+        contact=lit(ad.contact_n),
         inner_q=lit(ad.inner_q),
         inner_q1=lit(1.0 - ad.inner_q),
         inner_a=lit(ad.inner_a),

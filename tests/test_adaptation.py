@@ -258,6 +258,46 @@ def test_estimate_is_bounded() -> None:
     assert sched.k == 10.0
 
 
+def test_estimate_is_frozen_out_of_contact() -> None:
+    """Off the surface the force is noise alone while the corrections keep moving (the
+    controller presses towards the lost contact): without the contact gate the noise's
+    increments over the corrections' pull the estimate towards k_min."""
+    sched = schedule(initial_n_mm=50.0)
+    feed(sched, 100.0, 0.05, seed=4, n=300)
+    k_before, updates = sched.k, sched.updates
+    assert abs(k_before - 100.0) < 10.0 and updates > 50
+    rng = np.random.default_rng(5)
+    t = np.arange(600) * 0.004
+    u = 2e-5 * np.sin(2 * math.pi * 1.3 * t)  # 20 um swings, well above min_step_m
+    for k in range(600):
+        sched.observe(float(rng.normal(0.0, 0.1)), float(u[k]))  # free air: 0 N + noise
+    assert sched.updates == updates and sched.k == k_before
+
+
+def test_estimate_holds_under_poor_excitation() -> None:
+    """In contact, with corrections that wander by less than min_step_m (0.1 um here), the
+    force's change is noise (100 N/mm x 0.05 um = 5 mN against 0.1 N): the dead zone holds the
+    estimate where a fit would follow the noise."""
+    sched = schedule(initial_n_mm=50.0)
+    rng = np.random.default_rng(7)
+    u = 1e-3 + 2e-8 * rng.standard_normal(2000)
+    for k in range(1, 2000):
+        force = 12.0 + 1e5 * (float(u[k - 1]) - 1e-3) + float(rng.normal(0.0, 0.1))
+        sched.observe(force, float(u[k]))
+    assert sched.updates == 0 and sched.jumps == 0 and sched.k == 50.0
+
+
+def test_forgetting_bounds_the_statistics() -> None:
+    """The least squares' statistics are sums weighted by lambda^j: the count S_1 stays below
+    1/(1-lambda) and S_uu below max(du^2)/(1-lambda), however long the estimator runs (the
+    covariance, 1/S_uu, cannot wind up while excited, and does not move while it is not)."""
+    sched = schedule(initial_n_mm=50.0, forgetting=0.9)
+    feed(sched, 100.0, 0.1, seed=8, n=3000)
+    amplitude_mm = 1.7 * 6.0 / 100.0  # the feed's |u| bound (mm): its window increments double it
+    assert 0.0 < sched.s_1 <= 1.0 / (1.0 - 0.9) + 1e-9
+    assert sched.s_uu <= (2.0 * amplitude_mm) ** 2 / (1.0 - 0.9)
+
+
 # --------------------------------------------------------------------- in the closed loop
 
 
@@ -386,6 +426,38 @@ def test_generated_controller_replays_the_closed_loop_log_equal(impl: str, which
     got, status = open_generated(spec, impl, "double").run(forces, rotations)
     assert float(np.max(np.abs(got - want))) <= 1e-9
     np.testing.assert_array_equal(status, want_status)
+
+
+@pytest.mark.parametrize("impl", ["python", pytest.param("c", marks=needs_cc)])
+def test_generated_controller_freezes_its_estimate_off_contact_as_the_reference(
+    impl: str,
+) -> None:
+    """The step bench's log up to the stiffness step, then the tool lifted off (the force falls
+    to 0 N plus noise while the integrator keeps moving the correction): the reference's
+    estimate stays where it was once the force is below the contact gate, and the generated
+    code follows the reference sample for sample. (On this log the dead zone and the spread
+    test already stop every free-air update: the gate itself is covered by
+    test_estimate_is_frozen_out_of_contact.)"""
+    forces = closed_loop_log("inner_loop")[0][: int(5.9 / 0.004)]  # settled on 5 N/mm
+    rng = np.random.default_rng(11)
+    off = np.zeros((400, 3))
+    # the force falls to 0 over 100 periods (a lift-off the spike gate lets through)
+    ramp = np.clip(1.0 - np.arange(400) / 100.0, 0.0, 1.0) * forces[-1, 2]
+    off[:, 2] = ramp + rng.normal(0.0, 0.1, 400)
+    forces = np.vstack([forces, off])
+    rotations = np.tile(np.eye(3).ravel(), (len(forces), 1))
+    spec = knows_the_loop()
+    ref = Controller(spec)
+    want, k_ref = [], []
+    for f in forces:
+        want.append(ref.step(f.tolist())[0])
+        k_ref.append(float(ref.hybrid.stiffness_n_mm[2]))
+    k_lift = k_ref[len(forces) - 300]  # once the force is below the contact gate's 1 N
+    assert all(k == k_lift for k in k_ref[-300:])
+    got, _ = open_generated(spec, impl, "double").run(forces, rotations)
+    assert float(np.max(np.abs(got - np.array(want)))) <= 1e-9
+    moved = float(np.max(np.abs(np.array(want)[-300:, 2] - want[-301][2])))
+    assert moved > 1e-4  # the correction did move while the estimate was frozen
 
 
 # ------------------------------------------------------------- runs, sweeps, recordings, CLI

@@ -30,6 +30,11 @@ SPREAD = 0.05
 #: ``JUMP`` times the excitation threshold, is a sudden stiffening: the estimate restarts from
 #: that ratio and the least squares from nothing (the gain can only drop by it).
 JUMP = 4.0
+#: The estimate moves only in contact: both ends of the window must hold a force of at least
+#: ``CONTACT`` times the excitation threshold ``min_force_n`` (1 N with the kit's default 0.2 N,
+#: the experiments' engage threshold). Out of contact the force is noise alone and its increments
+#: over the corrections' would pull the estimate to ``k_min``: it is frozen instead.
+CONTACT = 5.0
 
 #: Singleton values of alpha's labels ZE, VS, S, SB, M, B, VB on [0, 1].
 ALPHA_LEVELS = {"ZE": 0.0, "VS": 1.0 / 6.0, "S": 2.0 / 6.0, "SB": 3.0 / 6.0, "M": 4.0 / 6.0,
@@ -180,7 +185,10 @@ class StiffnessSchedule:
                 self.s_uu = self.s_u = self.s_1 = self.s_uf = self.s_f = 0.0
                 self.jumps += 1
                 df = math.nan  # this period is used up
-        if math.isfinite(df) and abs(du) >= est.min_step_m and abs(df) >= est.min_force_n:
+        contact = CONTACT * est.min_force_n
+        touching = abs(f) >= contact and abs(self.f_hist[(p + n - self.window) % n]) >= contact
+        excited = abs(du) >= est.min_step_m and abs(df) >= est.min_force_n
+        if math.isfinite(df) and touching and excited:
             du_mm = 1000.0 * du
             lam = est.forgetting
             self.s_uu = lam * self.s_uu + du_mm * du_mm

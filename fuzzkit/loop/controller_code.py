@@ -23,7 +23,7 @@ from fuzzkit.codegen.controller import (
 )
 from fuzzkit.codegen.target import load_target
 from fuzzkit.control import status as st
-from fuzzkit.control.adaptation import ALPHA_TABLE, JUMP, SPREAD
+from fuzzkit.control.adaptation import ALPHA_TABLE, CONTACT, JUMP, SPREAD
 from fuzzkit.control.controllers import Surface, lookup_table_surface
 from fuzzkit.control.names import AXES
 from fuzzkit.control.reference import input_gains
@@ -145,6 +145,7 @@ def adaptation_design(spec: ControllerSpec) -> AdaptationDesign | None:
         gde=(gde[0], gde[1], gde[2]),
         jump=JUMP,
         spread=SPREAD,
+        contact_n=CONTACT * est.min_force_n,
         inner_q=est.inner_q,
         inner_a=est.inner_a,
         inner_g=est.inner_g,
