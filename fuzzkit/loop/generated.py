@@ -89,18 +89,20 @@ def run_controller(
     faults: Any,
     latency: tuple[int, int] | None,
     impl: str = "auto",
+    step: tuple[StepFunction, str] | None = None,
 ) -> GeneratedLoopController:
     """The generated controller of a Python-loop run: the run's controller spec
     (:func:`~fuzzkit.loop.compiled.generated_controller.run_controller_spec` of ``exp``,
     ``controller``, ``gains``, ``rulebase``) with the run's sensor delay (its ``faults``,
     seeded by ``seed``, and ``latency``, as :func:`fuzzkit.loop.python_loop.run` sets them), in
-    the implementation ``impl`` (:func:`open_step`)."""
+    the implementation ``impl`` (:func:`open_step`), or stepped by ``step`` (see
+    :class:`GeneratedLoopController`)."""
     from fuzzkit.loop.compiled.generated_controller import run_controller_spec
     from fuzzkit.loop.timing import run_faults_and_latency
 
     spec = run_controller_spec(exp, controller, gains, rulebase)
     _, sensor_delay, _ = run_faults_and_latency(exp, seed, faults, latency)
-    return GeneratedLoopController(spec, sensor_delay, impl)
+    return GeneratedLoopController(spec, sensor_delay, impl, step)
 
 
 class GeneratedLoopController:
@@ -110,16 +112,24 @@ class GeneratedLoopController:
 
     ``sensor_delay``: the run's sensor delay in periods (a fault's delay included,
     ``fuzzkit.loop.timing.run_faults_and_latency``): the start-up periods in which a missing
-    sample is no sensor fault.
+    sample is no sensor fault. ``step``: a step function and its label that take the generated
+    controller's steps instead of one opened here (:func:`open_step`): the ROS 2 closed loop's
+    plant node, whose steps are the controller node's over the middleware.
     """
 
     #: no reference axis controllers (nothing to adapt from the loop's side)
     controllers: tuple[Any, ...] = ()
 
-    def __init__(self, spec: ControllerSpec, sensor_delay: int, impl: str = "auto") -> None:
+    def __init__(
+        self,
+        spec: ControllerSpec,
+        sensor_delay: int,
+        impl: str = "auto",
+        step: tuple[StepFunction, str] | None = None,
+    ) -> None:
         self.spec = spec
         self.kind = spec.kind
-        self._step, self.label = open_step(spec, impl)
+        self._step, self.label = open_step(spec, impl) if step is None else step
         self.cp = np.zeros(P.N_CP)
         thr = spec.safety.engage_threshold_n
         self.cp[P.C_ENGAGE_THR] = math.nan if thr is None else thr

@@ -5,7 +5,7 @@ controller implementation run it."""
 from __future__ import annotations
 
 from functools import lru_cache
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from fuzzkit.errors import ConfigError
 from fuzzkit.loop import python_loop
@@ -14,13 +14,22 @@ from fuzzkit.loop.spec import CONTROLLER_IMPLS, FUZZY_IMPLS, RunSpec
 from fuzzkit.loop.task import Experiment
 from fuzzkit.plants.contract import ContactPlant, UnsupportedPlant
 
+if TYPE_CHECKING:
+    from fuzzkit.loop.generated import StepFunction
+
 
 @lru_cache(maxsize=8)
 def _exact_surface(rulebase: str) -> Any:
     return python_loop.load_surface(rulebase)
 
 
-def run_loop(spec: RunSpec, exp: Experiment, plant: str | ContactPlant) -> RunResult:
+def run_loop(
+    spec: RunSpec,
+    exp: Experiment,
+    plant: str | ContactPlant,
+    *,
+    step: tuple[StepFunction, str] | None = None,
+) -> RunResult:
     """Run ``spec`` on ``exp`` (its controller spec, stiffness and task resolved:
     :func:`fuzzkit.studies.batch.resolve`) and ``plant`` (a registered name, or a plant
     object whose ``name`` is registered); the one entry point of the closed loop.
@@ -32,6 +41,16 @@ def run_loop(spec: RunSpec, exp: Experiment, plant: str | ContactPlant) -> RunRe
     the code (``controller_impl="python"``: the generated Python, in the Python loop). The
     reference controller runs only when asked for (``controller_impl="reference"``), and for a
     spec that adapts its gains (``loop`` and ``controller_impl`` say so).
+
+    ``step``: a step function and its label that take the generated controller's steps in
+    place of the code opened in this process (the ROS 2 closed loop: the controller node, over
+    the middleware). Such a run is the Python loop's, as ``loop="python"`` of the same spec
+    with the code the function stands for.
+
+    Raises
+    ------
+    ConfigError
+        ``step`` with the reference controller, the compiled loop or an adapting spec.
     """
     from fuzzkit.loop.faults import fault
 
@@ -46,6 +65,18 @@ def run_loop(spec: RunSpec, exp: Experiment, plant: str | ContactPlant) -> RunRe
     faults = fault(spec.fault or exp.fault, spec.seed)
     check_implementation(spec)
     loop = spec.resolved_loop()
+    if step is not None:
+        cs = exp.controller_spec
+        if (
+            spec.controller_impl == "reference"
+            or spec.loop == "compiled"
+            or (cs is not None and cs.adaptation.mode != "none")
+        ):
+            raise ConfigError(
+                "a step function stands for the generated controller of a non-adapting spec "
+                "in the Python loop (not the reference, not the compiled loop)"
+            )
+        return _run_generated_python_loop(spec, exp, plant, faults, "", step)
     if spec.controller_impl == "reference":
         return _run_reference(spec, exp, plant, faults, "")
     if loop == "compiled":
@@ -92,7 +123,12 @@ class _Fallback(Exception):
 
 
 def _run_generated_python_loop(
-    spec: RunSpec, exp: Experiment, plant: Any, faults: Any, fallback: str
+    spec: RunSpec,
+    exp: Experiment,
+    plant: Any,
+    faults: Any,
+    fallback: str,
+    step: tuple[StepFunction, str] | None = None,
 ) -> RunResult:
     """``spec`` with the run's generated controller (C, or the generated Python: asked for,
     or without a compiler) in the Python loop; ``loop`` says so, with ``fallback`` (why the
@@ -113,7 +149,7 @@ def _run_generated_python_loop(
         return _run_reference(spec, exp, plant, faults, fallback or why)
     ctrl = run_controller(
         exp, spec.controller, dict(spec.gains), spec.rulebase, spec.seed, faults, spec.latency,
-        spec.controller_impl,
+        spec.controller_impl, step,
     )  # fmt: skip
     result = python_loop.run(exp, plant, ctrl.kind, hybrid=ctrl, seed=spec.seed, faults=faults,
                  latency=spec.latency, duration_s=spec.duration_s)  # fmt: skip

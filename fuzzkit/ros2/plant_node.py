@@ -4,8 +4,11 @@ controller node on simulated time.
 Import this module only after :func:`fuzzkit.ros2.runtime.require` succeeded. Each period
 :meth:`PlantNode.step` publishes ``/clock`` (the period's time), the tool pose and the wrench
 with that one stamp, and waits for the controller node's correction and its ``~/status`` for
-that period; :class:`fuzzkit.ros2.closed_loop.StepController` makes that the controller of
-:func:`fuzzkit.loop.python_loop.run`, so the plants and the loop are the kit's own. The
+that period. It is a generated controller's step function
+(:data:`fuzzkit.loop.generated.StepFunction`): :func:`run` hands it to the one closed loop,
+:func:`fuzzkit.loop.run.run_loop`, which builds the plant from the loop package's registry
+(:func:`fuzzkit.loop.adapter.make_plant`) and steps it in the Python loop, so that nothing of
+a period's plant logic lives here. The
 controller node must run with ``use_sim_time`` (its watchdog on ``/clock``), ``pose_sync``
 (a wrench waits for the pose of its stamp: the two topics may arrive in either order) and the
 pose output.
@@ -15,10 +18,11 @@ from __future__ import annotations
 
 import itertools
 import time
-from collections.abc import Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped, WrenchStamped
 from rclpy.context import Context
@@ -28,8 +32,14 @@ from rosgraph_msgs.msg import Clock
 
 from fuzzkit.control.spec import ControllerSpec
 from fuzzkit.errors import SimulationError
+from fuzzkit.loop.result import RunResult
+from fuzzkit.loop.run import run_loop
+from fuzzkit.loop.spec import RunSpec
+from fuzzkit.loop.task import Experiment
 from fuzzkit.ros2.messages import pose_message, time_msg, wrench_message
 from fuzzkit.ros2.node import RELIABLE, NodeOptions
+
+Vec = npt.NDArray[np.float64]
 
 #: ``/clock`` of period 0 (sim time 0 reads as "no clock yet").
 START_NS = 1_000_000_000
@@ -55,10 +65,10 @@ class PlantNode(Node):
     ) -> None:
         super().__init__("fuzzkit_plant", namespace=options.namespace, context=context)
         self.spec = spec
+        self.controller = controller
         self.timeout_s = timeout_s
         self._period_ns = round(spec.period_s * 1e9)
         self._periods = itertools.count()
-        self._rotation = np.eye(3).reshape(9).tolist()  # until the plant gives one
         self._clock_out = self.create_publisher(Clock, "/clock", RELIABLE)
         self._wrench = self.create_publisher(WrenchStamped, options.wrench_topic, RELIABLE)
         self._pose = self.create_publisher(PoseStamped, options.pose_topic, RELIABLE)
@@ -111,10 +121,10 @@ class PlantNode(Node):
             "discovery",
         )
 
-    def step(
-        self, force_n: Sequence[float], rotation: Sequence[float] | None
-    ) -> tuple[list[float], int]:
-        """One period over ROS 2: the controller node's correction ``u`` (m) and status bits.
+    def step(self, force_n: Vec, rotation: Vec, out: Vec) -> int:
+        """One period over ROS 2 on the sample ``force_n`` (N; NaN: missing) and the tool's
+        ``rotation`` (row-major 3x3; NaN: none, sent as the zero quaternion): the controller
+        node's correction ``u`` (m) written into ``out``, and its status bits.
 
         Raises
         ------
@@ -125,11 +135,19 @@ class PlantNode(Node):
         t = START_NS + k * self._period_ns
         self._clock_out.publish(Clock(clock=time_msg(t)))
         if self.spec.sensor.tool is not None:  # the node waits for the pose of this stamp
-            if rotation is not None:  # (the loop's start-up wait has none: the last one goes)
-                self._rotation = [float(v) for v in rotation]
-            self._pose.publish(pose_message(t, self._rotation))
+            self._pose.publish(pose_message(t, rotation))
         self._wrench.publish(wrench_message(t, force_n))
         self._until(
             lambda: k in self._corrections and k in self._statuses, f"no answer for period {k}"
         )
-        return self._corrections.pop(k), self._statuses.pop(k)
+        out[:] = self._corrections.pop(k)
+        return self._statuses.pop(k)
+
+
+def run(spec: RunSpec, exp: Experiment, plant_node: PlantNode) -> RunResult:
+    """``spec`` on ``exp`` (:func:`fuzzkit.studies.batch.resolve`) with the controller node
+    behind ``plant_node`` as its generated controller: the Python loop's run
+    (:func:`fuzzkit.loop.run.run_loop`, ``loop="python"``) of the registered plant
+    ``spec.plant``, each period one step over ROS 2."""
+    label = f"the controller node {plant_node.controller} over ROS 2"
+    return run_loop(replace(spec, loop="python"), exp, spec.plant, step=(plant_node.step, label))
