@@ -18,12 +18,13 @@ from fuzzkit.codegen.exact import emit_exact, unsupported_reason
 from fuzzkit.codegen.lookup_table import (
     DEFAULT_MAX_POINTS,
     DEFAULT_TOLERANCE,
+    Evaluator,
     LookupTable,
     NumberType,
     percent,
 )
 from fuzzkit.codegen.progress import ProgressFn
-from fuzzkit.codegen.table_search import make_table, table_problem
+from fuzzkit.codegen.table_search import ReferenceEvaluator, make_table, table_problem
 from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy.model import RuleBase
 from fuzzkit.fuzzy.type2_model import Type2RuleBase
@@ -133,12 +134,16 @@ def compile_rulebase(
         )
     tol = DEFAULT_TOLERANCE if tolerance is None else tolerance
     per_point = _VALUE_BYTES[number_type] * len(rb.outputs)
+    # one evaluator for every search of this compile: one engine, and one engine budget
+    # (codegen.budget) however many searches the method tries
+    reference = ReferenceEvaluator(rb)
     if resolution is not None:  # the user chose the table's size: its errors are theirs to see
         table = make_table(
             rb,
             number_type=number_type,
             tolerance=tolerance,
             resolution=resolution,
+            evaluate=reference,
             progress=progress,
         )
     else:
@@ -148,13 +153,14 @@ def compile_rulebase(
                 number_type=number_type,
                 tolerance=tol,
                 max_points=max(8, max_bytes // per_point),
+                evaluate=reference,
                 progress=progress,
             )
         except CodegenError:
             if exact_why is not None:
                 # No exact alternative (Q15, say): a table over the budget beats no code; the
                 # reason printed says it is over --max-bytes.
-                table = _over_budget_table(rb, number_type, tol, exact_why, progress)
+                table = _over_budget_table(rb, number_type, tol, exact_why, reference, progress)
                 files = emit(rb, table, target, fpi_defaults=fpi_defaults)
                 return Compiled(
                     "table",
@@ -200,19 +206,24 @@ def _over_budget_table(
     number_type: NumberType,
     tol: float,
     exact_why: str,
+    reference: Evaluator,
     progress: ProgressFn | None,
 ) -> LookupTable:
     """The table that meets ``tol`` whatever its size (an IT2 rule base: up to
     :data:`IT2_SEARCH_POINTS`), when no table within --max-bytes does and the exact method
-    cannot be used."""
+    cannot be used; ``reference`` is the compile's evaluator, whose budget the first search
+    has already been charged to."""
     if not isinstance(rb, Type2RuleBase):
-        return make_table(rb, number_type=number_type, tolerance=tol, progress=progress)
+        return make_table(
+            rb, number_type=number_type, tolerance=tol, evaluate=reference, progress=progress
+        )
     try:
         return make_table(
             rb,
             number_type=number_type,
             tolerance=tol,
             max_points=IT2_SEARCH_POINTS,
+            evaluate=reference,
             progress=progress,
         )
     except CodegenError as exc:
