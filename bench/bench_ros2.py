@@ -23,7 +23,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 SPEC = ROOT / "docs" / "examples" / "controller.yaml"
 RATES_HZ = (250, 1000)
-IMPLS = ("c", "python-generated")
+IMPLS = ("c", "python")
 SECONDS = 4.0  # of samples per case
 DOMAIN = 97  # away from the tests' blocks of domains (0..99 in fours, from the run's id)
 ENVIRONMENT = {

@@ -82,8 +82,8 @@ VARIANTS = ("fuzzy", "pi", "bare_fuzzy", "hot_pi", "adaptive", "selftuning", "se
 def reference_run(
     s: ControllerSpec, forces: FloatArray, rotations: FloatArray
 ) -> tuple[FloatArray, npt.NDArray[np.int64]]:
-    """The reference controller (``replay --impl python``) over a log, from reset."""
-    return replay(s, SensorLog(forces, rotations, None), "python")
+    """The reference controller (``replay --impl reference``) over a log, from reset."""
+    return replay(s, SensorLog(forces, rotations, None), "reference")
 
 
 @functools.cache

@@ -35,6 +35,16 @@ def _compile(spec: Path, out: Path) -> Path:
     return out
 
 
+def _reference_replay(
+    spec: Path, log: Path, out: Path, capsys: pytest.CaptureFixture[str]
+) -> npt.NDArray[np.float64]:
+    """``fuzzkit replay SPEC --impl reference`` of ``log``: t, ux, uy, uz, status per row."""
+    argv = ["replay", str(spec), "--forces", str(log), "--out", str(out), "--impl", "reference"]
+    assert main(argv) == 0
+    capsys.readouterr()
+    return read_out(out)[1]
+
+
 def _simulate(
     fmu: Path, forces: npt.NDArray[np.float64], rotations: npt.NDArray[np.float64] | None, dt: float
 ) -> npt.NDArray[np.void]:
@@ -84,10 +94,7 @@ def test_fmu_validates_and_equals_replay_on_a_hostile_log(
     assert np.nanmax(np.abs(forces[np.isfinite(forces)])) > spec.safety.limit_n
     log = tmp_path / "log.csv"
     write_log(log, forces, rotations)
-    out = tmp_path / "ref.csv"
-    assert main(["replay", str(spec_path), "--forces", str(log), "--out", str(out)]) == 0
-    capsys.readouterr()
-    _, ref = read_out(out)  # t, ux, uy, uz, status per row
+    ref = _reference_replay(spec_path, log, tmp_path / "ref.csv", capsys)
 
     got = _simulate(fmu, forces, rotations if gravity else None, spec.period_s)
     n = forces.shape[0]
@@ -152,10 +159,7 @@ def test_a_step_that_is_not_whole_periods_is_refused(
     held = hostile_log(spec)[0][:150]
     log = tmp_path / "held.csv"
     write_log(log, np.repeat(held, 2, axis=0), None)
-    out = tmp_path / "ref.csv"
-    assert main(["replay", str(SPEC_PLAIN), "--forces", str(log), "--out", str(out)]) == 0
-    capsys.readouterr()
-    _, ref = read_out(out)
+    ref = _reference_replay(SPEC_PLAIN, log, tmp_path / "ref.csv", capsys)
     got = _simulate(fmu, held, None, 2.0 * spec.period_s)
     assert got.shape[0] == held.shape[0] + 1
     u = np.column_stack([got["ux"], got["uy"], got["uz"]])[1:]

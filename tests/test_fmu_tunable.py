@@ -118,7 +118,8 @@ def test_gains_changed_mid_simulation_equal_replay_with_the_same_schedule(
     outs = {}
     for name, extra in (("tuned", ["--schedule", str(schedule)]), ("fixed", [])):
         out = tmp_path / f"{name}.csv"
-        argv = ["replay", str(spec_path), "--forces", str(log), "--out", str(out), *extra]
+        argv = ["replay", str(spec_path), "--forces", str(log), "--out", str(out), "--impl",
+                "reference", *extra]  # fmt: skip
         assert main(argv) == 0, capsys.readouterr().err
         outs[name] = read_out(out)[1]
     capsys.readouterr()
@@ -212,7 +213,7 @@ def test_bad_schedules_are_located_errors(
     schedule.write_text(text)
     out = tmp_path / "u.csv"
     code = main(["replay", str(SPEC_PI), "--forces", str(log), "--out", str(out),
-                 "--schedule", str(schedule)])  # fmt: skip
+                 "--impl", "reference", "--schedule", str(schedule)])  # fmt: skip
     err = capsys.readouterr().err
     assert code == 2 and f"{schedule}{where}: " in err and message in err, err
     assert not out.exists()
@@ -223,7 +224,7 @@ def test_a_schedule_needs_the_reference(tmp_path: Path, capsys: pytest.CaptureFi
     log.write_text("fx,fy,fz," + ",".join(ROT) + "\n" + "0,0,1,1,0,0,0,1,0,0,0,1\n" * 10)
     schedule = tmp_path / "s.csv"
     schedule.write_text("period,name,value\n2,kp_z,1e-4\n")
-    for extra in (["--impl", "c"], ["--compare"]):
+    for extra in (["--impl", "c"], ["--impl", "python"], [], ["--compare"]):
         code = main(["replay", str(SPEC_PI), "--forces", str(log), "--out",
                      str(tmp_path / "u.csv"), "--schedule", str(schedule), *extra])  # fmt: skip
         assert code == 2 and "--schedule" in capsys.readouterr().err

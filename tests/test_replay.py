@@ -28,7 +28,7 @@ def hostile_csv(
 
 
 @needs_cc
-def test_replay_python_and_c_agree_on_a_hostile_log(
+def test_replay_reference_and_c_agree_on_a_hostile_log(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     spec = load_spec(SPEC)
@@ -36,7 +36,7 @@ def test_replay_python_and_c_agree_on_a_hostile_log(
     log = tmp_path / "log.csv"
     write_log(log, forces, rotations, nan_word=True)
     outs = {}
-    for impl in ("python", "c"):
+    for impl in ("reference", "c"):
         out = tmp_path / f"u_{impl}.csv"
         code, stdout, err = run_cli(
             capsys, "replay", str(SPEC), "--forces", str(log), "--out", str(out), "--impl", impl
@@ -44,14 +44,14 @@ def test_replay_python_and_c_agree_on_a_hostile_log(
         assert code == 0, err
         assert f"{len(forces)} samples replayed" in stdout
         outs[impl] = read_out(out)
-    head, py = outs["python"]
+    head, py = outs["reference"]
     assert head == ["t", "ux", "uy", "uz", "status"] and outs["c"][0] == head
     c = outs["c"][1]
     assert py.shape == (len(forces), 5)
     np.testing.assert_array_equal(py[:, 0], np.arange(len(forces)) * 0.004)
     assert float(np.max(np.abs(py[:, 1:4] - c[:, 1:4]))) <= 1e-9
     np.testing.assert_array_equal(py[:, 4], c[:, 4])
-    # --impl python is the reference controller itself, sample by sample
+    # --impl reference is the reference controller itself, sample by sample
     ref = Controller(spec)
     want = [ref.step(list(f), list(r)) for f, r in zip(forces, rotations, strict=True)]
     np.testing.assert_array_equal(py[:, 1:4], np.array([u for u, _ in want]))
@@ -75,8 +75,9 @@ def test_replay_without_time_or_rotation_for_a_spec_without_a_tool(
     spec_file.write_text(text.split("sensor:")[0] + "adaptation: none\n")
     out = tmp_path / "u.csv"
     code, _, err = run_cli(
-        capsys, "replay", str(spec_file), "--forces", str(log), "--out", str(out)
-    )
+        capsys, "replay", str(spec_file), "--forces", str(log), "--out", str(out),
+        "--impl", "reference",
+    )  # fmt: skip
     assert code == 0, err
     head, got = read_out(out)
     assert head == ["ux", "uy", "uz", "status"]
@@ -273,7 +274,7 @@ def test_status_names_decode_the_bits(tmp_path: Path, capsys: pytest.CaptureFixt
     assert {"ENGAGED", "HELD", "TRIPPED", "TARING"} <= seen
 
 
-def test_python_generated_runs_the_generated_module(
+def test_impl_python_runs_the_generated_module(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     spec = load_spec(SPEC)
@@ -281,7 +282,7 @@ def test_python_generated_runs_the_generated_module(
     out = tmp_path / "u.csv"
     code, stdout, err = run_cli(
         capsys, "replay", str(SPEC), "--forces", str(log), "--out", str(out),
-        "--impl", "python-generated",
+        "--impl", "python",
     )  # fmt: skip
     assert code == 0 and "generated Python controller" in stdout, err
     _, got = read_out(out)
@@ -297,12 +298,49 @@ def test_python_generated_runs_the_generated_module(
 
 
 @needs_cc
+def test_replay_runs_the_generated_controller_unless_the_reference_is_named(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # --impl has simulate --controller-impl's names and meaning: auto (the default) is the
+    # generated C where a compiler exists, python the generated Python, reference the reference
+    forces, rotations, log = hostile_csv(tmp_path, 150, 4)
+    runs, said = {}, {}
+    for impl in ("auto", "c", "python", "reference"):
+        out = tmp_path / f"u_{impl}.csv"
+        extra = [] if impl == "auto" else ["--impl", impl]
+        code, stdout, err = run_cli(
+            capsys, "replay", str(SPEC), "--forces", str(log), "--out", str(out), *extra
+        )
+        assert code == 0, err
+        runs[impl], said[impl] = read_out(out)[1], stdout.splitlines()[0]
+    assert "by the generated C (double) controller" in said["auto"] == said["c"]
+    assert "by the generated Python controller" in said["python"]
+    assert "by the reference controller" in said["reference"]
+    np.testing.assert_array_equal(runs["auto"], runs["c"])
+    # the reference is the reference controller itself, and the generated code is not it
+    ref = Controller(load_spec(SPEC))
+    want = np.array([ref.step(list(f), list(r))[0] for f, r in zip(forces, rotations, strict=True)])
+    np.testing.assert_array_equal(runs["reference"][:, 1:4], want)
+    assert float(np.max(np.abs(runs["c"][:, 1:4] - want))) <= 1e-9
+
+
+def test_every_command_names_the_implementations_alike() -> None:
+    from fuzzkit.loop.controller_code import GENERATED_IMPLS
+    from fuzzkit.loop.spec import CONTROLLER_IMPLS
+    from fuzzkit.ros2.controller import IMPLS as ROS2_IMPLS
+    from fuzzkit.studies.replay import IMPLS
+
+    assert IMPLS == CONTROLLER_IMPLS == ("auto", "c", "python", "reference")
+    assert ROS2_IMPLS == GENERATED_IMPLS == CONTROLLER_IMPLS[:3]
+
+
+@needs_cc
 def test_compare_prints_the_largest_difference_per_column(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     *_, log = hostile_csv(tmp_path, 150, 7)
     runs = {}
-    for impl in ("python", "python-generated", "c"):
+    for impl in ("reference", "python", "c"):
         out = tmp_path / f"u_{impl}.csv"
         argv = ["--out", str(out), "--impl", impl, "--type", "float"]
         assert run_cli(capsys, "replay", str(SPEC), "--forces", str(log), *argv)[0] == 0
@@ -314,15 +352,14 @@ def test_compare_prints_the_largest_difference_per_column(
     assert "generated C (float)" in stdout
     for k, col in enumerate(("ux (m)", "uy (m)", "uz (m)")):
         gen, c = (float(x) for x in _row(stdout, col))
-        ref = runs["python"][:, 1 + k]
+        ref = runs["reference"][:, 1 + k]
         # printed to 3 significant digits
-        want_gen = float(np.max(np.abs(runs["python-generated"][:, 1 + k] - ref)))
+        want_gen = float(np.max(np.abs(runs["python"][:, 1 + k] - ref)))
         want_c = float(np.max(np.abs(runs["c"][:, 1 + k] - ref)))
         assert gen == pytest.approx(want_gen, rel=5e-3) and c == pytest.approx(want_c, rel=5e-3)
     assert float(_row(stdout, "uz (m)")[1]) > 0  # float C does differ from the double reference
     want_status = [
-        int(np.count_nonzero(runs[i][:, 4] != runs["python"][:, 4]))
-        for i in ("python-generated", "c")
+        int(np.count_nonzero(runs[i][:, 4] != runs["reference"][:, 4])) for i in ("python", "c")
     ]
     assert [int(v) for v in _row(stdout, "status (rows differing)")] == want_status
 

@@ -42,7 +42,7 @@ def _copy(run_file: Path, tmp_path: Path) -> Path:
     return csv
 
 
-@pytest.mark.parametrize("impl", ["python", "c"])
+@pytest.mark.parametrize("impl", ["reference", "c"])
 def test_the_runs_own_spec_reproduces_it(
     run_file: Path, impl: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -50,11 +50,11 @@ def test_the_runs_own_spec_reproduces_it(
 
 
 @pytest.mark.parametrize("gain", sorted(OFF))
-@pytest.mark.parametrize("impl", ["python", "c"])
+@pytest.mark.parametrize("impl", ["reference", "c"])
 def test_a_gain_1e_10_off_does_not_reproduce_the_run(
     run_file: Path, gain: str, impl: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    # the reference (impl python) or the generated C (impl c) of a spec whose gain differs
+    # the reference (impl reference) or the generated C (impl c) of a spec whose gain differs
     # by 1e-10 of its value from the run's
     text = SPEC.read_text(encoding="utf-8")
     assert text.count(GAINS) == 2

@@ -81,7 +81,7 @@ def _steps_of(stepper: Stepper, forces: npt.NDArray[np.float64], arrivals: list[
 
 
 @needs_cc
-@pytest.mark.parametrize("impl", ["c", "python-generated"])
+@pytest.mark.parametrize("impl", ["c", "python"])
 def test_a_stream_steps_as_replay_of_the_log_it_makes(impl: str) -> None:
     """Gaps, late and out-of-order samples, NaN, spikes and a trip: the node's steps equal
     ``fuzzkit replay --impl`` of the log with a NaN row for each period it had no sample for,
@@ -99,7 +99,7 @@ def test_a_stream_steps_as_replay_of_the_log_it_makes(impl: str) -> None:
     want_u, want_status = replay(spec, log, impl)
     np.testing.assert_array_equal(got_u, want_u)
     np.testing.assert_array_equal(got_status, want_status)
-    ref_u, ref_status = replay(spec, log, "python")
+    ref_u, ref_status = replay(spec, log, "reference")
     assert float(np.max(np.abs(got_u - ref_u))) <= 1e-9
     np.testing.assert_array_equal(got_status, ref_status)
     # the log is hostile: held, rejected and tripped periods all occur
@@ -144,7 +144,7 @@ def test_the_parameters_are_the_fmus_and_the_schedules() -> None:
 
 
 @needs_cc
-@pytest.mark.parametrize("impl", ["c", "python-generated"])
+@pytest.mark.parametrize("impl", ["c", "python"])
 def test_parameter_changes_step_as_replay_with_a_schedule(impl: str) -> None:
     """Gains and set points changed mid-run through the generated set_params, a refused change
     between them, a tare and a reset: the same corrections as the reference replayed with the
@@ -175,12 +175,12 @@ def test_parameter_changes_step_as_replay_with_a_schedule(impl: str) -> None:
     schedule = [Change(k, n, v) for k, c in changes.items() for n, v in c.items()]
     schedule += [Change(100, "tare", 1.0), Change(120, "reset", 1.0)]
     log = SensorLog(forces, np.tile(DOWN, (len(forces), 1)), None)
-    want_u, want_status = replay(spec, log, "python", schedule=schedule)
+    want_u, want_status = replay(spec, log, "reference", schedule=schedule)
     got_u = np.array([u for u, _ in out])
     assert float(np.max(np.abs(got_u - want_u))) <= 1e-9
     np.testing.assert_array_equal([s for _, s in out], want_status)
     # the changes mattered: without them the corrections differ by far more
-    plain_u, _ = replay(spec, log, "python")
+    plain_u, _ = replay(spec, log, "reference")
     assert float(np.max(np.abs(plain_u - want_u))) > 1e-4
 
 
@@ -235,20 +235,20 @@ def test_the_watchdog_periods_are_the_specs() -> None:
 def test_auto_runs_the_generated_python_where_c_does_not_compile(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    import fuzzkit.ros2.controller as node_controller
+    import fuzzkit.loop.controller_code as controller_code
     from fuzzkit.errors import ToolchainError
 
-    real = node_controller.open_generated
+    real = controller_code.open_generated
 
     def no_compiler(spec: object, target: str, number_type: str | None = None) -> object:
         if target == "c":
             raise ToolchainError("no C compiler found")
         return real(spec, target, number_type)
 
-    monkeypatch.setattr(node_controller, "open_generated", no_compiler)
+    monkeypatch.setattr(controller_code, "open_generated", no_compiler)
     spec = load_spec(SPEC_PI)
     ctl = open_node_controller(spec, "auto")
-    assert ctl.impl == "python-generated"
+    assert ctl.impl == "python"
     u, status = ctl.step([0.0, 0.0, 1.0], list(DOWN))
     assert u == [0.0, 0.0, 0.0] and status & st.TARING
     with pytest.raises(ToolchainError, match="no C compiler"):

@@ -116,8 +116,8 @@ def _feed(rig, forces, arrivals) -> None:
 LOG_CASES = [
     pytest.param(SPEC, "c", "pose", id="fuzzy-c-pose"),
     pytest.param(SPEC_PI, "c", "twist", id="pi-c-twist", marks=pytest.mark.verify),
-    pytest.param(SPEC, "python-generated", "twist", id="fuzzy-py-twist", marks=pytest.mark.verify),
-    pytest.param(SPEC_PI, "python-generated", "pose", id="pi-py-pose", marks=pytest.mark.verify),
+    pytest.param(SPEC, "python", "twist", id="fuzzy-py-twist", marks=pytest.mark.verify),
+    pytest.param(SPEC_PI, "python", "pose", id="pi-py-pose", marks=pytest.mark.verify),
 ]
 
 
@@ -223,7 +223,7 @@ def test_parameter_changes_over_ros_give_replay_with_a_schedule() -> None:
     schedule += [Change(k, e, 1.0) for k, e in events.items()]
     n = len(forces)
     log = SensorLog(forces, np.tile(DOWN, (n, 1)), None)
-    want_u, want_status = replay(spec, log, "python", schedule=schedule)
+    want_u, want_status = replay(spec, log, "reference", schedule=schedule)
     got = _positions(corrections)
     assert float(np.max(np.abs(got - want_u))) <= 1e-9
     # the reset restarts the grid: the statuses from there are periods 0, 1, ... again
@@ -231,7 +231,7 @@ def test_parameter_changes_over_ros_give_replay_with_a_schedule() -> None:
     assert len(runs) == 2
     before, after = _statuses(runs[0], 160), _statuses(runs[1], n - 160)
     np.testing.assert_array_equal(np.concatenate([before, after]), want_status)
-    plain_u, _ = replay(spec, log, "python")
+    plain_u, _ = replay(spec, log, "reference")
     assert float(np.max(np.abs(plain_u - want_u))) > 1e-4  # the changes mattered
 
 

@@ -1,7 +1,7 @@
 """A spec's ``surface: {method: table, ...}`` end to end (issue 28 item 1): the generated C and
 Python controllers, the reference controller, the compiled closed loop and replay all evaluate
 the same lookup table, so a run replays to 0 m (``--impl c``) and within 1e-12 m
-(``--impl python``), and the table's corrections are not the exact surface's."""
+(``--impl reference``), and the table's corrections are not the exact surface's."""
 
 from __future__ import annotations
 
@@ -103,7 +103,7 @@ def test_a_table_run_replays_and_differs_from_the_exact_one(
     csv = tmp_path / "run.csv"
     csv.write_text(run_csv(runs["table"]), encoding="utf-8")
     assert replayed_difference(capsys, spec, csv, "c") == 0.0
-    assert reproduces(capsys, spec, csv, "python")
+    assert reproduces(capsys, spec, csv, "reference")
     # the exact spec's controller on the table run's samples is another controller
     assert replayed_difference(capsys, EXAMPLE, csv, "c") > 1e-7
     assert float(np.max(np.abs(runs["table"].u - runs["exact"].u))) > 1e-7
@@ -121,6 +121,6 @@ def test_the_python_loop_runs_the_specs_table(
     assert result.loop.startswith("python") and "lookup table" in result.controller_impl
     csv = tmp_path / "run.csv"
     csv.write_text(run_csv(result), encoding="utf-8")
-    assert replayed_difference(capsys, spec, csv, "python") == 0.0
+    assert replayed_difference(capsys, spec, csv, "reference") == 0.0
     assert reproduces(capsys, spec, csv, "c")
-    assert replayed_difference(capsys, EXAMPLE, csv, "python") > 1e-7
+    assert replayed_difference(capsys, EXAMPLE, csv, "reference") > 1e-7

@@ -3,6 +3,7 @@ planar plant, determinism, Ctrl-C, and the gains file (round trip and bad files)
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from pathlib import Path
@@ -322,6 +323,11 @@ def test_cli_tune_writes_a_file_simulate_accepts(
     assert entry.provenance["experiments"] == ["E1"] and entry.provenance["budget"] == 10
     assert entry.provenance["cost"] <= entry.provenance["default_cost"]
     assert main(["simulate", "E1", "--controller", "pi", "--gains", str(out), "--json"]) == 0
+    # what ran the candidates, as simulate's runs name it: the generated controller
+    ran = json.loads(capsys.readouterr().out)
+    said = f"{ran['controller_impl']} [{ran['loop']}]"
+    assert f"controller: {said}\n" in text and entry.provenance["controller_impl"] == said
+    assert "generated C controller" in said or "generated Python" in said
 
 
 def test_cli_tune_ctrl_c_writes_the_best_so_far(

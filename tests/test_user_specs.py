@@ -4,7 +4,7 @@
 
 Replay equality: ``fuzzkit replay SPEC --forces run.csv`` reads the ``simulate --csv`` file as
 it is and must reproduce the run's corrections exactly with ``--impl c`` (the compiled loop ran
-that code) and with ``--impl python`` within 1e-12 of the corrections' largest magnitude (the
+that code) and with ``--impl reference`` within 1e-12 of the corrections' largest magnitude (the
 reference controller: the exact engine against the generated surface, rounding only), with the
 same status bits in every row.
 """
@@ -56,7 +56,7 @@ def test_a_run_replays_to_its_corrections(
     csv = tmp_path / "run.csv"
     csv.write_text(run_csv(result), encoding="utf-8")
     assert replayed_difference(capsys, spec, csv, "c") == 0.0
-    assert reproduces(capsys, spec, csv, "python")
+    assert reproduces(capsys, spec, csv, "reference")
 
 
 def test_replay_of_a_run_sees_a_different_controller(

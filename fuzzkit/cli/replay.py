@@ -12,6 +12,8 @@ EXIT_FAILURE = 1
 
 def register(sub: Any) -> None:
     """Add ``replay`` to the ``fuzzkit`` parser."""
+    from fuzzkit.loop.spec import CONTROLLER_IMPLS
+
     p = sub.add_parser(
         "replay",
         help="run a controller spec on a recorded wrist-sensor log (CSV or ROS 2 bag)",
@@ -23,16 +25,19 @@ def register(sub: Any) -> None:
         "or its .db3 or .mcap file) with a geometry_msgs/msg/WrenchStamped topic (--topic), "
         "resampled to the spec's period by the messages' stamps: the last message is held, "
         "and a period with no new message is a missing sample. The output has "
-        "[t,]ux,uy,uz (m),status. --impl python is fuzzkit's reference controller, "
-        "python-generated the generated Python module, c the generated C, compiled and run; "
-        "--compare runs all three and prints the largest difference per column. A run's CSV "
+        "[t,]ux,uy,uz (m),status. --impl names the controller as simulate's "
+        "--controller-impl does: the spec's generated controller (c, compiled and run; python, "
+        "the generated module imported; auto, c where a compiler exists, else python), or "
+        "reference, fuzzkit's reference controller; --compare runs the reference and both "
+        "generated ones and prints the largest difference per column. A run's CSV "
         "(fuzzkit simulate --csv) is read as it is: the sample the controller received, and the "
         "run's corrections and status bits, which the replay is compared with: it reproduces "
         "the run when every status is equal and the corrections are within 1e-12 of their "
         "largest magnitude (exit 1 when not).",
         epilog="examples:\n"
-        "  fuzzkit replay docs/examples/controller.yaml --forces log.csv --out u_ref.csv\n"
-        "  fuzzkit replay docs/examples/controller.yaml --forces log.csv --out u_c.csv --impl c\n"
+        "  fuzzkit replay docs/examples/controller.yaml --forces log.csv --out u.csv\n"
+        "  fuzzkit replay docs/examples/controller.yaml --forces log.csv --out u_ref.csv "
+        "--impl reference\n"
         "  fuzzkit replay docs/examples/controller.yaml --forces log.csv --compare\n"
         "  fuzzkit replay docs/examples/controller_pi.yaml --forces bag/ --topic /ft --out u.csv\n"
         "  fuzzkit simulate E1 --spec SPEC --csv run.csv && "
@@ -54,10 +59,12 @@ def register(sub: Any) -> None:
     )
     p.add_argument(
         "--impl",
-        default="python",
-        choices=("python", "python-generated", "c"),
-        help="python (default): the reference controller; python-generated: the generated "
-        "Python module; c: the generated C (needs a C compiler)",
+        default="auto",
+        choices=CONTROLLER_IMPLS,
+        help="which code runs the spec, as simulate's --controller-impl: c, the generated C "
+        "(needs a C compiler); python, the generated Python module; auto (default): c where a "
+        "C compiler exists, else python; reference, fuzzkit's reference controller (for "
+        "debugging, and --schedule)",
     )
     p.add_argument(
         "--compare",
@@ -84,7 +91,7 @@ def register(sub: Any) -> None:
         "--schedule",
         default=None,
         metavar="CHANGES.csv",
-        help="parameter changes during the replay (reference only): CSV period,name,value, "
+        help="parameter changes during the replay (--impl reference only): CSV period,name,value, "
         "names as the FMU's tunable parameters (kp_z, ki_z, kx_z, setpoint_z, limit_n) and the "
         "events tare and reset (value 1) (default: none)",
     )
@@ -149,7 +156,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
     from fuzzkit.control.spec_reader import load_spec
     from fuzzkit.errors import ConfigError, Location, Problem, ProblemsError
     from fuzzkit.fileio import check_output_path, write_atomic
-    from fuzzkit.studies.replay import compare, replay, replay_csv, reproduction
+    from fuzzkit.studies.replay import compare, replay_csv, replayed_by, reproduction
     from fuzzkit.studies.rosbag_log import is_bag
 
     if args.out is None and not args.compare:
@@ -175,7 +182,9 @@ def cmd_replay(args: argparse.Namespace) -> int:
         from fuzzkit.studies.param_schedule import read_schedule
 
         if args.compare:
-            raise ConfigError("--schedule changes the reference only: not with --compare")
+            raise ConfigError(
+                "--schedule changes the reference only (--impl reference): not with --compare"
+            )
         schedule = read_schedule(args.schedule, spec, n)
     if args.compare:
         (out, status), diffs = compare(spec, log, args.number_type)
@@ -185,16 +194,14 @@ def cmd_replay(args: argparse.Namespace) -> int:
         )
         _print_differences(diffs, args.number_type)
     else:
-        out, status = replay(spec, log, args.impl, args.number_type, schedule)
+        out, status, ran = replayed_by(spec, log, args.impl, args.number_type, schedule)
         counts = ", ".join(
             f"{name} {int(np.count_nonzero(status & bit))}" for name, bit in st.BITS.items()
         )
-        impl = {
-            "python": "reference (python)",
-            "python-generated": "generated Python",
-            "c": f"generated C ({args.number_type})",
-        }[args.impl]
-        print(f"{spec.name}: {n} samples replayed by the {impl} controller; rows with {counts}")
+        print(
+            f"{spec.name}: {n} samples replayed by the {_label(ran, args.number_type)} "
+            f"controller; rows with {counts}"
+        )
     verdict = reproduction(out, status, log)
     for line in verdict.lines() if verdict is not None else ():
         print(line)
@@ -204,10 +211,16 @@ def cmd_replay(args: argparse.Namespace) -> int:
     return EXIT_OK if verdict is None or verdict.ok else EXIT_FAILURE
 
 
+def _label(impl: str, number_type: str) -> str:
+    """What ``impl`` (``c``, ``python``, ``reference``) is, as replay prints it."""
+    from fuzzkit.studies.replay import IMPL_LABELS
+
+    return IMPL_LABELS[impl] + (f" ({number_type})" if impl == "c" else "")
+
+
 def _print_differences(diffs: Any, number_type: str) -> None:
     """The largest difference from the reference per column, one column per implementation."""
-    label = {"python-generated": "generated Python", "c": f"generated C ({number_type})"}
-    heads = ["column", *(label[d.impl] for d in diffs)]
+    heads = ["column", *(_label(d.impl, number_type) for d in diffs)]
     rows = [
         [f"u{axis} (m)", *(f"{d.largest_m[i]:.3g}" for d in diffs)] for i, axis in enumerate("xyz")
     ]

@@ -11,7 +11,7 @@ EXIT_OK = 0
 #: Kept here so that building the parser imports nothing of ROS (fuzzkit.ros2.messages.OUTPUTS,
 #: fuzzkit.ros2.controller.IMPLS; a test holds them equal).
 OUTPUTS = ("pose", "twist")
-IMPLS = ("auto", "c", "python-generated")
+IMPLS = ("auto", "c", "python")
 
 
 def register(sub: Any) -> None:
@@ -73,7 +73,7 @@ def register(sub: Any) -> None:
         choices=IMPLS,
         default="auto",
         help="auto: the generated C (double) where a compiler exists, else the generated "
-        "Python; c; python-generated",
+        "Python; c; python (the names of simulate --controller-impl)",
     )
     p.add_argument(
         "--watchdog-periods",

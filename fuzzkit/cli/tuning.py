@@ -278,6 +278,7 @@ def _tune(args: argparse.Namespace) -> int:
         f"{result.wall_time_s:.1f} s"
         + (" (interrupted: best so far)" if result.interrupted else "")
     )
+    print(f"controller: {result.controller_impl}")
     # the full per-case runs (what the trip warning counts): not after Ctrl-C (the user wants
     # out)
     cases = [] if result.interrupted else compare_cases(result, seed=0)

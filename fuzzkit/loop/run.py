@@ -15,6 +15,7 @@ from fuzzkit.loop.task import Experiment
 from fuzzkit.plants.contract import ContactPlant, UnsupportedPlant
 
 if TYPE_CHECKING:
+    from fuzzkit.control.controllers import Surface
     from fuzzkit.loop.generated import StepFunction
 
 
@@ -29,6 +30,7 @@ def run_loop(
     plant: str | ContactPlant,
     *,
     step: tuple[StepFunction, str] | None = None,
+    surface: Surface | None = None,
 ) -> RunResult:
     """Run ``spec`` on ``exp`` (its controller spec, stiffness and task resolved:
     :func:`fuzzkit.studies.batch.resolve`) and ``plant`` (a registered name, or a plant
@@ -47,14 +49,19 @@ def run_loop(
     the middleware). Such a run is the Python loop's, as ``loop="python"`` of the same spec
     with the code the function stands for.
 
+    ``surface``: a fuzzy-PI's surface given as a Python function ``du = F(e, de)``. No code is
+    generated from a function, so it runs on the reference controller only, asked for by name
+    (``controller_impl="reference"``), and the run's ``controller_impl`` names the function.
+
     Raises
     ------
     ConfigError
-        ``step`` with the reference controller, the compiled loop or an adapting spec.
+        ``step`` with the reference controller, the compiled loop or an adapting spec; a
+        ``surface`` without the reference controller, for PI, or with a ``fuzzy_impl``.
     """
     from fuzzkit.loop.faults import fault
 
-    if spec.controller == "fuzzy-pi":  # what the loop needs, said before anything runs
+    if spec.controller == "fuzzy-pi" and surface is None:  # what the loop needs, said first
         from fuzzkit.control.loop_rulebase import check_loop_rulebase, load_loop_rulebase
 
         cs = exp.controller_spec
@@ -65,6 +72,8 @@ def run_loop(
     faults = fault(spec.fault or exp.fault, spec.seed)
     check_implementation(spec)
     loop = spec.resolved_loop()
+    if surface is not None:
+        _check_function_surface(spec)
     if step is not None:
         cs = exp.controller_spec
         if (
@@ -78,7 +87,7 @@ def run_loop(
             )
         return _run_generated_python_loop(spec, exp, plant, faults, "", step)
     if spec.controller_impl == "reference":
-        return _run_reference(spec, exp, plant, faults, "")
+        return _run_reference(spec, exp, plant, faults, "", surface)
     if loop == "compiled":
         try:
             return _run_generated(spec, exp, plant, faults)
@@ -116,6 +125,23 @@ def check_implementation(spec: RunSpec) -> None:
             f"--fuzzy-impl {impl} chooses the reference controller's surface, and this run "
             "executes the spec's generated controller: add --controller-impl reference"
         )
+
+
+def _check_function_surface(spec: RunSpec) -> None:
+    """A surface given as a function runs where it can: the reference's fuzzy-PI."""
+    name = "a surface given as a Python function"
+    if spec.controller != "fuzzy-pi":
+        raise ConfigError(
+            f"{name} is a fuzzy-PI's surface; this run's controller is {spec.controller}"
+        )
+    if spec.controller_impl != "reference":
+        raise ConfigError(
+            f"{name} has no generated code (the {spec.controller_impl} controller implementation "
+            "runs what `fuzzkit compile` emits from a rule base): run it on the reference "
+            "controller (controller_impl='reference'), or give the rule base by name or path"
+        )
+    if spec.fuzzy_impl != "auto":
+        raise ConfigError(f"{name} is the surface: leave fuzzy_impl at auto, not {spec.fuzzy_impl}")
 
 
 class _Fallback(Exception):
@@ -158,14 +184,24 @@ def _run_generated_python_loop(
 
 
 def _run_reference(
-    spec: RunSpec, exp: Experiment, plant: Any, faults: Any, fallback: str
+    spec: RunSpec,
+    exp: Experiment,
+    plant: Any,
+    faults: Any,
+    fallback: str,
+    function: Surface | None = None,
 ) -> RunResult:
-    """``spec`` in the Python loop, on the reference controller."""
+    """``spec`` in the Python loop, on the reference controller (its fuzzy-PI on ``function``
+    when given: a surface given as a Python function)."""
 
     surface: Any = None
     label = "pi (python)"
     cs = exp.controller_spec
-    if spec.controller == "fuzzy-pi":
+    if function is not None:
+        surface = function
+        name = getattr(function, "__qualname__", None) or type(function).__name__
+        label = f"surface given as the Python function {name} (python)"
+    elif spec.controller == "fuzzy-pi":
         impl = spec.fuzzy_impl
         if cs is not None and impl in ("auto", "exact"):
             surface, label = _spec_reference_surface(cs, impl, spec.rulebase)

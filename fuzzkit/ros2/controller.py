@@ -4,7 +4,7 @@ parameters by name, its tare and its reset.
 
 Nothing here computes a correction: every step, tare, reset and parameter change is a call into
 the generated code, so the node runs what ``fuzzkit compile`` ships and ``fuzzkit replay --impl
-c`` (or ``python-generated``) checks.
+c`` (or ``python``) checks.
 """
 
 from __future__ import annotations
@@ -15,12 +15,12 @@ from typing import Any
 
 from fuzzkit.control.names import AXES
 from fuzzkit.control.spec import ControllerSpec
-from fuzzkit.errors import ToolchainError
-from fuzzkit.loop.controller_code import open_generated
+from fuzzkit.loop.controller_code import GENERATED_IMPLS, open_generated_impl
 from fuzzkit.ros2.parameters import refusal, tunable_values
 
-#: ``--impl``: ``auto`` is the generated C where it compiles, else the generated Python.
-IMPLS = ("auto", "c", "python-generated")
+#: ``--impl``: ``auto`` is the generated C where it compiles, else the generated Python
+#: (the names of ``simulate --controller-impl`` and ``replay --impl``).
+IMPLS = GENERATED_IMPLS
 
 
 class ParameterRefused(ValueError):
@@ -32,7 +32,7 @@ class ParameterRefused(ValueError):
 
 
 class NodeController:
-    """One generated controller (``impl``: ``c`` or ``python-generated``) and its parameters.
+    """One generated controller (``impl``: ``c`` or ``python``) and its parameters.
 
     ``params`` are the run-time parameters by name (:func:`fuzzkit.ros2.parameters.tunable_values`
     gives the spec's); :meth:`set_params` changes some of them through the generated
@@ -118,10 +118,5 @@ def open_node_controller(spec: ControllerSpec, impl: str = "auto") -> NodeContro
     """
     if impl not in IMPLS:
         raise ValueError(f"unknown impl {impl!r} (expected one of {', '.join(IMPLS)})")
-    if impl in ("auto", "c"):
-        try:
-            return NodeController(spec, "c", open_generated(spec, "c", "double"))
-        except ToolchainError:
-            if impl == "c":
-                raise
-    return NodeController(spec, "python-generated", open_generated(spec, "python"))
+    target, generated = open_generated_impl(spec, impl, "double")
+    return NodeController(spec, target, generated)

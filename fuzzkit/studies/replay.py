@@ -26,13 +26,14 @@ import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, NoReturn
+from typing import TYPE_CHECKING, NoReturn
 
 import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.control.spec import ControllerSpec
 from fuzzkit.errors import ConfigError, Location, Problem, ProblemsError
+from fuzzkit.loop.spec import CONTROLLER_IMPLS
 
 if TYPE_CHECKING:
     from fuzzkit.studies.param_schedule import Change
@@ -42,9 +43,14 @@ FloatArray = npt.NDArray[np.float64]
 FORCE_COLUMNS = ("fx", "fy", "fz")
 ROTATION_COLUMNS = tuple(f"r{i}{j}" for i in range(1, 4) for j in range(1, 4))
 COLUMNS = ("t", *FORCE_COLUMNS, *ROTATION_COLUMNS)
-#: ``--impl``: the reference, and the generated targets by the name ``--impl`` gives them.
-GENERATED = {"python-generated": "python", "c": "c"}
-IMPLS = ("python", *GENERATED)
+#: ``--impl``: ``--controller-impl``'s names (``fuzzkit.loop.spec.CONTROLLER_IMPLS``): the
+#: generated controller (``auto``: C where it compiles, else Python; ``c``; ``python``), or
+#: fuzzkit's ``reference`` controller, asked for by name.
+IMPLS = CONTROLLER_IMPLS
+#: The generated implementations ``--compare`` holds to the reference.
+GENERATED = ("python", "c")
+#: What each implementation is, as ``replay`` prints it.
+IMPL_LABELS = {"python": "generated Python", "c": "generated C", "reference": "reference"}
 #: A number as the log may write it (no thousands separators, no quotes).
 _NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?|[+-]?inf(?:inity)?", re.I)
 #: NaN as C's printf (``nan``, ``-nan``), MSVC (``-nan(ind)``) and others write it, any case.
@@ -239,24 +245,40 @@ def read_sensor_log(path: str | Path) -> SensorLog:
 def replay(
     spec: ControllerSpec,
     log: SensorLog,
-    impl: str = "python",
+    impl: str = "auto",
     number_type: str = "double",
     schedule: Sequence[Change] = (),
 ) -> tuple[FloatArray, npt.NDArray[np.int64]]:
     """Run the controller of ``spec`` on ``log`` from reset: corrections ``(n, 3)`` and status.
 
-    ``impl`` (:data:`IMPLS`): ``python`` is fuzzkit's reference controller
-    (``fuzzkit.control.reference``), ``python-generated`` the generated Python module
-    (``NAME_controller.py``) imported and run, ``c`` the generated C compiled and called
-    through ctypes (``number_type`` float/double). ``schedule``: parameter changes
+    ``impl`` (:data:`IMPLS`): the spec's generated controller, ``c`` compiled and called
+    through ctypes (``number_type`` float/double), ``python`` the generated Python module
+    (``NAME_controller.py``) imported and run, ``auto`` (default) the C where it compiles, else
+    the Python (:func:`replayed_by` says which); or ``reference``, fuzzkit's reference
+    controller (``fuzzkit.control.reference``). ``schedule``: parameter changes
     (:mod:`fuzzkit.studies.param_schedule`), for the reference only.
     """
-    if schedule and impl != "python":
+    out, status, _ = replayed_by(spec, log, impl, number_type, schedule)
+    return out, status
+
+
+def replayed_by(
+    spec: ControllerSpec,
+    log: SensorLog,
+    impl: str = "auto",
+    number_type: str = "double",
+    schedule: Sequence[Change] = (),
+) -> tuple[FloatArray, npt.NDArray[np.int64], str]:
+    """:func:`replay`, and the implementation that ran (``c``, ``python`` or ``reference``:
+    what ``auto`` became)."""
+    if impl not in IMPLS:
+        raise ConfigError(f"unknown --impl {impl!r} (expected one of {', '.join(IMPLS)})")
+    if schedule and impl != "reference":
         raise ConfigError(
-            f"--schedule changes the reference's parameters (--impl python); the generated "
-            f"{impl} has them built in (the FMU's are tunable: docs/fmu.md)"
+            "--schedule changes the reference's parameters (--impl reference); the generated "
+            "controller has them built in (the FMU's are tunable: docs/fmu.md)"
         )
-    if impl == "python":
+    if impl == "reference":
         from fuzzkit.control.reference import Controller
         from fuzzkit.loop.controller_code import spec_surface
         from fuzzkit.studies.param_schedule import apply
@@ -273,15 +295,12 @@ def replay(
             if k in by_period:
                 apply(ref, by_period[k])
             out[k], status[k] = ref.step(force, None if rot is None else rot[k])
-        return out, status
-    if impl in GENERATED:
-        from fuzzkit.loop.controller_code import open_generated
+        return out, status, impl
+    from fuzzkit.loop.controller_code import open_generated_impl
 
-        target = GENERATED[impl]
-        ctl: Any = open_generated(spec, target, number_type if target == "c" else None)
-        result: tuple[FloatArray, npt.NDArray[np.int64]] = ctl.run(log.forces, log.rotations)
-        return result
-    raise ValueError(f"unknown --impl {impl!r} (expected one of {', '.join(IMPLS)})")
+    target, ctl = open_generated_impl(spec, impl, number_type)
+    result: tuple[FloatArray, npt.NDArray[np.int64]] = ctl.run(log.forces, log.rotations)
+    return result[0], result[1], target
 
 
 @dataclass(frozen=True)
@@ -299,7 +318,7 @@ def compare(
 ) -> tuple[tuple[FloatArray, npt.NDArray[np.int64]], list[Difference]]:
     """Replay ``log`` through every implementation: the reference's output, and each generated
     one's :class:`Difference` from it (``fuzzkit replay --compare``)."""
-    ref_out, ref_status = replay(spec, log, "python")
+    ref_out, ref_status = replay(spec, log, "reference")
     diffs = []
     for impl in GENERATED:
         out, status = replay(spec, log, impl, number_type)

@@ -57,36 +57,32 @@ rules:
 """
 
 
-def _arm6_loop() -> None:
-    from fuzzkit.loop.compiled_loop import run_compiled
-    from fuzzkit.loop.faults import fault
-    from fuzzkit.studies.experiments import experiment
+def _compiled_run(experiment: str, plant: str, controller: str, fault: str | None = None) -> None:
+    """A short run through the loop's entry point, on the plant's compiled loop."""
+    from fuzzkit.loop.spec import RunSpec
+    from fuzzkit.studies.batch import run_spec
 
+    run_spec(
+        RunSpec(experiment, controller, plant, loop="compiled", fault=fault,
+                duration_s=WARM_DURATION_S)
+    )  # fmt: skip
+
+
+def _arm6_loop() -> None:
     # PI and fuzzy-PI are the same kernel (the controller is generated C called by address);
     # both are run so that each one's C controller is built and cached as well
-    run_compiled(experiment("E1"), "arm6", "pi", duration_s=WARM_DURATION_S)
-    run_compiled(
-        experiment("E2"), "arm6", "fuzzy-pi", faults=fault("spike"), duration_s=WARM_DURATION_S
-    )
+    _compiled_run("E1", "arm6", "pi")
+    _compiled_run("E2", "arm6", "fuzzy-pi", "spike")
 
 
 def _planar_loop() -> None:
-    from fuzzkit.loop.compiled_loop import run_compiled
-    from fuzzkit.loop.faults import fault
-    from fuzzkit.studies.experiments import experiment
-
-    run_compiled(experiment("E1"), "planar", "pi", duration_s=WARM_DURATION_S)
-    run_compiled(
-        experiment("E2"), "planar", "fuzzy-pi", faults=fault("nan"), duration_s=WARM_DURATION_S
-    )
+    _compiled_run("E1", "planar", "pi")
+    _compiled_run("E2", "planar", "fuzzy-pi", "nan")
 
 
 def _mujoco_loop() -> None:
-    from fuzzkit.loop.compiled_loop import run_compiled
-    from fuzzkit.studies.experiments import experiment
-
     # E3: a rough profile (the substep-by-substep path) and a wall
-    run_compiled(experiment("E3"), "mujoco", "pi", duration_s=WARM_DURATION_S)
+    _compiled_run("E3", "mujoco", "pi")
 
 
 def _height_field() -> None:

@@ -251,10 +251,12 @@ def optimise(
         raise ConfigError(f"baseline gains lack {', '.join(missing)}")
     lo, hi = space.log_bounds
     ndim = len(space.names)
+    baseline_gains = {n: base_gains[n] for n in space.names}
+    # said before the search, from the loop itself (a refusal shows here, not in a worker)
+    implementation = CaseRunner(problem).implementation(baseline_gains)
     pricer = _Pricer(problem, nworkers, budget, callback, admit, scheduler, constraint)
     interrupted = False
     try:
-        baseline_gains = {n: base_gains[n] for n in space.names}
         pricer.baseline = pricer.price([baseline_gains], constrained=False)[0]
         pricer.stage = "global"
         pop, generations = _plan(budget, ndim)
@@ -319,6 +321,7 @@ def optimise(
         cheapest_cost=cheapest.cost,
         cheapest_case_costs=dict(zip(problem.labels, cheapest.case_costs, strict=True)),
         problem=problem,
+        controller_impl=implementation,
     )
 
 

@@ -8,9 +8,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from fuzzkit.control.controllers import Surface
-from fuzzkit.errors import ConfigError
 from fuzzkit.loop.adapter import make_plant
-from fuzzkit.loop.python_loop import run
 from fuzzkit.loop.result import RunResult
 from fuzzkit.plants.contract import UnsupportedPlant
 from fuzzkit.studies.tuning.cost import run_cost
@@ -25,19 +23,14 @@ class CaseRunner:
     (what ``fuzzkit compile`` emits, compiled once per structure, the candidate's gains set as
     run-time parameters), in the plant's compiled loop where it has one, else in the Python
     loop; the reference controller when asked for (``controller_impl == "reference"``). A
-    surface given as a function is the reference controller's by definition (no code is
-    generated from a function): it runs in the Python loop.
+    surface given as a function has no generated code: the problem runs it on the reference
+    controller, asked for by name (:meth:`TuningProblem.build`), and each run says so.
     """
 
     def __init__(self, problem: TuningProblem) -> None:
         self.problem = problem
         self.surface: Surface | None = None
         if problem.surface is not None and not isinstance(problem.surface, str):
-            if problem.loop == "compiled":
-                raise ConfigError(
-                    "the compiled loop runs the generated controller, and a surface given as "
-                    "a function has none; use loop='python'"
-                )
             self.surface = problem.surface
 
     def run_case(
@@ -55,11 +48,6 @@ class CaseRunner:
         plant: Any = p.plant_of(case)
         if plant is None:
             plant = make_plant(p.plant) if isinstance(p.plant, str) else p.plant()
-        if self.surface is not None:
-            return run(
-                exp, plant, p.controller, gains=full, surface=self.surface,
-                seed=p.noise_seed, duration_s=duration_s, latency=p.latency_of(case),
-            )  # fmt: skip
         spec = RunSpec(
             exp.name,
             p.controller,
@@ -73,7 +61,21 @@ class CaseRunner:
             duration_s=duration_s,
             controller_impl=p.controller_impl,
         )
-        return run_loop(spec, exp, plant)
+        return run_loop(spec, exp, plant, surface=self.surface)
+
+    def implementation(self, gains: Mapping[str, float]) -> str:
+        """What runs the problem's candidates, from the runs themselves: each experiment's
+        first case run for one period with ``gains``, its ``controller_impl`` and ``loop``
+        (``controller [loop]``; several, joined by ``; ``, when the experiments differ)."""
+        p = self.problem
+        seen: list[str] = []
+        for group in range(len(p.experiments)):
+            case = p.groups.index(group)
+            r = self.run_case(case, gains, p.cases[case].scenario.period_s)
+            label = f"{r.controller_impl} [{r.loop}]"
+            if label not in seen:
+                seen.append(label)
+        return "; ".join(seen)
 
     def case_costs(self, gains: Mapping[str, float]) -> tuple[float, ...]:
         """The cost of ``gains`` (searched names only, or complete) on every case."""
@@ -91,20 +93,6 @@ class CaseRunner:
                 continue
             out.append(run_cost(result, p.weights))
         return tuple(out)
-
-
-def _rulebase_surface(problem: TuningProblem) -> Surface:
-    """The exact engine's surface of the problem's rule base for the reference controller, its
-    inputs in the roles the cases' spec gives them (by position without one)."""
-    from fuzzkit.control.loop_rulebase import POSITIONAL_ROLES, exact_surface, load_loop_rulebase
-    from fuzzkit.control.spec import surface_inputs
-
-    spec = problem.cases[0].controller_spec if problem.cases else None
-    if spec is not None and spec.rulebase is not None:
-        rb, roles = spec.rulebase, surface_inputs(spec, spec.rulebase)
-    else:
-        rb, roles = load_loop_rulebase(str(problem.surface)), POSITIONAL_ROLES
-    return exact_surface(rb, roles)
 
 
 def evaluate_gains(problem: TuningProblem, gains: Mapping[str, float]) -> tuple[float, ...]:

@@ -33,6 +33,30 @@ PlantSpec = str | Callable[[], ContactPlant]
 SurfaceSpec = str | Surface
 
 
+def function_surface_impl(controller_impl: str, loop: str) -> str:
+    """The controller implementation that prices a surface given as a Python function: the
+    reference controller (no code is generated from a function), asked for by name here so
+    that every run says so.
+
+    Raises
+    ------
+    ConfigError
+        The generated controller (``c``, ``python``) or the compiled loop asked for.
+    """
+    if controller_impl in ("c", "python"):
+        raise ConfigError(
+            f"--controller-impl {controller_impl} runs the generated controller, of a rule "
+            "base given by name or path (a surface given as a function has no code; it runs "
+            "on the reference controller)"
+        )
+    if loop == "compiled":
+        raise ConfigError(
+            "the compiled loop runs the generated controller, and a surface given as a "
+            "function has none (it runs on the reference controller): use loop='python'"
+        )
+    return "reference"
+
+
 @dataclass(frozen=True, slots=True)
 class TuningCase:
     """One case a gain set is priced on: an experiment at a stiffness and a latency.
@@ -175,11 +199,8 @@ class TuningProblem:
                 f"unknown controller implementation {controller_impl!r} "
                 f"(expected {', '.join(CONTROLLER_IMPLS)})"
             )
-        if controller_impl in ("c", "python") and not isinstance(surface or "", str):
-            raise ConfigError(
-                f"--controller-impl {controller_impl} runs the generated controller, of a rule "
-                "base given by name or path (a surface given as a function has no code)"
-            )
+        if surface is not None and not isinstance(surface, str):
+            controller_impl = function_surface_impl(controller_impl, loop)
         case_lats: tuple[tuple[int, int] | None, ...]
         if lats is not None:
             n_cases = len(cases)

@@ -48,6 +48,9 @@ class TuneResult:
     cheapest_case_costs: dict[str, float] = field(default_factory=dict)
     #: the problem solved (its cases: :attr:`TuningProblem.case_keys`); None when unknown
     problem: TuningProblem | None = None
+    #: what ran the candidates, as the runs name it (``controller_impl [loop]``,
+    #: :meth:`~fuzzkit.studies.tuning.pricing.CaseRunner.implementation`); empty when unknown
+    controller_impl: str = ""
 
     @property
     def latencies(self) -> tuple[tuple[int, int], ...] | None:
@@ -98,6 +101,7 @@ class TuneResult:
                 [list(pair) for pair in self.latencies] if self.latencies else "as defined"
             ),
             "rulebase": self.rulebase,
+            "controller_impl": self.controller_impl,
             "cost": round(self.cost, 6),
             "default_cost": round(self.baseline_cost, 6),
             "experiment_costs": {k: round(v, 6) for k, v in self.experiment_costs.items()},
@@ -113,4 +117,6 @@ class TuneResult:
         }
         if self.rulebase is None:
             del prov["rulebase"]
+        if not self.controller_impl:
+            del prov["controller_impl"]
         return GainsEntry(self.controller, dict(self.gains), prov)
