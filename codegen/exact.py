@@ -89,7 +89,27 @@ EXACT_DEFUZZIFIERS = (
 )
 #: Fuzzification kinds the exact templates implement (a shape's registry record says which
 #: one it uses, ``fuzzkit.fuzzy.shapes.ExactForm``; a shape without one is refused).
-TEMPLATE_KINDS = ("linear", "gaussian", "bell", "sigmoid", "singleton")
+TEMPLATE_KINDS = (
+    "linear",
+    "singleton",
+    "gaussian",
+    "gaussian_product",
+    "bell",
+    "sigmoid",
+    "sigmoid_difference",
+    "sigmoid_product",
+    "s_shape",
+    "z_shape",
+    "pi_shape",
+)
+#: Input kinds that call a helper of the generated code: the S spline (``smf``), the sigmoid.
+KIND_HELPERS = {
+    "s_shape": "smf",
+    "z_shape": "smf",
+    "pi_shape": "smf",
+    "sigmoid_difference": "sigmf",
+    "sigmoid_product": "sigmf",
+}
 
 
 @dataclass(frozen=True)
@@ -261,7 +281,7 @@ class ExactSpec:
     extend_limit: str
     vertical: str
     stack_bytes: int
-    helpers: tuple[str, ...]  # C helper functions the code calls (min, max, psum, finite)
+    helpers: tuple[str, ...]  # helper functions the code calls (min, max, psum, finite, smf, sigmf)
     has_geometry: bool
     max_base: int  # largest count of interval points before the bounded-sum crossings
     piece_type: str
@@ -910,6 +930,8 @@ def build_exact_spec(
             if o.gauss.product:
                 libm.add("copysign")
     own_math = libm & set(tg.portable_math.get(number_type, ()))
+    if "pow" in own_math:
+        own_math.update(("exp", "log"))  # pow is computed as exp(b log a)
     if "erfc" in own_math:
         own_math.add("exp")  # erfc is computed through exp
     libm -= own_math
@@ -941,6 +963,9 @@ def build_exact_spec(
         else " ".join([r.expr for r in rules] + [e for o in outputs for e in o.level_exprs])
     )
     helpers = {h for h in ("min", "max", "psum") if f"{callee[h]}(" in code}
+    helpers.update(
+        KIND_HELPERS[t.kind] for ax in inputs for t in ax.terms if t.kind in KIND_HELPERS
+    )
     if any(o.gauss is not None and o.gauss.product for o in outputs):
         helpers.add("finite")  # the crossings of two scaled Gaussians may not exist
     geo = [o for o in outputs if o.n_intervals]

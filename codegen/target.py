@@ -124,7 +124,7 @@ class Target:
     #: returns an object with ``step(force_n, tool_rotation) -> (correction, status)``.
     open_controller: Callable[[Mapping[str, str], str, str], Any] | None = None
     #: Per number type, the math functions its exact code computes itself rather than call
-    #: (C float: exp, log, erfc, whose libm versions differ by an ulp between C libraries).
+    #: (C float: exp, log, erfc, pow, whose libm versions differ by an ulp between C libraries).
     portable_math: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     #: A target whose templates this one reuses: a template missing from ``folder`` is taken
     #: from that target's folder (the FMU target lays the C target's controller out as is).

@@ -164,7 +164,7 @@ def _compiler(name: str) -> list[str]:
 
 
 #: Sanitized runs: (rule base, number type, random points). The Sugeno stage in double over
-#: extended inputs and the float code's own exp, log and erfc, besides MacVicar-Whelan.
+#: extended inputs, the float code's own exp, log, pow and erfc, besides MacVicar-Whelan.
 SANITIZED = {
     "macvicar_whelan-double": (lambda: rulebase("macvicar_whelan"), "double", 100_000),
     "macvicar_whelan-float": (lambda: rulebase("macvicar_whelan"), "float", 100_000),
@@ -175,6 +175,12 @@ SANITIZED = {
     ),
     "gaussian3x3-float": (
         lambda: load(Path(__file__).parent / "data" / "gaussian3x3.yaml"),
+        "float",
+        1000,
+    ),
+    # every smooth input shape, and the float code's own pow (a bell's)
+    "smooth_inputs-float": (
+        lambda: load(Path(__file__).parent / "data" / "fis" / "smooth_inputs.fis"),
         "float",
         1000,
     ),

@@ -10,10 +10,10 @@ from _fis_probe import fis_with_input_mf
 from _mamdani_reference import mu as reference_mu
 from _mamdani_reference import reference, smf, zmf
 
-from fuzzkit.codegen.exact import unsupported_reason
+from fuzzkit.codegen.exact import ROUNDING_BOUND, unsupported_reason
 from fuzzkit.codegen.method import compile_rulebase
 from fuzzkit.codegen.verify import load_module
-from fuzzkit.errors import CodegenError, RuleBaseError
+from fuzzkit.errors import RuleBaseError
 from fuzzkit.formats import fcl, fis, fll
 from fuzzkit.formats.foreign_common import ExportError
 from fuzzkit.formats.registry import dumps, loads
@@ -316,13 +316,15 @@ def test_fcl_iec_dialect_refuses_smooth_shapes_by_name(shape: str) -> None:
 
 
 @pytest.mark.parametrize("shape", list(MATLAB_FILE_TERMS))
-def test_exact_codegen_refuses_smooth_input_shapes_naming_the_alternative(shape: str) -> None:
+def test_exact_codegen_fuzzifies_smooth_input_shapes_as_the_engine(shape: str) -> None:
     rb = fll.loads(_file_texts(shape)["fll"], "t.fll")
-    why = unsupported_reason(rb)
-    assert why is not None
-    assert f"shape {shape!r}" in why and "--method table" in why
-    with pytest.raises(CodegenError, match=rf"shape '{shape}'.*--method table"):
-        compile_rulebase(rb, "python", "double", method="exact")
+    assert unsupported_reason(rb) is None
+    done = compile_rulebase(rb, "python", "double", method="exact")
+    module = load_module(done.files, rb.name)
+    x = np.linspace(-1.0, 11.0, 997)
+    got = np.array([module.eval([v])[0] for v in x])
+    want = Engine(rb).evaluate({"x": x})["y"]
+    np.testing.assert_allclose(got, want, rtol=0, atol=ROUNDING_BOUND["double"] * 10)
 
 
 def test_the_table_method_compiles_smooth_input_shapes_and_the_code_runs() -> None:

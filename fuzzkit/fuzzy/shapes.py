@@ -108,8 +108,12 @@ class ExactForm:
 
     ``kind`` is the template branch (``linear``: the trapezoid form ``(b, c, rise, fall)``;
     ``gaussian``: ``(mean, sigma)``; ``bell``: ``(centre, width, 2 slope)``; ``sigmoid``:
-    ``(slope, centre)``; ``singleton``: ``(value,)``), ``constants`` the numbers it needs and
-    ``libm`` the C functions it calls.
+    ``(slope, centre)``; ``singleton``: ``(value,)``; ``gaussian_product``: its parameters;
+    ``s_shape`` and ``z_shape``: ``(start, end, end - start, midpoint)``, the differences the
+    engine's formula takes; ``pi_shape``: those of its rising and of its falling half;
+    ``sigmoid_difference`` and ``sigmoid_product``: their parameters), ``constants`` the
+    numbers it needs and ``libm`` the C functions it calls. Each template branch computes the
+    engine's formula (the shape's function here) operation for operation.
     """
 
     kind: str
@@ -546,6 +550,11 @@ def _same(p: Params) -> Params:
     return p
 
 
+def _spline(start: float, end: float) -> Params:
+    """An S/Z spline's constants as :func:`s_shape` computes them: ends, width, midpoint."""
+    return (start, end, end - start, 0.5 * (start + end))
+
+
 # ---------------------------------------------------------------------------- the registry
 
 
@@ -691,6 +700,7 @@ _ENTRIES = (
                 condition_text="GAUSS2 needs mean1 <= mean2 (jFuzzyLogic)",
             ),
         ),
+        exact=ExactForm("gaussian_product", _same, ("exp",)),
         span=_span_gaussian_product,
         features=_widths(1, 3),
     ),
@@ -703,6 +713,7 @@ _ENTRIES = (
         lambda p, lo, hi: (_clip(p[1], lo, hi) + hi) / 2,
         fis=(_sp("smf", "start end"),),
         fll=(_sp("SShape", "start end"),),
+        exact=ExactForm("s_shape", lambda p: _spline(p[0], p[1])),
         span=_param_span,
         features=_spans((0, 1)),
     ),
@@ -715,6 +726,7 @@ _ENTRIES = (
         lambda p, lo, hi: (lo + _clip(p[0], lo, hi)) / 2,
         fis=(_sp("zmf", "start end"),),
         fll=(_sp("ZShape", "start end"),),
+        exact=ExactForm("z_shape", lambda p: _spline(p[0], p[1])),
         span=_param_span,
         features=_spans((0, 1)),
     ),
@@ -727,6 +739,7 @@ _ENTRIES = (
         lambda p, lo, hi: _core_middle(p[1], p[2], lo, hi),
         fis=(_sp("pimf", "a b c d"),),
         fll=(_sp("PiShape", "a b c d"),),
+        exact=ExactForm("pi_shape", lambda p: _spline(p[0], p[1]) + _spline(p[2], p[3])),
         span=_param_span,
         features=_spans((0, 1), (2, 3)),
     ),
@@ -739,6 +752,7 @@ _ENTRIES = (
         _centre_on_grid(sigmoid_difference),
         fis=(_sp("dsigmf", "slope1 centre1 slope2 centre2"),),
         fll=(_sp("SigmoidDifference", "centre1 slope1 slope2 centre2"),),
+        exact=ExactForm("sigmoid_difference", _same, ("exp", "fabs")),
         features=_slopes(0, 2),
     ),
     Shape(
@@ -750,6 +764,7 @@ _ENTRIES = (
         _centre_on_grid(sigmoid_product),
         fis=(_sp("psigmf", "slope1 centre1 slope2 centre2"),),
         fll=(_sp("SigmoidProduct", "centre1 slope1 slope2 centre2"),),
+        exact=ExactForm("sigmoid_product", _same, ("exp",)),
         features=_slopes(0, 2),
     ),
     # Sugeno (Takagi-Sugeno-Kang) output terms: not membership functions but the rule's output

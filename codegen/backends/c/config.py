@@ -81,7 +81,7 @@ TARGET = Target(
     visits_firing_cells=True,
     fast_centroid=True,
     # the same bits on a microcontroller's C library (newlib) as on the host's (glibc)
-    portable_math={"float": ("erfc", "exp", "log")},
+    portable_math={"float": ("erfc", "exp", "log", "pow")},
     verify_table=verify_c,
     verify_exact=verify_exact_c,
     open_controller=open_controller,
