@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from fuzzkit.analysis.intervals import Interval, exp_decreasing
-from fuzzkit.analysis.surface_bounds import compute
+from fuzzkit.analysis.surface_bounds import compute, seed_rectangles
 from fuzzkit.analysis.surface_enclosure import Enclosure, why_unsupported
 from fuzzkit.formats.registry import load
 from fuzzkit.fuzzy.inference import evaluate
@@ -161,3 +161,76 @@ def test_exp_enclosure_contains_a_finer_computation() -> None:
         for k, tk in enumerate(t):
             v = (-decimal.Decimal(float(tk))).exp()
             assert decimal.Decimal(float(e.lo[k])) <= v <= decimal.Decimal(float(e.hi[k]))
+
+
+def _rect_violations(rb: RuleBase, rect: np.ndarray, per_cell: int) -> list[str]:
+    """The enclosure of each rectangle (n, 4) against per_cell x per_cell engine samples in it
+    (values, and the secants between neighbouring samples)."""
+    enc = Enclosure(rb).enclose(*rect.T)
+    u = np.linspace(0.0, 1.0, per_cell)
+    xs = rect[:, :1] + u * (rect[:, 1:2] - rect[:, :1])  # (n, p)
+    ys = rect[:, 2:3] + u * (rect[:, 3:4] - rect[:, 2:3])
+    xx = np.repeat(xs[:, :, None], per_cell, axis=2)
+    yy = np.repeat(ys[:, None, :], per_cell, axis=1)
+    a, b = rb.inputs[0].name, rb.inputs[1].name
+    f = np.asarray(evaluate(rb, {a: xx.ravel(), b: yy.ravel()})[rb.outputs[0].name])
+    f = f.reshape(xx.shape)
+    hx, hy = xs[:, 1] - xs[:, 0], ys[:, 1] - ys[:, 0]
+    sx = np.diff(f, axis=1) / hx[:, None, None]
+    sy = np.diff(f, axis=2) / hy[:, None, None]
+    assert np.all(np.isfinite(sx)) and np.all(np.isfinite(sy))
+    bad = []
+    for k in range(rect.shape[0]):
+        slack = 8 * np.finfo(float).eps * max(1.0, float(np.max(np.abs(f[k]))))
+        for what, vals, iv, tol in (
+            ("dF/dx", sx[k], enc.gx, slack / hx[k]),
+            ("dF/dy", sy[k], enc.gy, slack / hy[k]),
+        ):
+            if vals.min() < iv.lo[k] - tol or vals.max() > iv.hi[k] + tol:
+                bad.append(
+                    f"{what} in [{vals.min():.6g}, {vals.max():.6g}] outside "
+                    f"[{iv.lo[k]:.6g}, {iv.hi[k]:.6g}] on {rect[k]}"
+                )
+    return bad
+
+
+def _kink_cells(rb: RuleBase, cells: int) -> np.ndarray:
+    """A cells x cells grid cut at the input terms' kinks, as the branch and bound seeds it:
+    every rectangle of a piecewise-linear rule base is then affine, so its switch lines and
+    the levels' order per side are used."""
+    rect = seed_rectangles(Enclosure(rb), cells)
+    # a kink an ulp from a grid line leaves a sliver no sample can tell apart: dropped
+    wide = (rect[:, 1] - rect[:, 0] > 1e-9) & (rect[:, 3] - rect[:, 2] > 1e-9)
+    return rect[wide]
+
+
+@pytest.mark.parametrize("name", ["macvicar_whelan", "tests/data/user/nonuniform5.yaml"])
+def test_the_enclosure_on_cells_cut_at_the_kinks_holds_every_dense_slope(name: str) -> None:
+    rb = _clamped(name)
+    assert _rect_violations(rb, _kink_cells(rb, 24), per_cell=9) == []
+
+
+@pytest.mark.parametrize("seed", [1, 5, 9, 13])
+def test_the_switch_lines_hold_on_random_piecewise_linear_rule_bases(seed: int) -> None:
+    rb = narrow_rulebase(np.random.default_rng(seed))
+    rb = replace(
+        rb, operators=replace(rb.operators, and_="min", implication="min", aggregation="max")
+    )
+    assert _rect_violations(rb, _kink_cells(rb, 16), per_cell=9) == []
+
+
+def test_the_levels_order_per_side_of_a_switch_line_tightens_the_slopes() -> None:
+    # macvicar_whelan at e in [0, 1/32], de in [-1, -31/32]: the levels of NM and NS tie along
+    # e = de + 1, through a corner; without their order per side the enclosure of dF/de holds
+    # each level's whole range (about [0, 9.8]); the engine's secants there lie in [1.04, 4.27]
+    rb = _clamped("macvicar_whelan")
+    rect = np.array([[0.0, 1.0 / 32.0, -1.0, -31.0 / 32.0]])
+    loose = Enclosure(rb).enclose(*rect.T, tighten=False).gx
+    tight = Enclosure(rb).enclose(*rect.T).gx
+    xs = np.linspace(0.0, 1.0 / 32.0, 65)
+    ys = np.linspace(-1.0, -31.0 / 32.0, 65)
+    f = _surface(rb, xs, ys)
+    sx = np.diff(f, axis=0) / (xs[1] - xs[0])
+    assert tight.lo[0] <= sx.min() and sx.max() <= tight.hi[0]
+    assert loose.hi[0] > 2.0 * sx.max()
+    assert tight.hi[0] - sx.max() < 0.15 * sx.max()

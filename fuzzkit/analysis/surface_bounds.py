@@ -108,6 +108,16 @@ def _split(rect: FloatArray) -> FloatArray:
     return np.concatenate(parts)
 
 
+def seed_rectangles(enclosure: Enclosure, cells: int) -> FloatArray:
+    """A ``cells`` x ``cells`` grid of the square, also cut at the input terms' kinks (so that
+    every rectangle of a piecewise-linear rule base is affine in each membership), (n, 4)."""
+    ex = np.union1d(np.linspace(-1.0, 1.0, cells + 1), enclosure.input_kinks(0))
+    ey = np.union1d(np.linspace(-1.0, 1.0, cells + 1), enclosure.input_kinks(1))
+    x0, y0 = np.meshgrid(ex[:-1], ey[:-1], indexing="ij")
+    x1, y1 = np.meshgrid(ex[1:], ey[1:], indexing="ij")
+    return np.stack([x0.ravel(), x1.ravel(), y0.ravel(), y1.ravel()], 1)
+
+
 def compute(rb: RuleBase) -> SurfaceBounds:
     """Branch and bound over [-1, 1]^2 (see the module doc).
 
@@ -117,11 +127,7 @@ def compute(rb: RuleBase) -> SurfaceBounds:
         The rule base has no sound enclosure (:func:`why_unsupported` says why).
     """
     enclosure = Enclosure(rb)
-    ex = np.union1d(np.linspace(-1.0, 1.0, SEEDS + 1), enclosure.input_kinks(0))
-    ey = np.union1d(np.linspace(-1.0, 1.0, SEEDS + 1), enclosure.input_kinks(1))
-    x0, y0 = np.meshgrid(ex[:-1], ey[:-1], indexing="ij")
-    x1, y1 = np.meshgrid(ex[1:], ey[1:], indexing="ij")
-    rect = np.stack([x0.ravel(), x1.ravel(), y0.ravel(), y1.ravel()], 1)
+    rect = seed_rectangles(enclosure, SEEDS)
     done: list[tuple[FloatArray, ...]] = []
     tolerance, gap = math.nan, 0.0
     for depth in range(MAX_DEPTH + 1):

@@ -41,8 +41,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import cast
 
 import numpy as np
+import numpy.typing as npt
 
 from fuzzkit.analysis.intervals import EPS, FloatArray, Interval, dot, down, sum_outward, up
 from fuzzkit.analysis.switch_lines import refine
@@ -52,6 +54,10 @@ from fuzzkit.fuzzy.model import Compound, Proposition, RuleBase
 
 #: Bins of the output axis (besides the terms' kinks and peaks) for the centroid's integrals.
 OUTPUT_BINS = 256
+#: Levels (in [0, 1]) at one point closer than this are not ordered (rounding).
+ORDER_MARGIN = 1e-12
+BoolArray = npt.NDArray[np.bool_]
+IntArray = npt.NDArray[np.intp]
 #: Rectangles per chunk of the centroid's (rectangles x terms x bins) arrays.
 _CHUNK = 128
 
@@ -311,8 +317,28 @@ class Enclosure:
         c = [value_bounds(t, y0, y1) for t in out.terms]
         return y0, y1, Interval(np.array([v.lo for v in c]), np.array([v.hi for v in c]))
 
+    def ordered_dfdl(
+        self, firing: list[tuple[Interval, Interval, Interval]], rows: IntArray, at: FloatArray
+    ) -> Interval:
+        """``dF/dL_t`` (m, T) on the rectangles ``rows`` of ``firing``, on a part of each where
+        the levels' order, and which are above 0, is that of ``at`` (m, T), the levels at one
+        point of that part (min implication, max aggregation; the caller,
+        :mod:`fuzzkit.analysis.switch_lines`, checks that no comparison changes sign there)."""
+        # a difference within rounding is no order (the caller's comparisons snap the same)
+        order = at[:, :, None] > at[:, None, :] + ORDER_MARGIN
+        order |= np.eye(at.shape[1], dtype=bool)[None] & (at[:, :, None] > ORDER_MARGIN)
+        sub = [(_rows(a, rows), _rows(gx, rows), _rows(gy, rows)) for a, gx, gy in firing]
+        parts = []
+        for k in range(0, rows.size, _CHUNK):
+            sl = slice(k, k + _CHUNK)
+            parts.append(cast(Interval, self._centroid(sub, sl, order[sl]).dfdl))
+        return _concat(parts)
+
     def _centroid(
-        self, firing: list[tuple[Interval, Interval, Interval]], sl: slice
+        self,
+        firing: list[tuple[Interval, Interval, Interval]],
+        sl: slice,
+        order: BoolArray | None = None,
     ) -> CellEnclosure:
         y0, y1, c = self._bins
         h = y1 - y0  # exact: neighbouring doubles of one binade or close ends
@@ -339,6 +365,8 @@ class Enclosure:
             if clip:
                 can = can & (c_hi > l_lo)  # the clip can be active: C > L
                 sure = sure & (c_lo > l_hi)
+                if order is not None:
+                    can, sure = _ordered(can, sure, order, level, c, p_lo, p_hi)
         hb = np.broadcast_to(h, mu.lo.shape)
         d = sum_outward(down(mu.lo * hb), up(mu.hi * hb), axis=1)
         bad = ~(d.lo > 0.0)
@@ -426,6 +454,10 @@ class Enclosure:
         )
 
 
+def _rows(iv: Interval, rows: IntArray) -> Interval:
+    return Interval(iv.lo[rows], iv.hi[rows])
+
+
 def _sub(iv: Interval, sl: slice) -> Interval:
     return Interval(iv.lo[sl], iv.hi[sl])
 
@@ -470,6 +502,42 @@ def _centroid_range(mu: Interval, y0: FloatArray, y1: FloatArray, h: FloatArray)
     # the cumulative sums' rounding: at most (bins + 2) eps of the largest |y| each way
     slack = (y0.size + 2) * EPS * 4.0 * max(float(np.max(np.abs(y0))), float(np.max(np.abs(y1))))
     return Interval(down(lo - slack), up(hi + slack))
+
+
+def _ordered(
+    can: BoolArray,
+    sure: BoolArray,
+    order: BoolArray,
+    level: Interval,
+    c: Interval,
+    p_lo: FloatArray,
+    p_hi: FloatArray,
+) -> tuple[BoolArray, BoolArray]:
+    """``can`` and ``sure`` (term ``t`` is the largest clipped term and clipped, per bin;
+    (n, T, B)) where ``L_s > L_t`` is known for ``order[:, s, t]`` (min implication).
+
+    ``order[:, t, t]``: ``L_t > 0``. ``s`` beats ``t`` in a bin where ``C_s >= L_t`` on all of
+    it: there ``min(L_s, C_s) >= min(L_s, L_t) = L_t >= min(L_t, C_t)``. A clipped ``t``
+    (``C_t > L_t``) beats every ``s`` with ``L_t > L_s`` (``min(L_s, C_s) <= L_s < L_t``), and
+    with ``L_t > 0`` every ``s`` whose term is 0 on the bin.
+    """
+    n_terms = order.shape[1]
+    eye = np.eye(n_terms, dtype=bool)[None]
+    higher = order & ~eye
+    l_hi = level.hi[:, None, :, None]  # (n, 1, T_t, 1)
+    c_lo_s = c.lo[None, :, None, :]  # (1, T_s, 1, B)
+    beaten = np.any(higher[..., None] & (c_lo_s >= l_hi), axis=1)  # (n, T_t, B)
+    others = ~eye[..., None]  # (1, T_t, T_s, 1)
+    positive = np.diagonal(order, axis1=1, axis2=2)[:, :, None, None]  # (n, T_t, 1, 1)
+    # every other term s: t is known higher, s is 0 on the bin while t is above 0, or s's
+    # clipped value is surely below t's
+    below = (
+        higher[..., None]
+        | (positive & (c.hi[None, None, :, :] <= 0.0))
+        | (p_hi[:, None, :, :] < p_lo[:, :, None, :])
+    )
+    clipped = sure | ((c.lo[None] > level.hi[:, :, None]) & np.all(below | ~others, axis=2))
+    return can & ~beaten, clipped & ~beaten
 
 
 def _others_max(p: FloatArray) -> FloatArray:

@@ -10,12 +10,21 @@ shrink however small the rectangle.
 
 Inside a rectangle between the input terms' kinks every membership is affine, so every
 comparison that selects a term or a rule is an affine function of ``(x, y)``, known exactly
-from its values at the four corners (the memberships there, as the engine computes them). When
-every comparison that changes sign inside the rectangle has the same zero line, the selection
-is constant on each side of it: the levels' slopes there are those at one point strictly inside
-that side. The slope enclosure is then the hull of ``sum_t dF/dL_t * dL_t`` over the two sides
-(``dF/dL_t`` still enclosed over the whole rectangle), intersected with the independent one.
+from its values at the four corners (the memberships there, as the engine computes them). The
+comparisons are those of the terms of one rule (the min), of the rules of one output term (the
+max), and of the rules of two output terms whose levels may tie (the order of the levels, on
+which the output stage's ``dF/dL_t`` depends). When every comparison that changes sign inside
+the rectangle has the same zero line, the selection and the levels' order are constant on each
+side of it: the levels' slopes and order there are those at one point strictly inside that
+side. On each side ``dF/dL_t`` is enclosed again knowing that order
+(:meth:`fuzzkit.analysis.surface_enclosure.Enclosure.ordered_dfdl`); the slope enclosure is
+the hull of ``sum_t dF/dL_t * dL_t`` over the two sides, intersected with the independent one.
 Rectangles with two or more distinct switch lines keep the independent enclosure.
+
+A corner value within :data:`ON_CORNER` of 0 counts as a line through that corner (rounding of
+the memberships there): the other side then has no interior in the rectangle, and its slopes
+belong to the neighbouring rectangle that holds it, which every box containing the corner also
+holds (:meth:`fuzzkit.analysis.surface_bounds.SurfaceBounds.over` takes closed rectangles).
 """
 
 from __future__ import annotations
@@ -54,9 +63,16 @@ class Enclosure(Protocol):
 
     def levels(self, firing: Firing, sl: slice) -> tuple[Interval, Interval, Interval]: ...
 
+    def ordered_dfdl(
+        self, firing: Firing, rows: npt.NDArray[np.intp], at: FloatArray
+    ) -> Interval: ...
+
 
 #: Relative agreement of two normalised switch lines that counts as the same line.
 SAME_LINE = 1e-9
+#: A comparison's corner value (a difference of memberships in [0, 1]) at most this far from 0
+#: is rounding of a line through the corner.
+ON_CORNER = 1e-12
 #: How far (share of the way to the centre) a side's point sits inside from its corner.
 INSET = 1e-6
 _CORNERS = ((0, 0), (1, 0), (0, 1), (1, 1))
@@ -97,7 +113,7 @@ def refine(
         return gx, gy
     level, lgx, lgy = enc.levels(firing, slice(0, n))
     width = np.maximum(lgx.hi - lgx.lo, lgy.hi - lgy.lo).max(axis=1)
-    cand = (width > 1e-9) & np.isfinite(gx.lo) & np.isfinite(gx.hi)
+    cand = ((width > 1e-9) | _may_tie(level)) & np.isfinite(gx.lo) & np.isfinite(gx.hi)
     cand &= _affine(enc, rect)
     idx = np.nonzero(cand)[0]
     if idx.size == 0:
@@ -111,11 +127,15 @@ def refine(
     points, which, valid = options
     # the levels' slopes at each side's point (a point rectangle: one selection, no kink)
     pf = enc.firing(points[:, 0], points[:, 0], points[:, 1], points[:, 1])
-    _, pgx, pgy = enc.levels(pf, slice(0, points.shape[0]))
+    plevel, pgx, pgy = enc.levels(pf, slice(0, points.shape[0]))
     single_x: BoolArray = np.all(pgx.hi - pgx.lo <= 1e-9 * (1 + np.abs(pgx.hi)), axis=1)
     single_y: BoolArray = np.all(pgy.hi - pgy.lo <= 1e-9 * (1 + np.abs(pgy.hi)), axis=1)
     single = single_x & single_y
-    side_dfdl = Interval(dfdl.lo[idx][which], dfdl.hi[idx][which])
+    # the levels' order on each side is that at its point (no comparison crosses the side);
+    # dF/dL_t is enclosed again with it, and intersected with the rectangle's own
+    side_dfdl = enc.ordered_dfdl(firing, idx[which], 0.5 * (plevel.lo + plevel.hi)).intersect(
+        Interval(dfdl.lo[idx][which], dfdl.hi[idx][which])
+    )
     ox, oy = dot(side_dfdl, pgx), dot(side_dfdl, pgy)
     new = [gx.lo.copy(), gx.hi.copy(), gy.lo.copy(), gy.hi.copy()]
     for k, cell in enumerate(idx):
@@ -154,7 +174,8 @@ def _comparisons(
     out: list[FloatArray] = []
 
     def add(a: FloatArray, b: FloatArray, live: BoolArray) -> None:
-        out.append(np.where(live[:, None], a - b, np.nan))
+        if np.any(live):
+            out.append(np.where(live[:, None], a - b, np.nan))
 
     for rp in props:
         for i in range(len(rp)):
@@ -163,14 +184,40 @@ def _comparisons(
     by_term: dict[int, list[int]] = {}
     for r, rule in enumerate(enc.rules):
         by_term.setdefault(rule.consequent, []).append(r)
-    for t, rs in by_term.items():
-        can = [strength[r][1] >= level.lo[idx, t] for r in rs]
+    can = {r: strength[r][1] >= level.lo[idx, rule.consequent] for r, rule in enumerate(enc.rules)}
+    for rs in by_term.values():
         for a in range(len(rs)):
             for b in range(a + 1, len(rs)):
                 for va, ca in props[rs[a]]:
                     for vb, cb in props[rs[b]]:
-                        add(va, vb, can[a] & can[b] & ca & cb)
+                        add(va, vb, can[rs[a]] & can[rs[b]] & ca & cb)
+    # two levels that may tie: where their order changes (the output stage's switch lines)
+    terms = sorted(by_term)
+    for i, t in enumerate(terms):
+        for u in terms[i + 1 :]:
+            tie = (level.lo[idx, t] <= level.hi[idx, u]) & (level.lo[idx, u] <= level.hi[idx, t])
+            if not np.any(tie):
+                continue
+            for a in by_term[t]:
+                for b in by_term[u]:
+                    both = tie & can[a] & can[b]
+                    if not np.any(both):
+                        continue
+                    for va, ca in props[a]:
+                        for vb, cb in props[b]:
+                            add(va, vb, both & ca & cb)
     return out
+
+
+def _may_tie(level: Interval) -> BoolArray:
+    """Per rectangle: two levels, one of them above 0, whose ranges overlap."""
+    overlap = (level.lo[:, :, None] <= level.hi[:, None, :]) & (
+        level.lo[:, None, :] <= level.hi[:, :, None]
+    )
+    live = (level.hi[:, :, None] > 0.0) | (level.hi[:, None, :] > 0.0)
+    off = ~np.eye(level.lo.shape[1], dtype=bool)[None]
+    tie: BoolArray = np.any(overlap & live & off, axis=(1, 2))
+    return tie
 
 
 def _sides(
@@ -186,6 +233,8 @@ def _sides(
     if not lines:
         return None
     g = np.stack(lines, 1)  # (n, M, 4)
+    # a corner value within rounding of 0: the line passes through that corner (module doc)
+    g = np.where(np.abs(g) <= ON_CORNER, 0.0, g)
     live = ~np.isnan(g[:, :, 0])
     gmin = np.where(live, np.nanmin(np.where(live[..., None], g, np.inf), axis=2), 0.0)
     gmax = np.where(live, np.nanmax(np.where(live[..., None], g, -np.inf), axis=2), 0.0)
