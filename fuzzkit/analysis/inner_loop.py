@@ -14,11 +14,21 @@ pymunk servo starts slower (an S-shaped step response) and needs the second pole
 is the free-run NRMSE (error RMS over the motion's standard deviation). The model the
 certificate uses carries it as uncertainty: ``a`` and ``q`` over the range of the fits widened
 by the largest NRMSE, ``g`` over the range of the fits times ``1 +- NRMSE``.
+
+**Series compliance.** A servo that is a spring (MuJoCo's PD joints) gives way under the
+contact force: held still, the tool reaches only ``s(k) = k_s / (k + k_s)`` of a commanded
+indentation against a contact of stiffness ``k``, the servo's stiffness ``k_s`` in series with
+the contact's. Each identification stiffness is therefore also pressed and held
+(:func:`press_gain`), ``k_s`` fitted to those static gains (:func:`series_stiffness`), each
+fit made on the motion divided by ``s(k)`` and the model's gain at a stiffness ``k`` is
+``g * s(k)`` (:meth:`InnerLoop.g_at`). A plant whose stiffest press loses less than
+:data:`SERIES_THRESHOLD` of the command has no series term (arm6 loses 0, the planar arm 0.4 %
+at 1000 N/mm: inside its ``g`` interval).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
@@ -42,6 +52,20 @@ WARM_UP = 100
 #: certificate built on it is no evidence for that plant, and ``fuzzkit stability`` warns.
 #: arm6 fits to 0.01 %, the planar arm to a few %; MuJoCo's dynamic arm to 95 % today.
 POOR_FIT_NRMSE = 0.10
+#: The static loss (``1 - s(k)`` at the stiffest identification point) from which a plant's
+#: series compliance is modelled; below it the ``g`` interval carries it.
+SERIES_THRESHOLD = 0.01
+#: Periods each level of the static press is held, and the last periods averaged.
+PRESS_HOLD = 200
+PRESS_AVERAGE = 50
+
+
+def series_gain(series_n_per_m: float | None, stiffness_n_per_m: float) -> float:
+    """``s(k) = k_s / (k + k_s)``: the share of a commanded indentation the tool reaches, held
+    still, against a contact of stiffness ``k`` (1 without a series stiffness ``k_s``)."""
+    if series_n_per_m is None:
+        return 1.0
+    return series_n_per_m / (stiffness_n_per_m + series_n_per_m)
 
 
 def poor_fit(plant: str, fit_error: float) -> str | None:
@@ -57,13 +81,16 @@ def poor_fit(plant: str, fit_error: float) -> str | None:
 
 @dataclass(frozen=True, slots=True)
 class InnerFit:
-    """One identification: the fitted pole ``a``, DC gain ``g`` and the free-run NRMSE."""
+    """One identification: the fitted pole ``a``, DC gain ``g`` (of the motion over its
+    static gain, :func:`press_gain`) and the free-run NRMSE."""
 
     stiffness_n_per_m: float
     a: float
     g: float
     nrmse: float
     q: float = 0.0
+    #: the tool's held indentation over the commanded one, from :func:`press_gain`
+    static_gain: float = 1.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -77,6 +104,13 @@ class InnerLoop:
     g_range: tuple[float, float]
     q_range: tuple[float, float] = (0.0, 0.0)
     contact_lag: tuple[float, float] = (0.0, 0.0)
+    #: the servo's stiffness in series with the contact (N/m), None when it has none
+    series_n_per_m: float | None = None
+
+    def g_at(self, stiffness_n_per_m: float) -> tuple[float, float]:
+        """The inner loop's gain interval against a contact of ``stiffness_n_per_m``."""
+        s = series_gain(self.series_n_per_m, stiffness_n_per_m)
+        return (self.g_range[0] * s, self.g_range[1] * s)
 
     @property
     def fit_error(self) -> float:
@@ -87,10 +121,14 @@ class InnerLoop:
         """JSON form."""
         return {
             "plant": self.plant,
-            "model": "x[k] = q x[k-1] + (1 - q) r[k]; p[k] = a p[k-1] + (1 - a) g x[k]",
+            "model": "x[k] = q x[k-1] + (1 - q) r[k]; p[k] = a p[k-1] + (1 - a) g s(K) x[k]; "
+            "s(K) = k_s / (K + k_s) at contact stiffness K (1 without a series stiffness k_s)",
             "a": list(self.a_range),
             "q": list(self.q_range),
             "g": list(self.g_range),
+            "series_stiffness_n_per_mm": None
+            if self.series_n_per_m is None
+            else self.series_n_per_m / 1e3,
             "contact_lag_periods": list(self.contact_lag),
             "fit_error_nrmse": self.fit_error,
             "fits": [
@@ -100,6 +138,7 @@ class InnerLoop:
                     "q": f.q,
                     "g": f.g,
                     "nrmse": f.nrmse,
+                    "static_gain": f.static_gain,
                 }
                 for f in self.fits
             ],
@@ -112,26 +151,58 @@ def excite(plant_name: str, stiffness_n_per_m: float) -> tuple[FloatArray, Float
     ``r``: the correction along task z the plant received, ``p``: the tool's task z (m), both
     relative to their means.
     """
-    exp = regulation_experiment(stiffness_n_per_m)
-    scn = exp.scenario
-    plant = make_plant(plant_name)
-    plant.reset(scn, seed=0)
-    depth = 10.0 / stiffness_n_per_m  # the set point's indentation
-    gap = float(scn.path[0].z) - (surface_height(exp) + scn.tool.radius_m)
     rng = np.random.default_rng(ID_SEED)
     # a level held for 1 to 8 periods: excites the whole band up to the Nyquist frequency
     holds = rng.integers(1, 9, WARM_UP + ID_PERIODS)
     signs = np.where(rng.integers(0, 2, len(holds)) > 0, 1.0, -1.0)
     level = np.repeat(signs, holds)[: WARM_UP + ID_PERIODS]
     level[:WARM_UP] = 0.0
-    r = gap + depth * (1.0 + 0.3 * level)
+    r, p = drive(plant_name, stiffness_n_per_m, 1.0 + 0.3 * level)
+    r, p = r[WARM_UP - 1 :], p[WARM_UP - 1 :]  # one settled period before the excitation
+    return r - np.mean(r), p - np.mean(p)
+
+
+def drive(
+    plant_name: str, stiffness_n_per_m: float, levels: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """``plant_name`` in the regulation task's contact, each period commanded to ``levels``
+    times the set point's indentation: ``(r, p)``, the correction along task z it received
+    and the tool's task z (m)."""
+    exp = regulation_experiment(stiffness_n_per_m)
+    scn = exp.scenario
+    plant = make_plant(plant_name)
+    plant.reset(scn, seed=0)
+    depth = 10.0 / stiffness_n_per_m  # the set point's indentation
+    gap = float(scn.path[0].z) - (surface_height(exp) + scn.tool.radius_m)
+    r = gap + depth * levels
     p = np.empty(len(r))
     rot = scn.rotation
     for k in range(len(r)):
         sample = plant.step(task_to_base(scn, np.array([0.0, 0.0, r[k]])), 0.0)
         p[k] = float((sample.tool_position @ rot)[2])
-    r, p = r[WARM_UP - 1 :], p[WARM_UP - 1 :]  # one settled period before the excitation
-    return r - np.mean(r), p - np.mean(p)
+    return r, p
+
+
+def press_gain(plant_name: str, stiffness_n_per_m: float) -> float:
+    """The tool's held indentation over the commanded one: commanded to 0.7 and then 1.3
+    times the set point's indentation, each held :data:`PRESS_HOLD` periods, the change of
+    the tool's mean position over the last :data:`PRESS_AVERAGE` periods of each level."""
+    levels = np.repeat([0.7, 1.3], PRESS_HOLD)
+    r, p = drive(plant_name, stiffness_n_per_m, levels)
+    low, high = slice(PRESS_HOLD - PRESS_AVERAGE, PRESS_HOLD), slice(-PRESS_AVERAGE, None)
+    return float((np.mean(p[high]) - np.mean(p[low])) / (np.mean(r[high]) - np.mean(r[low])))
+
+
+def series_stiffness(gains: dict[float, float]) -> float | None:
+    """The series stiffness ``k_s`` (N/m) that best explains the static gains ``{k: s}``
+    (least squares on ``1/s - 1 = k / k_s``), or None when the stiffest loses less than
+    :data:`SERIES_THRESHOLD` of the command."""
+    stiffest = max(gains)
+    if 1.0 - gains[stiffest] < SERIES_THRESHOLD:
+        return None
+    k = np.array(list(gains))
+    y = 1.0 / np.array(list(gains.values())) - 1.0
+    return float(np.dot(k, k) / np.dot(k, y))
 
 
 def simulate(r: FloatArray, a: float, q: float, g: float) -> FloatArray:
@@ -179,8 +250,15 @@ def fit(r: FloatArray, p: FloatArray, stiffness_n_per_m: float) -> InnerFit:
 
 @lru_cache(maxsize=4)
 def identify(plant_name: str) -> InnerLoop:
-    """Identify the inner loop of ``plant_name`` at :data:`ID_STIFFNESSES` (cached)."""
-    fits = tuple(fit(*excite(plant_name, k), k) for k in ID_STIFFNESSES)
+    """Identify the inner loop of ``plant_name`` at :data:`ID_STIFFNESSES` (cached): the
+    static press at each, the series stiffness from them, then the fits of the motion over
+    its series gain."""
+    statics = {k: press_gain(plant_name, k) for k in ID_STIFFNESSES}
+    ks = series_stiffness(statics)
+    fits = []
+    for k in ID_STIFFNESSES:
+        r, p = excite(plant_name, k)
+        fits.append(replace(fit(r, p / series_gain(ks, k), k), static_gain=statics[k]))
     err = max(f.nrmse for f in fits)
     a_lo = max(min(f.a for f in fits) - err, 0.0)
     a_hi = min(max(f.a for f in fits) + err, 1.0 - 1e-9)
@@ -189,7 +267,13 @@ def identify(plant_name: str) -> InnerLoop:
     g_lo = min(f.g for f in fits) * (1.0 - err)
     g_hi = max(f.g for f in fits) * (1.0 + err)
     return InnerLoop(
-        plant_name, fits, (a_lo, a_hi), (g_lo, g_hi), (q_lo, q_hi), contact_lag(plant_name)
+        plant_name,
+        tuple(fits),
+        (a_lo, a_hi),
+        (g_lo, g_hi),
+        (q_lo, q_hi),
+        contact_lag(plant_name),
+        ks,
     )
 
 

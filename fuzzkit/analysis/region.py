@@ -323,7 +323,7 @@ def axis_loop(
         phi=phi,
         phi_de=phi_de,
         inner_a=inner.a_range,
-        inner_g=inner.g_range,
+        inner_g=inner.g_at(stiffness_n_per_m),
         inner_q=inner.q_range,
         contact_lag=inner.contact_lag,
         sigma_min=sigma_min,
