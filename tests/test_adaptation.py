@@ -463,6 +463,7 @@ def test_generated_controller_freezes_its_estimate_off_contact_as_the_reference(
 # ------------------------------------------------------------- runs, sweeps, recordings, CLI
 
 
+@needs_cc
 def test_adaptive_controller_runs_and_reports_its_estimate(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -474,17 +475,21 @@ def test_adaptive_controller_runs_and_reports_its_estimate(
     args = ["simulate", "E1", "--controller", "adaptive-fuzzy-pi", "--stiffness", "20"]
     assert main([*args, "--json", "--rrd", str(rrd)]) == 0
     data = json.loads(capsys.readouterr().out)
-    assert data["loop"].startswith("python (fallback: the compiled loop does not run adaptation")
-    assert data["controller_impl"].startswith("spec adaptive_fuzzy_pi")
+    assert data["loop"] == "compiled"
+    assert data["controller_impl"].startswith(
+        "generated C controller (double) adaptive_fuzzy_pi_controller"
+    )
     k = data["stiffness_estimate_n_mm"]["z"]
     assert 1.0 <= k <= 2000.0 and k != 300.0  # it moved off the initial estimate
     assert data["gain_scale_final"]["z"] in (0.5, 0.2, 0.05, 0.02)
     # the recording carries the factor and the estimate over time
     dump = rrd_dump(rrd, "-vvv")
     assert "/adaptation/gain_scale/z" in dump and "/adaptation/stiffness/z" in dump
-    # the compiled loop does not model adaptation: asked for, it is refused (exit 2)
-    assert main([*args, "--loop", "compiled"]) == 2
-    assert "does not run adaptation" in capsys.readouterr().err
+    # the reference runs it only when asked for, and says so
+    assert main([*args, "--json", "--controller-impl", "reference"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["loop"] == "python"
+    assert data["controller_impl"].startswith("spec adaptive_fuzzy_pi: reference controller")
 
 
 def test_sweep_rows_name_the_adaptive_controller_and_its_estimate() -> None:
@@ -507,6 +512,7 @@ def test_the_example_is_the_kits_default_schedule() -> None:
     assert default_schedule(2).estimator.delay_periods == 3
 
 
+@needs_cc
 def test_tune_tunes_the_base_gains_under_the_schedule(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -518,11 +524,10 @@ def test_tune_tunes_the_base_gains_under_the_schedule(
     args = ["tune", "E1", "--controller", "adaptive-pi", "--plant", "planar", "--stiffness", "20"]
     assert main([*args, "--budget", "10", "--out", str(out), "--workers", "1", "--quiet"]) == 0
     assert "tuned pi on E1" in capsys.readouterr().out and out.is_file()
-    # an adaptive run is never handed to the compiled loop silently: it says where it ran
+    # an adaptive run executes its generated controller, and says where it ran
     run = run_spec(RunSpec("E1", "adaptive-pi", "planar", duration_s=0.2))
-    assert run.loop == (
-        "python (fallback: the compiled loop does not run adaptation (stiffness-scheduled))"
-    )
+    assert run.loop == "compiled"
+    assert run.controller_impl.startswith("generated C controller (double) adaptive_pi_controller")
 
 
 @pytest.mark.parametrize("seed", range(2))

@@ -4,7 +4,9 @@ generated C controller.
 :func:`run_compiled` takes the arguments of :func:`fuzzkit.loop.python_loop.run` that the
 compiled loop models; :func:`fuzzkit.loop.adapter.compiled_supports` says which plants have
 one. The controller is the run's controller spec generated as C (double) and called by address
-every period; the plant is reset in Python, then one compiled call runs every period.
+every period; the plant is reset in Python, then one compiled call runs every period. A spec
+that adapts its gains gets its gain factor and stiffness estimate per period from the same
+code (:mod:`fuzzkit.loop.compiled.adaptation_trace`).
 """
 
 from __future__ import annotations
@@ -73,4 +75,9 @@ def run_compiled(
             run_controller_spec(exp, controller, gains, rulebase)
         )
     ctrl = controller_args(exp, generated_controller, seed, faults, duration_s, latency)
-    return compiled(exp, plant, ctrl, seed)
+    result = compiled(exp, plant, ctrl, seed)
+    if generated_controller.spec.adaptation.mode != "none":
+        from fuzzkit.loop.compiled.adaptation_trace import record_adaptation
+
+        record_adaptation(generated_controller, result)
+    return result

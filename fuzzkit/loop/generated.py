@@ -21,7 +21,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fuzzkit.control.spec import ControllerSpec
-from fuzzkit.errors import ToolchainError
+from fuzzkit.errors import ConfigError, ToolchainError
 from fuzzkit.loop.compiled import period as P
 from fuzzkit.loop.compiled.generated_controller import (
     code_spec,
@@ -49,19 +49,55 @@ def open_step(spec: ControllerSpec, impl: str = "auto") -> tuple[StepFunction, s
         if impl == "c":
             raise
         return _python_step(spec, f"no C compiler: {exc}")
-    return _CStep(gen.step_function, gen.fresh_state()), gen.label
+    return _CStep(gen), gen.label
+
+
+def adaptation_of(step: StepFunction) -> tuple[FloatArray, FloatArray]:
+    """The gain factor and the stiffness estimate per task axis (N/mm) after the last call of
+    ``step``, an adapting spec's generated controller as :func:`open_step` opens it."""
+    read = getattr(step, "adaptation", None)
+    if read is None:
+        raise ConfigError("this step function does not report its adaptation")
+    factor, k = read()
+    return np.asarray(factor, dtype=np.float64), np.asarray(k, dtype=np.float64)
 
 
 class _CStep:
-    """``NAME_controller_step`` on a state of its own (a ``NAME_controller_t`` as doubles)."""
+    """``NAME_controller_step`` on a state of its own (a ``NAME_controller_t`` as doubles), and
+    ``NAME_controller_adaptation`` of that state where the spec adapts its gains."""
 
-    def __init__(self, fn: Any, state: FloatArray) -> None:
-        self.fn, self.state = fn, state
+    def __init__(self, gen: Any) -> None:
+        self.fn, self.state = gen.step_function, gen.fresh_state()
+        self.read = gen.library.adaptation_function
         self.ptr = ctypes.POINTER(ctypes.c_double)
+        self._factor, self._k = np.zeros(3), np.zeros(3)
 
     def __call__(self, force: FloatArray, rotation: FloatArray, out: FloatArray) -> int:
         f, r, o = (a.ctypes.data_as(self.ptr) for a in (force, rotation, out))
         return int(self.fn(self.state.ctypes.data, f, r, o))
+
+    def adaptation(self) -> tuple[FloatArray, FloatArray]:
+        """The gain factor and stiffness estimate per axis after the last step."""
+        f, k = (a.ctypes.data_as(self.ptr) for a in (self._factor, self._k))
+        self.read(self.state.ctypes.data, f, k, None)
+        return self._factor.copy(), self._k.copy()
+
+
+class _PythonStep:
+    """The generated Python controller's ``step`` (and ``adaptation``) as a step function."""
+
+    def __init__(self, ctl: Any) -> None:
+        self.ctl = ctl
+
+    def __call__(self, force: FloatArray, rotation: FloatArray, out: FloatArray) -> int:
+        u, status = self.ctl.step(force.tolist(), rotation.tolist())
+        out[:] = u
+        return int(status)
+
+    def adaptation(self) -> tuple[list[float], list[float]]:
+        """The gain factor and stiffness estimate per axis after the last step."""
+        factor, k, _ = self.ctl.adaptation()
+        return factor, k
 
 
 def _python_step(spec: ControllerSpec, why: str) -> tuple[StepFunction, str]:
@@ -71,13 +107,7 @@ def _python_step(spec: ControllerSpec, why: str) -> tuple[StepFunction, str]:
     ctl = open_generated(code, "python")
     if code is not spec:
         ctl.set_params(params_of(spec))
-
-    def step(force: FloatArray, rotation: FloatArray, out: FloatArray) -> int:
-        u, status = ctl.step(force.tolist(), rotation.tolist())
-        out[:] = u
-        return int(status)
-
-    return step, f"generated Python controller {spec.name}_controller ({why})"
+    return _PythonStep(ctl), f"generated Python controller {spec.name}_controller ({why})"
 
 
 def run_controller(
@@ -138,6 +168,16 @@ class GeneratedLoopController:
         self.selection = np.array([1.0 if s else 0.0 for s in spec.selection])
         self.setpoints = np.asarray(spec.setpoints, dtype=np.float64)
         self.cs, self.cv = P.controller_state(self.cp)
+        #: the spec adapts its gains: the gain factor and the stiffness estimate (N/mm) per
+        #: axis after each step, read from the generated code
+        self.adaptive = spec.adaptation.mode != "none"
+        if self.adaptive and getattr(self._step, "adaptation", None) is None:
+            raise ConfigError(
+                f"spec {spec.name!r} adapts its gains, and this step function does not report "
+                "its gain factor and stiffness estimate"
+            )
+        self.gain_scale = np.ones(3)
+        self.stiffness_n_mm = np.full(3, math.nan)
         self._sample = np.zeros(3)
         self._rotation = np.zeros(9)
         self._out = np.zeros(3)
@@ -152,6 +192,8 @@ class GeneratedLoopController:
         else:
             self._rotation[:] = np.asarray(rotation, dtype=np.float64).reshape(9)
         self.status = self._step(self._sample, self._rotation, self._out)
+        if self.adaptive:
+            self.gain_scale, self.stiffness_n_mm = adaptation_of(self._step)
         t_s = self.cs[P.CS_CTRL_T] + self.cp[P.C_PERIOD]  # the controller's clock
         loop_bookkeeping(
             self.cs,

@@ -37,7 +37,9 @@ class LoopController(Protocol):
     controller (:class:`fuzzkit.loop.generated.GeneratedLoopController`). After each
     call the loop reads ``status``, ``engaged``, ``tripped``, ``faults``, ``trip_time_s``,
     ``setpoints``, ``e``, ``de``, ``du`` and ``controllers`` (the reference's axis
-    controllers, which may adapt; none for generated code)."""
+    controllers, which may adapt; none for generated code), and where the controller adapts
+    (reference axis controllers with ``adapt``, or a generated controller's ``adaptive``)
+    ``gain_scale`` and ``stiffness_n_mm``."""
 
     def step(self, force: Vec | None, rotation: Vec | None = None) -> Vec: ...
 
@@ -142,7 +144,9 @@ def run(
         (sample.force.copy(), _rotation(scn, sample)) for _ in range(sensor_delay)
     )
     command_queue: deque[Vec] = deque(np.zeros(3) for _ in range(command_delay))
-    adaptive = any(getattr(c, "adapt", None) is not None for c in ctrl.controllers)
+    adaptive = getattr(ctrl, "adaptive", False) or any(
+        getattr(c, "adapt", None) is not None for c in ctrl.controllers
+    )
     scales: list[Vec] = []
     estimates: list[Vec] = []
     wall0 = time.perf_counter()

@@ -41,8 +41,9 @@ def run_loop(
     its adapter has one, else in the Python loop (MuJoCo; a scenario the kernels lack, a run
     without a compiler: ``loop`` is then ``python (fallback: ...)``); ``controller_impl`` names
     the code (``controller_impl="python"``: the generated Python, in the Python loop). The
-    reference controller runs only when asked for (``controller_impl="reference"``), and for a
-    spec that adapts its gains (``loop`` and ``controller_impl`` say so).
+    reference controller runs only when asked for (``controller_impl="reference"``). A spec
+    that adapts its gains runs its generated code too, with the code's gain factor and
+    stiffness estimate recorded per period.
 
     ``step``: a step function and its label that take the generated controller's steps in
     place of the code opened in this process (the ROS 2 closed loop: the controller node, over
@@ -158,21 +159,9 @@ def _run_generated_python_loop(
 ) -> RunResult:
     """``spec`` with the run's generated controller (C, or the generated Python: asked for,
     or without a compiler) in the Python loop; ``loop`` says so, with ``fallback`` (why the
-    compiled loop could not take it). A spec that adapts its gains still runs the reference
-    there, and ``loop`` says so: the Python loop does not yet record the generated
-    controller's stiffness estimate and gain factor."""
+    compiled loop could not take it)."""
     from fuzzkit.loop.generated import run_controller
 
-    cs = exp.controller_spec
-    if cs is not None and cs.adaptation.mode != "none":
-        if spec.controller_impl != "auto":
-            raise ConfigError(
-                f"a spec that adapts its gains ({cs.adaptation.mode}) runs on the reference "
-                f"controller only; use --controller-impl reference (or auto), not "
-                f"{spec.controller_impl}"
-            )
-        why = " (an adapting spec runs on the reference controller in the Python loop)"
-        return _run_reference(spec, exp, plant, faults, fallback or why)
     ctrl = run_controller(
         exp, spec.controller, dict(spec.gains), spec.rulebase, spec.seed, faults, spec.latency,
         spec.controller_impl, step,
@@ -278,8 +267,8 @@ def _run_generated(spec: RunSpec, exp: Experiment, plant: Any, faults: Any) -> R
     Raises
     ------
     _Fallback
-        The compiled loop cannot run it (adaptation, a plant mode the kernel lacks, no C
-        compiler); the caller decides whether the Python loop may.
+        The compiled loop cannot run it (a plant mode the kernel lacks, no C compiler); the
+        caller decides whether the Python loop may.
     """
     from fuzzkit.errors import ToolchainError
     from fuzzkit.loop.compiled.generated_controller import (
@@ -288,9 +277,6 @@ def _run_generated(spec: RunSpec, exp: Experiment, plant: Any, faults: Any) -> R
     )
     from fuzzkit.loop.compiled_loop import run_compiled
 
-    cs = exp.controller_spec
-    if cs is not None and cs.adaptation.mode != "none":
-        raise _Fallback(f"the compiled loop does not run adaptation ({cs.adaptation.mode})")
     ctl_spec = run_controller_spec(exp, spec.controller, dict(spec.gains), spec.rulebase)
     try:
         generated = load_generated_controller(ctl_spec)

@@ -92,6 +92,15 @@ class CompiledController:
         self.set_params_function: Any = getattr(self.library, f"{module}_set_params")
         self.set_params_function.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
         self.set_params_function.restype = ctypes.c_int
+        #: ``void NAME_controller_adaptation(const state *, T factor[3], T k[3], int band[3])``
+        #: (None: the spec does not adapt its gains)
+        self.adaptation_function: Any = None
+        if hasattr(self.library, f"{module}_adaptation"):
+            self.adaptation_function = getattr(self.library, f"{module}_adaptation")
+            self.adaptation_function.argtypes = [
+                ctypes.c_void_p, ptr, ptr, ctypes.POINTER(ctypes.c_int)
+            ]  # fmt: skip
+            self.adaptation_function.restype = None
         self._run = self.library.fuzzkit_controller_run
         self._run.argtypes = [
             ctypes.c_void_p,
@@ -137,6 +146,22 @@ class CompiledController:
             rot = self._rot
         status = int(self.step_function(self.state, self._in, rot, self._out))
         return [float(v) for v in self._out], status
+
+    def adaptation(self, state: Any = None) -> tuple[list[float], list[float], list[int]]:
+        """``NAME_controller_adaptation`` of ``state`` (default: this controller's): the gain
+        factor, the stiffness estimate (N/mm) and the band per task axis.
+
+        Raises
+        ------
+        ValueError
+            The spec does not adapt its gains (the code has no such function).
+        """
+        if self.adaptation_function is None:
+            raise ValueError("this generated controller does not adapt its gains")
+        ctype = _CTYPE[self.number_type]
+        factor, k, band = (ctype * 3)(), (ctype * 3)(), (ctypes.c_int * 3)()
+        self.adaptation_function(self.state if state is None else state, factor, k, band)
+        return [float(v) for v in factor], [float(v) for v in k], [int(v) for v in band]
 
     def run(
         self, forces: npt.ArrayLike, rotations: npt.ArrayLike | None = None

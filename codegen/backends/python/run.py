@@ -47,6 +47,20 @@ class ImportedController:
         out, status = self.controller.step(force_n, tool_rotation)
         return list(out), int(status)
 
+    def adaptation(self) -> tuple[list[float], list[float], list[int]]:
+        """``Controller.adaptation``: the gain factor, the stiffness estimate (N/mm) and the
+        band per task axis, as the C runner's.
+
+        Raises
+        ------
+        ValueError
+            The spec does not adapt its gains.
+        """
+        if not hasattr(self.controller, "adaptation"):
+            raise ValueError("this generated controller does not adapt its gains")
+        factor, k, band = self.controller.adaptation()
+        return list(factor), list(k), list(band)
+
     def run(
         self, forces: npt.ArrayLike, rotations: npt.ArrayLike | None = None
     ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]:
