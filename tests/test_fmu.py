@@ -26,6 +26,8 @@ SPEC_GRAVITY = REPO / "docs" / "examples" / "controller.yaml"
 SPEC_PLAIN = REPO / "docs" / "examples" / "controller_tilt_tare_only.yaml"
 #: incremental PI with gravity compensation
 SPEC_PI = REPO / "docs" / "examples" / "controller_pi.yaml"
+#: fuzzy-PI on the interval type-2 rule base (its surface the IT2 engine's table), front end
+SPEC_IT2 = REPO / "docs" / "examples" / "controller_it2.yaml"
 
 pytestmark = needs_cc
 
@@ -72,7 +74,8 @@ def _simulate(
 
 
 @pytest.mark.parametrize(
-    ("spec_path", "gravity"), [(SPEC_GRAVITY, True), (SPEC_PLAIN, False), (SPEC_PI, True)]
+    ("spec_path", "gravity"),
+    [(SPEC_GRAVITY, True), (SPEC_PLAIN, False), (SPEC_PI, True), (SPEC_IT2, True)],
 )
 def test_fmu_validates_and_equals_replay_on_a_hostile_log(
     spec_path: Path, gravity: bool, tmp_path: Path, capsys: pytest.CaptureFixture[str]

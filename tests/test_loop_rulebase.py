@@ -106,8 +106,11 @@ def test_names_and_order_are_free_but_the_count_is_not() -> None:
     )
     assert loop_problems(renamed) == []
     one = dataclasses.replace(rb, inputs=rb.inputs[:1])
-    with pytest.raises(ConfigError, match=r"exactly two inputs are needed .*got e \[-1, 1\]\n"):
+    with pytest.raises(
+        ConfigError, match=r"exactly two inputs are needed .*got e \[-1, 1\]\n"
+    ) as err:
         check_loop_rulebase(one, "one.yaml")
+    assert "rescale" not in str(err.value)  # its universe is already the loop's
     two_out = dataclasses.replace(rb, outputs=rb.outputs * 2)
     with pytest.raises(ConfigError, match=r"exactly one output is needed, got du"):
         check_loop_rulebase(two_out, "two.yaml")

@@ -21,7 +21,6 @@ from typing import TYPE_CHECKING
 
 from fuzzkit.errors import ConfigError
 from fuzzkit.fuzzy.model import RuleBase, Variable
-from fuzzkit.fuzzy.type2_model import footprint_of
 
 if TYPE_CHECKING:
     from fuzzkit.control.controllers import Surface
@@ -38,20 +37,13 @@ _EPS = 1e-9
 def loop_problems(rb: RuleBase) -> list[str]:
     """What keeps ``rb`` from running as the fuzzy-PI's surface (empty when it can)."""
     problems: list[str] = []
-    if footprint_of(rb) is not None:
-        # the generated controllers (exact method) and the compiled loop are type-1 only
-        problems.append(
-            "an interval type-2 rule base does not run in the closed loop yet (docs/type2.md, "
-            "In the closed loop); "
-            "evaluate it, plot it or compile it as a table"
-        )
     if len(rb.inputs) != 2:
         problems.append(
             f"exactly two inputs are needed (the scaled error and its change), got "
             f"{_listing(rb.inputs)}"
         )
     for role, var in zip(("Ki*e", "Kp*de"), rb.inputs, strict=False):
-        if abs(var.low - INPUT_RANGE[0]) > _EPS or abs(var.high - INPUT_RANGE[1]) > _EPS:
+        if _input_off_scale(var):
             problems.append(
                 f"input {var.name} must be on [-1, 1] (the controller clips {role} to it), "
                 f"got {_range(var)}"
@@ -60,7 +52,7 @@ def loop_problems(rb: RuleBase) -> list[str]:
         problems.append(f"exactly one output is needed, got {_listing(rb.outputs)}")
     else:
         out = rb.outputs[0]
-        if not (out.low <= 0.0 <= out.high) or max(-out.low, out.high) > OUTPUT_SCALE_LIMIT + _EPS:
+        if _output_off_scale(out):
             problems.append(
                 f"output {out.name} is a normalised correction (scaled by Kx): its range must "
                 f"contain 0 and lie within [-{OUTPUT_SCALE_LIMIT:g}, {OUTPUT_SCALE_LIMIT:g}], "
@@ -88,10 +80,31 @@ def check_loop_rulebase(rb: RuleBase, spec: str | os.PathLike[str] | None = None
         "  the loop needs two inputs (the error, then its change, unless a spec's inputs: "
         "maps them), each on [-1, 1], and one output within "
         f"[-{OUTPUT_SCALE_LIMIT:g}, {OUTPUT_SCALE_LIMIT:g}] (the controller feeds it Ki*e and "
-        "Kp*de clipped to [-1, 1] and multiplies its output by Kx)\n"
-        "  fix: rescale each universe to [-1, 1] (divide every term's "
-        "points by the range's half width); the gains Ki, Kp, Kx then carry the physical "
-        "scale (see docs/simulation.md, 'Your own rule base in the loop')"
+        "Kp*de clipped to [-1, 1] and multiplies its output by Kx)"
+        + (_RESCALE if _off_scale(rb) else "")
+    )
+
+
+_RESCALE = (
+    "\n  fix: rescale each universe to [-1, 1] (divide every term's points by the range's half "
+    "width); the gains Ki, Kp, Kx then carry the physical scale (see docs/simulation.md, 'Your "
+    "own rule base in the loop')"
+)
+
+
+def _input_off_scale(var: Variable) -> bool:
+    return abs(var.low - INPUT_RANGE[0]) > _EPS or abs(var.high - INPUT_RANGE[1]) > _EPS
+
+
+def _output_off_scale(out: Variable) -> bool:
+    return not (out.low <= 0.0 <= out.high) or max(-out.low, out.high) > OUTPUT_SCALE_LIMIT + _EPS
+
+
+def _off_scale(rb: RuleBase) -> bool:
+    """Whether some universe of ``rb`` is on another scale than the loop's (the advice to
+    rescale applies only then)."""
+    return any(_input_off_scale(v) for v in rb.inputs[:2]) or any(
+        _output_off_scale(v) for v in rb.outputs[:1]
     )
 
 

@@ -1,0 +1,171 @@
+"""An interval type-2 rule base in the closed loop (issue 43 item 1), through the command line.
+
+A controller spec naming ``macvicar_whelan_it2`` (``docs/examples/controller_it2.yaml``, its
+surface the generated table of the exact IT2 engine) simulates on every plant through its
+generated controller, replays through the generated C to 0 m with identical status bits,
+sweeps, tunes and exports as an FMU (``tests/test_fmu.py``). The loop's corrections follow the
+IT2 engine (an independent computation) within the table's certified bound, and not the
+type-1 surface. ``make test`` runs a covering set of plant x implementation x fault x latency;
+``make verify`` the whole product.
+"""
+
+from __future__ import annotations
+
+import csv
+import itertools
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from _codegen_util import needs_cc
+from _pairwise import pairwise
+from _replay_logs import replayed_difference, reproduces, run_cli
+
+from fuzzkit.codegen.controller import surface_table
+from fuzzkit.control.spec import IT2_TABLE
+from fuzzkit.formats.registry import load
+from fuzzkit.fuzzy.inference import Engine
+
+REPO = Path(__file__).resolve().parent.parent
+SPEC = REPO / "docs" / "examples" / "controller_it2.yaml"
+TYPE1_SPEC = REPO / "docs" / "examples" / "controller.yaml"
+
+pytestmark = needs_cc
+
+AXES = (
+    ("planar", "arm6", "mujoco", "mujoco-elastic"),
+    ("c", "python"),
+    ("none", "spike"),
+    ("1:1", "2:3"),
+)
+COVERING = pairwise(AXES)
+FULL = [r for r in itertools.product(*AXES) if r not in COVERING]
+
+
+def _ok(capsys: pytest.CaptureFixture[str], *argv: str) -> str:
+    code, out, err = run_cli(capsys, *argv)
+    assert code == 0, f"fuzzkit {' '.join(argv)}: exit {code}\n{out}\n{err}"
+    return out
+
+
+def _columns(path: Path, *names: str) -> list[np.ndarray]:
+    with path.open(encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    return [np.array([float(r[n]) for r in rows]) for n in names]
+
+
+def _run_and_replay(
+    plant: str,
+    impl: str,
+    fault: str,
+    latency: str,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    run_csv = tmp_path / "run.csv"
+    out = _ok(
+        capsys, "simulate", "E1", "--spec", str(SPEC), "--plant", plant, "--controller-impl",
+        impl, "--fault", fault, "--latency", latency, "--csv", str(run_csv), "--json",
+    )  # fmt: skip
+    run = json.loads(out[out.index("{") :])
+    assert run["plant"] == plant and not run["tripped"]
+    want = "generated C controller" if impl == "c" else "generated Python controller"
+    assert want in run["controller_impl"]
+    assert run["axes"]["z"]["peak_force_true"] > 5.0  # it pressed
+    (uz,) = _columns(run_csv, "uz_m")
+    assert np.abs(uz).max() > 1e-4
+    if impl == "c":  # the same code on the same samples: bit for bit
+        assert replayed_difference(capsys, SPEC, run_csv, "c") == 0.0
+    assert reproduces(capsys, SPEC, run_csv, "c")  # status bits equal in every row
+
+
+@pytest.mark.parametrize(("plant", "impl", "fault", "latency"), COVERING)
+def test_an_it2_spec_runs_on_every_plant_and_replays(
+    plant: str, impl: str, fault: str, latency: str, tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:  # fmt: skip
+    _run_and_replay(plant, impl, fault, latency, tmp_path, capsys)
+
+
+@pytest.mark.verify
+@pytest.mark.parametrize(("plant", "impl", "fault", "latency"), FULL)
+def test_an_it2_spec_runs_on_every_plant_and_replays_full(
+    plant: str, impl: str, fault: str, latency: str, tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:  # fmt: skip
+    _run_and_replay(plant, impl, fault, latency, tmp_path, capsys)
+
+
+def test_the_loop_evaluates_the_it2_surface(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # the reference controller (Python loop) records the e, de its surface read: its
+    # corrections are the IT2 engine's within the shipped table's certified bound, and
+    # visibly not the type-1 surface's; the same run replays through the generated C
+    run_csv = tmp_path / "ref.csv"
+    _ok(capsys, "simulate", "E1", "--spec", str(SPEC), "--controller-impl", "reference",
+        "--csv", str(run_csv))  # fmt: skip
+    e, de, du, bits = _columns(run_csv, "ez_n", "dez_n", "duz_m", "status_bits")
+    status = bits.astype(np.int64)
+    stepped = (status & 1 > 0) & (status & (2 | 4 | 16) == 0)  # engaged, not held/tripped/clamped
+    assert stepped.sum() > 500
+    x, y = np.clip(0.05 * e[stepped], -1, 1), np.clip(0.2 * de[stepped], -1, 1)
+    it2 = load("macvicar_whelan_it2")
+    bound = surface_table(it2, None, IT2_TABLE.resolution).bound[0]
+    off_it2 = np.abs(du[stepped] / 2e-4 - Engine(it2).evaluate({"e": x, "de": y})["du"])
+    type1 = Engine(load("macvicar_whelan")).evaluate({"e": x, "de": y})["du"]
+    assert off_it2.max() <= bound
+    assert np.abs(du[stepped] / 2e-4 - type1).max() > 3 * bound
+    assert reproduces(capsys, SPEC, run_csv, "c")
+
+
+def test_simulate_with_an_it2_rule_base_runs_its_table(capsys: pytest.CaptureFixture[str]) -> None:
+    runs = {}
+    for rb in ("macvicar_whelan_it2", "macvicar_whelan"):
+        out = _ok(capsys, "simulate", "E1", "--rulebase", rb, "--plant", "arm6", "--json")
+        runs[rb] = json.loads(out[out.index("{") :])
+    it2 = runs["macvicar_whelan_it2"]
+    assert "generated C controller" in it2["controller_impl"] and not it2["tripped"]
+    # another controller than the type-1 one on the same task
+    assert (
+        it2["axes"]["z"]["overshoot_pct"] != runs["macvicar_whelan"]["axes"]["z"]["overshoot_pct"]
+    )
+
+
+def test_an_it2_spec_sweeps_and_tunes(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    runs = tmp_path / "runs.csv"
+    _ok(capsys, "sweep", "E1", "--spec", str(SPEC), "--stiffness", "5,50", "--plant", "arm6",
+        "--workers", "1", "--quiet", "--out", str(runs))  # fmt: skip
+    with runs.open(encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [r["stiffness_n_per_mm"] for r in rows] == ["5.0", "50.0"]
+    assert {r["rulebase"] for r in rows} == {"macvicar_whelan_it2"}
+    assert all("generated C controller" in r["controller_impl"] for r in rows)
+    tuned = tmp_path / "tuned.yaml"
+    _ok(capsys, "tune", "E1", "--spec", str(SPEC), "--plant", "planar", "--budget", "10",
+        "--workers", "1", "--quiet", "--out", str(tmp_path / "g.yaml"), "--spec-out",
+        str(tuned))  # fmt: skip
+    text = tuned.read_text(encoding="utf-8")
+    assert "rulebase: macvicar_whelan_it2" in text
+    assert f"surface: {{method: table, resolution: {IT2_TABLE.resolution}}}" in text
+    out = _ok(capsys, "simulate", "E1", "--spec", str(tuned), "--json")
+    assert not json.loads(out[out.index("{") :])["tripped"]
+
+
+def test_an_exact_surface_for_an_it2_rule_base_is_refused_with_the_fix(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text = SPEC.read_text(encoding="utf-8")
+    exact = tmp_path / "exact_it2.yaml"
+    exact.write_text(
+        "".join(ln for ln in text.splitlines(keepends=True) if not ln.startswith("surface:")),
+        encoding="utf-8",
+    )
+    for argv in (("validate", str(exact)), ("simulate", "E1", "--spec", str(exact), "--csv",
+                                              str(tmp_path / "never.csv"))):  # fmt: skip
+        code, _, err = run_cli(capsys, *argv)
+        assert code == 2 and "Traceback" not in err
+        assert f"{exact}:" in err and "interval type-2" in err
+        assert "surface: {method: table, resolution: 65}" in err
+    assert not (tmp_path / "never.csv").exists()
