@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from fuzzkit.codegen.emit import FpiDefaults, emit
-from fuzzkit.codegen.exact import emit_exact, unsupported_reason
+from fuzzkit.codegen.exact import DISCONTINUOUS, emit_exact, unsupported_reason
 from fuzzkit.codegen.lookup_table import (
     DEFAULT_MAX_POINTS,
     DEFAULT_TOLERANCE,
@@ -32,8 +32,7 @@ from fuzzkit.fuzzy.type2_model import Type2RuleBase
 METHODS = ("auto", "table", "exact")
 #: Size budget of ``auto`` for a table's constant data (a small microcontroller's share).
 DEFAULT_MAX_BYTES = 8192
-#: Defuzzifiers whose surface jumps: no table is made for them silently.
-DISCONTINUOUS = frozenset({"mean_of_maximum", "smallest_of_maximum", "largest_of_maximum"})
+#: Defuzzifiers whose surface jumps (``exact.DISCONTINUOUS``): no table is made for them silently.
 _VALUE_BYTES = {"float": 4, "double": 8, "q15": 2}
 
 

@@ -324,8 +324,7 @@ def compare_exact(
     nearly flat or nearly tied maxima, e.g. under probabilistic-sum aggregation, jump more
     often).
     """
-    from fuzzkit.codegen.exact import rounding_allowance
-    from fuzzkit.codegen.method import DISCONTINUOUS
+    from fuzzkit.codegen.exact import DISCONTINUOUS, rounding_allowance
 
     allowance = rounding_allowance(rb, number_type)
     nan_got = np.isnan(got)

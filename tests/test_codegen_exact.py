@@ -24,7 +24,7 @@ from _random_rulebases import edged_rulebase, random_rulebase
 from _sugeno_reference import sugeno_pi_by_hand
 
 from fuzzkit.codegen.emit import emit
-from fuzzkit.codegen.exact import ROUNDING_BOUND, emit_exact, unsupported_reason
+from fuzzkit.codegen.exact import ROUNDING_BOUND, emit_exact, not_yet, unsupported_reason
 from fuzzkit.codegen.method import compile_rulebase
 from fuzzkit.codegen.table_search import make_table
 from fuzzkit.codegen.toolchain import SANITIZE_FLAGS, STRICT_FLAGS, CompiledTable, run_compiler
@@ -99,6 +99,12 @@ def test_shipped_rule_bases_in_c_match_the_engine_to_rounding(name: str, number_
 def test_random_family_in_c_matches_the_engine_to_rounding(seed: int) -> None:
     for rb in random_family(seed, 12):
         for number_type in ("double", "float"):
+            if not_yet(rb, rb.outputs[0], number_type) is not None:  # refused, by its class
+                assert number_type == "float", rb
+                assert "maxima of a probabilistic sum in float" in str(
+                    unsupported_reason(rb, "float")
+                )
+                continue
             result = verify_exact_c(rb, number_type, emit_exact(rb, "c", number_type), n=3000)
             assert result.nan_mismatches == 0, (rb, result.describe())
             assert all(e <= a for e, a in zip(result.max_error, result.allowance, strict=True)), (
@@ -376,12 +382,12 @@ def test_auto_takes_the_exact_method_when_no_table_fits_the_budget() -> None:
                 "outputs": (Variable("du", -1, 1, (Term("g", "gaussian", (0.0, 0.3)),)),),
                 "operators": Operators("min", "max", "min", "bounded_sum"),
             },
-            r"piecewise-linear output terms .* Gaussian ones under max aggregation "
-            r"\(here bounded_sum\)",
+            r"term 'g' is a gaussian \(bounded_sum aggregation\): .* Gaussian output terms in "
+            r"closed form under max aggregation only",
         ),
         (
             {"outputs": (Variable("du", -1, 1, (Term("b", "bell", (0.3, 2.0, 0.0)),)),)},
-            "term 'b' is a bell",
+            r"term 'b' is a bell \(max aggregation\): .* need a quadrature with a proven",
         ),
     ],
 )
