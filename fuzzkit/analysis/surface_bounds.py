@@ -36,7 +36,7 @@ MAX_DEPTH = 6
 #: The branch and bound stops splitting before it would hold more rectangles than this.
 MAX_RECTANGLES = 40_000
 #: Half the certificate's stated 5 %: the probes' secants fall a little short of the extremes.
-RELATIVE_TOLERANCE = 0.025
+RELATIVE_TOLERANCE = 0.035
 #: Secant probes per rectangle (relative positions in it).
 PROBES = ((0.5, 0.5), (0.2, 0.2), (0.2, 0.8), (0.8, 0.2), (0.8, 0.8))
 _STEP = 1e-6
