@@ -20,7 +20,11 @@ included (the hull of the one-sided slopes: Clarke's generalised gradient). The 
      terms' kinks and peaks, on which each ``C_t`` is monotone: per bin ``dmu/dL_t`` lies in
      ``[0 or its certain value, 0 or its possible value]``, and ``y - F`` in
      ``[y0 - F_hi, y1 - F_lo]``. ``D`` and ``N`` are bounded the same way from ``mu`` between
-     its values at the lowest and highest levels.
+     its values at the lowest and highest levels. On the bins where a bounded sum with
+     product implication is surely below 1, ``mu = sum_t L_t C_t`` is linear in the levels:
+     there ``N`` and ``D`` take ``sum_t L_t`` times the term's own integrals (closed form, each
+     term being linear on each bin) and ``dF/dL_t`` their part ``n_t - F d_t`` exactly, with no
+     bin-width term.
    * *weighted average* (a Mamdani output's term centres, or Sugeno constant or linear
      terms): ``F = sum w z / sum w``, ``dF = (sum dw (z - F) + sum w dz) / sum w``, and ``F`` in
      the hull of the ``z`` (a convex combination).
@@ -334,6 +338,38 @@ class Enclosure:
             parts.append(cast(Interval, self._centroid(sub, sl, order[sl]).dfdl))
         return _concat(parts)
 
+    @cached_property
+    def _term_integrals(self) -> tuple[Interval, Interval]:
+        """Per output term and bin, (T, B): ``int C_t dy`` and ``int y C_t dy`` (each term is
+        linear on each bin: the bins are cut at its kinks)."""
+        y0, y1, _ = self._bins
+        h = Interval.point(y1 - y0)
+        a, b = Interval.point(y0), Interval.point(y1)
+        half, sixth = (
+            Interval.point(np.full_like(y0, 0.5)),
+            Interval(down(np.full_like(y0, 1 / 6)), up(np.full_like(y0, 1 / 6))),
+        )
+        ic, iyc = [], []
+        for t in self.out.terms:
+            c0, c1 = value_bounds(t, y0, y0), value_bounds(t, y1, y1)
+            ic.append(h * (c0 + c1) * half)
+            iyc.append(h * (a * (c0 + c0 + c1) + b * (c0 + c1 + c1)) * sixth)
+        return (
+            Interval(np.array([v.lo for v in ic]), np.array([v.hi for v in ic])),
+            Interval(np.array([v.lo for v in iyc]), np.array([v.hi for v in iyc])),
+        )
+
+    def _linear_parts(self, lin: BoolArray) -> tuple[Interval, Interval]:
+        """Per rectangle and term, (n, T): the sums of :attr:`_term_integrals` over the bins
+        ``lin`` (n, B) marks."""
+        ic, iyc = self._term_integrals
+        m = lin.astype(np.float64)
+        out = []
+        for iv in (ic, iyc):
+            err = lin.shape[1] * EPS * (m @ np.maximum(np.abs(iv.lo), np.abs(iv.hi)).T)
+            out.append(Interval(down(m @ iv.lo.T - err), up(m @ iv.hi.T + err)))
+        return out[0], out[1]
+
     def _centroid(
         self,
         firing: list[tuple[Interval, Interval, Interval]],
@@ -367,11 +403,21 @@ class Enclosure:
                 sure = sure & (c_lo > l_hi)
                 if order is not None:
                     can, sure = _ordered(can, sure, order, level, c, p_lo, p_hi)
+        # bins where a bounded sum of scaled terms is surely below 1: there mu is linear in the
+        # levels, so their part of N and D is sum_t L_t * (the term's own integrals), exactly
+        lin = certain if (summed and not clip) else np.zeros(mu.lo.shape, dtype=bool)
+        mu_s = Interval(np.where(lin, 0.0, mu.lo), np.where(lin, 0.0, mu.hi))
         hb = np.broadcast_to(h, mu.lo.shape)
-        d = sum_outward(down(mu.lo * hb), up(mu.hi * hb), axis=1)
+        d = sum_outward(down(mu_s.lo * hb), up(mu_s.hi * hb), axis=1)
+        d_lin, n_lin = self._linear_parts(lin)
+        d = d + dot(level, d_lin)
         bad = ~(d.lo > 0.0)
         d = Interval(np.where(bad, 1.0, d.lo), np.where(bad, 1.0, d.hi))
         f = _centroid_range(mu, y0, y1, h)
+        if np.any(lin):
+            ym = Interval(np.broadcast_to(y0, hb.shape), np.broadcast_to(y1, hb.shape)) * mu_s
+            n_s = sum_outward(down(ym.lo * hb), up(ym.hi * hb), axis=1)
+            f = f.intersect((n_s + dot(level, n_lin)).divide_positive(d))
         f = Interval(np.maximum(f.lo, self.out.low), np.minimum(f.hi, self.out.high))
         # dmu/dL_t per bin: [certain value or 0, possible value or 0]
         if clip:
@@ -379,6 +425,7 @@ class Enclosure:
         else:
             k_lo = np.where(sure, c_lo, 0.0)
             k_hi = np.where(can, c_hi, 0.0)
+        k_lo, k_hi = np.where(lin[:, None, :], 0.0, k_lo), np.where(lin[:, None, :], 0.0, k_hi)
         f3 = f.lo[:, None, None], f.hi[:, None, None]
         # y - F over the bin; where dmu/dL is exactly 1 on the whole bin (a sure clip), the
         # integral of y over the bin is exact: h * (y0 + y1) / 2
@@ -389,6 +436,8 @@ class Enclosure:
         prod = Interval(r_lo, r_hi) * Interval(k_lo, k_hi)
         hb3 = np.broadcast_to(h, prod.lo.shape)
         num = sum_outward(down(prod.lo * hb3), up(prod.hi * hb3), axis=2)  # (n, T)
+        # the linear bins: dN/dL_t - F dD/dL_t = n_t - F d_t
+        num = num + (n_lin - Interval(f.lo[:, None], f.hi[:, None]) * d_lin)
         dfdl = num.divide_positive(Interval(d.lo[:, None], d.hi[:, None]))
         gx = dot(dfdl, lgx)
         gy = dot(dfdl, lgy)

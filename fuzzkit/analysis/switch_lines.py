@@ -19,7 +19,9 @@ side of it: the levels' slopes and order there are those at one point strictly i
 side. On each side ``dF/dL_t`` is enclosed again knowing that order
 (:meth:`fuzzkit.analysis.surface_enclosure.Enclosure.ordered_dfdl`); the slope enclosure is
 the hull of ``sum_t dF/dL_t * dL_t`` over the two sides, intersected with the independent one.
-Rectangles with two or more distinct switch lines keep the independent enclosure.
+Where two or more distinct lines cross the rectangle and all pass through one point (the
+origin, or where both inputs sit between two terms at 1/2), the same is done on each sector
+around that point (:func:`_sectors`); other rectangles keep the independent enclosure.
 
 A corner value within :data:`ON_CORNER` of 0 counts as a line through that corner (rounding of
 the memberships there): the other side then has no interior in the rectangle, and its slopes
@@ -73,6 +75,8 @@ SAME_LINE = 1e-9
 #: A comparison's corner value (a difference of memberships in [0, 1]) at most this far from 0
 #: is rounding of a line through the corner.
 ON_CORNER = 1e-12
+#: Distance (unit-square coordinates) within which lines count as through one point.
+COMMON_POINT = 1e-9
 #: How far (share of the way to the centre) a side's point sits inside from its corner.
 INSET = 1e-6
 _CORNERS = ((0, 0), (1, 0), (0, 1), (1, 1))
@@ -220,6 +224,45 @@ def _may_tie(level: Interval) -> BoolArray:
     return tie
 
 
+def _sectors(lines: FloatArray) -> list[FloatArray] | None:
+    """A point inside each part of the unit square that ``lines`` (m, 3), ``a u + b v + c = 0``
+    with ``(a, b)`` of length 1, cut it into, when they all pass through one point ``p`` (else
+    None): the lines through ``p`` and the square's edges at ``p`` cut the directions from
+    ``p`` into angular intervals, each inside one sector and wholly in or out of the square;
+    a point just out from ``p`` along the middle of each interval that is in."""
+    a, b, c = lines[:, 0], lines[:, 1], lines[:, 2]
+    other = np.nonzero(np.abs(a * b[0] - b * a[0]) > SAME_LINE)[0]
+    if other.size == 0:
+        return None  # parallel lines
+    j = int(other[0])
+    det = a[0] * b[j] - a[j] * b[0]
+    p = np.array([(-c[0] * b[j] + c[j] * b[0]) / det, (-a[0] * c[j] + a[j] * c[0]) / det])
+    if np.any(np.abs(a * p[0] + b * p[1] + c) > COMMON_POINT) or np.any(
+        (p < -COMMON_POINT) | (p > 1.0 + COMMON_POINT)
+    ):
+        return None
+    p = np.clip(p, 0.0, 1.0)
+    angles = [np.arctan2(a, -b), np.arctan2(-a, b)]
+    for k in range(2):  # the square's edges through p
+        if p[k] <= COMMON_POINT or p[k] >= 1.0 - COMMON_POINT:
+            angles.append(np.array([0.0, np.pi]) + (np.pi / 2 if k == 0 else 0.0))
+    theta = np.unique(np.mod(np.concatenate(angles), 2 * np.pi))
+    # one direction computed from two lines that agree to rounding
+    theta = theta[np.append(True, np.diff(theta) > SAME_LINE)]
+    if theta.size > 1 and theta[0] + 2 * np.pi - theta[-1] <= SAME_LINE:
+        theta = theta[:-1]
+    mids = 0.5 * (theta + np.append(theta[1:], theta[0] + 2 * np.pi))
+    out = []
+    for t in mids:
+        u = p + INSET * np.array([np.cos(t), np.sin(t)])
+        if np.any((u <= 0.0) | (u >= 1.0)):
+            continue
+        if np.any(np.abs(a * u[0] + b * u[1] + c) <= 1e-3 * INSET):
+            return None  # too near a line to tell its side
+        out.append(u)
+    return out
+
+
 def _sides(
     rect: FloatArray, lines: list[FloatArray]
 ) -> tuple[FloatArray, npt.NDArray[np.intp], BoolArray] | None:
@@ -227,7 +270,7 @@ def _sides(
 
     Returns ``(points (m, 2), rectangle index of each point (m,), valid (n,))``; a rectangle
     with no crossing comparison gets its centre, one with a single line a point on each side,
-    one with several lines is not valid.
+    one with several lines through one point a point in each sector, any other is not valid.
     """
     n = rect.shape[0]
     if not lines:
@@ -254,7 +297,8 @@ def _sides(
     ref = coef[np.arange(n), first]  # (n, 3)
     same = np.all(np.abs(coef - ref[:, None, :]) <= SAME_LINE * (1.0 + np.abs(ref[:, None, :])), 2)
     n_cross = cross.sum(1)
-    valid = np.all(~cross | (same & affine), axis=1) & np.all(~live | affine | ~cross, axis=1)
+    one_line = np.all(~cross | same, axis=1)
+    valid = np.all(~cross | affine, axis=1)
     corners = np.array(_CORNERS, dtype=np.float64)
     pts, which = [], []
     for k in range(n):
@@ -266,6 +310,16 @@ def _sides(
             which.append(k)
             continue
         if not valid[k]:
+            continue
+        if not one_line[k]:
+            # several lines: the sectors around their common point, if they have one
+            sectors = _sectors(coef[k, cross[k]])
+            if sectors is None:
+                valid[k] = False
+                continue
+            for u in sectors:
+                pts.append(base + u * span)
+                which.append(k)
             continue
         gk = g[k, first[k]]
         for corner in (int(np.argmin(gk)), int(np.argmax(gk))):
