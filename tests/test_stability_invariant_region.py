@@ -64,7 +64,7 @@ def _own_conditions(loop, box, rest_force=10.0):
     s = loop.sensor_delay
     damp = loop.damping_n_s_per_m / (loop.stiffness_n_per_m * loop.period_s)
     rows = []
-    for sigma, phi, a, g, de, q, lag in vertices(loop):
+    for sigma, phi, a, g, de, q, lag, *_ in vertices(loop):
         nxt = closed_loop_matrix(loop, sigma, phi, a, g, de, q, lag)
         now = np.eye(loop.order)
         # contact in its sector: spring-damper deviation >= -rest force / sigma_min
@@ -131,7 +131,7 @@ def test_switched_trajectories_from_the_region_stay_where_the_model_holds(
         v = x @ p @ x
         worst_contact, worst_e, worst_de = 0.0, 0.0, 0.0
         for _ in range(1500):
-            sigma, phi, a, g, de, q, lag = verts[rng.integers(len(verts))]
+            sigma, phi, a, g, de, q, lag, *_ = verts[rng.integers(len(verts))]
             nxt = closed_loop_matrix(loop, sigma, phi, a, g, de, q, lag) @ x
             spring = (1.0 - lag + damp) * nxt[0] + (lag - damp) * x[0]
             worst_contact = max(worst_contact, -spring * loop.sigma_min / 10.0)

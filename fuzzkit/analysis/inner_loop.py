@@ -24,16 +24,26 @@ fit made on the motion divided by ``s(k)`` and the model's gain at a stiffness `
 ``g * s(k)`` (:meth:`InnerLoop.g_at`). A plant whose stiffest press loses less than
 :data:`SERIES_THRESHOLD` of the command has no series term (arm6 loses 0, the planar arm 0.4 %
 at 1000 N/mm: inside its ``g`` interval).
+
+**Local in stiffness, with a slow lag.** Where the servo is a spring, the contact changes the
+inner loop's dynamics as well as its gain: MuJoCo's arm overshoots (velocity feed-forward,
+joint inertia) and creeps back through its gear friction. Such a plant is identified at each
+of :data:`LOCAL_ID_STIFFNESSES` with the fast lag's own gain ``h`` and a slow lag ``y[k] =
+b y[k-1] + (1 - b) (g - h) x[k]`` (:func:`fit_slow`, ``g`` fixed to the static gain), and a
+cell between two identification stiffnesses is certified over both neighbours' models, each
+with its own fit error (:meth:`InnerLoop.at`).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
 import numpy.typing as npt
 
+from fuzzkit.analysis.loop_model import InnerBox
 from fuzzkit.analysis.regulation import regulation_experiment
 from fuzzkit.loop.adapter import make_plant
 from fuzzkit.plants.contract import task_to_base
@@ -91,6 +101,9 @@ class InnerFit:
     q: float = 0.0
     #: the tool's held indentation over the commanded one, from :func:`press_gain`
     static_gain: float = 1.0
+    #: the slow lag's pole and the fast lag's own gain (:func:`fit_slow`), None without
+    b: float | None = None
+    h: float | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -108,9 +121,27 @@ class InnerLoop:
     series_n_per_m: float | None = None
 
     def g_at(self, stiffness_n_per_m: float) -> tuple[float, float]:
-        """The inner loop's gain interval against a contact of ``stiffness_n_per_m``."""
+        """The inner loop's gain interval against a contact of ``stiffness_n_per_m`` (over
+        every box)."""
+        boxes = self.at(stiffness_n_per_m)
+        return (min(b.g[0] for b in boxes), max(b.g[1] for b in boxes))
+
+    @property
+    def local(self) -> bool:
+        """Whether the model is local in stiffness (fits with a slow lag, :func:`fit_slow`)."""
+        return any(f.b is not None for f in self.fits)
+
+    def at(self, stiffness_n_per_m: float) -> tuple[InnerBox, ...]:
+        """The parameter boxes against a contact of ``stiffness_n_per_m``: the plant-wide one,
+        or, for a local model, one per fit at the identification stiffnesses either side
+        (:func:`bracket`), each widened by its NRMSE: ``a``, ``q`` by it, the gains ``h``,
+        ``g`` by ``1 +- NRMSE``, the slow lag's time constant by ``1 +- NRMSE``; every gain
+        times the series gain :func:`series_gain`."""
         s = series_gain(self.series_n_per_m, stiffness_n_per_m)
-        return (self.g_range[0] * s, self.g_range[1] * s)
+        if not self.local:
+            g = (self.g_range[0] * s, self.g_range[1] * s)
+            return (InnerBox(self.a_range, g, self.q_range),)
+        return tuple(_box(f, s) for f in bracket(self.fits, stiffness_n_per_m))
 
     @property
     def fit_error(self) -> float:
@@ -121,8 +152,14 @@ class InnerLoop:
         """JSON form."""
         return {
             "plant": self.plant,
-            "model": "x[k] = q x[k-1] + (1 - q) r[k]; p[k] = a p[k-1] + (1 - a) g s(K) x[k]; "
-            "s(K) = k_s / (K + k_s) at contact stiffness K (1 without a series stiffness k_s)",
+            "model": (
+                "x[k] = q x[k-1] + (1 - q) r[k]; p[k] = a p[k-1] + (1 - a) h s(K) x[k]; "
+                "y[k] = b y[k-1] + (1 - b) (g - h) s(K) x[k]; position p + y; "
+                "local in stiffness: the fits either side of K"
+                if self.local
+                else "x[k] = q x[k-1] + (1 - q) r[k]; p[k] = a p[k-1] + (1 - a) g s(K) x[k]"
+            )
+            + "; s(K) = k_s / (K + k_s) at contact stiffness K (1 without a series stiffness)",
             "a": list(self.a_range),
             "q": list(self.q_range),
             "g": list(self.g_range),
@@ -139,10 +176,45 @@ class InnerLoop:
                     "g": f.g,
                     "nrmse": f.nrmse,
                     "static_gain": f.static_gain,
+                    "slow_pole_b": f.b,
+                    "fast_gain_h": f.h,
                 }
                 for f in self.fits
             ],
         }
+
+
+def bracket(fits: tuple[InnerFit, ...], stiffness_n_per_m: float) -> tuple[InnerFit, ...]:
+    """The fits at the identification stiffnesses either side of ``stiffness_n_per_m`` (one
+    when it is one of them; the nearest when it is outside their range)."""
+    ordered = sorted(fits, key=lambda f: f.stiffness_n_per_m)
+    below = [f for f in ordered if f.stiffness_n_per_m <= stiffness_n_per_m][-1:]
+    above = [f for f in ordered if f.stiffness_n_per_m >= stiffness_n_per_m][:1]
+    if below and above and below[0] is above[0]:
+        return tuple(below)
+    return (*below, *above)
+
+
+def _widened(value: float, err: float) -> tuple[float, float]:
+    """A pole's interval around ``value`` widened by ``err``, kept in ``[0, 1)``."""
+    return (max(value - err, 0.0), min(value + err, 1.0 - 1e-9))
+
+
+def _box(fit: InnerFit, s: float) -> InnerBox:
+    """One fit's box (:meth:`InnerLoop.at`), its gains times the series gain ``s``."""
+    err = fit.nrmse
+    box = InnerBox(
+        _widened(fit.a, err), (fit.g * (1 - err) * s, fit.g * (1 + err) * s), _widened(fit.q, err)
+    )
+    if fit.b is None or fit.h is None:
+        return box
+    tau = -1.0 / math.log(fit.b) if fit.b > 0.0 else 0.0
+    b = (
+        (math.exp(-1.0 / (tau / (1.0 + err))), math.exp(-1.0 / (tau * (1.0 + err))))
+        if tau
+        else (0.0, 0.0)
+    )
+    return replace(box, b=b, h=(fit.h * (1 - err) * s, fit.h * (1 + err) * s))
 
 
 def excite(plant_name: str, stiffness_n_per_m: float) -> tuple[FloatArray, FloatArray]:
@@ -248,6 +320,50 @@ def fit(r: FloatArray, p: FloatArray, stiffness_n_per_m: float) -> InnerFit:
     return InnerFit(stiffness_n_per_m, a, g, nrmse, q)
 
 
+def simulate_slow(r: FloatArray, a: float, q: float, h: float, b: float) -> FloatArray:
+    """The position ``p + y`` of the cascade with a slow lag and unit gain (the fast lag's
+    gain ``h``, the slow lag's ``1 - h``) from rest at ``r[0]``."""
+    from scipy.signal import lfilter
+
+    d = r - r[0]
+    x = lfilter([1.0 - q], [1.0, -q], d)
+    p = lfilter([(1.0 - a) * h], [1.0, -a], x)
+    y = lfilter([(1.0 - b) * (1.0 - h)], [1.0, -b], x)
+    out: FloatArray = r[0] + p + y
+    return out
+
+
+def fit_slow(r: FloatArray, p: FloatArray, stiffness_n_per_m: float) -> InnerFit:
+    """The cascade with a slow lag (:func:`simulate_slow`, unit gain: ``p`` is the motion over
+    its series gain) minimising the free-run error against ``p`` (with an output offset)."""
+    from scipy.optimize import least_squares
+
+    def residual(theta: FloatArray) -> FloatArray:
+        a, q, h, b, c = theta
+        out: FloatArray = simulate_slow(r, a, q, h, b) + c - p
+        return out
+
+    sols = [
+        least_squares(
+            residual,
+            np.array([0.5, 0.5, h0, 0.9, 0.0]),
+            bounds=([0.0, 0.0, 0.0, 0.0, -1.0], [0.999, 0.999, 5.0, 0.999, 1.0]),
+        )
+        for h0 in (1.0, 3.0)
+    ]
+    sol = min(sols, key=lambda s: float(s.cost))
+    a, q, h, b, _ = (float(v) for v in sol.x)
+    nrmse = float(np.sqrt(np.mean(sol.fun**2)) / np.std(p))
+    return InnerFit(stiffness_n_per_m, a, 1.0, nrmse, q, b=b, h=h)
+
+
+#: Where a plant with a series compliance is identified: its contact changes the inner loop's
+#: dynamics, so its model is local in stiffness (:meth:`InnerLoop.at`), fitted at each of
+#: these, the calibration grid's stiffnesses (docs/stability.md): the validation grid's lie
+#: between them and are never identified at.
+LOCAL_ID_STIFFNESSES = (5e3, 1e4, 2e4, 5e4, 1e5, 2e5, 5e5, 1e6)
+
+
 @lru_cache(maxsize=4)
 def identify(plant_name: str) -> InnerLoop:
     """Identify the inner loop of ``plant_name`` at :data:`ID_STIFFNESSES` (cached): the
@@ -255,10 +371,16 @@ def identify(plant_name: str) -> InnerLoop:
     its series gain."""
     statics = {k: press_gain(plant_name, k) for k in ID_STIFFNESSES}
     ks = series_stiffness(statics)
+    stiffnesses: tuple[float, ...] = ID_STIFFNESSES
+    fitter = fit
+    if ks is not None:
+        stiffnesses, fitter = LOCAL_ID_STIFFNESSES, fit_slow
+        statics.update({k: press_gain(plant_name, k) for k in stiffnesses if k not in statics})
+        ks = series_stiffness(statics)
     fits = []
-    for k in ID_STIFFNESSES:
+    for k in stiffnesses:
         r, p = excite(plant_name, k)
-        fits.append(replace(fit(r, p / series_gain(ks, k), k), static_gain=statics[k]))
+        fits.append(replace(fitter(r, p / series_gain(ks, k), k), static_gain=statics[k]))
     err = max(f.nrmse for f in fits)
     a_lo = max(min(f.a for f in fits) - err, 0.0)
     a_hi = min(max(f.a for f in fits) + err, 1.0 - 1e-9)

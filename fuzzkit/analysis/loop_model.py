@@ -6,7 +6,9 @@ every state in newtons (positions and corrections times the contact stiffness ``
 
 * inner motion loop: two lags, ``x[k+1] = q x[k] + (1 - q) r[k+1]``,
   ``p[k+1] = a p[k] + (1 - a) g x[k+1]`` (identified, :mod:`fuzzkit.analysis.inner_loop`;
-  ``a``, ``q``, ``g`` uncertain in intervals);
+  ``a``, ``q``, ``g`` uncertain in intervals); on a plant with a slow mode (MuJoCo's
+  friction creep behind the servo's overshoot), the fast lag has its own gain ``h`` and a slow
+  lag ``y[k+1] = b y[k] + (1 - b) (g - h) x[k+1]`` brings the position ``p + y`` to ``g``;
 * contact: ``f[k+1] = sigma * (k ((1 - l) p[k+1] + l p[k]) + c (p[k+1] - p[k]) / T)``;
   ``sigma`` in ``[sigma_min, 1]`` is the sector of the clamp ``max(0, .)`` that lets the tool
   leave the surface (loss of contact); ``l`` in ``contact_lag`` is the fraction of a period by
@@ -22,9 +24,10 @@ every state in newtons (positions and corrections times the contact stiffness ``
 * command delay ``C`` periods plus the one period every correction waits for the next plant
   step: ``r[k+1] = u[k - C]``.
 
-The state is ``(p[k], x[k], w[k], ..., w[k-S], u[k], ..., u[k-C])``, of size ``S + C + 4``.
-The closed-loop matrix is multi-affine in ``(sigma, phi, a, q, g)`` (no parameter appears
-squared), so for any values in the box it is a convex combination of its values at the box's
+The state is ``(p[k], x[k], [y[k],] w[k], ..., w[k-S], u[k], ..., u[k-C])``, of size
+``S + C + 4`` (one more with the slow lag, one more with a front-end low-pass).
+The closed-loop matrix is multi-affine in ``(sigma, phi, a, q, g, b, h)`` (no parameter
+appears squared), so for any values in the box it is a convex combination of its values at the box's
 vertices
 (:func:`vertex_matrices`): a Lyapunov function common to the vertices holds for every
 combination, varying from one period to the next.
@@ -42,6 +45,18 @@ import numpy.typing as npt
 from fuzzkit.errors import ConfigError
 
 FloatArray = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True, slots=True)
+class InnerBox:
+    """One box of the inner loop's parameters: intervals of ``a``, ``g``, ``q`` and, with the
+    slow lag, ``b`` and ``h``."""
+
+    a: tuple[float, float]
+    g: tuple[float, float]
+    q: tuple[float, float]
+    b: tuple[float, float] | None = None
+    h: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -73,6 +88,13 @@ class AxisLoop:
     #: the controller's own front-end low-pass (a spec's ``sensor.lowpass_hz``), after the
     #: sensor's filter and delay; None: the controller reads the sample as it is
     frontend_cutoff_hz: float | None = None
+    #: the inner loop's slow lag: its pole ``b`` and the fast lag's own gain ``h`` (None: no
+    #: slow lag, the fast lag has the whole gain ``g``)
+    inner_b: tuple[float, float] | None = None
+    inner_h: tuple[float, float] | None = None
+    #: further boxes of the inner loop's parameters: the vertices are every box's (a cell
+    #: between two identification stiffnesses: each neighbour's model with its uncertainty)
+    inner_more: tuple[InnerBox, ...] = ()
 
     def __post_init__(self) -> None:
         problems = []
@@ -84,7 +106,12 @@ class AxisLoop:
             problems.append(f"damping must be >= 0 (got {self.damping_n_s_per_m})")
         if self.sensor_delay < 0 or self.command_delay < 0:
             problems.append("delays must be whole periods >= 0")
-        for name in ("phi", "phi_de", "inner_a", "inner_g", "inner_q", "contact_lag"):
+        if any((b.b is None) != (self.inner_b is None) for b in self.inner_more) or (
+            (self.inner_b is None) != (self.inner_h is None)
+        ):
+            problems.append("inner_b and inner_h go together, in every box")
+        names = ("phi", "phi_de", "inner_a", "inner_g", "inner_q", "contact_lag", "inner_b")
+        for name in (*names, "inner_h"):
             if getattr(self, name) is None:
                 continue
             lo, hi = getattr(self, name)
@@ -99,9 +126,21 @@ class AxisLoop:
             raise ConfigError("; ".join(problems))
 
     @property
+    def slow(self) -> bool:
+        """Whether the inner loop has its slow lag (state ``y``, after ``x``)."""
+        return self.inner_b is not None
+
+    @property
     def order(self) -> int:
         """The number of states (the front-end filter's, when there is one, is the last)."""
-        return self.sensor_delay + self.command_delay + 4 + (self.frontend_cutoff_hz is not None)
+        extra = int(self.slow) + int(self.frontend_cutoff_hz is not None)
+        return self.sensor_delay + self.command_delay + 4 + extra
+
+    def layout(self) -> tuple[int, int, int, int]:
+        """Indices of ``p``, ``x``, the first of the ``w`` queue and the first of the ``u``
+        queue in the state (the slow lag ``y``, when there is one, sits at 2)."""
+        iw = 2 + int(self.slow)
+        return 0, 1, iw, iw + 1 + self.sensor_delay
 
     @property
     def frontend_pole(self) -> float:
@@ -145,6 +184,8 @@ class StepRows:
     u_next: FloatArray
     c_next: FloatArray
     c_now: FloatArray
+    #: the slow lag's next state (zeros without one)
+    slow_next: FloatArray
 
 
 def step_rows(
@@ -156,14 +197,17 @@ def step_rows(
     phi_de: float | None = None,
     q: float = 0.0,
     lag: float = 0.0,
+    b: float = 0.0,
+    h: float | None = None,
 ) -> StepRows:
-    """The signals of one period for fixed values of the uncertain parameters."""
+    """The signals of one period for fixed values of the uncertain parameters (``b``, ``h``:
+    the slow lag's pole and the fast lag's gain, read only when the loop has the slow lag)."""
     s, c = loop.sensor_delay, loop.command_delay
     n = loop.order
     k = loop.stiffness_n_per_m
     damp = loop.damping_n_s_per_m / (k * loop.period_s)
     beta = loop.filter_pole
-    ip, ix, iw, iu = 0, 1, 2, 3 + s  # p, x, first of the w queue, first of the u queue
+    ip, ix, iw, iu = loop.layout()  # p, x, first of the w queue, first of the u queue
 
     def unit(i: int) -> FloatArray:
         e = np.zeros(n)
@@ -171,21 +215,40 @@ def step_rows(
         return e
 
     x_next = q * unit(ix) + (1.0 - q) * unit(iu + c)
-    p_next = a * unit(ip) + (1.0 - a) * g * x_next
-    spring_next = (1.0 - lag + damp) * p_next + (lag - damp) * unit(ip)
+    slow_next = np.zeros(n)
+    pos_now = unit(ip)
+    if loop.slow:
+        fast = g if h is None else h
+        p_next = a * unit(ip) + (1.0 - a) * fast * x_next
+        slow_next = b * unit(ip + 2) + (1.0 - b) * (g - fast) * x_next
+        pos_now = unit(ip) + unit(ip + 2)
+    else:
+        p_next = a * unit(ip) + (1.0 - a) * g * x_next
+    # the tool's position: the fast lag's plus the slow lag's
+    spring_next = (1.0 - lag + damp) * (p_next + slow_next) + (lag - damp) * pos_now
     w_next = beta * unit(iw) + (1.0 - beta) * sigma * spring_next
-    y_next = w_next if s == 0 else unit(iw + s - 1)
+    y_next_sample = w_next if s == 0 else unit(iw + s - 1)
     y_now = unit(iw + s)
-    c_next, c_now = y_next, y_now
+    c_next, c_now = y_next_sample, y_now
     if loop.frontend_cutoff_hz is not None:
         b2 = loop.frontend_pole
         c_now = unit(n - 1)
-        c_next = b2 * c_now + (1.0 - b2) * y_next
+        c_next = b2 * c_now + (1.0 - b2) * y_next_sample
     kp, ki = loop.kp * k, loop.ki * k  # per newton of force deviation, in newtons of correction
     pd = phi if phi_de is None else phi_de
     u_next = unit(iu) - (pd * kp + phi * ki) * c_next + pd * kp * c_now
     return StepRows(
-        p_next, x_next, spring_next, w_next, y_next, y_now, unit(iu), u_next, c_next, c_now
+        p_next,
+        x_next,
+        spring_next,
+        w_next,
+        y_next_sample,
+        y_now,
+        unit(iu),
+        u_next,
+        c_next,
+        c_now,
+        slow_next,
     )
 
 
@@ -198,12 +261,14 @@ def closed_loop_matrix(
     phi_de: float | None = None,
     q: float = 0.0,
     lag: float = 0.0,
+    b: float = 0.0,
+    h: float | None = None,
 ) -> FloatArray:
     """``A`` with ``x[k+1] = A x[k]`` for fixed values of the uncertain parameters
     (``phi_de`` None: the same ``phi`` on both terms)."""
     s, c = loop.sensor_delay, loop.command_delay
     n = loop.order
-    ip, ix, iw, iu = 0, 1, 2, 3 + s  # p, x, first of the w queue, first of the u queue
+    ip, ix, iw, iu = loop.layout()  # p, x, first of the w queue, first of the u queue
     a_mat = np.zeros((n, n))
 
     def unit(i: int) -> FloatArray:
@@ -211,10 +276,12 @@ def closed_loop_matrix(
         e[i] = 1.0
         return e
 
-    rows = step_rows(loop, sigma, phi, a, g, phi_de, q, lag)
+    rows = step_rows(loop, sigma, phi, a, g, phi_de, q, lag, b, h)
     p_next, x_next, w_next, u_next = rows.p_next, rows.x_next, rows.w_next, rows.u_next
     a_mat[ip] = p_next
     a_mat[ix] = x_next
+    if loop.slow:
+        a_mat[ip + 2] = rows.slow_next
     a_mat[iw] = w_next
     for i in range(1, s + 1):
         a_mat[iw + i] = unit(iw + i - 1)
@@ -241,10 +308,12 @@ def vertex_rows(loop: AxisLoop) -> list[StepRows]:
     return [step_rows(loop, *v) for v in vertices(loop)]
 
 
-def vertices(
-    loop: AxisLoop, nominal_plant: bool = False
-) -> list[tuple[float, float, float, float, float | None, float, float]]:
-    """``(sigma, phi, a, g, phi_de, q, lag)`` at every vertex of the parameter box."""
+Vertex = tuple[float, float, float, float, float | None, float, float, float, float | None]
+
+
+def vertices(loop: AxisLoop, nominal_plant: bool = False) -> list[Vertex]:
+    """``(sigma, phi, a, g, phi_de, q, lag, b, h)`` at every vertex of the parameter box
+    (``b`` 0 and ``h`` None without the slow lag)."""
 
     def corners(iv: tuple[float, float]) -> list[float]:
         return [0.5 * (iv[0] + iv[1])] if nominal_plant else sorted(set(iv))
@@ -252,18 +321,25 @@ def vertices(
     des: list[float | None] = [None]
     if loop.phi_de is not None:
         des = [*sorted(set(loop.phi_de))]
-    return [
-        (sigma, phi, a, g, de, q, lag)
-        for sigma, phi, a, g, de, q, lag in itertools.product(
+    first = InnerBox(loop.inner_a, loop.inner_g, loop.inner_q, loop.inner_b, loop.inner_h)
+    out: list[Vertex] = []
+    for box in (first, *loop.inner_more):
+        bs: list[float] = [0.0]
+        hs: list[float | None] = [None]
+        if box.b is not None and box.h is not None:
+            bs, hs = corners(box.b), [*corners(box.h)]
+        out += itertools.product(
             sorted({loop.sigma_min, 1.0}),
             sorted(set(loop.phi)),
-            corners(loop.inner_a),
-            corners(loop.inner_g),
+            corners(box.a),
+            corners(box.g),
             des,
-            corners(loop.inner_q),
+            corners(box.q),
             sorted(set(loop.contact_lag)),  # wide (planar): its corners stay in the core
+            bs,
+            hs,
         )
-    ]
+    return out
 
 
 def noise_std(loop: AxisLoop, noise_std_n: float) -> float:
@@ -279,13 +355,16 @@ def noise_std(loop: AxisLoop, noise_std_n: float) -> float:
     mid = [0.5 * (lo + hi) for lo, hi in (loop.phi, loop.inner_a, loop.inner_g, loop.inner_q)]
     phi_de = None if loop.phi_de is None else 0.5 * sum(loop.phi_de)
     lag = 0.5 * sum(loop.contact_lag)
-    a_mat = closed_loop_matrix(loop, 1.0, mid[0], mid[1], mid[2], phi_de, mid[3], lag)
+    slow_b = 0.0 if loop.inner_b is None else 0.5 * sum(loop.inner_b)
+    slow_h = None if loop.inner_h is None else 0.5 * sum(loop.inner_h)
+    nominal = (1.0, mid[0], mid[1], mid[2], phi_de, mid[3], lag, slow_b, slow_h)
+    a_mat = closed_loop_matrix(loop, *nominal)
     if max(abs(np.linalg.eigvals(a_mat))) >= 1.0:
         return math.inf
     n = loop.order
     k = loop.stiffness_n_per_m
     pd = mid[0] if phi_de is None else phi_de
-    iu = 3 + loop.sensor_delay
+    iu = loop.layout()[3]
     aug = np.zeros((n + 1, n + 1))
     aug[:n, :n] = a_mat
     b = np.zeros(n + 1)
@@ -301,13 +380,8 @@ def noise_std(loop: AxisLoop, noise_std_n: float) -> float:
     # u[k+1] reads the new noise: propagate it into the state the same period
     cov = solve_discrete_lyapunov(aug, np.outer(b, b) * noise_std_n**2)
     # the true force at the next plant step, from the state (contact held)
-    damp = loop.damping_n_s_per_m / (k * loop.period_s)
-    a, g, q = mid[1], mid[2], mid[3]
     c = np.zeros(n + 1)
-    now = 1.0 - lag + damp  # weight of p[k+1] in the force, of p[k]: 1 - now
-    c[0] = now * a + (1.0 - now)
-    c[1] = now * (1.0 - a) * g * q
-    c[iu + loop.command_delay] += now * (1.0 - a) * g * (1.0 - q)
+    c[:n] = step_rows(loop, *nominal).spring_next
     return float(math.sqrt(max(float(c @ cov @ c), 0.0)))
 
 

@@ -311,6 +311,7 @@ def axis_loop(
         if fuzzy is None:
             raise ConfigError("fuzzy-pi needs the rule base's bounds")
         phi, phi_de = fuzzy.phi, fuzzy.phi_de
+    first, *more = inner.at(stiffness_n_per_m)
     return AxisLoop(
         period_s=scn.period_s,
         stiffness_n_per_m=stiffness_n_per_m,
@@ -322,9 +323,12 @@ def axis_loop(
         ki=ki,
         phi=phi,
         phi_de=phi_de,
-        inner_a=inner.a_range,
-        inner_g=inner.g_at(stiffness_n_per_m),
-        inner_q=inner.q_range,
+        inner_a=first.a,
+        inner_g=first.g,
+        inner_q=first.q,
+        inner_b=first.b,
+        inner_h=first.h,
+        inner_more=tuple(more),
         contact_lag=inner.contact_lag,
         sigma_min=sigma_min,
         frontend_cutoff_hz=frontend_cutoff_hz,
