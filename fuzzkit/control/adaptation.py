@@ -49,7 +49,7 @@ TRUST_UPDATES = 4
 #: force is off the set point, so the secant's span grows until it counts: the trust does not
 #: wait for the windowed excitation a low gain may never make (a soft contact under the band
 #: of k_max). Its error is the force noise over ``TRUST_SPAN * min_force_n``.
-TRUST_SPAN = 5.0
+TRUST_SPAN = 2.0
 
 #: Singleton values of alpha's labels ZE, VS, S, SB, M, B, VB on [0, 1].
 ALPHA_LEVELS = {"ZE": 0.0, "VS": 1.0 / 6.0, "S": 2.0 / 6.0, "SB": 3.0 / 6.0, "M": 4.0 / 6.0,
