@@ -73,7 +73,10 @@ class AdaptationDesign:
     the window must reach for an update (out of contact the estimate is frozen). Self-tuning:
     ``alpha_min``, ``alpha_max``, the rule table of alpha (7x7, rows e, columns de) and the input
     gains per axis. The inner-loop model the estimator regresses on: ``inner_q``, ``inner_a``,
-    ``inner_g``.
+    ``inner_g``. Safe start: the band until the estimate is trusted (``safe_band``, the one of
+    ``k_max``), the most conservative band (``floor_band``, for a contact stiffer than
+    ``k_max``), the updates that make the estimate trusted (``trust_updates``) and the
+    secant's span, in excitation thresholds, that does too (``trust_span``).
     """
 
     mode: str
@@ -98,13 +101,10 @@ class AdaptationDesign:
     inner_q: float = 0.0
     inner_a: float = 0.0
     inner_g: float = 1.0
-
-    def initial_band(self) -> int:
-        """The band of the initial estimate."""
-        for i, (up_to, _) in enumerate(self.bands):
-            if up_to is None or self.initial_n_mm <= up_to:
-                return i
-        return len(self.bands) - 1
+    safe_band: int = 0
+    floor_band: int = 0
+    trust_updates: int = 4
+    trust_span: float = 5.0
 
 
 @dataclass(frozen=True)
@@ -124,7 +124,11 @@ class AdaptationCode:
     k_max: str
     band_limits: tuple[str, ...]  # every band's up_to but the last's
     band_scales: tuple[str, ...]
-    initial_band: int
+    safe_band: int  # until the estimate is trusted, and at the start
+    floor_band: int  # a contact stiffer than k_max
+    trust: int  # updates until the estimate is trusted
+    trust_step: str  # the secant's least span: trust_span * min_step_m, * min_force_n
+    trust_force: str
     dwell: int
     alpha_low: str
     alpha_span: str
@@ -555,6 +559,7 @@ def _adaptation_code(design: ControllerDesign, lit: Callable[[float], str]) -> A
                ad.k_max_n_mm, ad.alpha_min, ad.alpha_max, *ad.ge, *ad.gde, ad.inner_q,
                ad.inner_a, ad.inner_g]  # fmt: skip
     numbers += [v for b in ad.bands for v in b if v is not None]
+    numbers.append(ad.trust_span)
     numbers += [v for row in ad.alpha_table for v in row]
     if not all(math.isfinite(v) for v in numbers):
         raise CodegenError(f"controller {design.name!r}: adaptation parameters must be finite")
@@ -576,7 +581,11 @@ def _adaptation_code(design: ControllerDesign, lit: Callable[[float], str]) -> A
         k_max=lit(ad.k_max_n_mm),
         band_limits=tuple(lit(up) for up, _ in ad.bands[:-1] if up is not None),
         band_scales=tuple(lit(scale) for _, scale in ad.bands),
-        initial_band=ad.initial_band() if scheduled else 0,
+        safe_band=ad.safe_band,
+        floor_band=ad.floor_band,
+        trust=ad.trust_updates,
+        trust_step=lit(ad.trust_span * ad.min_step_m),
+        trust_force=lit(ad.trust_span * ad.min_force_n),
         dwell=ad.dwell_periods,
         alpha_low=lit(ad.alpha_min),
         alpha_span=lit(ad.alpha_max - ad.alpha_min),

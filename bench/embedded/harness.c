@@ -7,7 +7,7 @@
  *   FK_EVAL_HEADER "NAME.h", FK_EVAL NAME_eval, FK_EVAL_T float | int16_t, FK_NIN, FK_NOUT,
  *     FK_POINTS (random points), FK_AMPLITUDE (float inputs: uniform in +-amplitude)
  *   FK_CTL_HEADER "NAME_controller.h", FK_CTL NAME_controller (the controller's prefix),
- *     FK_LOG_N (samples in log_data.c: fk_log_force[n][3], fk_log_rot[n][9])
+ *     FK_LOG_N (samples in NAME_log_data.c: fk_log_force[n][3], fk_log_rot[n][9])
  */
 #include <stdint.h>
 #include <string.h>

@@ -48,6 +48,9 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent.parent
 SPEC = REPO / "docs" / "examples" / "controller.yaml"
+#: Controller specs measured besides SPEC, by row label: the stiffness-scheduled fuzzy-PI
+#: (issue 42: its step within 2,500 instructions on the Cortex-M4F).
+MORE_SPECS = {"adaptive": REPO / "docs" / "examples" / "controller_adaptive.yaml"}
 RULEBASE = "macvicar_whelan"
 #: Rule bases whose exact float ``eval`` runs on the Cortex-M4F: (row label, file or name).
 EXACT_FLOAT = (
@@ -159,11 +162,14 @@ def generate(build: Path) -> dict[str, Any]:
     from fuzzkit.loop.controller_code import generate as generate_controller
     from fuzzkit.studies.sensor_logs import hostile_log
 
-    spec = load_spec(SPEC)
-    for rel, text in generate_controller(spec, "c", "float").items():
-        (build / rel).write_text(text)
-    forces, rotations = hostile_log(spec)
-    (build / "log_data.c").write_text(log_source(forces, rotations))
+    controllers = []
+    for label, path in {"": SPEC, **MORE_SPECS}.items():
+        spec = load_spec(path)
+        for rel, text in generate_controller(spec, "c", "float").items():
+            (build / rel).write_text(text)
+        forces, rotations = hostile_log(spec)
+        (build / f"{spec.name}_log_data.c").write_text(log_source(forces, rotations))
+        controllers.append({"label": label, "name": spec.name, "log_n": forces.shape[0]})
     rb = load(RULEBASE)
     q15 = compile_rulebase(rb, "c", "q15", method="table")
     for rel, text in q15.files.items():
@@ -174,7 +180,7 @@ def generate(build: Path) -> dict[str, Any]:
         for rel, text in compile_rulebase(rb, "c", "float", method="exact").files.items():
             (build / rel).write_text(text)
         exact.append(rb.name)
-    return {"name": spec.name, "log_n": forces.shape[0], "exact": exact}
+    return {**controllers[0], "controllers": controllers, "exact": exact}
 
 
 def exact_defines(name: str) -> list[str]:
@@ -221,7 +227,7 @@ def sources(kind: str, info: dict[str, object]) -> list[str]:
     """The generated C files of ``kind``."""
     if kind == "controller":
         name = info["name"]
-        return [f"{name}_controller.c", f"{name}_surface.c", "log_data.c"]
+        return [f"{name}_controller.c", f"{name}_surface.c", f"{name}_log_data.c"]
     return [f"{RULEBASE}.c"]
 
 
@@ -327,7 +333,7 @@ def host_run(build: Path, out: str, files: list[str], defines: list[str]) -> tup
          str(HERE / "harness.c"), str(HERE / "host.c"), *files, "-lm"], build)  # fmt: skip
     size = 0
     for f in files:
-        if f == "log_data.c":
+        if f.endswith("log_data.c"):
             continue
         obj = build / (Path(f).stem + ".host.o")
         run([cc, *COMMON, f"-I{build}", "-c", f, "-o", str(obj)], build)
@@ -399,15 +405,27 @@ def compare(target: str, host: str, where: str) -> bool:
 def measure(build: Path) -> list[Row]:
     """Generate, build, run and compare everything; the table's rows."""
     info = generate(build)
-    name = info["name"]
     rows = []
-    # the controller (and its surface) in float on the Cortex-M4F
+    for ctl in info["controllers"]:
+        rows += controller_rows(build, ctl)
+    for (label, _), rb_name in zip(EXACT_FLOAT, info["exact"], strict=True):
+        rows.append(exact_row(build, label, rb_name))
+    rows += q15_rows(build, info)
+    return rows
+
+
+def controller_rows(build: Path, info: dict[str, Any]) -> list[Row]:
+    """The controller of ``info`` (and its surface) in float on the Cortex-M4F: its step on
+    the engaged periods and on the whole hostile log, and the surface's eval."""
+    name = info["name"]
+    tag = f"{info['label']} " if info["label"] else ""
+    rows = []
     defines = harness_defines("controller", info)
     files = sources("controller", info)
-    elf = cross_link(build, M4F, "controller_m4f.elf", [str(HERE / "harness.c"), *files], defines)
+    elf = cross_link(build, M4F, f"{name}_m4f.elf", [str(HERE / "harness.c"), *files], defines)
     target = qemu(build, M4F, elf)
-    host, host_bytes = host_run(build, "controller_host", files, defines)
-    same = compare(target, host, "controller on " + M4F.name)
+    host, host_bytes = host_run(build, f"{name}_host", files, defines)
+    same = compare(target, host, f"controller {name} on " + M4F.name)
     t = timings(target)
     rotation = "{1.0f,0.0f,0.0f,0.0f,-1.0f,0.0f,0.0f,0.0f,-1.0f}"
     ctl_call = (
@@ -421,19 +439,21 @@ def measure(build: Path) -> list[Row]:
     )
     steps = step_ticks(target)
     log_n = int(str(info["log_n"]))
-    host_step = host_instructions(build, "controller_host", f"{name}_controller_step", log_n)
-    host_eval = host_instructions(build, "controller_host", f"{name}_surface_eval",
+    host_step = host_instructions(build, f"{name}_host", f"{name}_controller_step", log_n)
+    host_eval = host_instructions(build, f"{name}_host", f"{name}_surface_eval",
                                   POINTS + EDGE_COMBOS["float"])  # fmt: skip
     running = steps["running"]
     rows.append(Row(
-        what=f"controller step, engaged ({len(running)} of {log_n} steps run both axes)",
+        what=f"{tag}controller step, engaged ({len(running)} of {log_n} steps run both axes)",
         board=M4F.name, flash_bytes=flash, ram_bytes=ram,
         mean_instructions=sum(running) / len(running) * M4F.insn_per_tick,
         max_instructions=max(running) * M4F.insn_per_tick, tick_instructions=M4F.insn_per_tick,
         calls=len(running), host_instructions=None, host_bytes=host_bytes, identical=same,
     ))  # fmt: skip
-    rows.append(_row("controller step, whole hostile log", M4F, flash, ram, t["step"],
+    rows.append(_row(f"{tag}controller step, whole hostile log", M4F, flash, ram, t["step"],
                      host_step, host_bytes, same))  # fmt: skip
+    if info["label"]:
+        return rows  # the surface is the same rule base's: measured once
     surf_call = (
         "float in[2], out[1]; in[0] = fk_sink_f[0]; in[1] = fk_sink_f[1]; "
         f"{name}_surface_eval(in, out); fk_sink_f[2] = out[0];"
@@ -441,9 +461,12 @@ def measure(build: Path) -> list[Row]:
     flash, ram = footprint(build, M4F, f"{name}_surface.h", surf_call, [f"{name}_surface.c"])
     rows.append(_row("surface eval, exact (float)", M4F, flash, ram, t["eval"], host_eval,
                      0, same))  # fmt: skip
-    for (label, _), rb_name in zip(EXACT_FLOAT, info["exact"], strict=True):
-        rows.append(exact_row(build, label, rb_name))
-    # the Q15 table on the Cortex-M3 and M0
+    return rows
+
+
+def q15_rows(build: Path, info: dict[str, Any]) -> list[Row]:
+    """The Q15 table on the Cortex-M3 and M0."""
+    rows = []
     defines = harness_defines("q15", info)
     files = sources("q15", info)
     host, host_bytes = host_run(build, "q15_host", files, defines)

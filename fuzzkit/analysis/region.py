@@ -4,7 +4,7 @@ model it was certified for (the JSON of ``fuzzkit stability``)."""
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from typing import Any
@@ -301,9 +301,12 @@ def axis_loop(
     latency: tuple[int, int],
     sigma_min: float = SIGMA_MIN,
     frontend_cutoff_hz: float | None = None,
+    gain_scale: tuple[float, float] = (1.0, 1.0),
 ) -> AxisLoop:
     """The linear model of a force axis of ``exp`` at one stiffness and latency
-    (``frontend_cutoff_hz``: the controller's own low-pass, a spec's)."""
+    (``frontend_cutoff_hz``: the controller's own low-pass, a spec's; ``gain_scale``: the
+    interval of an adaptation's factor of the increment, ``0 < lo <= hi``, which multiplies
+    ``phi``, and ``phi_de`` where given: the model is affine in each)."""
     _, kp, ki = effective_gains(controller, gains)
     scn = exp.scenario
     phi, phi_de = (1.0, 1.0), None
@@ -311,6 +314,10 @@ def axis_loop(
         if fuzzy is None:
             raise ConfigError("fuzzy-pi needs the rule base's bounds")
         phi, phi_de = fuzzy.phi, fuzzy.phi_de
+    lo, hi = gain_scale
+    if (lo, hi) != (1.0, 1.0):
+        phi = (phi[0] * lo, phi[1] * hi)
+        phi_de = None if phi_de is None else (phi_de[0] * lo, phi_de[1] * hi)
     first, *more = inner.at(stiffness_n_per_m)
     return AxisLoop(
         period_s=scn.period_s,
@@ -349,6 +356,7 @@ def certify_cell(
     *,
     frontend_cutoff_hz: float | None = None,
     limits_m: tuple[float, float] | None = None,
+    gain_scale: tuple[float, float] = (1.0, 1.0),
 ) -> Cell:
     """Certify one cell on the fuzzy box of ``fuzzy`` (:func:`certify_box`); a fuzzy-PI cell
     refused there because a vertex (or a product of two) is unstable is tried on smaller boxes
@@ -358,7 +366,11 @@ def certify_cell(
     first box is not tried again (the loop could rest there)."""
     args = (exp, controller, gains, inner)
     rest = (stiffness_n_per_mm, latency, sigma_min, noise_n, reuse)
-    opts = {"frontend_cutoff_hz": frontend_cutoff_hz, "limits_m": limits_m}
+    opts = {
+        "frontend_cutoff_hz": frontend_cutoff_hz,
+        "limits_m": limits_m,
+        "gain_scale": gain_scale,
+    }
     cell = certify_box(*args, fuzzy, *rest, **opts)  # type: ignore[arg-type]
     if cell.certified or fuzzy is None or cell.why_not.startswith(("the set point", "no rest")):
         return cell
@@ -378,6 +390,7 @@ def certify_cell(
             latency,
             1.0,
             frontend_cutoff_hz,
+            gain_scale,
         )
         mats = vertex_matrices(loop)
         if max(float(np.max(np.abs(np.linalg.eigvals(a)))) for a in mats) >= 1.0:
@@ -405,6 +418,7 @@ def certify_box(
     *,
     frontend_cutoff_hz: float | None = None,
     limits_m: tuple[float, float] | None = None,
+    gain_scale: tuple[float, float] = (1.0, 1.0),
 ) -> Cell:
     """Certify one cell on one fuzzy box: with the contact sector ``[sigma_min, 1]`` (contact
     may be lost), else with contact held (``[1, 1]``); ``Cell.contact_sector`` says which one holds.
@@ -430,6 +444,7 @@ def certify_box(
         latency,
         sigma_min,
         frontend_cutoff_hz,
+        gain_scale,
     )
     held = replace(loop, sigma_min=1.0)
     cert = certify(vertex_matrices(held), vertex_matrices(held, nominal_plant=True), (reuse,))
@@ -503,9 +518,11 @@ def certify_cells(
     *,
     frontend_cutoff_hz: float | None = None,
     limits_m: tuple[float, float] | None = None,
+    gain_scale: Callable[[float], tuple[float, float]] | None = None,
 ) -> Iterator[Cell]:
     """Every cell, stiffness by stiffness; each tries first the Lyapunov matrix that last
-    certified the same latency (the same state size), re-verified on its own vertices."""
+    certified the same latency (the same state size), re-verified on its own vertices.
+    ``gain_scale``: an adaptation's factor interval at each stiffness (N/mm)."""
     last: dict[tuple[int, int], FloatArray | None] = {}
     for k in stiffnesses_n_per_mm:
         for lat in latencies:
@@ -522,6 +539,7 @@ def certify_cells(
                 last.get(lat),
                 frontend_cutoff_hz=frontend_cutoff_hz,
                 limits_m=limits_m,
+                gain_scale=(1.0, 1.0) if gain_scale is None else gain_scale(k),
             )
             if cell.lyapunov_p is not None:
                 last[lat] = cell.lyapunov_p
@@ -543,13 +561,16 @@ def certify_region(
     frontend_cutoff_hz: float | None = None,
     limits_m: tuple[float, float] | None = None,
     deployed: dict[str, Any] | None = None,
+    gain_scale: Callable[[float], tuple[float, float]] | None = None,
 ) -> Region:
     """Certify every (stiffness, latency) cell for ``controller`` on ``plant``'s inner loop.
 
     ``surface``: how the fuzzy-PI evaluates ``rulebase`` (inputs in role order).
     ``frontend_cutoff_hz``, ``limits_m``: a spec's low-pass and ``(step_m, correction_m)``.
     ``deployed``: what the certified controller is (a spec's name and file, or the defaults
-    assumed), for the JSON.
+    assumed), for the JSON. ``gain_scale``: an adaptation's factor of the increment, the
+    interval it may take at each stiffness (N/mm); the factor may switch within it from one
+    period to the next (:mod:`fuzzkit.analysis.schedule_certificate`).
     """
     all_gains, kp, ki = effective_gains(controller, gains)
     inner = identify(plant)
@@ -567,6 +588,7 @@ def certify_region(
         noise_n,
         frontend_cutoff_hz=frontend_cutoff_hz,
         limits_m=limits_m,
+        gain_scale=gain_scale,
     )
     setpoints = [exp.setpoints[i] for i in range(3) if exp.selection[i]]
     rest = loop_equilibrium(exp, controller, gains, fuzzy)

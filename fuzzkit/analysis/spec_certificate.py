@@ -15,6 +15,12 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from fuzzkit.analysis.region import SIGMA_MIN, Region, certify_region, effective_gains
+from fuzzkit.analysis.schedule_certificate import (
+    DEFAULT_RHO,
+    RHO_STEPS,
+    adaptation_model,
+    scale_function,
+)
 from fuzzkit.control.spec import AxisSpec, ControllerSpec, role_ordered, with_gains
 from fuzzkit.errors import ConfigError
 from fuzzkit.loop.task import Experiment, with_spec
@@ -84,20 +90,56 @@ def certify_spec(
     axis: str | None = None,
     fuzzy_region: float = 1.0,
     sigma_min: float = SIGMA_MIN,
+    rho: float = DEFAULT_RHO,
 ) -> Region:
     """Certify ``spec``'s controller (one axis) on ``plant`` in the task ``exp``.
+
+    A spec that adapts its gains is certified over every factor its adaptation can run at each
+    stiffness, with the estimate within ``rho`` (:mod:`fuzzkit.analysis.schedule_certificate`);
+    the model's ``adaptation`` says what was assumed and, for a schedule that is not certified
+    in every cell, the largest estimate error of :data:`RHO_STEPS` it would be
+    (``rho_needed``; None: not even an exact estimate).
 
     Raises
     ------
     ConfigError
-        An adaptive spec (its gains change online; not certified), or see :func:`spec_axis`
-        and :func:`spec_experiment`.
+        See :func:`spec_axis` and :func:`spec_experiment`.
     """
-    if spec.adaptation.mode != "none":
-        raise ConfigError(
-            f"controller spec {spec.name!r} adapts its gains online ({spec.adaptation.mode}): "
-            "the certificate covers fixed gains only"
-        )
+    region = _certify_spec(
+        exp, spec, plant, stiffnesses_n_per_mm, latencies, axis, fuzzy_region, sigma_min, rho
+    )
+    ad = spec.adaptation
+    if ad.mode == "none":
+        return region
+    model = adaptation_model(ad, rho, stiffnesses_n_per_mm)
+    proved = all(c.certified for c in region.cells)
+    model["certified_every_cell"] = proved
+    if not proved and ad.mode == "stiffness-scheduled":
+        needed = None
+        for smaller in (r for r in RHO_STEPS if r < rho):
+            trial = _certify_spec(
+                exp, spec, plant, stiffnesses_n_per_mm, latencies, axis, fuzzy_region,
+                sigma_min, smaller,
+            )  # fmt: skip
+            if all(c.certified for c in trial.cells):
+                needed = smaller
+                break
+        model["rho_needed"] = needed
+    region.model["adaptation"] = model
+    return region
+
+
+def _certify_spec(
+    exp: Experiment,
+    spec: ControllerSpec,
+    plant: str,
+    stiffnesses_n_per_mm: Sequence[float],
+    latencies: Sequence[tuple[int, int]],
+    axis: str | None,
+    fuzzy_region: float,
+    sigma_min: float,
+    rho: float,
+) -> Region:
     ax = spec_axis(spec, axis)
     task = spec_experiment(exp, spec, ax)
     rulebase: Any = "macvicar_whelan"
@@ -128,6 +170,7 @@ def certify_spec(
         frontend_cutoff_hz=spec.sensor.lowpass_hz,
         limits_m=(spec.limits.step_m, spec.limits.correction_m),
         deployed=deployed,
+        gain_scale=None if spec.adaptation.mode == "none" else scale_function(spec.adaptation, rho),
     )
 
 

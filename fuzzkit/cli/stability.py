@@ -275,7 +275,41 @@ def _text(data: dict[str, Any], args: argparse.Namespace) -> str:
         lines.append(f"  {where}: {why}")
     certified = sum(c["certified"] for c in data["cells"])
     lines.append(f"certified {certified} of {len(data['cells'])} cells")
+    if "adaptation" in model:
+        lines += _adaptation_text(model["adaptation"])
     return "\n".join(lines)
+
+
+def _adaptation_text(ad: dict[str, Any]) -> list[str]:
+    """What the certificate of an adaptive spec assumed, and its verdict on the spec."""
+    factors = ", ".join(
+        f"{k} N/mm [{lo:g}, {hi:g}]" for k, (lo, hi) in ad["gain_factor_per_stiffness"].items()
+    )
+    lines = [f"adaptation ({ad['mode']}): the gain factor may switch every period within "
+             f"{factors}"]  # fmt: skip
+    if "rho" in ad:
+        lo, hi = ad["estimate_over_true"]
+        lines.append(
+            f"  the estimate within k_hat/k in [{lo:g}, {hi:g}] (rho {ad['rho']:g}), projected "
+            f"into {ad['range_n_mm']}; the band of k_max until it is trusted, the smallest "
+            "scale beyond k_max"
+        )
+    if ad["certified_every_cell"]:
+        lines.append(
+            "  proved: in every cell, one quadratic Lyapunov function for every factor "
+            "sequence in its interval (no dwell); the true stiffness is constant per cell"
+        )
+        return lines
+    lines.append("  refused: not every cell is certified with this adaptation")
+    if "rho_needed" in ad:
+        needed = ad["rho_needed"]
+        lines.append(
+            f"  it would be with an estimate within rho {needed:g}"
+            if needed is not None
+            else "  not even with an exact estimate (rho 0): a band the schedule runs there "
+            "(its own, its safe band or its smallest) is not stable"
+        )
+    return lines
 
 
 #: Width of a column of the text grids (a stiffness, a verdict, a region_n of 8.2f).

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 
+from fuzzkit.control import status as st
 from fuzzkit.control.adaptation_spec import Adaptation
 
 #: The least spread of the window increments ``du`` the slope needs: the normalised determinant
@@ -35,6 +36,20 @@ JUMP = 4.0
 #: the experiments' engage threshold). Out of contact the force is noise alone and its increments
 #: over the corrections' would pull the estimate to ``k_min``: it is frozen instead.
 CONTACT = 5.0
+#: The estimate is trusted after this many least-squares updates since the schedule started or
+#: restarted on a sudden stiffening; until then the schedule runs its band of ``k_max``
+#: (:meth:`~fuzzkit.control.adaptation_spec.Adaptation.safe_band`), whatever the estimate.
+#: The count needs no excitation from the gain itself beyond what that band makes: each
+#: update needs only ``|du| >= min_step_m`` and ``|df| >= min_force_n`` over a window.
+TRUST_UPDATES = 4
+#: Or the estimate is trusted once the secant since the first contact period (after a start or
+#: a restart) spans ``TRUST_SPAN`` times both excitation thresholds: ``|m - m_0| >= TRUST_SPAN *
+#: min_step_m`` and ``|f - f_0| >= TRUST_SPAN * min_force_n``; the estimate is then that secant.
+#: However small the safe band's gain, its integrator keeps moving the correction while the
+#: force is off the set point, so the secant's span grows until it counts: the trust does not
+#: wait for the windowed excitation a low gain may never make (a soft contact under the band
+#: of k_max). Its error is the force noise over ``TRUST_SPAN * min_force_n``.
+TRUST_SPAN = 2.0
 
 #: Singleton values of alpha's labels ZE, VS, S, SB, M, B, VB on [0, 1].
 ALPHA_LEVELS = {"ZE": 0.0, "VS": 1.0 / 6.0, "S": 2.0 / 6.0, "SB": 3.0 / 6.0, "M": 4.0 / 6.0,
@@ -139,8 +154,22 @@ class StiffnessSchedule:
         self.k = est.initial_n_mm
         self.updates = 0
         self.jumps = 0
-        self.band = self.ad.band_of(self.k)
+        self.fresh = 0  # updates since the start or the last sudden stiffening
+        self.beyond = False  # the last reading was stiffer than k_max
+        self.f0 = math.nan  # the secant's first contact period: force and tool motion
+        self.m0 = 0.0
+        self.band = self.ad.safe_band()
         self.since = self.dwell
+
+    @property
+    def trusted(self) -> bool:
+        """The estimate has had :data:`TRUST_UPDATES` updates since the last (re)start."""
+        return self.fresh >= TRUST_UPDATES
+
+    @property
+    def status(self) -> int:
+        """The schedule's status bits (``UNTRUSTED``, ``OUT_OF_RANGE``)."""
+        return (0 if self.trusted else st.UNTRUSTED) | (st.OUT_OF_RANGE if self.beyond else 0)
 
     @property
     def scale(self) -> float:
@@ -181,12 +210,18 @@ class StiffnessSchedule:
             bound = JUMP * self.k * du1_mm
             if df1 > bound if du1_mm > 0.0 else df1 < bound:
                 # a harder layer: the past says nothing about it, start afresh from here
-                self.k = min(max(df1 / du1_mm, est.k_min_n_mm), est.k_max_n_mm)
+                ratio = df1 / du1_mm
+                self.beyond = ratio > est.k_max_n_mm
+                self.k = min(max(ratio, est.k_min_n_mm), est.k_max_n_mm)
                 self.s_uu = self.s_u = self.s_1 = self.s_uf = self.s_f = 0.0
                 self.jumps += 1
+                self.fresh = 0
+                self.f0 = math.nan
                 df = math.nan  # this period is used up
         contact = CONTACT * est.min_force_n
         touching = abs(f) >= contact and abs(self.f_hist[(p + n - self.window) % n]) >= contact
+        if not self.trusted:
+            self._secant(f, self.u_hist[(p + n + 1 - self.delay) % n], contact)
         excited = abs(du) >= est.min_step_m and abs(df) >= est.min_force_n
         if math.isfinite(df) and touching and excited:
             du_mm = 1000.0 * du
@@ -199,13 +234,38 @@ class StiffnessSchedule:
             det = self.s_uu * self.s_1 - self.s_u * self.s_u
             if det > SPREAD * self.s_uu * self.s_1:
                 slope = (self.s_1 * self.s_uf - self.s_u * self.s_f) / det
+                self.beyond = slope > est.k_max_n_mm
                 self.k = min(max(slope, est.k_min_n_mm), est.k_max_n_mm)
                 self.updates += 1
+                self.fresh = min(self.fresh + 1, TRUST_UPDATES)
         if self.since < self.dwell:
             self.since += 1
-        target = self.ad.band_of(self.k)
+        if self.beyond:
+            target = self.ad.floor_band()
+        elif self.trusted:
+            target = self.ad.band_of(self.k)
+        else:
+            target = self.ad.safe_band()
         scales = self.ad.bands
         lower = scales[target].scale < scales[self.band].scale
         if target != self.band and (lower or self.since >= self.dwell):
             self.band = target
             self.since = 0
+
+    def _secant(self, f: float, m: float, contact: float) -> None:
+        """The untrusted estimate's secant since its first contact period: ``f`` this period's
+        force (NaN: held), ``m`` the tool motion it answers (``m_{k-D}``)."""
+        if not (math.isfinite(f) and abs(f) >= contact):
+            self.f0 = math.nan  # out of contact (or held): the secant starts again
+            return
+        if math.isnan(self.f0):
+            self.f0, self.m0 = f, m
+            return
+        est = self.ad.estimator
+        dm, df = m - self.m0, f - self.f0
+        if abs(dm) >= TRUST_SPAN * est.min_step_m and abs(df) >= TRUST_SPAN * est.min_force_n:
+            slope = df / (1000.0 * dm)
+            if slope > 0.0:
+                self.beyond = slope > est.k_max_n_mm
+                self.k = min(max(slope, est.k_min_n_mm), est.k_max_n_mm)
+                self.fresh = TRUST_UPDATES

@@ -98,6 +98,17 @@ class Adaptation:
                 return i
         return len(self.bands) - 1
 
+    def safe_band(self) -> int:
+        """The band until the estimate is trusted: the one of ``k_max``, the stiffest contact
+        the estimator's range admits."""
+        return self.band_of(self.estimator.k_max_n_mm)
+
+    def floor_band(self) -> int:
+        """The most conservative band (the smallest scale; the first of equal ones), for a
+        contact stiffer than ``k_max``."""
+        scales = [b.scale for b in self.bands]
+        return scales.index(min(scales))
+
     def dwell_periods(self, period_s: float) -> int:
         """The dwell time in whole periods (at least 1)."""
         return max(1, math.ceil(self.dwell_s / period_s - 1e-9))
@@ -253,9 +264,9 @@ def _band_problems(ad: Adaptation) -> list[tuple[SpecPath, str]]:
 #: 3 of its value there, from 1 to 2000 N/mm.
 DEFAULT_BANDS = (Band(0.5, 30.0), Band(0.2, 150.0), Band(0.05, 600.0), Band(0.02))
 DEFAULT_ESTIMATOR = Estimator(
-    window_periods=4,
+    window_periods=8,
     delay_periods=1,
-    forgetting=0.9,
+    forgetting=0.97,
     min_step_m=2.0e-6,
     min_force_n=0.2,
     initial_n_mm=300.0,

@@ -494,6 +494,9 @@ class HybridForceController:
             self.status |= st.ENGAGED
         if self.tripped:
             self.status |= st.TRIPPED
+        for sched in self.schedules:
+            if sched is not None:
+                self.status |= sched.status
         return self.selection * self.u + self._backoff
 
 

@@ -24,6 +24,13 @@ SATURATED = 1 << 4
 TARING = 1 << 5
 #: The spike gate rejected this sample (``HELD`` is set too).
 REJECTED = 1 << 6
+#: A stiffness schedule does not trust its estimate yet (fewer than
+#: :data:`fuzzkit.control.adaptation.TRUST_UPDATES` updates since its start or since a sudden
+#: stiffening): the gain is its band of ``k_max``, the stiffest contact its range admits.
+UNTRUSTED = 1 << 7
+#: A stiffness schedule's last update (or a sudden stiffening) read a contact stiffer than its
+#: range's ``k_max``: the gain is its most conservative band's.
+OUT_OF_RANGE = 1 << 8
 
 #: Every bit by name, in bit order (documentation and generated code list them from here).
 BITS: dict[str, int] = {
@@ -34,7 +41,11 @@ BITS: dict[str, int] = {
     "SATURATED": SATURATED,
     "TARING": TARING,
     "REJECTED": REJECTED,
+    "UNTRUSTED": UNTRUSTED,
+    "OUT_OF_RANGE": OUT_OF_RANGE,
 }
+#: The bits only a stiffness schedule sets (a controller without one never does).
+SCHEDULE_BITS = ("UNTRUSTED", "OUT_OF_RANGE")
 
 
 def describe(status: int) -> str:

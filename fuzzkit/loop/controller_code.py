@@ -23,7 +23,14 @@ from fuzzkit.codegen.controller import (
 )
 from fuzzkit.codegen.target import load_target
 from fuzzkit.control import status as st
-from fuzzkit.control.adaptation import ALPHA_TABLE, CONTACT, JUMP, SPREAD
+from fuzzkit.control.adaptation import (
+    ALPHA_TABLE,
+    CONTACT,
+    JUMP,
+    SPREAD,
+    TRUST_SPAN,
+    TRUST_UPDATES,
+)
 from fuzzkit.control.controllers import Surface, lookup_table_surface
 from fuzzkit.control.names import AXES
 from fuzzkit.control.reference import input_gains
@@ -43,12 +50,21 @@ STATUS_DOCS: Mapping[str, str] = {
     "TARING": "The tare is collecting free-air samples (the first N valid ones, or N after a "
     "request).",
     "REJECTED": "The spike gate rejected this sample (HELD is set too).",
+    "UNTRUSTED": "The stiffness schedule does not trust its estimate yet (too few updates "
+    "since the start or a sudden stiffening): the gain is its band of k_max.",
+    "OUT_OF_RANGE": "The stiffness schedule read a contact stiffer than its range's k_max: "
+    "the gain is its most conservative band's.",
 }
 
 
-def status_bits() -> tuple[StatusBit, ...]:
-    """The reference's status bits (``fuzzkit.control.status``) with their meaning."""
-    return tuple(StatusBit(name, bit, STATUS_DOCS[name]) for name, bit in st.BITS.items())
+def status_bits(scheduled: bool = False) -> tuple[StatusBit, ...]:
+    """The reference's status bits (``fuzzkit.control.status``) with their meaning; those
+    only a stiffness schedule sets (``SCHEDULE_BITS``) where ``scheduled``."""
+    return tuple(
+        StatusBit(name, bit, STATUS_DOCS[name])
+        for name, bit in st.BITS.items()
+        if scheduled or name not in st.SCHEDULE_BITS
+    )
 
 
 def design_of(spec: ControllerSpec) -> ControllerDesign:
@@ -88,7 +104,7 @@ def design_of(spec: ControllerSpec) -> ControllerDesign:
         gravity_m_s2=STANDARD_GRAVITY_M_S2,
         lowpass_alpha=spec.sensor.lowpass_alpha(spec.period_s),
         rulebase=None if spec.rulebase is None else role_ordered(spec, spec.rulebase),
-        status_bits=status_bits(),
+        status_bits=status_bits(spec.adaptation.mode == "stiffness-scheduled"),
         description=spec.description,
         source_file=source_file,
         source_sha256=sha,
@@ -137,6 +153,10 @@ def adaptation_design(spec: ControllerSpec) -> AdaptationDesign | None:
         k_min_n_mm=est.k_min_n_mm,
         k_max_n_mm=est.k_max_n_mm,
         bands=tuple((b.up_to_n_mm, b.scale) for b in ad.bands),
+        safe_band=ad.safe_band() if ad.bands else 0,
+        floor_band=ad.floor_band() if ad.bands else 0,
+        trust_updates=TRUST_UPDATES,
+        trust_span=TRUST_SPAN,
         dwell_periods=ad.dwell_periods(spec.period_s),
         alpha_min=ad.alpha_min,
         alpha_max=ad.alpha_max,
