@@ -77,6 +77,8 @@ TARGET = Target(
         "controller": {"{name}.h": "controller.h.jinja", "{name}.c": "controller.c.jinja"},
         # a fuzzy-PI controller's surface: the exact method as a sibling unit NAME_surface
         "surface": {"{name}.h": "exact.h.jinja", "{name}.c": "exact.c.jinja"},
+        # ... an interval type-2 rule base's (codegen.exact_type2)
+        "surface_type2": {"{name}.h": "exact.h.jinja", "{name}.c": "exact_type2.c.jinja"},
         # ... or, for a spec's surface: {method: table}, its lookup table
         "surface_table": {"{name}.h": "header.h.jinja", "{name}.c": "source.c.jinja"},
     },
