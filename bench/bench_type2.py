@@ -16,6 +16,9 @@
   bound against the exact engine printed), ns per ``NAME_eval`` (the harness of
   bench_codegen.py, -O2, CPU-time clock) and per 3-axis step (3 evals).
 
+* the generated exact IT2 code (``--method exact``, C float and double, -O2): bytes, largest
+  error against the engine, ns per eval and per 3-axis step.
+
 Target (issues 32, 43): the engine 100x faster than pyit2fls; the generated step <= 1 us (3 axes).
 """
 
@@ -33,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 import fuzzkit
+from fuzzkit.codegen.exact import emit_exact
 from fuzzkit.codegen.table_search import make_table
 from fuzzkit.fuzzy.inference import Engine
 
@@ -42,7 +46,7 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(ROOT / "tests" / "peers"))
 sys.path.insert(0, str(ROOT / "tests"))
 
-from bench_codegen import c_ns_per_call  # noqa: E402
+from bench_codegen import c_ns_per_call, measure_files  # noqa: E402
 from bench_engine import best_of  # noqa: E402
 from make_it2_refs import EVAL, system_spec  # noqa: E402
 
@@ -51,6 +55,8 @@ POINT = (0.3, -0.2)
 SURFACE_N = 101
 PEER_GRID = 11
 TABLE_RESOLUTION = 65
+#: Calls the exact step's timing makes (it is microseconds a call, the table's nanoseconds).
+EXACT_CALLS = 20_000
 
 
 def peer_row(python: str, rb: fuzzkit.fuzzy.model.RuleBase) -> tuple[float, float, str]:  # type: ignore[name-defined]
@@ -112,6 +118,17 @@ def main(argv: list[str] | None = None) -> None:
         print("  no C compiler: step not timed")
     else:
         print(f"  {ns:.1f} ns per eval, {3 * ns:.1f} ns per 3-axis step (target <= 1000 ns)")
+        for number_type in ("float", "double"):
+            nbytes, ns, err = measure_files(
+                rb, emit_exact(rb, "c", number_type), number_type, EXACT_CALLS
+            )
+            print(
+                f"generated C {number_type} exact IT2 (--method exact, -O2): {nbytes} bytes of "
+                f"code and constants, largest error {err:.2g} of the output range"
+            )
+            print(
+                f"  {ns:.0f} ns per eval, {3 * ns:.0f} ns per 3-axis step (target <= 1000 ns)"
+            )
 
 
 if __name__ == "__main__":

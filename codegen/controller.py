@@ -39,11 +39,13 @@ from fuzzkit.codegen.emit import (
     render_files,
 )
 from fuzzkit.codegen.exact import ROUNDING_BOUND, ExactSpec, build_exact_spec
+from fuzzkit.codegen.exact_type2 import Type2Spec, build_type2_spec
 from fuzzkit.codegen.lookup_table import LookupTable
 from fuzzkit.codegen.table_search import make_table
 from fuzzkit.codegen.target import load_target
 from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy.model import RuleBase
+from fuzzkit.fuzzy.type2_model import Type2RuleBase
 
 KINDS = ("pi", "fuzzy-pi")
 AXES = ("x", "y", "z")
@@ -263,7 +265,7 @@ class ControllerCodeSpec:
     libm: tuple[str, ...]
     #: the surface: an exact-method spec, or a lookup table's for a table surface (Python
     #: embeds it; C renders it as a sibling unit)
-    surface: ExactSpec | TableSpec | None
+    surface: ExactSpec | TableSpec | Type2Spec | None
     #: the file kind the surface renders as: ``surface`` (exact) or ``surface_table``
     surface_kind: str
     float_bound_note: tuple[str, ...]
@@ -423,7 +425,7 @@ def build_controller_spec(
     module, surface_name = controller_files(design)
     name = design.name
     fuzzy = design.kind == "fuzzy-pi"
-    surface: ExactSpec | TableSpec | None = None
+    surface: ExactSpec | TableSpec | Type2Spec | None = None
     if fuzzy:
         srb = _surface_rulebase(design, surface_name)
         if design.surface_method == "table":
@@ -435,6 +437,8 @@ def build_controller_spec(
             what = f"controller {name!r}"
             table = surface_table(srb, design.surface_tolerance, design.surface_resolution, what)
             surface = build_spec(srb, table, target)
+        elif isinstance(srb, Type2RuleBase):
+            surface = build_type2_spec(srb, target, nt)
         else:
             surface = build_exact_spec(srb, target, nt)
     weight = 0.0 if design.mass_kg is None else design.mass_kg * design.gravity_m_s2
@@ -543,7 +547,13 @@ def build_controller_spec(
         status=status,
         libm=tuple(sorted(libm)),
         surface=surface,
-        surface_kind="surface_table" if isinstance(surface, TableSpec) else "surface",
+        surface_kind=(
+            "surface_table"
+            if isinstance(surface, TableSpec)
+            else "surface_type2"
+            if isinstance(surface, Type2Spec)
+            else "surface"
+        ),
         float_bound_note=tuple(textwrap.wrap(_float_note(design, nt), 88)),
         guid=_guid(design, nt, __version__),
         tunable=tg.tunable_parameters,

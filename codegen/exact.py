@@ -43,6 +43,9 @@ from fuzzkit.codegen.emit import (
     units_line,
 )
 from fuzzkit.codegen.names import names_note, symbol
+
+# the number types and the rounding bound every exact unit (type-1, IT2) states, defined once
+from fuzzkit.codegen.rounding import EXACT_NUMBER_TYPES, ROUNDING_BOUND, ROUNDING_ULPS
 from fuzzkit.codegen.target import Target, load_target
 from fuzzkit.errors import CodegenError
 from fuzzkit.fuzzy import membership, shapes
@@ -60,20 +63,6 @@ from fuzzkit.fuzzy.model import (
 )
 from fuzzkit.fuzzy.output_geometry import LINEAR_NODES, TIE
 from fuzzkit.fuzzy.type2_model import Type2RuleBase
-
-#: Number types the exact target computes in (Q15 has no exact inference: use a table).
-EXACT_NUMBER_TYPES = ("float", "double")
-
-#: Stated bound of |generated - exact engine| for the continuous defuzzifiers (centroid,
-#: bisector, weighted average) as a multiple of the number type's machine epsilon times the
-#: output's full scale (largest |range end|): 2^-52 S x 64 for double (Python too), 2^-23 S x 64
-#: for float. Tested on 1e5 random points plus edges for every shipped rule base and a random
-#: family; see codegen/README.md. mom/som/lom are discontinuous where two maxima tie: the
-#: bound holds away from ties (double: levels within 1e-10 of each other count as tied, as in
-#: the engine); at a tie a rounding difference can move the result to the other maximum.
-ROUNDING_ULPS = 256
-EPSILON = {"double": 2.0**-52, "float": 2.0**-23}
-ROUNDING_BOUND = {k: ROUNDING_ULPS * v for k, v in EPSILON.items()}
 
 #: Defuzzifiers the exact method emits (``weighted_sum`` and ``weighted_average`` of Sugeno
 #: outputs: every consequent's value, a constant or ``c . x + c0``, weighted by its rule's
@@ -382,11 +371,10 @@ def unsupported_reason(rb: RuleBase, number_type: str = "double") -> str | None:
             "available as a lookup table (use --method table)"
         )
     if isinstance(rb, Type2RuleBase):
-        return (
-            "interval type-2 rule bases are generated as a lookup table of the exact IT2 "
-            "engine with a certified bound (use --method table); the exact method emits "
-            "type-1 inference only"
-        )
+        from fuzzkit.codegen.exact_type2 import unsupported_reason as type2_reason
+
+        why = type2_reason(rb)
+        return None if why is None else f"{why} (or use --method table)"
     if rb.defuzzifier not in EXACT_DEFUZZIFIERS:
         return f"the exact method has no {rb.defuzzifier} defuzzifier: compile with --method table"
     for out in rb.outputs:
@@ -1112,7 +1100,17 @@ def emit_exact(
     *,
     fpi_defaults: FpiDefaults | None = None,
 ) -> dict[str, str]:
-    """Generate the exact-method ``target`` sources for ``rb``: ``{relative path: text}``."""
+    """Generate the exact-method ``target`` sources for ``rb``: ``{relative path: text}``
+    (an interval type-2 rule base's by :mod:`fuzzkit.codegen.exact_type2`)."""
+    if isinstance(rb, Type2RuleBase):
+        from fuzzkit.codegen.exact_type2 import emit_exact_type2
+
+        if fpi_defaults is not None:
+            raise CodegenError(
+                f"rule base {rb.name!r}: --gains is not baked into interval type-2 exact code "
+                "yet (pass the gains to NAME_fpi_init)"
+            )
+        return emit_exact_type2(rb, target, number_type)
     spec = build_exact_spec(rb, target, number_type, fpi_defaults=fpi_defaults)
     return render_files(target, spec.name, spec, "exact")
 

@@ -190,6 +190,9 @@ SANITIZED = {
         "float",
         1000,
     ),
+    # interval type-2 (codegen.exact_type2): its own unit, with the fuzzy-PI step
+    "macvicar_whelan_it2-double": (lambda: rulebase("macvicar_whelan_it2"), "double", 2000),
+    "macvicar_whelan_it2-float": (lambda: rulebase("macvicar_whelan_it2"), "float", 2000),
 }
 
 

@@ -213,24 +213,6 @@ def test_plot_shades_the_footprint(tmp_path: object) -> None:
     assert _cli("plot", "macvicar_whelan_it2", "--out", f"{tmp_path}/it2.png").returncode == 0
 
 
-def test_exact_codegen_refuses_it2_and_compile_says_so(tmp_path: object) -> None:
-    # the exact method emits type-1 inference: on an IT2 rule base it would compile the upper
-    # sets alone, silently another controller
-    from fuzzkit.codegen.exact import emit_exact, unsupported_reason
-    from fuzzkit.errors import CodegenError
-
-    rb = load("macvicar_whelan_it2")
-    assert "interval type-2" in (unsupported_reason(rb) or "")
-    with pytest.raises(CodegenError, match="interval type-2"):
-        emit_exact(rb, "c")
-    run = _cli(
-        "compile", "macvicar_whelan_it2", "--target", "c", "--method", "exact",
-        "--out", f"{tmp_path}/out",
-    )  # fmt: skip
-    assert run.returncode == 2 and "interval type-2" in run.stderr
-    assert "Traceback" not in run.stderr
-
-
 def test_the_closed_loop_takes_it2() -> None:
     # nothing keeps an IT2 rule base out of the loop (tests/test_type2_loop.py runs it)
     from fuzzkit.control.loop_rulebase import loop_problems

@@ -1,12 +1,12 @@
 """An interval type-2 rule base in the closed loop (issue 43 item 1), through the command line.
 
 A controller spec naming ``macvicar_whelan_it2`` (``docs/examples/controller_it2.yaml``, its
-surface the generated table of the exact IT2 engine) simulates on every plant through its
-generated controller, replays through the generated C to 0 m with identical status bits,
-sweeps, tunes and exports as an FMU (``tests/test_fmu.py``). The loop's corrections follow the
-IT2 engine (an independent computation) within the table's certified bound, and not the
-type-1 surface. ``make test`` runs a covering set of plant x implementation x fault x latency;
-``make verify`` the whole product.
+surface exact IT2 inference, ``codegen/exact_type2.py``; or a table of it) simulates on every
+plant through its generated controller, replays through the generated C to 0 m with identical
+status bits, sweeps, tunes and exports as an FMU (``tests/test_fmu.py``). The loop's
+corrections follow the brute-force IT2 reference (``tests/_type2_reference.py``, an
+independent computation), and not the type-1 surface. ``make test`` runs a covering set of
+plant x implementation x fault x latency; ``make verify`` the whole product.
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ from __future__ import annotations
 import csv
 import itertools
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -21,11 +22,11 @@ import pytest
 from _codegen_util import needs_cc
 from _pairwise import pairwise
 from _replay_logs import replayed_difference, reproduces, run_cli
+from _type2_reference import centroid_interval
 
-from fuzzkit.codegen.controller import surface_table
-from fuzzkit.control.spec import IT2_TABLE
 from fuzzkit.formats.registry import load
 from fuzzkit.fuzzy.inference import Engine
+from fuzzkit.fuzzy.type2_model import Type2RuleBase
 
 REPO = Path(__file__).resolve().parent.parent
 SPEC = REPO / "docs" / "examples" / "controller_it2.yaml"
@@ -101,8 +102,8 @@ def test_the_loop_evaluates_the_it2_surface(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     # the reference controller (Python loop) records the e, de its surface read: its
-    # corrections are the IT2 engine's within the shipped table's certified bound, and
-    # visibly not the type-1 surface's; the same run replays through the generated C
+    # corrections are the brute force's IT2 output (20001 samples: quadrature error below
+    # 1e-7), and visibly not the type-1 surface's; the same run replays through the C
     run_csv = tmp_path / "ref.csv"
     _ok(capsys, "simulate", "E1", "--spec", str(SPEC), "--controller-impl", "reference",
         "--csv", str(run_csv))  # fmt: skip
@@ -112,15 +113,19 @@ def test_the_loop_evaluates_the_it2_surface(
     assert stepped.sum() > 500
     x, y = np.clip(0.05 * e[stepped], -1, 1), np.clip(0.2 * de[stepped], -1, 1)
     it2 = load("macvicar_whelan_it2")
-    bound = surface_table(it2, None, IT2_TABLE.resolution).bound[0]
-    off_it2 = np.abs(du[stepped] / 2e-4 - Engine(it2).evaluate({"e": x, "de": y})["du"])
+    assert isinstance(it2, Type2RuleBase)
+    rows = np.linspace(0, x.size - 1, 12).astype(int)
+    for k in rows:
+        y_l, y_r = centroid_interval(it2, {"e": x[k], "de": y[k]}, 20001)
+        assert abs(du[stepped][k] / 2e-4 - 0.5 * (y_l + y_r)) < 1e-7
     type1 = Engine(load("macvicar_whelan")).evaluate({"e": x, "de": y})["du"]
-    assert off_it2.max() <= bound
-    assert np.abs(du[stepped] / 2e-4 - type1).max() > 3 * bound
+    assert np.abs(du[stepped] / 2e-4 - type1).max() > 1e-2
     assert reproduces(capsys, SPEC, run_csv, "c")
 
 
-def test_simulate_with_an_it2_rule_base_runs_its_table(capsys: pytest.CaptureFixture[str]) -> None:
+def test_simulate_with_an_it2_rule_base_runs_its_exact_code(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
     runs = {}
     for rb in ("macvicar_whelan_it2", "macvicar_whelan"):
         out = _ok(capsys, "simulate", "E1", "--rulebase", rb, "--plant", "arm6", "--json")
@@ -147,25 +152,25 @@ def test_an_it2_spec_sweeps_and_tunes(tmp_path: Path, capsys: pytest.CaptureFixt
         "--workers", "1", "--quiet", "--out", str(tmp_path / "g.yaml"), "--spec-out",
         str(tuned))  # fmt: skip
     text = tuned.read_text(encoding="utf-8")
-    assert "rulebase: macvicar_whelan_it2" in text
-    assert f"surface: {{method: table, resolution: {IT2_TABLE.resolution}}}" in text
+    assert "rulebase: macvicar_whelan_it2" in text and "method: table" not in text
     out = _ok(capsys, "simulate", "E1", "--spec", str(tuned), "--json")
     assert not json.loads(out[out.index("{") :])["tripped"]
 
 
-def test_an_exact_surface_for_an_it2_rule_base_is_refused_with_the_fix(
+def test_an_it2_spec_on_a_table_surface_runs_and_replays(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
+    # the table of the exact IT2 engine, for targets that want one: the same loop, replayed
     text = SPEC.read_text(encoding="utf-8")
-    exact = tmp_path / "exact_it2.yaml"
-    exact.write_text(
-        "".join(ln for ln in text.splitlines(keepends=True) if not ln.startswith("surface:")),
+    table = tmp_path / "table_it2.yaml"
+    table.write_text(
+        re.sub(r"(?m)^surface: .*$", "surface: {method: table, resolution: 33}", text),
         encoding="utf-8",
     )
-    for argv in (("validate", str(exact)), ("simulate", "E1", "--spec", str(exact), "--csv",
-                                              str(tmp_path / "never.csv"))):  # fmt: skip
-        code, _, err = run_cli(capsys, *argv)
-        assert code == 2 and "Traceback" not in err
-        assert f"{exact}:" in err and "interval type-2" in err
-        assert "surface: {method: table, resolution: 65}" in err
-    assert not (tmp_path / "never.csv").exists()
+    run_csv = tmp_path / "run.csv"
+    out = _ok(capsys, "simulate", "E1", "--spec", str(table), "--plant", "arm6", "--csv",
+              str(run_csv), "--json")  # fmt: skip
+    assert not json.loads(out[out.index("{") :])["tripped"]
+    assert replayed_difference(capsys, table, run_csv, "c") == 0.0
+    # another controller than the exact spec's on the same samples
+    assert replayed_difference(capsys, SPEC, run_csv, "c") > 1e-7

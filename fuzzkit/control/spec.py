@@ -26,7 +26,6 @@ from fuzzkit.control.adaptation_spec import MODES, NONE, Adaptation, adaptation_
 from fuzzkit.control.names import AXES, KINDS
 from fuzzkit.errors import ConfigError
 from fuzzkit.fuzzy.model import RuleBase, Source
-from fuzzkit.fuzzy.type2_model import footprint_of
 from fuzzkit.fuzzy.validation import identifier_problem
 
 #: Adaptation modes (:mod:`fuzzkit.control.adaptation_spec`).
@@ -68,17 +67,6 @@ class Surface:
 
 #: The default surface: exact inference.
 EXACT = Surface()
-#: The surface an interval type-2 rule base's controller is generated with: the exact method
-#: emits type-1 inference only, so its surface is a lookup table of the exact IT2 engine, of
-#: this resolution (65 x 65 certifies 0.72 % of the output range for macvicar_whelan_it2;
-#: docs/type2.md). A run spec built from a rule base takes it (:func:`default_surface`).
-IT2_TABLE = Surface("table", resolution=65)
-
-
-def default_surface(rb: RuleBase | None) -> Surface:
-    """The surface a spec built from ``rb`` takes when none is given: :data:`EXACT`, or for an
-    interval type-2 rule base :data:`IT2_TABLE`."""
-    return IT2_TABLE if rb is not None and footprint_of(rb) is not None else EXACT
 
 
 @dataclass(frozen=True, slots=True)
@@ -300,19 +288,6 @@ def spec_problems(spec: ControllerSpec) -> list[tuple[SpecPath, str]]:
     elif spec.kind == "pi" and spec.inputs is not None:
         out.append((("inputs",), "a pi controller has no rule base to map inputs of"))
     out += surface_problems(spec.surface, spec.kind)
-    if (
-        spec.kind == "fuzzy-pi"
-        and spec.surface == EXACT
-        and default_surface(spec.rulebase) != EXACT
-    ):
-        out.append(
-            (
-                ("surface",),
-                "an interval type-2 rule base is generated as a lookup table of its exact engine "
-                "(the exact method emits type-1 inference only): write surface: {method: table, "
-                f"resolution: {IT2_TABLE.resolution}}} (docs/type2.md, 'In the closed loop')",
-            )
-        )
     out += adaptation_problems(spec.adaptation, spec.kind, spec.period_s)
     _positive(out, ("period_s",), spec.period_s)
     if _finite(spec.period_s) and not MIN_PERIOD_S <= spec.period_s <= MAX_PERIOD_S:

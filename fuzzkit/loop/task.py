@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 from fuzzkit.control.names import AXES
-from fuzzkit.control.spec import AxisSpec, ControllerSpec, Limits, Safety, default_surface
+from fuzzkit.control.spec import AxisSpec, ControllerSpec, Limits, Safety
 from fuzzkit.errors import ConfigError
 from fuzzkit.fuzzy.model import RuleBase
 from fuzzkit.plants.contract import Scenario
@@ -126,5 +126,4 @@ def spec_for(
         rulebase=rulebase if kind == "fuzzy-pi" else None,
         rulebase_ref=rulebase_ref if kind == "fuzzy-pi" else None,
         description=f"{kind} for {exp.name}, gains tuned by fuzzkit tune",
-        surface=default_surface(rulebase if kind == "fuzzy-pi" else None),
     )

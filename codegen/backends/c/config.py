@@ -72,9 +72,13 @@ TARGET = Target(
     files={
         "table": {"{name}.h": "header.h.jinja", "{name}.c": "source.c.jinja"},
         "exact": {"{name}.h": "exact.h.jinja", "{name}.c": "exact.c.jinja"},
+        # interval type-2 exact inference (codegen.exact_type2): the same header
+        "exact_type2": {"{name}.h": "exact.h.jinja", "{name}.c": "exact_type2.c.jinja"},
         "controller": {"{name}.h": "controller.h.jinja", "{name}.c": "controller.c.jinja"},
         # a fuzzy-PI controller's surface: the exact method as a sibling unit NAME_surface
         "surface": {"{name}.h": "exact.h.jinja", "{name}.c": "exact.c.jinja"},
+        # ... an interval type-2 rule base's (codegen.exact_type2)
+        "surface_type2": {"{name}.h": "exact.h.jinja", "{name}.c": "exact_type2.c.jinja"},
         # ... or, for a spec's surface: {method: table}, its lookup table
         "surface_table": {"{name}.h": "header.h.jinja", "{name}.c": "source.c.jinja"},
     },

@@ -35,6 +35,11 @@ TARGET = dataclasses.replace(
             **{f"sources/{h}": h for h in FMI2_HEADERS},
         },
         "surface": {"sources/{name}.h": "exact.h.jinja", "sources/{name}.c": "exact.c.jinja"},
+        # ... an interval type-2 rule base's (codegen.exact_type2)
+        "surface_type2": {
+            "sources/{name}.h": "exact.h.jinja",
+            "sources/{name}.c": "exact_type2.c.jinja",
+        },
         "surface_table": {
             "sources/{name}.h": "header.h.jinja",
             "sources/{name}.c": "source.c.jinja",

@@ -63,6 +63,8 @@ TARGET = Target(
     files={
         "table": {"{name}.py": "module.py.jinja"},
         "exact": {"{name}.py": "exact.py.jinja"},
+        # interval type-2 exact inference (codegen.exact_type2): its own body
+        "exact_type2": {"{name}.py": "exact.py.jinja"},
         # the fuzzy-PI surface is embedded (exact_body.py.jinja): one module, no import path
         "controller": {"{name}.py": "controller.py.jinja"},
     },
