@@ -126,9 +126,7 @@ def main(argv: list[str] | None = None) -> None:
                 f"generated C {number_type} exact IT2 (--method exact, -O2): {nbytes} bytes of "
                 f"code and constants, largest error {err:.2g} of the output range"
             )
-            print(
-                f"  {ns:.0f} ns per eval, {3 * ns:.0f} ns per 3-axis step (target <= 1000 ns)"
-            )
+            print(f"  {ns:.0f} ns per eval, {3 * ns:.0f} ns per 3-axis step (target <= 1000 ns)")
 
 
 if __name__ == "__main__":
