@@ -334,7 +334,9 @@ DISCONTINUOUS = frozenset({"mean_of_maximum", "smallest_of_maximum", "largest_of
 
 def not_yet(rb: RuleBase, out: Variable, number_type: str = "double") -> tuple[str, Term] | None:
     """Which :data:`NOT_YET` class refuses output ``out`` of ``rb`` in ``number_type``, with the
-    term that makes it so (None: the method emits it)."""
+    term that makes it so (None: the method emits it). An unregistered shape raises."""
+    for t in out.terms:
+        shapes.shape(t.shape)  # unregistered: raise, whichever path reads the term
     if out.is_sugeno or rb.defuzzifier == "weighted_average":
         return None  # the weighted average needs only the term centres
     if (
@@ -346,7 +348,7 @@ def not_yet(rb: RuleBase, out: Variable, number_type: str = "double") -> tuple[s
         return "float_psum_maxima", out.terms[0]
     if _gaussian_closed_form(rb, out):
         return None
-    pwl = [t for t in out.terms if shapes.shape(t.shape).piecewise_linear]  # unregistered: raise
+    pwl = [t for t in out.terms if shapes.shape(t.shape).piecewise_linear]
     curved = [t for t in out.terms if not shapes.shape(t.shape).piecewise_linear]
     if not curved:
         return None

@@ -320,9 +320,7 @@ def build_type2_spec(rb: RuleBase, target: str, number_type: str = "double") -> 
         n_points=n_points,
         bracket_steps=bracket,
         newton_steps=steps,
-        default=f"({tg.type_names[number_type]}){tg.nan}"
-        if o.default is None and target == "c"
-        else (tg.nan if o.default is None else lit(float(o.default))),
+        default=tg.nan if o.default is None else lit(float(o.default)),
     )
 
 

@@ -325,7 +325,7 @@ def test_replay_runs_the_generated_controller_unless_the_reference_is_named(
 
 
 def test_every_command_names_the_implementations_alike() -> None:
-    from fuzzkit.loop.controller_code import GENERATED_IMPLS
+    from fuzzkit.loop.generated import GENERATED_IMPLS
     from fuzzkit.loop.spec import CONTROLLER_IMPLS
     from fuzzkit.ros2.controller import IMPLS as ROS2_IMPLS
     from fuzzkit.studies.replay import IMPLS

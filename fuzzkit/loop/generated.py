@@ -36,6 +36,40 @@ FloatArray = npt.NDArray[np.float64]
 StepFunction = Callable[[FloatArray, FloatArray, FloatArray], int]
 
 
+#: The generated controller's implementations, as ``--controller-impl`` names them
+#: (``fuzzkit.loop.spec.CONTROLLER_IMPLS`` less the reference; ``ros2 --impl`` has these).
+GENERATED_IMPLS = ("auto", "c", "python")
+
+
+def open_generated_impl(
+    spec: ControllerSpec, impl: str, number_type: str | None = None
+) -> tuple[str, Any]:
+    """The spec's generated controller as ``impl`` names it
+    (:data:`GENERATED_IMPLS`), opened (:func:`open_generated`): ``(target that
+    runs it, the controller)``. ``number_type``: the C's (the Python computes in double).
+
+    Raises
+    ------
+    ToolchainError
+        ``c`` and no compiler, or code that does not compile.
+    ConfigError
+        An unknown ``impl``.
+    """
+    from fuzzkit.loop.controller_code import open_generated
+
+    if impl not in GENERATED_IMPLS:
+        raise ConfigError(
+            f"unknown generated implementation {impl!r} (expected {', '.join(GENERATED_IMPLS)})"
+        )
+    if impl in ("auto", "c"):
+        try:
+            return "c", open_generated(spec, "c", number_type)
+        except ToolchainError:
+            if impl == "c":
+                raise
+    return "python", open_generated(spec, "python")
+
+
 def open_step(spec: ControllerSpec, impl: str = "auto") -> tuple[StepFunction, str]:
     """The generated controller of ``spec`` as one step function, and its label: the double C
     (``impl`` ``c``, or ``auto`` where a C compiler exists; compiled once per process and code,

@@ -15,7 +15,7 @@ from typing import Any
 
 from fuzzkit.control.names import AXES
 from fuzzkit.control.spec import ControllerSpec
-from fuzzkit.loop.controller_code import GENERATED_IMPLS, open_generated_impl
+from fuzzkit.loop.generated import GENERATED_IMPLS, open_generated_impl
 from fuzzkit.ros2.parameters import refusal, tunable_values
 
 #: ``--impl``: ``auto`` is the generated C where it compiles, else the generated Python

@@ -296,7 +296,7 @@ def replayed_by(
                 apply(ref, by_period[k])
             out[k], status[k] = ref.step(force, None if rot is None else rot[k])
         return out, status, impl
-    from fuzzkit.loop.controller_code import open_generated_impl
+    from fuzzkit.loop.generated import open_generated_impl
 
     target, ctl = open_generated_impl(spec, impl, number_type)
     result: tuple[FloatArray, npt.NDArray[np.int64]] = ctl.run(log.forces, log.rotations)
