@@ -4,8 +4,9 @@ MATLAB ``.fis`` with ``gaussmf`` outputs through the commands a user runs on the
 Each goes through validate, eval --explain (text and JSON), compile --verify (C float, C
 double, Python; the exact method: every rounding bound checked on 1e5 points plus edges),
 simulate on every plant, replay (the shipped spec on the rule base, simulated on planar, its
-log replayed through the generated C to 0 m), stability and tune. ``make test`` runs validate
-and explain of each; the rest, a few CPU-minutes, runs in ``make verify``. Not here: report.
+log replayed through the generated C to 0 m), stability, tune and report (``--quick`` on
+planar with the shipped gains, about 16 CPU-s each). ``make test`` runs validate and explain
+of each; the rest, a few CPU-minutes, runs in ``make verify``.
 """
 
 from __future__ import annotations
@@ -95,3 +96,16 @@ def test_compile_simulate_stability_and_tune(
     out = _run(capsys, "tune", "E1", "--controller", "fuzzy-pi", "--rulebase", source,
                "--budget", "10", "--workers", "1", "--out", str(gains))  # fmt: skip
     assert gains.exists() and "wrote" in out
+
+
+@pytest.mark.verify
+@pytest.mark.parametrize("name", sorted(RULEBASES))
+def test_report(name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    source = RULEBASES[name]
+    folder = tmp_path / "report"
+    gains = Path(__file__).parent.parent / "docs" / "report" / "gains"
+    _run(capsys, "report", "--out", str(folder), "--plant", "planar", "--rulebase", source,
+         "--quick", "--gains-dir", str(gains), "--no-rrd", "--quiet")  # fmt: skip
+    text = (folder / "report.md").read_text("utf-8")
+    assert Path(source).stem in text or source in text
+    assert (folder / "surface.png").stat().st_size > 0
