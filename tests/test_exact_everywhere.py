@@ -109,3 +109,27 @@ def test_report(name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     text = (folder / "report.md").read_text("utf-8")
     assert Path(source).stem in text or source in text
     assert (folder / "surface.png").stat().st_size > 0
+
+
+def test_explain_draws_every_smooth_output_shape(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """eval --explain as text, JSON and the rule-viewer PNG on a rule base whose output has a
+    term of every smooth shape but the Gaussian (tests/data/smooth_outputs.yaml)."""
+    from fuzzkit.formats.registry import load
+    from fuzzkit.fuzzy import shapes
+    from fuzzkit.fuzzy.inference import Engine
+
+    source = str(DATA / "smooth_outputs.yaml")
+    rb = load(source)
+    smooth = {s.name for s in shapes.REGISTRY.values() if s.mu is not None and s.trapezoid is None}
+    assert {t.shape for t in rb.outputs[0].terms} == smooth - {"gaussian", "singleton"}
+    assert "ok" in _run(capsys, "validate", source)
+    point = ["-i", "e=0.2", "-i", "de=-0.3"]
+    png = tmp_path / "why.png"
+    text = _run(capsys, "eval", source, *point, "--explain", "--png", str(png))
+    value = json.loads(_run(capsys, "eval", source, *point, "--explain", "--json"))
+    got = value["outputs"][0]["value"]
+    assert got == Engine(rb).evaluate_point({"e": 0.2, "de": -0.3})["u"]
+    assert f"= {got}" in text
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
