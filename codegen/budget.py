@@ -7,9 +7,11 @@ method cannot compile (bell, sigmoid, MATLAB's shapes, Gaussians under a sum agg
 engine integrates every point on a grid of up to a million points, milliseconds a point. An
 :class:`EngineBudget` is charged with every batch of points *before* the engine evaluates it,
 at the engine's own estimate of its time per point
-(``fuzzkit.fuzzy.inference.Engine.work_per_point``, an over-estimate on this project's
-2-core machine), and refuses with the reason once a batch would pass its seconds: the answer
-does not depend on the machine's load, and no work is started that the budget cannot pay.
+(``fuzzkit.fuzzy.inference.Engine.work_per_point``: each output path's cost calibrated
+against this project's 2-core machine, at about twice what it measures), after the engine's
+construction (``Engine.construction_work``), and refuses with the reason once a batch would
+pass its seconds: the answer does not depend on the machine's load (a calibrated model, not a
+clock), and no work is started that the budget cannot pay.
 """
 
 from __future__ import annotations
@@ -29,14 +31,15 @@ FAST_CHOICES = (
 
 
 class EngineBudget:
-    """Estimated engine seconds spent so far for one ``task`` against a limit of ``seconds``."""
+    """Estimated engine seconds spent so far for one ``task`` against a limit of ``seconds``;
+    the engine's construction is the first thing it counts."""
 
     def __init__(self, engine: Engine, task: str, seconds: float) -> None:
         self.name = engine.rulebase.name
         self.per_point = engine.work_per_point() / OPERATIONS_PER_SECOND
         self.task = task
         self.seconds = seconds
-        self.spent = 0.0
+        self.spent = engine.construction_work() / OPERATIONS_PER_SECOND
 
     def charge(self, points: int) -> None:
         """Book ``points`` engine evaluations, or refuse (CodegenError) if they would pass the

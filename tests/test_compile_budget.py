@@ -106,3 +106,20 @@ def test_random_rule_bases_compile_or_refuse_with_the_reason_in_bounded_work(
     rb = random_rulebase(seed, "clamp", matlab_shapes=matlab)
     assert _compile_or_refuse(rb) in ("exact", "table", "refused")
     assert engine_seconds[0] <= SEARCH_SECONDS
+
+
+@pytest.mark.verify  # about 6 CPU-s of search
+def test_a_partition_table_without_a_compiler_is_searched_not_refused(
+    monkeypatch: pytest.MonkeyPatch, engine_seconds: list[float]
+) -> None:
+    """Without a C compiler every check grid of the search is the engine's. MacVicar-Whelan's
+    fast centroid costs about 2 us a point measured; the budget once charged it as the
+    breakpoint sweep (0.077 ms a point) and refused this search at 41 estimated seconds."""
+    monkeypatch.setattr("fuzzkit.codegen.toolchain.find_compiler", lambda *a, **k: None)
+    rb = load("macvicar_whelan")
+    result = compile_rulebase(rb, "python", "double", method="table", tolerance=0.0005)
+    assert result.method == "table" and result.table is not None
+    assert result.table.bound[0] <= 0.0005 * (
+        rb.outputs[0].high - rb.outputs[0].low
+    )  # of the range
+    assert 0 < engine_seconds[0] <= SEARCH_SECONDS

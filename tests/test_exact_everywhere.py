@@ -4,8 +4,9 @@ MATLAB ``.fis`` with ``gaussmf`` outputs through the commands a user runs on the
 Each goes through validate, eval --explain (text and JSON), compile --verify (C float, C
 double, Python; the exact method: every rounding bound checked on 1e5 points plus edges),
 simulate on every plant, replay (the shipped spec on the rule base, simulated on planar, its
-log replayed through the generated C to 0 m), stability and tune. ``make test`` runs validate
-and explain of each; the rest, a few CPU-minutes, runs in ``make verify``. Not here: report.
+log replayed through the generated C to 0 m), stability, tune and report (``--quick`` on
+planar with the shipped gains, about 16 CPU-s each). ``make test`` runs validate and explain
+of each; the rest, a few CPU-minutes, runs in ``make verify``.
 """
 
 from __future__ import annotations
@@ -95,3 +96,40 @@ def test_compile_simulate_stability_and_tune(
     out = _run(capsys, "tune", "E1", "--controller", "fuzzy-pi", "--rulebase", source,
                "--budget", "10", "--workers", "1", "--out", str(gains))  # fmt: skip
     assert gains.exists() and "wrote" in out
+
+
+@pytest.mark.verify
+@pytest.mark.parametrize("name", sorted(RULEBASES))
+def test_report(name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    source = RULEBASES[name]
+    folder = tmp_path / "report"
+    gains = Path(__file__).parent.parent / "docs" / "report" / "gains"
+    _run(capsys, "report", "--out", str(folder), "--plant", "planar", "--rulebase", source,
+         "--quick", "--gains-dir", str(gains), "--no-rrd", "--quiet")  # fmt: skip
+    text = (folder / "report.md").read_text("utf-8")
+    assert Path(source).stem in text or source in text
+    assert (folder / "surface.png").stat().st_size > 0
+
+
+def test_explain_draws_every_smooth_output_shape(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """eval --explain as text, JSON and the rule-viewer PNG on a rule base whose output has a
+    term of every smooth shape but the Gaussian (tests/data/smooth_outputs.yaml)."""
+    from fuzzkit.formats.registry import load
+    from fuzzkit.fuzzy import shapes
+    from fuzzkit.fuzzy.inference import Engine
+
+    source = str(DATA / "smooth_outputs.yaml")
+    rb = load(source)
+    smooth = {s.name for s in shapes.REGISTRY.values() if s.mu is not None and s.trapezoid is None}
+    assert {t.shape for t in rb.outputs[0].terms} == smooth - {"gaussian", "singleton"}
+    assert "ok" in _run(capsys, "validate", source)
+    point = ["-i", "e=0.2", "-i", "de=-0.3"]
+    png = tmp_path / "why.png"
+    text = _run(capsys, "eval", source, *point, "--explain", "--png", str(png))
+    value = json.loads(_run(capsys, "eval", source, *point, "--explain", "--json"))
+    got = value["outputs"][0]["value"]
+    assert got == Engine(rb).evaluate_point({"e": 0.2, "de": -0.3})["u"]
+    assert f"= {got}" in text
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

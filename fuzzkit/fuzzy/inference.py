@@ -64,10 +64,33 @@ from fuzzkit.fuzzy.type2_model import Type2RuleBase
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.intp]
 
-#: The batch engine's speed in :meth:`Engine.work_per_point` operations a second, below what
-#: this project's 2-core machine measures under load on shipped and random rule bases (the
-#: smooth-output grid kernel 4e7-4e8), so that work / speed over-estimates the time.
-OPERATIONS_PER_SECOND = 2e7
+#: The unit of :meth:`Engine.work_per_point`: one operation is one estimated nanosecond of the
+#: batch engine (numpy batches of thousands of points). Each output path's cost per unit of
+#: its size is calibrated against this project's 2-core machine under load (``_Output.work``,
+#: bench/bench_engine_work.py prints the measured against the estimated time), at about twice
+#: the most the path measured per unit, so that work / speed over-estimates the time, by a
+#: factor that no longer depends on the path (it did by 2-100 when every path shared one
+#: constant: the partition's fast centroid was costed as the breakpoint sweep).
+OPERATIONS_PER_SECOND = 1e9
+#: Nanoseconds per unit of each path's size (see ``_Output.work``): per rule and input (the
+#: firing), per grid point and piece (smooth outputs; the probabilistic sum goes through logs),
+#: per interval and slot pair (the breakpoint sweep, by defuzzifier), per fast-centroid
+#: function, per squared sorted point (Gaussian outputs).
+NS_PER_RULE_INPUT = 50
+#: Grid outputs stay at 50 ns (3-80 times the measured 0.6-15 ns): a compile of a smooth-output
+#: rule base spends time beyond the engine's evaluation that is not counted yet (issue 38:
+#: 56 s measured against 34 s estimated on two random rule bases).
+NS_PER_GRID_PIECE = 50
+NS_PER_SWEEP_SLOT = {"centroid": 600, "bisector": 1500}
+NS_PER_SWEEP_SLOT_MAXIMA = 900
+NS_FAST_CENTROID = (400, 100)  # per point, and per function
+NS_PER_GAUSSIAN_POINT2 = 15
+#: Construction, in the same estimated nanoseconds (``Engine.construction_work``): per output
+#: (measured 0.7-108 ms), and for a grid output per term its probe and its grid points
+#: (measured 66-356 ms for 3-9 terms on grids of 0.2-1 M points).
+NS_BUILD_OUTPUT = 80_000_000
+NS_BUILD_PROBE_POINT = 250
+NS_BUILD_GRID_POINT = 40
 _fmin = np.minimum
 _fmax = np.maximum
 
@@ -228,17 +251,35 @@ class _Output:
                 self.geometry = GridGeometry(rb, out, self.pieces)
 
     def work(self) -> int:
-        """Operations per point, roughly: what :meth:`Engine.work_per_point` adds up."""
+        """Estimated nanoseconds per point (``OPERATIONS_PER_SECOND``): what
+        :meth:`Engine.work_per_point` adds up. Measured on the 2-core machine under load, per
+        unit of each path's size (the constants are about twice the largest): the grid
+        kernel 0.6-4.6 ns per grid point and piece (max, bounded sum) and 12-15 ns
+        (probabilistic sum); the breakpoint sweep 220 (centroid), 390 (maxima) and 750 ns
+        (bisector) per interval and slot pair; the fast centroid 1.1-1.9 us a point with its
+        firing; Gaussian outputs 3-7 ns per squared sorted point."""
         geo = self.geometry
+        if self.fast_centroid is not None:
+            base, per_function = NS_FAST_CENTROID
+            return base + per_function * len(self.fast_centroid.functions)
         if isinstance(geo, GridGeometry):
-            return len(geo.y) * self.pieces.n_pieces  # the set on every grid point
+            return NS_PER_GRID_PIECE * len(geo.y) * self.pieces.n_pieces  # every grid point
         if isinstance(geo, PiecewiseLinearGeometry):
             # points sorted in every interval, times numpy's passes over them (the bisector's
             # and the maxima's searches make several)
-            return 30 * len(geo.z0) * geo.kmax * geo.kmax
+            per = NS_PER_SWEEP_SLOT.get(self.defuzzifier, NS_PER_SWEEP_SLOT_MAXIMA)
+            return per * len(geo.z0) * geo.kmax * geo.kmax
         if isinstance(geo, GaussianGeometry):
-            return (2 + len(geo.fixed) + 2 * geo.k * geo.k) ** 2
+            return NS_PER_GAUSSIAN_POINT2 * (2 + len(geo.fixed) + 2 * geo.k * geo.k) ** 2
         return len(self.centres)
+
+    def construction_work(self) -> int:
+        """Estimated nanoseconds this output stage took to build (see ``NS_BUILD_OUTPUT``)."""
+        geo = self.geometry
+        if not isinstance(geo, GridGeometry):
+            return NS_BUILD_OUTPUT
+        per_term = NS_BUILD_PROBE_POINT * geo.probe_points + NS_BUILD_GRID_POINT * len(geo.y)
+        return NS_BUILD_OUTPUT + per_term * self.pieces.n_terms
 
     def __call__(self, firing: FloatArray, inputs: list[FloatArray]) -> FloatArray:
         b = firing.shape[0]
@@ -361,13 +402,20 @@ class Engine:
         else:
             self._scalar = self._type2.scalar_path()
 
+    def construction_work(self) -> int:
+        """What building this engine cost, in the estimated nanoseconds of
+        :meth:`work_per_point` (a compile's budget counts it with the evaluations)."""
+        return sum(o.construction_work() if isinstance(o, _Output) else NS_BUILD_OUTPUT
+                   for o in self._outputs)  # fmt: skip
+
     def work_per_point(self) -> int:
-        """Roughly how many operations one point costs the batch engine: the rules over the
-        inputs, and per output the size of its integration (grid points times pieces for
-        smooth terms, intervals times points sorted for piecewise-linear ones). Divided by
+        """Roughly what one point costs the batch engine, in estimated nanoseconds: the rules
+        over the inputs, and per output the size of its integration (grid points times
+        pieces for smooth terms, intervals times points sorted for piecewise-linear ones,
+        functions for the fast centroid), each at its path's calibrated cost. Divided by
         :data:`OPERATIONS_PER_SECOND` it is an upper estimate of the engine's time per point
         (what ``fuzzkit compile`` checks against its time budget before the work)."""
-        rules = len(self.rulebase.rules) * max(1, len(self.input_names))
+        rules = NS_PER_RULE_INPUT * len(self.rulebase.rules) * max(1, len(self.input_names))
         return rules + sum(o.work() if isinstance(o, _Output) else len(o.inst_rules)
                            for o in self._outputs)  # fmt: skip
 

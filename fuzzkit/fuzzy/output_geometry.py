@@ -464,13 +464,15 @@ class GridGeometry:
 
     tolerance = 1e-9
     max_points = 1 << 20
+    #: Points of the fine probe the derivative bounds are read on, per term.
+    probe_points = 200_001
 
     def __init__(self, rb: RuleBase, out: Variable, pieces: OutputPieces) -> None:
         self.implication = rb.operators.implication
         self.aggregation = rb.operators.aggregation
         lo, hi = out.low, out.high
         width = hi - lo
-        probe = np.linspace(lo, hi, 200_001)
+        probe = np.linspace(lo, hi, self.probe_points)
         dh = probe[1] - probe[0]
         m2 = 0.0
         l1 = 0.0
