@@ -56,3 +56,22 @@ def test_the_closed_loop_estimate_ends_within_rho_on_the_whole_grid(plant: str) 
                 if run.ratio > RHO or run.excited < EXCITED:
                     bad.append(run)
     assert not bad, bad
+
+
+#: Where the MuJoCo arm's contact is softer than its servo (k_s = 173 N/mm, docs/stability.md):
+#: there the force answers a correction with about the contact's own stiffness. Stiffer, it
+#: answers with ``k k_s / (k + k_s)`` (at most 173 N/mm), which is what the estimate finds
+#: (docs/controller.md); the target is not met there.
+MUJOCO_OBSERVABLE = (5.0, 20.0)
+
+
+@pytest.mark.verify
+def test_the_closed_loop_estimate_ends_within_rho_on_mujoco_below_its_servo_stiffness() -> None:
+    bad = []
+    for k in MUJOCO_OBSERVABLE:
+        for lat in LATENCY:
+            for noise in NOISE:
+                run = estimate_in_loop("mujoco", k, lat, noise)
+                if run.ratio > RHO or run.excited < EXCITED:
+                    bad.append(run)
+    assert not bad, bad

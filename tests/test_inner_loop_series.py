@@ -61,3 +61,10 @@ def test_the_identified_series_stiffness_predicts_presses_it_was_not_fitted_on(p
     assert inner.series_n_per_m is not None
     for k in (2e4, 3e5):
         assert press_gain(plant, k) == pytest.approx(series_gain(inner.series_n_per_m, k), rel=5e-3)
+
+
+def test_the_stability_text_states_the_series_stiffness() -> None:
+    from fuzzkit.cli.stability import series_text
+
+    assert series_text(None) == ""
+    assert "servo stiffness 173.4 N/mm in series" in series_text(173.44)

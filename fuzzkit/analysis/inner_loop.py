@@ -120,12 +120,6 @@ class InnerLoop:
     #: the servo's stiffness in series with the contact (N/m), None when it has none
     series_n_per_m: float | None = None
 
-    def g_at(self, stiffness_n_per_m: float) -> tuple[float, float]:
-        """The inner loop's gain interval against a contact of ``stiffness_n_per_m`` (over
-        every box)."""
-        boxes = self.at(stiffness_n_per_m)
-        return (min(b.g[0] for b in boxes), max(b.g[1] for b in boxes))
-
     @property
     def local(self) -> bool:
         """Whether the model is local in stiffness (fits with a slow lag, :func:`fit_slow`)."""
@@ -368,7 +362,8 @@ LOCAL_ID_STIFFNESSES = (5e3, 1e4, 2e4, 5e4, 1e5, 2e5, 5e5, 1e6)
 def identify(plant_name: str) -> InnerLoop:
     """Identify the inner loop of ``plant_name`` at :data:`ID_STIFFNESSES` (cached): the
     static press at each, the series stiffness from them, then the fits of the motion over
-    its series gain."""
+    its series gain; a plant with a series stiffness is pressed and fitted, with the slow lag
+    (:func:`fit_slow`), at every one of :data:`LOCAL_ID_STIFFNESSES` instead."""
     statics = {k: press_gain(plant_name, k) for k in ID_STIFFNESSES}
     ks = series_stiffness(statics)
     stiffnesses: tuple[float, ...] = ID_STIFFNESSES

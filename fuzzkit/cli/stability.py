@@ -217,7 +217,8 @@ def _text(data: dict[str, Any], args: argparse.Namespace) -> str:
         f"axis {deployed['axis']}, surface {deployed['surface']}",
         f"{model['scenario']}: {model['controller']} on {model['plant']}, "
         f"inner loop a in [{model['inner_loop']['a'][0]:.4f}, {model['inner_loop']['a'][1]:.4f}]"
-        f" (fit error {100 * model['inner_loop']['fit_error_nrmse']:.2g} %)",
+        f" (fit error {100 * model['inner_loop']['fit_error_nrmse']:.2g} %)"
+        + series_text(model["inner_loop"].get("series_stiffness_n_per_mm")),
     ]
     if "fuzzy" in model:
         fz = model["fuzzy"]
@@ -320,3 +321,13 @@ def _interval(bounds: Any) -> str:
     """``[lo, hi]`` with fixed-width numbers (the JSON keeps every digit)."""
     lo, hi = (float(v) for v in bounds)
     return f"[{lo:9.4f}, {hi:9.4f}]"
+
+
+def series_text(series_n_per_mm: float | None) -> str:
+    """The inner loop's series stiffness as the text output states it ('' without one)."""
+    if series_n_per_mm is None:
+        return ""
+    return (
+        f", servo stiffness {series_n_per_mm:.4g} N/mm in series with the contact "
+        "(the inner loop's gain at K: k_s / (K + k_s))"
+    )
