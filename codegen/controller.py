@@ -78,7 +78,8 @@ class AdaptationDesign:
     ``inner_g``. Safe start: the band until the estimate is trusted (``safe_band``, the one of
     ``k_max``), the most conservative band (``floor_band``, for a contact stiffer than
     ``k_max``), the updates that make the estimate trusted (``trust_updates``) and the
-    secant's span, in excitation thresholds, that does too (``trust_span``).
+    secant's span, in excitation thresholds, that does too (``trust_span``). ``inverse_n_mm``:
+    the 1/k schedule's constant instead of bands (factor ``min(1, inverse_n_mm / k)``).
     """
 
     mode: str
@@ -106,7 +107,8 @@ class AdaptationDesign:
     safe_band: int = 0
     floor_band: int = 0
     trust_updates: int = 4
-    trust_span: float = 5.0
+    trust_span: float = 2.0
+    inverse_n_mm: float | None = None
 
 
 @dataclass(frozen=True)
@@ -131,6 +133,7 @@ class AdaptationCode:
     trust: int  # updates until the estimate is trusted
     trust_step: str  # the secant's least span: trust_span * min_step_m, * min_force_n
     trust_force: str
+    inverse: str | None  # the 1/k schedule's constant (N/mm), instead of bands
     dwell: int
     alpha_low: str
     alpha_span: str
@@ -570,10 +573,14 @@ def _adaptation_code(design: ControllerDesign, lit: Callable[[float], str]) -> A
                ad.inner_a, ad.inner_g]  # fmt: skip
     numbers += [v for b in ad.bands for v in b if v is not None]
     numbers.append(ad.trust_span)
+    numbers += [] if ad.inverse_n_mm is None else [ad.inverse_n_mm]
     numbers += [v for row in ad.alpha_table for v in row]
     if not all(math.isfinite(v) for v in numbers):
         raise CodegenError(f"controller {design.name!r}: adaptation parameters must be finite")
-    if scheduled and (not ad.bands or ad.window < 1 or ad.delay < 1 or ad.dwell_periods < 1):
+    bandless = ad.inverse_n_mm is not None
+    if scheduled and (
+        not (ad.bands or bandless) or ad.window < 1 or ad.delay < 1 or ad.dwell_periods < 1
+    ):
         raise CodegenError(f"controller {design.name!r}: a schedule needs bands and a window")
     if not scheduled and (len(ad.alpha_table) != 7 or any(len(r) != 7 for r in ad.alpha_table)):
         raise CodegenError(f"controller {design.name!r}: alpha's rule table must be 7x7")
@@ -591,8 +598,9 @@ def _adaptation_code(design: ControllerDesign, lit: Callable[[float], str]) -> A
         k_max=lit(ad.k_max_n_mm),
         band_limits=tuple(lit(up) for up, _ in ad.bands[:-1] if up is not None),
         band_scales=tuple(lit(scale) for _, scale in ad.bands),
-        safe_band=ad.safe_band,
-        floor_band=ad.floor_band,
+        safe_band=max(ad.safe_band, 0),
+        floor_band=max(ad.floor_band, 0),
+        inverse=None if ad.inverse_n_mm is None else lit(ad.inverse_n_mm),
         trust=ad.trust_updates,
         trust_step=lit(ad.trust_span * ad.min_step_m),
         trust_force=lit(ad.trust_span * ad.min_force_n),

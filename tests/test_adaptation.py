@@ -84,6 +84,16 @@ BASE = ADAPTIVE.read_text(encoding="utf-8").split("adaptation:")[0]
         ),
         ("adaptation:\n  mode: stiffness-scheduled\n", 2, "needs at least one band"),
         (
+            "adaptation:\n  mode: stiffness-scheduled\n  inverse_n_mm: 15\n  bands: [{scale: 1}]\n",
+            3,
+            "inverse_n_mm must be a finite number > 0, without bands",
+        ),
+        (
+            "adaptation:\n  mode: stiffness-scheduled\n  inverse_n_mm: -2\n",
+            3,
+            "inverse_n_mm must be a finite number > 0",
+        ),
+        (
             "adaptation:\n  mode: stiffness-scheduled\n  bands: [{up_to_n_mm: 10, scale: 1}]\n",
             3,
             "the last band takes every stiffness above",

@@ -66,6 +66,14 @@ def test_the_factor_interval_holds_every_band_the_estimate_can_select(
     assert scale_interval(adaptive().adaptation, k_n_mm, rho) == want
 
 
+def test_the_inverse_schedule_s_interval_runs_from_k_max_to_the_lowest_estimate() -> None:
+    spec = load_spec(EXAMPLES / "controller_inverse.yaml")
+    # estimates [50, 150] N/mm: min(1, 15/k) from 15/2000 (k_max, untrusted) to 15/50
+    assert scale_interval(spec.adaptation, 100.0, 0.5) == (15.0 / 2000.0, 0.3)
+    # at 5 N/mm the estimate may read 2.5: the factor is capped at 1
+    assert scale_interval(spec.adaptation, 5.0, 0.5) == (15.0 / 2000.0, 1.0)
+
+
 def test_the_self_tuning_factor_interval_is_alpha_s_range() -> None:
     spec = load_spec(EXAMPLES / "controller_selftuning.yaml")
     assert scale_interval(spec.adaptation, 5.0, 0.5) == (0.2, 1.0)

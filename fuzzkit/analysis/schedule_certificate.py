@@ -12,7 +12,8 @@ everything the adaptation can select at ``k`` by an interval ``[s_lo, s_hi]``
 stable for any sequence of factors in it. For a stiffness schedule the factors at ``k`` are
 the scales of every band that meets the estimate's interval, the band of ``k_max`` (the safe
 start: an untrusted estimate) and the most conservative band (a reading beyond ``k_max``); for
-the self-tuning factor, ``[alpha_min, alpha_max]`` at every stiffness.
+the 1/k schedule, ``min(1, k_0 / k_hat)`` from ``k_max`` to the estimate's lower end (it falls
+with the estimate); for the self-tuning factor, ``[alpha_min, alpha_max]`` at every stiffness.
 
 What it does not cover: ``k`` itself changing during contact (the cell's states are scaled by
 ``k``; a stiffness step is outside the model), stiffnesses between the grid's cells, and
@@ -51,6 +52,9 @@ def scale_interval(ad: Adaptation, k_n_mm: float, rho: float) -> tuple[float, fl
     if ad.mode != "stiffness-scheduled":
         return 1.0, 1.0
     lo, hi = estimate_interval(ad, k_n_mm, rho)
+    if ad.inverse_n_mm is not None:
+        # decreasing in the estimate; k_max's until trusted and beyond k_max
+        return ad.inverse_factor(ad.estimator.k_max_n_mm), ad.inverse_factor(lo)
     bands = set(range(ad.band_of(lo), ad.band_of(hi) + 1))
     bands |= {ad.safe_band(), ad.floor_band()}
     scales = [ad.bands[b].scale for b in sorted(bands)]
@@ -84,5 +88,6 @@ def adaptation_model(
             "range_n_mm": [est.k_min_n_mm, est.k_max_n_mm],
             "safe_band": ad.safe_band(),
             "floor_band": ad.floor_band(),
+            "inverse_n_mm": ad.inverse_n_mm,
         }
     return out

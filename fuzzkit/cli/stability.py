@@ -292,8 +292,13 @@ def _adaptation_text(ad: dict[str, Any]) -> list[str]:
         lo, hi = ad["estimate_over_true"]
         lines.append(
             f"  the estimate within k_hat/k in [{lo:g}, {hi:g}] (rho {ad['rho']:g}), projected "
-            f"into {ad['range_n_mm']}; the band of k_max until it is trusted, the smallest "
-            "scale beyond k_max"
+            f"into {ad['range_n_mm']}; "
+            + (
+                f"the factor min(1, {ad['inverse_n_mm']:g} / k_hat), at k_max until the "
+                "estimate is trusted and beyond k_max"
+                if ad.get("inverse_n_mm") is not None
+                else "the band of k_max until it is trusted, the smallest scale beyond k_max"
+            )
         )
     if ad["certified_every_cell"]:
         lines.append(

@@ -173,7 +173,12 @@ class StiffnessSchedule:
 
     @property
     def scale(self) -> float:
-        """The output-gain factor of the current band."""
+        """The output-gain factor: the current band's, or the 1/k schedule's at the estimate
+        (at ``k_max`` until the estimate is trusted and beyond ``k_max``)."""
+        if self.ad.inverse_n_mm is not None:
+            est = self.ad.estimator
+            used = self.k if self.trusted and not self.beyond else est.k_max_n_mm
+            return self.ad.inverse_factor(used)
         return self.ad.bands[self.band].scale
 
     @property
@@ -238,6 +243,8 @@ class StiffnessSchedule:
                 self.k = min(max(slope, est.k_min_n_mm), est.k_max_n_mm)
                 self.updates += 1
                 self.fresh = min(self.fresh + 1, TRUST_UPDATES)
+        if self.ad.inverse_n_mm is not None:
+            return  # the 1/k schedule has no bands: its factor follows the estimate
         if self.since < self.dwell:
             self.since += 1
         if self.beyond:

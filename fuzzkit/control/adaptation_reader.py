@@ -45,7 +45,7 @@ class _SpecReader(Protocol):
 #: The keys each mode takes (``mode`` always).
 MODE_KEYS = {
     "none": ("mode",),
-    "stiffness-scheduled": ("mode", "estimator", "bands", "dwell_s"),
+    "stiffness-scheduled": ("mode", "estimator", "bands", "inverse_n_mm", "dwell_s"),
     "self-tuning": ("mode", "alpha", "error_n", "change_n"),
 }
 ESTIMATOR_KEYS = (
@@ -89,6 +89,7 @@ def read_adaptation(r: _SpecReader, node: Node) -> Adaptation:
             estimator=_estimator(r, top.get("estimator")),
             bands=_bands(r, top.get("bands")),
             dwell_s=r.real(top, (*BASE, "dwell_s"), d.dwell_s),
+            inverse_n_mm=r.optional_real(top, (*BASE, "inverse_n_mm"), None),
         )
     if mode == "self-tuning":
         alpha = r.section(top["alpha"], (*BASE, "alpha"), ALPHA_KEYS) if "alpha" in top else {}

@@ -90,6 +90,15 @@ class Adaptation:
     alpha_max: float = 1.0
     error_n: float | None = None
     change_n: float | None = None
+    #: stiffness-scheduled without bands: the factor is ``min(1, inverse_n_mm / k)`` of the
+    #: estimate ``k`` (the 1/k schedule: ``k * factor`` constant above ``inverse_n_mm``)
+    inverse_n_mm: float | None = None
+
+    def inverse_factor(self, k_n_mm: float) -> float:
+        """The 1/k schedule's factor at the estimate ``k_n_mm``."""
+        if self.inverse_n_mm is None:
+            raise ValueError("not a 1/k schedule (no inverse_n_mm)")
+        return min(1.0, self.inverse_n_mm / k_n_mm)
 
     def band_of(self, k_n_mm: float) -> int:
         """The index of the band holding the estimate ``k_n_mm``."""
@@ -100,14 +109,14 @@ class Adaptation:
 
     def safe_band(self) -> int:
         """The band until the estimate is trusted: the one of ``k_max``, the stiffest contact
-        the estimator's range admits."""
+        the estimator's range admits (-1 for a 1/k schedule: no bands)."""
         return self.band_of(self.estimator.k_max_n_mm)
 
     def floor_band(self) -> int:
         """The most conservative band (the smallest scale; the first of equal ones), for a
         contact stiffer than ``k_max``."""
         scales = [b.scale for b in self.bands]
-        return scales.index(min(scales))
+        return scales.index(min(scales)) if scales else -1
 
     def dwell_periods(self, period_s: float) -> int:
         """The dwell time in whole periods (at least 1)."""
@@ -134,7 +143,16 @@ def adaptation_problems(ad: Adaptation, kind: str, period_s: float) -> list[tupl
         return out
     if ad.mode == "stiffness-scheduled":
         out += _estimator_problems(ad.estimator)
-        out += _band_problems(ad)
+        if ad.inverse_n_mm is None:
+            out += _band_problems(ad)
+        elif _bad(ad.inverse_n_mm, 0.0) or ad.bands:
+            out.append(
+                (
+                    (*base, "inverse_n_mm"),
+                    f"inverse_n_mm must be a finite number > 0, without bands (got "
+                    f"{ad.inverse_n_mm!r}, {len(ad.bands)} bands)",
+                )
+            )
         if _bad(ad.dwell_s, 0.0, open_low=False):
             out.append(
                 ((*base, "dwell_s"), f"dwell_s must be a finite number >= 0 (got {ad.dwell_s!r})")

@@ -93,9 +93,12 @@ def adaptation_schema() -> dict[str, Any]:
             "mode": {"const": "stiffness-scheduled"},
             "estimator": estimator,
             "bands": {"type": "array", "items": band, "minItems": 1},
+            "inverse_n_mm": _number(
+                "the 1/k schedule (instead of bands): factor min(1, inverse_n_mm / k)", 0, True
+            ),
             "dwell_s": _number("least time between two band changes that raise the gain", 0),
         },
-        ("mode", "bands"),
+        ("mode",),
     )
     tuning = _object(
         {

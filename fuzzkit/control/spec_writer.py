@@ -90,6 +90,8 @@ def adaptation_document(ad: Adaptation) -> Any:
     }
     if (est.inner_q, est.inner_a, est.inner_g) != (0.0, 0.0, 1.0):
         estimator["inner_loop"] = {"q": est.inner_q, "a": est.inner_a, "g": est.inner_g}
+    if ad.inverse_n_mm is not None:
+        return {"mode": ad.mode, "estimator": estimator, "inverse_n_mm": ad.inverse_n_mm}
     return {
         "mode": ad.mode,
         "estimator": estimator,

@@ -157,6 +157,7 @@ def adaptation_design(spec: ControllerSpec) -> AdaptationDesign | None:
         floor_band=ad.floor_band() if ad.bands else 0,
         trust_updates=TRUST_UPDATES,
         trust_span=TRUST_SPAN,
+        inverse_n_mm=ad.inverse_n_mm,
         dwell_periods=ad.dwell_periods(spec.period_s),
         alpha_min=ad.alpha_min,
         alpha_max=ad.alpha_max,
