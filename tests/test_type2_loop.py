@@ -174,3 +174,47 @@ def test_an_it2_spec_on_a_table_surface_runs_and_replays(
     assert replayed_difference(capsys, table, run_csv, "c") == 0.0
     # another controller than the exact spec's on the same samples
     assert replayed_difference(capsys, SPEC, run_csv, "c") > 1e-7
+
+
+def test_stability_certifies_the_it2_table_that_ships_against_a_dense_grid(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # on a table surface the certificate's phi = F(x, y) / (x + y) comes from the deployed
+    # table's triangles; the table's own interpolation on a 257 x 257 grid (which holds its
+    # 65 x 65 nodes) stays inside it and reaches both ends. The exact surface's bounds come
+    # from a denser table, and the certificate says they do not cover it.
+    from fuzzkit.codegen.controller import surface_table
+    from fuzzkit.control.controllers import lookup_table_surface
+
+    text = SPEC.read_text(encoding="utf-8")
+    table_spec = tmp_path / "table_it2.yaml"
+    table_spec.write_text(
+        re.sub(r"(?m)^surface: .*$", "surface: {method: table, resolution: 65}", text),
+        encoding="utf-8",
+    )
+    report = _stability(capsys, table_spec)
+    fuzzy = report["model"]["fuzzy"]
+    assert fuzzy["bounds_cover_deployed_surface"] is True and fuzzy["bounds"] == "phi"
+    lo, hi = fuzzy["phi"]
+    f = lookup_table_surface(surface_table(load("macvicar_whelan_it2"), None, 65))
+    g = np.linspace(-1.0, 1.0, 257)
+    phi = np.array([f(x, y) / (x + y) for x in g for y in g if abs(x + y) > 1e-6])
+    assert lo - 1e-12 <= phi.min() and phi.max() <= hi + 1e-12
+    assert phi.min() - lo < 1e-9 and hi - phi.max() < 1e-9
+    assert all(c["certified"] for c in report["cells"])
+
+
+@pytest.mark.verify
+def test_stability_of_the_exact_it2_surface_says_its_bounds_do_not_cover_it(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    # the exact surface's phi comes from a 129-point table of it (issue 40's sound bounds
+    # are not used yet): the certificate must say that they do not cover the deployed surface
+    fuzzy = _stability(capsys, SPEC)["model"]["fuzzy"]
+    assert fuzzy["bounds_cover_deployed_surface"] is False and fuzzy["surface_error_bound"] > 0
+
+
+def _stability(capsys: pytest.CaptureFixture[str], spec: Path) -> dict:  # type: ignore[type-arg]
+    out = _ok(capsys, "stability", "regulate", "--spec", str(spec), "--plant", "planar",
+              "--stiffness", "5", "--latency", "1:1", "--json")  # fmt: skip
+    return dict(json.loads(out[out.index("{") :]))

@@ -56,6 +56,7 @@ RULEBASE = "macvicar_whelan"
 EXACT_FLOAT = (
     ("3x3 Gaussian outputs", str(REPO / "tests" / "data" / "gaussian3x3.yaml")),
     ("Sugeno", "sugeno_pi"),
+    ("interval type-2 MacVicar-Whelan", "macvicar_whelan_it2"),
 )
 POINTS = 50_000
 #: Edge-value combinations the harness evaluates besides the random points (2 inputs):
