@@ -118,6 +118,16 @@ def jit(fn: F) -> F:
     return cast(F, numba.njit(cache=True)(fn))
 
 
+def jit_inline(fn: F) -> F:
+    """:func:`jit`, and inlined into the compiled code that calls it (numba's
+    ``inline="always"``, at numba's IR level; Python still calls it as a kernel).
+
+    For the small helpers every period of a compiled loop calls: a call that numba does not
+    inline costs an atomic reference count on every array passed through it, in and out,
+    which for the loop's helpers cost more than their own arithmetic (docs/benchmarks.md)."""
+    return cast(F, numba.njit(cache=True, inline="always")(fn))
+
+
 def has_cached_code(kernel: Any) -> bool:
     """True when ``kernel`` (a function compiled by :func:`jit`) has machine code in its disk
     cache for the current sources: its index file is there, current (stamp and numba version)

@@ -37,7 +37,7 @@ from fuzzkit.loop.compiled.common import (
 )
 from fuzzkit.loop.result import RunResult
 from fuzzkit.loop.task import Experiment
-from fuzzkit.plants.arm6_period import IK_STATUS_NAMES
+from fuzzkit.plants.arm6_period import IK_STATUS_NAMES, ik_workspace
 from fuzzkit.plants.contact import padded_terms, sensor_noise
 from fuzzkit.plants.contract import ContactPlant, UnsupportedPlant, wrist_sensor_extras
 
@@ -212,6 +212,7 @@ def pack(plant: MujocoArmPlant) -> MujocoArrays:
         np.array(plant._q_ik, dtype=np.float64),
         np.array(plant._ref_prev, dtype=np.float64),
         state,
+        ik_workspace(len(plant._q_ik)),  # the IK's scratch, so that a period allocates nothing
     )
     views = (
         d.userdata, d.qpos, d.sensordata, d.geom_xpos, d.xpos,

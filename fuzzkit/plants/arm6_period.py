@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -98,6 +99,7 @@ class Arm6Arrays:
     q_ik: FloatArray  # last IK solution (the warm start)
     stick: FloatArray  # (k, 3) tangential stick springs
     state: FloatArray  # (N_STATE,)
+    work: Arm6Workspace  # plant_step's scratch (workspace), so that a period allocates nothing
 
 
 def pack(plant: Arm6Plant) -> Arm6Arrays:
@@ -210,6 +212,7 @@ def pack(plant: Arm6Plant) -> Arm6Arrays:
         q_ik=np.array(plant._q_ik, dtype=np.float64),
         stick=np.zeros((k, 3)),
         state=state,
+        work=workspace(links.shape[0]),
     )
 
 
@@ -286,16 +289,18 @@ def jacobian(p: FloatArray, axes: FloatArray, origins: FloatArray, jac: FloatArr
 
 
 @jit
-def rotation_error(rt: FloatArray, r: FloatArray, out: FloatArray) -> None:
+def rotation_error(rt: FloatArray, r: FloatArray) -> tuple[float, float, float]:
     """``log(Rt R^T)`` as a rotation vector (fuzzkit.plants.rotations.rotation_error)."""
-    e = np.empty((3, 3))
-    for i in range(3):
-        for j in range(3):
-            e[i, j] = rt[i, 0] * r[j, 0] + rt[i, 1] * r[j, 1] + rt[i, 2] * r[j, 2]
-    # quat_from_matrix (Shepperd)
-    r00, r01, r02 = e[0, 0], e[0, 1], e[0, 2]
-    r10, r11, r12 = e[1, 0], e[1, 1], e[1, 2]
-    r20, r21, r22 = e[2, 0], e[2, 1], e[2, 2]
+    # quat_from_matrix (Shepperd) of e = Rt R^T, entry by entry
+    r00 = rt[0, 0] * r[0, 0] + rt[0, 1] * r[0, 1] + rt[0, 2] * r[0, 2]
+    r01 = rt[0, 0] * r[1, 0] + rt[0, 1] * r[1, 1] + rt[0, 2] * r[1, 2]
+    r02 = rt[0, 0] * r[2, 0] + rt[0, 1] * r[2, 1] + rt[0, 2] * r[2, 2]
+    r10 = rt[1, 0] * r[0, 0] + rt[1, 1] * r[0, 1] + rt[1, 2] * r[0, 2]
+    r11 = rt[1, 0] * r[1, 0] + rt[1, 1] * r[1, 1] + rt[1, 2] * r[1, 2]
+    r12 = rt[1, 0] * r[2, 0] + rt[1, 1] * r[2, 1] + rt[1, 2] * r[2, 2]
+    r20 = rt[2, 0] * r[0, 0] + rt[2, 1] * r[0, 1] + rt[2, 2] * r[0, 2]
+    r21 = rt[2, 0] * r[1, 0] + rt[2, 1] * r[1, 1] + rt[2, 2] * r[1, 2]
+    r22 = rt[2, 0] * r[2, 0] + rt[2, 1] * r[2, 1] + rt[2, 2] * r[2, 2]
     tr = r00 + r11 + r22
     if tr >= r00 and tr >= r11 and tr >= r22:
         s = math.sqrt(max(tr + 1.0, 0.0)) * 2.0
@@ -319,15 +324,14 @@ def rotation_error(rt: FloatArray, r: FloatArray, out: FloatArray) -> None:
     sn = math.sqrt(x * x + y * y + z * z)
     # small angle: angle ~ 2*s/w, exact to machine precision there
     k = (2.0 / w if w > 0.0 else 2.0) if sn < 1e-12 else 2.0 * math.atan2(sn, w) / sn
-    out[0], out[1], out[2] = k * x, k * y, k * z
+    return k * x, k * y, k * z
 
 
 @jit
-def _solve6(a: FloatArray, b: FloatArray, x: FloatArray) -> None:
-    """Solve ``a x = b`` (small, symmetric positive definite here) by LU with partial pivoting."""
-    n = a.shape[0]
-    m = a.copy()
-    v = b.copy()
+def _solve6(m: FloatArray, v: FloatArray, x: FloatArray) -> None:
+    """Solve ``m x = v`` (small, symmetric positive definite here) by LU with partial
+    pivoting; ``m`` and ``v`` are overwritten (the caller's scratch)."""
+    n = m.shape[0]
     for c in range(n):
         piv = c
         big = abs(m[c, c])
@@ -351,10 +355,18 @@ def _solve6(a: FloatArray, b: FloatArray, x: FloatArray) -> None:
 
 
 @jit
-def _dls(jac: FloatArray, err: FloatArray, lam2: float, dq: FloatArray) -> None:
-    """Damped least squares step ``J^T (J J^T + lam2 I)^-1 err``."""
+def _dls(
+    jac: FloatArray,
+    err: FloatArray,
+    lam2: float,
+    dq: FloatArray,
+    a: FloatArray,
+    y: FloatArray,
+    v: FloatArray,
+) -> None:
+    """Damped least squares step ``J^T (J J^T + lam2 I)^-1 err``; ``a`` (rows x rows), ``y``
+    and ``v`` (rows) are scratch."""
     rows, n = jac.shape
-    a = np.empty((rows, rows))
     for i in range(rows):
         for j in range(rows):
             acc = 0.0
@@ -362,8 +374,8 @@ def _dls(jac: FloatArray, err: FloatArray, lam2: float, dq: FloatArray) -> None:
                 acc += jac[i, c] * jac[j, c]
             a[i, j] = acc
         a[i, i] += lam2
-    y = np.empty(rows)
-    _solve6(a, err, y)
+        v[i] = err[i]
+    _solve6(a, v, y)
     for c in range(n):
         acc = 0.0
         for i in range(rows):
@@ -375,13 +387,12 @@ def _dls(jac: FloatArray, err: FloatArray, lam2: float, dq: FloatArray) -> None:
 def _ik_error(
     rt: FloatArray, pt: FloatArray, rot: FloatArray, p: FloatArray, e: FloatArray
 ) -> tuple[float, float]:
-    eo = np.empty(3)
-    rotation_error(rt, rot, eo)
+    ox, oy, oz = rotation_error(rt, rot)
     e[0], e[1], e[2] = pt[0] - p[0], pt[1] - p[1], pt[2] - p[2]
-    e[3], e[4], e[5] = eo[0], eo[1], eo[2]
+    e[3], e[4], e[5] = ox, oy, oz
     return (
         math.sqrt(e[0] ** 2 + e[1] ** 2 + e[2] ** 2),
-        math.sqrt(eo[0] ** 2 + eo[1] ** 2 + eo[2] ** 2),
+        math.sqrt(ox**2 + oy**2 + oz**2),
     )
 
 
@@ -391,6 +402,39 @@ def _at_limit(q: FloatArray, lo: FloatArray, hi: FloatArray) -> bool:
         if q[i] <= lo[i] + 1e-12 or q[i] >= hi[i] - 1e-12:
             return True
     return False
+
+
+#: What :func:`ik` works in, made once (:func:`ik_workspace`) and reused every period: the
+#: pose and errors of the current and the trial joints, the Jacobian, the step, the damped
+#: least squares' system. A period allocates nothing.
+IkWorkspace = tuple[
+    FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray,
+    FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray,
+    FloatArray, FloatArray,
+]  # fmt: skip
+
+
+def ik_workspace(n: int) -> IkWorkspace:
+    """:func:`ik`'s scratch for a chain of ``n`` joints."""
+    e = np.empty
+    return (
+        e((3, 3)), e(3), e((n, 3)), e((n, 3)), e(6), e((6, n)), e(n), e(n), e(6), e((3, 3)),
+        e(3), e((n, 3)), e((n, 3)), e((6, 6)), e(6), e(6),
+    )  # fmt: skip
+
+
+#: :func:`plant_step`'s scratch beside :func:`ik`'s: the path's quaternion and rotation, the
+#: IK target, the joint axes, the tool's velocity and force, a contact's normal and point.
+Arm6Workspace = tuple[
+    FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray,
+    FloatArray, IkWorkspace,
+]  # fmt: skip
+
+
+def workspace(n: int) -> Arm6Workspace:
+    """:func:`plant_step`'s scratch for a chain of ``n`` joints, made once per run."""
+    e = np.empty
+    return e(4), e((3, 3)), e(3), e((n, 3)), e(3), e(3), e(3), e(3), ik_workspace(n)
 
 
 @jit
@@ -406,22 +450,20 @@ def ik(
     tol_p: float,
     tol_o: float,
     max_iterations: int,
+    work: IkWorkspace,
 ) -> int:
     """Damped-least-squares IK from the seed ``q`` (updated in place); returns the status code.
 
     ``SerialChain.ik_fast`` step for step: the seed clamped to the limits, Levenberg-Marquardt
-    damping, the active set of joints at a limit, the stationary-point tests.
+    damping, the active set of joints at a limit, the stationary-point tests. ``work``:
+    :func:`ik_workspace` of the chain.
     """
+    rot, p, axes, origins, e, jac, dq, q_new, e_new, rot_n, p_n, axes_n, origins_n, a, y, v = work
     max_step = 0.5
     n = q.shape[0]
     for i in range(n):
         q[i] = min(max(q[i], lo[i]), hi[i])
-    rot = np.empty((3, 3))
-    p = np.empty(3)
-    axes = np.empty((n, 3))
-    origins = np.empty((n, 3))
     fk(q, links, tool_r, tool_p, rot, p, axes, origins)
-    e = np.empty(6)
     ep, eo = _ik_error(rt, pt, rot, p, e)
     cost = ep * ep + eo * eo
     mu = 1e-9
@@ -429,14 +471,6 @@ def ik(
     suspect = False
     iterations = 0
     status = IK_MAX_ITERATIONS
-    jac = np.empty((6, n))
-    dq = np.empty(n)
-    q_new = np.empty(n)
-    e_new = np.empty(6)
-    rot_n = np.empty((3, 3))
-    p_n = np.empty(3)
-    axes_n = np.empty((n, 3))
-    origins_n = np.empty((n, 3))
     while True:
         if ep <= tol_p and eo <= tol_o:
             status = IK_CONVERGED
@@ -446,7 +480,7 @@ def ik(
         iterations += 1
         jacobian(p, axes, origins, jac)
         lam2 = 0.5 * cost + mu
-        _dls(jac, e, lam2, dq)
+        _dls(jac, e, lam2, dq, a, y, v)
         blocked = False
         for i in range(n):
             if (q[i] <= lo[i] and dq[i] < 0.0) or (q[i] >= hi[i] and dq[i] > 0.0):
@@ -454,7 +488,7 @@ def ik(
                 for r in range(6):
                     jac[r, i] = 0.0
         if blocked:
-            _dls(jac, e, lam2, dq)
+            _dls(jac, e, lam2, dq, a, y, v)
         if suspect:
             gg = 0.0
             jj = 0.0
@@ -515,13 +549,12 @@ def pose_at(
 ) -> None:
     """Position and orientation of the nominal path at ``t_s`` (CartesianPath.pose_at)."""
     m = path_t.shape[0]
-    if t_s <= path_t[0]:
-        pos[:] = path_pos[0]
-        quat[:] = path_quat[0]
-        return
-    if t_s >= path_t[m - 1]:
-        pos[:] = path_pos[m - 1]
-        quat[:] = path_quat[m - 1]
+    if t_s <= path_t[0] or t_s >= path_t[m - 1]:
+        end = 0 if t_s <= path_t[0] else m - 1
+        for j in range(3):
+            pos[j] = path_pos[end, j]
+        for j in range(4):
+            quat[j] = path_quat[end, j]
         return
     i = 1
     while path_t[i] < t_s:
@@ -530,30 +563,31 @@ def pose_at(
     s = (t_s - path_t[i - 1]) / span if span > 0.0 else 1.0
     for j in range(3):
         pos[j] = path_pos[i - 1, j] + s * (path_pos[i, j] - path_pos[i - 1, j])
-    qa = path_quat[i - 1]
-    qb = path_quat[i]
-    if qa[0] == qb[0] and qa[1] == qb[1] and qa[2] == qb[2] and qa[3] == qb[3]:
-        quat[:] = qa
+    a0, a1, a2, a3 = (
+        path_quat[i - 1, 0],
+        path_quat[i - 1, 1],
+        path_quat[i - 1, 2],
+        path_quat[i - 1, 3],
+    )
+    b0, b1, b2, b3 = path_quat[i, 0], path_quat[i, 1], path_quat[i, 2], path_quat[i, 3]
+    if a0 == b0 and a1 == b1 and a2 == b2 and a3 == b3:
+        quat[0], quat[1], quat[2], quat[3] = a0, a1, a2, a3
         return
-    dot = qa[0] * qb[0] + qa[1] * qb[1] + qa[2] * qb[2] + qa[3] * qb[3]
-    b = qb.copy()
+    dot = a0 * b0 + a1 * b1 + a2 * b2 + a3 * b3
     if dot < 0.0:
         dot = -dot
-        b = -b
-    out = np.empty(4)
+        b0, b1, b2, b3 = -b0, -b1, -b2, -b3
     if dot > 0.9995:
-        for j in range(4):
-            out[j] = qa[j] + s * (b[j] - qa[j])
+        o0, o1 = a0 + s * (b0 - a0), a1 + s * (b1 - a1)
+        o2, o3 = a2 + s * (b2 - a2), a3 + s * (b3 - a3)
     else:
         theta = math.acos(dot)
         sin_t = math.sin(theta)
         w0 = math.sin((1.0 - s) * theta) / sin_t
         w1 = math.sin(s * theta) / sin_t
-        for j in range(4):
-            out[j] = w0 * qa[j] + w1 * b[j]
-    nn = math.sqrt(out[0] * out[0] + out[1] * out[1] + out[2] * out[2] + out[3] * out[3])
-    for j in range(4):
-        quat[j] = out[j] / nn
+        o0, o1, o2, o3 = w0 * a0 + w1 * b0, w0 * a1 + w1 * b1, w0 * a2 + w1 * b2, w0 * a3 + w1 * b3
+    nn = math.sqrt(o0 * o0 + o1 * o1 + o2 * o2 + o3 * o3)
+    quat[0], quat[1], quat[2], quat[3] = o0 / nn, o1 / nn, o2 / nn, o3 / nn
 
 
 @jit
@@ -597,28 +631,27 @@ def _object_contact(
         pt[0], pt[1], pt[2] = c[0] - dist * nx, c[1] - dist * ny, c[2] - dist * nz
         return float(depth)
     if kind == KIND_BOX:
-        d = np.empty(3)
-        qq = np.empty(3)
-        o = np.empty(3)
-        for i in range(3):
-            d[i] = c[i] - op[i]
-            qq[i] = min(max(d[i], -op[3 + i]), op[3 + i])
-            o[i] = d[i] - qq[i]
-        dist = math.sqrt(o[0] * o[0] + o[1] * o[1] + o[2] * o[2])
+        # the offset from the centre, its clamp to the box, and what lies outside, per axis
+        d0, d1, d2 = c[0] - op[0], c[1] - op[1], c[2] - op[2]
+        q0 = min(max(d0, -op[3]), op[3])
+        q1 = min(max(d1, -op[4]), op[4])
+        q2 = min(max(d2, -op[5]), op[5])
+        o0, o1, o2 = d0 - q0, d1 - q1, d2 - q2
+        dist = math.sqrt(o0 * o0 + o1 * o1 + o2 * o2)
         if dist > 1e-12:
             depth = radius - dist
             if depth <= 0.0:
                 return -1.0
-            for i in range(3):
-                nrm[i] = o[i] / dist
-                pt[i] = op[i] + qq[i]
+            nrm[0], nrm[1], nrm[2] = o0 / dist, o1 / dist, o2 / dist
+            pt[0], pt[1], pt[2] = op[0] + q0, op[1] + q1, op[2] + q2
             return depth
         best_gap = math.inf
         axis = 0
         best_sign = 1.0
         for i in range(3):
+            di = d0 if i == 0 else (d1 if i == 1 else d2)
             for sign in (1.0, -1.0):
-                gap = op[3 + i] - sign * d[i]
+                gap = op[3 + i] - sign * di
                 if gap < best_gap:
                     best_gap, axis, best_sign = gap, i, sign
         nrm[0] = nrm[1] = nrm[2] = 0.0
@@ -650,16 +683,17 @@ def contact_step(
     force: FloatArray,
     points: FloatArray,
     normals: FloatArray,
+    nrm: FloatArray,
+    pt: FloatArray,
 ) -> int:
     """Contact3Solver.step: force the tool exerts (base, into ``force``), contact points and
-    per-contact normal forces (rows of ``points`` / ``normals``); returns the contact count."""
+    per-contact normal forces (rows of ``points`` / ``normals``); returns the contact count.
+    ``nrm`` and ``pt`` (3 each) are scratch."""
     k_n, c_n, mu, kt = params[P_K], params[P_C], params[P_MU], params[P_KT]
     dt = params[P_DT]
     radius = params[P_RADIUS]
     fx = fy = fz = 0.0
     count = 0
-    nrm = np.empty(3)
-    pt = np.empty(3)
     for i in range(a_kind.shape[0]):
         depth = _object_contact(
             a_kind[i], a_p[i], a_terms[i], a_nterms[i], a_grid[i], c, radius, nrm, pt
@@ -700,27 +734,7 @@ def contact_step(
 
 @jit
 def plant_step(
-    a_links: FloatArray,
-    a_tool_r: FloatArray,
-    a_tool_p: FloatArray,
-    a_lower: FloatArray,
-    a_upper: FloatArray,
-    a_dq_max: FloatArray,
-    a_path_t: FloatArray,
-    a_path_pos: FloatArray,
-    a_path_quat: FloatArray,
-    a_kind: IntArray,
-    a_p: FloatArray,
-    a_terms: FloatArray,
-    a_nterms: IntArray,
-    a_grid: FloatArray,
-    a_rot_task: FloatArray,
-    params: FloatArray,
-    q: FloatArray,
-    q_ref: FloatArray,
-    q_ik: FloatArray,
-    stick: FloatArray,
-    state: FloatArray,
+    plant: tuple[Any, ...],
     noise: FloatArray,
     correction_base: FloatArray,
     path_time_s: float,
@@ -737,13 +751,18 @@ def plant_step(
     """One period of ``Arm6Plant.step``; returns ``(ik status, contact count, speed limited)``.
 
     ``nominal`` and ``tcp`` come out in the robot base frame; forces in the task frame.
+    ``plant``: the arrays of :class:`Arm6Arrays`, in its field order (the run's scratch,
+    :func:`workspace`, last).
     """
+    (
+        a_links, a_tool_r, a_tool_p, a_lower, a_upper, a_dq_max, a_path_t, a_path_pos,
+        a_path_quat, a_kind, a_p, a_terms, a_nterms, a_grid, a_rot_task, _, params, q, q_ref,
+        q_ik, stick, state, work,
+    ) = plant  # fmt: skip
     n = q.shape[0]
-    quat = np.empty(4)
+    quat, rt, target, axes, v, f, nrm, pt, ik_work = work
     pose_at(a_path_t, a_path_pos, a_path_quat, path_time_s, nominal, quat)
-    rt = np.empty((3, 3))
     matrix_from_quat(quat, rt)
-    target = np.empty(3)
     for j in range(3):
         target[j] = nominal[j] + correction_base[j]
     status = ik(
@@ -758,31 +777,29 @@ def plant_step(
         params[P_TOL_P],
         params[P_TOL_O],
         int(params[P_IK_ITER]),
+        ik_work,
     )
     lag = params[P_LAG]
     scale = 1.0
     limited = False
-    d = np.empty(n)
     for i in range(n):
-        d[i] = q_ik[i] - q_ref[i]
-        if abs(d[i]) > a_dq_max[i]:
-            scale = min(scale, a_dq_max[i] / abs(d[i]))
+        d = q_ik[i] - q_ref[i]
+        if abs(d) > a_dq_max[i]:
+            scale = min(scale, a_dq_max[i] / abs(d))
             limited = True
     for i in range(n):
-        q_ref[i] += d[i] * scale
+        q_ref[i] += (q_ik[i] - q_ref[i]) * scale
         q[i] += lag * (q_ref[i] - q[i])
     dt = params[P_DT]
     state[S_T] += dt
-    axes = np.empty((n, 3))
     fk(q, a_links, a_tool_r, a_tool_p, rot, tcp, axes, origins)
-    v = np.empty(3)
     for j in range(3):
         v[j] = (tcp[j] - state[S_P_PREV + j]) / dt
         state[S_P_PREV + j] = tcp[j]
-    f = np.empty(3)
     count = contact_step(
-        a_kind, a_p, a_terms, a_nterms, a_grid, stick, params, tcp, v, f, points, normals
-    )
+        a_kind, a_p, a_terms, a_nterms, a_grid, stick, params, tcp, v, f, points, normals, nrm,
+        pt,
+    )  # fmt: skip
     r = a_rot_task
     for j in range(3):
         force_true[j] = r[0, j] * f[0] + r[1, j] * f[1] + r[2, j] * f[2]

@@ -121,6 +121,7 @@ class MujocoArmPlant(Arm6Plant):
         #: IK through arm6's compiled twin (False: the Python reference, for comparison)
         self.compiled_ik = True
         self._ik_arrays: tuple[FloatArray, ...] | None = None
+        self._ik_work: arm6_period.IkWorkspace | None = None  # the compiled IK's scratch
         #: the servo ramp in C as MuJoCo's control callback, when given
         #: (:meth:`use_servo_callback`); None: the Python ramp, one ``mj_step`` per substep
         self.servo: ServoCallback | None = None
@@ -262,6 +263,8 @@ class MujocoArmPlant(Arm6Plant):
         if self._ik_arrays is None:
             return super()._solve_ik(rotation, position)
         links, tool_r, tool_p, lo, hi = self._ik_arrays
+        if self._ik_work is None:
+            self._ik_work = arm6_period.ik_workspace(links.shape[0])
         q = np.array(self._q_ik, dtype=np.float64)
         p = self.params
         status = arm6_period.ik(
@@ -276,6 +279,7 @@ class MujocoArmPlant(Arm6Plant):
             p.ik_position_tolerance,
             p.ik_orientation_tolerance,
             p.ik_iterations,
+            self._ik_work,
         )
         if status != arm6_period.IK_CONVERGED:
             return super()._solve_ik(rotation, position)

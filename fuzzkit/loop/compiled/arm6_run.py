@@ -46,10 +46,10 @@ def run_arm6(
     ``NAME_controller_step`` (ctypes); ``rec``, the recording
     (:func:`~fuzzkit.loop.compiled.common.recording`, the arm's ``ik`` and ``limited`` last).
     """
+    # what the recording reads of the plant (plant_step takes the whole record)
     (
-        a_links, a_tool_r, a_tool_p, a_lower, a_upper, a_dq_max, a_path_t, a_path_pos,
-        a_path_quat, a_kind, a_p, a_terms, a_nterms, a_grid, a_rot_task, a_offset, params, q,
-        q_ref, q_ik, stick, state_p,
+        _, a_tool_r, a_tool_p, _, _, _, a_path_t, a_path_pos, a_path_quat, a_kind, _, _, _, _,
+        a_rot_task, a_offset, _, q, _, _, _, state_p, _,
     ) = plant  # fmt: skip
     cp, selection, setpoints, c_state, spike_sign, nan_flag = ctrl
     (
@@ -80,10 +80,8 @@ def run_arm6(
         path_before = path_t
         path_t = period_start(cp, cs, path_t, a_rot_task, applied, corr_base)
         ik_status, count, limited = plant_step(
-            a_links, a_tool_r, a_tool_p, a_lower, a_upper, a_dq_max, a_path_t, a_path_pos,
-            a_path_quat, a_kind, a_p, a_terms, a_nterms, a_grid, a_rot_task, params, q, q_ref,
-            q_ik, stick, state_p, noise, corr_base, path_t,
-            nominal, tcp, rot, origins, f_true, f_meas, points, normals,
+            plant, noise, corr_base, path_t, nominal, tcp, rot, origins, f_true, f_meas, points,
+            normals,
         )  # fmt: skip
         t_s = state_p[0]
         r_status[k], consumed = controller_period(

@@ -31,7 +31,7 @@ from fuzzkit.control import status as st
 from fuzzkit.control.names import AXES
 from fuzzkit.control.spec import ControllerSpec, Limits, require_valid, with_gains
 from fuzzkit.errors import ConfigError
-from fuzzkit.jit import jit
+from fuzzkit.jit import jit_inline
 from fuzzkit.loop.compiled.period import (
     C_PERIOD,
     C_SENSOR_DELAY,
@@ -197,7 +197,7 @@ def run_controller_spec(
     return require_valid(spec_for(exp, controller, g, name, rb, rulebase if rb else None))
 
 
-@jit
+@jit_inline
 def generated_step(
     c_step: Any,
     c_state: FloatArray,
@@ -223,7 +223,7 @@ def generated_step(
     return status
 
 
-@jit
+@jit_inline
 def loop_bookkeeping(
     cs: FloatArray,
     cv: FloatArray,

@@ -116,7 +116,7 @@ def run_mujoco(
         a_links, a_tool_r, a_tool_p, a_lower, a_upper, a_dq_max, a_path_t, a_path_pos,
         a_path_quat, a_rot_task, a_offset, a_kv_over_kp, a_servo_qpos, a_link_qpos, a_elastic,
         a_bodies, prof_p, prof_terms, prof_nterms, prof_mocap, params, layout, q_ref, q_ik,
-        ref_prev, state,
+        ref_prev, state, ik_work,
     ) = plant  # fmt: skip
     d_userdata, d_qpos, d_sensordata, d_geom_xpos, d_xpos, d_mocap_pos, d_mocap_quat = mj
     cp, selection, setpoints, c_state, spike_sign, nan_flag = ctrl
@@ -174,6 +174,7 @@ def run_mujoco(
             params[M_TOL_P],
             params[M_TOL_O],
             int(params[M_IK_ITER]),
+            ik_work,
         )
         q_ik[:] = q_try
         scale = 1.0

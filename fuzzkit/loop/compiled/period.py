@@ -25,7 +25,7 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from fuzzkit.jit import jit
+from fuzzkit.jit import jit, jit_inline
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -62,7 +62,7 @@ def controller_state(cp: FloatArray) -> tuple[FloatArray, FloatArray]:
     return cs, np.zeros((N_CV, 3))
 
 
-@jit
+@jit_inline
 def path_held(cp: FloatArray, cs: FloatArray) -> bool:
     """The runner's rule: the path stops after a trip, or once engaged in a hold experiment."""
     return cs[CS_TRIPPED] > 0.0 or (
@@ -70,7 +70,7 @@ def path_held(cp: FloatArray, cs: FloatArray) -> bool:
     )
 
 
-@jit
+@jit_inline
 def inject_faults(
     cp: FloatArray,
     spike_sign: float,
@@ -98,7 +98,7 @@ def inject_faults(
         measured[:] = np.nan
 
 
-@jit
+@jit_inline
 def sensor_latency(
     k: int, sd: int, sensor_q: FloatArray, measured: FloatArray, reset_force: FloatArray
 ) -> FloatArray:
@@ -113,7 +113,7 @@ def sensor_latency(
     return oldest
 
 
-@jit
+@jit_inline
 def command_latency(
     k: int, cd: int, command_q: FloatArray, correction: FloatArray, applied: FloatArray
 ) -> None:
@@ -128,7 +128,7 @@ def command_latency(
         applied[:] = command_q[(k + 1) % (cd + 1)]
 
 
-@jit
+@jit_inline
 def error_change(cs: FloatArray, cv: FloatArray) -> None:
     """After the axes stepped: ``de = e - e_last`` (0 the first time), then ``e_last = e``."""
     e, de, e_last = cv[V_E], cv[V_DE], cv[V_E_LAST]
@@ -139,18 +139,18 @@ def error_change(cs: FloatArray, cv: FloatArray) -> None:
     cs[CS_HAS_E_LAST] = 1.0
 
 
-@jit
+@jit_inline
 def credit_normal(rot: FloatArray, nx: float, ny: float, nz: float, out: FloatArray) -> None:
     """``normal_force_by_axis`` for one contact: add its base-frame normal force ``(nx, ny,
     nz)``, in the task frame (``rot`` base-from-task), to the task axis it lies closest to."""
     best = 0
     best_abs = -1.0
-    tv = np.empty(3)
+    best_v = 0.0
     for j in range(3):
-        tv[j] = rot[0, j] * nx + rot[1, j] * ny + rot[2, j] * nz
-        if abs(tv[j]) > best_abs:
-            best, best_abs = j, abs(tv[j])
-    out[best] += tv[best]
+        tv = rot[0, j] * nx + rot[1, j] * ny + rot[2, j] * nz
+        if abs(tv) > best_abs:
+            best, best_abs, best_v = j, abs(tv), tv
+    out[best] += best_v
 
 
 @jit

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from fuzzkit.jit import jit
+from fuzzkit.jit import jit, jit_inline
 from fuzzkit.loop.compiled.generated_controller import generated_step
 from fuzzkit.loop.compiled.period import (
     C_COMMAND_DELAY,
@@ -57,7 +57,7 @@ def loop_state(cp: FloatArray, reset_force: FloatArray, rot: FloatArray) -> Loop
     return cs, cv, sensor_q, command_q, np.zeros(3), np.zeros(3), c_rot, np.zeros(3)
 
 
-@jit
+@jit_inline
 def period_start(
     cp: FloatArray,
     cs: FloatArray,
@@ -75,7 +75,7 @@ def period_start(
     return path_t
 
 
-@jit
+@jit_inline
 def controller_period(
     k: int,
     cp: FloatArray,
@@ -112,7 +112,7 @@ def controller_period(
     return status, consumed
 
 
-@jit
+@jit_inline
 def record_period(
     k: int,
     t_s: float,
