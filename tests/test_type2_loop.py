@@ -176,6 +176,7 @@ def test_an_it2_spec_on_a_table_surface_runs_and_replays(
     assert replayed_difference(capsys, SPEC, run_csv, "c") > 1e-7
 
 
+@pytest.mark.verify  # about 19 s (a 65 x 65 table of the exact IT2 engine, twice)
 def test_stability_certifies_the_it2_table_that_ships_against_a_dense_grid(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
