@@ -51,6 +51,13 @@ MUJOCO_VERIFY_SEEDS = tuple(range(10))
 #: Shortest runs that still cover contact, the faults (the dropout is at 2.2-2.3 s) and a
 #: steady stretch after them; None: the experiment's own duration (E3 meets its wall at 4.2 s).
 DURATION_S = {"E1": 3.5, "E2": 5.0, "E3": None}
+#: (plant, experiment, controller, axis) where the force need not settle: PI on the elastic
+#: arm can ring against E3's wall (docs/mujoco.md, "Joint elasticity is where the loop starts
+#: to ring"; a limit cycle some seeds and faults excite and others not). There the force is
+#: either held or still swinging (std over the final 0.5 s above :data:`RINGING_STD_N`), never
+#: settled off its set point; everything else is checked as elsewhere.
+RINGING = {("mujoco-elastic", "E3", "pi", 0)}
+RINGING_STD_N = 2.0
 #: Largest error of the mean true force over the final 0.5 s. E2 still slides over the rough
 #: workpiece then, so its force wanders more.
 HOLD_TOLERANCE_N = {"E1": 0.5, "E2": 1.5, "E3": 0.5}
@@ -113,6 +120,10 @@ def test_faults_never_push_the_true_force_past_the_limit_and_the_task_gets_done(
         if setpoint != 0.0:  # contact reached along every axis that must push
             assert float(np.max(r.force_true[:, axis])) >= 0.9 * setpoint, axis
         held = float(np.mean(r.force_true[tail, axis]))
+        if (plant, name, controller, axis) in RINGING:
+            swing = float(np.std(r.force_true[tail, axis]))
+            if swing > RINGING_STD_N:  # the documented ringing
+                continue
         assert abs(held - setpoint) < HOLD_TOLERANCE_N[name], (axis, held)
     if fault_kind in ("nan", "dropout", "spike"):
         assert r.faults > 0  # the bad samples were seen, counted and held
@@ -134,19 +145,23 @@ def test_the_dynamic_mujoco_arm_passes_the_same_matrix(
     )
 
 
+#: The IRB 140 in MuJoCo, rigid and with joint springs on axes 1-3.
+MUJOCO_PLANTS = ("mujoco", "mujoco-elastic")
+
+
 @pytest.mark.slow
 @needs_cc
 @pytest.mark.parametrize(
-    "name, controller, fault_kind, seed",
-    matrix_params([sorted(EXPERIMENTS), CONTROLLERS, sorted(FAULTS)]),
+    "name, controller, fault_kind, plant, seed",
+    matrix_params([sorted(EXPERIMENTS), CONTROLLERS, sorted(FAULTS), MUJOCO_PLANTS]),
 )
 def test_the_dynamic_mujoco_arm_passes_the_matrix_on_the_generated_controller(
-    name: str, controller: str, fault_kind: str, seed: int
+    name: str, controller: str, fault_kind: str, plant: str, seed: int
 ) -> None:
-    """The same matrix on the IRB 140 in MuJoCo, the generated C controller in the compiled
-    loop (what ships, at every seed of the other plants)."""
+    """The same matrix on the IRB 140 in MuJoCo, rigid and elastic, the generated C controller
+    in the compiled loop (what ships, at every seed of the other plants)."""
     test_faults_never_push_the_true_force_past_the_limit_and_the_task_gets_done(
-        "generated-c", name, controller, fault_kind, "mujoco", seed
+        "generated-c", name, controller, fault_kind, plant, seed
     )
 
 
