@@ -106,3 +106,18 @@ def test_a_spec_is_named_in_the_title() -> None:
         "regulate: fuzzy-pi on arm6\nspec e1_fuzzy, axis z, surface exact\n"
         "kp=0.2, ki=0.05, kx=0.0002"
     )
+
+
+def test_a_surface_with_no_rest_point_prints_its_bounds_as_none(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Every rule of ``no_rest.yaml`` says positive, so the bounds are of kind ``none``: the
+    text says so and why, with the cell's reason (it used to raise KeyError)."""
+    rulebase = Path(__file__).parent / "data" / "stability" / "no_rest.yaml"
+    argv = ["stability", "regulate", "--controller", "fuzzy-pi", "--plant", "arm6",
+            "--rulebase", str(rulebase), "--stiffness", "5", "--latency", "0:0"]  # fmt: skip
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "fuzzy bounds (none): none (" in text
+    assert "0:0, 5 N/mm: no rest point: F(e, 0) stays above 0" in text
+    assert "certified 0 of 1 cells" in text

@@ -21,15 +21,18 @@ box's boundary (Clarke's gradient there takes the neighbours' in) are inside.
 
 from __future__ import annotations
 
+import hashlib
 import math
 from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 
 from fuzzkit.analysis.intervals import FloatArray
 from fuzzkit.analysis.surface_enclosure import Enclosure, why_unsupported
 from fuzzkit.fuzzy.model import RuleBase
+from fuzzkit.loop.compiled.table import cache_dir, store_npz
 
 SEEDS = 32
 MAX_DEPTH = 6
@@ -217,9 +220,35 @@ def _excess(dx: FloatArray, dy: FloatArray, box_x: FloatArray, box_y: FloatArray
 
 
 @lru_cache(maxsize=16)
-def surface_bounds(rb: RuleBase) -> SurfaceBounds | str:
-    """The bounds of ``rb``'s exact surface (inputs in role order, clamped), or why none."""
+def surface_bounds(rb: RuleBase, centre: float = 0.0) -> SurfaceBounds | str:
+    """The bounds of ``rb``'s exact surface (inputs in role order, clamped) for the boxes
+    around ``(centre, 0)``, or why none. They are kept on disk beside the tables
+    (:func:`fuzzkit.loop.compiled.table.cache_dir`), so a run does not pay the branch and
+    bound each time: the key is the rule base, the centre and the source of the modules that
+    compute them, so a change to any of them computes afresh."""
     why = why_unsupported(rb)
     if why is not None:
         return why
-    return compute(rb)
+    path = cache_dir() / f"bounds-{_key(rb, centre)}.npz"
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            rect, f, dx, dy = (np.asarray(z[k], dtype=np.float64) for k in _FIELDS)
+            return SurfaceBounds(rect, f, dx, dy, float(z["tolerance"]), float(z["gap"]))
+    except (OSError, KeyError, ValueError):
+        pass  # not cached yet, or unreadable: compute
+    sb = compute(rb, centre)
+    store_npz(path, **{k: getattr(sb, k) for k in _FIELDS}, tolerance=sb.tolerance, gap=sb.gap)
+    return sb
+
+
+_FIELDS = ("rect", "f", "dx", "dy")
+
+
+def _key(rb: RuleBase, centre: float) -> str:
+    from fuzzkit.analysis import intervals, surface_enclosure, switch_lines, term_intervals
+
+    h = hashlib.sha256(f"{rb!r}|{centre!r}".encode())
+    for module in (intervals, term_intervals, surface_enclosure, switch_lines):
+        h.update(Path(str(module.__file__)).read_bytes())
+    h.update(Path(__file__).read_bytes())
+    return h.hexdigest()[:32]

@@ -224,9 +224,11 @@ def _text(data: dict[str, Any], args: argparse.Namespace) -> str:
         fz = model["fuzzy"]
         if "phi" in fz:
             what = _interval(fz["phi"])
-        else:
+        elif "dF_de" in fz:
             what = f"dF/de in {_interval(fz['dF_de'])}, dF/dde in {_interval(fz['dF_dde'])}"
-        lines.append(f"fuzzy bounds ({fz['bounds']}): {what}; {fz['bounds_are']}")
+        else:
+            what = f"none ({fz.get('why', 'no rest point')})"
+        lines.append(f"fuzzy bounds ({fz['bounds']}): {what}; {fz.get('bounds_are', '')}")
     rest = model["equilibrium"]
     if not rest["at_setpoint"]:
         lines.append(f"no cell is certified as settling at the set point: {rest['why']}")

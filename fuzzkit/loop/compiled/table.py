@@ -142,7 +142,6 @@ def cached_table(rb: Any, tolerance: float, build: Callable[[], Any]) -> TableAr
     rebuilt, never trusted.
     """
     from fuzzkit import __version__
-    from fuzzkit.fileio import write_atomic
 
     key = hashlib.sha256(f"{rb!r}|{tolerance!r}|{__version__}".encode()).hexdigest()[:32]
     path = cache_dir() / f"{key}.npz"
@@ -158,21 +157,29 @@ def cached_table(rb: Any, tolerance: float, build: Callable[[], Any]) -> TableAr
     except (OSError, KeyError, ValueError):
         pass
     arrays = table_arrays(build())
-    buf = io.BytesIO()
-    np.savez(
-        buf,
+    store_npz(
+        path,
         bp0=arrays.bp0,
         bp1=arrays.bp1,
         values=arrays.values,
         splits=arrays.splits,
         label=np.array(arrays.label),
     )
+    return arrays
+
+
+def store_npz(path: Path, **arrays: npt.ArrayLike) -> None:
+    """Keep ``arrays`` in the cache file ``path`` (written whole or not at all); a read-only
+    cache only costs the computation next time."""
+    from fuzzkit.fileio import write_atomic
+
+    buf = io.BytesIO()
+    np.savez(buf, **arrays)  # type: ignore[arg-type]
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         write_atomic(path, buf.getvalue())
     except OSError:
-        pass  # a read-only home only costs the rebuild next time
-    return arrays
+        pass
 
 
 def compiled_table(rulebase: str = "macvicar_whelan", tolerance: float = 1e-3) -> TableArrays:
