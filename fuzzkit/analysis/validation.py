@@ -23,6 +23,7 @@ from fuzzkit.analysis.region import certify_region
 from fuzzkit.analysis.regulation import regulation_experiment
 from fuzzkit.analysis.simulated import simulated_runs, worst_outcome
 from fuzzkit.studies.latency_sweep import scaled_default_gains
+from fuzzkit.studies.outcome import SETTLED
 
 #: The sensor-noise seeds every cell is simulated with; a cell settles when it settles in all.
 SEEDS = (0, 1, 2)
@@ -114,8 +115,8 @@ def compare(
                 }
             )
     certified = [d for d in detail if d["certified"]]
-    settled = [d for d in detail if d["simulated"] == "settled"]
-    false = [d for d in certified if d["simulated"] != "settled"]
+    settled = [d for d in detail if d["simulated"] == SETTLED]
+    false = [d for d in certified if d["simulated"] != SETTLED]
     row = Row(
         plant,
         controller,
