@@ -26,6 +26,9 @@ Tables
 4. Tuning time: ``tune E1 --budget N`` over 5/10/20 N/mm, and a robust tune over 3 stiffnesses x
    3 latencies, on arm6 with the Python loop (before) and the compiled loop (after); the same
    on the planar plant.
+
+Tables 1, 3 and 4 say what ran the controller in each row, read from the runs themselves
+(their ``controller_impl``, :func:`fuzzkit.loop.result.implementations`).
 """
 
 from __future__ import annotations
