@@ -26,6 +26,9 @@ Tables
 4. Tuning time: ``tune E1 --budget N`` over 5/10/20 N/mm, and a robust tune over 3 stiffnesses x
    3 latencies, on arm6 with the Python loop (before) and the compiled loop (after); the same
    on the planar plant.
+
+Tables 1, 3 and 4 say what ran the controller in each row, read from the runs themselves
+(their ``controller_impl``, :func:`fuzzkit.loop.result.implementations`).
 """
 
 from __future__ import annotations
@@ -34,14 +37,22 @@ import argparse
 import sys
 import time
 from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from fuzzkit.loop.result import RunResult
 
 ARM6_CASES = ("E1", "E2", "E3")
 CONTROLLERS = ("pi", "fuzzy-pi")
 
 
-def _best_rtf(fn: Callable[[], float], repeat: int = 3) -> float:
-    """Best real-time factor of ``repeat`` runs (CPU time): the least disturbed."""
-    return max(fn() for _ in range(repeat))
+def _best_rtf(fn: Callable[[], RunResult], repeat: int = 3) -> tuple[float, str]:
+    """Best real-time factor of ``repeat`` runs (CPU time): the least disturbed; and what ran
+    the controller (:func:`fuzzkit.loop.result.implementations` of the runs)."""
+    from fuzzkit.loop.result import implementations
+
+    runs = [fn() for _ in range(repeat)]
+    return max(r.real_time_factor for r in runs), implementations(r.controller_impl for r in runs)
 
 
 #: (plant, target real-time factor of its compiled loop)
@@ -50,33 +61,30 @@ LOOP_TARGETS = (("arm6", 1000), ("planar", 400), ("mujoco", 40))  # issue 37, it
 
 def real_time_factors(
     plants: Sequence[tuple[str, int]] = LOOP_TARGETS,
-) -> list[tuple[str, float, float | None, int]]:
-    """``(case, python rtf, compiled rtf, target)`` rows, CPU time."""
+) -> list[tuple[str, float, float | None, int, str]]:
+    """``(case, python rtf, compiled rtf, target, what ran)`` rows, CPU time; what ran: the
+    ``controller_impl`` of each column's runs."""
     from fuzzkit.loop.spec import RunSpec
     from fuzzkit.studies.batch import run_spec
 
-    rows: list[tuple[str, float, float | None, int]] = []
+    rows: list[tuple[str, float, float | None, int, str]] = []
     for plant, target in plants:
         for name in ARM6_CASES:
             for ctrl in CONTROLLERS:
                 spec = RunSpec(name, ctrl, plant=plant)
                 # build tables, load caches: start-up is not what is measured
                 compiled = run_spec(spec).loop == "compiled"
-                py = _best_rtf(
-                    lambda s=spec: (
-                        run_spec(
-                            RunSpec(
-                                s.experiment, s.controller, s.plant, controller_impl="reference"
-                            )
-                        ).real_time_factor
+                py, py_ran = _best_rtf(
+                    lambda s=spec: run_spec(
+                        RunSpec(s.experiment, s.controller, s.plant, controller_impl="reference")
                     ),
                     repeat=2,
                 )
                 if not compiled:  # a plant the kernel does not model: the Python loop ran it
-                    rows.append((f"{name} {plant} {ctrl} fallback", py, None, target))
+                    rows.append((f"{name} {plant} {ctrl} fallback", py, None, target, py_ran))
                     continue
-                co = _best_rtf(lambda s=spec: run_spec(s).real_time_factor, repeat=5)
-                rows.append((f"{name} {plant} {ctrl}", py, co, target))
+                co, co_ran = _best_rtf(lambda s=spec: run_spec(s), repeat=5)
+                rows.append((f"{name} {plant} {ctrl}", py, co, target, f"{py_ran} | {co_ran}"))
     return rows
 
 
@@ -242,9 +250,11 @@ def _compiled_planar_split() -> tuple[float, float]:
     return 1e6 * best, 1e6 * chipmunk
 
 
-def sweep_throughput(workers: int) -> list[tuple[str, float, int]]:
+def sweep_throughput(workers: int) -> list[tuple[str, float, int, str]]:
     """Runs per wall second of a sweep of whole runs on each plant: 60 compiled, 12 Python (the
-    pool's start-up is included, so small sweeps understate the compiled rate)."""
+    pool's start-up is included, so small sweeps understate the compiled rate), and what ran
+    the controller (the rows' ``controller_impl``)."""
+    from fuzzkit.loop.result import implementations
     from fuzzkit.studies.sweep import run_sweep, sweep_specs
 
     out = []
@@ -263,19 +273,20 @@ def sweep_throughput(workers: int) -> list[tuple[str, float, int]]:
             loop=loop,
         )
         t0 = time.perf_counter()
-        run_sweep(specs, workers=workers)
+        rows = run_sweep(specs, workers=workers)
         out.append(
             (
                 f"sweep, {len(specs)} {plant} runs, {loop} loop",
                 len(specs) / (time.perf_counter() - t0),
                 len(specs),
+                implementations(str(r["controller_impl"]) for r in rows),
             )
         )
     return out
 
 
-def tune_times(budget: int, workers: int) -> list[tuple[str, float, int, float, float]]:
-    """``(case, wall s, evaluations, cost, default cost)`` of the tuning runs."""
+def tune_times(budget: int, workers: int) -> list[tuple[str, float, int, float, float, str]]:
+    """``(case, wall s, evaluations, cost, default cost, what ran)`` of the tuning runs."""
     from fuzzkit.studies.tuning import tune
 
     cases: list[tuple[str, dict[str, object]]] = [
@@ -295,7 +306,9 @@ def tune_times(budget: int, workers: int) -> list[tuple[str, float, int, float, 
     rows = []
     for label, kw in cases:
         r = tune(["E1"], "pi", budget=budget, seed=0, workers=workers, **kw)  # type: ignore[arg-type]
-        rows.append((label, r.wall_time_s, r.evaluations, r.cost, r.baseline_cost))
+        rows.append(
+            (label, r.wall_time_s, r.evaluations, r.cost, r.baseline_cost, r.controller_impl)
+        )
     return rows
 
 
@@ -359,7 +372,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     head = f"{'case':<22}{'python loop':>13}{'compiled':>11}{'speed-up':>10}   target"
     print(head)
     print("-" * (len(head) + 12))
-    for name, py, co, target in real_time_factors():
+    ran: dict[str, str] = {}
+    for name, py, co, target, what in real_time_factors():
+        ran[name] = what
         if co is None:
             print(
                 f"{name:<22}{py:>12.0f}x{'-':>11}{'-':>10}   >= {target}x "
@@ -370,6 +385,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                 f"{name:<22}{py:>12.0f}x{co:>10.0f}x{co / py:>9.0f}x   >= {target}x "
                 f"{'ok' if co >= target else 'MISS'}"
             )
+
+    print("what ran the controller (the runs' controller_impl; python loop | compiled):")
+    for name, what in ran.items():
+        print(f"  {name:<22}{what}")
 
     print("\n1b. first compiled run in a fresh numba cache (compile cost; CPU s, wall s)")
     for label, cpu, wall in first_call_costs():
@@ -384,16 +403,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"  {name:<44}{peak:>10.1f} MB{cpu:>10.3f}")
 
     print(f"\n3. sweep throughput on {workers} local processes")
-    for name, rate, _ in sweep_throughput(workers):
-        print(f"  {name:<40}{rate:>8.2f} runs/s")
+    for name, rate, _, what in sweep_throughput(workers):
+        print(f"  {name:<40}{rate:>8.2f} runs/s   {what}")
 
     if not args.skip_tune:
         print(f"\n4. tune E1, budget {args.budget}, {workers} workers, 5/10/20 N/mm")
         head = f"{'case':<48}{'wall s':>8}{'evals':>7}{'cost':>10}{'default':>10}"
         print(head)
         print("-" * len(head))
-        for label, wall, evals, cost, base in tune_times(args.budget, workers):
-            print(f"{label:<48}{wall:>8.1f}{evals:>7}{cost:>10.4f}{base:>10.4f}")
+        for label, wall, evals, cost, base, what in tune_times(args.budget, workers):
+            print(f"{label:<48}{wall:>8.1f}{evals:>7}{cost:>10.4f}{base:>10.4f}   {what}")
     return 0
 
 

@@ -9,9 +9,10 @@ compiler exists) and never the reference.
 
 Each cell is what the command itself reports: ``simulate --json`` and ``compare --json``
 (``controller_impl`` of every run), ``sweep --out`` (its ``controller_impl`` column), ``tune``
-(its ``controller:`` line, from the loop's own runs). The commands that do not report it yet
-(``report``, ``stability --simulate``, the report's latency sweep) are not in the table; the
-closing note says so.
+(its ``controller:`` line, from the loop's own runs), ``stability --simulate --json`` (each
+simulated cell's ``controller_impl``), the latency sweep (its map's ``controller_impl``, as
+``bench/latency_sweep.py`` and the report print it) and ``report`` (every run in its
+``runs.json``). ``make bench``'s loop tables (``bench/bench_loop.py``) print the same labels.
 """
 
 from __future__ import annotations
@@ -106,15 +107,59 @@ def _tune(scn: Path, opts: list[str], plant: str, folder: Path) -> list[str]:
     return [found.group(1)]
 
 
+def _stability(scn: Path, opts: list[str], plant: str, folder: Path) -> list[str]:
+    argv = ["stability", str(scn), *opts, "--plant", plant, "--stiffness", "10"]
+    data = json.loads(_cli([*argv, "--latency", "1:1", "--simulate", "--workers", "1", "--json"]))
+    return [str(c["controller_impl"]) for c in data["cells"]]
+
+
+def _option(opts: list[str], name: str, default: str) -> str:
+    return opts[opts.index(name) + 1] if name in opts else default
+
+
+def _latency(scn: Path, opts: list[str], plant: str, folder: Path) -> list[str]:
+    from fuzzkit.studies.latency_sweep import stability_map
+
+    controller = _option(opts, "--controller", "pi")
+    rulebase = _option(opts, "--rulebase", "macvicar_whelan")
+    m = stability_map(controller, (1.0,), (0,), rulebase, plant, duration_s=1.0)
+    return [m.controller_impl]
+
+
+def _report(scn: Path, opts: list[str], plant: str, folder: Path) -> list[str]:
+    # the report runs PI and fuzzy-PI on E1-E3 itself: the kind is its rule base or spec
+    from fuzzkit.control.gains import GainsEntry, write_gains
+    from fuzzkit.studies.experiments import DEFAULT_GAINS
+
+    gains = folder / "gains"
+    gains.mkdir()
+    for ctrl in ("pi", "fuzzy-pi"):
+        write_gains(gains / f"{ctrl}.yaml", GainsEntry(ctrl, dict(DEFAULT_GAINS[ctrl])))
+    opts = [o for o in opts if o not in ("--controller", "pi", "fuzzy-pi")]
+    out = folder / "report"
+    argv = ["report", "--out", str(out), "--plant", plant, "--quick", "--no-rrd", "--quiet"]
+    _cli([*argv, "--gains-dir", str(gains), "--workers", "1", *opts])
+    runs = json.loads((out / "runs.json").read_text("utf-8"))["runs"]
+    return [str(r["controller_impl"]) for r in runs]
+
+
 #: command -> how it runs and what it reports as the implementation of each of its runs
 COMMANDS: dict[str, Callable[[Path, list[str], str, Path], list[str]]] = {
     "simulate": _simulate,
     "compare": _compare,
     "sweep": _sweep,
     "tune": _tune,
+    "stability --simulate": _stability,
+    "latency sweep": _latency,
+    "report": _report,
 }
-#: what a command cannot take: compare has no --spec
-NOT_TAKEN = {("compare", "fuzzy-PI, table surface"), ("compare", "renamed spec (spec_renamed)")}
+#: what a command cannot take: compare and the latency sweep have no --spec, report's is a
+#: section of its own (its own rows in the table)
+NOT_TAKEN = {
+    (command, kind)
+    for command in ("compare", "latency sweep")
+    for kind in ("fuzzy-PI, table surface", "renamed spec (spec_renamed)")
+}
 
 
 def implementations(command: str, plant: str, kind: str, folder: Path) -> list[str]:
@@ -150,7 +195,7 @@ def main(argv: list[str] | None = None) -> int:
     """Run the matrix and print it as markdown; exit 1 when a cell is not the generated C."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--plants", default=",".join(PLANTS))
-    parser.add_argument("--commands", default=",".join(COMMANDS))
+    parser.add_argument("--commands", default=",".join(COMMANDS), help="comma-separated")
     args = parser.parse_args(argv)
     plants = args.plants.split(",")
     commands = args.commands.split(",")

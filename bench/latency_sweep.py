@@ -27,6 +27,8 @@ def main() -> None:
             cells = " ".join("+" if ok else "." for ok in row)
             bound = m.boundary()[factor]
             print(f"{m.controller:<10}{factor:>7g}  {' ' * 26}{cells}   boundary {bound}")
+    for m in maps:
+        print(f"{m.controller}: {m.controller_impl}")
     print(f"wrote {write_stability_png(maps, args.out)}")
 
 

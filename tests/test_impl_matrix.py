@@ -2,8 +2,10 @@
 controller kind, each run's implementation read from what the command itself reports
 (``bench/impl_matrix.py``, which prints the same matrix as the closing note's table).
 
-``make test`` runs :data:`COVER` (every kind, command and plant at least once); ``make
-verify`` the full product. The reference controller must never run unless asked for: a cell
+``make test`` runs :data:`COVER` (every kind, command and plant at least once; ``report`` is
+covered by ``tests/test_report.py``, whose report checks its ``runs.json`` the same way);
+``make verify`` the full product, with one report (a quick report costs about 40 CPU-s).
+The reference controller must never run unless asked for: a cell
 that names it, or the generated Python where a C compiler exists, fails.
 """
 
@@ -43,7 +45,11 @@ COVER = (
     ("sweep", "arm6", ".fis (gauss_outputs.fis)"),
     ("tune", "planar", "fuzzy-PI, exact surface"),
     ("simulate", "planar", "PI"),
+    ("stability --simulate", "arm6", "renamed spec (spec_renamed)"),
+    ("latency sweep", "mujoco", "Sugeno (sugeno_pi)"),
 )
+#: the report's rows in ``make verify``
+REPORT_ROWS = (("report", "arm6", "fuzzy-PI, exact surface"),)
 
 
 def _cases() -> list[Any]:
@@ -53,14 +59,17 @@ def _cases() -> list[Any]:
         for command in M.COMMANDS
         for plant in M.PLANTS
         for kind in KIND_NAMES
-        if (command, kind) not in M.NOT_TAKEN
+        if (command, kind) not in M.NOT_TAKEN and command != "report"
     ]
-    return cover + full
+    report = [pytest.param(*row, marks=verify, id="-".join(row)) for row in REPORT_ROWS]
+    return cover + full + report
 
 
 def test_the_matrix_names_every_kind(tmp_path: Path) -> None:
     assert tuple(M.kinds(tmp_path)) == KIND_NAMES
-    assert set(M.COMMANDS) == {"simulate", "compare", "sweep", "tune"}
+    assert set(M.COMMANDS) == {
+        "simulate", "compare", "sweep", "tune", "stability --simulate", "latency sweep", "report"
+    }  # fmt: skip
 
 
 @needs_cc
@@ -73,8 +82,9 @@ def test_every_run_executes_the_generated_c(
     for label in labels:
         assert M.generated_c(label), label
         assert "reference" not in label
-    # compare runs both controllers, sweep every stiffness: each run says so
-    assert len(labels) == {"compare": 2, "sweep": 2}.get(command, 1)
+    # compare runs both controllers, sweep every stiffness, a report many runs: each says so
+    if command != "report":
+        assert len(labels) == {"compare": 2, "sweep": 2}.get(command, 1)
     assert M.cell(labels).startswith("generated C")
 
 

@@ -9,7 +9,7 @@ import pytest
 from fuzzkit.analysis.inner_loop import LOCAL_ID_STIFFNESSES
 from fuzzkit.analysis.region import certify_region
 from fuzzkit.analysis.regulation import regulation_experiment
-from fuzzkit.analysis.simulated import simulate_cells_seeds
+from fuzzkit.analysis.simulated import simulated_runs
 from fuzzkit.analysis.validation import SEEDS, VALIDATION
 from fuzzkit.studies.latency_sweep import scaled_default_gains
 
@@ -31,7 +31,8 @@ def test_no_false_certificate_for_pi_on_mujoco(factor: float) -> None:
     certified = [c for c in region.cells if c.certified]
     assert certified, "nothing certified: the check would be empty"
     for cell in certified:
-        runs = simulate_cells_seeds(
+        runs = simulated_runs(
             exp, "mujoco", "pi", gains, [cell.stiffness_n_per_mm], [cell.latency], SEEDS, workers=1
         )
-        assert all(outs == ["settled"] for outs in runs), (cell.stiffness_n_per_mm, cell.latency)
+        outcomes = [[c.outcome for c in outs] for outs in runs]
+        assert all(o == ["settled"] for o in outcomes), (cell.stiffness_n_per_mm, cell.latency)

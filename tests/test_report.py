@@ -165,6 +165,24 @@ def test_report_writes_markdown_figures_and_recordings(tmp_path: Path) -> None:
     assert (
         "| E1: fuzzy-PI settles faster than PI | planar | matched | 1000 N/mm | not judged" in text
     )
+    # What ran each run, from runs.json (the runs' own controller_impl), counted per part from
+    # the quick options: 1 plant x 3 experiments x 2 controllers x 3 gains sets; 2 stiffnesses
+    # x 6; 4 conditions x 3 x 2 x 2 swept gains sets; the spec on E1-E3; 2 maps x 2 x 4 runs.
+    import json
+
+    runs = json.loads((out / "runs.json").read_text())["runs"]
+    counts: dict[str, int] = {}
+    for r in runs:
+        counts[r["part"]] = counts.get(r["part"], 0) + r.get("runs", 1)
+        assert "generated" in r["controller_impl"], r
+        assert "reference" not in r["controller_impl"], r
+    assert counts == {
+        "E1-E3": 18, "stiffness study": 12, "verdict grid": 48, "controller specs": 3,
+        "latency sweep": 16,
+    }  # fmt: skip
+    assert "## What ran the controller" in text
+    for part, n in counts.items():
+        assert f"| {part} | {n} | generated " in text
     # Hand-written gains: compared with the defaults on the report's own tuning cases, each
     # case run at its latency.
     assert "carry no tuning provenance" in text

@@ -55,8 +55,8 @@ def test_certificate_agrees_with_simulation_on_the_must_cases(
     assert cell.certified is certified
     if certified:
         assert cell.margin > 0.0
-    (outcome,) = simulate_cells(exp, "arm6", controller, {}, [stiffness], [latency], workers=1)
-    assert (outcome == "settled") is certified
+    (sim,) = simulate_cells(exp, "arm6", controller, {}, [stiffness], [latency], workers=1)
+    assert (sim.outcome == "settled") is certified
 
 
 @pytest.mark.parametrize("controller", ["pi", "fuzzy-pi"])
@@ -68,10 +68,10 @@ def test_no_certified_cell_of_a_small_grid_fails_in_simulation(controller):
         gains = scaled_default_gains(controller, factor)
         region = certify_region(exp, controller, "arm6", stiffnesses, latencies, gains=gains)
         outcomes = simulate_cells(exp, "arm6", controller, gains, stiffnesses, latencies, workers=1)
-        for cell, outcome in zip(region.cells, outcomes, strict=True):
+        for cell, simulated in zip(region.cells, outcomes, strict=True):
             if cell.certified:
                 certified += 1
-                assert outcome == "settled", (factor, cell)
+                assert simulated.outcome == "settled", (factor, cell)
             else:
                 refused += 1
     assert certified >= 3 and refused >= 3  # the grid has both kinds: the check means something
@@ -128,6 +128,9 @@ def test_cli_draws_the_region_with_simulated_outcomes(tmp_path: Path, capsys):
     assert code == 0, err
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "Cs" in out and "-t" in out  # certified and settled; refused and tripped
+    # the implementation that ran the cells, as their runs report it (issue 37, item 2)
+    (said,) = [line for line in out.splitlines() if line.startswith("simulated with: ")]
+    assert "generated" in said and "reference" not in said
 
 
 @pytest.mark.parametrize(

@@ -149,3 +149,6 @@ def test_local_certificates_of_a_user_rule_base_settle_in_simulation(capsys):
     assert len(certified) >= 3
     assert all(c["simulated"] == "settled" for c in certified)
     assert all(0.0 < c["region_n"] < 1.0 for c in certified)  # local: well under 1 N
+    # each cell names what ran it: the spec's own generated controller, never the reference
+    assert all("user_nonuniform5" in c["controller_impl"] for c in cells), cells[0]
+    assert not any("reference" in c["controller_impl"] for c in cells)

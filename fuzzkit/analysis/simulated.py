@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from fuzzkit.loop.result import RunResult
 from fuzzkit.loop.task import Experiment
@@ -34,9 +35,18 @@ def outcome(result: RunResult) -> str:
     return end_state(result)
 
 
-def simulate_case(case: SimCase) -> str:
-    """The outcome of one case (:func:`run_case`)."""
-    return outcome(run_case(case))
+class Simulated(NamedTuple):
+    """One simulated cell: its :func:`outcome` and the ``controller_impl`` of the run (what
+    ran the controller, as the run itself reports it)."""
+
+    outcome: str
+    controller_impl: str
+
+
+def simulate_case(case: SimCase) -> Simulated:
+    """The outcome of one case (:func:`run_case`) and the implementation that ran it."""
+    result = run_case(case)
+    return Simulated(outcome(result), result.controller_impl)
 
 
 def run_case(case: SimCase) -> RunResult:
@@ -71,10 +81,10 @@ def simulate_cells(
     rulebase: str = "macvicar_whelan",
     workers: int | None = None,
     seed: int = 0,
-) -> list[str]:
+) -> list[Simulated]:
     """The outcome of every (stiffness, latency) cell, stiffness-major as the certificate's,
-    with the sensor noise seeded by ``seed``."""
-    return simulate_cells_seeds(
+    with the sensor noise seeded by ``seed``, each with the implementation that ran it."""
+    return simulated_runs(
         exp,
         plant,
         controller,
@@ -87,7 +97,7 @@ def simulate_cells(
     )[0]
 
 
-def simulate_cells_seeds(
+def simulated_runs(
     exp: Experiment,
     plant: str,
     controller: str,
@@ -98,8 +108,8 @@ def simulate_cells_seeds(
     *,
     rulebase: str = "macvicar_whelan",
     workers: int | None = None,
-) -> list[list[str]]:
-    """Per seed, the outcome of every cell (stiffness-major); all runs in one batch."""
+) -> list[list[Simulated]]:
+    """Per seed, every cell (stiffness-major) as :class:`Simulated`; all runs in one batch."""
     items = tuple(sorted((str(k), float(v)) for k, v in gains.items()))
     cases = [
         SimCase(exp, plant, controller, items, float(k), (int(s), int(c)), rulebase, int(seed))

@@ -21,8 +21,9 @@ from typing import Any
 
 from fuzzkit.analysis.region import certify_region
 from fuzzkit.analysis.regulation import regulation_experiment
-from fuzzkit.analysis.simulated import simulate_cells_seeds, worst_outcome
+from fuzzkit.analysis.simulated import simulated_runs, worst_outcome
 from fuzzkit.studies.latency_sweep import scaled_default_gains
+from fuzzkit.studies.outcome import SETTLED
 
 #: The sensor-noise seeds every cell is simulated with; a cell settles when it settles in all.
 SEEDS = (0, 1, 2)
@@ -100,11 +101,11 @@ def compare(
         region = certify_region(
             exp, controller, plant, stiffnesses, latencies, gains=gains, **certify_options
         )
-        per_seed = simulate_cells_seeds(
+        per_seed = simulated_runs(
             exp, plant, controller, gains, stiffnesses, latencies, seeds, workers=workers
         )
         for i, cell in enumerate(region.cells):
-            runs = [outs[i] for outs in per_seed]
+            runs = [outs[i].outcome for outs in per_seed]
             detail.append(
                 {
                     "factor": f,
@@ -114,8 +115,8 @@ def compare(
                 }
             )
     certified = [d for d in detail if d["certified"]]
-    settled = [d for d in detail if d["simulated"] == "settled"]
-    false = [d for d in certified if d["simulated"] != "settled"]
+    settled = [d for d in detail if d["simulated"] == SETTLED]
+    false = [d for d in certified if d["simulated"] != SETTLED]
     row = Row(
         plant,
         controller,

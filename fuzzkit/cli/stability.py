@@ -116,7 +116,7 @@ def _stability(args: argparse.Namespace) -> int:
         region, sim_exp, controller, gains, rulebase = _certify_spec(args, exp)
     else:
         region, sim_exp, controller, gains, rulebase = _certify_assumed(args, exp)
-    simulated: list[str] | None = None
+    simulated: list[Any] | None = None
     if args.simulate:
         from fuzzkit.analysis.simulated import simulate_cells
 
@@ -133,15 +133,21 @@ def _stability(args: argparse.Namespace) -> int:
     if args.png:
         from fuzzkit.viz.stability_figure import write_region_png
 
-        write_region_png(region, args.png, simulated)
+        write_region_png(
+            region, args.png, None if simulated is None else [s.outcome for s in simulated]
+        )
     data = region.as_dict()
     inner = data["model"]["inner_loop"]
     warning = poor_fit(inner["plant"], inner["fit_error_nrmse"])
     if warning is not None:
         print(f"fuzzkit: warning: {warning}", file=sys.stderr)
     if simulated is not None:
-        for cell, outcome in zip(data["cells"], simulated, strict=True):
-            cell["simulated"] = outcome
+        from fuzzkit.loop.result import implementations
+
+        for cell, sim in zip(data["cells"], simulated, strict=True):
+            cell["simulated"] = sim.outcome
+            cell["controller_impl"] = sim.controller_impl  # what the cell's run itself reports
+        data["simulated_with"] = implementations(s.controller_impl for s in simulated)
     if args.json:
         print(json.dumps(data, indent=2))
     else:
@@ -278,6 +284,8 @@ def _text(data: dict[str, Any], args: argparse.Namespace) -> str:
         lines.append(f"  {where}: {why}")
     certified = sum(c["certified"] for c in data["cells"])
     lines.append(f"certified {certified} of {len(data['cells'])} cells")
+    if "simulated_with" in data:
+        lines.append(f"simulated with: {data['simulated_with']}")
     if "adaptation" in model:
         lines += _adaptation_text(model["adaptation"])
     return "\n".join(lines)

@@ -4,6 +4,7 @@ summary, whichever loop ran it."""
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -79,3 +80,10 @@ class RunResult:
     def sim_time_s(self) -> float:
         """Simulated time covered by the run (s)."""
         return float(self.t[-1]) if len(self.t) else 0.0
+
+
+def implementations(labels: Iterable[str]) -> str:
+    """What ran a set of runs, for a header or a report line: their distinct ``controller_impl``
+    (:attr:`RunResult.controller_impl`, the one label of what ran), in first-seen order."""
+    distinct = list(dict.fromkeys(labels))
+    return "; ".join(distinct) if distinct else "(no run)"

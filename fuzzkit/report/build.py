@@ -26,6 +26,7 @@ from fuzzkit.control.names import KINDS as CONTROLLERS
 from fuzzkit.errors import ConfigError
 from fuzzkit.fileio import staged_folder, write_atomic
 from fuzzkit.progress import progress_bar
+from fuzzkit.report import ran
 from fuzzkit.report.certified import latency_lines, stiffness_lines
 from fuzzkit.report.grid import Condition, RunCache, conditions, grid_summaries, spec
 from fuzzkit.report.tuned import (
@@ -50,6 +51,7 @@ from fuzzkit.report.verdicts import (
     fmt,
     verdict_matrix_markdown,
 )
+from fuzzkit.studies.latency_sweep import StabilityMap
 from fuzzkit.studies.tuning_check import CaseComparison
 
 #: Gains labels, one per comparison protocol (docs/comparison.md): the hand-set defaults, the
@@ -340,13 +342,40 @@ def build_report(
         ) as bar:
             pairs = adaptive_rows(specs, plants, EXPERIMENT_NAMES, lambda: bar.update(1))
         text += "\n".join(adaptive_section(pairs))
-        text += _latency_section(
+        latency_text, maps = _latency_section(
             out,
             log,
             tuple(latency_factors or LATENCY_FACTORS),
             tuple(latency_delays or LATENCY_DELAYS),
             rulebase,
         )
+        text += latency_text
+        records = [
+            *(ran.record("E1-E3", d, gains=k[3]) for k, d in summaries.items()),
+            *(
+                ran.record("stiffness study", m, controller=c, gains=lab, stiffness=k)
+                for (c, lab), rows in study.items()
+                for k, m in rows
+            ),
+            *(
+                ran.record("verdict grid", d, gains=k[3], condition=cond)
+                for cond, by_key in grid.items()
+                for k, d in by_key.items()
+            ),
+            *(ran.record("controller specs", d, spec=d["spec"]) for d in spec_runs),
+            *(
+                ran.record(f"adaptive against fixed ({which})", p[which], spec=p["spec"])
+                for p in pairs
+                for which in ("adaptive", "fixed")
+            ),
+            *(
+                ran.record("latency sweep", {"controller_impl": m.controller_impl},
+                           controller=m.controller, runs=len(m.factors) * len(m.delays))
+                for m in maps
+            ),
+        ]  # fmt: skip
+        text += "\n".join(ran.section(records))
+        write_atomic(out / "runs.json", ran.runs_json(records))
         write_atomic(out / "report.md", text)
     return final / "report.md"
 
@@ -362,8 +391,9 @@ def _latency_section(
     factors: tuple[float, ...],
     delays: tuple[int, ...],
     rulebase: str = "macvicar_whelan",
-) -> str:
-    """Run the latency sweep, write ``latency.png`` and return the report's Latency section."""
+) -> tuple[str, list[StabilityMap]]:
+    """Run the latency sweep, write ``latency.png`` and return the report's Latency section
+    and the maps."""
     from fuzzkit.studies.experiments import DEFAULT_LATENCY
     from fuzzkit.studies.latency_sweep import stability_map
     from fuzzkit.viz.latency import write_stability_png
@@ -399,7 +429,7 @@ def _latency_section(
         md.append(f"| {factor:g} | " + " | ".join(cells) + " |")
     md += latency_lines(maps, rulebase)
     md.append("")
-    return "\n".join(md)
+    return "\n".join(md), maps
 
 
 def comparison_markdown(summaries: Mapping[Key, Mapping[str, Any]]) -> str:

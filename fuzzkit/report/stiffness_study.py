@@ -6,7 +6,8 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
-#: One row per stiffness: (N/mm, the z axis's metrics with ``tripped``).
+#: One row per stiffness: (N/mm, the z axis's metrics with ``tripped`` and the run's
+#: ``controller_impl``).
 StudyRows = list[tuple[float, Any]]
 
 
@@ -34,8 +35,8 @@ def stiffness_study(
             press = press_experiment(k * 1e3)
             run = RunSpec(press.name, ctrl, plant, gains=gains_items(g), rulebase=rulebase)
             r = run_loop(run, press, plant)
-            m = axis_metrics(r, 2)
-            m["tripped"] = float(r.tripped)
+            m: dict[str, Any] = {**axis_metrics(r, 2), "tripped": float(r.tripped)}
+            m["controller_impl"] = r.controller_impl
             rows.append((k, m))
             if on_run is not None:
                 on_run(ctrl, label)

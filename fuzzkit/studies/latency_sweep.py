@@ -22,12 +22,14 @@ __all__ = ["StabilityMap", "is_stable", "scaled_default_gains", "stability_map"]
 @dataclass(frozen=True, slots=True)
 class StabilityMap:
     """``stable[i][j]``: the loop with ``factors[i]`` x the default gains and ``delays[j]``
-    periods of sensor delay settles (see :func:`is_stable`)."""
+    periods of sensor delay settles (see :func:`is_stable`); ``controller_impl``: what ran the
+    controller, as the runs report it (:func:`fuzzkit.loop.result.implementations`)."""
 
     controller: str
     factors: tuple[float, ...]
     delays: tuple[int, ...]
     stable: tuple[tuple[bool, ...], ...]
+    controller_impl: str = ""
 
     def boundary(self) -> dict[float, int | None]:
         """Per gain factor, the largest delay up to which every delay of the sweep is stable
@@ -59,12 +61,14 @@ def stability_map(
     """Run the press experiment for every gain factor and delay (one seed: 1), each run as
     ``fuzzkit simulate`` runs it (:func:`fuzzkit.loop.run.run_loop`: the generated
     controller, in the compiled loop where the plant has one)."""
+    from fuzzkit.loop.result import implementations
     from fuzzkit.loop.run import run_loop
     from fuzzkit.loop.spec import RunSpec
     from fuzzkit.studies.batch import gains_items
 
     exp = press_experiment(1.0e4)
     rows = []
+    ran: list[str] = []
     for factor in factors:
         gains = gains_items(scaled_default_gains(controller, factor))
         runs = [
@@ -72,5 +76,9 @@ def stability_map(
                     latency=(delay, 0), duration_s=duration_s)
             for delay in delays
         ]  # fmt: skip
-        rows.append(tuple(is_stable(run_loop(r, exp, plant)) for r in runs))
-    return StabilityMap(controller, tuple(factors), tuple(delays), tuple(rows))
+        results = [run_loop(r, exp, plant) for r in runs]
+        ran += (r.controller_impl for r in results)
+        rows.append(tuple(is_stable(r) for r in results))
+    return StabilityMap(
+        controller, tuple(factors), tuple(delays), tuple(rows), implementations(ran)
+    )

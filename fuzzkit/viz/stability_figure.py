@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from fuzzkit.analysis.region import Region
+from fuzzkit.studies.outcome import OSCILLATING, SETTLED, TRIPPED
 from fuzzkit.units import latency_text
 
 #: Fill colour per verdict, and the marker per simulated outcome.
@@ -19,7 +20,7 @@ _FILL = {
     "stable, off set point": "#ffb74d",
     "not certified": "#e0e0e0",
 }
-_MARK = {"settled": ("o", "#1b5e20"), "oscillating": ("^", "#e65100"), "tripped": ("x", "#b71c1c")}
+_MARK = {SETTLED: ("o", "#1b5e20"), OSCILLATING: ("^", "#e65100"), TRIPPED: ("x", "#b71c1c")}
 
 
 def _verdict(cell: Any, at_setpoint: bool) -> str:

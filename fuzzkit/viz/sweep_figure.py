@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from fuzzkit.studies.outcome import NEVER_SETTLED
 from fuzzkit.units import latency_text
 from fuzzkit.viz.figures import figure_bytes, new_figure
 from fuzzkit.viz.palette import TRIP_LABEL, TRIP_STYLE, controller_colour, controller_name
@@ -31,7 +32,7 @@ METRICS = (
 )
 #: The metric whose missing value means "never settled" (others are missing for no contact).
 SETTLING = "settling_time_s"
-NEVER_SETTLED_LABEL = "never settled"
+NEVER_SETTLED_LABEL = NEVER_SETTLED  # the outcome word (fuzzkit.studies.outcome)
 
 
 def case_label(row: Mapping[str, Any]) -> str:
