@@ -6,7 +6,10 @@ same small-signal gain. Controllers: fuzzy-PI on ``macvicar_whelan`` (type-1) an
 controller on arm6. **Equal small-signal gain**: the surfaces' slopes at the origin (central
 differences of the exact engines, step 1e-4) are matched by scaling the IT2 controller's
 ``kx`` by ``dF1/dde / dF2/dde`` (the proportional part) and its ``ki`` by the remaining ratio
-of the ``e`` slopes (the integral part); the slopes and factors are printed.
+of the ``e`` slopes (the integral part); the slopes and factors are printed. Both
+controllers' ``kx`` is then scaled by ``REFERENCE_STIFFNESS / k`` at stiffness ``k`` (the loop
+gain ``kx k`` held at its 5 N/mm value: the default gains are certified at 5 N/mm only);
+``--gains-dir`` writes each setting's gains files, for ``fuzzkit stability --gains``.
 
 Settings: E1, E2, E3; sensor noise 0.05, 0.2, 0.5 N (standard deviation); contact stiffness 5,
 50 and 500 N/mm; SEEDS noise seeds each. Per setting and controller: the steady force error
@@ -24,6 +27,7 @@ import json
 import math
 import sys
 from dataclasses import replace
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -39,7 +43,8 @@ TYPE1, TYPE2 = "macvicar_whelan", "macvicar_whelan_it2"
 EXPERIMENTS = ("E1", "E2", "E3")
 NOISE_N = (0.05, 0.2, 0.5)
 STIFFNESS_N_PER_MM = (5.0, 50.0, 500.0)
-SEEDS = 2
+SEEDS = 3
+REFERENCE_STIFFNESS = 5.0
 STEP = 1e-4
 
 
@@ -87,6 +92,16 @@ def run(
     return result_row(spec, run_loop(spec, exp, plant))
 
 
+def at_stiffness(gains: dict[str, float], k: float) -> dict[str, float]:
+    """``gains`` with ``kx`` scaled by ``REFERENCE_STIFFNESS / k``."""
+    return dict(gains, kx=gains["kx"] * REFERENCE_STIFFNESS / k)
+
+
+def gains_file(gains: dict[str, float]) -> str:
+    """A ``fuzzkit stability --gains`` file of fuzzy-PI ``gains``."""
+    return "fuzzy-pi:\n" + "".join(f"  {key}: {v!r}\n" for key, v in sorted(gains.items()))
+
+
 def force_metrics(row: dict[str, Any]) -> dict[str, float | None]:
     """The force axes' steady std, overshoot, settling (the largest over the axes)."""
     out: dict[str, float | None] = {}
@@ -105,16 +120,23 @@ def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seeds", type=int, default=SEEDS)
     ap.add_argument("--json", help="write the rows here")
+    ap.add_argument("--gains-dir", help="write the gains files (T1_<k>.yaml, IT2_<k>.yaml) here")
     args = ap.parse_args(argv)
     g1, g2, info = matched_gains()
     print("slopes at the origin and IT2 gain factors:", {k: round(v, 4) for k, v in info.items()})
+    if args.gains_dir:
+        for k in STIFFNESS_N_PER_MM:
+            for label, base in (("T1", g1), ("IT2", g2)):
+                path = Path(args.gains_dir) / f"{label}_{k:g}.yaml"
+                path.write_text(gains_file(at_stiffness(base, k)), encoding="utf-8")
     rows = []
     print(f"{'exp':<4}{'noise':>6}{'k N/mm':>8}  {'ctrl':<5}{'std N':>8}{'over %':>8}"
           f"{'settle s':>9}{'trips':>6}")  # fmt: skip
     for exp_name in EXPERIMENTS:
         for noise in NOISE_N:
             for k in STIFFNESS_N_PER_MM:
-                for label, name, gains in (("T1", TYPE1, g1), ("IT2", TYPE2, g2)):
+                for label, name, base in (("T1", TYPE1, g1), ("IT2", TYPE2, g2)):
+                    gains = at_stiffness(base, k)
                     got = [run(name, gains, exp_name, noise, k, s) for s in range(args.seeds)]
                     # the metrics of the runs that did not trip (a tripped run stops)
                     ms = [force_metrics(r) for r in got if not r["tripped"]]
