@@ -8,9 +8,9 @@ candidate cut points (an edge meeting a level, or two scaled edges meeting), cla
 interval and sorted by a fixed compare-exchange network; the two sets' points merged in a
 fixed number of steps; both sets read at every point; prefix sums; the Karnik-Mendel ends by
 a binary-search bracket of a fixed number of steps, then on the bracketing piece (where
-``g`` is a cubic) a fixed number of safeguarded Newton steps: each step takes Newton's step
-from the safe end and halves the bracket, so after ``n`` steps the root is within
-``h 2^-n`` of the answer (``h`` the piece's width), whatever the input. Every loop's trip
+``g`` is a cubic, whose four coefficients are computed once) a fixed number of bisection
+steps, one Horner evaluation each: after ``n`` steps the root is within ``h 2^-(n+1)`` of the
+answer (``h`` the piece's width), whatever the input. Every loop's trip
 count is a constant; no heap, no recursion.
 
 Covered: one Mamdani output, continuous Karnik-Mendel (or EKM, the same interval),
@@ -46,10 +46,13 @@ from fuzzkit.fuzzy.model import RuleBase
 from fuzzkit.fuzzy.type2_kernel import FiringLayout, OutputLayout
 from fuzzkit.fuzzy.type2_model import Type2RuleBase
 
-#: Safeguarded Newton steps on the bracketing piece, per number type: each halves the
-#: bracket at least, so the root's error is at most the piece's width times 2^-steps (at most
-#: the output range times 2^-57 in double, 2^-27 in float: below the rounding bound).
-NEWTON_STEPS = {"double": 57, "float": 27}
+#: Bisection steps on the bracketing piece, per number type. On the piece ``g`` is the cubic
+#: ``g(p + t) = g(p) + D(p) t + sign (W(p) t^2 / 2 + W' t^3 / 6)`` (its coefficients are computed
+#: once, then each step is one Horner evaluation and a sign test): ``n`` steps leave the
+#: midpoint within ``h 2^-(n+1)`` of the root, ``h`` the piece's width, at most twice the full
+#: scale ``S``. So the root's error is at most ``S 2^-n``: ``S 2^-50`` in double, ``S 2^-21`` in
+#: float, 1/64 of the rounding bound (``ROUNDING_BOUND``: ``S 2^-44``, ``S 2^-15``).
+ROOT_STEPS = {"double": 50, "float": 21}
 
 
 @dataclass(frozen=True)
@@ -138,7 +141,7 @@ class Type2Spec:
     sets: tuple[Type2Set, Type2Set]
     n_points: int
     bracket_steps: int
-    newton_steps: int
+    root_steps: int
     default: str
     #: the generated Python module's inference (the type-1 exact module's own otherwise)
     python_body: str = "exact_type2_body.py.jinja"
@@ -248,7 +251,7 @@ def build_type2_spec(rb: RuleBase, target: str, number_type: str = "double") -> 
         fo += 2 * m + 3 * mk
         io += mk
     n_points = sum(s.m * s.c for s in sets)
-    steps = NEWTON_STEPS[number_type]
+    steps = ROOT_STEPS[number_type]
     bracket = math.ceil(math.log2(n_points + 1))
     o = rb.outputs[0]
     file_name, sha = source_sha256(rb)
@@ -258,9 +261,9 @@ def build_type2_spec(rb: RuleBase, target: str, number_type: str = "double") -> 
         f"Exact interval type-2 inference (continuous Karnik-Mendel): |generated - exact "
         f"engine| <= {bound:.3g} x the output's full scale (rounding; compile --verify checks 1e5 "
         f"points plus edges). Constant time: {n_points} cut points, a {bracket}"
-        f"-step binary-search bracket per end, then {steps} safeguarded Newton steps on the "
-        f"bracketing piece, each of which at least halves the bracket: the root's error is at "
-        f"most the piece's width x 2^-{steps}, below the rounding bound."
+        f"-step binary-search bracket per end, then {steps} bisection steps on the bracketing "
+        f"piece, where g is a cubic in closed form: the root's error is at most the piece's "
+        f"width x 2^-{steps + 1}, below the rounding bound."
     )
     fpi = n_in == 2
     return Type2Spec(
@@ -319,7 +322,7 @@ def build_type2_spec(rb: RuleBase, target: str, number_type: str = "double") -> 
         sets=(sets[0], sets[1]),
         n_points=n_points,
         bracket_steps=bracket,
-        newton_steps=steps,
+        root_steps=steps,
         default=tg.nan if o.default is None else lit(float(o.default)),
     )
 
@@ -331,7 +334,7 @@ def emit_exact_type2(rb: RuleBase, target: str, number_type: str = "double") -> 
 
 
 __all__ = [
-    "NEWTON_STEPS",
+    "ROOT_STEPS",
     "Type2Spec",
     "build_type2_spec",
     "emit_exact_type2",

@@ -20,7 +20,7 @@ from _replay_logs import run_cli
 from _type2_reference import centroid_interval
 
 from fuzzkit.codegen.exact import emit_exact, unsupported_reason
-from fuzzkit.codegen.exact_type2 import NEWTON_STEPS
+from fuzzkit.codegen.exact_type2 import ROOT_STEPS
 from fuzzkit.codegen.method import compile_rulebase
 from fuzzkit.codegen.toolchain import CompiledTable
 from fuzzkit.codegen.verify import load_module, verify_exact_python
@@ -48,7 +48,7 @@ def test_compile_exact_verifies_against_the_engine_in_c(
     # the header states the bound and how the root is found, in a fixed number of steps
     flat = " ".join(line.lstrip(" *") for line in header.splitlines())
     assert "continuous Karnik-Mendel" in flat and "rounding" in flat
-    assert f"{NEWTON_STEPS[number_type]} safeguarded Newton steps" in flat
+    assert f"{ROOT_STEPS[number_type]} bisection steps" in flat
     assert "malloc" not in source and "while" not in source  # no heap, no open-ended loop
 
 
