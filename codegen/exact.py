@@ -12,7 +12,10 @@ probabilistic sum), as the engine does. Everything is bounded at generation time
 loop counts (insertion sort of at most ``points_per_interval`` values, 60 bisection steps for a
 probabilistic-sum bisector), so the worst-case time is constant; nothing is allocated.
 
-The error against the exact engine is rounding only; :data:`ROUNDING_BOUND` states it.
+The error against the exact engine is rounding only; :data:`ROUNDING_BOUND` states it. Gaussian
+outputs under a probabilistic sum (product implication, centroid) are integrated by the fixed
+Gauss-Legendre rule of ``fuzzkit.fuzzy.smooth_quadrature``, which the engine uses too; its proven
+error against the true centroid is printed in the header.
 
 Size: just over 800 lines, all for one idea: the engine's output-stage breakpoint sweep emitted
 as generated-code data, with its rounding bound.
@@ -62,6 +65,8 @@ from fuzzkit.fuzzy.model import (
     Variable,
 )
 from fuzzkit.fuzzy.output_geometry import LINEAR_NODES, TIE
+from fuzzkit.fuzzy.smooth_quadrature import Quadrature, terms_at_nodes
+from fuzzkit.fuzzy.smooth_quadrature import applies as quadrature_applies
 from fuzzkit.fuzzy.type2_model import Type2RuleBase
 
 #: Defuzzifiers the exact method emits (``weighted_sum`` and ``weighted_average`` of Sugeno
@@ -164,6 +169,22 @@ class ExactOutput:
     sugeno: tuple[SugenoTerm, ...] = ()
     # Gaussian terms, max aggregation, centroid: closed form (erfc)
     gauss: GaussSpec | None = None
+    # Gaussian terms, product implication, probabilistic sum, centroid: a fixed quadrature
+    quad: QuadSpec | None = None
+
+
+@dataclass(frozen=True)
+class QuadSpec:
+    """The composite Gauss-Legendre rule of ``codegen.smooth_quadrature``: its nodes and
+    weights, and per piece its Gaussian at every node (piece-major), with the proven bound."""
+
+    n_nodes: int
+    nodes: tuple[str, ...]
+    weights: tuple[str, ...]
+    table: tuple[str, ...]
+    cells: int
+    per_cell: int
+    bound: float  # |centroid error| in output units, before rounding
 
 
 @dataclass(frozen=True)
@@ -311,8 +332,9 @@ NOT_YET = {
     ),
     "gaussian_sum": (
         "the exact method integrates Gaussian output terms in closed form under max "
-        "aggregation only; under a bounded or probabilistic sum it is not built yet; use "
-        "max aggregation, the weighted_average defuzzifier, or --method table"
+        "aggregation, and by a proven quadrature under a probabilistic sum with product "
+        "implication and the centroid; other bounded or probabilistic sums are not built "
+        "yet; use max aggregation, the weighted_average defuzzifier, or --method table"
     ),
     "mixed_output": (
         "the exact method integrates an output whose terms are all piecewise linear or all "
@@ -346,7 +368,7 @@ def not_yet(rb: RuleBase, out: Variable, number_type: str = "double") -> tuple[s
         and out.terms
     ):
         return "float_psum_maxima", out.terms[0]
-    if _gaussian_closed_form(rb, out):
+    if _gaussian_closed_form(rb, out) or _quadrature_rule(rb, out) is not None:
         return None
     pwl = [t for t in out.terms if shapes.shape(t.shape).piecewise_linear]
     curved = [t for t in out.terms if not shapes.shape(t.shape).piecewise_linear]
@@ -400,6 +422,11 @@ def _gaussian_closed_form(rb: RuleBase, out: Variable) -> bool:
     """Gaussian terms, max aggregation (any defuzzifier but the weighted average, which only
     needs the centres): the closed form the templates emit."""
     return rb.defuzzifier != "weighted_average" and gaussian_applies(rb, out, OutputPieces(rb, out))
+
+
+def _quadrature_rule(rb: RuleBase, out: Variable) -> Quadrature | None:
+    """The proven quadrature of an output (``fuzzkit.fuzzy.smooth_quadrature``), else None."""
+    return quadrature_applies(rb, out, OutputPieces(rb, out))
 
 
 def _linear(out: Variable) -> bool:
@@ -761,7 +788,7 @@ def _output(
     else:
         levels = tuple(f"w[{int(r)}]" for r in pieces.inst_rules)
 
-    def closed_form(**how: PolySpec | GaussSpec) -> ExactOutput:
+    def closed_form(**how: PolySpec | GaussSpec | QuadSpec) -> ExactOutput:
         """An output integrated in closed form from its levels: no breakpoint sweep."""
         return ExactOutput(
             index=k, name=out.name, low=lit(out.low), high=lit(out.high),
@@ -770,6 +797,19 @@ def _output(
             grid_cons=grid_cons, **how, **empty_geo,  # type: ignore[arg-type]
         )  # fmt: skip
 
+    qrule = _quadrature_rule(rb, out)
+    if qrule is not None:
+        table = [lit(float(v)) for v in terms_at_nodes(qrule, out, pieces).ravel()]
+        quad = QuadSpec(
+            n_nodes=len(qrule.nodes),
+            nodes=wrap([lit(float(v)) for v in qrule.nodes]),
+            weights=wrap([lit(float(v)) for v in qrule.weights]),
+            table=wrap(table),
+            cells=qrule.cells,
+            per_cell=qrule.per_cell,
+            bound=qrule.bound,
+        )
+        return closed_form(quad=quad)
     if _gaussian_closed_form(rb, out):
         gg = GaussianGeometry(rb, out, pieces)
         k_ = gg.k
@@ -877,6 +917,20 @@ def _bound_note(number_type: str, target: Target) -> str:
         f"at most {ROUNDING_ULPS} x {eps} x the output's full scale (largest |range end|) for "
         "centroid, bisector and weighted average. mean/smallest/largest of maximum jump where "
         "two maxima tie; there a rounding difference can pick the other one."
+    )
+
+
+def _quad_note(outputs: tuple[ExactOutput, ...]) -> str:
+    """The proven quadrature bound of each output integrated by one (codegen.smooth_quadrature:
+    Gaussian terms, product implication, probabilistic sum, centroid)."""
+    return "".join(
+        f" Output {o.name!r} (Gaussian terms under a probabilistic sum) is integrated by "
+        f"{o.quad.cells} x {o.quad.per_cell}-node Gauss-Legendre on the whole range, its "
+        f"aggregated set being analytic: the quadrature's own centroid error is proven at most "
+        f"{o.quad.bound:.2e} (Bernstein-ellipse bound, whatever the firing strengths), on top "
+        "of the rounding."
+        for o in outputs
+        if o.quad is not None
     )
 
 
@@ -1050,7 +1104,9 @@ def build_exact_spec(
         output_units=tuple(units_comment(v.units) for v in rb.outputs),
         libm=tuple(sorted(libm)),
         own_math=tuple(sorted(own_math)),
-        bound_note=tuple(textwrap.wrap(_bound_note(number_type, tg) + _wide_note(wide), 88)),
+        bound_note=tuple(
+            textwrap.wrap(_bound_note(number_type, tg) + _wide_note(wide) + _quad_note(outputs), 88)
+        ),
         has_fpi=has_fpi,
         fpi_note=note,
         fpi_defaults=defaults,

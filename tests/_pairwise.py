@@ -76,19 +76,35 @@ COVER_SEEDS = (0, 1)
 VERIFY_SEEDS = tuple(range(50))
 
 
+def rotated_product(axes: Sequence[Sequence[Hashable]], inner: int) -> list[Row]:
+    """Every row of the product of ``axes[inner:]`` once, each with one combination of the
+    first ``inner`` axes, taken in turn (product order): a fraction of the full product for a
+    matrix whose first axes act on a stage the later axes do not reach (the firing strengths
+    against the output stage, say). Which combinations of the later axes each leading
+    combination meets depends on the axes' lengths: the caller states and checks it.
+    """
+    lead = list(itertools.product(*axes[:inner]))
+    return [
+        (*lead[r % len(lead)], *rest) for r, rest in enumerate(itertools.product(*axes[inner:]))
+    ]
+
+
 def matrix_params(
     axes: Sequence[Sequence[Hashable]],
     cover_seeds: Sequence[int] = COVER_SEEDS,
     verify_seeds: Sequence[int] = VERIFY_SEEDS,
     marks: Mapping[Hashable, pytest.MarkDecorator] | None = None,
+    full_rows: Sequence[Row] | None = None,
 ) -> list[Any]:
     """The cases of a matrix test, each ``(*row, seed)``: the covering set
     (:func:`pairwise`) at ``cover_seeds``, ids ``cover-...``, and the full product of the
-    axes at ``verify_seeds``, marked :data:`verify`, ids ``full-...``.
+    axes (or ``full_rows``, a trimmed set such as :func:`rotated_product`) at
+    ``verify_seeds``, marked :data:`verify`, ids ``full-...``.
 
     ``marks`` adds a mark to every case holding a value (``{"generated-c": needs_cc}``).
     """
     marks = marks or {}
+    rows = list(itertools.product(*axes)) if full_rows is None else full_rows
 
     def case(kind: str, row: Sequence[Hashable], seed: int, *extra: pytest.MarkDecorator) -> Any:
         own = [marks[v] for v in row if v in marks]
@@ -96,5 +112,5 @@ def matrix_params(
         return pytest.param(*row, seed, marks=[*own, *extra], id=name)
 
     cover = [case("cover", row, s) for row in pairwise(axes) for s in cover_seeds]
-    full = [case("full", row, s, verify) for row in itertools.product(*axes) for s in verify_seeds]
+    full = [case("full", row, s, verify) for row in rows for s in verify_seeds]
     return cover + full

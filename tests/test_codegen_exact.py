@@ -184,6 +184,15 @@ SANITIZED = {
         "float",
         1000,
     ),
+    # Gaussian outputs under a probabilistic sum: the proven quadrature (smooth_quadrature)
+    "gaussian3x3-psum-float": (
+        lambda: dataclasses.replace(
+            load(Path(__file__).parent / "data" / "gaussian3x3.yaml"),
+            operators=Operators("product", "max", "product", "probabilistic_sum"),
+        ),
+        "float",
+        1000,
+    ),
     # every smooth input shape, and the float code's own pow (a bell's)
     "smooth_inputs-float": (
         lambda: load(Path(__file__).parent / "data" / "fis" / "smooth_inputs.fis"),
@@ -386,7 +395,8 @@ def test_auto_takes_the_exact_method_when_no_table_fits_the_budget() -> None:
                 "operators": Operators("min", "max", "min", "bounded_sum"),
             },
             r"term 'g' is a gaussian \(bounded_sum aggregation\): .* Gaussian output terms in "
-            r"closed form under max aggregation only",
+            r"closed form under max aggregation, and by a proven quadrature under a "
+            r"probabilistic sum with product implication",
         ),
         (
             {"outputs": (Variable("du", -1, 1, (Term("b", "bell", (0.3, 2.0, 0.0)),)),)},

@@ -8,8 +8,9 @@ must be refused by ``validate``; one it can, by ``--method exact`` either compil
 the engine (``codegen.verify``: random points, every edge combination, the weak points), or
 refused with a reason of one of the classes ``codegen.exact.NOT_YET`` lists, the explicit list
 of what the method does not emit yet. ``make test`` runs a covering set (tests/_pairwise.py),
-``make verify`` the full product; the classification alone runs over the full product in
-``make test`` (it compiles nothing).
+``make verify`` :data:`VERIFY_ROWS` (a quarter of the product: the AND and OR operators, which
+act on the firing strengths only, taken in turn over the product of the other axes); the
+classification alone runs over the full product in ``make test`` (it compiles nothing).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import itertools
 
 import pytest
 from _codegen_util import needs_cc
-from _pairwise import matrix_params
+from _pairwise import matrix_params, rotated_product
 
 from fuzzkit.codegen.exact import NOT_YET, emit_exact, not_yet, unsupported_reason
 from fuzzkit.codegen.toolchain import STRICT_FLAGS
@@ -123,6 +124,20 @@ AXES = (
 )
 
 
+#: ``make verify``'s rows: every implication x aggregation x defuzzifier x kind x target once,
+#: the four AND x OR combinations in turn. With these axes' lengths each AND x OR combination
+#: meets every aggregation x defuzzifier x kind (checked below); the firing strengths the AND
+#: and OR compute reach the output stage only as numbers in [0, 1] (and make test's covering
+#: rows meet every AND and OR value with every value of each other axis).
+VERIFY_ROWS = rotated_product((*AXES, TARGETS), 2)
+
+
+def test_the_verify_rows_meet_every_operator_pair_with_every_output_stage() -> None:
+    met = {(row[0], row[1], row[3], row[4], row[5]) for row in VERIFY_ROWS}
+    assert met == set(itertools.product(*AXES[:2], *AXES[3:]))
+    assert len(VERIFY_ROWS) == len(list(itertools.product(*AXES[2:], TARGETS)))
+
+
 def engine_refuses(defuzzifier: str, kind: str) -> bool:
     """Whether ``validate`` refuses the case: Sugeno terms need a weighted defuzzifier, and
     weighted_sum is for Sugeno terms only."""
@@ -171,6 +186,7 @@ def _verify(rb: model.RuleBase, target: str) -> None:
         (*AXES, TARGETS),
         cover_seeds=(0,),
         verify_seeds=(0,),
+        full_rows=VERIFY_ROWS,
         marks={"c-float": needs_cc, "c-double": needs_cc},
     ),
 )

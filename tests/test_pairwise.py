@@ -8,7 +8,7 @@ from collections.abc import Hashable, Sequence
 from typing import Any
 
 import pytest
-from _pairwise import COVER_SEEDS, VERIFY_SEEDS, matrix_params, pairwise
+from _pairwise import COVER_SEEDS, VERIFY_SEEDS, matrix_params, pairwise, rotated_product
 
 AXIS_SETS: dict[str, list[list[Hashable]]] = {
     # the safety matrix: impl, experiment, controller, fault, plant
@@ -101,3 +101,17 @@ def test_matrix_params_are_the_covering_set_at_two_seeds_and_the_marked_full_pro
     for c in cases:  # the compiler mark on exactly the cases that need one
         assert ("needs_cc" in _names(c)) == ("generated-c" in c.values), c.id
     assert len({c.id for c in cases}) == len(cases)  # ids unique: each case selectable
+
+
+def test_a_rotated_product_runs_each_later_row_once_with_the_leading_combinations_in_turn() -> None:
+    axes = (("a", "b"), ("x", "y"), (1, 2, 3), (True, False))
+    rows = rotated_product(axes, 2)
+    later = list(itertools.product(*axes[2:]))
+    assert [row[2:] for row in rows] == later  # every later row once, in product order
+    lead = list(itertools.product(*axes[:2]))
+    assert [row[:2] for row in rows] == [lead[r % 4] for r in range(len(later))]
+    assert set(rows) <= set(itertools.product(*axes))
+    cases = matrix_params(axes, full_rows=rows, verify_seeds=(7,))
+    assert [tuple(c.values) for c in cases if c.id.startswith("full-")] == [
+        (*row, 7) for row in rows
+    ]
