@@ -161,12 +161,7 @@ def test_an_it2_spec_on_a_table_surface_runs_and_replays(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     # the table of the exact IT2 engine, for targets that want one: the same loop, replayed
-    text = SPEC.read_text(encoding="utf-8")
-    table = tmp_path / "table_it2.yaml"
-    table.write_text(
-        re.sub(r"(?m)^surface: .*$", "surface: {method: table, resolution: 33}", text),
-        encoding="utf-8",
-    )
+    table = _table_spec(tmp_path, 33)
     run_csv = tmp_path / "run.csv"
     out = _ok(capsys, "simulate", "E1", "--spec", str(table), "--plant", "arm6", "--csv",
               str(run_csv), "--json")  # fmt: skip
@@ -187,12 +182,7 @@ def test_stability_certifies_the_it2_table_that_ships_against_a_dense_grid(
     from fuzzkit.codegen.controller import surface_table
     from fuzzkit.control.controllers import lookup_table_surface
 
-    text = SPEC.read_text(encoding="utf-8")
-    table_spec = tmp_path / "table_it2.yaml"
-    table_spec.write_text(
-        re.sub(r"(?m)^surface: .*$", "surface: {method: table, resolution: 65}", text),
-        encoding="utf-8",
-    )
+    table_spec = _table_spec(tmp_path, 65)
     report = _stability(capsys, table_spec)
     fuzzy = report["model"]["fuzzy"]
     assert fuzzy["bounds_cover_deployed_surface"] is True and fuzzy["bounds"] == "phi"
@@ -213,6 +203,15 @@ def test_stability_of_the_exact_it2_surface_says_its_bounds_do_not_cover_it(
     # are not used yet): the certificate must say that they do not cover the deployed surface
     fuzzy = _stability(capsys, SPEC)["model"]["fuzzy"]
     assert fuzzy["bounds_cover_deployed_surface"] is False and fuzzy["surface_error_bound"] > 0
+
+
+def _table_spec(tmp_path: Path, resolution: int) -> Path:
+    """The IT2 spec on a ``resolution`` x ``resolution`` table of its exact surface."""
+    text = SPEC.read_text(encoding="utf-8")
+    path = tmp_path / "table_it2.yaml"
+    surface = f"surface: {{method: table, resolution: {resolution}}}"
+    path.write_text(re.sub(r"(?m)^surface: .*$", surface, text), encoding="utf-8")
+    return path
 
 
 def _stability(capsys: pytest.CaptureFixture[str], spec: Path) -> dict:  # type: ignore[type-arg]
