@@ -84,6 +84,7 @@ VOLATILE = {
     "cpu_time_s",
     "real_time_factor",
     "controller_impl",
+    "simulated_with",  # stability --simulate: the controller_impl of its runs
     "rulebase",
     "controller_spec",
     "gains_source",
