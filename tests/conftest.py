@@ -8,6 +8,9 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from _dispatch import pin_kernels
+
+pin_kernels()  # before numpy's first import: one set of floating-point kernels on every CPU
 
 # --------------------------------------------------------------------------------------------
 # numba kernels, compiled once before the xdist workers use them
